@@ -1,0 +1,6 @@
+// Every CLI command, in the order `--help` lists them.
+import type { CliCommand } from '../command.ts';
+import { gpuInfoCommand } from './gpu-info.ts';
+import { infoCommand } from './info.ts';
+
+export const commands: CliCommand[] = [infoCommand, gpuInfoCommand];

@@ -1,0 +1,194 @@
+// A WebGPU canvas with an arcball camera, depth buffer, high-DPI resize and
+// an on-demand frame loop. Drawable things implement `RenderLayer`; work that
+// must be submitted before a frame (compute) goes in `beforeFrame` hooks.
+
+import { mat4, vec3 } from 'gl-matrix';
+import frameWgsl from '../../shaders/render/frame.wgsl?raw';
+import type { WgslPart } from '../gpu/wgsl.ts';
+import { ArcballCamera, type Bounds } from './camera.ts';
+import { CameraControls } from './camera-controls.ts';
+
+export const frameSnippet: WgslPart = { name: 'shaders/render/frame.wgsl', code: frameWgsl };
+
+export const DEPTH_FORMAT: GPUTextureFormat = 'depth24plus';
+const FRAME_UNIFORM_BYTES = 4 * (16 + 16 + 4 + 4 + 4);
+
+export interface RenderLayer {
+  /** Records draws into the frame's render pass (group 0 = frame uniforms is already set). */
+  draw(pass: GPURenderPassEncoder): void;
+}
+
+export interface ViewerOptions {
+  clearColor?: GPUColor;
+  /** Called after every camera change (e.g. to store the view in the URL). */
+  onCameraChange?: () => void;
+}
+
+export class Viewer {
+  readonly camera = new ArcballCamera();
+  readonly controls: CameraControls;
+  readonly format: GPUTextureFormat;
+  readonly frameBindGroupLayout: GPUBindGroupLayout;
+  readonly frameBindGroup: GPUBindGroup;
+  clearColor: GPUColor;
+  /** Frames per second over the last second of continuous drawing. */
+  fps = 0;
+  /** Frames drawn since creation (tests wait on this). */
+  framesDrawn = 0;
+
+  private readonly context: GPUCanvasContext;
+  private readonly frameUniforms: GPUBuffer;
+  private depth: GPUTexture | undefined;
+  private readonly layers: RenderLayer[] = [];
+  private readonly beforeFrame: ((encoder: GPUCommandEncoder) => void)[] = [];
+  private frameRequested = false;
+  private readonly resizeObserver: ResizeObserver;
+  private fpsWindow: number[] = [];
+  private readonly scratch = new Float32Array(FRAME_UNIFORM_BYTES / 4);
+  private destroyed = false;
+
+  constructor(
+    readonly device: GPUDevice,
+    readonly canvas: HTMLCanvasElement,
+    options: ViewerOptions = {},
+  ) {
+    const context = canvas.getContext('webgpu');
+    if (!context) throw new Error('Could not get a WebGPU context for the canvas.');
+    this.context = context;
+    this.format = navigator.gpu.getPreferredCanvasFormat();
+    context.configure({ device, format: this.format, alphaMode: 'opaque' });
+    this.clearColor = options.clearColor ?? { r: 0.09, g: 0.1, b: 0.12, a: 1 };
+
+    this.frameUniforms = device.createBuffer({
+      label: 'Viewer.frameUniforms',
+      size: FRAME_UNIFORM_BYTES,
+      usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
+    });
+    this.frameBindGroupLayout = device.createBindGroupLayout({
+      label: 'Viewer.frameLayout',
+      entries: [{ binding: 0, visibility: GPUShaderStage.VERTEX | GPUShaderStage.FRAGMENT, buffer: { type: 'uniform' } }],
+    });
+    this.frameBindGroup = device.createBindGroup({
+      label: 'Viewer.frameBindGroup',
+      layout: this.frameBindGroupLayout,
+      entries: [{ binding: 0, resource: { buffer: this.frameUniforms } }],
+    });
+
+    this.controls = new CameraControls(canvas, this.camera, {
+      onChange: () => {
+        this.requestFrame();
+        options.onCameraChange?.();
+      },
+    });
+
+    this.resizeObserver = new ResizeObserver((entries) => {
+      for (const entry of entries) {
+        const box = entry.devicePixelContentBoxSize?.[0];
+        const w = box ? box.inlineSize : Math.round(entry.contentRect.width * devicePixelRatio);
+        const h = box ? box.blockSize : Math.round(entry.contentRect.height * devicePixelRatio);
+        const max = device.limits.maxTextureDimension2D;
+        canvas.width = Math.max(1, Math.min(w, max));
+        canvas.height = Math.max(1, Math.min(h, max));
+      }
+      this.requestFrame();
+    });
+    try {
+      this.resizeObserver.observe(canvas, { box: 'device-pixel-content-box' });
+    } catch {
+      this.resizeObserver.observe(canvas);
+    }
+  }
+
+  addLayer(layer: RenderLayer): void {
+    this.layers.push(layer);
+    this.requestFrame();
+  }
+
+  removeLayer(layer: RenderLayer): void {
+    const i = this.layers.indexOf(layer);
+    if (i >= 0) this.layers.splice(i, 1);
+    this.requestFrame();
+  }
+
+  /** Runs `hook` at the start of each frame's command encoder. */
+  addBeforeFrame(hook: (encoder: GPUCommandEncoder) => void): () => void {
+    this.beforeFrame.push(hook);
+    return () => {
+      const i = this.beforeFrame.indexOf(hook);
+      if (i >= 0) this.beforeFrame.splice(i, 1);
+    };
+  }
+
+  fitTo(bounds: Bounds): void {
+    this.camera.fit(bounds);
+    this.requestFrame();
+  }
+
+  requestFrame(): void {
+    if (this.frameRequested || this.destroyed) return;
+    this.frameRequested = true;
+    requestAnimationFrame((t) => this.frame(t));
+  }
+
+  private ensureDepth(): GPUTexture {
+    const { width, height } = this.canvas;
+    if (!this.depth || this.depth.width !== width || this.depth.height !== height) {
+      this.depth?.destroy();
+      this.depth = this.device.createTexture({
+        label: 'Viewer.depth',
+        size: [width, height],
+        format: DEPTH_FORMAT,
+        usage: GPUTextureUsage.RENDER_ATTACHMENT,
+      });
+    }
+    return this.depth;
+  }
+
+  private writeFrameUniforms(): void {
+    const cam = this.camera;
+    cam.aspect = this.canvas.width / this.canvas.height;
+    const u = this.scratch;
+    u.set(cam.viewProjection(mat4.create()) as Float32Array, 0);
+    u.set(cam.view(mat4.create()) as Float32Array, 16);
+    const eye = cam.eyePosition();
+    u.set([eye[0], eye[1], eye[2], 1], 32);
+    // Headlight from slightly above and left of the eye.
+    const toLight = vec3.sub(vec3.create(), eye, cam.target);
+    vec3.normalize(toLight, toLight);
+    u.set([toLight[0], toLight[1], toLight[2], 0], 36);
+    u.set([this.canvas.width, this.canvas.height, 1 / this.canvas.width, 1 / this.canvas.height], 40);
+    this.device.queue.writeBuffer(this.frameUniforms, 0, u);
+  }
+
+  private frame(time: number): void {
+    this.frameRequested = false;
+    if (this.destroyed) return;
+    this.fpsWindow.push(time);
+    while (this.fpsWindow.length > 0 && time - this.fpsWindow[0] > 1000) this.fpsWindow.shift();
+    this.fps = this.fpsWindow.length > 1 ? ((this.fpsWindow.length - 1) * 1000) / (time - this.fpsWindow[0]) : 0;
+
+    this.writeFrameUniforms();
+    const encoder = this.device.createCommandEncoder({ label: 'Viewer.frame' });
+    for (const hook of this.beforeFrame) hook(encoder);
+    const pass = encoder.beginRenderPass({
+      label: 'Viewer.pass',
+      colorAttachments: [
+        { view: this.context.getCurrentTexture().createView(), clearValue: this.clearColor, loadOp: 'clear', storeOp: 'store' },
+      ],
+      depthStencilAttachment: { view: this.ensureDepth().createView(), depthClearValue: 1, depthLoadOp: 'clear', depthStoreOp: 'store' },
+    });
+    pass.setBindGroup(0, this.frameBindGroup);
+    for (const layer of this.layers) layer.draw(pass);
+    pass.end();
+    this.device.queue.submit([encoder.finish()]);
+    this.framesDrawn++;
+  }
+
+  destroy(): void {
+    this.destroyed = true;
+    this.resizeObserver.disconnect();
+    this.controls.dispose();
+    this.depth?.destroy();
+    this.frameUniforms.destroy();
+  }
+}

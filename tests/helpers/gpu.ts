@@ -1,0 +1,57 @@
+// GPU fixture for unit tests: every test gets its own device on Dawn
+// (SwiftShader here, a GPU where there is one), and fails if anything on it
+// raises a validation, out-of-memory or internal error, captured or not.
+import { test as base } from 'vitest';
+import type { GpuContext, GpuFailure } from '../../src/gpu/device.ts';
+import { requestNodeGpu } from '../../src/gpu/node-gpu.ts';
+
+export interface TestGpu extends GpuContext {
+  /** Errors seen so far (uncaptured errors and device loss). */
+  failures: GpuFailure[];
+}
+
+const SCOPES: GPUErrorFilter[] = ['validation', 'out-of-memory', 'internal'];
+
+/** Creates a device and starts error scopes; `finishTestGpu` checks them. */
+export async function createTestGpu(): Promise<TestGpu> {
+  const failures: GpuFailure[] = [];
+  const ctx = await requestNodeGpu({ label: 'test.device', onFailure: (f) => failures.push(f) });
+  for (const filter of SCOPES) ctx.device.pushErrorScope(filter);
+  return { ...ctx, failures };
+}
+
+/** Waits for the queue, pops the scopes and destroys the device; throws on any error. */
+export async function finishTestGpu(gpu: TestGpu): Promise<void> {
+  const { device } = gpu;
+  await device.queue.onSubmittedWorkDone();
+  const scoped: (GPUError | null)[] = [];
+  for (let i = 0; i < SCOPES.length; i++) scoped.push(await device.popErrorScope());
+  device.destroy();
+  const messages = [
+    ...scoped.filter((e): e is GPUError => e !== null).map((e) => `WebGPU error: ${e.message}`),
+    ...gpu.failures.map((f) => `WebGPU ${f.kind}: ${f.message}`),
+  ];
+  if (messages.length > 0) throw new Error(messages.join('\n'));
+}
+
+/**
+ * `gpuTest('name', async ({ gpu }) => ...)`: a vitest test with a fresh
+ * device that fails on any WebGPU error raised during the test.
+ */
+export const gpuTest = base.extend<{ gpu: TestGpu }>({
+  // eslint-disable-next-line no-empty-pattern
+  gpu: async ({}, use) => {
+    const gpu = await createTestGpu();
+    let error: unknown;
+    try {
+      await use(gpu);
+    } finally {
+      try {
+        await finishTestGpu(gpu);
+      } catch (e) {
+        error = e;
+      }
+    }
+    if (error) throw error;
+  },
+});
