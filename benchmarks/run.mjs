@@ -1,0 +1,20 @@
+#!/usr/bin/env node
+// Runs a TypeScript benchmark with the same loaders as the CLI:
+//   node benchmarks/run.mjs benchmarks/<name>.ts [args]
+import { spawnSync } from 'node:child_process';
+import { fileURLToPath } from 'node:url';
+import { resolve } from 'node:path';
+import { ensureNodeModules } from '../scripts/setup/npm-deps.mjs';
+
+const root = fileURLToPath(new URL('..', import.meta.url));
+ensureNodeModules(root, { quiet: true });
+const [script, ...args] = process.argv.slice(2);
+if (!script) {
+  console.error('usage: node benchmarks/run.mjs benchmarks/<name>.ts [args]');
+  process.exit(2);
+}
+const r = spawnSync(process.execPath, ['--import', new URL('../scripts/register-node-loaders.mjs', import.meta.url).href, resolve(root, script), ...args], {
+  cwd: process.env.INIT_CWD ?? process.cwd(),
+  stdio: 'inherit',
+});
+process.exit(r.status ?? 1);
