@@ -2,24 +2,9 @@
 // pipeline compilation), take the median, print a table, write JSON.
 import { mkdirSync, writeFileSync } from 'node:fs';
 import { dirname } from 'node:path';
+import { summarize, type Stats } from '../../src/bench/stats.ts';
 
-export interface Stats {
-  /** Samples after the discarded first run. */
-  samples: number[];
-  median: number;
-  mean: number;
-  min: number;
-  max: number;
-}
-
-export function summarize(all: number[], discardFirst = true): Stats {
-  const samples = discardFirst && all.length > 1 ? all.slice(1) : all.slice();
-  const sorted = [...samples].sort((a, b) => a - b);
-  const mid = sorted.length >> 1;
-  const median = sorted.length === 0 ? NaN : sorted.length % 2 ? sorted[mid] : (sorted[mid - 1] + sorted[mid]) / 2;
-  const mean = samples.reduce((s, x) => s + x, 0) / Math.max(1, samples.length);
-  return { samples, median, mean, min: sorted[0] ?? NaN, max: sorted[sorted.length - 1] ?? NaN };
-}
+export { summarize, type Stats };
 
 /** Runs `measure` `repeats` times (sequentially); returns the stats of its results. */
 export async function repeat(repeats: number, measure: (i: number) => Promise<number> | number): Promise<Stats> {

@@ -1,0 +1,108 @@
+// NRRD volumes (teem's format, written by 3D Slicer, ITK, VTK): a text header
+// ("NRRD000N", "field: value" lines, a blank line) followed by the samples.
+// We read attached data with raw or gzip encoding, 3 dimensions (or 4 with a
+// leading axis of size 1), and the scalar types the compressor accepts.
+
+import { DTYPE_BYTES, type DType } from './dtype.ts';
+import type { Dims } from './naming.ts';
+
+export class NrrdError extends Error {
+  constructor(message: string) {
+    super(message);
+    this.name = 'NrrdError';
+  }
+}
+
+export interface NrrdVolume {
+  dims: Dims;
+  dtype: DType;
+  /** Samples, little-endian, x fastest (converted from big-endian if needed). */
+  data: Uint8Array;
+  /** Voxel spacing when the header gives it (spacings or space directions). */
+  spacing?: [number, number, number];
+  fields: Record<string, string>;
+}
+
+const TYPE_NAMES: Record<string, DType> = {
+  'signed char': 'int8', int8: 'int8', int8_t: 'int8',
+  uchar: 'uint8', 'unsigned char': 'uint8', uint8: 'uint8', uint8_t: 'uint8',
+  short: 'int16', 'short int': 'int16', 'signed short': 'int16', 'signed short int': 'int16', int16: 'int16', int16_t: 'int16',
+  ushort: 'uint16', 'unsigned short': 'uint16', 'unsigned short int': 'uint16', uint16: 'uint16', uint16_t: 'uint16',
+  float: 'float32',
+  double: 'float64',
+};
+
+/** Finds the end of the header: the first empty line. Returns the data offset. */
+function headerEnd(bytes: Uint8Array): number {
+  const limit = Math.min(bytes.length, 1 << 16);
+  for (let i = 0; i < limit; i++) {
+    if (bytes[i] === 0x0a && bytes[i + 1] === 0x0a) return i + 2;
+    if (bytes[i] === 0x0a && bytes[i + 1] === 0x0d && bytes[i + 2] === 0x0a) return i + 3;
+  }
+  throw new NrrdError('no end of header (a blank line) in the first 64 KiB');
+}
+
+export function parseNrrdHeader(bytes: Uint8Array): { fields: Record<string, string>; dataOffset: number } {
+  const magic = String.fromCharCode(...bytes.subarray(0, 8));
+  if (!/^NRRD000\d$/.test(magic)) throw new NrrdError('not a NRRD file (no "NRRD000x" magic)');
+  const dataOffset = headerEnd(bytes);
+  const text = new TextDecoder().decode(bytes.subarray(0, dataOffset));
+  const fields: Record<string, string> = {};
+  for (const raw of text.split(/\r?\n/).slice(1)) {
+    const line = raw.trim();
+    if (line === '' || line.startsWith('#')) continue;
+    const m = /^([^:]+):=?\s*(.*)$/.exec(line);
+    if (m) fields[m[1].trim().toLowerCase()] = m[2].trim();
+  }
+  return { fields, dataOffset };
+}
+
+function parseSpacing(fields: Record<string, string>, axes: number): [number, number, number] | undefined {
+  if (fields.spacings) {
+    const s = fields.spacings.split(/\s+/).map(Number).slice(-3);
+    if (s.length === 3 && s.every((v) => Number.isFinite(v) && v > 0)) return s as [number, number, number];
+  }
+  const dirs = fields['space directions'];
+  if (dirs) {
+    const vectors = [...dirs.matchAll(/\(([^)]*)\)/g)].map((m) => m[1].split(',').map(Number));
+    const lengths = vectors.slice(-axes).map((v) => Math.hypot(...v));
+    if (lengths.length === 3 && lengths.every((v) => Number.isFinite(v) && v > 0)) return lengths as [number, number, number];
+  }
+  return undefined;
+}
+
+async function gunzip(bytes: Uint8Array): Promise<Uint8Array> {
+  const stream = new Blob([bytes as BlobPart]).stream().pipeThrough(new DecompressionStream('gzip'));
+  return new Uint8Array(await new Response(stream).arrayBuffer());
+}
+
+/** Parses a NRRD file with attached data; throws NrrdError with the reason. */
+export async function parseNrrd(bytes: Uint8Array): Promise<NrrdVolume> {
+  const { fields, dataOffset } = parseNrrdHeader(bytes);
+  if (fields['data file'] || fields.datafile) throw new NrrdError('detached data files (.nhdr + data file) are not supported; save as a single .nrrd');
+  const typeName = (fields.type ?? '').toLowerCase();
+  const dtype = TYPE_NAMES[typeName];
+  if (!dtype) throw new NrrdError(`sample type "${fields.type ?? '(missing)'}" is not supported (use uint8, int8, uint16, int16, float or double)`);
+  const sizes = (fields.sizes ?? '').split(/\s+/).filter((s) => s !== '').map(Number);
+  const dimension = Number(fields.dimension);
+  if (sizes.length !== dimension || sizes.some((s) => !Number.isInteger(s) || s < 1)) {
+    throw new NrrdError(`bad "sizes: ${fields.sizes ?? ''}" for dimension ${fields.dimension ?? '(missing)'}`);
+  }
+  // A leading axis of length 1 (a scalar "component" axis) is allowed.
+  const spatial = sizes.length === 4 && sizes[0] === 1 ? sizes.slice(1) : sizes;
+  if (spatial.length !== 3) throw new NrrdError(`only 3D volumes are supported (this file has ${sizes.length} axes: ${sizes.join(' x ')})`);
+  const dims = spatial as Dims;
+  const encoding = (fields.encoding ?? '').toLowerCase();
+  let payload = bytes.subarray(dataOffset);
+  if (encoding === 'gzip' || encoding === 'gz') payload = await gunzip(payload);
+  else if (encoding !== 'raw') throw new NrrdError(`encoding "${fields.encoding ?? '(missing)'}" is not supported (raw or gzip)`);
+  const width = DTYPE_BYTES[dtype];
+  const need = dims[0] * dims[1] * dims[2] * width;
+  if (payload.length < need) throw new NrrdError(`truncated: ${dims.join('x')} ${dtype} needs ${need} bytes of data, the file has ${payload.length}`);
+  const data = payload.slice(0, need);
+  const endian = (fields.endian ?? 'little').toLowerCase();
+  if (endian === 'big' && width > 1) {
+    for (let i = 0; i < data.length; i += width) data.subarray(i, i + width).reverse();
+  }
+  return { dims, dtype, data, spacing: parseSpacing(fields, 3), fields };
+}
