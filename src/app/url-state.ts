@@ -1,0 +1,44 @@
+// The view in the URL hash, so a link reopens the same surface and camera:
+// #iso=0.5&cam=qx,qy,qz,qw,tx,ty,tz,d . The volume itself comes from
+// ?url=... (same origin) or is the built-in default.
+import type { CameraState } from '../render/camera.ts';
+
+export interface ViewState {
+  iso?: number;
+  camera?: CameraState;
+}
+
+const round = (x: number) => Number(x.toPrecision(7));
+
+export function encodeViewState(s: ViewState): string {
+  const parts: string[] = [];
+  if (s.iso !== undefined && Number.isFinite(s.iso)) parts.push(`iso=${round(s.iso)}`);
+  if (s.camera) {
+    const c = s.camera;
+    parts.push(`cam=${[...c.rotation, ...c.target, c.distance].map(round).join(',')}`);
+  }
+  return parts.join('&');
+}
+
+export function decodeViewState(hash: string): ViewState {
+  const params = new URLSearchParams(hash.replace(/^#/, ''));
+  const out: ViewState = {};
+  const iso = Number(params.get('iso'));
+  if (params.has('iso') && Number.isFinite(iso)) out.iso = iso;
+  const cam = params.get('cam')?.split(',').map(Number);
+  if (cam && cam.length === 8 && cam.every(Number.isFinite) && cam[7] > 0) {
+    out.camera = {
+      rotation: [cam[0], cam[1], cam[2], cam[3]],
+      target: [cam[4], cam[5], cam[6]],
+      distance: cam[7],
+    };
+  }
+  return out;
+}
+
+/** Updates the hash without adding history entries (scrubbing would flood it). */
+export function writeViewState(s: ViewState): void {
+  const hash = encodeViewState(s);
+  const url = `${location.pathname}${location.search}${hash ? `#${hash}` : ''}`;
+  history.replaceState(null, '', url);
+}
