@@ -1,0 +1,22 @@
+// Decodes a GPU list of blocks into cache slots: entry i < count decodes block
+// block_ids[i] into slot slot_ids[i] (64 values, x + 4y + 16z). Dispatched
+// indirectly (args from indirect_args.wgsl, count in dispatch_args[3]) once
+// per stream shard; entries whose block is in another shard are skipped.
+
+@group(1) @binding(0) var<storage, read> block_ids: array<u32>;
+@group(1) @binding(1) var<storage, read> slot_ids: array<u32>;
+@group(1) @binding(2) var<storage, read> dispatch_args: array<u32>;
+@group(1) @binding(3) var<storage, read_write> slots: array<u32>;
+
+@compute @workgroup_size(64)
+fn decode_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+                 @builtin(local_invocation_index) lid: u32) {
+  let i = linear_workgroup_index(wid, nwg) * 64u + lid;
+  if (i >= dispatch_args[3]) { return; }
+  let b = block_ids[i];
+  if (b < stream.shard_first_block || b >= stream.shard_end_block) { return; }
+  var v: array<u32, 64>;
+  decode_block(b, &v);
+  let base = slot_ids[i] * 64u;
+  for (var j = 0u; j < 64u; j++) { slots[base + j] = v[j]; }
+}

@@ -1,0 +1,186 @@
+// Fixed-rate zfp encoder, one invocation per block: gathers the block from a
+// volume of uint8/int8/uint16/int16/float32/float64 (converted to float32 as
+// numpy's astype does), pads partial blocks as zfp does, and writes exactly
+// bits_per_block bits at the block's place in the output shard (atomicOr into
+// a zeroed buffer: neighbouring blocks share boundary words). Invocation 0 also
+// writes the zfp header words when the shard starts the stream.
+// Needs u64.wgsl, codec.wgsl, f64.wgsl and grid.wgsl.
+
+struct EncodeParams {
+  dims: vec3u,            // nx, ny, nz
+  dtype: u32,             // 0 uint8, 1 int8, 2 uint16, 3 int16, 4 float32, 5 float64
+  blocks: vec3u,          // blocks per axis
+  bits_per_block: u32,
+  first_block: u32,       // blocks [first_block, end_block) go to this shard
+  end_block: u32,
+  bit_base: u32,          // bit of first_block in out_words
+  input_z: u32,           // first z plane held by input_words
+  header_count: u32,      // header words to OR in (0 unless the shard starts the stream)
+  _pad0: u32,
+  _pad1: u32,
+  _pad2: u32,
+  header: array<vec4u, 2>,
+}
+
+@group(0) @binding(0) var<storage, read> input_words: array<u32>;
+@group(0) @binding(1) var<storage, read_write> out_words: array<atomic<u32>>;
+@group(0) @binding(2) var<uniform> eparams: EncodeParams;
+
+// Element i of the input as float32 bits.
+fn load_value(i: u32) -> u32 {
+  switch (eparams.dtype) {
+    case 0u: {
+      return bitcast<u32>(f32((input_words[i >> 2u] >> ((i & 3u) * 8u)) & 0xffu));
+    }
+    case 1u: {
+      let v = bitcast<i32>(input_words[i >> 2u] << (24u - (i & 3u) * 8u)) >> 24u;
+      return bitcast<u32>(f32(v));
+    }
+    case 2u: {
+      return bitcast<u32>(f32((input_words[i >> 1u] >> ((i & 1u) * 16u)) & 0xffffu));
+    }
+    case 3u: {
+      let v = bitcast<i32>(input_words[i >> 1u] << (16u - (i & 1u) * 16u)) >> 16u;
+      return bitcast<u32>(f32(v));
+    }
+    case 4u: {
+      return input_words[i];
+    }
+    default: {
+      return f64_to_f32_bits(input_words[2u * i], input_words[2u * i + 1u]);
+    }
+  }
+}
+
+// zfp's padding of a partial row of n (1..3) values at stride s.
+fn pad_row(p: ptr<function, array<u32, 64>>, o: u32, n: u32, s: u32) {
+  if (n >= 4u) { return; }
+  if (n <= 1u) { (*p)[o + s] = (*p)[o]; }
+  if (n <= 2u) { (*p)[o + 2u * s] = (*p)[o + s]; }
+  (*p)[o + 3u * s] = (*p)[o];
+}
+
+// ---- LSB-first bit writer (per invocation).
+var<private> wr_word: u32;
+var<private> wr_buf: u32;
+var<private> wr_pos: u32;  // bits already in wr_buf, < 32
+
+fn write_bits(v: u32, n: u32) {  // n <= 32; v has no bits at or above n
+  if (n == 0u) { return; }
+  wr_buf |= v << wr_pos;
+  let total = wr_pos + n;
+  if (total >= 32u) {
+    if (wr_buf != 0u) { atomicOr(&out_words[wr_word], wr_buf); }
+    wr_word += 1u;
+    wr_buf = select(0u, v >> (32u - wr_pos), wr_pos > 0u);
+    wr_pos = total - 32u;
+  } else {
+    wr_pos = total;
+  }
+}
+
+fn write_bit(b: u32) -> u32 {
+  write_bits(b, 1u);
+  return b;
+}
+
+fn writer_flush() {
+  if (wr_pos > 0u && wr_buf != 0u) { atomicOr(&out_words[wr_word], wr_buf); }
+}
+
+@compute @workgroup_size(64)
+fn encode_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+                 @builtin(local_invocation_index) lid: u32) {
+  let g = linear_workgroup_index(wid, nwg) * 64u + lid;
+  if (g == 0u) {
+    for (var h = 0u; h < eparams.header_count; h++) {
+      atomicOr(&out_words[h], eparams.header[h >> 2u][h & 3u]);
+    }
+  }
+  let b = eparams.first_block + g;
+  if (b >= eparams.end_block) { return; }
+
+  // gather (x + 4y + 16z) with zfp's padding
+  let bx = eparams.blocks.x;
+  let by = eparams.blocks.y;
+  let c = vec3u(b % bx, (b / bx) % by, b / (bx * by)) * 4u;
+  let d = eparams.dims;
+  let nx = min(4u, d.x - c.x);
+  let ny = min(4u, d.y - c.y);
+  let nz = min(4u, d.z - c.z);
+  var f: array<u32, 64>;
+  for (var z = 0u; z < nz; z++) {
+    for (var y = 0u; y < ny; y++) {
+      let row = c.x + d.x * (c.y + y + d.y * (c.z + z - eparams.input_z));
+      for (var x = 0u; x < nx; x++) {
+        f[16u * z + 4u * y + x] = load_value(row + x);
+      }
+      pad_row(&f, 16u * z + 4u * y, nx, 1u);
+    }
+    for (var x = 0u; x < 4u; x++) { pad_row(&f, 16u * z + x, ny, 4u); }
+  }
+  for (var i = 0u; i < 16u; i++) { pad_row(&f, i, nz, 16u); }
+
+  let start = u64_bit_to_word(u64_add32(u64_mul(b - eparams.first_block, eparams.bits_per_block), eparams.bit_base));
+  wr_word = start.x;
+  wr_buf = 0u;
+  wr_pos = start.y;
+
+  let emax = block_emax(&f);
+  let e = u32(emax + 127);
+  if (e == 0u) {
+    return;  // a single 0 bit, then zero padding: the buffer is already zero
+  }
+  write_bits(2u * e + 1u, 9u);
+  var q: array<i32, 64>;
+  for (var i = 0u; i < 64u; i++) { q[i] = float_to_int(f[i], emax); }
+  fwd_xform(&q);
+  var u: array<u32, 64>;
+  for (var i = 0u; i < 64u; i++) { u[i] = (bitcast<u32>(q[PERM[i]]) + NB) ^ NB; }
+
+  var bits = eparams.bits_per_block - 9u;
+  var n = 0u;
+  var k = 32u;
+  loop {
+    if (bits == 0u || k == 0u) { break; }
+    k -= 1u;
+    var lo = 0u;
+    var hi = 0u;
+    for (var i = 0u; i < 32u; i++) {
+      lo |= ((u[i] >> k) & 1u) << i;
+      hi |= ((u[i + 32u] >> k) & 1u) << i;
+    }
+    // first n bits verbatim
+    let m = min(n, bits);
+    bits -= m;
+    if (m >= 32u) {
+      write_bits(lo, 32u);
+      let mh = m - 32u;
+      write_bits(hi & select((1u << mh) - 1u, 0xffffffffu, mh == 32u), mh);
+      lo = select(hi >> mh, 0u, mh == 32u);
+      hi = 0u;
+    } else if (m > 0u) {
+      write_bits(lo & ((1u << m) - 1u), m);
+      lo = (lo >> m) | (hi << (32u - m));
+      hi = hi >> m;
+    }
+    // group tests; (hi, lo) holds the plane's bits from n on
+    loop {
+      if (bits == 0u || n >= 64u) { break; }
+      bits -= 1u;
+      if (write_bit(select(0u, 1u, (lo | hi) != 0u)) == 0u) { break; }
+      loop {
+        if (bits == 0u || n >= 63u) { break; }
+        bits -= 1u;
+        if (write_bit(lo & 1u) != 0u) { break; }
+        lo = (lo >> 1u) | (hi << 31u);
+        hi >>= 1u;
+        n += 1u;
+      }
+      lo = (lo >> 1u) | (hi << 31u);
+      hi >>= 1u;
+      n += 1u;
+    }
+  }
+  writer_flush();
+}

@@ -1,0 +1,204 @@
+// GPU encoder: volumes of uint8/int8/uint16/int16/float32/float64 (converted
+// to float32 as numpy's astype does) to zfp fixed-rate streams, bit-exact with
+// zfp 1.0.1 (`zfpy.compress_numpy(a.astype(np.float32), rate=R)`), with or
+// without zfp's header.
+//
+//   const enc = await ZfpEncoder.create(device);
+//   const stream = await enc.compressToStream(bytes, 'uint8', [X, Y, Z], 4, { header: true }); // stays on the GPU
+//   const file = await stream.readBytes();                                                   // zfp's file bytes
+//
+// One invocation encodes one block; the output stream is cut into shards of
+// whole z rows of blocks (each shard one storage binding), and the input is
+// uploaded one slab of z planes per shard, so neither needs to fit a binding.
+
+import type { DType } from '../volume/dtype.ts';
+import { DTYPE_BYTES } from '../volume/dtype.ts';
+import { formatDims, type Dims } from '../volume/naming.ts';
+import { dispatchLinear } from '../gpu/dispatch.ts';
+import { createComputePipeline } from '../gpu/wgsl.ts';
+import { planZfpStream, ZfpFormatError, type ZfpStreamInfo } from './format.ts';
+import { maxShardBytesFor, planShards, ZfpGpuStream } from './gpu-stream.ts';
+import { BindGroupCache, binding, refKey, refSize, UniformSlots, type GpuBufferRef } from './gpu-util.ts';
+import { writeZfpHeader } from './header.ts';
+import { zfpWgsl } from './wgsl.ts';
+
+const DTYPE_CODE: Record<DType, number> = { uint8: 0, int8: 1, uint16: 2, int16: 3, float32: 4, float64: 5 };
+
+export interface EncodeArgs {
+  /** Input values (little endian, x fastest) holding z planes from `inputZPlane` on. STORAGE usage. */
+  input: GpuBufferRef;
+  dtype: DType;
+  /** First z plane in `input`; must be <= 4 * (first z block row of the shard). */
+  inputZPlane: number;
+  /** Target stream from createStream(); `shard` is the one written. */
+  stream: ZfpGpuStream;
+  shard: number;
+  timestampWrites?: GPUComputePassTimestampWrites;
+}
+
+export interface CompressOptions {
+  /** Write zfp's header (default true): 96 bits, 148 when bitsPerBlock > 2048. */
+  header?: boolean;
+  /** Name used in messages and in the stream info. */
+  fileName?: string;
+  /** Cap on the shard (and input slab) size; default: one storage binding. */
+  maxShardBytes?: number;
+}
+
+export class ZfpEncoder {
+  private readonly groups = new BindGroupCache();
+  private readonly uniforms: UniformSlots;
+
+  private constructor(readonly device: GPUDevice, private readonly pipeline: GPUComputePipeline) {
+    this.uniforms = new UniformSlots(device, 'ZfpEncoder');
+  }
+
+  static async create(device: GPUDevice): Promise<ZfpEncoder> {
+    const layout = device.createBindGroupLayout({
+      label: 'ZfpEncoder.layout',
+      entries: [
+        { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
+        { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
+        { binding: 2, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform' } },
+      ],
+    });
+    const pipeline = await createComputePipeline(device, 'ZfpEncoder.encode', zfpWgsl.encode, 'encode_blocks', {
+      layout: device.createPipelineLayout({ label: 'ZfpEncoder', bindGroupLayouts: [layout] }),
+    });
+    return new ZfpEncoder(device, pipeline);
+  }
+
+  /**
+   * Plans and allocates (zeroed) the output stream for `info`: shards of whole
+   * z rows of blocks whose input slab (of `dtype`) and output both fit `maxShardBytes`.
+   */
+  createStream(info: ZfpStreamInfo, dtype: DType, maxShardBytes = maxShardBytesFor(this.device)): ZfpGpuStream {
+    const [bx, by] = info.blockGrid;
+    const [nx, ny] = info.dims;
+    const rowInputBytes = nx * ny * 4 * DTYPE_BYTES[dtype];
+    const rowsPerSlab = Math.floor(maxShardBytes / rowInputBytes);
+    if (rowsPerSlab < 1) throw new ZfpFormatError(`${info.fileName}: 4 z planes of ${formatDims(info.dims)} ${dtype} (${rowInputBytes} bytes) do not fit one storage binding of ${maxShardBytes} bytes`);
+    const plans = planShards(info, maxShardBytes, bx * by, rowsPerSlab * bx * by);
+    return ZfpGpuStream.create(this.device, info, plans, 'ZfpEncoder.stream');
+  }
+
+  /** z planes [first, end) of the input that shard `s` of `stream` needs. */
+  static shardPlanes(stream: ZfpGpuStream, s: number): [number, number] {
+    const [bx, by] = stream.info.blockGrid;
+    const shard = stream.shards[s];
+    const z0 = Math.floor(shard.firstBlock / (bx * by));
+    const z1 = Math.ceil(shard.endBlock / (bx * by));
+    return [4 * z0, Math.min(4 * z1, stream.info.dims[2])];
+  }
+
+  /**
+   * Records the encoding of shard `a.shard` (clears it, then one dispatch).
+   * Needs a command encoder (the clear is not a pass command).
+   */
+  encode(encoder: GPUCommandEncoder, a: EncodeArgs): void {
+    const { stream } = a;
+    if (stream.isDestroyed) throw new Error('ZfpEncoder: the target stream was destroyed');
+    const info = stream.info;
+    const shard = stream.shards[a.shard];
+    if (!shard) throw new Error(`ZfpEncoder: the stream has no shard ${a.shard}`);
+    const [p0, p1] = ZfpEncoder.shardPlanes(stream, a.shard);
+    if (a.inputZPlane > p0) throw new Error(`ZfpEncoder: shard ${a.shard} needs z planes from ${p0}, the input starts at ${a.inputZPlane}`);
+    const [nx, ny] = info.dims;
+    const needBytes = nx * ny * (p1 - a.inputZPlane) * DTYPE_BYTES[a.dtype];
+    if (refSize(a.input) < needBytes) throw new Error(`ZfpEncoder: the input has ${refSize(a.input)} bytes, shard ${a.shard} needs ${needBytes}`);
+
+    const header = new Uint32Array(8);
+    let headerWords = 0;
+    if (info.hasHeader && shard.firstBlock === 0) {
+      const h = writeZfpHeader(info.dims, info.bitsPerBlock);
+      headerWords = Math.ceil(h.bits / 32);
+      new Uint8Array(header.buffer).set(h.bytes);
+    }
+    const record = new Uint32Array([
+      ...info.dims, DTYPE_CODE[a.dtype],
+      ...info.blockGrid, info.bitsPerBlock,
+      shard.firstBlock, shard.endBlock, shard.bitBase, a.inputZPlane,
+      headerWords, 0, 0, 0,
+      ...header,
+    ]);
+    const params = this.uniforms.get(`enc|${record.join(',')}`, record);
+    const group = this.groups.get(`enc|${refKey(a.input)}|${refKey(shard.buffer)}|${params.offset}|${refKey(params.buffer)}`, () =>
+      this.device.createBindGroup({
+        label: 'ZfpEncoder.bindGroup',
+        layout: this.pipeline.getBindGroupLayout(0),
+        entries: [
+          { binding: 0, resource: binding(a.input) },
+          { binding: 1, resource: { buffer: shard.buffer } },
+          { binding: 2, resource: params },
+        ],
+      }),
+    );
+    encoder.clearBuffer(shard.buffer);
+    const desc: GPUComputePassDescriptor = { label: 'ZfpEncoder.encode' };
+    if (a.timestampWrites) desc.timestampWrites = a.timestampWrites;
+    const pass = encoder.beginComputePass(desc);
+    pass.setPipeline(this.pipeline);
+    pass.setBindGroup(0, group);
+    dispatchLinear(pass, Math.ceil((shard.endBlock - shard.firstBlock) / 64));
+    pass.end();
+  }
+
+  /**
+   * Compresses a volume held on the CPU (`bytes`: little endian, x fastest)
+   * into a new GPU stream (the caller owns it; decode it directly, or read
+   * it back with readBytes()). Uploads one input slab per shard.
+   */
+  async compressToStream(bytes: Uint8Array, dtype: DType, dims: Dims, rate: number, opts: CompressOptions = {}): Promise<ZfpGpuStream> {
+    const fileName = opts.fileName ?? `volume_${formatDims(dims)}_${dtype}.raw`;
+    const info = planZfpStream(fileName, dims, rate, opts.header ?? true);
+    const expect = dims[0] * dims[1] * dims[2] * DTYPE_BYTES[dtype];
+    if (bytes.byteLength !== expect) {
+      throw new ZfpFormatError(`${fileName}: ${formatDims(dims)} ${dtype} is ${expect} bytes, got ${bytes.byteLength}`);
+    }
+    const { device } = this;
+    const stream = this.createStream(info, dtype, opts.maxShardBytes ?? maxShardBytesFor(device));
+    const planeBytes = dims[0] * dims[1] * DTYPE_BYTES[dtype];
+    let input: GPUBuffer | undefined;
+    try {
+      const slabs = stream.shards.map((_, s) => ZfpEncoder.shardPlanes(stream, s));
+      const largest = Math.max(...slabs.map(([z0, z1]) => (z1 - z0) * planeBytes));
+      input = device.createBuffer({ label: 'ZfpEncoder.input', size: Math.ceil(largest / 4) * 4, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST });
+      for (let s = 0; s < stream.shards.length; s++) {
+        const [z0, z1] = slabs[s];
+        const slab = bytes.subarray(z0 * planeBytes, z1 * planeBytes);
+        const whole = slab.byteLength & ~3;
+        if (whole > 0) device.queue.writeBuffer(input, 0, slab.buffer, slab.byteOffset, whole);
+        if (whole < slab.byteLength) {
+          const tail = new Uint8Array(4);
+          tail.set(slab.subarray(whole));
+          device.queue.writeBuffer(input, whole, tail);
+        }
+        const encoder = device.createCommandEncoder({ label: 'ZfpEncoder.compress' });
+        this.encode(encoder, { input, dtype, inputZPlane: z0, stream, shard: s });
+        device.queue.submit([encoder.finish()]);
+      }
+      await device.queue.onSubmittedWorkDone();
+    } catch (e) {
+      stream.destroy();
+      throw e;
+    } finally {
+      input?.destroy();
+    }
+    return stream;
+  }
+
+  /** Compresses to zfp's file bytes (see compressToStream). */
+  async compress(bytes: Uint8Array, dtype: DType, dims: Dims, rate: number, opts: CompressOptions = {}): Promise<{ bytes: Uint8Array; info: ZfpStreamInfo }> {
+    const stream = await this.compressToStream(bytes, dtype, dims, rate, opts);
+    try {
+      return { bytes: await stream.readBytes(), info: stream.info };
+    } finally {
+      stream.destroy();
+    }
+  }
+
+  destroy(): void {
+    this.uniforms.destroy();
+    this.groups.clear();
+  }
+}
