@@ -97,7 +97,7 @@ export class UniformSlots {
 
   constructor(private readonly device: GPUDevice, private readonly label: string) {}
 
-  get(key: string, data: Uint32Array): GPUBufferBinding {
+  get(key: string, data: Uint32Array<ArrayBuffer>): GPUBufferBinding {
     let b = this.byKey.get(key);
     if (b) return b;
     const page = Math.floor(this.used / UniformSlots.PER_PAGE);
