@@ -3,6 +3,7 @@
 
 import { DTYPE_BYTES } from '../volume/dtype.ts';
 import type { Dims } from '../volume/naming.ts';
+import { describeZfpStream } from '../zfp/format.ts';
 import { describeMode, parseZfpHeader, ZfpFormatError } from '../zfp/header.ts';
 import { detectFile, type FileKind } from './detect.ts';
 
@@ -18,12 +19,13 @@ export interface FileDescription {
   rate?: number;
   bitsPerBlock?: number;
   blocks?: number;
+  blockGrid?: Dims;
+  /** Bit where block 0 starts (the header's length; 0 without header). */
+  payloadBitOffset?: number;
+  /** Size of the volume decoded to float32. */
+  decodedBytes?: number;
   /** Problems found (e.g. size does not match the shape). */
   problems: string[];
-}
-
-function blockCount(d: Dims): number {
-  return Math.ceil(d[0] / 4) * Math.ceil(d[1] / 4) * Math.ceil(d[2] / 4);
 }
 
 export function describeFile(fileName: string, bytes: number, head: Uint8Array, opts: { rate?: number } = {}): FileDescription {
@@ -31,45 +33,40 @@ export function describeFile(fileName: string, bytes: number, head: Uint8Array, 
   const out: FileDescription = { kind: detected.kind, detectedBy: detected.why, bytes, problems: [] };
   const name = detected.name;
   switch (detected.kind) {
-    case 'zfp': {
-      out.zfpHeader = true;
-      try {
-        const h = parseZfpHeader(head);
-        out.dtype = h.scalarType;
-        out.zfpMode = describeMode(h.mode, h.dimensionality);
-        if (h.dimensionality !== 3) out.problems.push(`the field is ${h.dimensionality}D; only 3D volumes are supported`);
-        out.dims = [h.size[0], h.size[1], h.size[2]];
-        if (h.mode.kind === 'fixed-rate' && h.mode.maxBits) {
-          out.bitsPerBlock = h.mode.maxBits;
-          out.rate = h.mode.maxBits / 4 ** h.dimensionality;
-          if (h.dimensionality === 3) {
-            out.blocks = blockCount(out.dims);
-            const needBits = h.headerBits + out.blocks * out.bitsPerBlock;
-            if (bytes * 8 < needBits) out.problems.push(`truncated: the header promises ${Math.ceil(needBits / 8)} bytes, the file has ${bytes}`);
-          }
-        } else {
-          out.problems.push(`not fixed-rate (${out.zfpMode}); only fixed-rate streams can be decoded block by block`);
+    case 'zfp':
+    case 'zfp-headerless': {
+      out.zfpHeader = detected.kind === 'zfp';
+      // What can be said even when the stream is unusable.
+      if (detected.kind === 'zfp') {
+        try {
+          const h = parseZfpHeader(head);
+          out.dtype = h.scalarType;
+          out.zfpMode = describeMode(h.mode, h.dimensionality);
+          out.dims = [h.size[0], h.size[1], h.size[2]];
+          if (h.dimensionality !== 3) out.dims = undefined;
+        } catch (e) {
+          if (!(e instanceof ZfpFormatError)) throw e;
         }
+      } else {
+        out.dims = name.dims;
+        out.dtype = name.dtype;
+        out.rate = opts.rate ?? name.rate;
+      }
+      try {
+        const info = describeZfpStream(fileName, bytes, head, opts);
+        out.dims = info.dims;
+        out.dtype = info.scalarType;
+        out.zfpMode = info.mode;
+        out.rate = info.rate;
+        out.bitsPerBlock = info.bitsPerBlock;
+        out.blocks = info.blockCount;
+        out.blockGrid = info.blockGrid;
+        out.payloadBitOffset = info.payloadBitOffset;
+        out.decodedBytes = info.dims[0] * info.dims[1] * info.dims[2] * 4;
+        out.problems.push(...info.notes);
       } catch (e) {
         if (!(e instanceof ZfpFormatError)) throw e;
         out.problems.push(e.message);
-      }
-      break;
-    }
-    case 'zfp-headerless': {
-      out.zfpHeader = false;
-      out.dims = name.dims;
-      out.dtype = name.dtype;
-      out.rate = opts.rate ?? name.rate;
-      if (!name.dims) out.problems.push('the name carries no shape (expected name_XxYxZ_float32...zfp)');
-      if (out.rate === undefined) out.problems.push('the rate is unknown: give --rate or name the file ...crateR.zfp');
-      if (name.dims && out.rate !== undefined) {
-        out.blocks = blockCount(name.dims);
-        out.bitsPerBlock = Math.round(64 * out.rate);
-        const expect = Math.ceil((out.blocks * out.bitsPerBlock) / 64) * 8;
-        if (bytes !== expect) {
-          out.problems.push(`a fixed-rate ${out.rate} stream of this shape is ${expect} bytes, the file has ${bytes} (not fixed-rate, or a different shape or rate)`);
-        }
       }
       break;
     }

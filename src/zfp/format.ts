@@ -169,7 +169,20 @@ function headerless(fileName: string, fileBytes: number, opts: OpenZfpOptions): 
   if (name.dtype && name.dtype !== 'float32') fail(fileName, `the name says ${name.dtype}; only float32 zfp streams are supported`);
   const rate = opts.rate ?? name.rate;
   if (rate === undefined) {
-    fail(fileName, `no zfp header and no rate: give the rate (--rate R) or name the file ${name.base}_${formatDims(name.dims)}_float32.raw.crateR.zfp`);
+    checkDims(fileName, name.dims, 'in the file name');
+    const grid = blockGridOf(name.dims);
+    const blocks = grid[0] * grid[1] * grid[2];
+    // rates whose stream has exactly this size
+    const lo = Math.max(MIN_FLOAT_BLOCK_BITS, Math.floor(((fileBytes - 8) * 8) / blocks));
+    const fits: number[] = [];
+    for (let bits = lo; bits <= Math.ceil((fileBytes * 8) / blocks) && bits <= 0x8000; bits++) {
+      if (fixedRateStreamBytes(blocks, bits) === fileBytes) fits.push(bits / BLOCK_VALUES);
+    }
+    const hint =
+      fits.length === 0
+        ? `; no fixed rate gives ${fileBytes} bytes for ${formatDims(name.dims)}, so this is not a fixed-rate stream (fixed-precision and fixed-accuracy streams have no fixed size)`
+        : ` (the size fits rate ${fits.join(' or ')})`;
+    fail(fileName, `no zfp header and no rate: give the rate (--rate R) or name the file ${name.base}_${formatDims(name.dims)}_float32.raw.crateR.zfp${hint}`);
   }
   const bits = bitsPerBlockForRate(rate);
   checkDims(fileName, name.dims, 'in the file name');

@@ -16,7 +16,7 @@
 // the stream is needed and the file's bytes go to the GPU as they are.
 
 import { formatDims } from '../volume/naming.ts';
-import type { ZfpStreamInfo } from './format.ts';
+import { openZfpStream, type OpenZfpOptions, type ZfpStreamInfo } from './format.ts';
 
 export interface ZfpShard {
   buffer: GPUBuffer;
@@ -236,4 +236,13 @@ export class ZfpGpuStream {
     }
     return out;
   }
+}
+
+/**
+ * The one call the page and the CLI need: validates the file (throwing a
+ * ZfpFormatError that names it, before any GPU allocation) and uploads it.
+ */
+export function loadZfpStream(device: GPUDevice, bytes: Uint8Array, fileName: string, opts: OpenZfpOptions & UploadOptions = {}): ZfpGpuStream {
+  const info = openZfpStream(bytes, fileName, opts);
+  return ZfpGpuStream.upload(device, info, bytes, opts);
 }

@@ -1,6 +1,8 @@
 // Every CLI command, in the order `--help` lists them.
 import type { CliCommand } from '../command.ts';
+import { compressCommand } from './compress.ts';
+import { decompressCommand } from './decompress.ts';
 import { gpuInfoCommand } from './gpu-info.ts';
 import { infoCommand } from './info.ts';
 
-export const commands: CliCommand[] = [infoCommand, gpuInfoCommand];
+export const commands: CliCommand[] = [infoCommand, compressCommand, decompressCommand, gpuInfoCommand];
