@@ -1,7 +1,9 @@
 // Turns a GPU-written element count into indirect dispatch arguments for
-// kernels of 64 invocations per workgroup laid out on a 2D grid (x <= 65535):
-// args = [x, y, 1, count]. One invocation; its workgroup size is 64 only to
-// follow the project rule, the other 63 invocations do nothing.
+// kernels of 64 invocations per workgroup laid out on a 2D grid (x <= MAX_WG):
+// args = [x, y, 1, count]. One invocation does the work; the workgroup size is
+// 64 only to follow the project rule.
+
+override MAX_WG: u32 = 65535u;
 
 struct CountRef {
   word: u32,  // index of the count in count_words
@@ -11,15 +13,18 @@ struct CountRef {
 @group(0) @binding(1) var<uniform> count_ref: CountRef;
 @group(0) @binding(2) var<storage, read_write> args_out: array<u32>;
 
+fn ceil_div(a: u32, b: u32) -> u32 {
+  return a / b + select(0u, 1u, a % b != 0u);
+}
+
 @compute @workgroup_size(64)
 fn indirect_args(@builtin(local_invocation_index) lid: u32) {
   if (lid != 0u) { return; }
   let count = count_words[count_ref.word];
-  let groups = (count + 63u) / 64u;
-  let y = (groups + 65534u) / 65535u;
-  let x = select((groups + y - 1u) / y, 0u, groups == 0u);
-  args_out[0] = x;
-  args_out[1] = max(y, 1u);
+  let groups = ceil_div(count, 64u);
+  let y = max(1u, ceil_div(groups, MAX_WG));
+  args_out[0] = ceil_div(groups, y);
+  args_out[1] = y;
   args_out[2] = 1u;
   args_out[3] = count;
 }

@@ -25,6 +25,7 @@ import {
   type GpuBufferRef,
   type GpuCount,
 } from './gpu-util.ts';
+import { IndirectArgs } from './indirect-args.ts';
 import { zfpWgsl } from './wgsl.ts';
 
 export type { ComputeTarget, GpuBufferRef, GpuCount } from './gpu-util.ts';
@@ -63,21 +64,25 @@ export interface DecodeVolumeArgs {
 export class ZfpDecoder {
   private readonly groups = new BindGroupCache();
   private readonly uniforms: UniformSlots;
-  /** [x, y, z, count] for the indirect block-list dispatch. */
-  private readonly args: GPUBuffer;
 
   private constructor(
     readonly device: GPUDevice,
     private readonly decodeBlocksPipeline: GPUComputePipeline,
     private readonly decodeVolumePipeline: GPUComputePipeline,
     private readonly rangesPipeline: GPUComputePipeline,
-    private readonly argsPipeline: GPUComputePipeline,
+    /** [x, y, 1, count] of the indirect block-list dispatch. */
+    private readonly args: IndirectArgs,
+    private readonly maxWorkgroups: number,
   ) {
     this.uniforms = new UniformSlots(device, 'ZfpDecoder');
-    this.args = device.createBuffer({ label: 'ZfpDecoder.args', size: 16, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.INDIRECT });
   }
 
-  static async create(device: GPUDevice): Promise<ZfpDecoder> {
+  /**
+   * @param opts.maxWorkgroupsPerDimension grid limit (default: the device's);
+   *   tests lower it so small jobs use 2D grids.
+   */
+  static async create(device: GPUDevice, opts: { maxWorkgroupsPerDimension?: number } = {}): Promise<ZfpDecoder> {
+    const maxWorkgroups = opts.maxWorkgroupsPerDimension ?? device.limits.maxComputeWorkgroupsPerDimension;
     const stream = streamBindGroupLayout(device);
     const storage = (binding: number, readOnly: boolean): GPUBindGroupLayoutEntry => ({
       binding,
@@ -91,7 +96,6 @@ export class ZfpDecoder {
     const blocksLayout = layout('ZfpDecoder.decodeBlocks.layout', storage(0, true), storage(1, true), storage(2, true), storage(3, false));
     const volumeLayout = layout('ZfpDecoder.decodeVolume.layout', uniform(0), storage(1, false));
     const rangesLayout = layout('ZfpDecoder.blockRanges.layout', storage(0, false));
-    const argsLayout = layout('ZfpDecoder.indirectArgs.layout', storage(0, true), uniform(1), storage(2, false));
 
     const [blocks, volume, ranges, args] = await Promise.all([
       createComputePipeline(device, 'ZfpDecoder.decodeBlocks', zfpWgsl.decodeBlocks, 'decode_blocks', {
@@ -103,11 +107,9 @@ export class ZfpDecoder {
       createComputePipeline(device, 'ZfpDecoder.blockRanges', zfpWgsl.blockRanges, 'block_ranges', {
         layout: pipelineLayout('ZfpDecoder.blockRanges', [stream, rangesLayout]),
       }),
-      createComputePipeline(device, 'ZfpDecoder.indirectArgs', zfpWgsl.indirectArgs, 'indirect_args', {
-        layout: pipelineLayout('ZfpDecoder.indirectArgs', [argsLayout]),
-      }),
+      IndirectArgs.create(device, 'ZfpDecoder.indirectArgs', maxWorkgroups),
     ]);
-    return new ZfpDecoder(device, blocks, volume, ranges, args);
+    return new ZfpDecoder(device, blocks, volume, ranges, args, maxWorkgroups);
   }
 
   private check(stream: ZfpGpuStream): void {
@@ -123,21 +125,6 @@ export class ZfpDecoder {
   encodeDecodeBlocks(target: ComputeTarget, a: DecodeBlocksArgs): void {
     this.check(a.stream);
     const { device } = this;
-    const alignment = device.limits.minStorageBufferOffsetAlignment;
-    if (a.count.offset % 4 !== 0) throw new Error(`ZfpDecoder: count offset ${a.count.offset} is not a multiple of 4`);
-    const countBase = Math.floor(a.count.offset / alignment) * alignment;
-    const countKey = `${refKey({ buffer: a.count.buffer, offset: countBase })}#${a.count.offset}`;
-    const argsGroup = this.groups.get(`args|${countKey}`, () =>
-      device.createBindGroup({
-        label: 'ZfpDecoder.indirectArgs.bindGroup',
-        layout: this.argsPipeline.getBindGroupLayout(0),
-        entries: [
-          { binding: 0, resource: { buffer: a.count.buffer, offset: countBase, size: Math.min(a.count.buffer.size - countBase, alignment) } },
-          { binding: 1, resource: this.uniforms.get(`count|${(a.count.offset - countBase) / 4}`, new Uint32Array([(a.count.offset - countBase) / 4, 0, 0, 0])) },
-          { binding: 2, resource: { buffer: this.args } },
-        ],
-      }),
-    );
     const listGroup = this.groups.get(`blocks|${refKey(a.blockIds)}|${refKey(a.slotIds)}|${refKey(a.slots)}`, () =>
       device.createBindGroup({
         label: 'ZfpDecoder.decodeBlocks.bindGroup',
@@ -145,7 +132,7 @@ export class ZfpDecoder {
         entries: [
           { binding: 0, resource: binding(a.blockIds) },
           { binding: 1, resource: binding(a.slotIds) },
-          { binding: 2, resource: { buffer: this.args } },
+          { binding: 2, resource: { buffer: this.args.buffer } },
           { binding: 3, resource: binding(a.slots) },
         ],
       }),
@@ -154,14 +141,12 @@ export class ZfpDecoder {
       target,
       'ZfpDecoder.decodeBlocks',
       (pass) => {
-        pass.setPipeline(this.argsPipeline);
-        pass.setBindGroup(0, argsGroup);
-        pass.dispatchWorkgroups(1);
+        this.args.encode(pass, a.count);
         pass.setPipeline(this.decodeBlocksPipeline);
         pass.setBindGroup(1, listGroup);
         for (const shard of a.stream.shards) {
           pass.setBindGroup(0, shard.bindGroup);
-          pass.dispatchWorkgroupsIndirect(this.args, 0);
+          pass.dispatchWorkgroupsIndirect(this.args.buffer, 0);
         }
       },
       a.timestampWrites,
@@ -193,7 +178,7 @@ export class ZfpDecoder {
         pass.setBindGroup(1, group);
         for (const shard of a.stream.shards) {
           pass.setBindGroup(0, shard.bindGroup);
-          dispatchLinear(pass, Math.ceil((shard.endBlock - shard.firstBlock) / 64));
+          dispatchLinear(pass, Math.ceil((shard.endBlock - shard.firstBlock) / 64), this.maxWorkgroups);
         }
       },
       a.timestampWrites,
@@ -246,7 +231,7 @@ export class ZfpDecoder {
         for (const w of work) {
           pass.setBindGroup(0, a.stream.shards[w.shard].bindGroup);
           pass.setBindGroup(1, w.group);
-          dispatchLinear(pass, Math.ceil(w.count / 64));
+          dispatchLinear(pass, Math.ceil(w.count / 64), this.maxWorkgroups);
         }
       },
       a.timestampWrites,
