@@ -1,0 +1,100 @@
+// Stable LSD radix sort by u32 key with u32 values, 4 bits per pass,
+// barrier-free. Each invocation owns a chunk of CHUNK consecutive elements:
+// `histogram` counts the chunk's digits into table[d * units + chunk]
+// (digit-major), an exclusive scan of the table (ExclusiveScan) turns that
+// into the first output position of each (digit, chunk), and `scatter` walks
+// the chunk in order writing each element at its digit's next position.
+// Chunks are in index order and each is walked in order, so equal digits
+// keep their order: the sort is stable. Descending order complements the
+// digit (d ^ 15), so it is stable too and needs no reverse pass.
+
+override WG: u32 = 64u;
+override CHUNK: u32 = 64u; // at most 255: per-digit counters are 8-bit lanes
+
+struct Sort {
+  n: u32,
+  units: u32,
+  capacity: u32,
+  count_in: u32,
+}
+
+struct Pass {
+  shift: u32,
+  flip: u32, // 15 for descending, 0 for ascending
+}
+
+@group(0) @binding(0) var<uniform> sort: Sort;
+@group(0) @binding(1) var<uniform> pass_: Pass;
+@group(0) @binding(2) var<storage, read> keys_in: array<u32>;
+@group(0) @binding(3) var<storage, read> values_in: array<u32>;
+@group(0) @binding(4) var<storage, read_write> histograms: array<u32>;
+@group(0) @binding(5) var<storage, read> offsets: array<u32>;
+@group(0) @binding(6) var<storage, read_write> keys_out: array<u32>;
+@group(0) @binding(7) var<storage, read_write> values_out: array<u32>;
+
+fn digit(key: u32) -> u32 {
+  return ((key >> pass_.shift) & 15u) ^ pass_.flip;
+}
+
+@compute @workgroup_size(WG)
+fn histogram(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+             @builtin(local_invocation_index) lid: u32) {
+  let c = grid_invocation_index(wid, nwg, lid, WG);
+  let units = sort.units;
+  if (c >= units) {
+    return;
+  }
+  let begin = c * CHUNK;
+  let len = min(sort.n - begin, CHUNK);
+  // 16 counters as 8-bit lanes of 4 words: no dynamically indexed array.
+  var counts = vec4u(0u);
+  for (var j = 0u; j < len; j++) {
+    let d = digit(keys_in[begin + j]);
+    let inc = 1u << ((d & 3u) * 8u);
+    counts += select(vec4u(0u), vec4u(inc), vec4u(d >> 2u) == vec4u(0u, 1u, 2u, 3u));
+  }
+  for (var d = 0u; d < 16u; d++) {
+    histograms[d * units + c] = (counts[d >> 2u] >> ((d & 3u) * 8u)) & 255u;
+  }
+}
+
+@compute @workgroup_size(WG)
+fn scatter(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+           @builtin(local_invocation_index) lid: u32) {
+  let c = grid_invocation_index(wid, nwg, lid, WG);
+  let units = sort.units;
+  if (c >= units) {
+    return;
+  }
+  var next: array<u32, 16>;
+  for (var d = 0u; d < 16u; d++) {
+    next[d] = offsets[d * units + c];
+  }
+  let begin = c * CHUNK;
+  let len = min(sort.n - begin, CHUNK);
+  for (var j = 0u; j < len; j++) {
+    let key = keys_in[begin + j];
+    let d = digit(key);
+    let p = next[d];
+    next[d] = p + 1u;
+    keys_out[p] = key;
+    values_out[p] = values_in[begin + j];
+  }
+}
+
+// Copies the sorted result back when an in-place sort ran an odd number of
+// passes (it ended in scratch).
+@compute @workgroup_size(WG)
+fn copy_back(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+             @builtin(local_invocation_index) lid: u32) {
+  let c = grid_invocation_index(wid, nwg, lid, WG);
+  if (c >= sort.units) {
+    return;
+  }
+  let begin = c * CHUNK;
+  let len = min(sort.n - begin, CHUNK);
+  for (var j = 0u; j < len; j++) {
+    keys_out[begin + j] = keys_in[begin + j];
+    values_out[begin + j] = values_in[begin + j];
+  }
+}

@@ -1,0 +1,133 @@
+// Stream compaction driven by a GPU-side count: StreamCompact (values) and
+// StreamCompactIds (indices), from a 0/1 mask and its exclusive scan.
+
+import compactWgsl from '../../shaders/primitives/compact.wgsl?raw';
+import { createComputePipeline } from '../gpu/wgsl.ts';
+import { BindGroupCache } from './bind-group-cache.ts';
+import type { CountLike } from './count.ts';
+import {
+  DispatchRecords,
+  RECORD_UNIFORM_SIZE,
+  dispatchSnippet,
+  gridSnippet,
+  maxWorkgroupsPerDimension,
+  workgroupSize,
+  type PrimitiveOptions,
+} from './dispatch-records.ts';
+
+export interface CompactOptions extends PrimitiveOptions {
+  /** Elements per invocation. Default 16. */
+  chunk?: number;
+}
+
+export interface StreamCompactIdsArgs {
+  /** u32 per element, non-zero = keep; STORAGE usage. */
+  mask: GPUBuffer;
+  /** Exclusive scan of the (0/1) mask, e.g. from ExclusiveScan; STORAGE usage. */
+  offsets: GPUBuffer;
+  /** Receives the kept elements at offsets[i]; STORAGE usage. Nothing else is written. */
+  output: GPUBuffer;
+  /** Elements of mask/offsets to consider. A GpuCount's buffer needs COPY_SRC. */
+  count: CountLike;
+  timestampWrites?: GPUComputePassTimestampWrites;
+}
+
+export interface StreamCompactArgs extends StreamCompactIdsArgs {
+  /** u32 values, one per element; STORAGE usage. */
+  values: GPUBuffer;
+}
+
+/** Shared body of both compactions: one pipeline, one dispatch record. */
+class Compaction {
+  private readonly bindGroups = new BindGroupCache();
+
+  constructor(
+    private readonly device: GPUDevice,
+    private readonly label: string,
+    private readonly pipeline: GPUComputePipeline,
+    private readonly records: DispatchRecords,
+  ) {}
+
+  static async create(device: GPUDevice, label: string, entryPoint: string, options: CompactOptions): Promise<Compaction> {
+    const chunk = options.chunk ?? 16;
+    if (!Number.isInteger(chunk) || chunk < 1 || chunk > 4096) throw new RangeError('chunk must be in 1..4096');
+    const wg = workgroupSize(device, options);
+    const [pipeline, records] = await Promise.all([
+      createComputePipeline(device, `${label}.compact`, [gridSnippet, { name: 'shaders/primitives/compact.wgsl', code: compactWgsl }], entryPoint, {
+        constants: { WG: wg, CHUNK: chunk },
+      }),
+      DispatchRecords.create(device, label, {
+        chunk,
+        wg,
+        levels: 1,
+        capacity: 0xffffffff,
+        maxWorkgroupsPerDimension: maxWorkgroupsPerDimension(device, options),
+      }),
+    ]);
+    return new Compaction(device, label, pipeline, records);
+  }
+
+  encode(encoder: GPUCommandEncoder, args: StreamCompactIdsArgs, values?: GPUBuffer): void {
+    const { mask, offsets, output } = args;
+    if (output === mask || output === offsets || output === values) throw new Error(`${this.label}: output must not alias an input`);
+    const buffers = values ? [mask, offsets, values, output] : [mask, offsets, output];
+    const bindGroup = this.bindGroups.get(buffers, () =>
+      this.device.createBindGroup({
+        label: `${this.label}.bindGroup`,
+        layout: this.pipeline.getBindGroupLayout(0),
+        entries: [
+          { binding: 0, resource: { buffer: this.records.params, size: RECORD_UNIFORM_SIZE } },
+          { binding: 1, resource: { buffer: mask } },
+          { binding: 2, resource: { buffer: offsets } },
+          ...(values ? [{ binding: 3, resource: { buffer: values } }] : []),
+          { binding: 4, resource: { buffer: output } },
+        ],
+      }),
+    );
+    this.records.encodeCount(encoder, args.count);
+    const pass = encoder.beginComputePass({ label: this.label, timestampWrites: args.timestampWrites });
+    this.records.dispatchSetup(pass);
+    pass.setPipeline(this.pipeline);
+    pass.setBindGroup(0, bindGroup);
+    pass.dispatchWorkgroupsIndirect(this.records.params, DispatchRecords.argsOffset(0));
+    pass.end();
+  }
+
+  destroy(): void {
+    this.records.destroy();
+  }
+}
+
+/** out[offsets[i]] = values[i] for every i < count with mask[i] != 0. */
+export class StreamCompact {
+  private constructor(private readonly impl: Compaction) {}
+
+  static async create(device: GPUDevice, options: CompactOptions = {}): Promise<StreamCompact> {
+    return new StreamCompact(await Compaction.create(device, 'StreamCompact', 'compact_values', options));
+  }
+
+  encode(encoder: GPUCommandEncoder, args: StreamCompactArgs): void {
+    this.impl.encode(encoder, args, args.values);
+  }
+
+  destroy(): void {
+    this.impl.destroy();
+  }
+}
+
+/** out[offsets[i]] = i for every i < count with mask[i] != 0 (the paper's StreamCompactIDs). */
+export class StreamCompactIds {
+  private constructor(private readonly impl: Compaction) {}
+
+  static async create(device: GPUDevice, options: CompactOptions = {}): Promise<StreamCompactIds> {
+    return new StreamCompactIds(await Compaction.create(device, 'StreamCompactIds', 'compact_ids', options));
+  }
+
+  encode(encoder: GPUCommandEncoder, args: StreamCompactIdsArgs): void {
+    this.impl.encode(encoder, args);
+  }
+
+  destroy(): void {
+    this.impl.destroy();
+  }
+}

@@ -1,0 +1,214 @@
+// Exclusive scan (prefix sum) of u32, any length from 0 to the capacity, with
+// the count in a GPU buffer and an optional total written to a GPU buffer.
+// Design: multi-level reduce-then-scan (shaders/primitives/scan.wgsl); see
+// src/primitives/README.md for why not single-pass.
+
+import scanWgsl from '../../shaders/primitives/scan.wgsl?raw';
+import { createComputePipeline, type WgslPart } from '../gpu/wgsl.ts';
+import type { CountLike, GpuCount } from './count.ts';
+import {
+  DispatchRecords,
+  RECORD_UNIFORM_SIZE,
+  dispatchSnippet,
+  gridSnippet,
+  maxWorkgroupsPerDimension,
+  workgroupSize,
+  type PrimitiveOptions,
+} from './dispatch-records.ts';
+
+const scanSnippet: WgslPart = { name: 'shaders/primitives/scan.wgsl', code: scanWgsl };
+
+export interface ExclusiveScanOptions extends PrimitiveOptions {
+  /** Most elements one encode may scan; grow() raises it. */
+  capacity: number;
+  /** Consecutive elements per invocation (and per partial sum). Default 16. */
+  chunk?: number;
+}
+
+export interface ExclusiveScanArgs {
+  /** u32 elements; needs STORAGE usage. Not the same buffer as `output`. */
+  input: GPUBuffer;
+  /** Receives the exclusive prefix sums of the first `count` elements; STORAGE usage. */
+  output: GPUBuffer;
+  /** Elements to scan (clamped to the capacity). A GpuCount's buffer needs COPY_SRC. */
+  count: CountLike;
+  /** Where to write the sum of all `count` elements; its buffer needs COPY_DST. */
+  totalOut?: GpuCount;
+  timestampWrites?: GPUComputePassTimestampWrites;
+}
+
+interface UserBindGroups {
+  reduce?: GPUBindGroup;
+  scan: GPUBindGroup;
+}
+
+/** Levels until one chunk holds the rest (the top level, one invocation). */
+function levelsFor(capacity: number, chunk: number): number {
+  let levels = 1;
+  for (let n = Math.max(1, capacity); n > chunk; n = Math.ceil(n / chunk)) levels++;
+  return levels;
+}
+
+export class ExclusiveScan {
+  /** Elements per invocation. */
+  readonly chunk: number;
+  private capacityValue = 0;
+  private levels = 1;
+  /** sums[l], scans[l] for levels l >= 1 (index 0 unused). */
+  private sums: GPUBuffer[] = [];
+  private scans: GPUBuffer[] = [];
+  private internalReduce: GPUBindGroup[] = [];
+  private internalScan: GPUBindGroup[] = [];
+  private userBindGroups = new WeakMap<GPUBuffer, WeakMap<GPUBuffer, UserBindGroups>>();
+  private readonly zero: GPUBuffer;
+  private readonly total: GPUBuffer;
+
+  private constructor(
+    private readonly device: GPUDevice,
+    private readonly layout: GPUBindGroupLayout,
+    private readonly reducePipeline: GPUComputePipeline,
+    private readonly scanPipeline: GPUComputePipeline,
+    private readonly records: DispatchRecords,
+    chunk: number,
+    capacity: number,
+  ) {
+    this.chunk = chunk;
+    this.zero = device.createBuffer({ label: 'ExclusiveScan.zero', size: 4, usage: GPUBufferUsage.STORAGE });
+    this.total = device.createBuffer({ label: 'ExclusiveScan.total', size: 4, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC });
+    this.allocate(capacity);
+  }
+
+  static async create(device: GPUDevice, options: ExclusiveScanOptions): Promise<ExclusiveScan> {
+    const chunk = options.chunk ?? 16;
+    if (!Number.isInteger(chunk) || chunk < 2 || chunk > 4096) throw new RangeError('chunk must be in 2..4096');
+    const wg = workgroupSize(device, options);
+    const maxPerDim = maxWorkgroupsPerDimension(device, options);
+    const layout = device.createBindGroupLayout({
+      label: 'ExclusiveScan.layout',
+      entries: [
+        { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform', hasDynamicOffset: true, minBindingSize: RECORD_UNIFORM_SIZE } },
+        { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
+        { binding: 2, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
+        { binding: 3, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
+        { binding: 4, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
+      ],
+    });
+    const pipelineLayout = device.createPipelineLayout({ label: 'ExclusiveScan.pipelineLayout', bindGroupLayouts: [layout] });
+    const parts = [gridSnippet, dispatchSnippet, scanSnippet];
+    const constants = { WG: wg, CHUNK: chunk };
+    const [reduce, scan, records] = await Promise.all([
+      createComputePipeline(device, 'ExclusiveScan.reduce', parts, 'reduce', { layout: pipelineLayout, constants }),
+      createComputePipeline(device, 'ExclusiveScan.scan', parts, 'scan', { layout: pipelineLayout, constants }),
+      DispatchRecords.create(device, 'ExclusiveScan', {
+        chunk,
+        wg,
+        levels: levelsFor(0xffffffff, chunk),
+        capacity: options.capacity,
+        maxWorkgroupsPerDimension: maxPerDim,
+      }),
+    ]);
+    return new ExclusiveScan(device, layout, reduce, scan, records, chunk, options.capacity);
+  }
+
+  get capacity(): number {
+    return this.capacityValue;
+  }
+
+  /** Raises the capacity (reallocating scratch); never shrinks. Call between submissions. */
+  grow(capacity: number): void {
+    if (capacity <= this.capacityValue) return;
+    this.allocate(capacity);
+  }
+
+  private allocate(capacity: number): void {
+    if (!Number.isInteger(capacity) || capacity < 0 || capacity > 0xffffffff) throw new RangeError(`capacity ${capacity} is not a u32`);
+    for (const b of [...this.sums, ...this.scans]) b?.destroy();
+    this.capacityValue = capacity;
+    this.levels = levelsFor(capacity, this.chunk);
+    this.sums = [];
+    this.scans = [];
+    let n = Math.max(1, capacity);
+    for (let l = 1; l < this.levels; l++) {
+      n = Math.ceil(n / this.chunk);
+      const usage = GPUBufferUsage.STORAGE;
+      this.sums[l] = this.device.createBuffer({ label: `ExclusiveScan.sums${l}`, size: n * 4, usage });
+      this.scans[l] = this.device.createBuffer({ label: `ExclusiveScan.scans${l}`, size: n * 4, usage });
+    }
+    this.internalReduce = [];
+    this.internalScan = [];
+    for (let l = 1; l < this.levels; l++) {
+      const top = l === this.levels - 1;
+      if (!top) this.internalReduce[l] = this.bindGroup(`reduce${l}`, this.sums[l], this.sums[l + 1], this.zero);
+      this.internalScan[l] = this.bindGroup(`scan${l}`, this.sums[l], this.scans[l], top ? this.zero : this.scans[l + 1]);
+    }
+    this.userBindGroups = new WeakMap();
+    this.records.setCapacity(capacity);
+  }
+
+  private bindGroup(name: string, src: GPUBuffer, dst: GPUBuffer, carry: GPUBuffer): GPUBindGroup {
+    return this.device.createBindGroup({
+      label: `ExclusiveScan.${name}`,
+      layout: this.layout,
+      entries: [
+        { binding: 0, resource: { buffer: this.records.params, size: RECORD_UNIFORM_SIZE } },
+        { binding: 1, resource: { buffer: src } },
+        { binding: 2, resource: { buffer: dst } },
+        { binding: 3, resource: { buffer: carry } },
+        { binding: 4, resource: { buffer: this.total } },
+      ],
+    });
+  }
+
+  private userGroups(input: GPUBuffer, output: GPUBuffer): UserBindGroups {
+    let byOutput = this.userBindGroups.get(input);
+    if (!byOutput) {
+      byOutput = new WeakMap();
+      this.userBindGroups.set(input, byOutput);
+    }
+    let groups = byOutput.get(output);
+    if (!groups) {
+      const single = this.levels === 1;
+      groups = {
+        reduce: single ? undefined : this.bindGroup('reduce0', input, this.sums[1], this.zero),
+        scan: this.bindGroup('scan0', input, output, single ? this.zero : this.scans[1]),
+      };
+      byOutput.set(output, groups);
+    }
+    return groups;
+  }
+
+  /** Records the scan: a count copy, one compute pass, and the total copy if asked. */
+  encode(encoder: GPUCommandEncoder, args: ExclusiveScanArgs): void {
+    if (args.input === args.output) throw new Error('ExclusiveScan: input and output must be different buffers');
+    const user = this.userGroups(args.input, args.output);
+    const params = this.records.params;
+    this.records.encodeCount(encoder, args.count);
+    const pass = encoder.beginComputePass({ label: 'ExclusiveScan', timestampWrites: args.timestampWrites });
+    this.records.dispatchSetup(pass);
+    const top = this.levels - 1;
+    if (top > 0) {
+      pass.setPipeline(this.reducePipeline);
+      for (let l = 0; l < top; l++) {
+        pass.setBindGroup(0, l === 0 ? user.reduce! : this.internalReduce[l], [DispatchRecords.recordOffset(l)]);
+        pass.dispatchWorkgroupsIndirect(params, DispatchRecords.argsOffset(l));
+      }
+    }
+    pass.setPipeline(this.scanPipeline);
+    // The top level holds at most one chunk: one invocation, even for count 0.
+    pass.setBindGroup(0, top === 0 ? user.scan : this.internalScan[top], [DispatchRecords.recordOffset(top)]);
+    pass.dispatchWorkgroups(1);
+    for (let l = top - 1; l >= 0; l--) {
+      pass.setBindGroup(0, l === 0 ? user.scan : this.internalScan[l], [DispatchRecords.recordOffset(l)]);
+      pass.dispatchWorkgroupsIndirect(params, DispatchRecords.argsOffset(l));
+    }
+    pass.end();
+    if (args.totalOut) encoder.copyBufferToBuffer(this.total, 0, args.totalOut.buffer, args.totalOut.offset, 4);
+  }
+
+  destroy(): void {
+    for (const b of [...this.sums, ...this.scans]) b?.destroy();
+    this.zero.destroy();
+    this.total.destroy();
+    this.records.destroy();
+  }
+}

@@ -1,0 +1,279 @@
+// Stable radix sort by u32 key with u32 values, ascending or descending, the
+// count from a GPU buffer. 4 bits per pass (keyBits / 4 passes, 8 for full
+// keys); each pass is histogram -> ExclusiveScan of the digit table ->
+// scatter, all sized on the GPU (shaders/primitives/radix_sort.wgsl).
+
+import sortWgsl from '../../shaders/primitives/radix_sort.wgsl?raw';
+import { createComputePipeline } from '../gpu/wgsl.ts';
+import { BindGroupCache } from './bind-group-cache.ts';
+import type { CountLike } from './count.ts';
+import {
+  DispatchRecords,
+  RECORD_TABLE_COUNT,
+  RECORD_UNIFORM_SIZE,
+  dispatchSnippet,
+  gridSnippet,
+  maxWorkgroupsPerDimension,
+  workgroupSize,
+  type PrimitiveOptions,
+} from './dispatch-records.ts';
+import { ExclusiveScan } from './scan.ts';
+
+const RADIX_BITS = 4;
+const RADIX = 1 << RADIX_BITS;
+const MAX_PASSES = 32 / RADIX_BITS;
+/** Bytes between the per-pass uniforms (shift, flip). */
+const PASS_STRIDE = 256;
+
+export interface RadixSortOptions extends PrimitiveOptions {
+  /** Most elements one encode may sort; grow() raises it. */
+  capacity: number;
+  /** Consecutive elements per invocation, 1..255. Default 64. */
+  chunk?: number;
+}
+
+export interface RadixSortArgs {
+  /** u32 keys; STORAGE usage (and COPY_SRC/COPY_DST not needed). Sorted in place unless keysOut is given. */
+  keys: GPUBuffer;
+  /** u32 values, permuted with their keys; STORAGE usage. */
+  values: GPUBuffer;
+  /** Output buffers (both or neither); the inputs are then left unchanged. STORAGE usage. */
+  keysOut?: GPUBuffer;
+  valuesOut?: GPUBuffer;
+  /** Elements to sort (clamped to the capacity). A GpuCount's buffer needs COPY_SRC. */
+  count: CountLike;
+  /** Largest keys first (still stable: equal keys keep their input order). */
+  descending?: boolean;
+  /** Only the low keyBits bits of the keys are sorted on (1..32, default 32); fewer bits, fewer passes. */
+  keyBits?: number;
+}
+
+interface Pair {
+  keys: GPUBuffer;
+  values: GPUBuffer;
+}
+
+export class RadixSortByKey {
+  readonly chunk: number;
+  private capacityValue = 0;
+  private keysTmp!: GPUBuffer;
+  private valuesTmp!: GPUBuffer;
+  private histograms!: GPUBuffer;
+  private offsets!: GPUBuffer;
+  private readonly histogramGroups = new BindGroupCache();
+  private readonly scatterGroups = new BindGroupCache();
+
+  private constructor(
+    private readonly device: GPUDevice,
+    private readonly histogramLayout: GPUBindGroupLayout,
+    private readonly scatterLayout: GPUBindGroupLayout,
+    private readonly histogramPipeline: GPUComputePipeline,
+    private readonly scatterPipeline: GPUComputePipeline,
+    private readonly copyPipeline: GPUComputePipeline,
+    private readonly records: DispatchRecords,
+    private readonly scan: ExclusiveScan,
+    private readonly passParams: GPUBuffer,
+    chunk: number,
+    capacity: number,
+  ) {
+    this.chunk = chunk;
+    this.allocate(capacity);
+  }
+
+  static async create(device: GPUDevice, options: RadixSortOptions): Promise<RadixSortByKey> {
+    const chunk = options.chunk ?? 64;
+    if (!Number.isInteger(chunk) || chunk < 1 || chunk > 255) throw new RangeError('chunk must be in 1..255');
+    const wg = workgroupSize(device, options);
+    const maxPerDim = maxWorkgroupsPerDimension(device, options);
+    const uniform = (dynamic: boolean): GPUBindGroupLayoutEntry['buffer'] => ({
+      type: 'uniform',
+      hasDynamicOffset: dynamic,
+      minBindingSize: RECORD_UNIFORM_SIZE,
+    });
+    const entry = (binding: number, buffer: GPUBindGroupLayoutEntry['buffer']): GPUBindGroupLayoutEntry => ({
+      binding,
+      visibility: GPUShaderStage.COMPUTE,
+      buffer,
+    });
+    const histogramLayout = device.createBindGroupLayout({
+      label: 'RadixSortByKey.histogramLayout',
+      entries: [entry(0, uniform(false)), entry(1, uniform(true)), entry(2, { type: 'read-only-storage' }), entry(4, { type: 'storage' })],
+    });
+    const scatterLayout = device.createBindGroupLayout({
+      label: 'RadixSortByKey.scatterLayout',
+      entries: [
+        entry(0, uniform(false)),
+        entry(1, uniform(true)),
+        entry(2, { type: 'read-only-storage' }),
+        entry(3, { type: 'read-only-storage' }),
+        entry(5, { type: 'read-only-storage' }),
+        entry(6, { type: 'storage' }),
+        entry(7, { type: 'storage' }),
+      ],
+    });
+    const parts = [gridSnippet, dispatchSnippet, { name: 'shaders/primitives/radix_sort.wgsl', code: sortWgsl }];
+    const constants = { WG: wg, CHUNK: chunk };
+    const layoutOf = (l: GPUBindGroupLayout) => device.createPipelineLayout({ label: 'RadixSortByKey.pipelineLayout', bindGroupLayouts: [l] });
+    const [histogram, scatter, copy, records, scan] = await Promise.all([
+      createComputePipeline(device, 'RadixSortByKey.histogram', parts, 'histogram', { layout: layoutOf(histogramLayout), constants }),
+      createComputePipeline(device, 'RadixSortByKey.scatter', parts, 'scatter', { layout: layoutOf(scatterLayout), constants }),
+      createComputePipeline(device, 'RadixSortByKey.copyBack', parts, 'copy_back', { layout: layoutOf(scatterLayout), constants }),
+      DispatchRecords.create(device, 'RadixSortByKey', {
+        chunk,
+        wg,
+        levels: 1,
+        capacity: options.capacity,
+        maxWorkgroupsPerDimension: maxPerDim,
+        tableRows: RADIX,
+      }),
+      ExclusiveScan.create(device, {
+        capacity: RadixSortByKey.tableSize(options.capacity, chunk),
+        maxWorkgroupsPerDimension: options.maxWorkgroupsPerDimension,
+        workgroupSize: options.workgroupSize,
+      }),
+    ]);
+    // Per-pass uniforms, written once: ascending passes, then descending.
+    const passParams = device.createBuffer({
+      label: 'RadixSortByKey.passParams',
+      size: 2 * MAX_PASSES * PASS_STRIDE,
+      usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
+    });
+    const words = new Uint32Array((2 * MAX_PASSES * PASS_STRIDE) / 4);
+    for (let d = 0; d < 2; d++) {
+      for (let p = 0; p < MAX_PASSES; p++) {
+        const at = ((d * MAX_PASSES + p) * PASS_STRIDE) / 4;
+        words[at] = p * RADIX_BITS;
+        words[at + 1] = d === 1 ? RADIX - 1 : 0;
+      }
+    }
+    device.queue.writeBuffer(passParams, 0, words);
+    return new RadixSortByKey(device, histogramLayout, scatterLayout, histogram, scatter, copy, records, scan, passParams, chunk, options.capacity);
+  }
+
+  private static tableSize(capacity: number, chunk: number): number {
+    return RADIX * Math.ceil(Math.max(1, capacity) / chunk);
+  }
+
+  get capacity(): number {
+    return this.capacityValue;
+  }
+
+  /** Raises the capacity (reallocating scratch); never shrinks. Call between submissions. */
+  grow(capacity: number): void {
+    if (capacity <= this.capacityValue) return;
+    for (const b of [this.keysTmp, this.valuesTmp, this.histograms, this.offsets]) b.destroy();
+    this.allocate(capacity);
+  }
+
+  private allocate(capacity: number): void {
+    if (!Number.isInteger(capacity) || capacity < 0 || capacity > 0xffffffff) throw new RangeError(`capacity ${capacity} is not a u32`);
+    this.capacityValue = capacity;
+    const storage = GPUBufferUsage.STORAGE;
+    const words = Math.max(1, capacity);
+    const table = RadixSortByKey.tableSize(capacity, this.chunk);
+    this.keysTmp = this.device.createBuffer({ label: 'RadixSortByKey.keysTmp', size: words * 4, usage: storage });
+    this.valuesTmp = this.device.createBuffer({ label: 'RadixSortByKey.valuesTmp', size: words * 4, usage: storage });
+    this.histograms = this.device.createBuffer({ label: 'RadixSortByKey.histograms', size: table * 4, usage: storage });
+    this.offsets = this.device.createBuffer({ label: 'RadixSortByKey.offsets', size: table * 4, usage: storage });
+    this.scan.grow(table);
+    this.records.setCapacity(capacity);
+    this.histogramGroups.clear();
+    this.scatterGroups.clear();
+  }
+
+  private histogramGroup(src: Pair): GPUBindGroup {
+    return this.histogramGroups.get([src.keys], () =>
+      this.device.createBindGroup({
+        label: 'RadixSortByKey.histogramBindGroup',
+        layout: this.histogramLayout,
+        entries: [
+          { binding: 0, resource: { buffer: this.records.params, size: RECORD_UNIFORM_SIZE } },
+          { binding: 1, resource: { buffer: this.passParams, size: RECORD_UNIFORM_SIZE } },
+          { binding: 2, resource: { buffer: src.keys } },
+          { binding: 4, resource: { buffer: this.histograms } },
+        ],
+      }),
+    );
+  }
+
+  private scatterGroup(src: Pair, dst: Pair): GPUBindGroup {
+    return this.scatterGroups.get([src.keys, src.values, dst.keys, dst.values], () =>
+      this.device.createBindGroup({
+        label: 'RadixSortByKey.scatterBindGroup',
+        layout: this.scatterLayout,
+        entries: [
+          { binding: 0, resource: { buffer: this.records.params, size: RECORD_UNIFORM_SIZE } },
+          { binding: 1, resource: { buffer: this.passParams, size: RECORD_UNIFORM_SIZE } },
+          { binding: 2, resource: { buffer: src.keys } },
+          { binding: 3, resource: { buffer: src.values } },
+          { binding: 5, resource: { buffer: this.offsets } },
+          { binding: 6, resource: { buffer: dst.keys } },
+          { binding: 7, resource: { buffer: dst.values } },
+        ],
+      }),
+    );
+  }
+
+  /** Records the sort: about 3 compute passes per 4 key bits, no readback. */
+  encode(encoder: GPUCommandEncoder, args: RadixSortArgs): void {
+    const keyBits = args.keyBits ?? 32;
+    if (!Number.isInteger(keyBits) || keyBits < 1 || keyBits > 32) throw new RangeError('keyBits must be in 1..32');
+    if ((args.keysOut === undefined) !== (args.valuesOut === undefined)) throw new Error('RadixSortByKey: give both keysOut and valuesOut, or neither');
+    if (args.keys === args.values) throw new Error('RadixSortByKey: keys and values must be different buffers');
+    const input: Pair = { keys: args.keys, values: args.values };
+    const output: Pair = args.keysOut && args.valuesOut ? { keys: args.keysOut, values: args.valuesOut } : input;
+    const inPlace = output.keys === input.keys && output.values === input.values;
+    if (!inPlace && (output.keys === input.keys || output.values === input.values || output.keys === input.values || output.values === input.keys)) {
+      throw new Error('RadixSortByKey: outputs must be the inputs (in place) or distinct from them');
+    }
+    const scratch: Pair = { keys: this.keysTmp, values: this.valuesTmp };
+    const passes = Math.ceil(keyBits / RADIX_BITS);
+    // Ping-pong so that the last pass writes `output`; an in-place sort with
+    // an odd number of passes ends in scratch and copies back.
+    const copyBack = inPlace && passes % 2 === 1;
+    const last = copyBack ? scratch : output;
+    const other = copyBack ? output : scratch;
+    const passBase = (args.descending ? MAX_PASSES : 0) * PASS_STRIDE;
+    const params = this.records.params;
+    const argsOffset = DispatchRecords.argsOffset(0);
+
+    this.records.encodeCount(encoder, args.count);
+    let pass = encoder.beginComputePass({ label: 'RadixSortByKey.setup' });
+    this.records.dispatchSetup(pass);
+    pass.end();
+    let src = input;
+    for (let p = 0; p < passes; p++) {
+      const dst = (passes - 1 - p) % 2 === 0 ? last : other;
+      const passOffset = [passBase + p * PASS_STRIDE];
+      pass = encoder.beginComputePass({ label: 'RadixSortByKey.histogram' });
+      pass.setPipeline(this.histogramPipeline);
+      pass.setBindGroup(0, this.histogramGroup(src), passOffset);
+      pass.dispatchWorkgroupsIndirect(params, argsOffset);
+      pass.end();
+      this.scan.encode(encoder, {
+        input: this.histograms,
+        output: this.offsets,
+        count: { buffer: params, offset: RECORD_TABLE_COUNT },
+      });
+      pass = encoder.beginComputePass({ label: 'RadixSortByKey.scatter' });
+      pass.setPipeline(this.scatterPipeline);
+      pass.setBindGroup(0, this.scatterGroup(src, dst), passOffset);
+      pass.dispatchWorkgroupsIndirect(params, argsOffset);
+      pass.end();
+      src = dst;
+    }
+    if (copyBack) {
+      pass = encoder.beginComputePass({ label: 'RadixSortByKey.copyBack' });
+      pass.setPipeline(this.copyPipeline);
+      pass.setBindGroup(0, this.scatterGroup(scratch, output), [passBase]);
+      pass.dispatchWorkgroupsIndirect(params, argsOffset);
+      pass.end();
+    }
+  }
+
+  destroy(): void {
+    for (const b of [this.keysTmp, this.valuesTmp, this.histograms, this.offsets, this.passParams]) b.destroy();
+    this.records.destroy();
+    this.scan.destroy();
+  }
+}
