@@ -1,0 +1,155 @@
+// `npm run bench:zfp`: whole-volume decode and encode throughput of the WGSL
+// zfp codec (GB/s of float32 data; GPU time of the kernel pass from timestamp
+// queries, or queue wall time where there are none), median of 10 runs after
+// a discarded first, next to zfpy's serial C codec (zfp 1.0.1) on the same
+// file in the same run, as a ratio.
+//
+//   node benchmarks/run.mjs benchmarks/zfp.ts [--repeats N] [FILE.zfp ...]
+import { execFileSync } from 'node:child_process';
+import { readFileSync } from 'node:fs';
+import { basename, join } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { describeAdapter } from '../src/gpu/device.ts';
+import { requestNodeGpu } from '../src/gpu/node-gpu.ts';
+import { GpuTimer } from '../src/gpu/timing.ts';
+import { ZfpDecoder } from '../src/zfp/decoder.ts';
+import { ZfpEncoder } from '../src/zfp/encoder.ts';
+import { openZfpStream, planZfpStream } from '../src/zfp/format.ts';
+import { ZfpGpuStream } from '../src/zfp/gpu-stream.ts';
+import { formatDims } from '../src/volume/naming.ts';
+import { printTable, repeat, writeJson, type Stats } from './lib/report.ts';
+
+const root = fileURLToPath(new URL('..', import.meta.url));
+const volumes = join(root, '..', 'shared', 'data', 'volumes');
+const DEFAULT_FILES = [join(volumes, 'bonsai_256x256x256_float32.rate4.zfp'), join(volumes, 'hydrogen_atom_128x128x128_float32.rate8.zfp')];
+
+const args = process.argv.slice(2);
+let repeats = 11; // 10 measured after the discarded first
+const files: string[] = [];
+for (let i = 0; i < args.length; i++) {
+  if (args[i] === '--repeats') repeats = Number(args[++i]) + 1;
+  else files.push(args[i]);
+}
+if (files.length === 0) files.push(...DEFAULT_FILES);
+
+const ZFPY = `
+import sys, json, time, numpy as np, zfpy
+path, repeats = sys.argv[1], int(sys.argv[2])
+data = open(path, 'rb').read()
+h = zfpy.header(data)
+def timed(f):
+    out, ts = None, []
+    for _ in range(repeats):
+        t = time.perf_counter(); out = f(); ts.append(time.perf_counter() - t)
+    return out, ts
+dec, tdec = timed(lambda: zfpy.decompress_numpy(data))
+rate = h['config']['rate']
+_, tenc = timed(lambda: zfpy.compress_numpy(dec, rate=rate, write_header=True))
+print(json.dumps({'decode_s': tdec, 'encode_s': tenc}))
+`;
+
+function python(): string {
+  return join(root, '.venv', 'bin', 'python');
+}
+
+function summarizeSeconds(all: number[]): Stats {
+  const sorted = all.slice(1).sort((a, b) => a - b);
+  const mid = sorted.length >> 1;
+  const median = sorted.length % 2 ? sorted[mid] : (sorted[mid - 1] + sorted[mid]) / 2;
+  return { samples: all.slice(1), median, mean: sorted.reduce((s, x) => s + x, 0) / sorted.length, min: sorted[0], max: sorted[sorted.length - 1] };
+}
+
+async function main(): Promise<void> {
+  const gpu = await requestNodeGpu({ label: 'bench.zfp', onFailure: (f) => console.error(`WebGPU ${f.kind}: ${f.message}`) });
+  const { device } = gpu;
+  const adapter = describeAdapter(gpu.adapter);
+  console.log(`adapter: ${adapter}`);
+  const decoder = await ZfpDecoder.create(device);
+  const encoder = await ZfpEncoder.create(device);
+  const timer = new GpuTimer(device, 16);
+  const rows: (string | number)[][] = [];
+  const results: unknown[] = [];
+
+  for (const path of files) {
+    const bytes = new Uint8Array(readFileSync(path));
+    const info = openZfpStream(bytes, basename(path));
+    const floatBytes = info.dims[0] * info.dims[1] * info.dims[2] * 4;
+    const stream = ZfpGpuStream.upload(device, info, bytes);
+    const volume = decoder.decodeVolume(stream); // also the encoder's input
+    const target = encoder.createStream(planZfpStream(info.fileName, info.dims, info.rate, info.hasHeader), 'float32');
+
+    const timeOne = async (record: (enc: GPUCommandEncoder, frame: ReturnType<GpuTimer['begin']>) => void, label: string) => {
+      const frame = timer.begin();
+      const enc = device.createCommandEncoder({ label: `bench.${label}` });
+      record(enc, frame);
+      frame.resolve(enc);
+      device.queue.submit([enc.finish()]);
+      frame.submitted();
+      return (await frame.read()).totalMs / 1000;
+    };
+    const decode = await repeat(repeats, () =>
+      timeOne((enc, frame) => decoder.encodeDecodeVolume(enc, { stream, output: volume, timestampWrites: frame.pass('decode') }), 'decode'),
+    );
+    const encode = await repeat(repeats, () =>
+      timeOne((enc, frame) => {
+        for (let s = 0; s < target.shards.length; s++) {
+          const inputZPlane = 0; // the whole decoded volume is the input
+          encoder.encode(enc, { input: volume, dtype: 'float32', inputZPlane, stream: target, shard: s, timestampWrites: frame.pass(`encode${s}`) });
+        }
+      }, 'encode'),
+    );
+
+    const zfpy = JSON.parse(execFileSync(python(), ['-c', ZFPY, path, String(repeats)], { encoding: 'utf8', maxBuffer: 1 << 26 })) as { decode_s: number[]; encode_s: number[] };
+    const zdec = summarizeSeconds(zfpy.decode_s);
+    const zenc = summarizeSeconds(zfpy.encode_s);
+    const gbs = (s: number) => floatBytes / s / 1e9;
+    const name = `${basename(path)} (${formatDims(info.dims)}, rate ${info.rate})`;
+    rows.push([name, 'decode', gbs(decode.median), gbs(zdec.median), gbs(decode.median) / gbs(zdec.median), decode.median * 1000]);
+    rows.push([name, 'encode', gbs(encode.median), gbs(zenc.median), gbs(encode.median) / gbs(zenc.median), encode.median * 1000]);
+    results.push({
+      file: path,
+      dims: info.dims,
+      rate: info.rate,
+      bitsPerBlock: info.bitsPerBlock,
+      compressedBytes: bytes.byteLength,
+      float32Bytes: floatBytes,
+      decode: { gbPerSecond: gbs(decode.median), seconds: decode },
+      encode: { gbPerSecond: gbs(encode.median), seconds: encode },
+      zfpySerial: {
+        decode: { gbPerSecond: gbs(zdec.median), seconds: zdec },
+        encode: { gbPerSecond: gbs(zenc.median), seconds: zenc },
+      },
+      ratio: { decode: gbs(decode.median) / gbs(zdec.median), encode: gbs(encode.median) / gbs(zenc.median) },
+    });
+    volume.destroy();
+    target.destroy();
+    stream.destroy();
+  }
+
+  printTable(
+    `zfp fixed-rate codec, GB/s of float32 data, median of ${repeats - 1} (first run discarded); ours: ${timer.source}`,
+    ['file', 'op', 'WebGPU GB/s', 'zfpy serial GB/s', 'ratio', 'WebGPU ms'],
+    rows,
+  );
+  if (gpu.adapter.software) console.log('\nnote: the adapter is a software rasterizer (SwiftShader on the CPU): these are not GPU figures.');
+  const slug = (gpu.adapter.architecture || gpu.adapter.vendor || 'unknown').toLowerCase().replace(/[^a-z0-9]+/g, '-').replace(/^-|-$/g, '');
+  writeJson(join(root, 'benchmarks', 'results', `zfp-${slug}.json`), {
+    benchmark: 'zfp',
+    date: new Date().toISOString(),
+    adapter: gpu.adapter,
+    adapterDescription: adapter,
+    timing: timer.source === 'timestamp-query' ? 'GPU time of the kernel pass (timestamp queries)' : 'queue wall time from submit to done',
+    zfpyTiming: 'time.perf_counter around zfpy.decompress_numpy / compress_numpy only (serial C, zfp 1.0.1)',
+    repeats: repeats - 1,
+    results,
+  });
+  timer.destroy();
+  decoder.destroy();
+  encoder.destroy();
+  device.destroy();
+}
+
+main().catch((e) => {
+  console.error(e);
+  process.exit(1);
+});
