@@ -62,10 +62,14 @@ export function streamBindGroupLayout(device: GPUDevice): GPUBindGroupLayout {
   return layout;
 }
 
-/** The largest shard buffer the device allows (bytes, multiple of 4). */
+/**
+ * The largest shard buffer the device allows (bytes, multiple of 4), at most
+ * 4 GiB - 4 so word indices and in-shard bit offsets stay in the kernels'
+ * 32-bit word index / 64-bit bit arithmetic.
+ */
 export function maxShardBytesFor(device: GPUDevice): number {
   const l = device.limits;
-  return Math.floor(Math.min(l.maxStorageBufferBindingSize, l.maxBufferSize) / 4) * 4;
+  return Math.floor(Math.min(l.maxStorageBufferBindingSize, l.maxBufferSize, 2 ** 32 - 4) / 4) * 4;
 }
 
 /**
