@@ -13,7 +13,8 @@ fn decode_block(b: u32, out: ptr<function, array<u32, 64>>) {
   }
   let emax = i32(read_bits(8u)) - 127;
   var bits = stream.bits_per_block - 9u;  // budget for the coefficients
-  var u: array<u32, 64>;                  // negabinary coefficients, sequency order
+  // *out first holds the negabinary coefficients (sequency order), then the floats
+  for (var i = 0u; i < 64u; i++) { (*out)[i] = 0u; }
   var n = 0u;                             // coefficients known to be significant
   var k = 32u;
   loop {
@@ -42,18 +43,18 @@ fn decode_block(b: u32, out: ptr<function, array<u32, 64>>) {
     let bit = 1u << k;
     loop {
       if (lo == 0u) { break; }
-      u[countTrailingZeros(lo)] |= bit;
+      (*out)[countTrailingZeros(lo)] |= bit;
       lo &= lo - 1u;
     }
     loop {
       if (hi == 0u) { break; }
-      u[countTrailingZeros(hi) + 32u] |= bit;
+      (*out)[countTrailingZeros(hi) + 32u] |= bit;
       hi &= hi - 1u;
     }
   }
   var q: array<i32, 64>;
   for (var i = 0u; i < 64u; i++) {
-    q[PERM[i]] = bitcast<i32>((u[i] ^ NB) - NB);
+    q[PERM[i]] = bitcast<i32>(((*out)[i] ^ NB) - NB);
   }
   inv_xform(&q);
   for (var i = 0u; i < 64u; i++) {

@@ -135,8 +135,8 @@ fn encode_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg
   var q: array<i32, 64>;
   for (var i = 0u; i < 64u; i++) { q[i] = float_to_int(f[i], emax); }
   fwd_xform(&q);
-  var u: array<u32, 64>;
-  for (var i = 0u; i < 64u; i++) { u[i] = (bitcast<u32>(q[PERM[i]]) + NB) ^ NB; }
+  // f is free now: it holds the negabinary coefficients in sequency order
+  for (var i = 0u; i < 64u; i++) { f[i] = (bitcast<u32>(q[PERM[i]]) + NB) ^ NB; }
 
   var bits = eparams.bits_per_block - 9u;
   var n = 0u;
@@ -147,8 +147,8 @@ fn encode_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg
     var lo = 0u;
     var hi = 0u;
     for (var i = 0u; i < 32u; i++) {
-      lo |= ((u[i] >> k) & 1u) << i;
-      hi |= ((u[i + 32u] >> k) & 1u) << i;
+      lo |= ((f[i] >> k) & 1u) << i;
+      hi |= ((f[i + 32u] >> k) & 1u) << i;
     }
     // first n bits verbatim
     let m = min(n, bits);
