@@ -24,7 +24,7 @@ struct Dispatch {
 @compute @workgroup_size(WG)
 fn compact_values(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
                   @builtin(local_invocation_index) lid: u32) {
-  let base = linear_workgroup_index(wid, nwg) * (WG * CHUNK) + lid;
+  let base = grid_workgroup_index(wid, nwg) * (WG * CHUNK) + lid;
   for (var k = 0u; k < CHUNK; k++) {
     let i = base + k * WG;
     if (i < dispatch.n && mask[i] != 0u) {
@@ -36,7 +36,7 @@ fn compact_values(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nw
 @compute @workgroup_size(WG)
 fn compact_ids(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
                @builtin(local_invocation_index) lid: u32) {
-  let base = linear_workgroup_index(wid, nwg) * (WG * CHUNK) + lid;
+  let base = grid_workgroup_index(wid, nwg) * (WG * CHUNK) + lid;
   for (var k = 0u; k < CHUNK; k++) {
     let i = base + k * WG;
     if (i < dispatch.n && mask[i] != 0u) {

@@ -13,16 +13,28 @@ fn ceil_div(a: u32, b: u32) -> u32 {
   return a / b + select(0u, 1u, a % b != 0u);
 }
 
-/** Workgroup grid covering `workgroups`: 1D up to MAX_WG_PER_DIM, else 2D. */
+/**
+ * Workgroup grid covering `workgroups` with x, y <= MAX_WG_PER_DIM: 1D, then
+ * 2D, and 3D only past MAX_WG_PER_DIM^2 (about 2^32 at the default limit, so
+ * in practice only when tests lower the limit). x * y * z >= workgroups.
+ */
 fn dispatch_grid(workgroups: u32) -> vec3u {
   if (workgroups <= MAX_WG_PER_DIM) {
     return vec3u(workgroups, 1u, 1u);
   }
-  let y = ceil_div(workgroups, MAX_WG_PER_DIM);
-  return vec3u(ceil_div(workgroups, y), y, 1u);
+  let plane = MAX_WG_PER_DIM * MAX_WG_PER_DIM;
+  let z = ceil_div(workgroups, plane);
+  let rest = ceil_div(workgroups, z);
+  let y = ceil_div(rest, MAX_WG_PER_DIM);
+  return vec3u(ceil_div(rest, y), y, z);
 }
 
-/** Global invocation index in a 2D grid of WG-sized workgroups. */
+/** Linear index of a workgroup in a dispatch_grid grid (x fastest, then y, then z). */
+fn grid_workgroup_index(wid: vec3u, nwg: vec3u) -> u32 {
+  return wid.x + nwg.x * (wid.y + nwg.y * wid.z);
+}
+
+/** Global invocation index in such a grid of WG-sized workgroups. */
 fn grid_invocation_index(wid: vec3u, nwg: vec3u, lid: u32, wg: u32) -> u32 {
-  return linear_workgroup_index(wid, nwg) * wg + lid;
+  return grid_workgroup_index(wid, nwg) * wg + lid;
 }

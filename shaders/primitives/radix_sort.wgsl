@@ -6,10 +6,10 @@
 // the chunk in order writing each element at its digit's next position.
 // Chunks are in index order and each is walked in order, so equal digits
 // keep their order: the sort is stable. Descending order complements the
-// digit (d ^ 15), so it is stable too and needs no reverse pass.
+// digit (d ^ mask), so it is stable too and needs no reverse pass.
 
 override WG: u32 = 64u;
-override CHUNK: u32 = 64u; // at most 255: per-digit counters are 8-bit lanes
+override CHUNK: u32 = 128u; // at most 255: per-digit counters are 8-bit lanes
 
 struct Sort {
   n: u32,
@@ -20,7 +20,8 @@ struct Sort {
 
 struct Pass {
   shift: u32,
-  flip: u32, // 15 for descending, 0 for ascending
+  mask: u32, // 15, or fewer bits in the last pass when keyBits is not a multiple of 4
+  flip: u32, // mask for descending, 0 for ascending
 }
 
 @group(0) @binding(0) var<uniform> sort: Sort;
@@ -33,7 +34,7 @@ struct Pass {
 @group(0) @binding(7) var<storage, read_write> values_out: array<u32>;
 
 fn digit(key: u32) -> u32 {
-  return ((key >> pass_.shift) & 15u) ^ pass_.flip;
+  return ((key >> pass_.shift) & pass_.mask) ^ pass_.flip;
 }
 
 @compute @workgroup_size(WG)

@@ -9,7 +9,6 @@ import {
   DispatchRecords,
   RECORD_UNIFORM_SIZE,
   dispatchSnippet,
-  gridSnippet,
   maxWorkgroupsPerDimension,
   workgroupSize,
   type PrimitiveOptions,
@@ -53,7 +52,7 @@ class Compaction {
     if (!Number.isInteger(chunk) || chunk < 1 || chunk > 4096) throw new RangeError('chunk must be in 1..4096');
     const wg = workgroupSize(device, options);
     const [pipeline, records] = await Promise.all([
-      createComputePipeline(device, `${label}.compact`, [gridSnippet, { name: 'shaders/primitives/compact.wgsl', code: compactWgsl }], entryPoint, {
+      createComputePipeline(device, `${label}.compact`, [dispatchSnippet, { name: 'shaders/primitives/compact.wgsl', code: compactWgsl }], entryPoint, {
         constants: { WG: wg, CHUNK: chunk },
       }),
       DispatchRecords.create(device, label, {

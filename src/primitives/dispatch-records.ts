@@ -6,12 +6,10 @@
 
 import dispatchWgsl from '../../shaders/primitives/dispatch.wgsl?raw';
 import setupWgsl from '../../shaders/primitives/setup.wgsl?raw';
-import { gridSnippet } from '../gpu/dispatch.ts';
 import { createComputePipeline, type WgslPart } from '../gpu/wgsl.ts';
 import { encodeCountCopy, type CountLike } from './count.ts';
 
 export const dispatchSnippet: WgslPart = { name: 'shaders/primitives/dispatch.wgsl', code: dispatchWgsl };
-export { gridSnippet };
 
 /** Bytes between records (a multiple of every minUniformBufferOffsetAlignment). */
 export const RECORD_STRIDE = 256;
@@ -88,7 +86,7 @@ export class DispatchRecords {
     const pipeline = await createComputePipeline(
       device,
       `${label}.setup`,
-      [gridSnippet, dispatchSnippet, { name: 'shaders/primitives/setup.wgsl', code: setupWgsl }],
+      [dispatchSnippet, { name: 'shaders/primitives/setup.wgsl', code: setupWgsl }],
       'setup_dispatch',
       {
         constants: {

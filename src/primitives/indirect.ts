@@ -1,7 +1,9 @@
 // dispatchWorkgroupsIndirect arguments from a GPU-side element count, with
 // 2D grids past maxComputeWorkgroupsPerDimension; no readback, no host loops.
 // Kernels dispatched with them rebuild the linear workgroup index with
-// `linear_workgroup_index` (shaders/common/grid.wgsl) and skip indices past
+// `grid_workgroup_index` (dispatchSnippet, shaders/primitives/dispatch.wgsl;
+// equal to `linear_workgroup_index` of shaders/common/grid.wgsl whenever
+// z = 1, that is below limit^2 workgroups) and skip indices past
 // ceil(count / itemsPerWorkgroup).
 
 import type { CountLike, GpuCount } from './count.ts';

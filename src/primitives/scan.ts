@@ -10,7 +10,6 @@ import {
   DispatchRecords,
   RECORD_UNIFORM_SIZE,
   dispatchSnippet,
-  gridSnippet,
   maxWorkgroupsPerDimension,
   workgroupSize,
   type PrimitiveOptions,
@@ -94,7 +93,7 @@ export class ExclusiveScan {
       ],
     });
     const pipelineLayout = device.createPipelineLayout({ label: 'ExclusiveScan.pipelineLayout', bindGroupLayouts: [layout] });
-    const parts = [gridSnippet, dispatchSnippet, scanSnippet];
+    const parts = [dispatchSnippet, scanSnippet];
     const constants = { WG: wg, CHUNK: chunk };
     const [reduce, scan, records] = await Promise.all([
       createComputePipeline(device, 'ExclusiveScan.reduce', parts, 'reduce', { layout: pipelineLayout, constants }),

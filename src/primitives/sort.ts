@@ -12,7 +12,6 @@ import {
   RECORD_TABLE_COUNT,
   RECORD_UNIFORM_SIZE,
   dispatchSnippet,
-  gridSnippet,
   maxWorkgroupsPerDimension,
   workgroupSize,
   type PrimitiveOptions,
@@ -22,13 +21,19 @@ import { ExclusiveScan } from './scan.ts';
 const RADIX_BITS = 4;
 const RADIX = 1 << RADIX_BITS;
 const MAX_PASSES = 32 / RADIX_BITS;
-/** Bytes between the per-pass uniforms (shift, flip). */
+/** Bytes between the per-pass uniforms (shift, mask, flip). */
 const PASS_STRIDE = 256;
+/** Per-pass uniforms: direction x pass x digit width (1..RADIX_BITS bits). */
+const PASS_RECORDS = 2 * MAX_PASSES * RADIX_BITS;
+
+function passRecord(descending: boolean, pass: number, bits: number): number {
+  return ((descending ? MAX_PASSES : 0) + pass) * RADIX_BITS + bits - 1;
+}
 
 export interface RadixSortOptions extends PrimitiveOptions {
   /** Most elements one encode may sort; grow() raises it. */
   capacity: number;
-  /** Consecutive elements per invocation, 1..255. Default 64. */
+  /** Consecutive elements per invocation, 1..255 (table size 16 * count / chunk). Default 128. */
   chunk?: number;
 }
 
@@ -44,7 +49,7 @@ export interface RadixSortArgs {
   count: CountLike;
   /** Largest keys first (still stable: equal keys keep their input order). */
   descending?: boolean;
-  /** Only the low keyBits bits of the keys are sorted on (1..32, default 32); fewer bits, fewer passes. */
+  /** Only the low keyBits bits of the keys are compared (1..32, default 32); ceil(keyBits / 4) passes. */
   keyBits?: number;
 }
 
@@ -81,7 +86,7 @@ export class RadixSortByKey {
   }
 
   static async create(device: GPUDevice, options: RadixSortOptions): Promise<RadixSortByKey> {
-    const chunk = options.chunk ?? 64;
+    const chunk = options.chunk ?? 128;
     if (!Number.isInteger(chunk) || chunk < 1 || chunk > 255) throw new RangeError('chunk must be in 1..255');
     const wg = workgroupSize(device, options);
     const maxPerDim = maxWorkgroupsPerDimension(device, options);
@@ -111,7 +116,7 @@ export class RadixSortByKey {
         entry(7, { type: 'storage' }),
       ],
     });
-    const parts = [gridSnippet, dispatchSnippet, { name: 'shaders/primitives/radix_sort.wgsl', code: sortWgsl }];
+    const parts = [dispatchSnippet, { name: 'shaders/primitives/radix_sort.wgsl', code: sortWgsl }];
     const constants = { WG: wg, CHUNK: chunk };
     const layoutOf = (l: GPUBindGroupLayout) => device.createPipelineLayout({ label: 'RadixSortByKey.pipelineLayout', bindGroupLayouts: [l] });
     const [histogram, scatter, copy, records, scan] = await Promise.all([
@@ -132,18 +137,20 @@ export class RadixSortByKey {
         workgroupSize: options.workgroupSize,
       }),
     ]);
-    // Per-pass uniforms, written once: ascending passes, then descending.
+    // Per-pass uniforms, written once; an encode picks them by dynamic offset.
     const passParams = device.createBuffer({
       label: 'RadixSortByKey.passParams',
-      size: 2 * MAX_PASSES * PASS_STRIDE,
+      size: PASS_RECORDS * PASS_STRIDE,
       usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
     });
-    const words = new Uint32Array((2 * MAX_PASSES * PASS_STRIDE) / 4);
-    for (let d = 0; d < 2; d++) {
+    const words = new Uint32Array((PASS_RECORDS * PASS_STRIDE) / 4);
+    for (const descending of [false, true]) {
       for (let p = 0; p < MAX_PASSES; p++) {
-        const at = ((d * MAX_PASSES + p) * PASS_STRIDE) / 4;
-        words[at] = p * RADIX_BITS;
-        words[at + 1] = d === 1 ? RADIX - 1 : 0;
+        for (let bits = 1; bits <= RADIX_BITS; bits++) {
+          const at = (passRecord(descending, p, bits) * PASS_STRIDE) / 4;
+          const mask = (1 << bits) - 1;
+          words.set([p * RADIX_BITS, mask, descending ? mask : 0], at);
+        }
       }
     }
     device.queue.writeBuffer(passParams, 0, words);
@@ -233,7 +240,7 @@ export class RadixSortByKey {
     const copyBack = inPlace && passes % 2 === 1;
     const last = copyBack ? scratch : output;
     const other = copyBack ? output : scratch;
-    const passBase = (args.descending ? MAX_PASSES : 0) * PASS_STRIDE;
+    const descending = args.descending ?? false;
     const params = this.records.params;
     const argsOffset = DispatchRecords.argsOffset(0);
 
@@ -244,7 +251,7 @@ export class RadixSortByKey {
     let src = input;
     for (let p = 0; p < passes; p++) {
       const dst = (passes - 1 - p) % 2 === 0 ? last : other;
-      const passOffset = [passBase + p * PASS_STRIDE];
+      const passOffset = [passRecord(descending, p, Math.min(RADIX_BITS, keyBits - p * RADIX_BITS)) * PASS_STRIDE];
       pass = encoder.beginComputePass({ label: 'RadixSortByKey.histogram' });
       pass.setPipeline(this.histogramPipeline);
       pass.setBindGroup(0, this.histogramGroup(src), passOffset);
@@ -265,7 +272,7 @@ export class RadixSortByKey {
     if (copyBack) {
       pass = encoder.beginComputePass({ label: 'RadixSortByKey.copyBack' });
       pass.setPipeline(this.copyPipeline);
-      pass.setBindGroup(0, this.scatterGroup(scratch, output), [passBase]);
+      pass.setBindGroup(0, this.scatterGroup(scratch, output), [0]);
       pass.dispatchWorkgroupsIndirect(params, argsOffset);
       pass.end();
     }

@@ -23,7 +23,7 @@ export function rng(seed: number): () => number {
   };
 }
 
-export function randomU32(n: number, seed: number): Uint32Array {
+export function randomU32(n: number, seed: number): Uint32Array<ArrayBuffer> {
   const next = rng(seed);
   const a = new Uint32Array(n);
   for (let i = 0; i < n; i++) a[i] = next();
@@ -31,7 +31,7 @@ export function randomU32(n: number, seed: number): Uint32Array {
 }
 
 /** 0/1 mask with the given density of ones (0..1). */
-export function randomMask(n: number, density: number, seed: number): Uint32Array {
+export function randomMask(n: number, density: number, seed: number): Uint32Array<ArrayBuffer> {
   const next = rng(seed);
   const a = new Uint32Array(n);
   if (density >= 1) return a.fill(1);

@@ -1,31 +1,128 @@
+// ExclusiveScan against a CPU scan: every size the issue lists, full-range
+// random u32 (so sums wrap) and 0/1 masks, counts from GPU buffers smaller
+// than the buffers, poisoned outputs checked element by element (the tail
+// past the count must stay poisoned), totals written to a GPU buffer.
 import { describe, expect } from 'vitest';
 import { ExclusiveScan } from '../../../src/primitives/scan.ts';
+import type { CountLike } from '../../../src/primitives/count.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
-import { SMALL_SIZES, cpuExclusiveScan, diff, gpuCount, poison, randomU32, read, upload } from './helpers.ts';
+import { LARGE_SIZES, POISON, SMALL_SIZES, cpuExclusiveScan, diff, gpuCount, poison, randomMask, randomU32, read, upload } from './helpers.ts';
+
+const EXTRA = 37; // buffer elements past the count
+
+/** Scans `data[0..n)` with the GPU count (or host number) and returns problems found. */
+async function check(device: GPUDevice, scan: ExclusiveScan, data: Uint32Array, n: number, useHostCount = false): Promise<string[]> {
+  const input = upload(device, 'test.input', data);
+  const output = upload(device, 'test.output', new Uint32Array(0), data.length);
+  const totals = upload(device, 'test.totals', new Uint32Array(0), 3);
+  const countBuf = useHostCount ? undefined : gpuCount(device, n);
+  const count: CountLike = countBuf ?? n;
+  const encoder = device.createCommandEncoder();
+  scan.encode(encoder, { input, output, count, totalOut: { buffer: totals, offset: 4 } });
+  device.queue.submit([encoder.finish()]);
+  const ref = cpuExclusiveScan(data, n);
+  const problems: string[] = [];
+  const d = diff(await read(device, output), ref.scan);
+  if (d) problems.push(`n=${n}: ${d}`);
+  const t = await read(device, totals);
+  if (t[1] !== ref.total || t[0] !== POISON || t[2] !== POISON) problems.push(`n=${n}: totals buffer [${[...t]}], expected total ${ref.total} at word 1`);
+  for (const b of [input, output, totals, countBuf?.buffer]) b?.destroy();
+  return problems;
+}
 
 describe('ExclusiveScan', () => {
-  gpuTest('small sizes, GPU count below the buffer length', async ({ gpu }) => {
+  gpuTest('every size, random u32, GPU count below the buffer length, total to a GPU buffer', async ({ gpu }) => {
     const { device } = gpu;
-    const scan = await ExclusiveScan.create(device, { capacity: 70000 });
+    const scan = await ExclusiveScan.create(device, { capacity: 2 ** 24 + EXTRA });
     const problems: string[] = [];
-    for (const n of SMALL_SIZES) {
-      const extra = 37;
-      const data = randomU32(n + extra, n + 1);
-      const input = upload(device, 'in', data);
-      const output = upload(device, 'out', new Uint32Array(0), n + extra);
-      const count = gpuCount(device, n);
-      const total = upload(device, 'total', new Uint32Array(0), 3);
-      const enc = device.createCommandEncoder();
-      scan.encode(enc, { input, output, count, totalOut: { buffer: total, offset: 4 } });
-      device.queue.submit([enc.finish()]);
-      const ref = cpuExclusiveScan(data, n);
-      const d = diff(await read(device, output), ref.scan);
-      if (d) problems.push(`n=${n}: ${d}`);
-      const t = await read(device, total);
-      if (t[1] !== ref.total) problems.push(`n=${n}: total ${t[1]} != ${ref.total}`);
-      for (const b of [input, output, count.buffer, total]) b.destroy();
+    for (const n of [...SMALL_SIZES, ...LARGE_SIZES]) {
+      problems.push(...(await check(device, scan, randomU32(n + EXTRA, n + 1), n)));
     }
     expect(problems).toEqual([]);
+    scan.destroy();
+  });
+
+  gpuTest('0/1 masks of every density, host-number counts', async ({ gpu }) => {
+    const { device } = gpu;
+    const scan = await ExclusiveScan.create(device, { capacity: 2 ** 20 + 3 });
+    const problems: string[] = [];
+    for (const n of [0, 1, 255, 4095, 65536, 2 ** 20 + 3]) {
+      for (const density of [0, 0.01, 0.5, 1]) {
+        problems.push(...(await check(device, scan, randomMask(n + EXTRA, density, n + 3), n, true)));
+      }
+    }
+    expect(problems).toEqual([]);
+    scan.destroy();
+  });
+
+  gpuTest('many levels (tiny chunks), 2D grids, one object reused across sizes', async ({ gpu }) => {
+    const { device } = gpu;
+    const problems: string[] = [];
+    // chunk 2 over 65537 elements gives 18 levels; a grid limit of 3
+    // workgroups per dimension forces 2D grids at every level.
+    for (const [chunk, maxPerDim] of [
+      [2, 3],
+      [3, 65535],
+      [7, 2],
+    ]) {
+      const scan = await ExclusiveScan.create(device, { capacity: 65537, chunk, maxWorkgroupsPerDimension: maxPerDim, workgroupSize: 16 });
+      for (const n of [0, 1, 2, 3, 4, 63, 64, 65, 257, 4095, 65537]) {
+        problems.push(...(await check(device, scan, randomU32(n + EXTRA, n * chunk + 5), n)).map((p) => `chunk ${chunk}: ${p}`));
+      }
+      scan.destroy();
+    }
+    expect(problems).toEqual([]);
+  });
+
+  gpuTest('grow raises the capacity; counts above it are clamped', async ({ gpu }) => {
+    const { device } = gpu;
+    const scan = await ExclusiveScan.create(device, { capacity: 100 });
+    expect(scan.capacity).toBe(100);
+    const data = randomU32(70000 + EXTRA, 11);
+    // Above the capacity: only the first 100 elements are scanned.
+    const input = upload(device, 'test.input', data);
+    const output = upload(device, 'test.output', new Uint32Array(0), data.length);
+    const totals = upload(device, 'test.totals', new Uint32Array(0), 1);
+    let encoder = device.createCommandEncoder();
+    scan.encode(encoder, { input, output, count: 70000, totalOut: { buffer: totals, offset: 0 } });
+    device.queue.submit([encoder.finish()]);
+    const clamped = cpuExclusiveScan(data, 100);
+    expect(diff(await read(device, output), clamped.scan)).toBe('');
+    expect((await read(device, totals))[0]).toBe(clamped.total);
+
+    scan.grow(70000);
+    expect(scan.capacity).toBe(70000);
+    poison(device, output);
+    encoder = device.createCommandEncoder();
+    scan.encode(encoder, { input, output, count: 70000, totalOut: { buffer: totals, offset: 0 } });
+    device.queue.submit([encoder.finish()]);
+    const full = cpuExclusiveScan(data, 70000);
+    expect(diff(await read(device, output), full.scan)).toBe('');
+    expect((await read(device, totals))[0]).toBe(full.total);
+    for (const b of [input, output, totals]) b.destroy();
+    scan.destroy();
+  });
+
+  gpuTest('two scans in one encoder share the object; the second count comes from the first total', async ({ gpu }) => {
+    const { device } = gpu;
+    const scan = await ExclusiveScan.create(device, { capacity: 5000 });
+    const a = randomMask(5000, 0.3, 21);
+    const b = randomU32(5000, 22);
+    const inA = upload(device, 'a', a);
+    const outA = upload(device, 'outA', new Uint32Array(0), 5000);
+    const inB = upload(device, 'b', b);
+    const outB = upload(device, 'outB', new Uint32Array(0), 5000);
+    const totals = upload(device, 'totals', new Uint32Array(0), 2);
+    const encoder = device.createCommandEncoder();
+    scan.encode(encoder, { input: inA, output: outA, count: gpuCount(device, 5000), totalOut: { buffer: totals, offset: 0 } });
+    // The number of ones in `a`, known only to the GPU, is the second count.
+    scan.encode(encoder, { input: inB, output: outB, count: { buffer: totals, offset: 0 }, totalOut: { buffer: totals, offset: 4 } });
+    device.queue.submit([encoder.finish()]);
+    const refA = cpuExclusiveScan(a);
+    const refB = cpuExclusiveScan(b, refA.total);
+    expect(diff(await read(device, outA), refA.scan)).toBe('');
+    expect(diff(await read(device, outB), refB.scan)).toBe('');
+    expect([...(await read(device, totals))]).toEqual([refA.total, refB.total]);
     scan.destroy();
   });
 });
