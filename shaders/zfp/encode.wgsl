@@ -52,12 +52,12 @@ fn load_value(i: u32) -> u32 {
   }
 }
 
-// zfp's padding of a partial row of n (1..3) values at stride s.
-fn pad_row(p: ptr<function, array<u32, 64>>, o: u32, n: u32, s: u32) {
-  if (n >= 4u) { return; }
-  if (n <= 1u) { (*p)[o + s] = (*p)[o]; }
-  if (n <= 2u) { (*p)[o + 2u * s] = (*p)[o + s]; }
-  (*p)[o + 3u * s] = (*p)[o];
+// zfp pads a partial block one axis at a time (x, then y, then z), each row
+// of n < 4 valid values as: n = 1 -> a a a a, n = 2 -> a b b a, n = 3 -> a b c a.
+// Per axis that is a map of positions, so voxel (x, y, z) of the padded block
+// is the input voxel (pad_index(x, nx), pad_index(y, ny), pad_index(z, nz)).
+fn pad_index(p: u32, n: u32) -> u32 {
+  return select(select(0u, 1u, n == 2u && p == 2u), p, p < n);
 }
 
 // ---- LSB-first bit writer (per invocation).
@@ -88,6 +88,28 @@ fn writer_flush() {
   if (wr_pos > 0u && wr_buf != 0u) { atomicOr(&out_words[wr_word], wr_buf); }
 }
 
+// In-place transpose of the 32x32 bit matrix p[o..o+32) (row r = word, column
+// c = bit c): afterwards bit r of word c is what bit c of word r was.
+fn transpose32(p: ptr<function, array<u32, 64>>, o: u32) {
+  var m = 0x0000ffffu;
+  var j = 16u;
+  loop {
+    if (j == 0u) { break; }
+    var k = 0u;
+    loop {
+      if (k >= 32u) { break; }
+      let a = (*p)[o + k];
+      let b = (*p)[o + k + j];
+      let t = ((a >> j) ^ b) & m;
+      (*p)[o + k] = a ^ (t << j);
+      (*p)[o + k + j] = b ^ t;
+      k = (k + j + 1u) & ~j;
+    }
+    j >>= 1u;
+    m ^= m << j;
+  }
+}
+
 @compute @workgroup_size(64)
 fn encode_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
                  @builtin(local_invocation_index) lid: u32) {
@@ -109,17 +131,12 @@ fn encode_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg
   let ny = min(4u, d.y - c.y);
   let nz = min(4u, d.z - c.z);
   var f: array<u32, 64>;
-  for (var z = 0u; z < nz; z++) {
-    for (var y = 0u; y < ny; y++) {
-      let row = c.x + d.x * (c.y + y + d.y * (c.z + z - eparams.input_z));
-      for (var x = 0u; x < nx; x++) {
-        f[16u * z + 4u * y + x] = load_value(row + x);
-      }
-      pad_row(&f, 16u * z + 4u * y, nx, 1u);
-    }
-    for (var x = 0u; x < 4u; x++) { pad_row(&f, 16u * z + x, ny, 4u); }
+  for (var i = 0u; i < 64u; i++) {
+    let x = pad_index(i & 3u, nx);
+    let y = pad_index((i >> 2u) & 3u, ny);
+    let z = pad_index(i >> 4u, nz);
+    f[i] = load_value(c.x + x + d.x * (c.y + y + d.y * (c.z + z - eparams.input_z)));
   }
-  for (var i = 0u; i < 16u; i++) { pad_row(&f, i, nz, 16u); }
 
   let start = u64_bit_to_word(u64_add32(u64_mul(b - eparams.first_block, eparams.bits_per_block), eparams.bit_base));
   wr_word = start.x;
@@ -138,18 +155,18 @@ fn encode_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg
   // f is free now: it holds the negabinary coefficients in sequency order
   for (var i = 0u; i < 64u; i++) { f[i] = (bitcast<u32>(q[PERM[i]]) + NB) ^ NB; }
 
+  // bit planes: f[k] = bit k of coefficients 0..31, f[32 + k] = of 32..63
+  transpose32(&f, 0u);
+  transpose32(&f, 32u);
+
   var bits = eparams.bits_per_block - 9u;
   var n = 0u;
   var k = 32u;
   loop {
     if (bits == 0u || k == 0u) { break; }
     k -= 1u;
-    var lo = 0u;
-    var hi = 0u;
-    for (var i = 0u; i < 32u; i++) {
-      lo |= ((f[i] >> k) & 1u) << i;
-      hi |= ((f[i + 32u] >> k) & 1u) << i;
-    }
+    var lo = f[k];
+    var hi = f[32u + k];
     // first n bits verbatim
     let m = min(n, bits);
     bits -= m;
