@@ -21,15 +21,35 @@ struct Dispatch {
 @group(0) @binding(3) var<storage, read> values: array<u32>;
 @group(0) @binding(4) var<storage, read_write> out: array<u32>;
 
+fn keep_value(i: u32, n: u32) {
+  if (i < n && mask[i] != 0u) {
+    out[offsets[i]] = values[i];
+  }
+}
+
+fn keep_id(i: u32, n: u32) {
+  if (i < n && mask[i] != 0u) {
+    out[offsets[i]] = i;
+  }
+}
+
+// Four elements per iteration: the loop overhead dominates on CPU
+// implementations (SwiftShader), and GPUs get more loads in flight.
 @compute @workgroup_size(WG)
 fn compact_values(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
                   @builtin(local_invocation_index) lid: u32) {
   let base = grid_workgroup_index(wid, nwg) * (WG * CHUNK) + lid;
-  for (var k = 0u; k < CHUNK; k++) {
+  let n = dispatch.n;
+  var k = 0u;
+  for (; k + 4u <= CHUNK; k += 4u) {
     let i = base + k * WG;
-    if (i < dispatch.n && mask[i] != 0u) {
-      out[offsets[i]] = values[i];
-    }
+    keep_value(i, n);
+    keep_value(i + WG, n);
+    keep_value(i + 2u * WG, n);
+    keep_value(i + 3u * WG, n);
+  }
+  for (; k < CHUNK; k++) {
+    keep_value(base + k * WG, n);
   }
 }
 
@@ -37,10 +57,16 @@ fn compact_values(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nw
 fn compact_ids(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
                @builtin(local_invocation_index) lid: u32) {
   let base = grid_workgroup_index(wid, nwg) * (WG * CHUNK) + lid;
-  for (var k = 0u; k < CHUNK; k++) {
+  let n = dispatch.n;
+  var k = 0u;
+  for (; k + 4u <= CHUNK; k += 4u) {
     let i = base + k * WG;
-    if (i < dispatch.n && mask[i] != 0u) {
-      out[offsets[i]] = i;
-    }
+    keep_id(i, n);
+    keep_id(i + WG, n);
+    keep_id(i + 2u * WG, n);
+    keep_id(i + 3u * WG, n);
+  }
+  for (; k < CHUNK; k++) {
+    keep_id(base + k * WG, n);
   }
 }

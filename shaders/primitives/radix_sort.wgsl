@@ -37,6 +37,12 @@ fn digit(key: u32) -> u32 {
   return ((key >> pass_.shift) & pass_.mask) ^ pass_.flip;
 }
 
+/** One count for the key's digit, in the 8-bit lane layout of `histogram`. */
+fn count_digit(key: u32) -> vec4u {
+  let d = digit(key);
+  return select(vec4u(0u), vec4u(1u << ((d & 3u) * 8u)), vec4u(d >> 2u) == vec4u(0u, 1u, 2u, 3u));
+}
+
 @compute @workgroup_size(WG)
 fn histogram(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
              @builtin(local_invocation_index) lid: u32) {
@@ -48,15 +54,29 @@ fn histogram(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: ve
   let begin = c * CHUNK;
   let len = min(sort.n - begin, CHUNK);
   // 16 counters as 8-bit lanes of 4 words: no dynamically indexed array.
+  // Four keys per iteration: loop overhead dominates on CPU implementations.
   var counts = vec4u(0u);
-  for (var j = 0u; j < len; j++) {
-    let d = digit(keys_in[begin + j]);
-    let inc = 1u << ((d & 3u) * 8u);
-    counts += select(vec4u(0u), vec4u(inc), vec4u(d >> 2u) == vec4u(0u, 1u, 2u, 3u));
+  var j = 0u;
+  for (; j + 4u <= len; j += 4u) {
+    let i = begin + j;
+    counts += count_digit(keys_in[i]) + count_digit(keys_in[i + 1u]) + count_digit(keys_in[i + 2u]) + count_digit(keys_in[i + 3u]);
+  }
+  for (; j < len; j++) {
+    counts += count_digit(keys_in[begin + j]);
   }
   for (var d = 0u; d < 16u; d++) {
     histograms[d * units + c] = (counts[d >> 2u] >> ((d & 3u) * 8u)) & 255u;
   }
+}
+
+/** Writes element i at its digit's next position and advances that position. */
+fn place(next: ptr<function, array<u32, 16>>, i: u32) {
+  let key = keys_in[i];
+  let d = digit(key);
+  let p = (*next)[d];
+  (*next)[d] = p + 1u;
+  keys_out[p] = key;
+  values_out[p] = values_in[i];
 }
 
 @compute @workgroup_size(WG)
@@ -73,13 +93,16 @@ fn scatter(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3
   }
   let begin = c * CHUNK;
   let len = min(sort.n - begin, CHUNK);
-  for (var j = 0u; j < len; j++) {
-    let key = keys_in[begin + j];
-    let d = digit(key);
-    let p = next[d];
-    next[d] = p + 1u;
-    keys_out[p] = key;
-    values_out[p] = values_in[begin + j];
+  var j = 0u;
+  for (; j + 4u <= len; j += 4u) {
+    let i = begin + j;
+    place(&next, i);
+    place(&next, i + 1u);
+    place(&next, i + 2u);
+    place(&next, i + 3u);
+  }
+  for (; j < len; j++) {
+    place(&next, begin + j);
   }
 }
 
