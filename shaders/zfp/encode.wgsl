@@ -6,9 +6,12 @@
 // writes the zfp header words when the shard starts the stream.
 // Needs u64.wgsl, codec.wgsl, f64.wgsl and grid.wgsl.
 
+// Input type, fixed per pipeline: 0 uint8, 1 int8, 2 uint16, 3 int16, 4 float32, 5 float64.
+override DTYPE: u32 = 4u;
+
 struct EncodeParams {
   dims: vec3u,            // nx, ny, nz
-  dtype: u32,             // 0 uint8, 1 int8, 2 uint16, 3 int16, 4 float32, 5 float64
+  dtype: u32,             // DTYPE (checked on the CPU side; kept for the record)
   blocks: vec3u,          // blocks per axis
   bits_per_block: u32,
   first_block: u32,       // blocks [first_block, end_block) go to this shard
@@ -28,7 +31,7 @@ struct EncodeParams {
 
 // Element i of the input as float32 bits.
 fn load_value(i: u32) -> u32 {
-  switch (eparams.dtype) {
+  switch (DTYPE) {
     case 0u: {
       return bitcast<u32>(f32((input_words[i >> 2u] >> ((i & 3u) * 8u)) & 0xffu));
     }

@@ -48,13 +48,21 @@ export interface CompressOptions {
 export class ZfpEncoder {
   private readonly groups = new BindGroupCache();
   private readonly uniforms: UniformSlots;
+  /** One pipeline per input type (the type is an override constant: no per-value switch). */
+  private readonly pipelines = new Map<DType, Promise<GPUComputePipeline>>();
+  private readonly ready = new Map<DType, GPUComputePipeline>();
 
-  private constructor(readonly device: GPUDevice, private readonly pipeline: GPUComputePipeline) {
+  private constructor(
+    readonly device: GPUDevice,
+    private readonly groupLayout: GPUBindGroupLayout,
+    private readonly layout: GPUPipelineLayout,
+  ) {
     this.uniforms = new UniformSlots(device, 'ZfpEncoder');
   }
 
-  static async create(device: GPUDevice): Promise<ZfpEncoder> {
-    const layout = device.createBindGroupLayout({
+  /** Compiles the pipelines for `dtypes` now (others are compiled on first use by compress*(), or by prepare()). */
+  static async create(device: GPUDevice, dtypes: readonly DType[] = ['float32']): Promise<ZfpEncoder> {
+    const group = device.createBindGroupLayout({
       label: 'ZfpEncoder.layout',
       entries: [
         { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
@@ -62,10 +70,26 @@ export class ZfpEncoder {
         { binding: 2, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform' } },
       ],
     });
-    const pipeline = await createComputePipeline(device, 'ZfpEncoder.encode', zfpWgsl.encode, 'encode_blocks', {
-      layout: device.createPipelineLayout({ label: 'ZfpEncoder', bindGroupLayouts: [layout] }),
-    });
-    return new ZfpEncoder(device, pipeline);
+    const encoder = new ZfpEncoder(device, group, device.createPipelineLayout({ label: 'ZfpEncoder', bindGroupLayouts: [group] }));
+    await Promise.all(dtypes.map((t) => encoder.prepare(t)));
+    return encoder;
+  }
+
+  /** Compiles the pipeline for input type `dtype` (once). */
+  prepare(dtype: DType): Promise<GPUComputePipeline> {
+    let p = this.pipelines.get(dtype);
+    if (!p) {
+      p = createComputePipeline(this.device, `ZfpEncoder.encode.${dtype}`, zfpWgsl.encode, 'encode_blocks', {
+        layout: this.layout,
+        constants: { DTYPE: DTYPE_CODE[dtype] },
+      }).then((pipeline) => {
+        this.ready.set(dtype, pipeline);
+        return pipeline;
+      });
+      p.catch(() => this.pipelines.delete(dtype));
+      this.pipelines.set(dtype, p);
+    }
+    return p;
   }
 
   /**
@@ -93,10 +117,13 @@ export class ZfpEncoder {
 
   /**
    * Records the encoding of shard `a.shard` (clears it, then one dispatch).
-   * Needs a command encoder (the clear is not a pass command).
+   * Needs a command encoder (the clear is not a pass command), and the
+   * pipeline of `a.dtype` (create() or prepare()).
    */
   encode(encoder: GPUCommandEncoder, a: EncodeArgs): void {
     const { stream } = a;
+    const pipeline = this.ready.get(a.dtype);
+    if (!pipeline) throw new Error(`ZfpEncoder: no pipeline for ${a.dtype} yet: await encoder.prepare('${a.dtype}') first`);
     if (stream.isDestroyed) throw new Error('ZfpEncoder: the target stream was destroyed');
     const info = stream.info;
     const shard = stream.shards[a.shard];
@@ -125,7 +152,7 @@ export class ZfpEncoder {
     const group = this.groups.get(`enc|${refKey(a.input)}|${refKey(shard.buffer)}|${params.offset}|${refKey(params.buffer)}`, () =>
       this.device.createBindGroup({
         label: 'ZfpEncoder.bindGroup',
-        layout: this.pipeline.getBindGroupLayout(0),
+        layout: this.groupLayout,
         entries: [
           { binding: 0, resource: binding(a.input) },
           { binding: 1, resource: { buffer: shard.buffer } },
@@ -137,7 +164,7 @@ export class ZfpEncoder {
     const desc: GPUComputePassDescriptor = { label: 'ZfpEncoder.encode' };
     if (a.timestampWrites) desc.timestampWrites = a.timestampWrites;
     const pass = encoder.beginComputePass(desc);
-    pass.setPipeline(this.pipeline);
+    pass.setPipeline(pipeline);
     pass.setBindGroup(0, group);
     dispatchLinear(pass, Math.ceil((shard.endBlock - shard.firstBlock) / 64));
     pass.end();
@@ -156,6 +183,7 @@ export class ZfpEncoder {
       throw new ZfpFormatError(`${fileName}: ${formatDims(dims)} ${dtype} is ${expect} bytes, got ${bytes.byteLength}`);
     }
     const { device } = this;
+    await this.prepare(dtype);
     const stream = this.createStream(info, dtype, opts.maxShardBytes ?? maxShardBytesFor(device));
     const planeBytes = dims[0] * dims[1] * DTYPE_BYTES[dtype];
     let input: GPUBuffer | undefined;
