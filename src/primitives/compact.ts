@@ -20,9 +20,9 @@ export interface CompactOptions extends PrimitiveOptions {
 }
 
 export interface StreamCompactIdsArgs {
-  /** u32 per element, non-zero = keep; STORAGE usage. */
+  /** u32 per element: 1 = keep, 0 = drop; STORAGE usage. */
   mask: GPUBuffer;
-  /** Exclusive scan of the (0/1) mask, e.g. from ExclusiveScan; STORAGE usage. */
+  /** Exclusive scan of the 0/1 mask (kept elements of one chunk go to consecutive slots from its first offset), e.g. from ExclusiveScan; STORAGE usage. */
   offsets: GPUBuffer;
   /** Receives the kept elements at offsets[i]; STORAGE usage. Nothing else is written. */
   output: GPUBuffer;
