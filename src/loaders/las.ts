@@ -1,0 +1,332 @@
+// LAS/LAZ point clouds through LASzip compiled to WebAssembly (wasm/las).
+//
+// The file's bytes are copied once into the Wasm heap and decoded there in
+// chunks; each chunk is copied out of the heap straight into its place in the
+// caller's arrays. Positions are float32 relative to the centre of the
+// header's bounds (`header.centre`, float64), so UTM-sized coordinates keep
+// their precision. Every reader frees its Wasm memory on close(), also after
+// errors.
+import createLasModule, { type LasWasm } from '../../wasm/dist/las.js';
+import { copyIntoHeap, instantiateWasm, ptr } from './wasm-module.ts';
+
+export type Vec3 = [number, number, number];
+
+export interface LasHeader {
+  pointCount: number;
+  /** "1.2", "1.4", ... */
+  version: string;
+  pointFormat: number;
+  pointRecordLength: number;
+  compressed: boolean;
+  scale: Vec3;
+  offset: Vec3;
+  /** Bounds stored in the header (float64). */
+  bounds: { min: Vec3; max: Vec3 };
+  /** Positions are relative to this point (the centre of `bounds`). */
+  centre: Vec3;
+  hasRGB: boolean;
+  hasGpsTime: boolean;
+  vlrCount: number;
+  offsetToPointData: number;
+  systemIdentifier: string;
+  generatingSoftware: string;
+}
+
+/** Which per-point arrays to decode. */
+export interface LasFields {
+  /** float32 x, y, z relative to `header.centre`. */
+  positions?: boolean;
+  /** uint16 r, g, b (only when the format has RGB). */
+  rgb?: boolean;
+  intensity?: boolean;
+  classification?: boolean;
+  /** The raw int32 X, Y, Z (scaled = X * scale + offset, in float64). */
+  xyz?: boolean;
+  /** The point records in uncompressed LAS layout (`pointRecordLength` bytes each). */
+  records?: boolean;
+}
+
+export interface LasChunk {
+  /** Index of the first point of the chunk. */
+  start: number;
+  count: number;
+  positions?: Float32Array;
+  rgb?: Uint16Array;
+  intensity?: Uint16Array;
+  classification?: Uint8Array;
+  xyz?: Int32Array;
+  records?: Uint8Array;
+}
+
+/** A file that is not a readable LAS/LAZ file; the message names the file. */
+export class LasError extends Error {
+  constructor(
+    readonly fileName: string,
+    readonly reason: string,
+  ) {
+    super(`${fileName}: ${reason}`);
+    this.name = 'LasError';
+  }
+}
+
+let wasm: Promise<LasWasm> | undefined;
+
+/** The LASzip module (instantiated once per page or process). */
+export function loadLasWasm(): Promise<LasWasm> {
+  wasm ??= instantiateWasm(createLasModule, new URL('../../wasm/dist/las.wasm', import.meta.url), 'LAS/LAZ').catch((e: unknown) => {
+    wasm = undefined;
+    throw e;
+  });
+  return wasm;
+}
+
+const INFO_FIELDS = 28;
+const DEFAULT_CHUNK = 1 << 16;
+
+/** An open LAS/LAZ file in the Wasm heap. Call close() when done. */
+export class LasReader {
+  private handle: number;
+  private nextPoint = 0;
+  private scratch: { capacity: number; fields: Required<LasFields>; ptrs: Record<keyof LasFields, number> } | undefined;
+
+  private constructor(
+    private readonly m: LasWasm,
+    handle: number,
+    readonly fileName: string,
+    readonly header: LasHeader,
+  ) {
+    this.handle = handle;
+  }
+
+  /** Opens `bytes` (copied once into the Wasm heap). Throws LasError for bad files. */
+  static async open(bytes: Uint8Array, fileName: string): Promise<LasReader> {
+    const m = await loadLasWasm();
+    const data = copyIntoHeap(m, bytes, fileName);
+    // las_open owns `data` from here on, also when it fails.
+    const handle = ptr(m._las_open(data, bytes.byteLength));
+    if (handle === 0) throw new LasError(fileName, 'out of WebAssembly memory');
+    const error = m.UTF8ToString(ptr(m._las_error(handle)));
+    if (error) {
+      m._las_close(handle);
+      throw new LasError(fileName, error);
+    }
+    let header: LasHeader;
+    const info = ptr(m._malloc(INFO_FIELDS * 8));
+    try {
+      m._las_info(handle, info);
+      const v = new Float64Array(m.HEAPU8.buffer, info, INFO_FIELDS).slice();
+      const v3 = (i: number): Vec3 => [v[i], v[i + 1], v[i + 2]];
+      header = {
+        pointCount: v[0],
+        version: `${v[1]}.${v[2]}`,
+        pointFormat: v[3],
+        pointRecordLength: v[4],
+        compressed: v[5] === 1,
+        scale: v3(6),
+        offset: v3(9),
+        bounds: { min: v3(12), max: v3(15) },
+        centre: v3(18),
+        hasRGB: v[21] === 1,
+        hasGpsTime: v[22] === 1,
+        vlrCount: v[23],
+        offsetToPointData: v[24],
+        systemIdentifier: m.UTF8ToString(ptr(m._las_header_string(handle, 0))).trim(),
+        generatingSoftware: m.UTF8ToString(ptr(m._las_header_string(handle, 1))).trim(),
+      };
+    } finally {
+      m._free(info);
+    }
+    return new LasReader(m, handle, fileName, header);
+  }
+
+  get pointsRead(): number {
+    return this.nextPoint;
+  }
+
+  get closed(): boolean {
+    return this.handle === 0;
+  }
+
+  /**
+   * Decodes up to `maxPoints` points (default 65536) into new arrays, or into
+   * `into` at `into.offset` (points) when given. Returns undefined at the end.
+   */
+  read(maxPoints = DEFAULT_CHUNK, fields: LasFields = { positions: true }, into?: Partial<LasChunk> & { offset: number }): LasChunk | undefined {
+    if (this.handle === 0) throw new LasError(this.fileName, 'the reader is closed');
+    const n = Math.min(maxPoints, this.header.pointCount - this.nextPoint);
+    if (n <= 0) return undefined;
+    const s = this.ensureScratch(n, fields);
+    const got = this.m._las_read(
+      this.handle,
+      n,
+      s.fields.positions ? s.ptrs.positions : 0,
+      s.fields.rgb ? s.ptrs.rgb : 0,
+      s.fields.intensity ? s.ptrs.intensity : 0,
+      s.fields.classification ? s.ptrs.classification : 0,
+      s.fields.xyz ? s.ptrs.xyz : 0,
+      s.fields.records ? s.ptrs.records : 0,
+    );
+    if (got < 0) {
+      const reason = this.m.UTF8ToString(ptr(this.m._las_error(this.handle)));
+      throw new LasError(this.fileName, reason || 'cannot read the points');
+    }
+    const start = this.nextPoint;
+    this.nextPoint += got;
+    // The heap may have grown (and moved) during the call: take a fresh view.
+    const heap = this.m.HEAPU8.buffer;
+    const chunk: LasChunk = { start, count: got };
+    const at = into?.offset ?? 0;
+    const copy = <T extends Float32Array | Uint16Array | Uint8Array | Int32Array>(
+      make: (b: ArrayBufferLike, o: number, l: number) => T,
+      p: number,
+      perPoint: number,
+      dest: T | undefined,
+    ): T => {
+      const src = make(heap, p, got * perPoint);
+      if (dest) {
+        dest.set(src, at * perPoint);
+        return dest.subarray(at * perPoint, (at + got) * perPoint) as T;
+      }
+      return src.slice() as T;
+    };
+    const f = s.fields;
+    if (f.positions) chunk.positions = copy((b, o, l) => new Float32Array(b, o, l), s.ptrs.positions, 3, into?.positions);
+    if (f.rgb) chunk.rgb = copy((b, o, l) => new Uint16Array(b, o, l), s.ptrs.rgb, 3, into?.rgb);
+    if (f.intensity) chunk.intensity = copy((b, o, l) => new Uint16Array(b, o, l), s.ptrs.intensity, 1, into?.intensity);
+    if (f.classification) chunk.classification = copy((b, o, l) => new Uint8Array(b, o, l), s.ptrs.classification, 1, into?.classification);
+    if (f.xyz) chunk.xyz = copy((b, o, l) => new Int32Array(b, o, l), s.ptrs.xyz, 3, into?.xyz);
+    if (f.records) chunk.records = copy((b, o, l) => new Uint8Array(b, o, l), s.ptrs.records, this.header.pointRecordLength, into?.records);
+    return chunk;
+  }
+
+  private ensureScratch(n: number, fields: LasFields): NonNullable<LasReader['scratch']> {
+    const want: Required<LasFields> = {
+      positions: !!fields.positions,
+      rgb: !!fields.rgb && this.header.hasRGB,
+      intensity: !!fields.intensity,
+      classification: !!fields.classification,
+      xyz: !!fields.xyz,
+      records: !!fields.records,
+    };
+    const s = this.scratch;
+    if (s && s.capacity >= n && (Object.keys(want) as (keyof LasFields)[]).every((k) => !want[k] || s.fields[k])) {
+      return { ...s, fields: want };
+    }
+    this.freeScratch();
+    const bytesPerPoint: Record<keyof LasFields, number> = {
+      positions: 12,
+      rgb: 6,
+      intensity: 2,
+      classification: 1,
+      xyz: 12,
+      records: this.header.pointRecordLength,
+    };
+    const ptrs = { positions: 0, rgb: 0, intensity: 0, classification: 0, xyz: 0, records: 0 };
+    for (const k of Object.keys(want) as (keyof LasFields)[]) {
+      if (!want[k]) continue;
+      // 8-byte aligned by malloc, which typed-array views need.
+      ptrs[k] = ptr(this.m._malloc(n * bytesPerPoint[k]));
+      if (ptrs[k] === 0) {
+        this.scratch = { capacity: n, fields: want, ptrs };
+        this.freeScratch();
+        throw new LasError(this.fileName, `out of WebAssembly memory for a chunk of ${n} points`);
+      }
+    }
+    this.scratch = { capacity: n, fields: want, ptrs };
+    return this.scratch;
+  }
+
+  private freeScratch(): void {
+    if (!this.scratch) return;
+    for (const p of Object.values(this.scratch.ptrs)) if (p) this.m._free(p);
+    this.scratch = undefined;
+  }
+
+  /** Frees the reader, LASzip's state and the file's bytes in the Wasm heap. */
+  close(): void {
+    if (this.handle === 0) return;
+    this.freeScratch();
+    this.m._las_close(this.handle);
+    this.handle = 0;
+  }
+}
+
+export interface PointCloud {
+  fileName: string;
+  header: LasHeader;
+  count: number;
+  /** float32 x, y, z relative to `header.centre`. */
+  positions: Float32Array;
+  /** uint16 r, g, b when the format has RGB. */
+  rgb?: Uint16Array;
+  intensity: Uint16Array;
+  classification: Uint8Array;
+  /** Bounds of `positions` (relative to the centre), from the points. */
+  localBounds: { min: Vec3; max: Vec3 };
+  /** Milliseconds spent decoding (open + all chunks, without waits for the event loop). */
+  decodeMs: number;
+}
+
+export interface LoadPointCloudOptions {
+  /** Points per chunk (default 262144). */
+  chunkSize?: number;
+  /** Called after every chunk with points read so far and the total. */
+  onProgress?: (done: number, total: number) => void;
+  /** Called with every decoded chunk (views into the result arrays), e.g. to upload it. */
+  onChunk?: (chunk: LasChunk, header: LasHeader) => void;
+  /** Yield to the event loop between chunks so a page can repaint its progress bar. */
+  yieldBetweenChunks?: boolean;
+  signal?: AbortSignal;
+}
+
+/** Reads a whole LAS/LAZ file into typed arrays, in chunks, with progress. */
+export async function loadPointCloud(bytes: Uint8Array, fileName: string, options: LoadPointCloudOptions = {}): Promise<PointCloud> {
+  let decodeMs = 0;
+  let t0 = performance.now();
+  const reader = await LasReader.open(bytes, fileName);
+  try {
+    const { header } = reader;
+    const n = header.pointCount;
+    const out = {
+      positions: new Float32Array(n * 3),
+      rgb: header.hasRGB ? new Uint16Array(n * 3) : undefined,
+      intensity: new Uint16Array(n),
+      classification: new Uint8Array(n),
+    };
+    const min: Vec3 = [Infinity, Infinity, Infinity];
+    const max: Vec3 = [-Infinity, -Infinity, -Infinity];
+    const chunkSize = options.chunkSize ?? 1 << 18;
+    const fields = { positions: true, rgb: header.hasRGB, intensity: true, classification: true };
+    for (;;) {
+      const chunk = reader.read(chunkSize, fields, { ...out, offset: reader.pointsRead });
+      if (!chunk) break;
+      const p = chunk.positions!;
+      for (let i = 0; i < p.length; i += 3) {
+        for (let a = 0; a < 3; a++) {
+          const v = p[i + a];
+          if (v < min[a]) min[a] = v;
+          if (v > max[a]) max[a] = v;
+        }
+      }
+      decodeMs += performance.now() - t0;
+      options.onChunk?.(chunk, header);
+      options.onProgress?.(reader.pointsRead, n);
+      if (options.yieldBetweenChunks) await new Promise((r) => setTimeout(r, 0));
+      if (options.signal?.aborted) throw new LasError(fileName, 'loading was cancelled');
+      t0 = performance.now();
+    }
+    decodeMs += performance.now() - t0;
+    if (n === 0) {
+      min.fill(0);
+      max.fill(0);
+    }
+    return { fileName, header, count: n, ...out, intensity: out.intensity, classification: out.classification, localBounds: { min, max }, decodeMs };
+  } finally {
+    reader.close();
+  }
+}
+
+/** Scaled coordinate of raw integer `X` on `axis`: X * scale + offset in float64, as laspy computes it. */
+export function scaled(header: LasHeader, axis: 0 | 1 | 2, raw: number): number {
+  return raw * header.scale[axis] + header.offset[axis];
+}

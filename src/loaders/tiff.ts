@@ -1,0 +1,400 @@
+// TIFF images and stacks through libtiff (with zlib and libjpeg-turbo)
+// compiled to WebAssembly (wasm/tiff).
+//
+// A multi-page file, or several single- or multi-page files ordered by name,
+// becomes one volume laid out [page][y][x][sample] (samples interleaved, in
+// the file's sample type). Each file's bytes are copied once into the Wasm
+// heap; each page is decoded there and copied straight into its place in the
+// volume; the file's Wasm memory is freed before the next file is opened.
+import createTiffModule, { type TiffWasm } from '../../wasm/dist/tiff.js';
+import { copyIntoHeap, formatBytes, instantiateWasm, ptr } from './wasm-module.ts';
+
+export type SampleType = 'uint8' | 'int8' | 'uint16' | 'int16' | 'uint32' | 'int32' | 'float32' | 'float64';
+export type SampleArray = Uint8Array | Int8Array | Uint16Array | Int16Array | Uint32Array | Int32Array | Float32Array | Float64Array;
+export type Vec3 = [number, number, number];
+
+export const COMPRESSION_NAMES: Record<number, string> = {
+  1: 'NONE', 2: 'CCITTRLE', 3: 'CCITT_T4', 4: 'CCITT_T6', 5: 'LZW', 6: 'OJPEG', 7: 'JPEG', 8: 'ADOBE_DEFLATE', 32771: 'CCITTRLEW',
+  32773: 'PACKBITS', 32809: 'THUNDERSCAN', 32946: 'DEFLATE', 34676: 'SGILOG', 34677: 'SGILOG24', 34712: 'JPEG2000', 34887: 'LERC',
+  34925: 'LZMA', 50000: 'ZSTD', 50001: 'WEBP', 50002: 'JPEGXL',
+};
+export const SAMPLE_FORMAT_NAMES: Record<number, string> = { 1: 'UINT', 2: 'INT', 3: 'IEEEFP', 4: 'VOID', 5: 'COMPLEXINT', 6: 'COMPLEXIEEEFP' };
+export const PHOTOMETRIC_NAMES: Record<number, string> = {
+  0: 'MINISWHITE', 1: 'MINISBLACK', 2: 'RGB', 3: 'PALETTE', 4: 'MASK', 5: 'SEPARATED', 6: 'YCBCR', 8: 'CIELAB', 32844: 'LOGL', 32845: 'LOGLUV',
+};
+
+export interface TiffPage {
+  /** Page (IFD) index in its file. */
+  index: number;
+  fileName: string;
+  width: number;
+  height: number;
+  bitsPerSample: number;
+  samplesPerPixel: number;
+  sampleFormat: number;
+  sampleFormatName: string;
+  compression: number;
+  compressionName: string;
+  photometric: number;
+  photometricName: string;
+  /** 1 chunky, 2 planar (separate). */
+  planarConfig: number;
+  tiled: boolean;
+  tileWidth: number;
+  tileHeight: number;
+  rowsPerStrip: number;
+  xResolution: number;
+  yResolution: number;
+  /** 1 none, 2 inch, 3 centimetre. */
+  resolutionUnit: number;
+  /** NewSubfileType bit 0: a thumbnail / pyramid level, not part of the stack. */
+  reducedResolution: boolean;
+  bigEndian: boolean;
+  bigTiff: boolean;
+  description: string;
+  /** The decoded sample type, or undefined when this build cannot decode the page. */
+  dtype?: SampleType;
+}
+
+/** A file that is not a readable TIFF (or stack); the message names the file. */
+export class TiffError extends Error {
+  constructor(
+    readonly fileName: string,
+    readonly reason: string,
+  ) {
+    super(`${fileName}: ${reason}`);
+    this.name = 'TiffError';
+  }
+}
+
+let wasm: Promise<TiffWasm> | undefined;
+
+/** The libtiff module (instantiated once per page or process). */
+export function loadTiffWasm(): Promise<TiffWasm> {
+  wasm ??= instantiateWasm(createTiffModule, new URL('../../wasm/dist/tiff.wasm', import.meta.url), 'TIFF').catch((e: unknown) => {
+    wasm = undefined;
+    throw e;
+  });
+  return wasm;
+}
+
+const PAGE_FIELDS = 18;
+
+export function sampleType(bits: number, format: number): SampleType | undefined {
+  if (format === 3) return bits === 32 ? 'float32' : bits === 64 ? 'float64' : undefined;
+  if (format !== 1 && format !== 2) return undefined;
+  const signed = format === 2;
+  if (bits === 8) return signed ? 'int8' : 'uint8';
+  if (bits === 16) return signed ? 'int16' : 'uint16';
+  if (bits === 32) return signed ? 'int32' : 'uint32';
+  return undefined;
+}
+
+const ARRAY_TYPES = {
+  uint8: Uint8Array,
+  int8: Int8Array,
+  uint16: Uint16Array,
+  int16: Int16Array,
+  uint32: Uint32Array,
+  int32: Int32Array,
+  float32: Float32Array,
+  float64: Float64Array,
+} as const;
+
+export function allocateSamples(dtype: SampleType, length: number): SampleArray {
+  return new ARRAY_TYPES[dtype](length);
+}
+
+/** An open TIFF file in the Wasm heap. Call close() when done. */
+export class TiffReader {
+  private handle: number;
+
+  private constructor(
+    private readonly m: TiffWasm,
+    handle: number,
+    readonly fileName: string,
+    readonly pages: TiffPage[],
+  ) {
+    this.handle = handle;
+  }
+
+  /** Opens `bytes` (copied once into the Wasm heap). Throws TiffError for bad files. */
+  static async open(bytes: Uint8Array, fileName: string): Promise<TiffReader> {
+    const m = await loadTiffWasm();
+    const data = copyIntoHeap(m, bytes, fileName);
+    // tiff_open owns `data` from here on, also when it fails.
+    const handle = ptr(m._tiff_open(data, bytes.byteLength));
+    if (handle === 0) throw new TiffError(fileName, 'out of WebAssembly memory');
+    const fail = (reason: string): never => {
+      m._tiff_close(handle);
+      throw new TiffError(fileName, reason);
+    };
+    const error = m.UTF8ToString(ptr(m._tiff_error(handle)));
+    if (error) fail(error);
+    const count = m._tiff_page_count(handle);
+    const pages: TiffPage[] = [];
+    const info = ptr(m._malloc(PAGE_FIELDS * 8));
+    try {
+      for (let i = 0; i < count; i++) {
+        if (m._tiff_page_info(handle, i, info) !== 0) {
+          fail(`page ${i}: ${m.UTF8ToString(ptr(m._tiff_error(handle))) || 'cannot read its directory'}`);
+        }
+        const v = new Float64Array(m.HEAPU8.buffer, info, PAGE_FIELDS).slice();
+        const description = m.UTF8ToString(ptr(m._tiff_page_description(handle, i)));
+        pages.push({
+          index: i,
+          fileName,
+          width: v[0],
+          height: v[1],
+          bitsPerSample: v[2],
+          samplesPerPixel: v[3],
+          sampleFormat: v[4],
+          sampleFormatName: SAMPLE_FORMAT_NAMES[v[4]] ?? String(v[4]),
+          compression: v[5],
+          compressionName: COMPRESSION_NAMES[v[5]] ?? String(v[5]),
+          photometric: v[6],
+          photometricName: PHOTOMETRIC_NAMES[v[6]] ?? String(v[6]),
+          planarConfig: v[7],
+          tiled: v[8] === 1,
+          tileWidth: v[9],
+          tileHeight: v[10],
+          rowsPerStrip: v[11],
+          xResolution: v[12],
+          yResolution: v[13],
+          resolutionUnit: v[14],
+          reducedResolution: (v[15] & 1) === 1,
+          bigEndian: v[16] === 1,
+          bigTiff: v[17] === 1,
+          description,
+          dtype: sampleType(v[2], v[4]),
+        });
+      }
+    } finally {
+      m._free(info);
+    }
+    return new TiffReader(m, handle, fileName, pages);
+  }
+
+  get pageCount(): number {
+    return this.pages.length;
+  }
+
+  get closed(): boolean {
+    return this.handle === 0;
+  }
+
+  /**
+   * Decodes page `index` ([y][x][sample]) into a new array, or into `into`
+   * starting at element `offset`. Throws TiffError when the page cannot be decoded.
+   */
+  readPage(index: number, into?: SampleArray, offset = 0): SampleArray {
+    if (this.handle === 0) throw new TiffError(this.fileName, 'the reader is closed');
+    const m = this.m;
+    const page = this.pages[index];
+    if (!page) throw new TiffError(this.fileName, `page ${index} does not exist (the file has ${this.pages.length})`);
+    const bytes = m._tiff_page_bytes(this.handle, index);
+    if (!(bytes > 0) || !page.dtype) {
+      const reason = m.UTF8ToString(ptr(m._tiff_error(this.handle)));
+      throw new TiffError(this.fileName, `page ${index}: ${reason || 'cannot be decoded'}`);
+    }
+    const out = ptr(m._malloc(bytes));
+    if (out === 0) throw new TiffError(this.fileName, `out of WebAssembly memory for a ${formatBytes(bytes)} page`);
+    try {
+      if (m._tiff_read_page(this.handle, index, out, bytes) !== 0) {
+        const reason = m.UTF8ToString(ptr(m._tiff_error(this.handle)));
+        throw new TiffError(this.fileName, `page ${index}: ${reason || 'cannot be decoded'}`);
+      }
+      const dest = into ?? allocateSamples(page.dtype, bytes / (page.bitsPerSample / 8));
+      const bpe = dest.BYTES_PER_ELEMENT;
+      if ((offset + bytes / bpe) * bpe > dest.byteLength) throw new TiffError(this.fileName, `page ${index} does not fit the destination array`);
+      // The heap may have grown during the call: take a fresh view.
+      new Uint8Array(dest.buffer, dest.byteOffset + offset * bpe, bytes).set(m.HEAPU8.subarray(out, out + bytes));
+      return dest;
+    } finally {
+      m._free(out);
+    }
+  }
+
+  /** Frees libtiff's state and the file's bytes in the Wasm heap. */
+  close(): void {
+    if (this.handle === 0) return;
+    this.m._tiff_close(this.handle);
+    this.handle = 0;
+  }
+}
+
+export interface ImageJInfo {
+  /** key=value lines of the ImageJ ImageDescription. */
+  fields: Record<string, string>;
+  images?: number;
+  slices?: number;
+  channels?: number;
+  frames?: number;
+  spacing?: number;
+  unit?: string;
+}
+
+/** Parses ImageJ's ImageDescription ("ImageJ=1.x\nimages=..\nspacing=.."), or undefined. */
+export function parseImageJ(description: string): ImageJInfo | undefined {
+  if (!description.startsWith('ImageJ=')) return undefined;
+  const fields: Record<string, string> = {};
+  for (const line of description.split(/\r?\n/)) {
+    const eq = line.indexOf('=');
+    if (eq > 0) fields[line.slice(0, eq).trim()] = line.slice(eq + 1).trim();
+  }
+  const num = (k: string): number | undefined => {
+    const v = Number(fields[k]);
+    return fields[k] !== undefined && Number.isFinite(v) ? v : undefined;
+  };
+  const unit = fields.unit?.replace(/\\u00B5/gi, 'µ');
+  return { fields, images: num('images'), slices: num('slices'), channels: num('channels'), frames: num('frames'), spacing: num('spacing'), unit };
+}
+
+export interface TiffVolume {
+  /** x, y, z (z = pages). */
+  dims: Vec3;
+  samplesPerPixel: number;
+  dtype: SampleType;
+  /** [page][y][x][sample], native byte order. */
+  data: SampleArray;
+  /** Metadata of every page in the volume, in order. */
+  pages: TiffPage[];
+  /** The files, in stack order (sorted by name). */
+  files: string[];
+  /** Pages left out because their shape or type differs from the first (thumbnails, previews). */
+  skippedPages: number;
+  /** Voxel size from ImageJ metadata (x, y from the resolution, z from `spacing`); undefined if none. */
+  spacing?: Vec3;
+  unit?: string;
+  imagej?: ImageJInfo;
+  decodeMs: number;
+}
+
+export interface TiffSource {
+  name: string;
+  bytes: Uint8Array;
+}
+
+export interface LoadTiffOptions {
+  /** Called after every page with pages decoded so far and the total. */
+  onProgress?: (done: number, total: number) => void;
+  /** Yield to the event loop between pages so a page can repaint its progress bar. */
+  yieldBetweenPages?: boolean;
+  signal?: AbortSignal;
+}
+
+/** Natural order: "slice2.tif" before "slice10.tif". */
+export function compareNames(a: string, b: string): number {
+  return a.localeCompare(b, 'en', { numeric: true, sensitivity: 'base' }) || (a < b ? -1 : a > b ? 1 : 0);
+}
+
+function describeShape(p: TiffPage): string {
+  return `${p.width}×${p.height}${p.samplesPerPixel > 1 ? `×${p.samplesPerPixel}` : ''} ${p.dtype ?? `${p.bitsPerSample}-bit ${p.sampleFormatName}`}`;
+}
+
+/**
+ * Loads a multi-page TIFF, or a stack of files (ordered by name), as one volume.
+ * Throws TiffError naming the file for unreadable or inconsistent input.
+ */
+export async function loadTiffStack(sources: TiffSource | TiffSource[], options: LoadTiffOptions = {}): Promise<TiffVolume> {
+  const files = (Array.isArray(sources) ? [...sources] : [sources]).sort((a, b) => compareNames(a.name, b.name));
+  if (files.length === 0) throw new TiffError('(no file)', 'no TIFF files were given');
+  let decodeMs = 0;
+  let first: TiffPage | undefined;
+  let data: SampleArray | undefined;
+  let capacityPages = 0;
+  let filled = 0;
+  let skipped = 0;
+  const pages: TiffPage[] = [];
+  let estimatedTotal = 0;
+  for (let f = 0; f < files.length; f++) {
+    const { name, bytes } = files[f];
+    let t0 = performance.now();
+    const reader = await TiffReader.open(bytes, name);
+    try {
+      if (!first) {
+        first = reader.pages.find((p) => !p.reducedResolution) ?? reader.pages[0];
+        if (!first.dtype) {
+          throw new TiffError(name, `unsupported samples: ${first.bitsPerSample}-bit ${first.sampleFormatName} (8/16/32-bit integers and 32/64-bit floats are supported)`);
+        }
+        if (first.width * first.height === 0) throw new TiffError(name, 'the image is empty (0 pixels)');
+      }
+      const use = reader.pages.filter((p) => !p.reducedResolution && sameShape(p, first!));
+      if (use.length === 0) {
+        throw new TiffError(name, `its pages (${describeShape(reader.pages[0])}) do not match the stack (${describeShape(first)})`);
+      }
+      skipped += reader.pages.length - use.length;
+      // The stack's size is known only file by file: assume the others are like this one.
+      estimatedTotal = filled + use.length * (files.length - f);
+      const perPage = first.width * first.height * first.samplesPerPixel;
+      if (!data || filled + use.length > capacityPages) {
+        capacityPages = Math.max(filled + use.length, estimatedTotal);
+        const grown = allocateSamples(first.dtype!, perPage * capacityPages);
+        if (data) grown.set(data.subarray(0, filled * perPage) as never);
+        data = grown;
+      }
+      for (const p of use) {
+        reader.readPage(p.index, data, filled * perPage);
+        pages.push(p);
+        filled++;
+        decodeMs += performance.now() - t0;
+        options.onProgress?.(filled, Math.max(estimatedTotal, filled));
+        if (options.yieldBetweenPages) await new Promise((r) => setTimeout(r, 0));
+        if (options.signal?.aborted) throw new TiffError(name, 'loading was cancelled');
+        t0 = performance.now();
+      }
+      decodeMs += performance.now() - t0;
+    } finally {
+      reader.close();
+    }
+  }
+  const perPage = first!.width * first!.height * first!.samplesPerPixel;
+  const volumeData = filled === capacityPages ? data! : (data!.slice(0, filled * perPage) as SampleArray);
+  const imagej = parseImageJ(pages[0].description);
+  let spacing: Vec3 | undefined;
+  let unit: string | undefined;
+  if (imagej) {
+    const sx = first!.xResolution > 0 ? 1 / first!.xResolution : 1;
+    const sy = first!.yResolution > 0 ? 1 / first!.yResolution : sx;
+    spacing = [sx, sy, imagej.spacing ?? 1];
+    unit = imagej.unit;
+  }
+  return {
+    dims: [first!.width, first!.height, filled],
+    samplesPerPixel: first!.samplesPerPixel,
+    dtype: first!.dtype!,
+    data: volumeData,
+    pages,
+    files: files.map((f) => f.name),
+    skippedPages: skipped,
+    spacing,
+    unit,
+    imagej,
+    decodeMs,
+  };
+}
+
+function sameShape(p: TiffPage, q: TiffPage): boolean {
+  return p.width === q.width && p.height === q.height && p.samplesPerPixel === q.samplesPerPixel && p.dtype === q.dtype && p.dtype !== undefined;
+}
+
+/** min, max and mean over all samples (float64 accumulation). */
+export function sampleStats(data: SampleArray): { min: number; max: number; mean: number } {
+  let min = Infinity;
+  let max = -Infinity;
+  // Sum in blocks: keeps the float64 rounding error small for huge volumes.
+  let total = 0;
+  const block = 1 << 16;
+  for (let start = 0; start < data.length; start += block) {
+    let s = 0;
+    const end = Math.min(data.length, start + block);
+    for (let i = start; i < end; i++) {
+      const v = data[i];
+      if (v < min) min = v;
+      if (v > max) max = v;
+      s += v;
+    }
+    total += s;
+  }
+  return { min, max, mean: data.length > 0 ? total / data.length : NaN };
+}

@@ -1,0 +1,331 @@
+// Thin C API over LASzip's reader (laszip_api.h) for JavaScript.
+//
+// The file's bytes are copied once into the Wasm heap by the caller (malloc +
+// HEAPU8.set) and read in place through a std::streambuf over that memory, so
+// LASzip sees a seekable std::istream and no further copy is made. Points come
+// out in chunks: positions as float32 relative to the centre of the header's
+// bounds (UTM coordinates keep their centimetres), RGB, intensity,
+// classification, and optionally the raw integer XYZ and the point records in
+// uncompressed LAS layout (which tests hash against laspy).
+//
+// Every function reports failure through las_error(); none aborts.
+
+#include <laszip_api.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <istream>
+#include <new>
+#include <streambuf>
+
+// The same file builds natively for the benchmark's native baseline.
+#ifdef __EMSCRIPTEN__
+#include <emscripten/emscripten.h>
+#else
+#define EMSCRIPTEN_KEEPALIVE
+#endif
+
+namespace {
+
+// A read-only, seekable stream buffer over memory we do not own.
+class MemoryBuffer : public std::streambuf {
+ public:
+  MemoryBuffer(const uint8_t* data, size_t size) {
+    char* p = reinterpret_cast<char*>(const_cast<uint8_t*>(data));
+    setg(p, p, p + size);
+  }
+
+ protected:
+  pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode which) override {
+    if (!(which & std::ios_base::in)) return pos_type(off_type(-1));
+    off_type base = dir == std::ios_base::beg ? 0 : dir == std::ios_base::cur ? gptr() - eback() : egptr() - eback();
+    off_type target = base + off;
+    if (target < 0 || target > egptr() - eback()) return pos_type(off_type(-1));
+    setg(eback(), eback() + target, egptr());
+    return pos_type(target);
+  }
+  pos_type seekpos(pos_type pos, std::ios_base::openmode which) override {
+    return seekoff(off_type(pos), std::ios_base::beg, which);
+  }
+  // Lets istream::read copy large blocks with memcpy instead of byte by byte.
+  std::streamsize xsgetn(char* s, std::streamsize n) override {
+    std::streamsize avail = egptr() - gptr();
+    if (n > avail) n = avail;
+    std::memcpy(s, gptr(), static_cast<size_t>(n));
+    gbump(static_cast<int>(n));
+    return n;
+  }
+};
+
+struct LasReader {
+  uint8_t* data;  // owned: malloc'ed by the caller, freed by las_close
+  MemoryBuffer buffer;
+  std::istream stream;
+  laszip_POINTER laszip = nullptr;
+  laszip_header* header = nullptr;
+  laszip_point* point = nullptr;
+  bool open = false;
+  laszip_BOOL compressed = 0;
+  int64_t count = 0;
+  int64_t next = 0;  // index of the next point to read
+  double centre[3] = {0, 0, 0};
+  char error[600] = {0};
+
+  LasReader(uint8_t* bytes, size_t size) : data(bytes), buffer(bytes, size), stream(&buffer) {}
+};
+
+void set_error(LasReader* r, const char* what, bool with_laszip_message) {
+  laszip_CHAR* detail = nullptr;
+  if (with_laszip_message && r->laszip) laszip_get_error(r->laszip, &detail);
+  if (detail && detail[0])
+    std::snprintf(r->error, sizeof(r->error), "%s: %s", what, detail);
+  else
+    std::snprintf(r->error, sizeof(r->error), "%s", what);
+}
+
+bool has_rgb(int format) { return format == 2 || format == 3 || format == 5 || format == 7 || format == 8 || format == 10; }
+bool has_gps(int format) { return format == 1 || format >= 3; }
+bool has_nir(int format) { return format == 8 || format == 10; }
+bool has_wave(int format) { return format == 4 || format == 5 || format == 9 || format == 10; }
+
+// Size of the standard fields of a point format (without extra bytes).
+int base_record_length(int format) {
+  static const int sizes[11] = {20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67};
+  return format >= 0 && format <= 10 ? sizes[format] : 0;
+}
+
+inline uint8_t* put_u8(uint8_t* p, uint8_t v) { *p = v; return p + 1; }
+inline uint8_t* put_u16(uint8_t* p, uint16_t v) { std::memcpy(p, &v, 2); return p + 2; }
+inline uint8_t* put_i32(uint8_t* p, int32_t v) { std::memcpy(p, &v, 4); return p + 4; }
+inline uint8_t* put_f64(uint8_t* p, double v) { std::memcpy(p, &v, 8); return p + 8; }
+
+// Writes one point in the uncompressed LAS record layout of its format
+// (Wasm is little-endian like LAS). Returns the record length written.
+int write_record(const laszip_point* pt, int format, int record_length, uint8_t* out) {
+  uint8_t* p = out;
+  p = put_i32(p, pt->X);
+  p = put_i32(p, pt->Y);
+  p = put_i32(p, pt->Z);
+  p = put_u16(p, pt->intensity);
+  if (format <= 5) {
+    p = put_u8(p, uint8_t(pt->return_number | (pt->number_of_returns << 3) | (pt->scan_direction_flag << 6) | (pt->edge_of_flight_line << 7)));
+    p = put_u8(p, uint8_t(pt->classification | (pt->synthetic_flag << 5) | (pt->keypoint_flag << 6) | (pt->withheld_flag << 7)));
+    p = put_u8(p, uint8_t(pt->scan_angle_rank));
+    p = put_u8(p, pt->user_data);
+    p = put_u16(p, pt->point_source_ID);
+    if (has_gps(format)) p = put_f64(p, pt->gps_time);
+    if (has_rgb(format)) {
+      p = put_u16(p, pt->rgb[0]);
+      p = put_u16(p, pt->rgb[1]);
+      p = put_u16(p, pt->rgb[2]);
+    }
+  } else {
+    p = put_u8(p, uint8_t(pt->extended_return_number | (pt->extended_number_of_returns << 4)));
+    p = put_u8(p, uint8_t(pt->extended_classification_flags | (pt->extended_scanner_channel << 4) | (pt->scan_direction_flag << 6) |
+                          (pt->edge_of_flight_line << 7)));
+    p = put_u8(p, pt->extended_classification);
+    p = put_u8(p, pt->user_data);
+    p = put_u16(p, uint16_t(pt->extended_scan_angle));
+    p = put_u16(p, pt->point_source_ID);
+    p = put_f64(p, pt->gps_time);
+    if (has_rgb(format)) {
+      p = put_u16(p, pt->rgb[0]);
+      p = put_u16(p, pt->rgb[1]);
+      p = put_u16(p, pt->rgb[2]);
+    }
+    if (has_nir(format)) p = put_u16(p, pt->rgb[3]);
+  }
+  if (has_wave(format)) {
+    std::memcpy(p, pt->wave_packet, 29);
+    p += 29;
+  }
+  int written = int(p - out);
+  int extra = record_length - written;
+  if (extra > 0) {
+    int have = pt->extra_bytes && pt->num_extra_bytes > 0 ? pt->num_extra_bytes : 0;
+    int n = have < extra ? have : extra;
+    if (n > 0) std::memcpy(p, pt->extra_bytes, size_t(n));
+    if (extra > n) std::memset(p + n, 0, size_t(extra - n));
+  }
+  return record_length;
+}
+
+bool finite_bounds(const laszip_header* h) {
+  const double v[6] = {h->min_x, h->min_y, h->min_z, h->max_x, h->max_y, h->max_z};
+  for (double x : v)
+    if (!std::isfinite(x)) return false;
+  return h->min_x <= h->max_x && h->min_y <= h->max_y && h->min_z <= h->max_z;
+}
+
+}  // namespace
+
+extern "C" {
+
+// Takes ownership of `data` (allocated with malloc); las_close frees it.
+// Always returns a handle unless out of memory; check las_error().
+EMSCRIPTEN_KEEPALIVE LasReader* las_open(uint8_t* data, uint32_t size) {
+  LasReader* r = new (std::nothrow) LasReader(data, size);
+  if (!r) {
+    std::free(data);
+    return nullptr;
+  }
+  if (size < 4 || std::memcmp(data, "LASF", 4) != 0) {
+    set_error(r, "not a LAS/LAZ file (the file does not start with the signature \"LASF\")", false);
+    return r;
+  }
+  if (laszip_create(&r->laszip) || !r->laszip) {
+    set_error(r, "could not create the LASzip reader", false);
+    return r;
+  }
+  if (laszip_open_reader_stream(r->laszip, r->stream, &r->compressed)) {
+    set_error(r, "cannot read the LAS header", true);
+    return r;
+  }
+  r->open = true;
+  if (laszip_get_header_pointer(r->laszip, &r->header) || laszip_get_point_pointer(r->laszip, &r->point)) {
+    set_error(r, "cannot access the LAS header", true);
+    return r;
+  }
+  // As LASzip does: the legacy 32-bit count, or the LAS 1.4 64-bit one when it is 0.
+  const int64_t count = r->header->number_of_point_records ? int64_t(r->header->number_of_point_records)
+                                                           : int64_t(r->header->extended_number_of_point_records);
+  r->count = count;
+  const laszip_header* h = r->header;
+  if (h->point_data_format > 10) {
+    char msg[120];
+    std::snprintf(msg, sizeof(msg), "unsupported point data format %d (LAS defines 0 to 10)", int(h->point_data_format));
+    set_error(r, msg, false);
+    return r;
+  }
+  // Without compression, all records must be in the file: a truncated LAS
+  // would otherwise only fail after decoding most of it.
+  if (!r->compressed) {
+    uint64_t need = uint64_t(h->offset_to_point_data) + uint64_t(count) * h->point_data_record_length;
+    if (need > size) {
+      char msg[200];
+      std::snprintf(msg, sizeof(msg), "truncated file: the header announces %lld points (%llu bytes) but the file has %u bytes",
+                    (long long)count, (unsigned long long)need, size);
+      set_error(r, msg, false);
+      return r;
+    }
+  }
+  if (finite_bounds(h)) {
+    r->centre[0] = 0.5 * (h->min_x + h->max_x);
+    r->centre[1] = 0.5 * (h->min_y + h->max_y);
+    r->centre[2] = 0.5 * (h->min_z + h->max_z);
+  } else {
+    r->centre[0] = h->x_offset;
+    r->centre[1] = h->y_offset;
+    r->centre[2] = h->z_offset;
+  }
+  return r;
+}
+
+// Empty string when all is well.
+EMSCRIPTEN_KEEPALIVE const char* las_error(LasReader* r) { return r ? r->error : "out of memory"; }
+
+// Header facts as doubles, in the order of LAS_INFO_FIELDS in src/loaders/las.ts.
+EMSCRIPTEN_KEEPALIVE int las_info(LasReader* r, double* out) {
+  if (!r || !r->header) return 1;
+  const laszip_header* h = r->header;
+  int format = h->point_data_format;
+  double v[] = {
+      double(r->count),
+      double(h->version_major),
+      double(h->version_minor),
+      double(format),
+      double(h->point_data_record_length),
+      double(r->compressed ? 1 : 0),
+      h->x_scale_factor, h->y_scale_factor, h->z_scale_factor,
+      h->x_offset, h->y_offset, h->z_offset,
+      h->min_x, h->min_y, h->min_z,
+      h->max_x, h->max_y, h->max_z,
+      r->centre[0], r->centre[1], r->centre[2],
+      double(has_rgb(format) ? 1 : 0),
+      double(has_gps(format) ? 1 : 0),
+      double(h->number_of_variable_length_records),
+      double(h->offset_to_point_data),
+      double(h->file_creation_year),
+      double(h->file_creation_day),
+      double(base_record_length(format)),
+  };
+  std::memcpy(out, v, sizeof(v));
+  return 0;
+}
+
+// 0: system identifier, 1: generating software (NUL-terminated copies).
+EMSCRIPTEN_KEEPALIVE const char* las_header_string(LasReader* r, int which) {
+  static char text[33];
+  text[0] = 0;
+  if (!r || !r->header) return text;
+  const char* src = which == 0 ? r->header->system_identifier : r->header->generating_software;
+  std::memcpy(text, src, 32);
+  text[32] = 0;
+  return text;
+}
+
+// Reads up to `n` points into the given arrays (any may be null):
+//   positions: float32 x,y,z relative to the centre; rgb: uint16 r,g,b (0 when
+//   the format has none); intensity: uint16; classification: uint8;
+//   xyz: the raw int32 X,Y,Z; records: point_data_record_length bytes each.
+// Returns the number read (0 at the end), or -1 with las_error() set.
+EMSCRIPTEN_KEEPALIVE int32_t las_read(LasReader* r, int32_t n, float* positions, uint16_t* rgb, uint16_t* intensity, uint8_t* classification,
+                                      int32_t* xyz, uint8_t* records) {
+  if (!r || !r->open || r->error[0]) return -1;
+  if (n < 0) n = 0;
+  int64_t left = r->count - r->next;
+  if (n > left) n = int32_t(left);
+  const laszip_header* h = r->header;
+  const int format = h->point_data_format;
+  const bool rgb_present = has_rgb(format);
+  const int record_length = h->point_data_record_length;
+  const double sx = h->x_scale_factor, sy = h->y_scale_factor, sz = h->z_scale_factor;
+  const double ox = h->x_offset - r->centre[0], oy = h->y_offset - r->centre[1], oz = h->z_offset - r->centre[2];
+  const laszip_point* pt = r->point;
+  for (int32_t i = 0; i < n; i++) {
+    if (laszip_read_point(r->laszip)) {
+      char msg[160];
+      std::snprintf(msg, sizeof(msg), "cannot read point %lld of %lld (truncated or corrupt point data)", (long long)(r->next + 1),
+                    (long long)r->count);
+      set_error(r, msg, true);
+      return -1;
+    }
+    if (positions) {
+      // Scale in float64 and subtract the centre before rounding to float32.
+      positions[3 * i + 0] = float(pt->X * sx + ox);
+      positions[3 * i + 1] = float(pt->Y * sy + oy);
+      positions[3 * i + 2] = float(pt->Z * sz + oz);
+    }
+    if (rgb) {
+      rgb[3 * i + 0] = rgb_present ? pt->rgb[0] : 0;
+      rgb[3 * i + 1] = rgb_present ? pt->rgb[1] : 0;
+      rgb[3 * i + 2] = rgb_present ? pt->rgb[2] : 0;
+    }
+    if (intensity) intensity[i] = pt->intensity;
+    if (classification) classification[i] = format >= 6 ? pt->extended_classification : pt->classification;
+    if (xyz) {
+      xyz[3 * i + 0] = pt->X;
+      xyz[3 * i + 1] = pt->Y;
+      xyz[3 * i + 2] = pt->Z;
+    }
+    if (records) write_record(pt, format, record_length, records + size_t(i) * size_t(record_length));
+    r->next++;
+  }
+  return n;
+}
+
+// Frees the reader, LASzip's state and the file bytes.
+EMSCRIPTEN_KEEPALIVE void las_close(LasReader* r) {
+  if (!r) return;
+  if (r->laszip) {
+    if (r->open) laszip_close_reader(r->laszip);
+    laszip_destroy(r->laszip);
+  }
+  std::free(r->data);
+  delete r;
+}
+
+}  // extern "C"
