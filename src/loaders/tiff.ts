@@ -314,9 +314,7 @@ export async function loadTiffStack(sources: TiffSource | TiffSource[], options:
     try {
       if (!first) {
         first = reader.pages.find((p) => !p.reducedResolution) ?? reader.pages[0];
-        if (!first.dtype) {
-          throw new TiffError(name, `unsupported samples: ${first.bitsPerSample}-bit ${first.sampleFormatName} (8/16/32-bit integers and 32/64-bit floats are supported)`);
-        }
+        if (!first.dtype) throw new TiffError(name, unsupportedSamples(first));
         if (first.width * first.height === 0) throw new TiffError(name, 'the image is empty (0 pixels)');
       }
       const use = reader.pages.filter((p) => !p.reducedResolution && sameShape(p, first!));
@@ -372,6 +370,15 @@ export async function loadTiffStack(sources: TiffSource | TiffSource[], options:
     imagej,
     decodeMs,
   };
+}
+
+/** The same wording as the C API's checks (wasm/tiff/tiff_api.c). */
+function unsupportedSamples(p: TiffPage): string {
+  if (p.sampleFormat === 3) return `unsupported ${p.bitsPerSample}-bit floating-point samples (32 and 64 are supported)`;
+  if (p.sampleFormat !== 1 && p.sampleFormat !== 2) {
+    return `unsupported sample format ${p.sampleFormat} (unsigned, signed integer and IEEE float are supported)`;
+  }
+  return `unsupported sample size: ${p.bitsPerSample} bits per sample (8, 16 and 32-bit integers are supported)`;
 }
 
 function sameShape(p: TiffPage, q: TiffPage): boolean {

@@ -57,6 +57,9 @@ def tiff_entry(path, extra=None):
         }
     if extra:
         e.update(extra)
+        if extra.get('lossy'):
+            # Lossy files: the decoded samples, to compare value by value.
+            pyxs(arr, series.axes).astype(arr.dtype.newbyteorder('<')).tofile(path + '.decoded.raw')
     return e
 
 
@@ -137,9 +140,9 @@ def make_tiffs(out):
     tifffile.imwrite(os.path.join(out, 'unsupported_f16.tif'), field((1, 8, 8), np.float16), photometric='minisblack')
     tifffile.imwrite(os.path.join(out, 'unsupported_zstd.tif'), field((1, 16, 16), np.uint16), photometric='minisblack', compression='zstd')
     files['unsupported'] = {
-        'unsupported_1bit.tif': 'bits per sample',
-        'unsupported_f16.tif': 'floating-point',
-        'unsupported_zstd.tif': 'compression',
+        'unsupported_1bit.tif': 'unsupported sample size: 1 bits per sample',
+        'unsupported_f16.tif': 'unsupported 16-bit floating-point samples',
+        'unsupported_zstd.tif': 'unsupported compression 50000',
     }
     return files
 
