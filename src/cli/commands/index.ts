@@ -4,5 +4,7 @@ import { compressCommand } from './compress.ts';
 import { decompressCommand } from './decompress.ts';
 import { gpuInfoCommand } from './gpu-info.ts';
 import { infoCommand } from './info.ts';
+import { lasCommand } from './las.ts';
+import { tiffCommand } from './tiff.ts';
 
-export const commands: CliCommand[] = [infoCommand, compressCommand, decompressCommand, gpuInfoCommand];
+export const commands: CliCommand[] = [infoCommand, compressCommand, decompressCommand, gpuInfoCommand, lasCommand, tiffCommand];
