@@ -71,35 +71,24 @@ fn shr_round_even(m: u32, r: u32) -> u32 {
 // (float)v rounds to 24 bits (nearest even), the product rounds again
 // (nearest even; subnormal, zero and infinity included).
 fn int_to_float_bits(v: i32, emax: i32) -> u32 {
-  if (v == 0) {
-    return 0u;
-  }
   let sign = select(0u, 0x80000000u, v < 0);
+  if (v == 0 || emax < -119) {
+    return sign;  // 0, or the scale factor 2^(emax - 30) is 0 in float32
+  }
   let mag = select(bitcast<u32>(v), 0u - bitcast<u32>(v), v < 0);
-  var p = 31u - countLeadingZeros(mag);  // leading bit
-  var m: u32;                            // 24-bit significand: value = m * 2^(p - 23)
-  if (p > 23u) {
-    m = shr_round_even(mag, p - 23u);
-    if (m == 0x1000000u) {
-      m = 0x800000u;
-      p += 1u;
-    }
-  } else {
-    m = mag << (23u - p);
-  }
-  if (emax - 30 < -149) {
-    return sign;  // the scale factor itself is 0 in float32
-  }
-  let e = i32(p) + emax - 30;  // exponent of the leading bit of the product
-  let biased = e + 127;
-  if (biased >= 255) {
-    return sign | 0x7f800000u;
-  }
+  let lz = countLeadingZeros(mag);
+  let norm = mag << lz;  // leading one at bit 31
+  var m = norm >> 8u;    // 24-bit significand, then rounded: [2^23, 2^24]
+  let rem = norm & 0xffu;
+  m += select(0u, 1u, rem > 0x80u || (rem == 0x80u && (m & 1u) == 1u));
+  // value = m * 2^(biased - 150), biased = the float32 exponent field when m < 2^24
+  let biased = 128 - i32(lz) + emax;
   if (biased >= 1) {
-    return sign | (u32(biased) << 23u) | (m & 0x7fffffu);
+    // m = 2^24 carries into the exponent; past the largest exponent: infinity
+    return sign | min((u32(biased) << 23u) + m - 0x800000u, 0x7f800000u);
   }
-  // Subnormal: m * 2^(e - 23) in units of 2^-149 is m >> r.
-  let r = u32(-(e + 126));
+  // subnormal: m * 2^(biased - 1) units of 2^-149, i.e. m >> (1 - biased), rounded again
+  let r = u32(1 - biased);
   if (r >= 25u) {
     return sign;
   }
