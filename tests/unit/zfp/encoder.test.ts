@@ -4,7 +4,7 @@
 // above 32: 148-bit header) rates encode to exactly the bytes of
 // zfpy.compress_numpy(a.astype(np.float32), rate=R); zfpy decodes our files to
 // exactly what our decoder gives, so the round trip has zfp's own error.
-import { mkdtempSync, readFileSync, writeFileSync } from 'node:fs';
+import { mkdtempSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { describe, expect } from 'vitest';
