@@ -6,6 +6,7 @@ import { describe, expect } from 'vitest';
 import { ExclusiveScan } from '../../../src/primitives/scan.ts';
 import type { CountLike } from '../../../src/primitives/count.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
+import { readU32 } from '../../../src/gpu/buffers.ts';
 import { LARGE_SIZES, POISON, SMALL_SIZES, cpuExclusiveScan, diff, gpuCount, poison, randomMask, randomU32, read, upload } from './helpers.ts';
 
 const EXTRA = 37; // buffer elements past the count
@@ -123,6 +124,47 @@ describe('ExclusiveScan', () => {
     expect(diff(await read(device, outA), refA.scan)).toBe('');
     expect(diff(await read(device, outB), refB.scan)).toBe('');
     expect([...(await read(device, totals))]).toEqual([refA.total, refB.total]);
+    scan.destroy();
+  });
+
+  gpuTest('2^27 elements, the issue\'s upper bound (pattern computed on the fly, checked in slices)', async ({ gpu }) => {
+    const { device } = gpu;
+    const n = 2 ** 27;
+    const length = n + 5;
+    // 0..7 per element from a multiplicative hash: no 512 MiB host arrays.
+    const value = (i: number) => Math.imul(i, 0x9e3779b1) >>> 29;
+    const input = device.createBuffer({ label: 'test.input', size: length * 4, usage: GPUBufferUsage.STORAGE, mappedAtCreation: true });
+    const words = new Uint32Array(input.getMappedRange());
+    for (let i = 0; i < length; i++) words[i] = value(i);
+    input.unmap();
+    const output = device.createBuffer({ label: 'test.output', size: length * 4, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC, mappedAtCreation: true });
+    new Uint32Array(output.getMappedRange()).fill(POISON);
+    output.unmap();
+    const totals = upload(device, 'test.totals', new Uint32Array(0), 1);
+    const scan = await ExclusiveScan.create(device, { capacity: length });
+    const encoder = device.createCommandEncoder();
+    scan.encode(encoder, { input, output, count: gpuCount(device, n), totalOut: { buffer: totals, offset: 0 } });
+    device.queue.submit([encoder.finish()]);
+    let sum = 0;
+    let wrong = 0;
+    let first = '';
+    const slice = 2 ** 23;
+    for (let start = 0; start < length; start += slice) {
+      const got = await readU32(device, output, start * 4, Math.min(slice, length - start));
+      for (let k = 0; k < got.length; k++) {
+        const i = start + k;
+        const want = i < n ? sum : POISON;
+        if (got[k] !== want) {
+          wrong++;
+          first ||= `[${i}] ${got[k]} != ${want}`;
+        }
+        if (i < n) sum = (sum + value(i)) >>> 0;
+      }
+    }
+    expect(first).toBe('');
+    expect(wrong).toBe(0);
+    expect((await read(device, totals))[0]).toBe(sum);
+    for (const b of [input, output, totals]) b.destroy();
     scan.destroy();
   });
 });
