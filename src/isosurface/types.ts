@@ -1,0 +1,94 @@
+// The contract between the isosurface pipeline (src/isosurface/) and its
+// users: the page (renderer, stats panel, benchmark), the CLI and the tests.
+
+import type { PassTiming, TimingSource } from '../gpu/timing.ts';
+import type { Dims } from '../volume/naming.ts';
+
+export interface IsosurfaceOptions {
+  /** Cache slots to start with (one slot = one decoded 4x4x4 block, 256 bytes). Default: 10% of the blocks. */
+  initialCacheSlots?: number;
+  /** Vertices the output buffers hold at first (8 bytes each). Default: chosen from the volume size. */
+  initialVertexCapacity?: number;
+  /**
+   * Bytes the cache (slot data and bookkeeping) and the vertex output may take
+   * together. Growth beyond it is refused with an IsosurfaceBudgetError.
+   * Default: half of the device's maxBufferSize, at most 2 GiB.
+   */
+  memoryBudgetBytes?: number;
+  /** Largest vertex buffer binding (tests lower it to force several shards). Default: the device limit. */
+  maxVertexBindingBytes?: number;
+  /** Record per-stage GPU times (timestamp queries where present). Default true. */
+  timing?: boolean;
+}
+
+export interface VolumeInfo {
+  dims: Dims;
+  /** Blocks per axis: ceil(dims / 4). */
+  blockGrid: Dims;
+  blockCount: number;
+  /** Smallest and largest decoded value (from the per-block ranges). */
+  valueRange: [number, number];
+}
+
+/** Everything the stats panel and the benchmark need about one computed surface. */
+export interface IsosurfaceStats {
+  isovalue: number;
+  activeBlocks: number;
+  /** Blocks decompressed into the cache for this surface. */
+  newBlocks: number;
+  occupiedBlocks: number;
+  /** 1 - newBlocks / activeBlocks (1 when nothing is active). */
+  hitRate: number;
+  vertices: number;
+  triangles: number;
+  cacheSlots: number;
+  /** Slots holding a block (valid data), after this update. */
+  cacheSlotsUsed: number;
+  /** Bytes of the slot data and cache bookkeeping buffers. */
+  cacheBytes: number;
+  /** Bytes of the vertex output buffers (capacity). */
+  vertexBytes: number;
+  /** Sum of the stages' GPU time, ms. */
+  gpuMs: number;
+  stages: PassTiming[];
+  timingSource: TimingSource;
+  /** True if this surface needed the cache or vertex buffers to grow (and was recomputed). */
+  grew: boolean;
+}
+
+/** A vertex shard: part of the triangle soup in one buffer (one storage binding). */
+export interface VertexShard {
+  /**
+   * Compressed vertices, 8 bytes each: u32 packed position (10 bits per axis,
+   * x in bits 0-9, y 10-19, z 20-29; local = q * 4 / 1023 voxels from the
+   * block origin) and u32 block id (raster order, x fastest). Usage includes
+   * VERTEX and STORAGE.
+   */
+  vertices: GPUBuffer;
+  /** drawIndirect arguments [vertexCount, instanceCount, firstVertex, firstInstance], written by the GPU. */
+  drawArgs: GPUBuffer;
+  drawArgsOffset: number;
+}
+
+/** What the renderer binds to draw the current surface (and shade it from the volume). */
+export interface IsosurfaceDrawData {
+  shards: VertexShard[];
+  info: VolumeInfo;
+  /** Decoded blocks, 64 f32 per slot (voxel x + 4y + 16z); valid for every active block of the drawn surface. */
+  slotData: GPUBuffer;
+  /** Per block: its slot, or 0xffffffff when not cached. */
+  blockToSlot: GPUBuffer;
+  /** Increases whenever any buffer above is replaced (after growth): re-create bind groups then. */
+  version: number;
+}
+
+export class IsosurfaceBudgetError extends Error {
+  constructor(
+    message: string,
+    readonly neededBytes: number,
+    readonly budgetBytes: number,
+  ) {
+    super(message);
+    this.name = 'IsosurfaceBudgetError';
+  }
+}
