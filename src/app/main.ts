@@ -1,72 +1,239 @@
-// Page entry: WebGPU device, viewer, the built-in volume, and the panel.
+// Page entry: the WebGPU device, the viewer and its layers, the panel, and
+// the first volume (?url=… from this origin, else the built-in one).
 import { BROWSER_HELP, describeAdapter, requestGpu, WebGpuUnavailableError, type GpuContext } from '../gpu/device.ts';
 import { BoxLayer } from '../render/box-layer.ts';
+import { SurfaceLayer } from '../render/surface-layer.ts';
 import { Viewer } from '../render/viewer.ts';
-import { generateDefaultVolume } from '../volume/procedural.ts';
+import { acceptDrops, hexToRgb, wireControls } from './controls.ts';
+import { byId } from './dom.ts';
+import { copyLink, savePly, savePng } from './exports.ts';
 import { setInfoList } from './info-list.ts';
+import { chooseIsovalue } from './iso-choice.ts';
+import { VolumeLoader } from './loading/loader.ts';
 import { Messages, showFatal } from './messages.ts';
+import { publishPageState, type PageState } from './page-state.ts';
+import { Session } from './session.ts';
+import { BenchPanel } from './ui/bench-panel.ts';
+import { BudgetControl, defaultBudgetBytes } from './ui/budget-control.ts';
+import { Hud } from './ui/hud.ts';
+import { IsoControl } from './ui/iso-control.ts';
+import { ProgressView } from './ui/progress.ts';
+import { StatsPanel } from './ui/stats-panel.ts';
+import { VolumeForm } from './ui/volume-form.ts';
+import { ViewLink } from './view-link.ts';
 
-function byId<T extends HTMLElement>(id: string): T {
-  const el = document.getElementById(id);
-  if (!el) throw new Error(`page is missing #${id}`);
-  return el as T;
-}
-
-/** State the end-to-end tests read (also handy in the console). */
-export interface PageState {
-  status: 'loading' | 'ready' | 'error';
-  adapter?: GpuContext['adapter'];
-  framesDrawn: () => number;
-}
-
-declare global {
-  interface Window {
-    zfpiso?: PageState;
-  }
-}
-
-async function start(): Promise<void> {
-  const stage = byId('stage');
-  const messages = new Messages(byId('messages'));
-  const state: PageState = { status: 'loading', framesDrawn: () => 0 };
-  window.zfpiso = state;
-
-  let gpu: GpuContext;
+async function startGpu(stage: HTMLElement, messages: Messages, state: PageState): Promise<GpuContext | undefined> {
   try {
-    gpu = await requestGpu(navigator.gpu, {
+    return await requestGpu(navigator.gpu, {
       label: 'page.device',
       onFailure: (f) => {
-        if (f.kind === 'device-lost') showFatal(stage, f.message);
-        else messages.show(`WebGPU ${f.kind} error: ${f.message}`);
+        if (f.kind === 'device-lost') {
+          state.status = 'error';
+          showFatal(stage, f.message);
+        } else messages.show(`WebGPU ${f.kind} error: ${f.message}`);
       },
     });
   } catch (e) {
     state.status = 'error';
     showFatal(stage, e instanceof WebGpuUnavailableError ? e.message : `Could not start WebGPU: ${(e as Error).message}. ${BROWSER_HELP}`);
-    return;
+    return undefined;
   }
+}
+
+/** ?url= of this page, if any. */
+function urlParameter(): string | undefined {
+  return new URLSearchParams(location.search).get('url') ?? undefined;
+}
+
+/** Keeps ?url= only while the volume on screen came from it (so a copied link reopens that volume). */
+function setUrlParameter(url: string | undefined): void {
+  const params = new URLSearchParams(location.search);
+  if (url) params.set('url', url);
+  else params.delete('url');
+  const search = params.toString();
+  history.replaceState(null, '', `${location.pathname}${search ? `?${search}` : ''}${location.hash}`);
+}
+
+async function start(): Promise<void> {
+  const stage = byId('stage');
+  const state = publishPageState();
+  const messages = new Messages(byId('messages'));
+  const show = messages.show.bind(messages);
+  messages.show = (text, kind, timeoutMs) => {
+    state.messages.push(text);
+    return show(text, kind, timeoutMs);
+  };
+
+  const gpu = await startGpu(stage, messages, state);
+  if (!gpu) return;
   state.adapter = gpu.adapter;
   setInfoList(byId('gpu-info'), [
     ['adapter', describeAdapter(gpu.adapter)],
+    ['max buffer', `${(gpu.limits.maxBufferSize / 2 ** 20).toFixed(0)} MiB`],
     ['max binding', `${(gpu.limits.maxStorageBufferBindingSize / 2 ** 20).toFixed(0)} MiB`],
-    ['timing', gpu.features.timestampQuery ? 'GPU timestamps' : 'queue wall time'],
+    ['timing', gpu.features.timestampQuery ? 'GPU timestamps per stage' : 'queue wall time (no timestamp-query)'],
   ]);
 
-  const viewer = new Viewer(gpu.device, byId<HTMLCanvasElement>('view'));
+  let link: ViewLink | undefined;
+  const viewer = new Viewer(gpu.device, byId<HTMLCanvasElement>('view'), { onCameraChange: () => link?.schedule() });
+  link = new ViewLink(viewer.camera);
   state.framesDrawn = () => viewer.framesDrawn;
-  const box = await BoxLayer.create(viewer);
+  state.camera = () => viewer.camera.getState();
+  const [box, surface] = await Promise.all([BoxLayer.create(viewer), SurfaceLayer.create(viewer)]);
+  viewer.addLayer(surface);
   viewer.addLayer(box);
 
-  const volume = generateDefaultVolume();
-  const bounds = { min: [0, 0, 0] as [number, number, number], max: volume.dims.map((d) => d - 1) as [number, number, number] };
-  box.setBounds(bounds);
-  viewer.fitTo(bounds);
-  setInfoList(byId('volume-info'), [
-    ['name', volume.name],
-    ['dims', volume.dims.join(' × ')],
-  ]);
-  state.status = 'ready';
-  document.body.dataset.status = 'ready';
+  const initialView = ViewLink.initial();
+  let pendingIso = initialView.iso;
+  let volumeUrl: string | undefined;
+
+  const isoControl = new IsoControl(
+    {
+      slider: byId('iso-slider'),
+      number: byId('iso-value'),
+      profile: byId('iso-profile'),
+      readout: byId('profile-readout'),
+      min: byId('iso-min'),
+      max: byId('iso-max'),
+    },
+    (iso) => session.setIsovalue(iso),
+  );
+  const budget = new BudgetControl(byId('budget-mb'), byId('budget-bar'), byId('budget-note'), defaultBudgetBytes(gpu.limits), (bytes) =>
+    session.current?.iso.setMemoryBudget(bytes),
+  );
+  const hud = new Hud(byId('hud'), viewer, byId('fps'));
+  const bench: BenchPanel = new BenchPanel({
+    context: () => {
+      const v = session.current;
+      if (!v) return undefined;
+      return {
+        engine: v.iso,
+        baseName: (v.opened.kind === 'default' ? 'default' : v.opened.name).replace(/[^\w.-]+/g, '_'),
+        valueRange: v.iso.info.valueRange,
+        volume: {
+          name: v.opened.name,
+          kind: v.opened.kind,
+          dims: v.iso.info.dims,
+          rate: v.opened.rate,
+          blocks: v.iso.info.blockCount,
+          valueRange: v.iso.info.valueRange,
+          compressedBytes: v.opened.compressedBytes,
+        },
+        adapter: { ...gpu.adapter },
+      };
+    },
+    onRunning: (running) => {
+      state.benchRunning = running;
+      isoControl.setEnabled(!running && session.current !== undefined);
+      byId<HTMLInputElement>('budget-mb').disabled = running;
+      if (!running && session.current) session.setIsovalue(isoControl.value);
+    },
+    onSurface: () => viewer.requestFrame(),
+    onDone: (result) => {
+      state.bench = result;
+    },
+    onError: (m) => messages.show(m),
+  });
+  const session = new Session({
+    viewer,
+    surface,
+    box,
+    isoControl,
+    stats: new StatsPanel(byId('surface-stats'), byId('memory-stats'), byId('stage-times')),
+    budget,
+    hud,
+    bench,
+    link,
+    messages,
+    state,
+    volumeInfo: byId('volume-info'),
+  });
+  session.pendingCamera = initialView.camera;
+
+  let nextUrl: string | undefined;
+  const loader = new VolumeLoader({
+    gpu,
+    progress: new ProgressView(byId('progress')),
+    form: new VolumeForm(byId<HTMLDialogElement>('volume-form')),
+    memoryBudget: () => budget.bytes,
+    chooseIso: (opened, iso, ranges) => {
+      const [lo, hi] = iso.info.valueRange;
+      const wanted = pendingIso;
+      pendingIso = undefined;
+      if (wanted !== undefined && wanted >= lo && wanted <= hi) return wanted;
+      return opened.defaultIsovalue ?? chooseIsovalue(ranges, iso.info.valueRange);
+    },
+    onLoaded: (v) => {
+      session.install(v);
+      volumeUrl = nextUrl;
+      setUrlParameter(volumeUrl);
+    },
+    onError: (m) => messages.show(m),
+    onCancelled: (what) => messages.show(`Opening ${what} was cancelled; the current volume stays.`, 'info', 4000),
+    onBusy: (busy) => {
+      state.loading = busy;
+      byId<HTMLButtonElement>('bench-run').disabled = busy || !session.current;
+    },
+  });
+
+  acceptDrops(byId('drop-overlay'), (files) => {
+    if (bench.isRunning) return messages.show('A benchmark is running: cancel it before opening another volume.', 'info', 4000) && undefined;
+    if (files.length > 1) messages.show(`Opening ${files[0].name} (one volume at a time; ${files.length - 1} other file(s) ignored).`, 'info', 4000);
+    nextUrl = undefined;
+    void loader.loadFile(files[0]);
+  });
+  wireControls({
+    openFiles: (files) => {
+      nextUrl = undefined;
+      void loader.loadFile(files[0]);
+    },
+    loadDefault: () => {
+      nextUrl = undefined;
+      void loader.loadDefault();
+    },
+    resetView: () => viewer.controls.reset(),
+    fitView: () => {
+      viewer.fitView();
+      link?.schedule();
+    },
+    savePng: () => void savePng(viewer, session, messages),
+    savePly: () => void savePly(session, messages),
+    copyLink: () => {
+      if (session.current && session.current.opened.kind !== 'default' && !volumeUrl) {
+        messages.show('The link keeps the view and isovalue; the volume came from a local file, so open it again after following the link.', 'info', 6000);
+      }
+      void copyLink(link!, messages);
+    },
+    stepIso: (steps) => isoControl.step(steps),
+    setBoxVisible: (on) => {
+      if (on) viewer.addLayer(box);
+      else viewer.removeLayer(box);
+    },
+    setSmooth: (on) => {
+      surface.style.smooth = on;
+      viewer.requestFrame();
+    },
+    setColors: (front, back) => {
+      surface.style.front = hexToRgb(front);
+      surface.style.back = hexToRgb(back);
+      viewer.requestFrame();
+    },
+  });
+
+  // The first volume: ?url= when given (falling back to the built-in one if it fails).
+  const url = urlParameter();
+  if (url) {
+    nextUrl = url;
+    await loader.loadUrl(url);
+  }
+  if (!session.current) {
+    nextUrl = undefined;
+    await loader.loadDefault();
+  }
+  if (state.status !== 'error') {
+    state.status = 'ready';
+    document.body.dataset.status = 'ready';
+  }
 }
 
 start().catch((e: unknown) => {

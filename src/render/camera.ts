@@ -49,6 +49,19 @@ export class ArcballCamera {
     this.home = this.getState();
   }
 
+  /** Centres `bounds` and zooms to show them whole, keeping the current direction. */
+  frameBounds(bounds: Bounds): void {
+    const r = 0.5 * vec3.distance(vec3.fromValues(...bounds.min), vec3.fromValues(...bounds.max));
+    this.sceneRadius = Math.max(r, 1e-6);
+    vec3.set(
+      this.target,
+      (bounds.min[0] + bounds.max[0]) / 2,
+      (bounds.min[1] + bounds.max[1]) / 2,
+      (bounds.min[2] + bounds.max[2]) / 2,
+    );
+    this.distance = (this.sceneRadius / Math.sin(this.fovY / 2)) * 1.05;
+  }
+
   reset(): void {
     this.setState(this.home);
   }

@@ -46,6 +46,7 @@ export class Viewer {
   private fpsWindow: number[] = [];
   private readonly scratch = new Float32Array(FRAME_UNIFORM_BYTES / 4);
   private destroyed = false;
+  private bounds: Bounds | undefined;
 
   constructor(
     readonly device: GPUDevice,
@@ -79,6 +80,7 @@ export class Viewer {
         this.requestFrame();
         options.onCameraChange?.();
       },
+      onFit: () => this.fitView(),
     });
 
     this.resizeObserver = new ResizeObserver((entries) => {
@@ -120,7 +122,15 @@ export class Viewer {
   }
 
   fitTo(bounds: Bounds): void {
+    this.bounds = bounds;
     this.camera.fit(bounds);
+    this.requestFrame();
+  }
+
+  /** Shows the bounds given to fitTo whole again, keeping the view direction (F). */
+  fitView(): void {
+    if (this.bounds) this.camera.frameBounds(this.bounds);
+    else this.camera.reset();
     this.requestFrame();
   }
 
@@ -128,6 +138,14 @@ export class Viewer {
     if (this.frameRequested || this.destroyed) return;
     this.frameRequested = true;
     requestAnimationFrame((t) => this.frame(t));
+  }
+
+  /**
+   * Draws a frame at once (not at the next animation frame): read the canvas
+   * right after it in the same task, e.g. for a screenshot.
+   */
+  drawNow(): void {
+    if (!this.destroyed) this.frame(performance.now());
   }
 
   private ensureDepth(): GPUTexture {

@@ -86,9 +86,9 @@ export function generateDefaultVolume(dims: Dims = [128, 128, 128], seed = 20201
   const height = new Float32Array(nx * ny);
   for (let j = 0; j < ny; j++) {
     for (let i = 0; i < nx; i++) {
-      const u = (i / nx) * 6;
-      const v = (j / ny) * 6;
-      height[j * nx + i] = 0.3 + 0.16 * noise.fbm(u, v, 5);
+      const u = (i / nx) * 4.5;
+      const v = (j / ny) * 4.5;
+      height[j * nx + i] = 0.3 + 0.13 * noise.fbm(u, v, 4);
     }
   }
   const layerWidth = 0.035;
@@ -108,8 +108,8 @@ export function generateDefaultVolume(dims: Dims = [128, 128, 128], seed = 20201
           const wave = Math.cos(Math.PI * 2 * shells * r);
           // Open a window where the direction points to -x,-y (toward the camera).
           const dir = r > 1e-6 ? (-dx - dy) / (Math.SQRT2 * r * radius) : 0;
-          const window = 1 - smoothstep(0.55, 0.8, dir);
-          shell = (0.5 + 0.45 * wave * window) * (1 - smoothstep(0.95, 1.15, r)) + 0.1 * (1 - r);
+          const window = 1 - smoothstep(0.45, 0.7, dir);
+          shell = (0.5 + 0.45 * wave) * window * (1 - smoothstep(0.95, 1.1, r));
         }
         data[(k * ny + j) * nx + i] = Math.max(sheet, shell);
       }

@@ -1,0 +1,114 @@
+// The current surface as a binary little-endian PLY mesh: float x, y, z in
+// voxel index coordinates (voxel (i, j, k) at (i, j, k)), 3 vertex indices per
+// face. Vertices shared by neighbouring triangles are welded (the soup's
+// copies of a vertex decode to the same floats), so mesh tools see a
+// connected surface; faces keep the soup's order, one per triangle.
+
+import type { Dims } from '../../volume/naming.ts';
+
+/** Packed (position, block id) pairs -> float positions (see src/isosurface/types.ts VertexShard). */
+export function decodePackedVertices(packed: Uint32Array, count: number, blockGrid: Dims): Float32Array {
+  const out = new Float32Array(count * 3);
+  const [gx, gy] = blockGrid;
+  const s = 4 / 1023;
+  for (let v = 0; v < count; v++) {
+    const p = packed[2 * v];
+    const b = packed[2 * v + 1];
+    const bx = b % gx;
+    const by = Math.floor(b / gx) % gy;
+    const bz = Math.floor(b / (gx * gy));
+    out[3 * v] = Math.fround(bx * 4 + Math.fround((p & 0x3ff) * s));
+    out[3 * v + 1] = Math.fround(by * 4 + Math.fround(((p >>> 10) & 0x3ff) * s));
+    out[3 * v + 2] = Math.fround(bz * 4 + Math.fround(((p >>> 20) & 0x3ff) * s));
+  }
+  return out;
+}
+
+export interface WeldedMesh {
+  /** xyz per unique vertex */
+  positions: Float32Array;
+  /** 3 indices per triangle */
+  indices: Uint32Array;
+}
+
+/** Merges vertices with bit-identical positions (open-addressing hash on the float bits). */
+export function weldVertices(soup: Float32Array): WeldedMesh {
+  const n = soup.length / 3;
+  const bits = new Uint32Array(soup.buffer, soup.byteOffset, soup.length);
+  let size = 1;
+  while (size < n * 2) size <<= 1;
+  const table = new Int32Array(size).fill(-1);
+  const mask = size - 1;
+  const unique = new Uint32Array(n);
+  const indices = new Uint32Array(n);
+  let count = 0;
+  for (let v = 0; v < n; v++) {
+    const x = bits[3 * v], y = bits[3 * v + 1], z = bits[3 * v + 2];
+    let h = (Math.imul(x, 0x9e3779b1) ^ Math.imul(y, 0x85ebca77) ^ Math.imul(z, 0xc2b2ae3d)) >>> 0;
+    h = (h ^ (h >>> 15)) & mask;
+    for (;;) {
+      const u = table[h];
+      if (u < 0) {
+        table[h] = count;
+        unique[count] = v;
+        indices[v] = count++;
+        break;
+      }
+      const w = unique[u];
+      if (bits[3 * w] === x && bits[3 * w + 1] === y && bits[3 * w + 2] === z) {
+        indices[v] = u;
+        break;
+      }
+      h = (h + 1) & mask;
+    }
+  }
+  const positions = new Float32Array(count * 3);
+  for (let u = 0; u < count; u++) positions.set(soup.subarray(3 * unique[u], 3 * unique[u] + 3), 3 * u);
+  return { positions, indices };
+}
+
+export function encodePly(mesh: WeldedMesh, comments: string[] = []): Uint8Array {
+  const vertices = mesh.positions.length / 3;
+  const faces = mesh.indices.length / 3;
+  const header =
+    'ply\nformat binary_little_endian 1.0\n' +
+    comments.map((c) => `comment ${c.replace(/[\r\n]+/g, ' ')}\n`).join('') +
+    `element vertex ${vertices}\nproperty float x\nproperty float y\nproperty float z\n` +
+    `element face ${faces}\nproperty list uchar int vertex_indices\nend_header\n`;
+  const head = new TextEncoder().encode(header);
+  const out = new Uint8Array(head.byteLength + vertices * 12 + faces * 13);
+  out.set(head, 0);
+  const view = new DataView(out.buffer);
+  let at = head.byteLength;
+  for (let i = 0; i < mesh.positions.length; i++, at += 4) view.setFloat32(at, mesh.positions[i], true);
+  for (let f = 0; f < faces; f++) {
+    out[at] = 3;
+    view.setInt32(at + 1, mesh.indices[3 * f], true);
+    view.setInt32(at + 5, mesh.indices[3 * f + 1], true);
+    view.setInt32(at + 9, mesh.indices[3 * f + 2], true);
+    at += 13;
+  }
+  return out;
+}
+
+/** Reads back what encodePly wrote (tests, and a check users can run in the console). */
+export function parsePly(bytes: Uint8Array): { comments: string[]; positions: Float32Array; indices: Uint32Array } {
+  const text = new TextDecoder('latin1').decode(bytes.subarray(0, Math.min(bytes.length, 4096)));
+  const end = text.indexOf('end_header\n');
+  if (!text.startsWith('ply\n') || end < 0) throw new Error('not a PLY file');
+  const lines = text.slice(0, end).split('\n');
+  const comments = lines.filter((l) => l.startsWith('comment ')).map((l) => l.slice(8));
+  const nv = Number(/element vertex (\d+)/.exec(text)?.[1]);
+  const nf = Number(/element face (\d+)/.exec(text)?.[1]);
+  const view = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
+  let at = end + 'end_header\n'.length;
+  const positions = new Float32Array(nv * 3);
+  for (let i = 0; i < nv * 3; i++, at += 4) positions[i] = view.getFloat32(at, true);
+  const indices = new Uint32Array(nf * 3);
+  for (let f = 0; f < nf; f++) {
+    if (bytes[at] !== 3) throw new Error(`face ${f} has ${bytes[at]} vertices`);
+    for (let k = 0; k < 3; k++) indices[3 * f + k] = view.getInt32(at + 1 + 4 * k, true);
+    at += 13;
+  }
+  return { comments, positions, indices };
+}

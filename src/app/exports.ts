@@ -1,0 +1,70 @@
+// What a user takes away: the view as PNG, the surface as binary PLY, and a
+// link that reopens this view.
+
+import type { Viewer } from '../render/viewer.ts';
+import { download } from './dom.ts';
+import { captureViewPng } from './export/screenshot.ts';
+import { decodePackedVertices, encodePly, weldVertices } from './export/ply.ts';
+import { formatBytes } from './format.ts';
+import type { Messages } from './messages.ts';
+import type { Session } from './session.ts';
+import type { ViewLink } from './view-link.ts';
+
+function baseName(session: Session): string {
+  const v = session.current;
+  if (!v) return 'surface';
+  const name = v.opened.kind === 'default' ? 'default' : v.opened.name.replace(/\.(raw|zfp|nrrd)(\..*)?$/i, '').replace(/\.[^.]*$/, '');
+  return name.replace(/[^\w.-]+/g, '_');
+}
+
+function isoTag(session: Session): string {
+  const s = session.current?.iso;
+  const iso = session.current ? (window.zfpiso?.iso ?? 0) : 0;
+  return s ? `_iso${Number(iso.toPrecision(6))}` : '';
+}
+
+export async function savePng(viewer: Viewer, session: Session, messages: Messages): Promise<void> {
+  try {
+    const blob = await captureViewPng(viewer);
+    download(blob, `${baseName(session)}${isoTag(session)}.png`);
+  } catch (e) {
+    messages.show(`Screenshot: ${(e as Error).message}`);
+  }
+}
+
+export async function savePly(session: Session, messages: Messages): Promise<void> {
+  const v = session.current;
+  if (!v) return;
+  try {
+    const packed = await v.iso.readVertices();
+    const count = packed.length / 2;
+    if (count === 0) {
+      messages.show('The surface is empty at this isovalue: nothing to export.', 'info', 4000);
+      return;
+    }
+    const soup = decodePackedVertices(packed, count, v.iso.info.blockGrid);
+    const mesh = weldVertices(soup);
+    const iso = window.zfpiso?.stats?.isovalue ?? window.zfpiso?.iso ?? NaN;
+    const ply = encodePly(mesh, [
+      `isosurface of ${v.opened.name} at isovalue ${iso}`,
+      `voxel index coordinates: voxel (i, j, k) at (i, j, k); volume ${v.iso.info.dims.join(' x ')}`,
+      'made by zfp-isosurface-webgpu (marching cubes on the GPU, zfp fixed-rate blocks)',
+    ]);
+    download(new Blob([ply as BlobPart], { type: 'application/octet-stream' }), `${baseName(session)}${isoTag(session)}.ply`);
+    messages.show(`Exported ${(count / 3).toLocaleString('en-US')} triangles, ${(mesh.positions.length / 3).toLocaleString('en-US')} vertices (${formatBytes(ply.byteLength)}).`, 'info', 4000);
+  } catch (e) {
+    messages.show(`PLY export: ${(e as Error).message}`);
+  }
+}
+
+export async function copyLink(link: ViewLink, messages: Messages): Promise<void> {
+  link.flush();
+  const href = link.href();
+  try {
+    await navigator.clipboard.writeText(href);
+    messages.show('Link to this view copied.', 'info', 2500);
+  } catch {
+    // No clipboard permission (e.g. not a secure context): show it to copy by hand.
+    messages.show(`Link to this view: ${href}`, 'info');
+  }
+}

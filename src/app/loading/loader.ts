@@ -1,0 +1,164 @@
+// Opening a volume, from the user's file (drop, picker), a same-origin URL or
+// the built-in generator, to a computed first surface. Only a volume that got
+// all the way is handed to `onLoaded`; on any failure or cancel everything
+// made so far is freed, the message names the file, and the current volume
+// stays. A newer load cancels an older one.
+
+import type { GpuContext } from '../../gpu/device.ts';
+import type { IsosurfaceStats } from '../../isosurface/types.ts';
+import {
+  inspectVolumeFile,
+  openDefaultVolume,
+  openVolumeFile,
+  type OpenedVolume,
+  type OpenPhase,
+  type VolumeFileFacts,
+} from '../../volume/open-volume.ts';
+import { createIsosurface, type PageIsosurface } from '../engine.ts';
+import { formatBytes } from '../format.ts';
+import type { ProgressView } from '../ui/progress.ts';
+import type { VolumeForm } from '../ui/volume-form.ts';
+import { fetchVolume, fileNameOfUrl, LoadCancelled, readFile, resolveSameOrigin } from './read.ts';
+
+export interface LoadedVolume {
+  opened: OpenedVolume;
+  iso: PageIsosurface;
+  /** [min, max] per block. */
+  ranges: Float32Array;
+  initialIso: number;
+  firstStats: IsosurfaceStats;
+  /** How long the whole load took, ms. */
+  loadMs: number;
+}
+
+export interface LoaderDeps {
+  gpu: GpuContext;
+  progress: ProgressView;
+  form: VolumeForm;
+  /** The isovalue a volume opens at. */
+  chooseIso: (opened: OpenedVolume, iso: PageIsosurface, ranges: Float32Array) => number;
+  /** Applied to every new Isosurface before its first surface. */
+  memoryBudget: () => number | undefined;
+  onLoaded: (volume: LoadedVolume) => void;
+  onError: (message: string) => void;
+  onCancelled: (what: string) => void;
+  onBusy: (busy: boolean) => void;
+}
+
+const PHASE_TEXT: Record<OpenPhase, string> = {
+  upload: 'Uploading the stream to the GPU…',
+  compress: 'Compressing on the GPU…',
+};
+
+/** The message for a failed load: the error's own text when it names the file, else prefixed with it. */
+export function loadErrorMessage(what: string, e: unknown): string {
+  const text = e instanceof Error ? e.message : String(e);
+  return text.includes(what) ? text : `${what}: ${text}`;
+}
+
+export class VolumeLoader {
+  private generation = 0;
+  private controller: AbortController | undefined;
+
+  constructor(private readonly deps: LoaderDeps) {}
+
+  get busy(): boolean {
+    return this.controller !== undefined;
+  }
+
+  cancel(): void {
+    this.controller?.abort();
+    this.deps.form.cancel();
+  }
+
+  loadFile(file: File): Promise<void> {
+    return this.run(file.name, async (signal, progress) => {
+      const bytes = await readFile(file, (done, total) => progress(`Reading ${formatBytes(done)} of ${formatBytes(total ?? file.size)}…`, total ? (done / total) * 0.3 : undefined), signal);
+      return this.open(file.name, bytes, signal, progress);
+    });
+  }
+
+  loadUrl(url: string): Promise<void> {
+    let resolved: URL;
+    try {
+      resolved = resolveSameOrigin(url);
+    } catch (e) {
+      this.deps.onError((e as Error).message);
+      return Promise.resolve();
+    }
+    const name = fileNameOfUrl(resolved);
+    return this.run(name, async (signal, progress) => {
+      const bytes = await fetchVolume(resolved, (done, total) => progress(`Downloading ${formatBytes(done)}${total ? ` of ${formatBytes(total)}` : ''}…`, total ? (done / total) * 0.3 : undefined), signal);
+      return this.open(name, bytes, signal, progress);
+    });
+  }
+
+  loadDefault(): Promise<void> {
+    return this.run('Built-in volume', async (_signal, progress) => {
+      progress('Generating and compressing on the GPU…', undefined);
+      return openDefaultVolume(this.deps.gpu.device);
+    });
+  }
+
+  private async open(fileName: string, bytes: Uint8Array, signal: AbortSignal, progress: (text: string, f?: number) => void): Promise<OpenedVolume | undefined> {
+    progress('Checking the file…', 0.3);
+    const facts: VolumeFileFacts = await inspectVolumeFile(fileName, bytes);
+    let request = {};
+    if (facts.missing.length > 0 || facts.compresses) {
+      progress('Waiting for the volume’s description…', 0.3);
+      const answer = await this.deps.form.ask(facts);
+      if (!answer || signal.aborted) throw new LoadCancelled();
+      request = answer;
+    }
+    return openVolumeFile(this.deps.gpu.device, facts, bytes, request, {
+      onPhase: (phase) => progress(PHASE_TEXT[phase], undefined),
+    });
+  }
+
+  private async run(what: string, produce: (signal: AbortSignal, progress: (text: string, f?: number) => void) => Promise<OpenedVolume | undefined>): Promise<void> {
+    this.cancel();
+    const job = ++this.generation;
+    const controller = new AbortController();
+    this.controller = controller;
+    const { signal } = controller;
+    const { progress, gpu } = this.deps;
+    const started = performance.now();
+    progress.start(what, () => this.cancel());
+    this.deps.onBusy(true);
+    const set = (text: string, f?: number) => {
+      if (job === this.generation) progress.set(text, f);
+    };
+    let opened: OpenedVolume | undefined;
+    let iso: PageIsosurface | undefined;
+    try {
+      opened = await produce(signal, set);
+      if (!opened || signal.aborted) throw new LoadCancelled();
+      set('Computing block ranges…', 0.65);
+      iso = await createIsosurface(gpu, opened.stream);
+      const budget = this.deps.memoryBudget();
+      if (budget !== undefined) iso.setMemoryBudget(budget);
+      if (signal.aborted) throw new LoadCancelled();
+      const ranges = await iso.readBlockRanges();
+      const initialIso = this.deps.chooseIso(opened, iso, ranges);
+      set('Extracting the surface…', 0.8);
+      const firstStats = await iso.compute(initialIso);
+      if (signal.aborted) throw new LoadCancelled();
+      this.deps.onLoaded({ opened, iso, ranges, initialIso, firstStats, loadMs: performance.now() - started });
+      opened = undefined;
+      iso = undefined;
+    } catch (e) {
+      if (job !== this.generation) {
+        // Replaced by a newer load: nothing to say.
+      } else if (e instanceof LoadCancelled || signal.aborted) this.deps.onCancelled(what);
+      else this.deps.onError(loadErrorMessage(what, e));
+    } finally {
+      iso?.destroy();
+      opened?.stream.destroy();
+      if (job === this.generation) {
+        this.controller = undefined;
+        progress.finish();
+        this.deps.onBusy(false);
+      }
+    }
+  }
+}

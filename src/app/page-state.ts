@@ -1,0 +1,50 @@
+// What the page exposes as window.zfpiso: for the end-to-end tests, and handy
+// in the console. Plain data and getters only.
+import type { BenchResult } from '../bench/harness.ts';
+import type { AdapterSummary } from '../gpu/device.ts';
+import type { IsosurfaceStats } from '../isosurface/types.ts';
+import type { CameraState } from '../render/camera.ts';
+import type { Dims } from '../volume/naming.ts';
+
+export interface PageVolumeState {
+  name: string;
+  fileName: string;
+  kind: string;
+  dims: Dims;
+  rate: number;
+  valueRange: [number, number];
+  blockCount: number;
+}
+
+export interface PageState {
+  status: 'loading' | 'ready' | 'error';
+  adapter?: AdapterSummary;
+  framesDrawn: () => number;
+  camera?: () => CameraState;
+  volume?: PageVolumeState;
+  /** The isovalue the user chose (slider). */
+  iso?: number;
+  /** The newest statistics received (the drawn surface). */
+  stats?: IsosurfaceStats;
+  /** Statistics received so far. */
+  statsCount: number;
+  /** Volumes loaded so far (the built-in one included). */
+  loads: number;
+  loading: boolean;
+  /** Every message shown to the user, in order. */
+  messages: string[];
+  bench?: BenchResult;
+  benchRunning: boolean;
+}
+
+declare global {
+  interface Window {
+    zfpiso?: PageState;
+  }
+}
+
+export function publishPageState(): PageState {
+  const state: PageState = { status: 'loading', framesDrawn: () => 0, statsCount: 0, loads: 0, loading: false, messages: [], benchRunning: false };
+  window.zfpiso = state;
+  return state;
+}

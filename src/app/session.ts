@@ -1,0 +1,135 @@
+// The volume on screen: its Isosurface, what the panel shows about it, and
+// the switch to a newly loaded one (the old one is freed only after the new
+// one has its first surface, so a failed load leaves it untouched).
+
+import { IsosurfaceBudgetError, type IsosurfaceStats } from '../isosurface/types.ts';
+import type { BoxLayer } from '../render/box-layer.ts';
+import type { SurfaceLayer } from '../render/surface-layer.ts';
+import type { Viewer } from '../render/viewer.ts';
+import type { CameraState } from '../render/camera.ts';
+import { formatIso } from './format.ts';
+import { setInfoList } from './info-list.ts';
+import type { LoadedVolume } from './loading/loader.ts';
+import type { Messages } from './messages.ts';
+import type { PageState } from './page-state.ts';
+import { computeBlockProfile } from './ui/block-profile.ts';
+import type { BenchPanel } from './ui/bench-panel.ts';
+import type { BudgetControl } from './ui/budget-control.ts';
+import type { Hud } from './ui/hud.ts';
+import type { IsoControl } from './ui/iso-control.ts';
+import { StatsPanel, volumeRows } from './ui/stats-panel.ts';
+import type { ViewLink } from './view-link.ts';
+
+export interface SessionParts {
+  viewer: Viewer;
+  surface: SurfaceLayer;
+  box: BoxLayer;
+  isoControl: IsoControl;
+  stats: StatsPanel;
+  budget: BudgetControl;
+  hud: Hud;
+  bench: BenchPanel;
+  link: ViewLink;
+  messages: Messages;
+  state: PageState;
+  volumeInfo: HTMLElement;
+}
+
+export class Session {
+  current: LoadedVolume | undefined;
+  /** Camera to restore on the first volume (from the link the page was opened with). */
+  pendingCamera: CameraState | undefined;
+  private requestedAt = new Map<number, number>();
+  private lastLatency: number | undefined;
+
+  constructor(private readonly p: SessionParts) {
+    p.viewer.addBeforeFrame(() => p.surface.setDrawData(this.current?.iso.drawData));
+  }
+
+  install(v: LoadedVolume): void {
+    const { p } = this;
+    const old = this.current;
+    this.current = v;
+    this.requestedAt.clear();
+    const { info } = v.iso;
+    v.iso.onStats((s) => {
+      if (this.current === v) this.showStats(s);
+    });
+    v.iso.onError((e) => {
+      if (this.current !== v) return;
+      if (e instanceof IsosurfaceBudgetError) p.budget.showError(e);
+      p.messages.show(e.message);
+    });
+    const max = info.dims.map((n) => n - 1) as [number, number, number];
+    const bounds = { min: [0, 0, 0] as [number, number, number], max };
+    p.box.setBounds(bounds);
+    p.viewer.fitTo(bounds);
+    if (this.pendingCamera) {
+      p.viewer.camera.setState(this.pendingCamera);
+      this.pendingCamera = undefined;
+    }
+    const [lo, hi] = info.valueRange;
+    p.isoControl.setVolume(info.valueRange, computeBlockProfile(v.ranges, lo, hi), v.initialIso);
+    p.isoControl.setEnabled(true);
+    setInfoList(p.volumeInfo, volumeRows(v.opened, info.blockCount, info.valueRange));
+    p.bench.setVolume(info.valueRange);
+    p.budget.clearError();
+    p.link.setIso(v.initialIso);
+    p.state.volume = {
+      name: v.opened.name,
+      fileName: v.opened.fileName,
+      kind: v.opened.kind,
+      dims: info.dims,
+      rate: v.opened.rate,
+      valueRange: info.valueRange,
+      blockCount: info.blockCount,
+    };
+    p.state.iso = v.initialIso;
+    p.surface.setDrawData(v.iso.drawData);
+    this.lastLatency = undefined;
+    this.showStats(v.firstStats);
+    p.state.loads++;
+    if (old) {
+      old.iso.destroy();
+      old.opened.stream.destroy();
+    }
+    p.viewer.requestFrame();
+  }
+
+  /** The user moved the isovalue. */
+  setIsovalue(iso: number): void {
+    const v = this.current;
+    if (!v) return;
+    const f = Math.fround(iso);
+    this.requestedAt.set(f, performance.now());
+    if (this.requestedAt.size > 256) this.requestedAt.delete(this.requestedAt.keys().next().value!);
+    this.p.state.iso = iso;
+    this.p.link.setIso(iso);
+    v.iso.setIsovalue(iso);
+  }
+
+  private showStats(s: IsosurfaceStats): void {
+    const { p } = this;
+    const v = this.current!;
+    const t = this.requestedAt.get(Math.fround(s.isovalue));
+    if (t !== undefined) {
+      this.lastLatency = performance.now() - t;
+      this.requestedAt.delete(Math.fround(s.isovalue));
+    }
+    p.stats.update(s, v.iso.info.blockCount, this.lastLatency);
+    p.budget.setUsed(s.cacheBytes + s.vertexBytes);
+    p.budget.clearError();
+    p.hud.setSurface(formatIso(s.isovalue, v.iso.info.valueRange), s.triangles, s.gpuMs);
+    p.state.stats = s;
+    p.state.statsCount++;
+    p.viewer.requestFrame();
+  }
+
+  destroy(): void {
+    this.current?.iso.destroy();
+    this.current?.opened.stream.destroy();
+    this.current = undefined;
+  }
+}
+
+export { StatsPanel };

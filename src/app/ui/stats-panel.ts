@@ -1,0 +1,74 @@
+// The numbers a user reads about the volume and the current surface: sizes
+// and rate, blocks (total / active / occupied), the cache (slots, memory,
+// newly decompressed blocks, hit rate), triangles and vertex memory, GPU time
+// per stage, frame rate.
+
+import type { IsosurfaceStats } from '../../isosurface/types.ts';
+import type { OpenedVolume } from '../../volume/open-volume.ts';
+import { setInfoList } from '../info-list.ts';
+import { formatBytes, formatCount, formatMs, formatPercent } from '../format.ts';
+import { el } from '../dom.ts';
+
+export function volumeRows(v: OpenedVolume, blockCount: number, valueRange: [number, number]): [string, string][] {
+  const [nx, ny, nz] = v.dims;
+  const decoded = nx * ny * nz * 4;
+  const rows: [string, string][] = [
+    ['name', v.name],
+    ['dims', `${nx} × ${ny} × ${nz}`],
+    ['source', v.compressedHere ? `${v.sourceDtype}, ${formatBytes(v.sourceBytes)}, compressed here` : `zfp stream, ${formatBytes(v.sourceBytes)}`],
+    ['rate', `${v.rate} bits/value (${(32 / v.rate).toFixed(1)} : 1 vs float32)`],
+    ['compressed', formatBytes(v.compressedBytes)],
+    ['decompressed', `${formatBytes(decoded)} float32`],
+    ['blocks', formatCount(blockCount)],
+    ['values', `${valueRange[0].toPrecision(5)} … ${valueRange[1].toPrecision(5)}`],
+  ];
+  return rows;
+}
+
+export class StatsPanel {
+  constructor(
+    private readonly surface: HTMLElement,
+    private readonly memory: HTMLElement,
+    private readonly stages: HTMLElement,
+  ) {}
+
+  clear(): void {
+    setInfoList(this.surface, []);
+    setInfoList(this.memory, []);
+    this.stages.replaceChildren();
+  }
+
+  update(s: IsosurfaceStats, blockCount: number, latencyMs: number | undefined): void {
+    setInfoList(this.surface, [
+      ['isovalue', String(Number(s.isovalue.toPrecision(7)))],
+      ['triangles', formatCount(s.triangles)],
+      ['vertices', `${formatCount(s.vertices)} · ${formatBytes(s.vertices * 8)} (8 B each)`],
+      ['active blocks', `${formatCount(s.activeBlocks)} of ${formatCount(blockCount)} (${formatPercent(s.activeBlocks / Math.max(1, blockCount))})`],
+      ['occupied blocks', formatCount(s.occupiedBlocks)],
+      ['decompressed', `${formatCount(s.newBlocks)} new blocks`],
+      ['hit rate', formatPercent(s.hitRate)],
+      ['GPU time', `${formatMs(s.gpuMs)}${s.timingSource === 'queue-wall-time' ? ' (queue wall time)' : ''}`],
+      ['latency', latencyMs === undefined ? '–' : formatMs(latencyMs)],
+    ]);
+    setInfoList(this.memory, [
+      ['cache slots', `${formatCount(s.cacheSlotsUsed)} used of ${formatCount(s.cacheSlots)}`],
+      ['cache memory', formatBytes(s.cacheBytes)],
+      ['vertex buffers', formatBytes(s.vertexBytes)],
+      ['total', formatBytes(s.cacheBytes + s.vertexBytes)],
+    ]);
+    this.drawStages(s);
+  }
+
+  private drawStages(s: IsosurfaceStats): void {
+    const max = Math.max(1e-9, ...s.stages.map((t) => t.ms));
+    this.stages.replaceChildren(
+      ...s.stages.map((t) => {
+        const bar = el('span', { className: 'stage-bar' });
+        bar.style.width = `${(t.ms / max) * 100}%`;
+        const row = el('div', { className: 'stage' }, el('span', { className: 'stage-name', textContent: t.label }), el('span', { className: 'stage-track' }, bar), el('span', { className: 'stage-ms', textContent: formatMs(t.ms) }));
+        row.dataset.stage = t.label;
+        return row;
+      }),
+    );
+  }
+}

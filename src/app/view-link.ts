@@ -1,0 +1,45 @@
+// Keeps the URL hash in step with the view (isovalue and camera), so a copied
+// link reopens the same picture: #iso=…&cam=…, next to ?url=… for the volume.
+// Writes are throttled (scrubbing and orbiting change them every frame).
+
+import type { ArcballCamera } from '../render/camera.ts';
+import { decodeViewState, encodeViewState, writeViewState, type ViewState } from './url-state.ts';
+
+export class ViewLink {
+  private timer: ReturnType<typeof setTimeout> | undefined;
+  private iso: number | undefined;
+
+  constructor(private readonly camera: ArcballCamera) {}
+
+  /** What the page was opened with. */
+  static initial(): ViewState {
+    return decodeViewState(location.hash);
+  }
+
+  setIso(iso: number | undefined): void {
+    this.iso = iso;
+    this.schedule();
+  }
+
+  schedule(): void {
+    if (this.timer !== undefined) return;
+    this.timer = setTimeout(() => {
+      this.timer = undefined;
+      this.flush();
+    }, 250);
+  }
+
+  flush(): void {
+    writeViewState(this.state());
+  }
+
+  state(): ViewState {
+    return { iso: this.iso, camera: this.camera.getState() };
+  }
+
+  /** The full link to this view. */
+  href(): string {
+    const hash = encodeViewState(this.state());
+    return `${location.origin}${location.pathname}${location.search}${hash ? `#${hash}` : ''}`;
+  }
+}

@@ -1,0 +1,166 @@
+// Draws the isosurface: the compressed-vertex soup of an IsosurfaceDrawData
+// (one vertex buffer and one GPU-written drawIndirect record per shard), lit
+// with smooth normals from the volume gradient read from the block cache
+// (see shaders/render/surface.wgsl), two-sided, with a headlight.
+
+import { vec3 } from 'gl-matrix';
+import surfaceWgsl from '../../shaders/render/surface.wgsl?raw';
+import vertexFormatWgsl from '../../shaders/render/vertex_format_local.wgsl?raw';
+import { createShaderModule } from '../gpu/wgsl.ts';
+import type { IsosurfaceDrawData } from '../isosurface/types.ts';
+import type { ArcballCamera } from './camera.ts';
+import { DEPTH_FORMAT, frameSnippet, type RenderLayer } from './viewer.ts';
+
+/** What a layer needs from the viewer (a Viewer satisfies it; tests build one without a canvas). */
+export interface RenderTarget {
+  readonly device: GPUDevice;
+  readonly format: GPUTextureFormat;
+  readonly frameBindGroupLayout: GPUBindGroupLayout;
+  readonly camera: ArcballCamera;
+}
+
+export type Rgb = [number, number, number];
+
+export interface SurfaceStyle {
+  /** Outside of the value >= iso region (sRGB, 0..1). */
+  front: Rgb;
+  /** Inside (back faces). */
+  back: Rgb;
+  /** Normals from the volume gradient (true) or flat per triangle. */
+  smooth: boolean;
+  ambient: number;
+  specular: number;
+  rim: number;
+  /** 0..1: how much far parts darken. */
+  depthCue: number;
+}
+
+export const DEFAULT_SURFACE_STYLE: SurfaceStyle = {
+  front: [0.86, 0.8, 0.7],
+  back: [0.42, 0.56, 0.74],
+  smooth: true,
+  ambient: 0.16,
+  specular: 0.28,
+  rim: 0.12,
+  depthCue: 0.35,
+};
+
+const UNIFORM_BYTES = 80;
+
+export class SurfaceLayer implements RenderLayer {
+  visible = true;
+  style: SurfaceStyle = { ...DEFAULT_SURFACE_STYLE };
+  private data: IsosurfaceDrawData | undefined;
+  private bindGroup: GPUBindGroup | undefined;
+  private boundVersion = -1;
+  private readonly uniforms: GPUBuffer;
+  private readonly scratch = new ArrayBuffer(UNIFORM_BYTES);
+
+  private constructor(
+    private readonly target: RenderTarget,
+    private readonly pipeline: GPURenderPipeline,
+    private readonly layout: GPUBindGroupLayout,
+  ) {
+    this.uniforms = target.device.createBuffer({
+      label: 'SurfaceLayer.uniforms',
+      size: UNIFORM_BYTES,
+      usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
+    });
+  }
+
+  static async create(target: RenderTarget): Promise<SurfaceLayer> {
+    const { device } = target;
+    const module = await createShaderModule(device, 'SurfaceLayer.shader', [
+      frameSnippet,
+      { name: 'shaders/isosurface/vertex_format.wgsl', code: vertexFormatWgsl },
+      { name: 'shaders/render/surface.wgsl', code: surfaceWgsl },
+    ]);
+    const layout = device.createBindGroupLayout({
+      label: 'SurfaceLayer.layout',
+      entries: [
+        { binding: 0, visibility: GPUShaderStage.VERTEX | GPUShaderStage.FRAGMENT, buffer: { type: 'uniform' } },
+        { binding: 1, visibility: GPUShaderStage.VERTEX, buffer: { type: 'read-only-storage' } },
+        { binding: 2, visibility: GPUShaderStage.VERTEX, buffer: { type: 'read-only-storage' } },
+      ],
+    });
+    const pipeline = await device.createRenderPipelineAsync({
+      label: 'SurfaceLayer.pipeline',
+      layout: device.createPipelineLayout({ label: 'SurfaceLayer', bindGroupLayouts: [target.frameBindGroupLayout, layout] }),
+      vertex: {
+        module,
+        entryPoint: 'vs',
+        buffers: [{ arrayStride: 8, stepMode: 'vertex', attributes: [{ shaderLocation: 0, offset: 0, format: 'uint32x2' }] }],
+      },
+      fragment: { module, entryPoint: 'fs', targets: [{ format: target.format }] },
+      // Two-sided: no culling; the fragment shader tells the sides apart.
+      primitive: { topology: 'triangle-list', cullMode: 'none' },
+      depthStencil: { format: DEPTH_FORMAT, depthWriteEnabled: true, depthCompare: 'less' },
+    });
+    return new SurfaceLayer(target, pipeline, layout);
+  }
+
+  /** The surface to draw (undefined: nothing). Bind groups follow `data.version`. */
+  setDrawData(data: IsosurfaceDrawData | undefined): void {
+    if (data !== this.data) {
+      this.data = data;
+      this.bindGroup = undefined;
+      this.boundVersion = -1;
+    }
+  }
+
+  get drawData(): IsosurfaceDrawData | undefined {
+    return this.data;
+  }
+
+  private ensureBindGroup(data: IsosurfaceDrawData): GPUBindGroup {
+    if (!this.bindGroup || this.boundVersion !== data.version) {
+      this.bindGroup = this.target.device.createBindGroup({
+        label: 'SurfaceLayer.bindGroup',
+        layout: this.layout,
+        entries: [
+          { binding: 0, resource: { buffer: this.uniforms } },
+          { binding: 1, resource: { buffer: data.slotData } },
+          { binding: 2, resource: { buffer: data.blockToSlot } },
+        ],
+      });
+      this.boundVersion = data.version;
+    }
+    return this.bindGroup;
+  }
+
+  private writeUniforms(data: IsosurfaceDrawData): void {
+    const { info } = data;
+    const s = this.style;
+    const u32 = new Uint32Array(this.scratch);
+    const i32 = new Int32Array(this.scratch);
+    const f32 = new Float32Array(this.scratch);
+    u32.set([...info.blockGrid, s.smooth ? 1 : 0], 0);
+    i32.set([...info.dims, 0], 4);
+    f32.set([...s.front, s.ambient], 8);
+    f32.set([...s.back, s.specular], 12);
+    // Depth-cue range: the eye distance to the volume's bounding sphere.
+    const centre = vec3.fromValues((info.dims[0] - 1) / 2, (info.dims[1] - 1) / 2, (info.dims[2] - 1) / 2);
+    const radius = 0.5 * Math.hypot(info.dims[0] - 1, info.dims[1] - 1, info.dims[2] - 1);
+    const eyeDist = vec3.distance(this.target.camera.eyePosition(), centre);
+    f32.set([s.rim, s.depthCue, Math.max(0, eyeDist - radius), eyeDist + radius], 16);
+    this.target.device.queue.writeBuffer(this.uniforms, 0, this.scratch);
+  }
+
+  draw(pass: GPURenderPassEncoder): void {
+    const data = this.data;
+    if (!this.visible || !data || data.shards.length === 0) return;
+    this.writeUniforms(data);
+    pass.setPipeline(this.pipeline);
+    pass.setBindGroup(1, this.ensureBindGroup(data));
+    for (const shard of data.shards) {
+      pass.setVertexBuffer(0, shard.vertices);
+      pass.drawIndirect(shard.drawArgs, shard.drawArgsOffset);
+    }
+  }
+
+  destroy(): void {
+    this.uniforms.destroy();
+    this.data = undefined;
+    this.bindGroup = undefined;
+  }
+}

@@ -1,0 +1,274 @@
+// From a file's bytes (or the built-in default volume) to a fixed-rate zfp
+// stream on the GPU: the one path the page, the CLI and the tests share, so
+// they compute the same surfaces for the same input.
+//
+//   zfp with header       -> validated and uploaded as is
+//   header-less .zfp       -> shape and rate from the name (or given), uploaded
+//   name_XxYxZ_dtype.raw   -> compressed on the GPU at the chosen rate
+//   .nrrd (raw or gzip)    -> compressed on the GPU at the chosen rate
+//   "default"              -> generated (procedural.ts), compressed at DEFAULT_VOLUME_RATE
+//
+// inspectVolumeFile says what a file is and what is still missing (a raw
+// file without shape, a header-less stream without rate) so a caller can ask
+// for it; openVolumeFile does the work. Errors name the file.
+
+import { detectFile } from '../formats/detect.ts';
+import { blockGridOf, fixedRateStreamBytes, MIN_FLOAT_BLOCK_BITS, openZfpStream } from '../zfp/format.ts';
+import { ZfpFormatError } from '../zfp/header.ts';
+import { loadZfpStream, type ZfpGpuStream } from '../zfp/gpu-stream.ts';
+import { ZfpEncoder } from '../zfp/encoder.ts';
+import { DTYPE_BYTES, type DType } from './dtype.ts';
+import { formatDims, parseVolumeName, type Dims } from './naming.ts';
+import { NrrdError, parseNrrd, type NrrdVolume } from './nrrd.ts';
+import { generateDefaultVolume } from './procedural.ts';
+
+/** Rate (bits per value) raw volumes are compressed at unless the user picks another. */
+export const DEFAULT_RAW_RATE = 8;
+/** Rate of the built-in default volume (page and `cli ... default`). */
+export const DEFAULT_VOLUME_RATE = 8;
+/** The name that stands for the built-in volume on the command line. */
+export const DEFAULT_VOLUME_NAME = 'default';
+
+export type VolumeFileKind = 'zfp' | 'zfp-headerless' | 'raw' | 'nrrd';
+
+export class VolumeFileError extends Error {
+  constructor(message: string) {
+    super(message);
+    this.name = 'VolumeFileError';
+  }
+}
+
+export type MissingField = 'dims' | 'dtype' | 'rate';
+
+export interface VolumeFileFacts {
+  fileName: string;
+  kind: VolumeFileKind;
+  bytes: number;
+  /** From the header or the name. */
+  dims?: Dims;
+  /** Sample type of the data in the file (zfp streams: float32). */
+  dtype?: DType;
+  /** zfp streams: the stream's rate when known. */
+  rate?: number;
+  /** Header-less zfp without a rate: rates whose stream has exactly this size. */
+  fittingRates?: number[];
+  /** What must be given before the file can be opened. */
+  missing: MissingField[];
+  /** Raw and NRRD: compressed here, so a rate is chosen (default DEFAULT_RAW_RATE). */
+  compresses: boolean;
+  nrrd?: NrrdVolume;
+}
+
+export interface OpenRequest {
+  dims?: Dims;
+  dtype?: DType;
+  /** Header-less zfp: the stream's rate. Raw/NRRD: the rate to compress at. */
+  rate?: number;
+}
+
+export type OpenPhase = 'upload' | 'compress';
+
+export interface OpenedVolume {
+  stream: ZfpGpuStream;
+  /** Short name for display (file name, or the default volume's name). */
+  name: string;
+  fileName: string;
+  kind: VolumeFileKind | 'default';
+  dims: Dims;
+  /** Type of the original samples (what was compressed, or float32 for zfp). */
+  sourceDtype: DType;
+  /** Bytes of the input as given (file size, or the generated data). */
+  sourceBytes: number;
+  /** Bytes of the compressed stream on the GPU. */
+  compressedBytes: number;
+  rate: number;
+  /** True when the page/CLI compressed the volume (raw, NRRD, default). */
+  compressedHere: boolean;
+  /** The default volume's suggested isovalue. */
+  defaultIsovalue?: number;
+}
+
+export interface OpenOptions {
+  /** Reused between calls (pipelines compile once); created when absent. */
+  encoder?: ZfpEncoder;
+  onPhase?: (phase: OpenPhase) => void;
+}
+
+const encoders = new WeakMap<GPUDevice, Promise<ZfpEncoder>>();
+
+/** One encoder per device, created on first use. */
+export function encoderFor(device: GPUDevice): Promise<ZfpEncoder> {
+  let e = encoders.get(device);
+  if (!e) {
+    e = ZfpEncoder.create(device);
+    e.catch(() => encoders.delete(device));
+    encoders.set(device, e);
+  }
+  return e;
+}
+
+/** Rates (multiples of 1/64) whose header-less stream of `dims` is exactly `bytes` long. */
+export function fittingRates(dims: Dims, bytes: number): number[] {
+  const g = blockGridOf(dims);
+  const blocks = g[0] * g[1] * g[2];
+  const out: number[] = [];
+  const lo = Math.max(MIN_FLOAT_BLOCK_BITS, Math.floor(((bytes - 8) * 8) / blocks));
+  for (let bits = lo; bits <= Math.ceil((bytes * 8) / blocks) && bits <= 0x8000; bits++) {
+    if (fixedRateStreamBytes(blocks, bits) === bytes) out.push(bits / 64);
+  }
+  return out;
+}
+
+function sizeOf(dims: Dims, dtype: DType): number {
+  return dims[0] * dims[1] * dims[2] * DTYPE_BYTES[dtype];
+}
+
+/** Says what a file is and what is missing; throws (naming the file) when it cannot be a volume. */
+export async function inspectVolumeFile(fileName: string, bytes: Uint8Array): Promise<VolumeFileFacts> {
+  const detected = detectFile(fileName, bytes.subarray(0, 64));
+  const name = detected.name;
+  const base = { fileName, bytes: bytes.byteLength };
+  switch (detected.kind) {
+    case 'zfp': {
+      const info = openZfpStream(bytes, fileName); // throws ZfpFormatError naming the file
+      return { ...base, kind: 'zfp', dims: info.dims, dtype: 'float32', rate: info.rate, missing: [], compresses: false };
+    }
+    case 'zfp-headerless': {
+      if (name.dtype && name.dtype !== 'float32') {
+        throw new VolumeFileError(`${fileName}: the name says ${name.dtype}; only float32 zfp streams are supported`);
+      }
+      const facts: VolumeFileFacts = { ...base, kind: 'zfp-headerless', dtype: 'float32', dims: name.dims, rate: name.rate, missing: [], compresses: false };
+      if (!name.dims) facts.missing.push('dims');
+      if (name.rate === undefined) {
+        if (name.dims) {
+          facts.fittingRates = fittingRates(name.dims, bytes.byteLength);
+          // No fixed rate fits: the codec says why (e.g. a fixed-precision stream).
+          if (facts.fittingRates.length === 0) openZfpStream(bytes, fileName);
+        }
+        facts.missing.push('rate');
+      } else if (name.dims) {
+        openZfpStream(bytes, fileName); // size check now, before asking anything
+      }
+      return facts;
+    }
+    case 'raw': {
+      const facts: VolumeFileFacts = { ...base, kind: 'raw', dims: name.dims, dtype: name.dtype, missing: [], compresses: true };
+      if (!name.dims) facts.missing.push('dims');
+      if (!name.dtype) facts.missing.push('dtype');
+      if (name.dims && name.dtype && sizeOf(name.dims, name.dtype) !== bytes.byteLength) {
+        throw new VolumeFileError(
+          `${fileName}: ${formatDims(name.dims)} ${name.dtype} is ${sizeOf(name.dims, name.dtype)} bytes, the file has ${bytes.byteLength}; ` +
+            'the name must give the volume\'s shape and type (name_XxYxZ_dtype.raw)',
+        );
+      }
+      return facts;
+    }
+    case 'nrrd': {
+      let nrrd: NrrdVolume;
+      try {
+        nrrd = await parseNrrd(bytes);
+      } catch (e) {
+        if (e instanceof NrrdError) throw new VolumeFileError(`${fileName}: ${e.message}`);
+        throw e;
+      }
+      return { ...base, kind: 'nrrd', dims: nrrd.dims, dtype: nrrd.dtype, missing: [], compresses: true, nrrd };
+    }
+    case 'tiff':
+      throw new VolumeFileError(`${fileName}: TIFF stacks are not supported here yet; save the volume as name_XxYxZ_dtype.raw or .nrrd`);
+    case 'las':
+    case 'laz':
+      throw new VolumeFileError(`${fileName}: this is a ${detected.kind.toUpperCase()} point cloud, not a volume; open it in the LIDAR example page`);
+    case 'swc':
+      throw new VolumeFileError(`${fileName}: this is an SWC neuron tracing, not a volume`);
+    default:
+      throw new VolumeFileError(
+        `${fileName}: not a volume this page reads (${detected.why}). Supported: .zfp (with header, or named name_XxYxZ_float32.raw.crateR.zfp), ` +
+          'name_XxYxZ_dtype.raw (uint8, int8, uint16, int16, float32, float64) and .nrrd',
+      );
+  }
+}
+
+/** The rate `rate` is a usable zfp rate (checked before compressing). */
+export function checkRate(fileName: string, rate: number | undefined): number {
+  if (rate === undefined || !Number.isFinite(rate) || rate <= 0) throw new VolumeFileError(`${fileName}: give a positive rate (bits per value), e.g. ${DEFAULT_RAW_RATE}`);
+  return rate;
+}
+
+/**
+ * Opens the file as a GPU stream, with `req` filling what `facts.missing`
+ * lists (and choosing the rate of raw/NRRD volumes). Throws an error naming
+ * the file; nothing stays allocated on failure.
+ */
+export async function openVolumeFile(device: GPUDevice, facts: VolumeFileFacts, bytes: Uint8Array, req: OpenRequest = {}, opts: OpenOptions = {}): Promise<OpenedVolume> {
+  const { fileName } = facts;
+  const display = fileName.split(/[\\/]/).pop() ?? fileName;
+  const common = { name: display, fileName, kind: facts.kind, sourceBytes: bytes.byteLength };
+  switch (facts.kind) {
+    case 'zfp':
+    case 'zfp-headerless': {
+      opts.onPhase?.('upload');
+      let stream: ZfpGpuStream;
+      const dims = req.dims ?? facts.dims;
+      if (!dims) throw new VolumeFileError(`${fileName}: give the volume's dimensions (the name carries none)`);
+      if (facts.kind === 'zfp-headerless' && (!facts.dims || req.dims)) {
+        // The codec reads the shape from the name: hand it one that carries the given shape.
+        const base = parseVolumeName(fileName).base || 'volume';
+        const named = `${base}_${formatDims(dims)}_float32.zfp`;
+        try {
+          stream = loadZfpStream(device, bytes, named, { rate: req.rate ?? facts.rate });
+        } catch (e) {
+          if (e instanceof ZfpFormatError) throw new ZfpFormatError(e.message.split(named).join(fileName));
+          throw e;
+        }
+      } else {
+        stream = loadZfpStream(device, bytes, fileName, { rate: req.rate ?? facts.rate });
+      }
+      const info = stream.info;
+      return { ...common, stream, dims: info.dims, sourceDtype: 'float32', compressedBytes: info.paddedBytes, rate: info.rate, compressedHere: false };
+    }
+    case 'raw':
+    case 'nrrd': {
+      const dims = req.dims ?? facts.dims;
+      const dtype = req.dtype ?? facts.dtype;
+      if (!dims || !dtype) throw new VolumeFileError(`${fileName}: give the volume's dimensions and sample type (the name carries none)`);
+      const data = facts.kind === 'nrrd' ? facts.nrrd!.data : bytes;
+      if (sizeOf(dims, dtype) !== data.byteLength) {
+        throw new VolumeFileError(`${fileName}: ${formatDims(dims)} ${dtype} is ${sizeOf(dims, dtype)} bytes, the file has ${data.byteLength}`);
+      }
+      const rate = checkRate(fileName, req.rate ?? DEFAULT_RAW_RATE);
+      opts.onPhase?.('compress');
+      const encoder = opts.encoder ?? (await encoderFor(device));
+      const stream = await encoder.compressToStream(data, dtype, dims, rate, { header: true, fileName });
+      return { ...common, stream, dims, sourceDtype: dtype, compressedBytes: stream.info.paddedBytes, rate: stream.info.rate, compressedHere: true };
+    }
+  }
+}
+
+/** The built-in volume (procedural.ts), compressed on the GPU at DEFAULT_VOLUME_RATE. */
+export async function openDefaultVolume(device: GPUDevice, opts: OpenOptions & { rate?: number } = {}): Promise<OpenedVolume> {
+  const volume = generateDefaultVolume();
+  const rate = opts.rate ?? DEFAULT_VOLUME_RATE;
+  opts.onPhase?.('compress');
+  const encoder = opts.encoder ?? (await encoderFor(device));
+  const bytes = new Uint8Array(volume.data.buffer, volume.data.byteOffset, volume.data.byteLength);
+  const fileName = `${DEFAULT_VOLUME_NAME}_${formatDims(volume.dims)}_float32.raw`;
+  const stream = await encoder.compressToStream(bytes, 'float32', volume.dims, rate, { header: true, fileName });
+  return {
+    stream,
+    name: volume.name,
+    fileName,
+    kind: 'default',
+    dims: volume.dims,
+    sourceDtype: 'float32',
+    sourceBytes: bytes.byteLength,
+    compressedBytes: stream.info.paddedBytes,
+    rate: stream.info.rate,
+    compressedHere: true,
+    defaultIsovalue: volume.defaultIsovalue,
+  };
+}
+
+/** True when `spec` names the built-in volume rather than a file (CLI). */
+export function isDefaultVolume(spec: string): boolean {
+  return spec === DEFAULT_VOLUME_NAME;
+}
