@@ -1,6 +1,9 @@
 import { defineConfig } from 'vite';
+import { sharedDataPlugin } from './scripts/vite-shared-data.ts';
 
 export default defineConfig({
+  // /data/ -> ../shared/data on the dev and preview servers (tests, ?url=); see the plugin.
+  plugins: [sharedDataPlugin()],
   build: {
     target: 'es2022',
     sourcemap: true,
