@@ -19,6 +19,11 @@ export interface IsosurfaceOptions {
   maxVertexBindingBytes?: number;
   /** Record per-stage GPU times (timestamp queries where present). Default true. */
   timing?: boolean;
+  /**
+   * Added by the pipeline: grid limit per dispatch dimension (default: the
+   * device's). Tests lower it so small dispatches use 2D/3D grids.
+   */
+  maxWorkgroupsPerDimension?: number;
 }
 
 export interface VolumeInfo {
@@ -54,6 +59,11 @@ export interface IsosurfaceStats {
   timingSource: TimingSource;
   /** True if this surface needed the cache or vertex buffers to grow (and was recomputed). */
   grew: boolean;
+  /**
+   * Added by the pipeline: bytes held per volume outside the budget (the
+   * compressed stream, block ranges, active-block mask/offsets/list, scan scratch).
+   */
+  fixedBytes?: number;
 }
 
 /** A vertex shard: part of the triangle soup in one buffer (one storage binding). */
@@ -76,7 +86,11 @@ export interface IsosurfaceDrawData {
   info: VolumeInfo;
   /** Decoded blocks, 64 f32 per slot (voxel x + 4y + 16z); valid for every active block of the drawn surface. */
   slotData: GPUBuffer;
-  /** Per block: its slot, or 0xffffffff when not cached. */
+  /**
+   * Per block: its slot, or 0xffffffff when not cached. (After a refused
+   * growth the previous surface stays drawn while the cache may already have
+   * moved on: treat 0xffffffff as "no data" when shading.)
+   */
   blockToSlot: GPUBuffer;
   /** Increases whenever any buffer above is replaced (after growth): re-create bind groups then. */
   version: number;
@@ -90,5 +104,16 @@ export class IsosurfaceBudgetError extends Error {
   ) {
     super(message);
     this.name = 'IsosurfaceBudgetError';
+  }
+}
+
+/**
+ * Added by the pipeline: `compute(iso)` rejects with this when a newer
+ * isovalue replaced `iso` before it was computed (newest wins).
+ */
+export class IsosurfaceSupersededError extends Error {
+  constructor(readonly isovalue: number, readonly replacedBy: number) {
+    super(`the surface at iso ${isovalue} was not computed: iso ${replacedBy} replaced it`);
+    this.name = 'IsosurfaceSupersededError';
   }
 }
