@@ -1,0 +1,108 @@
+// Plan kernels: one invocation each (argument kernels), run between the
+// primitives to turn GPU counts into the gated counts and the indirect
+// dispatch / draw arguments of what follows. This is where the pipeline
+// "branches" without the host: a cache too small for the surface, or nothing
+// new to decode, or more vertices than the buffers hold, all become
+// dispatches of zero workgroups.
+
+@group(0) @binding(0) var<storage, read_write> counters: array<u32>;
+
+// After the active list: is the cache large enough? The update succeeds iff
+// new <= available, and available = slots - (active - new), so iff
+// active <= slots: known before touching any cache state.
+@compute @workgroup_size(1)
+fn plan_cache() {
+  let active_count = counters[C_ACTIVE];
+  let slots = counters[C_SLOTS];
+  let fits = active_count <= slots;
+  let active_gated = select(0u, active_count, fits);
+  let slots_gated = select(0u, slots, fits);
+  counters[C_ACTIVE_GATED] = active_gated;
+  counters[C_SLOTS_GATED] = slots_gated;
+  counters[C_STATUS] = select(STATUS_CACHE_SHORTFALL, 0u, fits);
+  write_dispatch_args(&counters, A_SLOTS, ceil_div(slots_gated, 64u));
+  write_dispatch_args(&counters, A_MARK, ceil_div(active_gated, 64u));
+  write_dispatch_args(&counters, A_MC, active_gated);
+}
+
+// After the scan of the new-block mask: "exit if n_new = 0" (the availability
+// scan, compactions and sort get count 0). Empty slots sort before every
+// occupied one, so the new blocks fill min(new, empty) of them: that is how
+// many more slots hold a block after the assignment.
+@compute @workgroup_size(1)
+fn plan_update() {
+  let fresh = counters[C_NEW];
+  counters[C_SLOTS_USED] = min(counters[C_SLOTS_USED] + fresh, counters[C_SLOTS]);
+  counters[C_AVAIL_SCAN] = select(0u, counters[C_SLOTS_GATED], fresh > 0u);
+  counters[C_COMPACT_NEW] = select(0u, counters[C_ACTIVE_GATED], fresh > 0u);
+  write_dispatch_args(&counters, A_ASSIGN, ceil_div(fresh, 64u));
+}
+
+// After the block vertex counts are scanned: do the vertices fit? Then each
+// shard gets the range of occupied blocks whose vertices reach it (binary
+// searches over their output ranges, which increase along the list), its
+// dispatch arguments and its draw arguments. Otherwise the shards' dispatches
+// are empty and the draw arguments keep the previous surface.
+@group(0) @binding(1) var<storage, read> occupied_list: array<u32>;
+@group(0) @binding(2) var<storage, read> vertex_offsets: array<u32>;
+@group(0) @binding(3) var<storage, read> vertex_counts: array<u32>;
+@group(0) @binding(4) var<storage, read_write> shard_info: array<u32>;
+@group(0) @binding(5) var<storage, read_write> draw_args: array<u32>;
+
+// First occupied entry j in [0, n) whose output range ends after `vertex`.
+fn first_ending_after(vertex: u32, n: u32) -> u32 {
+  var lo = 0u;
+  var hi = n;
+  while (lo < hi) {
+    let mid = lo + (hi - lo) / 2u;
+    let i = occupied_list[mid];
+    if (vertex_offsets[i] + vertex_counts[i] > vertex) {
+      hi = mid;
+    } else {
+      lo = mid + 1u;
+    }
+  }
+  return lo;
+}
+
+@compute @workgroup_size(1)
+fn plan_vertices() {
+  let total = counters[C_VERTICES];
+  var status = counters[C_STATUS];
+  if (status == 0u && total > counters[C_VERTEX_CAPACITY]) {
+    status |= STATUS_VERTEX_OVERFLOW;
+    counters[C_STATUS] = status;
+  }
+  let ok = status == 0u;
+  let occupied = counters[C_OCCUPIED];
+  let per_shard = counters[C_PER_SHARD];
+  let shards = counters[C_SHARDS];
+  for (var k = 0u; k < shards; k++) {
+    let r = k * SHARD_STRIDE;
+    let base = k * per_shard;
+    var first = 0u;
+    var count = 0u;
+    if (ok && total > base) {
+      first = first_ending_after(base, occupied);
+      // blocks starting before the shard's end: end at vertex base + per_shard - 1 or later
+      count = first_ending_after(base + per_shard - 1u, occupied);
+      // the last block reaching the shard is the first one ending after its last vertex,
+      // unless the surface ends inside the shard
+      count = min(count + 1u, occupied) - first;
+      draw_args[4u * k] = min(total - base, per_shard);
+    } else if (ok) {
+      draw_args[4u * k] = 0u;
+    }
+    shard_info[r + S_FIRST] = first;
+    shard_info[r + S_COUNT] = count;
+    shard_info[r + S_BASE] = base;
+    let g = dispatch_grid(count);
+    shard_info[r + S_ARGS] = g.x;
+    shard_info[r + S_ARGS + 1u] = g.y;
+    shard_info[r + S_ARGS + 2u] = g.z;
+  }
+  if (ok) {
+    counters[C_DRAWN_VERTICES] = total;
+    counters[C_DRAWN_OCCUPIED] = occupied;
+  }
+}

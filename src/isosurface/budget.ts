@@ -1,0 +1,33 @@
+// Memory accounting and growth policy of the cache and the vertex output,
+// shared by the Isosurface and the CPU model of the cache (lru-model.ts), so
+// both grow to the same capacities.
+import { CACHE_BYTES_PER_SLOT } from './lru-cache.ts';
+import { MC_BYTES_PER_SLOT } from './block-mc.ts';
+import { VertexShards } from './vertex-output.ts';
+
+/** Bytes the cache takes at `slots` slots: slot data, maps, scratch, per-active buffers, blockToSlot. */
+export function cacheBytesFor(slots: number, blockCount: number): number {
+  return slots * (CACHE_BYTES_PER_SLOT + MC_BYTES_PER_SLOT) + blockCount * 4;
+}
+
+export function vertexBytesFor(vertices: number, perShard: number): number {
+  return VertexShards.bytesFor(vertices, perShard);
+}
+
+/**
+ * Capacity after growth when `needed` exceeds `current`: 1.5x the current
+ * capacity (fewer regrowths on the way up), at least `needed`, at most `max`
+ * (the block count for the cache); never below `needed`.
+ */
+export function grownCapacity(current: number, needed: number, max = Infinity): number {
+  return Math.max(needed, Math.min(max, Math.ceil(current * 1.5)));
+}
+
+/** Default memory budget: half of maxBufferSize, at most 2 GiB (types.ts). */
+export function defaultMemoryBudget(limits: GPUSupportedLimits): number {
+  return Math.min(limits.maxBufferSize / 2, 2 ** 31);
+}
+
+export function formatMB(bytes: number): string {
+  return `${(bytes / 2 ** 20).toFixed(bytes < 10 * 2 ** 20 ? 2 : 1)} MB`;
+}

@@ -1,0 +1,74 @@
+// The counters buffer (layout.ts): every count of one computation lives here,
+// written by scans (totals), the plan kernels and the LRU kernels, and read by
+// later dispatches (indirect arguments, gated counts) and, asynchronously, by
+// the statistics readback. The host writes only the capacities (words 0-4).
+import { type GpuCount } from '../primitives/count.ts';
+import { bindGroup, bindGroupLayout, computePipeline } from './gpu-util.ts';
+import { C, COUNTERS_BYTES } from './layout.ts';
+import { isosurfaceWgsl } from './wgsl.ts';
+
+export type CounterName = keyof typeof C;
+
+export class Counters {
+  readonly buffer: GPUBuffer;
+  private readonly group: GPUBindGroup;
+  private readonly word = new Uint32Array(1);
+
+  private constructor(
+    private readonly device: GPUDevice,
+    private readonly planCache: GPUComputePipeline,
+    private readonly planUpdate: GPUComputePipeline,
+    layout: GPUBindGroupLayout,
+  ) {
+    this.buffer = device.createBuffer({
+      label: 'Isosurface.counters',
+      size: COUNTERS_BYTES,
+      usage: GPUBufferUsage.STORAGE | GPUBufferUsage.INDIRECT | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST,
+    });
+    this.group = bindGroup(device, 'Isosurface.counters.bindGroup', layout, [this.buffer]);
+  }
+
+  static async create(device: GPUDevice, maxWorkgroupsPerDimension: number): Promise<Counters> {
+    const layout = bindGroupLayout(device, 'Isosurface.plan.layout', ['rw']);
+    const constants = { MAX_WG_PER_DIM: maxWorkgroupsPerDimension };
+    const [cache, update] = await Promise.all([
+      computePipeline(device, 'Isosurface.planCache', isosurfaceWgsl.plan, 'plan_cache', [layout], constants),
+      computePipeline(device, 'Isosurface.planUpdate', isosurfaceWgsl.plan, 'plan_update', [layout], constants),
+    ]);
+    return new Counters(device, cache, update, layout);
+  }
+
+  /** The counter as a GpuCount (for the primitives and the decoder). */
+  count(name: CounterName): GpuCount {
+    return { buffer: this.buffer, offset: C[name] * 4 };
+  }
+
+  /** Byte offset of a word (indirect arguments). */
+  static offset(word: number): number {
+    return word * 4;
+  }
+
+  /** Host-written words (capacities); queue-ordered, so call between submissions. */
+  set(name: 'blocks' | 'slots' | 'vertexCapacity' | 'shards' | 'perShard' | 'slotsUsed', value: number): void {
+    this.word[0] = value;
+    this.device.queue.writeBuffer(this.buffer, C[name] * 4, this.word);
+  }
+
+  /** Records plan_cache (is the cache large enough; gated counts and arguments). */
+  encodePlanCache(pass: GPUComputePassEncoder): void {
+    pass.setPipeline(this.planCache);
+    pass.setBindGroup(0, this.group);
+    pass.dispatchWorkgroups(1);
+  }
+
+  /** Records plan_update (exit if nothing is new; assignment arguments). */
+  encodePlanUpdate(pass: GPUComputePassEncoder): void {
+    pass.setPipeline(this.planUpdate);
+    pass.setBindGroup(0, this.group);
+    pass.dispatchWorkgroups(1);
+  }
+
+  destroy(): void {
+    this.buffer.destroy();
+  }
+}

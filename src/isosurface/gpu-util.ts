@@ -1,0 +1,44 @@
+// Small helpers for the isosurface classes: explicit bind group layouts
+// (several kernels share one WGSL file, so 'auto' layouts would drop the
+// bindings a kernel does not use), pipelines, bind groups.
+import { createComputePipeline, type WgslPart } from '../gpu/wgsl.ts';
+
+/** uniform, read-only storage, read-write storage. */
+export type BindingKind = 'uniform' | 'read' | 'rw';
+
+const TYPES: Record<BindingKind, GPUBufferBindingType> = { uniform: 'uniform', read: 'read-only-storage', rw: 'storage' };
+
+export function bindGroupLayout(device: GPUDevice, label: string, kinds: BindingKind[]): GPUBindGroupLayout {
+  return device.createBindGroupLayout({
+    label,
+    entries: kinds.map((k, binding) => ({ binding, visibility: GPUShaderStage.COMPUTE, buffer: { type: TYPES[k] } })),
+  });
+}
+
+export function computePipeline(
+  device: GPUDevice,
+  label: string,
+  parts: WgslPart[],
+  entryPoint: string,
+  layouts: GPUBindGroupLayout[],
+  constants?: Record<string, number>,
+): Promise<GPUComputePipeline> {
+  return createComputePipeline(device, label, parts, entryPoint, {
+    layout: device.createPipelineLayout({ label, bindGroupLayouts: layouts }),
+    constants,
+  });
+}
+
+export type Resource = GPUBuffer | GPUBufferBinding;
+
+export function bindGroup(device: GPUDevice, label: string, layout: GPUBindGroupLayout, resources: Resource[]): GPUBindGroup {
+  return device.createBindGroup({
+    label,
+    layout,
+    entries: resources.map((r, binding) => ({ binding, resource: 'mapState' in r ? { buffer: r } : r })),
+  });
+}
+
+export function storageBuffer(device: GPUDevice, label: string, bytes: number, extraUsage = 0): GPUBuffer {
+  return device.createBuffer({ label, size: Math.max(4, Math.ceil(bytes / 4) * 4), usage: GPUBufferUsage.STORAGE | extraUsage });
+}

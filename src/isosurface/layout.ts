@@ -1,0 +1,58 @@
+// Numbers shared with the WGSL kernels (shaders/isosurface/common.wgsl holds
+// the same constants; tests/unit/isosurface/layout.test.ts checks they agree).
+
+/** "No slot" in blockToSlot, "no block" in slotToBlock, and the age of an empty slot. */
+export const NONE = 0xffffffff;
+/** Ages of slots holding a block saturate at AGE_MAX; the sort compares AGE_KEY_BITS bits (empty = 0xffff). */
+export const AGE_MAX = 0xfffe;
+export const AGE_KEY_BITS = 16;
+
+/** Word indices in the counters buffer (see common.wgsl for what each holds). */
+export const C = {
+  blocks: 0,
+  slots: 1,
+  vertexCapacity: 2,
+  shards: 3,
+  perShard: 4,
+  active: 8,
+  activeGated: 9,
+  slotsGated: 10,
+  new: 11,
+  availScan: 12,
+  avail: 13,
+  vertices: 14,
+  occupied: 15,
+  status: 16,
+  slotsUsed: 17,
+  drawnVertices: 18,
+  drawnOccupied: 19,
+  compactNew: 20,
+} as const;
+
+/** Word offsets of indirect dispatch arguments (x, y, z) in the counters buffer. */
+export const A = {
+  slots: 24,
+  mark: 28,
+  assign: 32,
+  mc: 36,
+} as const;
+
+export const STATUS_CACHE_SHORTFALL = 1;
+export const STATUS_VERTEX_OVERFLOW = 2;
+
+/** The counters buffer: 64 words. */
+export const COUNTER_WORDS = 64;
+export const COUNTERS_BYTES = COUNTER_WORDS * 4;
+
+/** Vertex shard records in shard_info: 64 words apart (a storage offset alignment). */
+export const SHARD_RECORD_BYTES = 256;
+export const S = { first: 0, count: 1, base: 2, args: 4 } as const;
+/** Bytes of one shard record bound by the vertex pass. */
+export const SHARD_RECORD_BINDING = 32;
+/** drawIndirect arguments per shard: [vertexCount, instanceCount, firstVertex, firstInstance]. */
+export const DRAW_ARGS_BYTES = 16;
+
+/** Bytes of one decoded block in the slot data (64 f32). */
+export const SLOT_BYTES = 256;
+/** Bytes of one compressed vertex. */
+export const VERTEX_BYTES = 8;

@@ -1,0 +1,30 @@
+// The isosurface WGSL files (shaders/isosurface/) and what each kernel is
+// composed of.
+import commonWgsl from '../../shaders/isosurface/common.wgsl?raw';
+import activeBlocksWgsl from '../../shaders/isosurface/active_blocks.wgsl?raw';
+import lruWgsl from '../../shaders/isosurface/lru.wgsl?raw';
+import planWgsl from '../../shaders/isosurface/plan.wgsl?raw';
+import blockMcWgsl from '../../shaders/isosurface/block_mc.wgsl?raw';
+import vertexFormatWgsl from '../../shaders/isosurface/vertex_format.wgsl?raw';
+import type { WgslPart } from '../gpu/wgsl.ts';
+import { mcCaseTableSnippet } from '../mc/case-table-wgsl.ts';
+import { dispatchSnippet } from '../primitives/dispatch-records.ts';
+
+const part = (name: string, code: string): WgslPart => ({ name: `shaders/isosurface/${name}.wgsl`, code });
+
+/**
+ * The compressed vertex format: `decode_vertex_position(packed, block_id,
+ * block_grid) -> vec3f` (voxel index space) and `encode_vertex_position`.
+ * The renderer composes this part into its vertex shader.
+ */
+export const vertexFormatSnippet = part('vertex_format', vertexFormatWgsl);
+export const isosurfaceCommonSnippet = part('common', commonWgsl);
+
+const base = [dispatchSnippet, isosurfaceCommonSnippet];
+
+export const isosurfaceWgsl = {
+  activeBlocks: [...base, part('active_blocks', activeBlocksWgsl)],
+  lru: [...base, part('lru', lruWgsl)],
+  plan: [...base, part('plan', planWgsl)],
+  blockMc: [...base, mcCaseTableSnippet, vertexFormatSnippet, part('block_mc', blockMcWgsl)],
+} satisfies Record<string, WgslPart[]>;
