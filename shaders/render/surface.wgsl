@@ -44,23 +44,26 @@ fn voxel(g: vec3i) -> vec2f {
 }
 
 // One component of the gradient at g along `axis` (central, else one-sided).
-fn partial(g: vec3i, center: f32, axis: vec3i) -> f32 {
+fn partial(g: vec3i, center: vec2f, axis: vec3i) -> f32 {
   let p = voxel(g + axis);
   let m = voxel(g - axis);
   if (p.y > 0.0 && m.y > 0.0) {
     return 0.5 * (p.x - m.x);
   }
+  if (center.y == 0.0) {
+    return 0.0;
+  }
   if (p.y > 0.0) {
-    return p.x - center;
+    return p.x - center.x;
   }
   if (m.y > 0.0) {
-    return center - m.x;
+    return center.x - m.x;
   }
   return 0.0;
 }
 
 fn gradient(g: vec3i) -> vec3f {
-  let c = voxel(g).x;
+  let c = voxel(g);
   return vec3f(partial(g, c, vec3i(1, 0, 0)), partial(g, c, vec3i(0, 1, 0)), partial(g, c, vec3i(0, 0, 1)));
 }
 
@@ -100,22 +103,36 @@ fn to_srgb(c: vec3f) -> vec3f {
 }
 
 @fragment
-fn fs(in: VsOut) -> @location(0) vec4f {
+fn fs(in: VsOut, @builtin(front_facing) front_facing: bool) -> @location(0) vec4f {
   let to_eye = normalize(frame.eye.xyz - in.world);
-  // The triangle's own normal, for places without a usable gradient.
-  var n = cross(dpdx(in.world), dpdy(in.world));
+  // Marching cubes winds triangles so that their right-hand normal points
+  // out of the value >= iso region (VTK's convention): a front-facing
+  // triangle shows the outside, a back-facing one the inside.
+  var base = surface.front.rgb;
+  if (!front_facing) {
+    base = surface.back.rgb;
+  }
+  // The triangle's own normal (derivatives must be taken in uniform control flow).
+  let face = cross(dpdx(in.world), dpdy(in.world));
+  var n: vec3f;
   let g = length(in.normal);
   if (g > 1e-12) {
     n = in.normal / g;
+    if (!front_facing) {
+      n = -n;
+    }
+    // Near silhouettes the interpolated normal may lean away from the eye:
+    // mirror it into the visible half-space.
+    let d = dot(n, to_eye);
+    if (d < 0.0) {
+      n = normalize(n - 2.0 * d * to_eye);
+    }
   } else {
-    n = normalize(n);
-  }
-  // Two-sided: the side facing away from the eye is the inside of the
-  // value >= iso region, shown in the back colour.
-  var base = surface.front.rgb;
-  if (dot(n, to_eye) < 0.0) {
-    n = -n;
-    base = surface.back.rgb;
+    // Flat shading (or no usable gradient): the triangle's own normal, toward the eye.
+    n = normalize(face);
+    if (dot(n, to_eye) < 0.0) {
+      n = -n;
+    }
   }
   // Camera axes in world space (rows of the view rotation).
   let right = vec3f(frame.view[0].x, frame.view[1].x, frame.view[2].x);

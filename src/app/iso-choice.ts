@@ -17,7 +17,8 @@ export function otsuThreshold(values: ArrayLike<number>, lo: number, hi: number,
   if (n === 0) return (lo + hi) / 2;
   let sumAll = 0;
   for (let b = 0; b < bins; b++) sumAll += b * hist[b];
-  let w0 = 0, sum0 = 0, best = -1, bestB = bins / 2;
+  const between = new Float64Array(bins);
+  let w0 = 0, sum0 = 0, best = -1;
   for (let b = 0; b < bins - 1; b++) {
     w0 += hist[b];
     sum0 += b * hist[b];
@@ -25,14 +26,20 @@ export function otsuThreshold(values: ArrayLike<number>, lo: number, hi: number,
     if (w0 === 0 || w1 === 0) continue;
     const m0 = sum0 / w0;
     const m1 = (sumAll - sum0) / w1;
-    const between = w0 * w1 * (m0 - m1) ** 2;
-    if (between > best) {
-      best = between;
-      bestB = b;
+    between[b] = w0 * w1 * (m0 - m1) ** 2;
+    best = Math.max(best, between[b]);
+  }
+  if (best <= 0) return (lo + hi) / 2;
+  // Splits in an empty gap between the classes score the same: take the gap's middle.
+  let first = -1, last = -1;
+  for (let b = 0; b < bins - 1; b++) {
+    if (between[b] >= best * (1 - 1e-9)) {
+      if (first < 0) first = b;
+      last = b;
     }
   }
-  // The boundary between bin bestB and the next.
-  return lo + ((bestB + 1) / bins) * (hi - lo);
+  // The boundary after bin `first` .. after bin `last`.
+  return lo + ((first + last) / 2 + 1) / bins * (hi - lo);
 }
 
 /** Midpoints (min + max) / 2 of the blocks that are not constant, from [min, max] pairs. */

@@ -11,7 +11,30 @@ import { CameraControls } from './camera-controls.ts';
 export const frameSnippet: WgslPart = { name: 'shaders/render/frame.wgsl', code: frameWgsl };
 
 export const DEPTH_FORMAT: GPUTextureFormat = 'depth24plus';
-const FRAME_UNIFORM_BYTES = 4 * (16 + 16 + 4 + 4 + 4);
+export const FRAME_UNIFORM_BYTES = 4 * (16 + 16 + 4 + 4 + 4);
+
+/** Bind group 0 of every layer's pipeline: the frame uniforms (shaders/render/frame.wgsl). */
+export function createFrameBindGroupLayout(device: GPUDevice, label = 'Viewer.frameLayout'): GPUBindGroupLayout {
+  return device.createBindGroupLayout({
+    label,
+    entries: [{ binding: 0, visibility: GPUShaderStage.VERTEX | GPUShaderStage.FRAGMENT, buffer: { type: 'uniform' } }],
+  });
+}
+
+/** The frame uniforms for `camera` on a width x height target (camera.aspect is set from them). */
+export function frameUniformData(camera: ArcballCamera, width: number, height: number, out = new Float32Array(FRAME_UNIFORM_BYTES / 4)): Float32Array {
+  camera.aspect = width / height;
+  out.set(camera.viewProjection(mat4.create()) as Float32Array, 0);
+  out.set(camera.view(mat4.create()) as Float32Array, 16);
+  const eye = camera.eyePosition();
+  out.set([eye[0], eye[1], eye[2], 1], 32);
+  // Headlight: toward the eye.
+  const toLight = vec3.sub(vec3.create(), eye, camera.target);
+  vec3.normalize(toLight, toLight);
+  out.set([toLight[0], toLight[1], toLight[2], 0], 36);
+  out.set([width, height, 1 / width, 1 / height], 40);
+  return out;
+}
 
 export interface RenderLayer {
   /** Records draws into the frame's render pass (group 0 = frame uniforms is already set). */
@@ -65,10 +88,7 @@ export class Viewer {
       size: FRAME_UNIFORM_BYTES,
       usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
     });
-    this.frameBindGroupLayout = device.createBindGroupLayout({
-      label: 'Viewer.frameLayout',
-      entries: [{ binding: 0, visibility: GPUShaderStage.VERTEX | GPUShaderStage.FRAGMENT, buffer: { type: 'uniform' } }],
-    });
+    this.frameBindGroupLayout = createFrameBindGroupLayout(device);
     this.frameBindGroup = device.createBindGroup({
       label: 'Viewer.frameBindGroup',
       layout: this.frameBindGroupLayout,
@@ -163,19 +183,8 @@ export class Viewer {
   }
 
   private writeFrameUniforms(): void {
-    const cam = this.camera;
-    cam.aspect = this.canvas.width / this.canvas.height;
-    const u = this.scratch;
-    u.set(cam.viewProjection(mat4.create()) as Float32Array, 0);
-    u.set(cam.view(mat4.create()) as Float32Array, 16);
-    const eye = cam.eyePosition();
-    u.set([eye[0], eye[1], eye[2], 1], 32);
-    // Headlight from slightly above and left of the eye.
-    const toLight = vec3.sub(vec3.create(), eye, cam.target);
-    vec3.normalize(toLight, toLight);
-    u.set([toLight[0], toLight[1], toLight[2], 0], 36);
-    u.set([this.canvas.width, this.canvas.height, 1 / this.canvas.width, 1 / this.canvas.height], 40);
-    this.device.queue.writeBuffer(this.frameUniforms, 0, u);
+    const u = frameUniformData(this.camera, this.canvas.width, this.canvas.height, this.scratch);
+    this.device.queue.writeBuffer(this.frameUniforms, 0, u as Float32Array<ArrayBuffer>);
   }
 
   private frame(time: number): void {

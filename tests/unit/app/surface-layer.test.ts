@@ -1,0 +1,143 @@
+// The surface renderer on Dawn, off screen: a sphere's isosurface is drawn
+// lit in the outside colour from outside and in the inside colour from
+// within; gradient normals shade it smoothly where flat normals show facets;
+// uncached neighbour blocks (one-sided differences) still shade sensibly.
+import { describe, expect } from 'vitest';
+import { ArcballCamera } from '../../../src/render/camera.ts';
+import { SurfaceLayer } from '../../../src/render/surface-layer.ts';
+import { createCpuSurface } from '../../../src/render/testing/cpu-surface.ts';
+import { createFrameBindGroupLayout, DEPTH_FORMAT, FRAME_UNIFORM_BYTES, frameUniformData } from '../../../src/render/viewer.ts';
+import type { Dims } from '../../../src/volume/naming.ts';
+import { marchingCubes } from '../../../src/mc/serial-mc.ts';
+import { gpuTest } from '../../helpers/gpu.ts';
+
+const SIZE = 128;
+
+function sphereVolume(n: number): Float32Array {
+  // Values decrease outward (inside = value >= iso), like a density.
+  const v = new Float32Array(n * n * n);
+  const c = (n - 1) / 2;
+  for (let z = 0; z < n; z++) for (let y = 0; y < n; y++) for (let x = 0; x < n; x++) v[x + n * (y + n * z)] = 20 - Math.hypot(x - c, y - c, z - c);
+  return v;
+}
+
+async function render(device: GPUDevice, layer: SurfaceLayer, camera: ArcballCamera, layout: GPUBindGroupLayout): Promise<Uint8Array> {
+  const color = device.createTexture({ size: [SIZE, SIZE], format: 'rgba8unorm', usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC });
+  const depth = device.createTexture({ size: [SIZE, SIZE], format: DEPTH_FORMAT, usage: GPUTextureUsage.RENDER_ATTACHMENT });
+  const uniforms = device.createBuffer({ size: FRAME_UNIFORM_BYTES, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
+  device.queue.writeBuffer(uniforms, 0, frameUniformData(camera, SIZE, SIZE) as Float32Array<ArrayBuffer>);
+  const group = device.createBindGroup({ layout, entries: [{ binding: 0, resource: { buffer: uniforms } }] });
+  const read = device.createBuffer({ size: SIZE * SIZE * 4, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+  const encoder = device.createCommandEncoder();
+  const pass = encoder.beginRenderPass({
+    colorAttachments: [{ view: color.createView(), clearValue: { r: 0, g: 0, b: 0, a: 1 }, loadOp: 'clear', storeOp: 'store' }],
+    depthStencilAttachment: { view: depth.createView(), depthClearValue: 1, depthLoadOp: 'clear', depthStoreOp: 'store' },
+  });
+  pass.setBindGroup(0, group);
+  layer.draw(pass);
+  pass.end();
+  encoder.copyTextureToBuffer({ texture: color }, { buffer: read, bytesPerRow: SIZE * 4 }, [SIZE, SIZE]);
+  device.queue.submit([encoder.finish()]);
+  await read.mapAsync(GPUMapMode.READ);
+  const out = new Uint8Array(read.getMappedRange().slice(0));
+  for (const r of [color, depth, uniforms, read]) r.destroy();
+  return out;
+}
+
+const px = (img: Uint8Array, x: number, y: number) => [img[4 * (x + SIZE * y)], img[4 * (x + SIZE * y) + 1], img[4 * (x + SIZE * y) + 2]];
+const lum = (img: Uint8Array, x: number, y: number) => px(img, x, y).reduce((a, b) => a + b, 0);
+
+/** Largest brightness step between neighbouring pixels inside the sphere's disc (away from its outline). */
+function largestStep(img: Uint8Array): number {
+  let worst = 0;
+  for (let y = SIZE / 2 - 12; y < SIZE / 2 + 12; y++) {
+    for (let x = SIZE / 2 - 12; x < SIZE / 2 + 12; x++) {
+      const a = lum(img, x, y), b = lum(img, x + 1, y), c = lum(img, x, y + 1);
+      worst = Math.max(worst, Math.abs(a - b), Math.abs(a - c));
+    }
+  }
+  return worst;
+}
+
+describe('SurfaceLayer', () => {
+  gpuTest('draws a lit, two-sided, smooth surface', async ({ gpu }) => {
+    const { device } = gpu;
+    const dims: Dims = [24, 24, 24];
+    const surface = createCpuSurface(device, sphereVolume(24), dims, 11.3); // radius 8.7
+    const frameLayout = createFrameBindGroupLayout(device);
+    const camera = new ArcballCamera();
+    const layer = await SurfaceLayer.create({ device, format: 'rgba8unorm', frameBindGroupLayout: frameLayout, camera });
+    layer.setDrawData(surface.data);
+    camera.fit({ min: [0, 0, 0], max: [23, 23, 23] });
+
+    const outside = await render(device, layer, camera, frameLayout);
+    const centre = px(outside, SIZE / 2, SIZE / 2);
+    // Facing the headlight: bright, and the warm outside colour (red > blue).
+    expect(centre[0]).toBeGreaterThan(150);
+    expect(centre[0]).toBeGreaterThan(centre[2]);
+    // The corners are background.
+    expect(px(outside, 2, 2)).toEqual([0, 0, 0]);
+    const smoothStep = largestStep(outside);
+
+    layer.style.smooth = false;
+    const flat = await render(device, layer, camera, frameLayout);
+    const flatStep = largestStep(flat);
+    // Gradient normals: no facet edges; per-triangle normals: visible steps.
+    expect(smoothStep).toBeLessThan(flatStep * 0.5);
+    // Seen from outside, flat or smooth: the outside colour.
+    expect(px(flat, SIZE / 2, SIZE / 2)[0]).toBeGreaterThan(px(flat, SIZE / 2, SIZE / 2)[2]);
+    layer.style.smooth = true;
+
+    // From the centre of the sphere, the inside (back) colour: blue > red.
+    camera.setState({ ...camera.getState(), target: [11.5, 11.5, 11.5], distance: 0.5 });
+    const inside = await render(device, layer, camera, frameLayout);
+    const c2 = px(inside, SIZE / 2, SIZE / 2);
+    expect(c2[2]).toBeGreaterThan(c2[0]);
+    expect(c2[2]).toBeGreaterThan(60);
+
+    layer.destroy();
+    surface.destroy();
+  });
+
+  gpuTest('shades from one-sided differences where neighbour blocks are not cached', async ({ gpu }) => {
+    const { device } = gpu;
+    const dims: Dims = [24, 24, 24];
+    const surface = createCpuSurface(device, sphereVolume(24), dims, 11.3);
+    const frameLayout = createFrameBindGroupLayout(device);
+    const camera = new ArcballCamera();
+    const layer = await SurfaceLayer.create({ device, format: 'rgba8unorm', frameBindGroupLayout: frameLayout, camera });
+    layer.setDrawData(surface.data);
+    camera.fit({ min: [0, 0, 0], max: [23, 23, 23] });
+    const full = await render(device, layer, camera, frameLayout);
+    // Keep only the blocks holding an end of a vertex's grid edge (what the
+    // pipeline always has cached); the gradients' outer neighbours are gone.
+    const keep = new Set<number>();
+    const cell = (x: number, y: number, z: number) => (x >> 2) + 6 * ((y >> 2) + 6 * (z >> 2));
+    const soup = marchingCubes(sphereVolume(24), dims, 11.3).positions;
+    for (let i = 0; i < soup.length; i += 3) {
+      keep.add(cell(Math.floor(soup[i]), Math.floor(soup[i + 1]), Math.floor(soup[i + 2])));
+      keep.add(cell(Math.ceil(soup[i]), Math.ceil(soup[i + 1]), Math.ceil(soup[i + 2])));
+    }
+    const blocks = 6 * 6 * 6;
+    const map = Uint32Array.from({ length: blocks }, (_, i) => (keep.has(i) ? i : 0xffffffff));
+    expect(keep.size).toBeLessThan(blocks * 0.75);
+    device.queue.writeBuffer(surface.data.blockToSlot, 0, map);
+    const partial = await render(device, layer, camera, frameLayout);
+    let covered = 0, diff = 0;
+    for (let i = 0; i < SIZE * SIZE; i++) {
+      const a = full[4 * i] + full[4 * i + 1] + full[4 * i + 2];
+      const b = partial[4 * i] + partial[4 * i + 1] + partial[4 * i + 2];
+      if (a > 0) {
+        covered++;
+        diff += Math.abs(a - b);
+      }
+      // Never NaN-black where the surface is.
+      if (a > 0) expect(b).toBeGreaterThan(0);
+    }
+    expect(covered).toBeGreaterThan(SIZE * SIZE * 0.08);
+    // One-sided differences of a smooth field: nearly the same image.
+    expect(diff / covered / 3).toBeLessThan(12);
+    layer.destroy();
+    surface.destroy();
+  });
+});

@@ -1,0 +1,114 @@
+// The shared volume-opening path (page and CLI): what each kind of file is,
+// what must be asked, the errors users see, and that what is opened decodes
+// to the same values as the codec's own path.
+import { readFileSync } from 'node:fs';
+import { join } from 'node:path';
+import { describe, expect, it } from 'vitest';
+import { ZfpDecoder } from '../../../src/zfp/decoder.ts';
+import { ZfpEncoder } from '../../../src/zfp/encoder.ts';
+import { loadZfpStream } from '../../../src/zfp/gpu-stream.ts';
+import {
+  DEFAULT_VOLUME_RATE,
+  fittingRates,
+  inspectVolumeFile,
+  openDefaultVolume,
+  openVolumeFile,
+} from '../../../src/volume/open-volume.ts';
+import { gpuTest } from '../../helpers/gpu.ts';
+import { sharedData } from '../../helpers/python.ts';
+
+const volumes = join(sharedData, 'volumes');
+const vectors = join(sharedData, 'zfp-vectors');
+const read = (dir: string, name: string) => new Uint8Array(readFileSync(join(dir, name)));
+
+describe('inspectVolumeFile', () => {
+
+  it('reads headers, names and sizes', async () => {
+    const h = await inspectVolumeFile('hydrogen_atom_128x128x128_float32.rate8.zfp', read(volumes, 'hydrogen_atom_128x128x128_float32.rate8.zfp'));
+    expect(h).toMatchObject({ kind: 'zfp', dims: [128, 128, 128], rate: 8, missing: [], compresses: false });
+    const raw = await inspectVolumeFile('neghip_66x66x66_uint8.raw', read(volumes, 'neghip_66x66x66_uint8.raw'));
+    expect(raw).toMatchObject({ kind: 'raw', dims: [66, 66, 66], dtype: 'uint8', missing: [], compresses: true });
+    const headerless = await inspectVolumeFile('fuel_p8decoded_64x64x64_float32.rate4.zfp', read(vectors, 'fuel_p8decoded_64x64x64_float32.rate4.zfp'));
+    expect(headerless).toMatchObject({ kind: 'zfp-headerless', dims: [64, 64, 64], rate: 4, missing: [] });
+  });
+
+  it('says what is missing, with the rates that fit the size', async () => {
+    const bytes = read(vectors, 'fuel_p8decoded_64x64x64_float32.rate4.zfp');
+    const noRate = await inspectVolumeFile('fuel_64x64x64_float32.zfp', bytes);
+    expect(noRate.missing).toEqual(['rate']);
+    expect(noRate.fittingRates).toContain(4);
+    const noName = await inspectVolumeFile('stream.zfp', bytes);
+    expect(noName.missing).toEqual(['dims', 'rate']);
+    const rawNoName = await inspectVolumeFile('scan.raw', read(volumes, 'neghip_66x66x66_uint8.raw'));
+    expect(rawNoName.missing).toEqual(['dims', 'dtype']);
+    expect(fittingRates([64, 64, 64], bytes.byteLength)).toEqual([4]);
+  });
+
+  it('rejects fixed-precision streams with the codec message naming the file', async () => {
+    for (const f of ['fuel_64x64x64_float8.zfp', 'hydrogen_atom_128x128x128_float8.zfp', 'bonsai_256x256x256_float8.zfp']) {
+      await expect(inspectVolumeFile(f, read(volumes, f))).rejects.toThrow(new RegExp(`^${f.replace(/\./g, '\\.')}: .*not a fixed-rate stream`));
+    }
+  });
+
+  it('rejects truncated and mis-sized files', async () => {
+    const full = read(volumes, 'hydrogen_atom_128x128x128_float32.rate8.zfp');
+    await expect(inspectVolumeFile('cut.zfp', full.subarray(0, 100_000))).rejects.toThrow(/^cut\.zfp: truncated/);
+    await expect(inspectVolumeFile('neghip_64x64x64_uint8.raw', read(volumes, 'neghip_66x66x66_uint8.raw'))).rejects.toThrow(
+      /^neghip_64x64x64_uint8\.raw: 64x64x64 uint8 is 262144 bytes, the file has 287496/,
+    );
+    await expect(inspectVolumeFile('x_64x64x64_float32.rate3.zfp', read(vectors, 'fuel_p8decoded_64x64x64_float32.rate4.zfp'))).rejects.toThrow(/^x_64x64x64_float32\.rate3\.zfp: /);
+  });
+
+  it('points non-volumes elsewhere', async () => {
+    await expect(inspectVolumeFile('laspy_simple.las', read(join(sharedData, 'las'), 'laspy_simple.las'))).rejects.toThrow(/point cloud/);
+    await expect(inspectVolumeFile('notes.txt', new TextEncoder().encode('hello'))).rejects.toThrow(/^notes\.txt: not a volume/);
+    await expect(inspectVolumeFile('bad.nrrd', new TextEncoder().encode('NRRD0004\ntype: float\ndimension: 2\nsizes: 2 2\nencoding: raw\n\n'))).rejects.toThrow(/^bad\.nrrd: only 3D/);
+  });
+});
+
+async function decode(device: GPUDevice, stream: Parameters<ZfpDecoder['readVolume']>[0]): Promise<Float32Array> {
+  const decoder = await ZfpDecoder.create(device);
+  try {
+    return (await decoder.readVolume(stream))!;
+  } finally {
+    decoder.destroy();
+  }
+}
+
+describe('openVolumeFile', () => {
+  gpuTest('compresses a raw volume as the encoder does', async ({ gpu }) => {
+    const bytes = read(volumes, 'neghip_66x66x66_uint8.raw');
+    const facts = await inspectVolumeFile('neghip_66x66x66_uint8.raw', bytes);
+    const opened = await openVolumeFile(gpu.device, facts, bytes, { rate: 6 });
+    expect(opened).toMatchObject({ kind: 'raw', dims: [66, 66, 66], sourceDtype: 'uint8', rate: 6, compressedHere: true });
+    const encoder = await ZfpEncoder.create(gpu.device);
+    const ref = await encoder.compressToStream(bytes, 'uint8', [66, 66, 66], 6);
+    expect(await opened.stream.readBytes()).toEqual(await ref.readBytes());
+    opened.stream.destroy();
+    ref.destroy();
+    encoder.destroy();
+  });
+
+  gpuTest('opens a header-less stream with the shape and rate given by the user', async ({ gpu }) => {
+    const bytes = read(vectors, 'fuel_p8decoded_64x64x64_float32.rate4.zfp');
+    const facts = await inspectVolumeFile('stream.zfp', bytes);
+    const opened = await openVolumeFile(gpu.device, facts, bytes, { dims: [64, 64, 64], rate: 4 });
+    expect(opened.rate).toBe(4);
+    const expected = new Float32Array(read(vectors, 'fuel_p8decoded_64x64x64_float32.rate4.decoded.raw').buffer);
+    expect(await decode(gpu.device, opened.stream)).toEqual(expected);
+    opened.stream.destroy();
+    // A wrong rate is the codec's error, naming the user's file (not a made-up name).
+    await expect(openVolumeFile(gpu.device, facts, bytes, { dims: [64, 64, 64], rate: 5 })).rejects.toThrow(/^stream\.zfp: /);
+  });
+
+  gpuTest('the built-in volume is the generated field at the default rate', async ({ gpu }) => {
+    const opened = await openDefaultVolume(gpu.device);
+    expect(opened).toMatchObject({ kind: 'default', dims: [128, 128, 128], rate: DEFAULT_VOLUME_RATE, defaultIsovalue: 0.5 });
+    const same = loadZfpStream(gpu.device, await opened.stream.readBytes(), 'default.zfp');
+    const a = await decode(gpu.device, opened.stream);
+    const b = await decode(gpu.device, same);
+    expect(a).toEqual(b);
+    opened.stream.destroy();
+    same.destroy();
+  });
+});
