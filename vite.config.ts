@@ -7,6 +7,13 @@ export default defineConfig({
   build: {
     target: 'es2022',
     sourcemap: true,
+    // Every page of the app (the example pages live next to index.html).
+    rolldownOptions: {
+      input: {
+        main: 'index.html',
+        lidar: 'lidar.html',
+      },
+    },
   },
   server: { port: 5173 },
   preview: { port: 4173 },

@@ -1,0 +1,154 @@
+// Pieces shared by the example pages (LIDAR, neuron): WebGPU start-up with
+// errors shown to the user, file drops, the load progress bar, the view
+// state in the URL hash (the same #cam=... as the main page) and formatting.
+import { setInfoList } from '../app/info-list.ts';
+import { Messages, showFatal } from '../app/messages.ts';
+import { decodeViewState, encodeViewState } from '../app/url-state.ts';
+import { BROWSER_HELP, describeAdapter, requestGpu, WebGpuUnavailableError, type GpuContext } from '../gpu/device.ts';
+import type { Viewer } from '../render/viewer.ts';
+
+export function byId<T extends HTMLElement>(id: string): T {
+  const el = document.getElementById(id);
+  if (!el) throw new Error(`page is missing #${id}`);
+  return el as T;
+}
+
+/** State the page tests read (and the shape the shared test helpers expect). */
+export interface ExamplePageState {
+  status: 'loading' | 'ready' | 'error';
+  adapter?: GpuContext['adapter'];
+  framesDrawn: () => number;
+}
+
+export function publishState<T extends ExamplePageState>(state: T): T {
+  // tests/e2e/page.ts waits on window.zfpiso, like on the main page.
+  (window as unknown as { zfpiso: ExamplePageState }).zfpiso = state;
+  return state;
+}
+
+/** Requests the device; on failure shows the reason over the view and returns undefined. */
+export async function startGpu(stage: HTMLElement, messages: Messages, label: string): Promise<GpuContext | undefined> {
+  try {
+    const gpu = await requestGpu(navigator.gpu, {
+      label,
+      onFailure: (f) => {
+        if (f.kind === 'device-lost') showFatal(stage, f.message);
+        else messages.show(`WebGPU ${f.kind} error: ${f.message}`);
+      },
+    });
+    setInfoList(byId('gpu-info'), [
+      ['adapter', describeAdapter(gpu.adapter)],
+      ['max buffer', formatBytes(gpu.limits.maxBufferSize)],
+    ]);
+    return gpu;
+  } catch (e) {
+    showFatal(stage, e instanceof WebGpuUnavailableError ? e.message : `Could not start WebGPU: ${(e as Error).message}. ${BROWSER_HELP}`);
+    document.body.dataset.status = 'error';
+    return undefined;
+  }
+}
+
+/** Files dropped on `target` (or chosen with `input`) go to `onFiles`. */
+export function acceptFiles(target: HTMLElement, overlay: HTMLElement, input: HTMLInputElement, onFiles: (files: File[]) => void): void {
+  let depth = 0;
+  const hasFiles = (e: DragEvent) => [...(e.dataTransfer?.types ?? [])].includes('Files');
+  target.addEventListener('dragenter', (e) => {
+    if (!hasFiles(e)) return;
+    e.preventDefault();
+    depth++;
+    overlay.hidden = false;
+  });
+  target.addEventListener('dragover', (e) => {
+    if (hasFiles(e)) e.preventDefault();
+  });
+  target.addEventListener('dragleave', () => {
+    depth = Math.max(0, depth - 1);
+    if (depth === 0) overlay.hidden = true;
+  });
+  target.addEventListener('drop', (e) => {
+    e.preventDefault();
+    depth = 0;
+    overlay.hidden = true;
+    const files = [...(e.dataTransfer?.files ?? [])];
+    if (files.length > 0) onFiles(files);
+  });
+  input.addEventListener('change', () => {
+    const files = [...(input.files ?? [])];
+    input.value = '';
+    if (files.length > 0) onFiles(files);
+  });
+}
+
+/** The progress box over the view. */
+export class Progress {
+  private readonly box = byId('progress');
+  private readonly what = byId('progress-what');
+  private readonly text = byId('progress-text');
+  private readonly bar = byId('progress-bar');
+
+  start(what: string): void {
+    this.what.textContent = what;
+    this.set(0, '');
+    this.box.hidden = false;
+  }
+
+  set(fraction: number, text: string): void {
+    const pct = Math.max(0, Math.min(1, fraction)) * 100;
+    this.bar.style.width = `${pct.toFixed(1)}%`;
+    this.box.setAttribute('aria-valuenow', pct.toFixed(0));
+    this.text.textContent = text;
+  }
+
+  done(): void {
+    this.box.hidden = true;
+  }
+}
+
+/** Keeps the camera in the URL hash (#cam=...) and restores it on load. */
+export function syncCameraWithUrl(viewer: Viewer): { restore(): boolean; write(): void } {
+  let timer: ReturnType<typeof setTimeout> | undefined;
+  return {
+    restore() {
+      const s = decodeViewState(location.hash);
+      if (!s.camera) return false;
+      viewer.camera.setState(s.camera);
+      viewer.requestFrame();
+      return true;
+    },
+    write() {
+      clearTimeout(timer);
+      timer = setTimeout(() => {
+        const params = new URLSearchParams(location.hash.replace(/^#/, ''));
+        const cam = new URLSearchParams(encodeViewState({ camera: viewer.camera.getState() })).get('cam');
+        if (cam) params.set('cam', cam);
+        history.replaceState(null, '', `${location.pathname}${location.search}#${params.toString().replace(/%2C/g, ',')}`);
+      }, 250);
+    },
+  };
+}
+
+export function formatCount(n: number): string {
+  return Math.round(n).toLocaleString('en-US');
+}
+
+export function formatBytes(n: number): string {
+  if (n < 1024) return `${n} B`;
+  if (n < 1024 ** 2) return `${(n / 1024).toFixed(1)} KiB`;
+  if (n < 1024 ** 3) return `${(n / 1024 ** 2).toFixed(1)} MiB`;
+  return `${(n / 1024 ** 3).toFixed(2)} GiB`;
+}
+
+export function formatMs(ms: number): string {
+  return ms < 1000 ? `${ms.toFixed(0)} ms` : `${(ms / 1000).toFixed(2)} s`;
+}
+
+export function formatLength(x: number, unit = 'm'): string {
+  const a = Math.abs(x);
+  const digits = a >= 100 ? 0 : a >= 10 ? 1 : 2;
+  return `${x.toFixed(digits)} ${unit}`;
+}
+
+/** Lets the browser paint (progress bars) between chunks of synchronous work. */
+export function nextFrame(): Promise<void> {
+  return new Promise((r) => setTimeout(r, 0));
+}
