@@ -3,6 +3,11 @@ import { chromiumPath, chromiumWebGpuArgs } from './tests/e2e/chromium.ts';
 
 // End-to-end tests of the built page in Debian's headless Chromium, with
 // WebGPU on SwiftShader (flags: ../shared/docs/TOOLCHAIN.md).
+// E2E_PORT picks another port (and build folder) for the preview server, so
+// two runs can go side by side.
+const port = Number(process.env.E2E_PORT ?? 4173);
+const outDir = port === 4173 ? 'dist' : `test-results/dist-${port}`;
+
 export default defineConfig({
   testDir: 'tests/e2e',
   testMatch: '**/*.spec.ts',
@@ -12,15 +17,15 @@ export default defineConfig({
   outputDir: 'test-results/e2e',
   reporter: [['list']],
   use: {
-    baseURL: 'http://127.0.0.1:4173',
+    baseURL: `http://127.0.0.1:${port}`,
     screenshot: 'only-on-failure',
     trace: 'off',
     launchOptions: { executablePath: chromiumPath(), args: chromiumWebGpuArgs },
     viewport: { width: 1100, height: 720 },
   },
   webServer: {
-    command: 'npx vite build --logLevel warn && npx vite preview --host 127.0.0.1 --port 4173 --strictPort',
-    url: 'http://127.0.0.1:4173',
+    command: `npx vite build --logLevel warn --outDir ${outDir} && npx vite preview --host 127.0.0.1 --port ${port} --strictPort --outDir ${outDir}`,
+    url: `http://127.0.0.1:${port}`,
     reuseExistingServer: false,
     timeout: 180_000,
     stdout: 'ignore',

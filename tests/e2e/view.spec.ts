@@ -1,0 +1,86 @@
+// What a user sees first and does first: the built-in volume as a shaded
+// surface, and the camera (orbit, pan, zoom, reset, fit).
+import { expect, test, type Page } from '@playwright/test';
+import { nonBackgroundFraction, openApp, waitForFrames, watchErrors } from './page.ts';
+import { trianglesShown } from './volume-page.ts';
+
+async function canvasPixels(page: Page): Promise<Buffer> {
+  await waitForFrames(page, 1);
+  // Two animation frames: the last camera change has been drawn.
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  return page.locator('#view').screenshot();
+}
+
+test('the page opens on the built-in volume with a shaded surface and its statistics', async ({ page }) => {
+  const errors = watchErrors(page);
+  const started = Date.now();
+  await openApp(page);
+  const state = await page.evaluate(() => ({ volume: window.zfpiso!.volume, stats: window.zfpiso!.stats }));
+  expect(state.volume?.kind).toBe('default');
+  expect(state.volume?.dims).toEqual([128, 128, 128]);
+  expect(state.stats?.isovalue).toBeCloseTo(0.5, 6);
+  expect(state.stats?.triangles).toBeGreaterThan(10_000);
+  await waitForFrames(page, 1);
+  expect(await nonBackgroundFraction(page)).toBeGreaterThan(0.1);
+  expect(await trianglesShown(page)).toBe(state.stats!.triangles);
+  await expect(page.locator('#volume-info dd[data-key="dims"]')).toHaveText('128 × 128 × 128');
+  await expect(page.locator('#iso-value')).toHaveValue('0.5000');
+  await expect(page.locator('#hud')).toContainText('triangles');
+  // Within seconds, even on SwiftShader.
+  expect(Date.now() - started).toBeLessThan(30_000);
+  expect(errors).toEqual([]);
+});
+
+test('dragging, panning and zooming change the view; R and double-click reset it; F fits', async ({ page }) => {
+  await openApp(page);
+  const view = page.locator('#view');
+  const home = await canvasPixels(page);
+  const homeCamera = await page.evaluate(() => window.zfpiso!.camera!());
+  const box = (await view.boundingBox())!;
+  const cx = box.x + box.width / 2, cy = box.y + box.height / 2;
+
+  // Orbit
+  await page.mouse.move(cx, cy);
+  await page.mouse.down();
+  await page.mouse.move(cx + 120, cy + 40, { steps: 6 });
+  await page.mouse.up();
+  const orbited = await canvasPixels(page);
+  expect(orbited.equals(home)).toBe(false);
+  const cam1 = await page.evaluate(() => window.zfpiso!.camera!());
+  expect(cam1.rotation).not.toEqual(homeCamera.rotation);
+
+  // R resets to exactly the home view.
+  await page.keyboard.press('r');
+  expect((await canvasPixels(page)).equals(home)).toBe(true);
+
+  // Shift-drag pans (the target moves, the rotation stays).
+  await page.keyboard.down('Shift');
+  await page.mouse.move(cx, cy);
+  await page.mouse.down();
+  await page.mouse.move(cx + 80, cy, { steps: 4 });
+  await page.mouse.up();
+  await page.keyboard.up('Shift');
+  const cam2 = await page.evaluate(() => window.zfpiso!.camera!());
+  expect(cam2.rotation).toEqual(homeCamera.rotation);
+  expect(cam2.target).not.toEqual(homeCamera.target);
+
+  // Wheel zooms.
+  await page.mouse.wheel(0, -400);
+  const cam3 = await page.evaluate(() => window.zfpiso!.camera!());
+  expect(cam3.distance).toBeLessThan(cam2.distance);
+  expect((await canvasPixels(page)).equals(home)).toBe(false);
+
+  // F: whole volume in view again, same direction.
+  await page.locator('#fit-view').click();
+  const cam4 = await page.evaluate(() => window.zfpiso!.camera!());
+  expect(cam4.target).toEqual(homeCamera.target);
+  expect(cam4.distance).toBeCloseTo(homeCamera.distance, 6);
+
+  // Double-click resets too.
+  await page.mouse.move(cx, cy);
+  await page.mouse.down();
+  await page.mouse.move(cx - 90, cy - 60, { steps: 5 });
+  await page.mouse.up();
+  await view.dblclick();
+  expect((await canvasPixels(page)).equals(home)).toBe(true);
+});
