@@ -154,7 +154,13 @@ export class BlockMarchingCubes {
     scan.encode(encoder, { input: e.vertexCounts, output: e.vertexOffsets, count: active, totalOut: counters.count('vertices') });
     scan.encode(encoder, { input: e.occupiedMask, output: e.occupiedOffsets, count: active, totalOut: counters.count('occupied') });
     compactIds.encode(encoder, { mask: e.occupiedMask, offsets: e.occupiedOffsets, output: e.occupiedList, count: active });
-    pass = encoder.beginComputePass({ label: 'Isosurface.planVertices' });
+    this.encodePlanVertices(encoder, slotData, shards);
+  }
+
+  /** Records plan_vertices alone (after a vertex overflow, once the shards have grown). */
+  encodePlanVertices(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: VertexShards): void {
+    const g = this.bind(slotData, shards);
+    const pass = encoder.beginComputePass({ label: 'Isosurface.planVertices' });
     pass.setPipeline(this.planPipeline);
     pass.setBindGroup(0, g.plan);
     pass.dispatchWorkgroups(1);

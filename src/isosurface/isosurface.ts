@@ -48,6 +48,8 @@ interface Request {
   attempts: number;
   /** GPU ms of earlier attempts (skipped for growth). */
   earlierMs: number;
+  /** Blocks decoded by earlier attempts (a vertex overflow happens after the cache update). */
+  earlierNew: number;
 }
 
 /** Attempts per isovalue: one, plus a cache growth, plus a vertex growth, plus slack. */
@@ -204,7 +206,7 @@ export class Isosurface implements SurfaceEngine {
     const f = Math.fround(iso);
     const replaced = this.pending;
     if (replaced) for (const w of replaced.waiters) w.reject(new IsosurfaceSupersededError(replaced.iso, f));
-    this.pending = { iso: f, waiters: waiter ? [waiter] : [], grew: false, attempts: 0, earlierMs: 0 };
+    this.pending = { iso: f, waiters: waiter ? [waiter] : [], grew: false, attempts: 0, earlierMs: 0, earlierNew: 0 };
     if (!this.inFlight) this.launchPending();
   }
 
@@ -214,8 +216,13 @@ export class Isosurface implements SurfaceEngine {
     if (r) this.launch(r);
   }
 
-  /** Records and submits the computation of r.iso: one command buffer, no waits. */
-  private launch(r: Request): void {
+  /**
+   * Records and submits the computation of r.iso: one command buffer, no
+   * waits. `verticesOnly` resumes after a vertex overflow: the cache update
+   * and the block counts of the failed attempt are still in their buffers
+   * (nothing ran since), so only plan_vertices and the vertex pass run again.
+   */
+  private launch(r: Request, verticesOnly = false): void {
     this.inFlight = r;
     r.attempts++;
     const { device } = this;
@@ -224,16 +231,23 @@ export class Isosurface implements SurfaceEngine {
     const encoder = device.createCommandEncoder({ label: 'Isosurface.compute' });
     const s = this.stats;
     s.mark(encoder, 0);
-    this.active.encode(encoder);
-    const pass = encoder.beginComputePass({ label: 'Isosurface.planCache' });
-    this.counters.encodePlanCache(pass);
-    pass.end();
+    if (!verticesOnly) {
+      this.active.encode(encoder);
+      const pass = encoder.beginComputePass({ label: 'Isosurface.planCache' });
+      this.counters.encodePlanCache(pass);
+      pass.end();
+    }
     s.mark(encoder, 1);
-    this.cache.encodeUpdate(encoder);
+    if (!verticesOnly) this.cache.encodeUpdate(encoder);
     s.mark(encoder, 2);
-    this.cache.encodeDecode(encoder);
+    if (!verticesOnly) this.cache.encodeDecode(encoder);
     s.mark(encoder, 3);
-    this.mc.encodeCounts(encoder, this.cache.slotData, this.shards);
+    if (verticesOnly) {
+      this.counters.set('status', 0);
+      this.mc.encodePlanVertices(encoder, this.cache.slotData, this.shards);
+    } else {
+      this.mc.encodeCounts(encoder, this.cache.slotData, this.shards);
+    }
     s.mark(encoder, 4);
     this.mc.encodeVertices(encoder, this.cache.slotData, this.shards);
     s.mark(encoder, 5);
@@ -252,6 +266,9 @@ export class Isosurface implements SurfaceEngine {
     const status = raw.counters[C.status];
     if (status !== 0) {
       r.earlierMs += raw.gpuMs;
+      // A vertices-only retry reads these counters again; a full one does not.
+      const verticesOnly = status === STATUS_VERTEX_OVERFLOW;
+      if (!verticesOnly) r.earlierNew += raw.counters[C.new];
       if (this.pending) {
         // A newer isovalue is waiting: compute that one (it grows what it needs).
         for (const w of r.waiters) w.reject(new IsosurfaceSupersededError(r.iso, this.pending.iso));
@@ -266,7 +283,7 @@ export class Isosurface implements SurfaceEngine {
         return;
       }
       r.grew = true;
-      this.launch(r);
+      this.launch(r, verticesOnly);
       return;
     }
     const stats = this.toStats(r, raw);
@@ -287,7 +304,7 @@ export class Isosurface implements SurfaceEngine {
   private toStats(r: Request, raw: RawStats): IsosurfaceStats {
     const c = raw.counters;
     const activeBlocks = c[C.active];
-    const newBlocks = c[C.new];
+    const newBlocks = c[C.new] + r.earlierNew;
     const vertices = c[C.vertices];
     const stages = r.earlierMs > 0 ? [...raw.stages, { label: 'attempts before growth', ms: r.earlierMs }] : raw.stages;
     return {
