@@ -1,0 +1,71 @@
+// The GPU cache against a CPU model of Algorithm 1 (src/isosurface/lru-model.ts):
+// a scripted sequence of isovalues on a small volume with a small cache must
+// give, after every surface, the same active and new block counts and the
+// same slot <-> block maps and slot ages, slot for slot: exactly the evictions
+// an LRU makes, including growth (the model grows by the same policy) and a
+// reset to the initial capacity.
+import { describe, expect } from 'vitest';
+import { grownCapacity } from '../../../src/isosurface/budget.ts';
+import { Isosurface } from '../../../src/isosurface/isosurface.ts';
+import { activeBlocks, LruCacheModel } from '../../../src/isosurface/lru-model.ts';
+import type { Dims } from '../../../src/volume/naming.ts';
+import { blockRanges } from '../../../src/zfp/cpu/codec.ts';
+import { gpuTest } from '../../helpers/gpu.ts';
+import { compressVolume, decodeVolume, makeField } from './helpers.ts';
+
+describe('LRU block cache', () => {
+  gpuTest('evicts, grows and resets exactly as the CPU model of Algorithm 1', async ({ gpu }) => {
+    const { device } = gpu;
+    const dims: Dims = [26, 21, 17];
+    const values = makeField(dims, 2024, 'blobs');
+    const stream = await compressVolume(device, values, dims, 12);
+    const decoded = await decodeVolume(device, stream);
+    const ranges = blockRanges(decoded, dims);
+    const initialSlots = 12;
+    const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: initialSlots, initialVertexCapacity: 1 << 16 });
+    expect([...(await iso.readBlockRanges())]).toEqual([...ranges]);
+    const grid = iso.info.blockGrid;
+    const model = new LruCacheModel(iso.info.blockCount, initialSlots);
+    const [lo, hi] = iso.info.valueRange;
+    const at = (f: number) => Math.fround(lo + (hi - lo) * f);
+    // nested surfaces up and down, repeats, jumps, a reset, and surfaces
+    // larger than the cache (growth); fractions of the value range
+    const script: (number | 'reset')[] = [0.9, 0.8, 0.7, 0.85, 0.6, 0.95, 0.5, 0.9, 0.3, 0.3, 0.75, 'reset', 0.65, 0.2, 0.92, 0.1, 0.55, 0.05, 0.88];
+    let evictions = 0;
+    let growths = 0;
+    let hits = 0;
+    for (const step of script) {
+      if (step === 'reset') {
+        await iso.resetCache();
+        model.reset(initialSlots);
+        continue;
+      }
+      const t = at(step);
+      const active = activeBlocks(ranges, grid, t);
+      let update = model.update(active);
+      if (!update) {
+        model.grow(grownCapacity(model.capacity, active.length, iso.info.blockCount));
+        update = model.update(active)!;
+        growths++;
+      }
+      evictions += update.evicted.length;
+      hits += active.length - update.newBlocks.length;
+      const stats = await iso.compute(t);
+      const what = `iso ${t} (${step} of the range)`;
+      expect(stats.activeBlocks, what).toBe(active.length);
+      expect(stats.newBlocks, what).toBe(update.newBlocks.length);
+      expect(stats.cacheSlots, what).toBe(model.capacity);
+      expect(stats.cacheSlotsUsed, what).toBe(model.slotsUsed);
+      const state = await iso.readCacheState();
+      expect([...state.slotToBlock], what).toEqual([...model.slotToBlock]);
+      expect([...state.blockToSlot], what).toEqual([...model.blockToSlot]);
+      expect([...state.slotAge], what).toEqual([...model.slotAge]);
+    }
+    // the script exercised what it is for
+    expect(evictions).toBeGreaterThan(20);
+    expect(growths).toBeGreaterThanOrEqual(2);
+    expect(hits).toBeGreaterThan(20);
+    iso.destroy();
+    stream.destroy();
+  });
+});
