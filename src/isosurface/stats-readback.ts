@@ -30,6 +30,7 @@ export class StatsReadback {
   private readonly free: GPUBuffer[] = [];
   private readonly all: GPUBuffer[] = [];
   private readonly stagingBytes: number;
+  private destroyed = false;
 
   constructor(private readonly device: GPUDevice, timing: boolean) {
     this.source = timing && device.features.has('timestamp-query') ? 'timestamp-query' : 'queue-wall-time';
@@ -69,6 +70,7 @@ export class StatsReadback {
   async read(staging: GPUBuffer, submittedAt: number): Promise<RawStats> {
     // Let the caller finish what it is doing (e.g. record its draw) first.
     await null;
+    if (this.destroyed) throw new Error('Isosurface: destroyed');
     try {
       await staging.mapAsync(GPUMapMode.READ);
     } catch (e) {
@@ -90,6 +92,7 @@ export class StatsReadback {
   }
 
   destroy(): void {
+    this.destroyed = true;
     this.querySet?.destroy();
     this.resolveBuffer?.destroy();
     for (const b of this.all) b.destroy();

@@ -1,0 +1,114 @@
+// Isosurface object behaviour: newest isovalue wins (at most one computation
+// in flight, a pending one replaced), the memory budget (a refused surface
+// leaves the previous one drawn, a clear error; raising the budget lets it
+// grow), growth of the vertex output alone (the cache update of the failed
+// attempt counts), and destroy().
+import { describe, expect } from 'vitest';
+import { Isosurface } from '../../../src/isosurface/isosurface.ts';
+import { formatMB } from '../../../src/isosurface/budget.ts';
+import { IsosurfaceBudgetError, IsosurfaceSupersededError, type IsosurfaceStats } from '../../../src/isosurface/types.ts';
+import { marchingCubes } from '../../../src/mc/serial-mc.ts';
+import type { Dims } from '../../../src/volume/naming.ts';
+import { gpuTest } from '../../helpers/gpu.ts';
+import { compressVolume, decodeVolume, makeField } from './helpers.ts';
+
+const dims: Dims = [30, 27, 22];
+
+async function setup(device: GPUDevice) {
+  const values = makeField(dims, 5, 'blobs');
+  const stream = await compressVolume(device, values, dims, 8);
+  return { stream, decoded: await decodeVolume(device, stream) };
+}
+
+describe('Isosurface', () => {
+  gpuTest('newest wins: a pending isovalue is replaced, never queued', async ({ gpu }) => {
+    const { stream, decoded } = await setup(gpu.device);
+    // room for every surface: no growth retries in this test
+    const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: 1 << 20, initialVertexCapacity: 1 << 20 });
+    const [lo, hi] = iso.info.valueRange;
+    const values = [0.3, 0.4, 0.5, 0.6].map((f) => Math.fround(lo + f * (hi - lo)));
+    const seen: number[] = [];
+    iso.onStats((s) => seen.push(s.isovalue));
+    // one in flight at once, the next two replace each other, the last one wins
+    for (const v of values) iso.setIsovalue(v);
+    expect(iso.busy).toBe(true);
+    const first = iso.compute(values[0]); // replaces values[3] as the pending one
+    const last = iso.compute(values[2]);
+    await expect(first).rejects.toBeInstanceOf(IsosurfaceSupersededError);
+    const stats = await last;
+    expect(seen).toEqual([values[0], values[2]]);
+    expect(stats.triangles).toBe(marchingCubes(decoded, dims, values[2]).triangleCount);
+    expect(iso.busy).toBe(false);
+    iso.destroy();
+    stream.destroy();
+  });
+
+  gpuTest('a surface over the memory budget is refused with a clear error and the previous one stays drawn', async ({ gpu }) => {
+    const { stream, decoded } = await setup(gpu.device);
+    const budget = 100_000;
+    const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: 8, initialVertexCapacity: 3000, memoryBudgetBytes: budget });
+    const [lo, hi] = iso.info.valueRange;
+    const small = Math.fround(lo + 0.9 * (hi - lo));
+    const large = Math.fround(lo + 0.05 * (hi - lo));
+    const errors: Error[] = [];
+    iso.onError((e) => errors.push(e));
+    const kept = await iso.compute(small);
+    const keptVertices = await iso.readVertices();
+    const version = iso.drawData.version;
+    const error = await iso.compute(large).then(
+      () => undefined,
+      (e: unknown) => e,
+    );
+    expect(error).toBeInstanceOf(IsosurfaceBudgetError);
+    const budgetError = error as IsosurfaceBudgetError;
+    expect(budgetError.message).toContain(`the surface at iso ${large} needs `);
+    expect(budgetError.message).toContain(`the budget is ${formatMB(budget)}; raise it`);
+    expect(budgetError.neededBytes).toBeGreaterThan(budget);
+    expect(budgetError.budgetBytes).toBe(budget);
+    expect(errors).toEqual([error]);
+    // the vertices and draw arguments still hold the previous surface (the
+    // cache may have grown on the way: that alone fitted the budget)
+    expect([...(await iso.readVertices())]).toEqual([...keptVertices]);
+    expect(keptVertices.length / 2).toBe(kept.vertices);
+    // with room, the same surface grows what it needs and is exact
+    iso.setMemoryBudget(64 << 20);
+    const grown = await iso.compute(large);
+    expect(grown.grew).toBe(true);
+    expect(grown.triangles).toBe(marchingCubes(decoded, dims, large).triangleCount);
+    expect(iso.drawData.version).toBeGreaterThan(version);
+    expect(grown.cacheBytes + grown.vertexBytes).toBeLessThanOrEqual(64 << 20);
+    iso.destroy();
+    stream.destroy();
+  });
+
+  gpuTest('vertex overflow alone: the buffers grow, the decoded blocks count once, the cache is not redone', async ({ gpu }) => {
+    const { stream, decoded } = await setup(gpu.device);
+    const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: 100_000, initialVertexCapacity: 10 });
+    const [lo, hi] = iso.info.valueRange;
+    const t = Math.fround(lo + 0.2 * (hi - lo));
+    const stats: IsosurfaceStats = await iso.compute(t);
+    expect(stats.grew).toBe(true);
+    expect(stats.newBlocks).toBe(stats.activeBlocks); // cold cache: every active block decoded once
+    expect(stats.triangles).toBe(marchingCubes(decoded, dims, t).triangleCount);
+    expect(stats.stages.map((s) => s.label)).toContain('attempts before growth');
+    const again = await iso.compute(t);
+    expect(again.grew).toBe(false);
+    expect(again.newBlocks).toBe(0);
+    expect(again.hitRate).toBe(1);
+    iso.destroy();
+    stream.destroy();
+  });
+
+  gpuTest('destroy rejects what is waiting; a destroyed object refuses work', async ({ gpu }) => {
+    const { stream } = await setup(gpu.device);
+    const iso = await Isosurface.create(gpu, stream);
+    const running = iso.compute(iso.info.valueRange[0] + 1);
+    const waiting = iso.compute(iso.info.valueRange[0] + 2);
+    iso.destroy();
+    await expect(running).rejects.toThrow(/destroyed/);
+    await expect(waiting).rejects.toThrow(/destroyed/);
+    await expect(iso.compute(3)).rejects.toThrow(/destroyed/);
+    await expect(iso.compute(NaN)).rejects.toThrow();
+    stream.destroy();
+  });
+});
