@@ -11,6 +11,7 @@
 //                                  identical; exit 3 when emcc is absent)
 //   node wasm/build.mjs --native   also build the same C APIs natively (gcc)
 //                                  for the loader benchmark's native baseline
+//   node wasm/build.mjs --native-only   only the native baseline (no emcc needed)
 //
 // Everything third-party lives in wasm/.build/ (git-ignored). The build is
 // deterministic: pinned sources (wasm/sources.json, sha256-checked), fixed
@@ -30,7 +31,8 @@ const sources = JSON.parse(readFileSync(join(here, 'sources.json'), 'utf8'));
 
 const args = new Set(process.argv.slice(2));
 const CHECK = args.has('--check');
-const NATIVE = args.has('--native');
+const NATIVE = args.has('--native') || args.has('--native-only');
+const NATIVE_ONLY = args.has('--native-only');
 const JOBS = String(Math.max(1, Number(process.env.WASM_BUILD_JOBS ?? 2)));
 export const EXIT_NO_EMCC = 3;
 
@@ -345,8 +347,9 @@ async function buildLaszip(tc) {
 
 function libraryStamp(tc) {
   const h = createHash('sha256');
-  h.update(JSON.stringify({ sources, tc: { ...tc, env: undefined, cmake: undefined }, LASZIP_SOURCES, ZLIB_SOURCES }));
-  h.update(readFileSync(fileURLToPath(import.meta.url)));
+  h.update(JSON.stringify({ sources, tc: { ...tc, env: undefined, cmake: undefined }, LASZIP_SOURCES, ZLIB_SOURCES, WASM32_TYPE_SIZES, WASM32_JPEG_TYPE_SIZES }));
+  // The library recipes themselves (editing the rest of this script keeps the cache).
+  for (const fn of [compileArchive, cmakeBuild, buildZlib, buildJpeg, buildTiff, buildLaszip]) h.update(fn.toString());
   if (tc.kind === 'wasm') h.update(emccVersion());
   return h.digest('hex');
 }
@@ -461,6 +464,14 @@ async function buildNative() {
 // ---------------------------------------------------------------- main
 
 async function main() {
+  if (NATIVE_ONLY) {
+    const missing = ['cmake', 'make', 'dpkg-source', 'gcc', 'g++'].filter((t) => !which(t));
+    if (missing.length > 0) aptInstall(missing.map((t) => ({ 'dpkg-source': 'dpkg-dev', gcc: 'build-essential', 'g++': 'build-essential' })[t] ?? t));
+    mkdirSync(work, { recursive: true });
+    fetchSources();
+    await buildNative();
+    return;
+  }
   ensureToolchain({ install: !CHECK });
   mkdirSync(work, { recursive: true });
   fetchSources();

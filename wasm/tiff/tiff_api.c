@@ -105,7 +105,10 @@ static int go_to(TiffFile *f, int page) {
     return 0;
   }
   if (f->current != page) {
-    if (!TIFFSetDirectory(f->tif, (tdir_t)page)) {
+    /* Walking forward one page reads the next IFD; TIFFSetDirectory would
+     * re-walk the chain from the first one (quadratic over a stack). */
+    int ok = f->current >= 0 && page == f->current + 1 ? TIFFReadDirectory(f->tif) : TIFFSetDirectory(f->tif, (tdir_t)page);
+    if (!ok) {
       f->current = -1;
       if (!f->error[0]) set_error(f, "cannot read the directory of page %d", page);
       return 0;
@@ -201,8 +204,10 @@ EMSCRIPTEN_KEEPALIVE const char *tiff_page_description(TiffFile *f, int page) {
   if (!f->tif || !go_to(f, page)) return f->description;
   const char *text = NULL;
   if (TIFFGetField(f->tif, TIFFTAG_IMAGEDESCRIPTION, &text) && text) {
-    strncpy(f->description, text, sizeof f->description - 1);
-    f->description[sizeof f->description - 1] = 0;
+    /* Not strncpy: it would zero-fill the whole 64 KiB for every page. */
+    size_t n = strnlen(text, sizeof f->description - 1);
+    memcpy(f->description, text, n);
+    f->description[n] = 0;
   }
   return f->description;
 }
