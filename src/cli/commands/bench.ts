@@ -1,0 +1,93 @@
+// `bench IN [--modes random,sweep-up,sweep-down] [--count 100] [--seed S]
+// [--range lo,hi] [--rate R] [--cache-budget MB]`: the paper's isosurface
+// benchmark (section 4.6) with the shared harness (src/bench/harness.ts), the
+// same one the page's benchmark panel runs: per mode a cold cache and a seeded
+// isovalue sequence, the first surface discarded from the summaries. Prints a
+// summary per mode; --json writes {volume, adapter, options, records, summaries}.
+import { describeAdapter } from '../../gpu/device.ts';
+import { runBenchmark } from '../../bench/harness.ts';
+import { BENCH_MODES, isBenchMode, type BenchMode } from '../../bench/sequences.ts';
+import { Isosurface } from '../../isosurface/isosurface.ts';
+import { numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
+import { budgetOption, openInput } from './extract.ts';
+
+function modesOption(text: string | undefined): BenchMode[] {
+  if (text === undefined) return [...BENCH_MODES];
+  const modes = text.split(',').map((s) => s.trim());
+  for (const m of modes) if (!isBenchMode(m)) throw new UsageError(`--modes takes ${BENCH_MODES.join(', ')} (got "${m}")`);
+  return modes as BenchMode[];
+}
+
+function pad(cells: (string | number)[], widths: number[]): string {
+  return cells.map((c, i) => (typeof c === 'number' ? String(c).padStart(widths[i]) : c.padEnd(widths[i]))).join('  ');
+}
+
+export const benchCommand: CliCommand = {
+  name: 'bench',
+  summary: 'isosurface benchmark: random / sweep-up / sweep-down isovalues, GPU ms and hit rates per mode',
+  usage: 'bench IN [--modes random,sweep-up,sweep-down] [--count N] [--seed S] [--range lo,hi] [--rate R] [--cache-budget MB]',
+  options: {
+    modes: { type: 'string' },
+    count: { type: 'string' },
+    seed: { type: 'string' },
+    range: { type: 'string' },
+    rate: { type: 'string' },
+    'cache-budget': { type: 'string' },
+  },
+  async run(ctx, args) {
+    const input = requiredPositional(args, 0, 'IN (a zfp file or a raw volume)');
+    const modes = modesOption(stringOption(args, 'modes'));
+    const count = numberOption(args, 'count') ?? 100;
+    if (!Number.isInteger(count) || count < 1) throw new UsageError('--count must be a positive integer');
+    const seed = numberOption(args, 'seed') ?? 1;
+    if (!Number.isInteger(seed)) throw new UsageError('--seed must be an integer');
+    const rangeList = numberListOption(args, 'range');
+    if (rangeList && (rangeList.length !== 2 || !(rangeList[0] < rangeList[1]))) throw new UsageError('--range must be lo,hi with lo < hi');
+    const budget = budgetOption(args);
+    const gpu = await ctx.gpu();
+    const volume = await openInput(gpu.device, input, numberOption(args, 'rate'));
+    ctx.log(`${input}: ${volume.how}`);
+    const iso = await Isosurface.create(gpu, volume.stream, budget === undefined ? {} : { memoryBudgetBytes: budget });
+    try {
+      // Default range: the middle 80% of the values (the paper excludes noise and near-empty surfaces).
+      const [lo, hi] = iso.info.valueRange;
+      const range: [number, number] = rangeList ? [rangeList[0], rangeList[1]] : [lo + 0.1 * (hi - lo), hi - 0.1 * (hi - lo)];
+      const result = await runBenchmark(iso, {
+        modes,
+        count,
+        range,
+        seed,
+        onProgress: (done, total, r) => {
+          if (done % 10 === 0 || done === total) ctx.log(`${done}/${total} ${r.mode} iso ${r.iso.toFixed(3)}: ${r.gpuMs.toFixed(1)} ms GPU, hit rate ${(r.hitRate * 100).toFixed(1)}%`);
+        },
+      });
+      const header = ['mode', 'surfaces', 'mean ms', 'median ms', 'wall ms', 'hit rate %', 'active', 'new', 'occupied', 'triangles'];
+      const rows = result.summaries.map((s) => [
+        s.mode,
+        s.count,
+        s.meanMs.toFixed(1),
+        s.medianMs.toFixed(1),
+        s.meanWallMs.toFixed(1),
+        (s.meanHitRate * 100).toFixed(2),
+        Math.round(s.meanActiveBlocks),
+        Math.round(s.meanNewBlocks),
+        Math.round(s.meanOccupiedBlocks),
+        Math.round(s.meanTriangles),
+      ]);
+      const widths = header.map((h, i) => Math.max(h.length, ...rows.map((r) => String(r[i]).length)));
+      console.log(`\n${input} (${iso.info.dims.join('x')}), ${count} isovalues per mode in [${range[0]}, ${range[1]}], seed ${seed}, ${describeAdapter(gpu.adapter)}`);
+      console.log(pad(header, widths));
+      for (const r of rows) console.log(pad(r, widths));
+      return {
+        volume: { file: input, how: volume.how, dims: iso.info.dims, blockCount: iso.info.blockCount, valueRange: iso.info.valueRange },
+        adapter: describeAdapter(gpu.adapter),
+        options: { ...result.options, rate: volume.rate, memoryBudgetBytes: iso.memoryBudget },
+        records: result.records,
+        summaries: result.summaries,
+      };
+    } finally {
+      iso.destroy();
+      volume.stream.destroy();
+    }
+  },
+};
