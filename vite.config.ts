@@ -12,6 +12,7 @@ export default defineConfig({
       input: {
         main: 'index.html',
         lidar: 'lidar.html',
+        neuron: 'neuron.html',
       },
     },
   },

@@ -81,10 +81,10 @@ export function acceptFiles(target: HTMLElement, overlay: HTMLElement, input: HT
 
 /** The progress box over the view. */
 export class Progress {
-  private readonly box = byId('progress');
-  private readonly what = byId('progress-what');
-  private readonly text = byId('progress-text');
-  private readonly bar = byId('progress-bar');
+  private readonly box = byId('load-progress');
+  private readonly what = byId('load-progress-what');
+  private readonly text = byId('load-progress-text');
+  private readonly bar = byId('load-progress-bar');
 
   start(what: string): void {
     this.what.textContent = what;

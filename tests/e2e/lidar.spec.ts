@@ -19,7 +19,7 @@ test('the shared LAZ file shows as 110,000 points, in every colour mode', async 
   await expect(page.locator('#cloud-info dd[data-key="points"]')).toHaveText('110,000');
   await expect(page.locator('#cloud-info dd[data-key="format"]')).toHaveText('LAS 1.2, point format 3, LAZ');
   await expect(page.locator('#cloud-info dd[data-key="load time"]')).toContainText(/\d/);
-  await expect(page.locator('#hud')).toContainText('110,000 points');
+  await expect(page.locator('#view-badge')).toContainText('110,000 points');
   await waitForFrames(page, 2);
   const rgbCover = await nonBackgroundFraction(page);
   expect(rgbCover).toBeGreaterThan(0.05);

@@ -127,7 +127,7 @@ async function start(): Promise<void> {
   viewer.addLayer(box);
 
   const progress = new Progress();
-  const hud = byId('hud');
+  const hud = byId('view-badge');
   const emptyHint = byId('empty-hint');
   const colorSelect = byId<HTMLSelectElement>('color-mode');
   const sizeInput = byId<HTMLInputElement>('point-size');

@@ -1,0 +1,73 @@
+// Depth of the opaque layers (neuron traces now, an isosurface later) in a
+// texture of its own, drawn before the frame's main pass, so the volume
+// renderer can stop its rays where they meet opaque geometry. The viewer's
+// own depth buffer cannot be sampled while it is the pass's attachment.
+import { DEPTH_FORMAT, type Viewer } from '../../render/viewer.ts';
+
+export interface DepthDrawer {
+  /** Records depth-only draws (pipelines with no colour target) into `pass`. */
+  drawDepth(pass: GPURenderPassEncoder): void;
+  /** Whether there is anything to draw. */
+  readonly hasDepth: boolean;
+}
+
+export class DepthPrepass {
+  private texture: GPUTexture | undefined;
+  private readonly drawers: DepthDrawer[] = [];
+  private readonly listeners: (() => void)[] = [];
+  private readonly removeHook: () => void;
+
+  constructor(private readonly viewer: Viewer) {
+    this.removeHook = viewer.addBeforeFrame((encoder) => this.record(encoder));
+    this.ensureTexture();
+  }
+
+  add(drawer: DepthDrawer): void {
+    this.drawers.push(drawer);
+  }
+
+  /** True when some layer writes depth this frame. */
+  get active(): boolean {
+    return this.drawers.some((d) => d.hasDepth);
+  }
+
+  /** Called whenever the texture is re-created (bind groups that sample it must be rebuilt). */
+  onResize(listener: () => void): void {
+    this.listeners.push(listener);
+  }
+
+  get view(): GPUTextureView {
+    return this.ensureTexture().createView();
+  }
+
+  private ensureTexture(): GPUTexture {
+    const { width, height } = this.viewer.canvas;
+    if (!this.texture || this.texture.width !== width || this.texture.height !== height) {
+      this.texture?.destroy();
+      this.texture = this.viewer.device.createTexture({
+        label: 'DepthPrepass.depth',
+        size: [width, height],
+        format: DEPTH_FORMAT,
+        usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.TEXTURE_BINDING,
+      });
+      for (const l of this.listeners) l();
+    }
+    return this.texture;
+  }
+
+  private record(encoder: GPUCommandEncoder): void {
+    const pass = encoder.beginRenderPass({
+      label: 'DepthPrepass.pass',
+      colorAttachments: [],
+      depthStencilAttachment: { view: this.ensureTexture().createView(), depthClearValue: 1, depthLoadOp: 'clear', depthStoreOp: 'store' },
+    });
+    pass.setBindGroup(0, this.viewer.frameBindGroup);
+    for (const d of this.drawers) if (d.hasDepth) d.drawDepth(pass);
+    pass.end();
+  }
+
+  destroy(): void {
+    this.removeHook();
+    this.texture?.destroy();
+  }
+}
