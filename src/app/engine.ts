@@ -1,7 +1,8 @@
 // What the page needs from the isosurface pipeline (src/isosurface/): the
 // `Isosurface` class satisfies this; the page only talks to this interface.
 import type { GpuContext } from '../gpu/device.ts';
-import type { IsosurfaceDrawData, IsosurfaceStats, VolumeInfo } from '../isosurface/types.ts';
+import { Isosurface } from '../isosurface/isosurface.ts';
+import type { IsosurfaceDrawData, IsosurfaceOptions, IsosurfaceStats, VolumeInfo } from '../isosurface/types.ts';
 import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
 
 export interface PageIsosurface {
@@ -22,7 +23,6 @@ export interface PageIsosurface {
   destroy(): void;
 }
 
-export async function createIsosurface(gpu: GpuContext, stream: ZfpGpuStream): Promise<PageIsosurface> {
-  const { CpuIsosurface } = await import('../render/testing/cpu-isosurface.ts');
-  return CpuIsosurface.create(gpu, stream);
+export function createIsosurface(gpu: GpuContext, stream: ZfpGpuStream, options: IsosurfaceOptions = {}): Promise<PageIsosurface> {
+  return Isosurface.create(gpu, stream, options);
 }

@@ -4,7 +4,8 @@
 import type { Viewer } from '../render/viewer.ts';
 import { download } from './dom.ts';
 import { captureViewPng } from './export/screenshot.ts';
-import { decodePackedVertices, encodePly, weldVertices } from './export/ply.ts';
+import { decodeVertices } from '../isosurface/vertex-format.ts';
+import { encodePly, weldVertices } from './export/ply.ts';
 import { formatBytes } from './format.ts';
 import type { Messages } from './messages.ts';
 import type { Session } from './session.ts';
@@ -42,7 +43,7 @@ export async function savePly(session: Session, messages: Messages): Promise<voi
       messages.show('The surface is empty at this isovalue: nothing to export.', 'info', 4000);
       return;
     }
-    const soup = decodePackedVertices(packed, count, v.iso.info.blockGrid);
+    const soup = decodeVertices(packed, count, v.iso.info);
     const mesh = weldVertices(soup);
     const iso = window.zfpiso?.stats?.isovalue ?? window.zfpiso?.iso ?? NaN;
     const ply = encodePly(mesh, [

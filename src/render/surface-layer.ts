@@ -5,7 +5,7 @@
 
 import { vec3 } from 'gl-matrix';
 import surfaceWgsl from '../../shaders/render/surface.wgsl?raw';
-import vertexFormatWgsl from '../../shaders/render/vertex_format_local.wgsl?raw';
+import vertexFormatWgsl from '../../shaders/isosurface/vertex_format.wgsl?raw';
 import { createShaderModule } from '../gpu/wgsl.ts';
 import type { IsosurfaceDrawData } from '../isosurface/types.ts';
 import type { ArcballCamera } from './camera.ts';

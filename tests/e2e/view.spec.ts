@@ -6,9 +6,13 @@ import { trianglesShown } from './volume-page.ts';
 
 async function canvasPixels(page: Page): Promise<Buffer> {
   await waitForFrames(page, 1);
+  // Only the rendering: hide the readouts over the view (the frame rate changes).
+  const hide = await page.addStyleTag({ content: '#hud, #view-tools { visibility: hidden !important; }' });
   // Two animation frames: the last camera change has been drawn.
   await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
-  return page.locator('#view').screenshot();
+  const png = await page.locator('#view').screenshot();
+  await hide.evaluate((el) => el.remove());
+  return png;
 }
 
 test('the page opens on the built-in volume with a shaded surface and its statistics', async ({ page }) => {

@@ -4,25 +4,6 @@
 // copies of a vertex decode to the same floats), so mesh tools see a
 // connected surface; faces keep the soup's order, one per triangle.
 
-import type { Dims } from '../../volume/naming.ts';
-
-/** Packed (position, block id) pairs -> float positions (see src/isosurface/types.ts VertexShard). */
-export function decodePackedVertices(packed: Uint32Array, count: number, blockGrid: Dims): Float32Array {
-  const out = new Float32Array(count * 3);
-  const [gx, gy] = blockGrid;
-  const s = 4 / 1023;
-  for (let v = 0; v < count; v++) {
-    const p = packed[2 * v];
-    const b = packed[2 * v + 1];
-    const bx = b % gx;
-    const by = Math.floor(b / gx) % gy;
-    const bz = Math.floor(b / (gx * gy));
-    out[3 * v] = Math.fround(bx * 4 + Math.fround((p & 0x3ff) * s));
-    out[3 * v + 1] = Math.fround(by * 4 + Math.fround(((p >>> 10) & 0x3ff) * s));
-    out[3 * v + 2] = Math.fround(bz * 4 + Math.fround(((p >>> 20) & 0x3ff) * s));
-  }
-  return out;
-}
 
 export interface WeldedMesh {
   /** xyz per unique vertex */

@@ -134,9 +134,8 @@ export class VolumeLoader {
       opened = await produce(signal, set);
       if (!opened || signal.aborted) throw new LoadCancelled();
       set('Computing block ranges…', 0.65);
-      iso = await createIsosurface(gpu, opened.stream);
       const budget = this.deps.memoryBudget();
-      if (budget !== undefined) iso.setMemoryBudget(budget);
+      iso = await createIsosurface(gpu, opened.stream, budget !== undefined ? { memoryBudgetBytes: budget } : {});
       if (signal.aborted) throw new LoadCancelled();
       const ranges = await iso.readBlockRanges();
       const initialIso = this.deps.chooseIso(opened, iso, ranges);

@@ -54,7 +54,8 @@ export class StatsPanel {
       ['cache slots', `${formatCount(s.cacheSlotsUsed)} used of ${formatCount(s.cacheSlots)}`],
       ['cache memory', formatBytes(s.cacheBytes)],
       ['vertex buffers', formatBytes(s.vertexBytes)],
-      ['total', formatBytes(s.cacheBytes + s.vertexBytes)],
+      ['budgeted total', formatBytes(s.cacheBytes + s.vertexBytes)],
+      ...(s.fixedBytes !== undefined ? ([['stream + ranges', formatBytes(s.fixedBytes)]] as [string, string][]) : []),
     ]);
     this.drawStages(s);
   }

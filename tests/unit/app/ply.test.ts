@@ -2,7 +2,8 @@
 // made (within the 10-bit quantization), welding keeps every triangle and
 // merges shared corners, and the file reads back as written.
 import { describe, expect, it } from 'vitest';
-import { decodePackedVertices, encodePly, parsePly, weldVertices } from '../../../src/app/export/ply.ts';
+import { encodePly, parsePly, weldVertices } from '../../../src/app/export/ply.ts';
+import { decodeVertices } from '../../../src/isosurface/vertex-format.ts';
 import { marchingCubes } from '../../../src/mc/serial-mc.ts';
 import { packTriangleSoup } from '../../../src/render/testing/cpu-surface.ts';
 import { generateDefaultVolume } from '../../../src/volume/procedural.ts';
@@ -23,7 +24,7 @@ describe('PLY export', () => {
   const grid: Dims = [6, 6, 6];
 
   it('decodes packed vertices to within the quantization step', () => {
-    const soup = decodePackedVertices(packed, packed.length / 2, grid);
+    const soup = decodeVertices(packed, packed.length / 2, { blockGrid: grid });
     expect(soup.length).toBe(mc.positions.length);
     let worst = 0;
     for (let i = 0; i < soup.length; i++) worst = Math.max(worst, Math.abs(soup[i] - mc.positions[i]));
@@ -31,7 +32,7 @@ describe('PLY export', () => {
   });
 
   it('welds a closed surface into a mesh with V - E + F = 2', () => {
-    const soup = decodePackedVertices(packed, packed.length / 2, grid);
+    const soup = decodeVertices(packed, packed.length / 2, { blockGrid: grid });
     const mesh = weldVertices(soup);
     expect(mesh.indices.length).toBe(soup.length / 3);
     const v = mesh.positions.length / 3;
@@ -53,7 +54,7 @@ describe('PLY export', () => {
   });
 
   it('writes binary little-endian PLY that reads back exactly', () => {
-    const soup = decodePackedVertices(packed, packed.length / 2, grid);
+    const soup = decodeVertices(packed, packed.length / 2, { blockGrid: grid });
     const mesh = weldVertices(soup);
     const bytes = encodePly(mesh, ['sphere at 7.3']);
     const header = new TextDecoder().decode(bytes.subarray(0, 300));
@@ -71,7 +72,7 @@ describe('PLY export', () => {
     const vol = generateDefaultVolume([48, 40, 36]);
     const m = marchingCubes(vol.data, vol.dims, 0.5);
     const p = packTriangleSoup(m.positions, vol.dims);
-    const soup = decodePackedVertices(p, p.length / 2, [12, 10, 9]);
+    const soup = decodeVertices(p, p.length / 2, { blockGrid: [12, 10, 9] });
     const mesh = weldVertices(soup);
     expect(mesh.indices.length / 3).toBe(m.triangleCount);
     // Most soup vertices are shared by several triangles.
