@@ -7,7 +7,7 @@
 // their precision. Every reader frees its Wasm memory on close(), also after
 // errors.
 import createLasModule, { type LasWasm } from '../../wasm/dist/las.js';
-import { copyIntoHeap, instantiateWasm, ptr } from './wasm-module.ts';
+import { copyIntoHeap, instantiateWasm, ptr, streamIntoHeap } from './wasm-module.ts';
 
 export type Vec3 = [number, number, number];
 
@@ -98,12 +98,22 @@ export class LasReader {
     this.handle = handle;
   }
 
-  /** Opens `bytes` (copied once into the Wasm heap). Throws LasError for bad files. */
-  static async open(bytes: Uint8Array, fileName: string): Promise<LasReader> {
+  /**
+   * Opens `bytes`, or a Blob/File streamed straight into the heap (the file's
+   * only copy). Throws LasError for bad files.
+   */
+  static async open(bytes: Uint8Array | Blob, fileName: string, onRead?: (done: number, total: number) => void): Promise<LasReader> {
     const m = await loadLasWasm();
-    const data = copyIntoHeap(m, bytes, fileName);
+    const size = bytes instanceof Uint8Array ? bytes.byteLength : bytes.size;
+    if (size > 0xffffffff) throw new LasError(fileName, 'files over 4 GiB do not fit in WebAssembly memory');
+    let data: number;
+    try {
+      data = bytes instanceof Uint8Array ? copyIntoHeap(m, bytes, fileName) : await streamIntoHeap(m, bytes, fileName, onRead);
+    } catch (e) {
+      throw new LasError(fileName, (e as Error).message.replace(`${fileName}: `, ''));
+    }
     // las_open owns `data` from here on, also when it fails.
-    const handle = ptr(m._las_open(data, bytes.byteLength));
+    const handle = ptr(m._las_open(data, size));
     if (handle === 0) throw new LasError(fileName, 'out of WebAssembly memory');
     const error = m.UTF8ToString(ptr(m._las_error(handle)));
     if (error) {

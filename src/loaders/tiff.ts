@@ -7,7 +7,7 @@
 // heap; each page is decoded there and copied straight into its place in the
 // volume; the file's Wasm memory is freed before the next file is opened.
 import createTiffModule, { type TiffWasm } from '../../wasm/dist/tiff.js';
-import { copyIntoHeap, formatBytes, instantiateWasm, ptr } from './wasm-module.ts';
+import { copyIntoHeap, formatBytes, instantiateWasm, ptr, streamIntoHeap } from './wasm-module.ts';
 
 export type SampleType = 'uint8' | 'int8' | 'uint16' | 'int16' | 'uint32' | 'int32' | 'float32' | 'float64';
 export type SampleArray = Uint8Array | Int8Array | Uint16Array | Int16Array | Uint32Array | Int32Array | Float32Array | Float64Array;
@@ -118,12 +118,22 @@ export class TiffReader {
     this.handle = handle;
   }
 
-  /** Opens `bytes` (copied once into the Wasm heap). Throws TiffError for bad files. */
-  static async open(bytes: Uint8Array, fileName: string): Promise<TiffReader> {
+  /**
+   * Opens `bytes`, or a Blob/File streamed straight into the heap (the file's
+   * only copy). Throws TiffError for bad files.
+   */
+  static async open(bytes: Uint8Array | Blob, fileName: string): Promise<TiffReader> {
     const m = await loadTiffWasm();
-    const data = copyIntoHeap(m, bytes, fileName);
+    const size = bytes instanceof Uint8Array ? bytes.byteLength : bytes.size;
+    if (size > 0xffffffff) throw new TiffError(fileName, 'files over 4 GiB do not fit in WebAssembly memory');
+    let data: number;
+    try {
+      data = bytes instanceof Uint8Array ? copyIntoHeap(m, bytes, fileName) : await streamIntoHeap(m, bytes, fileName);
+    } catch (e) {
+      throw new TiffError(fileName, (e as Error).message.replace(`${fileName}: `, ''));
+    }
     // tiff_open owns `data` from here on, also when it fails.
-    const handle = ptr(m._tiff_open(data, bytes.byteLength));
+    const handle = ptr(m._tiff_open(data, size));
     if (handle === 0) throw new TiffError(fileName, 'out of WebAssembly memory');
     const fail = (reason: string): never => {
       m._tiff_close(handle);
@@ -272,7 +282,8 @@ export interface TiffVolume {
 
 export interface TiffSource {
   name: string;
-  bytes: Uint8Array;
+  /** The file's bytes, or the File itself (streamed into the Wasm heap when its turn comes). */
+  bytes: Uint8Array | Blob;
 }
 
 export interface LoadTiffOptions {

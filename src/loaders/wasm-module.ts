@@ -49,6 +49,40 @@ export function copyIntoHeap(module: EmscriptenBase, bytes: Uint8Array, what: st
   return p;
 }
 
+/**
+ * Streams a Blob (a dropped File) into a fresh malloc'ed block of the heap,
+ * chunk by chunk, so the file's bytes exist once, in Wasm memory, instead of
+ * once in an ArrayBuffer and again in the heap. Frees the block on failure.
+ */
+export async function streamIntoHeap(
+  module: EmscriptenBase,
+  blob: Blob,
+  what: string,
+  onProgress?: (done: number, total: number) => void,
+): Promise<number> {
+  const size = blob.size;
+  const p = ptr(module._malloc(Math.max(1, size)));
+  if (p === 0) throw new Error(`${what}: out of WebAssembly memory for ${formatBytes(size)}`);
+  try {
+    let at = 0;
+    const reader = blob.stream().getReader();
+    for (;;) {
+      const { done, value } = await reader.read();
+      if (done) break;
+      if (at + value.byteLength > size) throw new Error(`${what}: the file grew while it was read`);
+      // The heap may grow between reads (another module call): take a fresh view each time.
+      module.HEAPU8.set(value, p + at);
+      at += value.byteLength;
+      onProgress?.(at, size);
+    }
+    if (at !== size) throw new Error(`${what}: read ${at} of ${size} bytes`);
+    return p;
+  } catch (e) {
+    module._free(p);
+    throw e;
+  }
+}
+
 export function formatBytes(n: number): string {
   if (n < 1024) return `${n} B`;
   if (n < 1024 ** 2) return `${(n / 1024).toFixed(1)} KiB`;

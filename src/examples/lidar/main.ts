@@ -243,10 +243,10 @@ async function start(): Promise<void> {
     progress.start(`Reading ${file.name}`);
     let reader: LasReader | undefined;
     try {
-      const bytes = new Uint8Array(await file.arrayBuffer());
+      // Streamed straight into the Wasm heap: the file's only copy.
+      reader = await LasReader.open(file, file.name, (done, total) => progress.set(done / total, `${formatBytes(done)} / ${formatBytes(total)}`));
       if (token !== loadToken) return;
       progress.start(`Decoding ${file.name}`);
-      reader = await LasReader.open(bytes, file.name);
       const h = reader.header;
       points.reset(h.pointCount);
       hasRGB = h.hasRGB;

@@ -295,17 +295,9 @@ async function start(): Promise<void> {
   const loadStack = async (files: File[], token: number) => {
     const t0 = performance.now();
     const what = files.length === 1 ? files[0].name : `${files.length} TIFF files`;
-    progress.start(`Reading ${what}`);
-    const sources = [];
-    let read = 0;
-    for (const f of files) {
-      sources.push({ name: f.name, bytes: new Uint8Array(await f.arrayBuffer()) });
-      read++;
-      progress.set(read / files.length, `${read} / ${files.length} files`);
-      if (token !== loadToken) return;
-    }
     progress.start(`Decoding ${what}`);
-    const v = await loadTiffStack(sources, {
+    // Each File is streamed into the Wasm heap when its turn comes, and freed after.
+    const v = await loadTiffStack(files.map((f) => ({ name: f.name, bytes: f })), {
       yieldBetweenPages: true,
       onProgress: (done, total) => progress.set(done / total, `${formatCount(done)} / ${formatCount(total)} pages`),
     });

@@ -155,6 +155,22 @@ describe('streaming a point cloud in chunks', () => {
   });
 });
 
+describe('opening a Blob (a dropped File)', () => {
+  test('streams it into the heap and decodes the same points', async () => {
+    const bytes = readBytes(join(sharedData, 'las', 'lazperf_autzen_trim.laz'));
+    const seen: number[] = [];
+    const r = await LasReader.open(new Blob([bytes]), 'autzen.laz', (done, total) => {
+      expect(total).toBe(bytes.byteLength);
+      seen.push(done);
+    });
+    const a = r.read(1 << 20, { records: true })!;
+    r.close();
+    expect(seen[seen.length - 1]).toBe(bytes.byteLength);
+    const b = await decodeAll(bytes, 'autzen.laz');
+    expect(createHash('sha256').update(a.records!).digest('hex')).toBe(b.recordsSha256);
+  });
+});
+
 describe('LAS 1.4 point formats 6, 7, 8 written by laspy/lazrs', () => {
   let fx: Fixtures;
   beforeAll(() => {

@@ -48,6 +48,13 @@ describe('shared TIFF files match tifffile (expected.json)', () => {
     expect(v.imagej !== undefined).toBe(e.imagej);
   });
 
+  test('Files (Blobs) stream into the heap one at a time and decode the same', async () => {
+    const name = 'morpholibj_bat-cochlea-volume.tif';
+    const bytes = readBytes(join(sharedData, 'tiff', name));
+    const v = await loadTiffStack({ name, bytes: new Blob([bytes]) });
+    expect(sha256(v.data)).toBe(expected[name].decoded.sha256_pyxs);
+  });
+
   test('ImageJ stacks carry their voxel spacing', async () => {
     const v = await loadTiffStack(source(join(sharedData, 'tiff'), 'imagejs_stack.tif'));
     expect(v.dims).toEqual([128, 128, 10]);
