@@ -2,7 +2,7 @@
 // isosurfaces of a volume with the GPU pipeline (src/isosurface/), one after
 // the other with the block cache kept between them. IN is a zfp file or an
 // uncompressed volume (raw `name_XxYxZ_dtype.raw`, NRRD), compressed on the
-// GPU at --rate (default 8) first. Per isovalue: counts, cache behaviour,
+// GPU at --rate (default 8) first, or `default`: the page's built-in volume. Per isovalue: counts, cache behaviour,
 // surface area and bounding box in voxel index space (voxel (i, j, k) at
 // (i, j, k), as VTK places them), GPU time; --ply writes each soup.
 import { readFileSync, writeFileSync } from 'node:fs';
@@ -13,6 +13,7 @@ import { soupToPly } from '../../isosurface/ply.ts';
 import { IsosurfaceBudgetError } from '../../isosurface/types.ts';
 import { decodeVertices } from '../../isosurface/vertex-format.ts';
 import { loadVolumeInput, VolumeInputError } from '../../isosurface/volume-input.ts';
+import { isDefaultVolume, openDefaultVolume } from '../../volume/open-volume.ts';
 import { meshMetrics } from '../../mc/mesh-metrics.ts';
 import { ZfpFormatError } from '../../zfp/format.ts';
 import { numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
@@ -45,6 +46,11 @@ export function budgetOption(args: Parameters<typeof numberOption>[0]): number |
 /** Opens IN as a GPU zfp stream, with user mistakes as UsageErrors (shared with `bench`). */
 export async function openInput(device: GPUDevice, path: string, rate: number | undefined) {
   if (rate !== undefined && !(rate > 0)) throw new UsageError('--rate must be positive');
+  if (isDefaultVolume(path)) {
+    // The page's built-in volume (src/volume/open-volume.ts): same field, same rate, same stream.
+    const v = await openDefaultVolume(device, rate === undefined ? {} : { rate });
+    return { stream: v.stream, how: `the built-in volume "${v.name}", ${v.dims.join('x')} float32 compressed on the GPU at rate ${v.rate}`, rate: v.rate };
+  }
   const bytes = new Uint8Array(readFileSync(path));
   try {
     return await loadVolumeInput(device, bytes, basename(path), { rate });
