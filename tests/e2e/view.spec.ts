@@ -2,6 +2,7 @@
 // surface, and the camera (orbit, pan, zoom, reset, fit).
 import { expect, test, type Page } from '@playwright/test';
 import { nonBackgroundFraction, openApp, waitForFrames, watchErrors } from './page.ts';
+import { runCli } from './cli.ts';
 import { trianglesShown } from './volume-page.ts';
 
 async function canvasPixels(page: Page): Promise<Buffer> {
@@ -11,12 +12,14 @@ async function canvasPixels(page: Page): Promise<Buffer> {
   // Two animation frames: the last camera change has been drawn.
   await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
   const png = await page.locator('#view').screenshot();
-  await hide.evaluate((el) => el.remove());
+  await hide.evaluate((el) => (el as HTMLElement).remove());
   return png;
 }
 
-test('the page opens on the built-in volume with a shaded surface and its statistics', async ({ page }) => {
+test('the page opens on the built-in volume with a shaded surface and the CLI\'s triangle count', async ({ page }) => {
   const errors = watchErrors(page);
+  // The CLI computes the same volume (generated, compressed at the same rate) headless on Dawn.
+  const cli = runCli<{ isosurfaces: { iso: number; triangles: number }[] }>(['extract', 'default', '--iso', '0.5']);
   const started = Date.now();
   await openApp(page);
   const state = await page.evaluate(() => ({ volume: window.zfpiso!.volume, stats: window.zfpiso!.stats }));
@@ -27,6 +30,9 @@ test('the page opens on the built-in volume with a shaded surface and its statis
   await waitForFrames(page, 1);
   expect(await nonBackgroundFraction(page)).toBeGreaterThan(0.1);
   expect(await trianglesShown(page)).toBe(state.stats!.triangles);
+  const headless = (await cli).isosurfaces[0];
+  expect(headless.iso).toBe(Math.fround(0.5));
+  expect(await trianglesShown(page)).toBe(headless.triangles);
   await expect(page.locator('#volume-info dd[data-key="dims"]')).toHaveText('128 × 128 × 128');
   await expect(page.locator('#iso-value')).toHaveValue('0.5000');
   await expect(page.locator('#hud')).toContainText('triangles');
