@@ -330,7 +330,7 @@ export async function loadPointCloud(bytes: Uint8Array, fileName: string, option
       min.fill(0);
       max.fill(0);
     }
-    return { fileName, header, count: n, ...out, intensity: out.intensity, classification: out.classification, localBounds: { min, max }, decodeMs };
+    return { fileName, header, count: n, ...out, localBounds: { min, max }, decodeMs };
   } finally {
     reader.close();
   }

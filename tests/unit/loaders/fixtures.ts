@@ -23,9 +23,9 @@ export function makeFixtures(): Fixtures {
   return { dir, expected, dispose: () => rmSync(dir, { recursive: true, force: true }) };
 }
 
-export function readBytes(path: string): Uint8Array {
+export function readBytes(path: string): Uint8Array<ArrayBuffer> {
   const b = readFileSync(path);
-  return new Uint8Array(b.buffer, b.byteOffset, b.byteLength);
+  return new Uint8Array(b.buffer as ArrayBuffer, b.byteOffset, b.byteLength);
 }
 
 export function sharedExpected(kind: 'las' | 'tiff' | 'swc'): Record<string, any> {
