@@ -3,7 +3,14 @@
 // block's vertex count (0 = not occupied), a scan of the counts gives every
 // block's output offset and the total, a scan + ID compaction of "count > 0"
 // gives the occupied list, and one vertex pass per shard runs over the
-// occupied blocks whose output reaches that shard (shaders/isosurface/block_mc.wgsl).
+// occupied blocks whose output reaches that shard.
+//
+// Two ways to read a block's voxels, the same results (shaders/isosurface/):
+// 'workgroup' (block_mc_workgroup.wgsl) stages the block and its +x/+y/+z
+// neighbour voxels in workgroup memory, the paper's design; 'direct'
+// (block_mc_direct.wgsl) lets each invocation read its 8 corners from the
+// cache, with no workgroup memory in the count pass, which measured several
+// times faster on SwiftShader (README.md).
 import { createCaseTableBuffer } from '../mc/case-table-wgsl.ts';
 import type { StreamCompactIds } from '../primitives/compact.ts';
 import type { ExclusiveScan } from '../primitives/scan.ts';
@@ -13,7 +20,10 @@ import { A } from './layout.ts';
 import { VertexShards } from './vertex-output.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
 
+export type BlockLoad = 'workgroup' | 'direct';
+
 export interface BlockMcParts {
+  load: BlockLoad;
   volume: GPUBuffer;
   counters: Counters;
   scan: ExclusiveScan;
@@ -38,6 +48,7 @@ interface EntryBuffers {
 interface Layouts {
   common: GPUBindGroupLayout;
   count: GPUBindGroupLayout;
+  occupancy: GPUBindGroupLayout;
   emit: GPUBindGroupLayout;
   shard: GPUBindGroupLayout;
   plan: GPUBindGroupLayout;
@@ -48,6 +59,7 @@ interface Groups {
   shards: VertexShards['shards'];
   common: GPUBindGroup;
   count: GPUBindGroup;
+  occupancy: GPUBindGroup;
   emit: GPUBindGroup;
   plan: GPUBindGroup;
   shardGroups: GPUBindGroup[];
@@ -63,6 +75,8 @@ export class BlockMarchingCubes {
     private readonly parts: BlockMcParts,
     private readonly layouts: Layouts,
     private readonly countPipeline: GPUComputePipeline,
+    /** 'direct' only: occupancy from the counts. */
+    private readonly occupancyPipeline: GPUComputePipeline | undefined,
     private readonly emitPipeline: GPUComputePipeline,
     private readonly planPipeline: GPUComputePipeline,
     capacity: number,
@@ -72,27 +86,33 @@ export class BlockMarchingCubes {
   }
 
   static async create(device: GPUDevice, parts: BlockMcParts, capacity: number): Promise<BlockMarchingCubes> {
+    const direct = parts.load === 'direct';
     const layouts: Layouts = {
       common: bindGroupLayout(device, 'Isosurface.blockMc.layout', ['uniform', 'uniform', 'read', 'read', 'read']),
-      count: bindGroupLayout(device, 'Isosurface.countVertices.layout', ['read', 'rw', 'rw']),
+      count: bindGroupLayout(device, 'Isosurface.countVertices.layout', direct ? ['read', 'rw'] : ['read', 'rw', 'rw']),
+      occupancy: bindGroupLayout(device, 'Isosurface.occupancy.layout', ['read', 'read', 'rw']),
       emit: bindGroupLayout(device, 'Isosurface.emitVertices.layout', ['read', 'read']),
       shard: bindGroupLayout(device, 'Isosurface.shard.layout', ['read', 'rw']),
       plan: bindGroupLayout(device, 'Isosurface.planVertices.layout', ['rw', 'read', 'read', 'read', 'rw', 'rw']),
     };
     const constants = { MAX_WG_PER_DIM: parts.maxWorkgroupsPerDimension };
-    const [count, emit, plan] = await Promise.all([
-      computePipeline(device, 'Isosurface.countVertices', isosurfaceWgsl.blockMc, 'count_vertices', [layouts.common, layouts.count], constants),
-      computePipeline(device, 'Isosurface.emitVertices', isosurfaceWgsl.blockMc, 'emit_vertices', [layouts.common, layouts.emit, layouts.shard], constants),
+    const wgsl = direct ? isosurfaceWgsl.blockMcDirect : isosurfaceWgsl.blockMcWorkgroup;
+    const suffix = direct ? '_direct' : '';
+    const [count, occupancy, emit, plan] = await Promise.all([
+      computePipeline(device, 'Isosurface.countVertices', wgsl, `count_vertices${suffix}`, [layouts.common, layouts.count], constants),
+      direct ? computePipeline(device, 'Isosurface.occupancy', wgsl, 'occupied_from_counts', [layouts.common, layouts.occupancy], constants) : undefined,
+      computePipeline(device, 'Isosurface.emitVertices', wgsl, `emit_vertices${suffix}`, [layouts.common, layouts.emit, layouts.shard], constants),
       computePipeline(device, 'Isosurface.planVertices', isosurfaceWgsl.plan, 'plan_vertices', [layouts.plan], constants),
     ]);
-    return new BlockMarchingCubes(device, parts, layouts, count, emit, plan, capacity);
+    return new BlockMarchingCubes(device, parts, layouts, count, occupancy, emit, plan, capacity);
   }
 
   private allocate(capacity: number): EntryBuffers {
     const words = (label: string) => storageBuffer(this.device, `Isosurface.${label}`, capacity * 4);
     return {
       capacity,
-      vertexCounts: words('vertexCounts'),
+      // cleared before each count pass in the 'direct' variant (atomic sums)
+      vertexCounts: storageBuffer(this.device, 'Isosurface.vertexCounts', capacity * 4, GPUBufferUsage.COPY_DST),
       vertexOffsets: words('vertexOffsets'),
       occupiedMask: words('occupiedMask'),
       occupiedOffsets: words('occupiedOffsets'),
@@ -128,7 +148,8 @@ export class BlockMarchingCubes {
       slotData,
       shards: shards.shards,
       common: bindGroup(d, 'Isosurface.blockMc.bindGroup', L.common, [p.volume, this.caseTable, slotData, p.blockToSlot, p.activeIds]),
-      count: bindGroup(d, 'Isosurface.countVertices.bindGroup', L.count, [p.counters.buffer, e.vertexCounts, e.occupiedMask]),
+      count: bindGroup(d, 'Isosurface.countVertices.bindGroup', L.count, p.load === 'direct' ? [p.counters.buffer, e.vertexCounts] : [p.counters.buffer, e.vertexCounts, e.occupiedMask]),
+      occupancy: bindGroup(d, 'Isosurface.occupancy.bindGroup', L.occupancy, [p.counters.buffer, e.vertexCounts, e.occupiedMask]),
       emit: bindGroup(d, 'Isosurface.emitVertices.bindGroup', L.emit, [e.occupiedList, e.vertexOffsets]),
       plan: bindGroup(d, 'Isosurface.planVertices.bindGroup', L.plan, [p.counters.buffer, e.occupiedList, e.vertexOffsets, e.vertexCounts, shards.shardInfo, shards.drawArgs]),
       shardGroups: shards.shards.map((s, k) => bindGroup(d, `Isosurface.shard${k}.bindGroup`, L.shard, [shards.shardRecord(k), s.vertices])),
@@ -144,11 +165,18 @@ export class BlockMarchingCubes {
     const g = this.bind(slotData, shards);
     const { counters, scan, compactIds } = this.parts;
     const e = this.entries;
-    let pass = encoder.beginComputePass({ label: 'Isosurface.countVertices' });
+    if (this.occupancyPipeline) encoder.clearBuffer(e.vertexCounts);
+    const pass = encoder.beginComputePass({ label: 'Isosurface.countVertices' });
     pass.setPipeline(this.countPipeline);
     pass.setBindGroup(0, g.common);
     pass.setBindGroup(1, g.count);
     pass.dispatchWorkgroupsIndirect(counters.buffer, Counters.offset(A.mc));
+    if (this.occupancyPipeline) {
+      // one invocation per active entry: the mark pass's arguments
+      pass.setPipeline(this.occupancyPipeline);
+      pass.setBindGroup(1, g.occupancy);
+      pass.dispatchWorkgroupsIndirect(counters.buffer, Counters.offset(A.mark));
+    }
     pass.end();
     const active = counters.count('activeGated');
     scan.encode(encoder, { input: e.vertexCounts, output: e.vertexOffsets, count: active, totalOut: counters.count('vertices') });

@@ -138,9 +138,10 @@ export class Isosurface implements SurfaceEngine {
       BlockCache.create(device, { stream, decoder, counters, scan, compact, compactIds, activeIds: active.activeIds, maxWorkgroupsPerDimension: maxWg }, slots),
       active.readBlockRanges(),
     ]);
+    const load = options.blockLoad ?? (gpu.adapter.software ? 'direct' : 'workgroup');
     const mc = await BlockMarchingCubes.create(
       device,
-      { volume, counters, scan, compactIds, activeIds: active.activeIds, blockToSlot: cache.blockToSlot, maxWorkgroupsPerDimension: maxWg },
+      { load, volume, counters, scan, compactIds, activeIds: active.activeIds, blockToSlot: cache.blockToSlot, maxWorkgroupsPerDimension: maxWg },
       slots,
     );
     const shards = new VertexShards(device, perShard, vertices);

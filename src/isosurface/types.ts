@@ -24,6 +24,14 @@ export interface IsosurfaceOptions {
    * device's). Tests lower it so small dispatches use 2D/3D grids.
    */
   maxWorkgroupsPerDimension?: number;
+  /**
+   * Added by the pipeline: how the block marching cubes reads a block's
+   * voxels. 'workgroup' stages the block and its neighbour voxels in
+   * workgroup memory (the paper's design); 'direct' reads each cell's corners
+   * from the cache (faster on CPU implementations). Same output. Default:
+   * 'direct' on software adapters (SwiftShader), else 'workgroup'.
+   */
+  blockLoad?: 'workgroup' | 'direct';
 }
 
 export interface VolumeInfo {

@@ -4,7 +4,9 @@ import commonWgsl from '../../shaders/isosurface/common.wgsl?raw';
 import activeBlocksWgsl from '../../shaders/isosurface/active_blocks.wgsl?raw';
 import lruWgsl from '../../shaders/isosurface/lru.wgsl?raw';
 import planWgsl from '../../shaders/isosurface/plan.wgsl?raw';
-import blockMcWgsl from '../../shaders/isosurface/block_mc.wgsl?raw';
+import blockMcCommonWgsl from '../../shaders/isosurface/block_mc_common.wgsl?raw';
+import blockMcWorkgroupWgsl from '../../shaders/isosurface/block_mc_workgroup.wgsl?raw';
+import blockMcDirectWgsl from '../../shaders/isosurface/block_mc_direct.wgsl?raw';
 import vertexFormatWgsl from '../../shaders/isosurface/vertex_format.wgsl?raw';
 import type { WgslPart } from '../gpu/wgsl.ts';
 import { mcCaseTableSnippet } from '../mc/case-table-wgsl.ts';
@@ -26,5 +28,6 @@ export const isosurfaceWgsl = {
   activeBlocks: [...base, part('active_blocks', activeBlocksWgsl)],
   lru: [...base, part('lru', lruWgsl)],
   plan: [...base, part('plan', planWgsl)],
-  blockMc: [...base, mcCaseTableSnippet, vertexFormatSnippet, part('block_mc', blockMcWgsl)],
+  blockMcWorkgroup: [...base, mcCaseTableSnippet, vertexFormatSnippet, part('block_mc_common', blockMcCommonWgsl), part('block_mc_workgroup', blockMcWorkgroupWgsl)],
+  blockMcDirect: [...base, mcCaseTableSnippet, vertexFormatSnippet, part('block_mc_common', blockMcCommonWgsl), part('block_mc_direct', blockMcDirectWgsl)],
 } satisfies Record<string, WgslPart[]>;

@@ -6,7 +6,8 @@
 // match the CPU soup within half a step plus rounding, where it is unambiguous.
 // Sizes not multiples of 4, single-block volumes, volumes without cells, 2D/3D
 // dispatch grids, several vertex shards and stream shards, growth from a
-// one-slot cache and a one-vertex buffer.
+// one-slot cache and a one-vertex buffer; both ways of reading the blocks
+// ('workgroup' memory and 'direct' reads) on every case.
 import { describe, expect } from 'vitest';
 import { Isosurface } from '../../../src/isosurface/isosurface.ts';
 import type { IsosurfaceOptions } from '../../../src/isosurface/types.ts';
@@ -38,6 +39,38 @@ const CASES: Case[] = [
   { dims: [26, 30, 21], kind: 'blobs', options: { maxVertexBindingBytes: 8 * 777, maxWorkgroupsPerDimension: 5 }, maxShardBytes: 16384 },
 ];
 
+/** Four isovalues through one Isosurface: every surface equal to the serial one. */
+async function checkSurfaces(iso: Isosurface, decoded: Float32Array, c: Case, label: string): Promise<void> {
+  const random = rng(c.dims[0] + 1000 * c.dims[2]);
+  const [lo, hi] = iso.info.valueRange;
+  let shardsUsed = 0;
+  for (let k = 0; k < 4; k++) {
+    const t = Math.fround(lo + (hi - lo) * (0.1 + 0.8 * random()));
+    const stats = await iso.compute(t);
+    const packed = await iso.readVertices();
+    const cpu = marchingCubes(decoded, c.dims, t);
+    expect(stats.triangles, `${label} iso ${t}`).toBe(cpu.triangleCount);
+    expect(stats.vertices).toBe(packed.length / 2);
+    const cmp = compareBlockSoups(gpuTriangles(packed), cpuTriangles(decoded, c.dims, t));
+    const detail = `${label} iso ${t}: ${JSON.stringify(cmp.unmatchedGpu.slice(0, 3))} vs ${JSON.stringify(cmp.unmatchedCpu.slice(0, 3))}`;
+    expect(cmp.unmatchedGpu.length + cmp.unmatchedCpu.length, detail).toBe(0);
+    expect(cmp.exact + cmp.withinOne).toBe(cpu.triangleCount);
+    // Dequantized, in voxel index space: same area and bounding box within the quantization.
+    const gpuMetrics = meshMetrics(await drawnSoup(iso));
+    const cpuMetrics = meshMetrics(cpu.positions);
+    if (cpu.triangleCount > 0) {
+      // relative for large surfaces; tiny ones feel the quantization more
+      expect(Math.abs(gpuMetrics.area - cpuMetrics.area)).toBeLessThan(0.005 * cpuMetrics.area + 0.002 * cpu.triangleCount);
+      for (let a = 0; a < 3; a++) {
+        expect(Math.abs(gpuMetrics.bbox!.min[a] - cpuMetrics.bbox!.min[a])).toBeLessThanOrEqual(VERTEX_TOLERANCE);
+        expect(Math.abs(gpuMetrics.bbox!.max[a] - cpuMetrics.bbox!.max[a])).toBeLessThanOrEqual(VERTEX_TOLERANCE);
+      }
+    }
+    shardsUsed = Math.max(shardsUsed, Math.ceil(stats.vertices / Math.floor((c.options?.maxVertexBindingBytes ?? Infinity) / 8)));
+  }
+  if (c.options?.maxVertexBindingBytes) expect(shardsUsed).toBeGreaterThan(2);
+}
+
 describe('block marching cubes = serial marching cubes', () => {
   for (const c of CASES) {
     const name = `${c.dims.join('x')} ${c.kind}${c.options ? ' ' + JSON.stringify(c.options) : ''}${c.maxShardBytes ? ` stream shards of ${c.maxShardBytes} B` : ''}`;
@@ -47,36 +80,11 @@ describe('block marching cubes = serial marching cubes', () => {
       const stream = await compressVolume(device, values, c.dims, 16, c.maxShardBytes);
       if (c.maxShardBytes) expect(stream.shards.length).toBeGreaterThan(2);
       const decoded = await decodeVolume(device, stream);
-      const iso = await Isosurface.create(gpu, stream, c.options);
-      const random = rng(c.dims[0] + 1000 * c.dims[2]);
-      const [lo, hi] = iso.info.valueRange;
-      let shardsUsed = 0;
-      for (let k = 0; k < 4; k++) {
-        const t = Math.fround(lo + (hi - lo) * (0.1 + 0.8 * random()));
-        const stats = await iso.compute(t);
-        const packed = await iso.readVertices();
-        const cpu = marchingCubes(decoded, c.dims, t);
-        expect(stats.triangles, `iso ${t}`).toBe(cpu.triangleCount);
-        expect(stats.vertices).toBe(packed.length / 2);
-        const cmp = compareBlockSoups(gpuTriangles(packed), cpuTriangles(decoded, c.dims, t));
-        const detail = `iso ${t}: ${JSON.stringify(cmp.unmatchedGpu.slice(0, 3))} vs ${JSON.stringify(cmp.unmatchedCpu.slice(0, 3))}`;
-        expect(cmp.unmatchedGpu.length + cmp.unmatchedCpu.length, detail).toBe(0);
-        expect(cmp.exact + cmp.withinOne).toBe(cpu.triangleCount);
-        // Dequantized, in voxel index space: same area and bounding box within the quantization.
-        const gpuMetrics = meshMetrics(await drawnSoup(iso));
-        const cpuMetrics = meshMetrics(cpu.positions);
-        if (cpu.triangleCount > 0) {
-          // relative for large surfaces; tiny ones feel the quantization more
-          expect(Math.abs(gpuMetrics.area - cpuMetrics.area)).toBeLessThan(0.005 * cpuMetrics.area + 0.002 * cpu.triangleCount);
-          for (let a = 0; a < 3; a++) {
-            expect(Math.abs(gpuMetrics.bbox!.min[a] - cpuMetrics.bbox!.min[a])).toBeLessThanOrEqual(VERTEX_TOLERANCE);
-            expect(Math.abs(gpuMetrics.bbox!.max[a] - cpuMetrics.bbox!.max[a])).toBeLessThanOrEqual(VERTEX_TOLERANCE);
-          }
-        }
-        shardsUsed = Math.max(shardsUsed, Math.ceil(stats.vertices / Math.floor((c.options?.maxVertexBindingBytes ?? Infinity) / 8)));
+      for (const blockLoad of ['workgroup', 'direct'] as const) {
+        const iso = await Isosurface.create(gpu, stream, { ...c.options, blockLoad });
+        await checkSurfaces(iso, decoded, c, blockLoad);
+        iso.destroy();
       }
-      if (c.options?.maxVertexBindingBytes) expect(shardsUsed).toBeGreaterThan(2);
-      iso.destroy();
       stream.destroy();
     });
   }
