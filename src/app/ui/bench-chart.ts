@@ -1,6 +1,7 @@
-// The benchmark chart: GPU time per isovalue (solid, left axis) and cache hit
-// rate (dashed, right axis, 0-100 %) for each sequence, by isovalue index.
-// The first isovalue of each sequence (left out of the summary) is hollow.
+// The benchmark chart, two panels over the isovalue index: GPU time per
+// surface (top) and the cache hit rate (bottom, 0-100 %), one line per
+// sequence. The first isovalue of each sequence (left out of the summary) is
+// drawn hollow.
 
 import type { BenchRecord } from '../../bench/harness.ts';
 import type { BenchMode } from '../../bench/sequences.ts';
@@ -18,69 +19,75 @@ function niceMax(x: number): number {
   return 10 * p;
 }
 
+interface Panel {
+  top: number;
+  height: number;
+  max: number;
+  ticks: number[];
+  label: (v: number) => string;
+  value: (r: BenchRecord) => number;
+  title: string;
+}
+
 export function drawBenchChart(canvas: HTMLCanvasElement, records: BenchRecord[], modes: BenchMode[], count: number): void {
   const dpr = window.devicePixelRatio || 1;
-  const cssW = canvas.clientWidth || 290;
-  const cssH = canvas.clientHeight || 170;
+  const cssW = canvas.clientWidth || 300;
+  const cssH = canvas.clientHeight || 200;
   canvas.width = Math.round(cssW * dpr);
   canvas.height = Math.round(cssH * dpr);
   const g = canvas.getContext('2d');
   if (!g) return;
   g.setTransform(dpr, 0, 0, dpr, 0, 0);
   g.clearRect(0, 0, cssW, cssH);
-  const left = 34, right = 30, top = 16, bottom = 20;
+  const left = 38, right = 6, bottom = 16;
   const w = cssW - left - right;
-  const h = cssH - top - bottom;
-  const maxMs = niceMax(Math.max(0, ...records.map((r) => r.gpuMs)));
   const x = (i: number) => left + (count > 1 ? (i / (count - 1)) * w : w / 2);
-  const yMs = (ms: number) => top + h - (ms / maxMs) * h;
-  const yHit = (f: number) => top + h - f * h;
-
+  const maxMs = niceMax(Math.max(0, ...records.map((r) => r.gpuMs)));
+  const usable = cssH - bottom - 14 - 14;
+  const panels: Panel[] = [
+    { top: 14, height: usable * 0.62, max: maxMs, ticks: [0, 0.5, 1], label: (v) => `${Number((v * maxMs).toPrecision(3))}`, value: (r) => r.gpuMs, title: 'GPU ms per surface' },
+    { top: 14 + usable * 0.62 + 14, height: usable * 0.38, max: 1, ticks: [0, 0.5, 1], label: (v) => `${Math.round(v * 100)}%`, value: (r) => r.hitRate, title: 'cache hit rate' },
+  ];
   g.font = '10px system-ui, sans-serif';
-  g.strokeStyle = '#30343c';
-  g.fillStyle = '#8d95a1';
   g.lineWidth = 1;
-  for (let k = 0; k <= 4; k++) {
-    const yy = Math.round(top + (k / 4) * h) + 0.5;
-    g.beginPath();
-    g.moveTo(left, yy);
-    g.lineTo(left + w, yy);
-    g.stroke();
+  for (const p of panels) {
+    const y = (v: number) => p.top + p.height - (Math.min(v, p.max) / p.max) * p.height;
+    g.fillStyle = '#8d95a1';
     g.textAlign = 'right';
-    g.fillText(String(Number((maxMs * (1 - k / 4)).toPrecision(3))), left - 4, yy + 3);
-    g.textAlign = 'left';
-    g.fillText(`${100 - k * 25}%`, left + w + 4, yy + 3);
-  }
-  g.textAlign = 'left';
-  g.fillText('GPU ms', 2, 10);
-  g.textAlign = 'right';
-  g.fillText('hit rate', cssW - 2, 10);
-  g.textAlign = 'center';
-  g.fillText('isovalue #', left + w / 2, cssH - 4);
-
-  for (const mode of modes) {
-    const rs = records.filter((r) => r.mode === mode);
-    if (rs.length === 0) continue;
-    const color = MODE_COLORS[mode];
-    g.strokeStyle = color;
-    g.lineWidth = 1.4;
-    g.setLineDash([]);
-    g.beginPath();
-    rs.forEach((r, i) => (i === 0 ? g.moveTo(x(r.index), yMs(r.gpuMs)) : g.lineTo(x(r.index), yMs(r.gpuMs))));
-    g.stroke();
-    g.setLineDash([3, 3]);
-    g.lineWidth = 1;
-    g.beginPath();
-    rs.forEach((r, i) => (i === 0 ? g.moveTo(x(r.index), yHit(r.hitRate)) : g.lineTo(x(r.index), yHit(r.hitRate))));
-    g.stroke();
-    g.setLineDash([]);
-    const first = rs.find((r) => r.discarded);
-    if (first) {
+    g.fillText(p.title, left + w, p.top - 4);
+    for (const t of p.ticks) {
+      const yy = Math.round(p.top + p.height - t * p.height) + 0.5;
+      g.strokeStyle = '#30343c';
       g.beginPath();
-      g.arc(x(first.index), yMs(first.gpuMs), 3, 0, Math.PI * 2);
-      g.fillStyle = '#1f2228';
-      g.fill();
+      g.moveTo(left, yy);
+      g.lineTo(left + w, yy);
       g.stroke();
+      g.textAlign = 'right';
+      g.fillText(p.label(t), left - 4, yy + 3);
+    }
+    for (const mode of modes) {
+      const rs = records.filter((r) => r.mode === mode);
+      if (rs.length === 0) continue;
+      g.strokeStyle = MODE_COLORS[mode];
+      g.lineWidth = 1.3;
+      g.beginPath();
+      rs.forEach((r, i) => (i === 0 ? g.moveTo(x(r.index), y(p.value(r))) : g.lineTo(x(r.index), y(p.value(r)))));
+      g.stroke();
+      const first = rs.find((r) => r.discarded);
+      if (first) {
+        g.beginPath();
+        g.arc(x(first.index), y(p.value(first)), 2.5, 0, Math.PI * 2);
+        g.fillStyle = '#1d2026';
+        g.fill();
+        g.stroke();
+      }
     }
   }
+  g.fillStyle = '#8d95a1';
+  g.textAlign = 'left';
+  g.fillText('1', left, cssH - 3);
+  g.textAlign = 'right';
+  g.fillText(String(count), left + w, cssH - 3);
+  g.textAlign = 'center';
+  g.fillText('isovalue # (in sequence order)', left + w / 2, cssH - 3);
 }
