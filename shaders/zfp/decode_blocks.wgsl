@@ -1,7 +1,8 @@
 // Decodes a GPU list of blocks into cache slots: entry i < count decodes block
 // block_ids[i] into slot slot_ids[i] (64 values, x + 4y + 16z). Dispatched
-// indirectly (args from indirect_args.wgsl, count in dispatch_args[3]) once
-// per stream shard; entries whose block is in another shard are skipped.
+// indirectly (IndirectArgs, shaders/primitives/indirect_args.wgsl: a 1D, 2D
+// or 3D grid, count in dispatch_args[3]) once per stream shard; entries whose
+// block is in another shard are skipped.
 
 @group(1) @binding(0) var<storage, read> block_ids: array<u32>;
 @group(1) @binding(1) var<storage, read> slot_ids: array<u32>;
@@ -11,7 +12,7 @@
 @compute @workgroup_size(64)
 fn decode_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
                  @builtin(local_invocation_index) lid: u32) {
-  let i = linear_workgroup_index(wid, nwg) * 64u + lid;
+  let i = (wid.x + nwg.x * (wid.y + nwg.y * wid.z)) * 64u + lid;
   if (i >= dispatch_args[3]) { return; }
   let b = block_ids[i];
   if (b < stream.shard_first_block || b >= stream.shard_end_block) { return; }

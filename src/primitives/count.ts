@@ -35,7 +35,8 @@ class HostCountRing {
     this.buffer = device.createBuffer({
       label: 'primitives.hostCounts',
       size: HOST_COUNT_SLOTS * 4,
-      usage: GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST,
+      // STORAGE: IndirectArgs reads counts through a storage binding
+      usage: GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST | GPUBufferUsage.STORAGE,
     });
   }
 

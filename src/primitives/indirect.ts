@@ -1,53 +1,130 @@
 // dispatchWorkgroupsIndirect arguments from a GPU-side element count, with
-// 2D grids past maxComputeWorkgroupsPerDimension; no readback, no host loops.
-// Kernels dispatched with them rebuild the linear workgroup index with
-// `grid_workgroup_index` (dispatchSnippet, shaders/primitives/dispatch.wgsl;
-// equal to `linear_workgroup_index` of shaders/common/grid.wgsl whenever
-// z = 1, that is below limit^2 workgroups) and skip indices past
-// ceil(count / itemsPerWorkgroup).
+// 2D/3D grids past maxComputeWorkgroupsPerDimension; no readback, no host
+// loops. The one IndirectArgs of the project (the primitives, the zfp
+// decoder's block lists, ...): a one-invocation kernel reads the count from a
+// storage binding, so it runs inside the caller's compute pass as well as in
+// a pass of its own, and writes [x, y, z, count] into its own 16-byte buffer
+// (INDIRECT | STORAGE | COPY_SRC; kernels may read the count at word 3).
+// Kernels dispatched with it rebuild the linear workgroup index with
+// `grid_workgroup_index` from dispatchSnippet (shaders/primitives/dispatch.wgsl),
+// which equals `linear_workgroup_index` of shaders/common/grid.wgsl whenever
+// z = 1 (below limit^2 workgroups), and skip indices past the count.
 
-import type { CountLike, GpuCount } from './count.ts';
-import { DispatchRecords, RECORD_ARGS, maxWorkgroupsPerDimension, type PrimitiveOptions } from './dispatch-records.ts';
+import indirectWgsl from '../../shaders/primitives/indirect_args.wgsl?raw';
+import { createComputePipeline } from '../gpu/wgsl.ts';
+import { toGpuCount, type CountLike, type GpuCount } from './count.ts';
+import { dispatchSnippet, maxWorkgroupsPerDimension, type PrimitiveOptions } from './dispatch-records.ts';
 
 export interface IndirectArgsOptions extends Pick<PrimitiveOptions, 'maxWorkgroupsPerDimension'> {
   /** Elements one workgroup of the target kernel handles. */
   itemsPerWorkgroup: number;
+  label?: string;
 }
 
 export interface IndirectArgsEncodeArgs {
-  /** Elements; a GpuCount's buffer needs COPY_SRC. */
+  /** Elements; a GpuCount's buffer needs STORAGE usage (any 4-byte offset). */
   count: CountLike;
-  /** Where the three u32 (x, y, z) go; the buffer needs COPY_DST (and INDIRECT to be used). */
-  out: GpuCount;
+  /**
+   * Also copy (x, y, z) here (12 bytes; the buffer needs COPY_DST, and
+   * INDIRECT to be used). Only when recording into a command encoder.
+   */
+  out?: GpuCount;
 }
 
+/** Word index k of a count at byte offset 4k past a 256-aligned base: one uniform slot per k. */
+const WORDS_PER_BINDING = 64;
+const SLOT_STRIDE = 256;
+
 export class IndirectArgs {
-  private constructor(private readonly records: DispatchRecords) {}
+  /** [x, y, z, count] of the last recorded count. */
+  readonly buffer: GPUBuffer;
+  private readonly wordIndex: GPUBuffer;
+  private readonly layout: GPUBindGroupLayout;
+  private groups = new WeakMap<GPUBuffer, Map<number, GPUBindGroup>>();
+
+  private constructor(
+    private readonly device: GPUDevice,
+    private readonly pipeline: GPUComputePipeline,
+    private readonly label: string,
+  ) {
+    this.layout = pipeline.getBindGroupLayout(0);
+    this.buffer = device.createBuffer({ label: `${label}.args`, size: 16, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.INDIRECT | GPUBufferUsage.COPY_SRC });
+    // The word index of each slot, written once: bound with a dynamic offset.
+    this.wordIndex = device.createBuffer({ label: `${label}.wordIndex`, size: WORDS_PER_BINDING * SLOT_STRIDE, usage: GPUBufferUsage.UNIFORM, mappedAtCreation: true });
+    const words = new Uint32Array(this.wordIndex.getMappedRange());
+    for (let k = 0; k < WORDS_PER_BINDING; k++) words[(k * SLOT_STRIDE) / 4] = k;
+    this.wordIndex.unmap();
+  }
 
   static async create(device: GPUDevice, options: IndirectArgsOptions): Promise<IndirectArgs> {
     const items = options.itemsPerWorkgroup;
     if (!Number.isInteger(items) || items < 1) throw new RangeError('itemsPerWorkgroup must be a positive integer');
-    const records = await DispatchRecords.create(device, 'IndirectArgs', {
-      chunk: items,
-      wg: 1,
-      levels: 1,
-      capacity: 0xffffffff,
-      maxWorkgroupsPerDimension: maxWorkgroupsPerDimension(device, options),
+    const label = options.label ?? 'IndirectArgs';
+    const layout = device.createBindGroupLayout({
+      label: `${label}.layout`,
+      entries: [
+        { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
+        { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform', hasDynamicOffset: true, minBindingSize: 16 } },
+        { binding: 2, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
+      ],
     });
-    return new IndirectArgs(records);
+    const pipeline = await createComputePipeline(device, label, [dispatchSnippet, { name: 'shaders/primitives/indirect_args.wgsl', code: indirectWgsl }], 'indirect_args', {
+      layout: device.createPipelineLayout({ label, bindGroupLayouts: [layout] }),
+      constants: { ITEMS: items, MAX_WG_PER_DIM: maxWorkgroupsPerDimension(device, options) },
+    });
+    return new IndirectArgs(device, pipeline, label);
   }
 
-  /** Records: count copy, a one-thread pass, and the 12-byte copy to `out`. */
-  encode(encoder: GPUCommandEncoder, args: IndirectArgsEncodeArgs): void {
-    if (args.out.offset % 4 !== 0) throw new RangeError('out.offset must be a multiple of 4');
-    this.records.encodeCount(encoder, args.count);
-    const pass = encoder.beginComputePass({ label: 'IndirectArgs' });
-    this.records.dispatchSetup(pass);
-    pass.end();
-    encoder.copyBufferToBuffer(this.records.params, RECORD_ARGS, args.out.buffer, args.out.offset, 12);
+  /** The bind group reading the count at `offset` of `buffer`, and its dynamic offset. */
+  private bind(count: GpuCount): [GPUBindGroup, number] {
+    const base = Math.floor(count.offset / (WORDS_PER_BINDING * 4)) * WORDS_PER_BINDING * 4;
+    const word = (count.offset - base) / 4;
+    let byBase = this.groups.get(count.buffer);
+    if (!byBase) {
+      byBase = new Map();
+      this.groups.set(count.buffer, byBase);
+    }
+    let group = byBase.get(base);
+    if (!group) {
+      group = this.device.createBindGroup({
+        label: `${this.label}.bindGroup`,
+        layout: this.layout,
+        entries: [
+          { binding: 0, resource: { buffer: count.buffer, offset: base, size: Math.min(count.buffer.size - base, WORDS_PER_BINDING * 4) } },
+          { binding: 1, resource: { buffer: this.wordIndex, size: 16 } },
+          { binding: 2, resource: { buffer: this.buffer } },
+        ],
+      });
+      byBase.set(base, group);
+    }
+    return [group, word * SLOT_STRIDE];
+  }
+
+  /**
+   * Records the arguments for `count`: into `target` if it is a compute pass
+   * (one dispatch; the pipeline and bind group 0 are left changed), else in a
+   * pass of its own, then the copy to `out` if given.
+   */
+  encode(target: GPUCommandEncoder | GPUComputePassEncoder, args: IndirectArgsEncodeArgs): void {
+    const count = toGpuCount(this.device, args.count);
+    if (count.offset % 4 !== 0) throw new RangeError('count.offset must be a multiple of 4');
+    if (args.out && args.out.offset % 4 !== 0) throw new RangeError('out.offset must be a multiple of 4');
+    const [group, dynamicOffset] = this.bind(count);
+    const isEncoder = typeof (target as GPUCommandEncoder).beginComputePass === 'function';
+    if (!isEncoder && args.out) throw new Error('IndirectArgs: `out` needs a command encoder (it is a buffer copy)');
+    const pass = isEncoder ? (target as GPUCommandEncoder).beginComputePass({ label: this.label }) : (target as GPUComputePassEncoder);
+    pass.setPipeline(this.pipeline);
+    pass.setBindGroup(0, group, [dynamicOffset]);
+    pass.dispatchWorkgroups(1);
+    if (isEncoder) {
+      pass.end();
+      if (args.out) (target as GPUCommandEncoder).copyBufferToBuffer(this.buffer, 0, args.out.buffer, args.out.offset, 12);
+    }
   }
 
   destroy(): void {
-    this.records.destroy();
+    this.buffer.destroy();
+    this.wordIndex.destroy();
+    this.groups = new WeakMap();
   }
 }

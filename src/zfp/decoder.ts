@@ -8,8 +8,9 @@
 // One invocation decodes one block (workgroups of 64). Every kernel runs once
 // per stream shard (bind group 0 = the shard), so streams larger than one
 // storage binding work unchanged. The block-list decode is dispatched
-// indirectly from a GPU count (no readback): a one-invocation kernel turns the
-// count into dispatch arguments in the decoder's own 16-byte scratch buffer.
+// indirectly from a GPU count (no readback): the project's IndirectArgs
+// (src/primitives/indirect.ts) turns the count into dispatch arguments in its
+// own 16-byte buffer, inside the decode pass.
 
 import { dispatchLinear } from '../gpu/dispatch.ts';
 import { createComputePipeline } from '../gpu/wgsl.ts';
@@ -25,7 +26,7 @@ import {
   type GpuBufferRef,
   type GpuCount,
 } from './gpu-util.ts';
-import { IndirectArgs } from './indirect-args.ts';
+import { IndirectArgs } from '../primitives/indirect.ts';
 import { zfpWgsl } from './wgsl.ts';
 
 export type { ComputeTarget, GpuBufferRef, GpuCount } from './gpu-util.ts';
@@ -70,7 +71,7 @@ export class ZfpDecoder {
     private readonly decodeBlocksPipeline: GPUComputePipeline,
     private readonly decodeVolumePipeline: GPUComputePipeline,
     private readonly rangesPipeline: GPUComputePipeline,
-    /** [x, y, 1, count] of the indirect block-list dispatch. */
+    /** [x, y, z, count] of the indirect block-list dispatch. */
     private readonly args: IndirectArgs,
     private readonly maxWorkgroups: number,
   ) {
@@ -107,7 +108,7 @@ export class ZfpDecoder {
       createComputePipeline(device, 'ZfpDecoder.blockRanges', zfpWgsl.blockRanges, 'block_ranges', {
         layout: pipelineLayout('ZfpDecoder.blockRanges', [stream, rangesLayout]),
       }),
-      IndirectArgs.create(device, 'ZfpDecoder.indirectArgs', maxWorkgroups),
+      IndirectArgs.create(device, { itemsPerWorkgroup: 64, maxWorkgroupsPerDimension: maxWorkgroups, label: 'ZfpDecoder.indirectArgs' }),
     ]);
     return new ZfpDecoder(device, blocks, volume, ranges, args, maxWorkgroups);
   }
@@ -141,7 +142,7 @@ export class ZfpDecoder {
       target,
       'ZfpDecoder.decodeBlocks',
       (pass) => {
-        this.args.encode(pass, a.count);
+        this.args.encode(pass, { count: a.count });
         pass.setPipeline(this.decodeBlocksPipeline);
         pass.setBindGroup(1, listGroup);
         for (const shard of a.stream.shards) {

@@ -9,7 +9,6 @@ import decodeBlock from '../../shaders/zfp/decode_block.wgsl?raw';
 import decodeBlocks from '../../shaders/zfp/decode_blocks.wgsl?raw';
 import decodeVolume from '../../shaders/zfp/decode_volume.wgsl?raw';
 import blockRanges from '../../shaders/zfp/block_ranges.wgsl?raw';
-import indirectArgs from '../../shaders/zfp/indirect_args.wgsl?raw';
 import encode from '../../shaders/zfp/encode.wgsl?raw';
 
 const part = (name: string, code: string): WgslPart => ({ name: `shaders/zfp/${name}.wgsl`, code });
@@ -20,6 +19,5 @@ export const zfpWgsl = {
   decodeBlocks: [...decoderBase, part('decode_blocks', decodeBlocks)],
   decodeVolume: [...decoderBase, part('decode_volume', decodeVolume)],
   blockRanges: [...decoderBase, part('block_ranges', blockRanges)],
-  indirectArgs: [part('indirect_args', indirectArgs)],
   encode: [gridSnippet, part('u64', u64), part('codec', codec), part('f64', f64), part('encode', encode)],
 } satisfies Record<string, WgslPart[]>;

@@ -12,7 +12,7 @@ import { readF32, readU32 } from '../../../src/gpu/buffers.ts';
 import { BitReader, blockRanges, decodeBlock, toWords } from '../../../src/zfp/cpu/codec.ts';
 import { ZfpDecoder } from '../../../src/zfp/decoder.ts';
 import { openZfpStream } from '../../../src/zfp/format.ts';
-import { IndirectArgs } from '../../../src/zfp/indirect-args.ts';
+import { IndirectArgs } from '../../../src/primitives/indirect.ts';
 import { loadZfpStream, ZfpGpuStream } from '../../../src/zfp/gpu-stream.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { runPython } from '../../helpers/python.ts';
@@ -111,7 +111,7 @@ describe('ZfpDecoder', () => {
 
   gpuTest('turns GPU counts into dispatch grids that cover them', async ({ gpu }) => {
     const { device } = gpu;
-    const args = await IndirectArgs.create(device);
+    const args = await IndirectArgs.create(device, { itemsPerWorkgroup: 64 });
     const counts = [0, 1, 64, 65, 65535 * 64, 65535 * 64 + 1, 3 * 65535 * 64 + 5, 0xffffffc0];
     const countBuffer = device.createBuffer({ size: counts.length * 4, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST });
     device.queue.writeBuffer(countBuffer, 0, new Uint32Array(counts));
@@ -119,7 +119,7 @@ describe('ZfpDecoder', () => {
     for (let i = 0; i < counts.length; i++) {
       const encoder = device.createCommandEncoder();
       const pass = encoder.beginComputePass();
-      args.encode(pass, { buffer: countBuffer, offset: 4 * i });
+      args.encode(pass, { count: { buffer: countBuffer, offset: 4 * i } });
       pass.end();
       encoder.copyBufferToBuffer(args.buffer, 0, out, 16 * i, 16);
       device.queue.submit([encoder.finish()]);
