@@ -101,7 +101,8 @@ async function start(): Promise<void> {
   const budget = new BudgetControl(byId('budget-mb'), byId('budget-bar'), byId('budget-note'), defaultBudgetBytes(gpu.limits), (bytes) =>
     session.current?.iso.setMemoryBudget(bytes),
   );
-  const hud = new Hud(byId('hud'), viewer, byId('fps'));
+  const hud: Hud = new Hud(byId('hud'), viewer, (text) => stats.setFps(text));
+  const stats = new StatsPanel(byId('surface-stats'), byId('memory-stats'), byId('stage-times'), () => hud.fpsLabel);
   const bench: BenchPanel = new BenchPanel({
     context: () => {
       const v = session.current;
@@ -139,7 +140,7 @@ async function start(): Promise<void> {
     surface,
     box,
     isoControl,
-    stats: new StatsPanel(byId('surface-stats'), byId('memory-stats'), byId('stage-times')),
+    stats,
     budget,
     hud,
     bench,
@@ -176,21 +177,23 @@ async function start(): Promise<void> {
     },
   });
 
-  acceptDrops(byId('drop-overlay'), (files) => {
-    if (bench.isRunning) return messages.show('A benchmark is running: cancel it before opening another volume.', 'info', 4000) && undefined;
-    if (files.length > 1) messages.show(`Opening ${files[0].name} (one volume at a time; ${files.length - 1} other file(s) ignored).`, 'info', 4000);
+  /** Another volume, unless a benchmark is using the current one. */
+  const open = (load: () => Promise<void>): void => {
+    if (bench.isRunning) {
+      messages.show('A benchmark is running: cancel it before opening another volume.', 'info', 4000);
+      return;
+    }
     nextUrl = undefined;
-    void loader.loadFile(files[0]);
-  });
+    void load();
+  };
+  const openFiles = (files: File[]): void => {
+    if (files.length > 1) messages.show(`Opening ${files[0].name} (one volume at a time; ${files.length - 1} other file(s) ignored).`, 'info', 4000);
+    open(() => loader.loadFile(files[0]));
+  };
+  acceptDrops(byId('drop-overlay'), openFiles);
   wireControls({
-    openFiles: (files) => {
-      nextUrl = undefined;
-      void loader.loadFile(files[0]);
-    },
-    loadDefault: () => {
-      nextUrl = undefined;
-      void loader.loadDefault();
-    },
+    openFiles,
+    loadDefault: () => open(() => loader.loadDefault()),
     resetView: () => viewer.controls.reset(),
     fitView: () => {
       viewer.fitView();

@@ -7,7 +7,7 @@ import type { BoxLayer } from '../render/box-layer.ts';
 import type { SurfaceLayer } from '../render/surface-layer.ts';
 import type { Viewer } from '../render/viewer.ts';
 import type { CameraState } from '../render/camera.ts';
-import { formatIso } from './format.ts';
+import { formatBytes, formatIso } from './format.ts';
 import { setInfoList } from './info-list.ts';
 import type { LoadedVolume } from './loading/loader.ts';
 import type { Messages } from './messages.ts';
@@ -57,8 +57,13 @@ export class Session {
     });
     v.iso.onError((e) => {
       if (this.current !== v) return;
-      if (e instanceof IsosurfaceBudgetError) p.budget.showError(e);
-      p.messages.show(e.message);
+      if (e instanceof IsosurfaceBudgetError) {
+        p.budget.showError(e);
+        p.messages.show(
+          `The surface at isovalue ${p.state.iso !== undefined ? Number(p.state.iso.toPrecision(6)) : ''} needs ${formatBytes(e.neededBytes)} of GPU memory for its block cache and vertices; ` +
+            `the budget is ${formatBytes(e.budgetBytes)}. The previous surface stays: raise the budget under “Cache and memory”.`,
+        );
+      } else p.messages.show(`Isosurface: ${e.message}`);
     });
     const max = info.dims.map((n) => n - 1) as [number, number, number];
     const bounds = { min: [0, 0, 0] as [number, number, number], max };

@@ -6,11 +6,13 @@ import { formatMs, formatShortCount } from '../format.ts';
 export class Hud {
   private text = '';
   private framesSeen = 0;
+  /** The frame rate as the panel shows it. */
+  fpsLabel = 'idle (drawn on demand)';
 
   constructor(
     private readonly root: HTMLElement,
     private readonly viewer: Viewer,
-    private readonly fpsField?: HTMLElement,
+    private readonly onFps?: (text: string) => void,
   ) {
     setInterval(() => this.render(), 500);
   }
@@ -35,6 +37,7 @@ export class Hud {
     this.framesSeen = this.viewer.framesDrawn;
     const rate = fps === undefined ? 'idle' : `${fps.toFixed(0)} fps`;
     this.root.textContent = this.text ? `${this.text} · ${rate}` : '';
-    if (this.fpsField) this.fpsField.textContent = fps === undefined ? 'idle (drawn on demand)' : `${fps.toFixed(0)} fps`;
+    this.fpsLabel = fps === undefined ? 'idle (drawn on demand)' : `${fps.toFixed(0)} fps`;
+    this.onFps?.(this.fpsLabel);
   }
 }

@@ -12,17 +12,20 @@ import { el } from '../dom.ts';
 export function volumeRows(v: OpenedVolume, blockCount: number, valueRange: [number, number]): [string, string][] {
   const [nx, ny, nz] = v.dims;
   const decoded = nx * ny * nz * 4;
-  const rows: [string, string][] = [
+  const source =
+    v.kind === 'default' ? 'generated, compressed on the GPU' :
+    v.compressedHere ? `${v.sourceDtype} ${v.kind === 'nrrd' ? 'NRRD' : 'raw'}, compressed on the GPU` :
+    v.kind === 'zfp' ? 'zfp stream with header' : 'header-less zfp stream';
+  return [
     ['name', v.name],
     ['dims', `${nx} × ${ny} × ${nz}`],
-    ['source', v.compressedHere ? `${v.sourceDtype}, ${formatBytes(v.sourceBytes)}, compressed here` : `zfp stream, ${formatBytes(v.sourceBytes)}`],
-    ['rate', `${v.rate} bits/value (${(32 / v.rate).toFixed(1)} : 1 vs float32)`],
-    ['compressed', formatBytes(v.compressedBytes)],
-    ['decompressed', `${formatBytes(decoded)} float32`],
-    ['blocks', formatCount(blockCount)],
+    ['source', source],
+    ['rate', `${v.rate} bits/value`],
+    ['compressed', `${formatBytes(v.compressedBytes)} (${(decoded / v.compressedBytes).toFixed(1)} : 1)`],
+    ['decompressed', `${formatBytes(decoded)} as float32`],
+    ['blocks', `${formatCount(blockCount)} of 4³`],
     ['values', `${valueRange[0].toPrecision(5)} … ${valueRange[1].toPrecision(5)}`],
   ];
-  return rows;
 }
 
 export class StatsPanel {
@@ -30,7 +33,15 @@ export class StatsPanel {
     private readonly surface: HTMLElement,
     private readonly memory: HTMLElement,
     private readonly stages: HTMLElement,
+    /** The frame-rate text (kept current by the HUD). */
+    private readonly fpsText: () => string = () => '–',
   ) {}
+
+  /** Updates only the frame-rate row. */
+  setFps(text: string): void {
+    const dd = this.surface.querySelector<HTMLElement>('dd[data-key="frame rate"]');
+    if (dd) dd.textContent = text;
+  }
 
   clear(): void {
     setInfoList(this.surface, []);
@@ -42,13 +53,14 @@ export class StatsPanel {
     setInfoList(this.surface, [
       ['isovalue', String(Number(s.isovalue.toPrecision(7)))],
       ['triangles', formatCount(s.triangles)],
-      ['vertices', `${formatCount(s.vertices)} · ${formatBytes(s.vertices * 8)} (8 B each)`],
+      ['vertices', `${formatCount(s.vertices)} (${formatBytes(s.vertices * 8)})`],
       ['active blocks', `${formatCount(s.activeBlocks)} of ${formatCount(blockCount)} (${formatPercent(s.activeBlocks / Math.max(1, blockCount))})`],
       ['occupied blocks', formatCount(s.occupiedBlocks)],
       ['decompressed', `${formatCount(s.newBlocks)} new blocks`],
       ['hit rate', formatPercent(s.hitRate)],
       ['GPU time', `${formatMs(s.gpuMs)}${s.timingSource === 'queue-wall-time' ? ' (queue wall time)' : ''}`],
       ['latency', latencyMs === undefined ? '–' : formatMs(latencyMs)],
+      ['frame rate', this.fpsText()],
     ]);
     setInfoList(this.memory, [
       ['cache slots', `${formatCount(s.cacheSlotsUsed)} used of ${formatCount(s.cacheSlots)}`],
@@ -66,7 +78,7 @@ export class StatsPanel {
       ...s.stages.map((t) => {
         const bar = el('span', { className: 'stage-bar' });
         bar.style.width = `${(t.ms / max) * 100}%`;
-        const row = el('div', { className: 'stage' }, el('span', { className: 'stage-name', textContent: t.label }), el('span', { className: 'stage-track' }, bar), el('span', { className: 'stage-ms', textContent: formatMs(t.ms) }));
+        const row = el('div', { className: 'stage' }, el('span', { className: 'stage-name', textContent: t.label, title: t.label }), el('span', { className: 'stage-track' }, bar), el('span', { className: 'stage-ms', textContent: formatMs(t.ms) }));
         row.dataset.stage = t.label;
         return row;
       }),
