@@ -226,6 +226,14 @@ export class Isosurface implements SurfaceEngine {
   private launch(r: Request, verticesOnly = false): void {
     this.inFlight = r;
     r.attempts++;
+    try {
+      this.record(r, verticesOnly);
+    } catch (e) {
+      this.fail(r, e instanceof Error ? e : new Error(String(e)));
+    }
+  }
+
+  private record(r: Request, verticesOnly: boolean): void {
     const { device } = this;
     this.isoWord[0] = r.iso;
     device.queue.writeBuffer(this.volume, 28, this.isoWord);
