@@ -16,6 +16,7 @@ export interface ControlActions {
   setBoxVisible: (on: boolean) => void;
   setSmooth: (on: boolean) => void;
   setColors: (front: string, back: string) => void;
+  setUpAxis: (up: 'x' | 'y' | 'z') => void;
 }
 
 /** Files dragged anywhere over the page are dropped on the view. */
@@ -75,6 +76,8 @@ export function wireControls(a: ControlActions): void {
   const back = $<HTMLInputElement>('back-color');
   const colors = () => a.setColors(front.value, back.value);
   front.addEventListener('input', colors);
+  const up = $<HTMLSelectElement>('up-axis');
+  up.addEventListener('change', () => a.setUpAxis(up.value as 'x' | 'y' | 'z'));
   back.addEventListener('input', colors);
 
   document.addEventListener('keydown', (e) => {

@@ -76,6 +76,8 @@ async function start(): Promise<void> {
 
   let link: ViewLink | undefined;
   const viewer = new Viewer(gpu.device, byId<HTMLCanvasElement>('view'), { onCameraChange: () => link?.schedule() });
+  // Y up, as in ParaView and vtk.js (and CT scans like the bonsai); the Display section changes it.
+  viewer.upAxis = 'y';
   link = new ViewLink(viewer.camera);
   state.framesDrawn = () => viewer.framesDrawn;
   state.camera = () => viewer.camera.getState();
@@ -215,6 +217,10 @@ async function start(): Promise<void> {
     setSmooth: (on) => {
       surface.style.smooth = on;
       viewer.requestFrame();
+    },
+    setUpAxis: (up) => {
+      viewer.setUpAxis(up);
+      link?.schedule();
     },
     setColors: (front, back) => {
       surface.style.front = hexToRgb(front);

@@ -2,7 +2,7 @@
 // like ParaView/VTK trackballs), distance for zoom, target for pan. Shared
 // by every page. State is plain numbers so it fits in a URL hash.
 
-import { mat4, quat, vec3 } from 'gl-matrix';
+import { mat3, mat4, quat, vec3 } from 'gl-matrix';
 
 export interface CameraState {
   /** Rotation from world to eye orientation, [x, y, z, w]. */
@@ -10,6 +10,12 @@ export interface CameraState {
   target: [number, number, number];
   distance: number;
 }
+
+/** Where a y-up fit looks from (toward the centre): front, right, a little above. */
+export const DEFAULT_VIEW_DIRECTION: readonly [number, number, number] = [0.62, 0.5, 1];
+
+/** The world axis shown pointing up by fit() and reset: LIDAR and terrain use z, CT and ParaView's default y. */
+export type UpAxis = 'x' | 'y' | 'z';
 
 export interface Bounds {
   min: [number, number, number];
@@ -29,8 +35,8 @@ export class ArcballCamera {
     this.home = this.getState();
   }
 
-  /** Frames `bounds` from a three-quarter view and makes that the reset view. */
-  fit(bounds: Bounds): void {
+  /** Frames `bounds` from a three-quarter view with `up` pointing up, and makes that the reset view. */
+  fit(bounds: Bounds, up: UpAxis = 'z'): void {
     const c = vec3.fromValues(
       (bounds.min[0] + bounds.max[0]) / 2,
       (bounds.min[1] + bounds.max[1]) / 2,
@@ -39,12 +45,22 @@ export class ArcballCamera {
     const r = 0.5 * vec3.distance(vec3.fromValues(...bounds.min), vec3.fromValues(...bounds.max));
     this.sceneRadius = Math.max(r, 1e-6);
     vec3.copy(this.target, c);
-    // Z up, looking from -x,-y toward the centre, a little from above.
-    const q = quat.create();
-    quat.setAxisAngle(q, [1, 0, 0], (-62 * Math.PI) / 180);
-    const yaw = quat.create();
-    quat.setAxisAngle(yaw, [0, 0, 1], (35 * Math.PI) / 180);
-    quat.multiply(this.rotation, q, yaw);
+    if (up === 'z') {
+      // Z up, looking from -x,-y toward the centre, a little from above.
+      const q = quat.create();
+      quat.setAxisAngle(q, [1, 0, 0], (-62 * Math.PI) / 180);
+      const yaw = quat.create();
+      quat.setAxisAngle(yaw, [0, 0, 1], (35 * Math.PI) / 180);
+      quat.multiply(this.rotation, q, yaw);
+    } else {
+      // Y up: from the front (+z), right (+x) and a little above, like ParaView's
+      // default view turned to three-quarters; X up: the same with axes cycled.
+      const dir = up === 'y' ? vec3.fromValues(...DEFAULT_VIEW_DIRECTION) : vec3.fromValues(DEFAULT_VIEW_DIRECTION[2], DEFAULT_VIEW_DIRECTION[0], DEFAULT_VIEW_DIRECTION[1]);
+      const upVec = up === 'y' ? vec3.fromValues(0, 1, 0) : vec3.fromValues(1, 0, 0);
+      const look = mat4.lookAt(mat4.create(), vec3.normalize(dir, dir), [0, 0, 0], upVec);
+      quat.fromMat3(this.rotation, mat3.fromMat4(mat3.create(), look));
+      quat.normalize(this.rotation, this.rotation);
+    }
     this.distance = this.sceneRadius / Math.sin(this.fovY / 2) * 1.05;
     this.home = this.getState();
   }

@@ -5,7 +5,7 @@
 import { mat4, vec3 } from 'gl-matrix';
 import frameWgsl from '../../shaders/render/frame.wgsl?raw';
 import type { WgslPart } from '../gpu/wgsl.ts';
-import { ArcballCamera, type Bounds } from './camera.ts';
+import { ArcballCamera, type Bounds, type UpAxis } from './camera.ts';
 import { CameraControls } from './camera-controls.ts';
 
 export const frameSnippet: WgslPart = { name: 'shaders/render/frame.wgsl', code: frameWgsl };
@@ -141,10 +141,19 @@ export class Viewer {
     };
   }
 
+  /** The axis fitTo() shows pointing up (reset view). */
+  upAxis: UpAxis = 'z';
+
   fitTo(bounds: Bounds): void {
     this.bounds = bounds;
-    this.camera.fit(bounds);
+    this.camera.fit(bounds, this.upAxis);
     this.requestFrame();
+  }
+
+  /** Changes the up axis and fits the view (a new reset view) to the last bounds. */
+  setUpAxis(up: UpAxis): void {
+    this.upAxis = up;
+    if (this.bounds) this.fitTo(this.bounds);
   }
 
   /** Shows the bounds given to fitTo whole again, keeping the view direction (F). */

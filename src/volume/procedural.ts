@@ -1,12 +1,13 @@
 // The built-in default volume, generated in the page (no download), seeded so
 // every run shows the same data. It holds both kinds of isosurface the paper
-// studies, in one scalar field with values in [0, 1]:
+// studies, in one scalar field with values in [0, 1], y up:
 //   - a turbulent sheet: the interface of a mixing layer whose height is a
-//     fractal noise of (x, y), like the Richtmyer-Meshkov data;
+//     fractal noise of (x, z), like the Richtmyer-Meshkov data;
 //   - nested shells: concentric spherical shells above the sheet, opened on
 //     one side so inner shells show through, like a CT scan's skin and bone.
 // value = max(sheet, shells), so a surface of the union shows both at once.
 
+import { DEFAULT_VIEW_DIRECTION } from '../render/camera.ts';
 import type { Dims } from './naming.ts';
 
 export interface ProceduralVolume {
@@ -82,33 +83,39 @@ export function generateDefaultVolume(dims: Dims = [128, 128, 128], seed = 20201
   const noise = new ValueNoise2D(random);
   const data = new Float32Array(nx * ny * nz);
 
-  // Sheet height (in units of z in [0, 1]) per column, computed once.
-  const height = new Float32Array(nx * ny);
-  for (let j = 0; j < ny; j++) {
+  // Y is up (as in ParaView's default view and the page's): the sheet's
+  // height (in units of y in [0, 1]) per (x, z) column, computed once.
+  const height = new Float32Array(nx * nz);
+  for (let k = 0; k < nz; k++) {
     for (let i = 0; i < nx; i++) {
       const u = (i / nx) * 4.5;
-      const v = (j / ny) * 4.5;
-      height[j * nx + i] = 0.3 + 0.13 * noise.fbm(u, v, 4);
+      const v = (k / nz) * 4.5;
+      height[k * nx + i] = 0.3 + 0.13 * noise.fbm(u, v, 4);
     }
   }
   const layerWidth = 0.035;
-  // Shells: centre above the sheet, 4 shells, opened toward -x, -y (the default view).
-  const cx = 0.5, cy = 0.5, cz = 0.68, radius = 0.28, shells = 4;
+  // Shells: centre above the sheet, 4 shells, opened on the side the default
+  // view sees at an angle (it looks from DEFAULT_VIEW_DIRECTION; the window
+  // faces 35 degrees to its right, so the cut shows the shells' thickness).
+  const cx = 0.5, cy = 0.68, cz = 0.5, radius = 0.28, shells = 4;
+  const [wx, wy, wz] = [DEFAULT_VIEW_DIRECTION[0] + 0.55, DEFAULT_VIEW_DIRECTION[1] - 0.1, DEFAULT_VIEW_DIRECTION[2] - 0.5];
+  const wl = Math.hypot(wx, wy, wz);
   for (let k = 0; k < nz; k++) {
     const z = (k + 0.5) / nz;
     for (let j = 0; j < ny; j++) {
       const y = (j + 0.5) / ny;
       for (let i = 0; i < nx; i++) {
         const x = (i + 0.5) / nx;
-        const sheet = 0.5 - 0.5 * Math.tanh((z - height[j * nx + i]) / layerWidth);
+        const sheet = 0.5 - 0.5 * Math.tanh((y - height[k * nx + i]) / layerWidth);
         const dx = x - cx, dy = y - cy, dz = z - cz;
-        const r = Math.sqrt(dx * dx + dy * dy + dz * dz) / radius;
+        const d = Math.sqrt(dx * dx + dy * dy + dz * dz);
+        const r = d / radius;
         let shell = 0;
         if (r < 1.15) {
           const wave = Math.cos(Math.PI * 2 * shells * r);
-          // Open a window where the direction points to -x,-y (toward the camera).
-          const dir = r > 1e-6 ? (-dx - dy) / (Math.SQRT2 * r * radius) : 0;
-          const window = 1 - smoothstep(0.45, 0.7, dir);
+          // A window where the direction from the centre points at the camera.
+          const dir = d > 1e-9 ? (dx * wx + dy * wy + dz * wz) / (d * wl) : 0;
+          const window = 1 - smoothstep(0.5, 0.75, dir);
           shell = (0.5 + 0.45 * wave) * window * (1 - smoothstep(0.95, 1.1, r));
         }
         data[(k * ny + j) * nx + i] = Math.max(sheet, shell);
