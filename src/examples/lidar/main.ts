@@ -236,6 +236,20 @@ async function start(): Promise<void> {
   };
 
   let firstLoad = true;
+  // Progressive display while loading: a few frames a second at most, and
+  // only once the GPU has finished the previous one (a slow GPU would
+  // otherwise queue frame after frame of ever more points).
+  let lastRedraw = 0;
+  let gpuBusy = false;
+  const redrawDue = () => {
+    const now = performance.now();
+    if (gpuBusy || now - lastRedraw < 250) return false;
+    lastRedraw = now;
+    gpuBusy = true;
+    // The viewer's frame runs first in the next animation frame; wait for it on the GPU.
+    requestAnimationFrame(() => void gpu.device.queue.onSubmittedWorkDone().then(() => (gpuBusy = false)));
+    return true;
+  };
 
   const loadFile = async (file: File) => {
     const t0 = performance.now();
@@ -272,7 +286,7 @@ async function start(): Promise<void> {
         if (!c) break;
         if (rgbShift < 0) rgbShift = c.rgb && c.rgb.some((v) => v > 255) ? 8 : 0;
         stats.add(c.count, c.positions!, c.intensity, c.classification);
-        points.append(c.positions!, packAttributes(c.count, c.rgb, rgbShift, c.intensity, c.classification), c.count);
+        points.append(c.positions!, packAttributes(c.count, c.rgb, rgbShift, c.intensity, c.classification), c.count, redrawDue());
         state.pointCount = points.pointCount;
         progress.set(reader.pointsRead / Math.max(1, h.pointCount), `${formatCount(reader.pointsRead)} / ${formatCount(h.pointCount)} points`);
         if (reader.pointsRead === c.count) finishStyle();
@@ -343,7 +357,7 @@ async function start(): Promise<void> {
         onChunk: (c) => {
           if (token !== loadToken) return;
           stats.add(c.count, c.positions!, c.intensity, c.classification);
-          points.append(c.positions!, packAttributes(c.count, c.rgb, 0, c.intensity, c.classification), c.count);
+          points.append(c.positions!, packAttributes(c.count, c.rgb, 0, c.intensity, c.classification), c.count, redrawDue());
           state.pointCount = points.pointCount;
           if (!styled) {
             finishStyle();

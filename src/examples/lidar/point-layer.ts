@@ -127,8 +127,12 @@ export class PointLayer implements RenderLayer {
     this.viewer.requestFrame();
   }
 
-  /** Appends `count` points (positions x,y,z and two attribute words each). */
-  append(positions: Float32Array, attributes: Uint32Array, count: number): void {
+  /**
+   * Appends `count` points (positions x,y,z and two attribute words each).
+   * `redraw: false` defers the frame (loaders redraw a few times a second,
+   * not after every chunk, so slow GPUs are not swamped while loading).
+   */
+  append(positions: Float32Array, attributes: Uint32Array, count: number, redraw = true): void {
     const { device } = this.viewer;
     let done = 0;
     while (done < count) {
@@ -163,7 +167,7 @@ export class PointLayer implements RenderLayer {
       this.uploaded += n;
       done += n;
     }
-    this.viewer.requestFrame();
+    if (redraw) this.viewer.requestFrame();
   }
 
   setStyle(change: Partial<PointStyle>): void {
