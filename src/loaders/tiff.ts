@@ -108,14 +108,18 @@ export function allocateSamples(dtype: SampleType, length: number): SampleArray 
 /** An open TIFF file in the Wasm heap. Call close() when done. */
 export class TiffReader {
   private handle: number;
+  private readonly infos: (TiffPage | undefined)[];
+  private infoPtr = 0;
 
   private constructor(
     private readonly m: TiffWasm,
     handle: number,
     readonly fileName: string,
-    readonly pages: TiffPage[],
+    /** Top-level directories (pages) in the file. */
+    readonly pageCount: number,
   ) {
     this.handle = handle;
+    this.infos = new Array<TiffPage | undefined>(pageCount);
   }
 
   /**
@@ -135,58 +139,71 @@ export class TiffReader {
     // tiff_open owns `data` from here on, also when it fails.
     const handle = ptr(m._tiff_open(data, size));
     if (handle === 0) throw new TiffError(fileName, 'out of WebAssembly memory');
-    const fail = (reason: string): never => {
-      m._tiff_close(handle);
-      throw new TiffError(fileName, reason);
-    };
     const error = m.UTF8ToString(ptr(m._tiff_error(handle)));
-    if (error) fail(error);
-    const count = m._tiff_page_count(handle);
-    const pages: TiffPage[] = [];
-    const info = ptr(m._malloc(PAGE_FIELDS * 8));
-    try {
-      for (let i = 0; i < count; i++) {
-        if (m._tiff_page_info(handle, i, info) !== 0) {
-          fail(`page ${i}: ${m.UTF8ToString(ptr(m._tiff_error(handle))) || 'cannot read its directory'}`);
-        }
-        const v = new Float64Array(m.HEAPU8.buffer, info, PAGE_FIELDS).slice();
-        const description = m.UTF8ToString(ptr(m._tiff_page_description(handle, i)));
-        pages.push({
-          index: i,
-          fileName,
-          width: v[0],
-          height: v[1],
-          bitsPerSample: v[2],
-          samplesPerPixel: v[3],
-          sampleFormat: v[4],
-          sampleFormatName: SAMPLE_FORMAT_NAMES[v[4]] ?? String(v[4]),
-          compression: v[5],
-          compressionName: COMPRESSION_NAMES[v[5]] ?? String(v[5]),
-          photometric: v[6],
-          photometricName: PHOTOMETRIC_NAMES[v[6]] ?? String(v[6]),
-          planarConfig: v[7],
-          tiled: v[8] === 1,
-          tileWidth: v[9],
-          tileHeight: v[10],
-          rowsPerStrip: v[11],
-          xResolution: v[12],
-          yResolution: v[13],
-          resolutionUnit: v[14],
-          reducedResolution: (v[15] & 1) === 1,
-          bigEndian: v[16] === 1,
-          bigTiff: v[17] === 1,
-          description,
-          dtype: sampleType(v[2], v[4]),
-        });
-      }
-    } finally {
-      m._free(info);
+    if (error) {
+      m._tiff_close(handle);
+      throw new TiffError(fileName, error);
     }
-    return new TiffReader(m, handle, fileName, pages);
+    const reader = new TiffReader(m, handle, fileName, m._tiff_page_count(handle));
+    try {
+      reader.page(0);
+    } catch (e) {
+      reader.close();
+      throw e;
+    }
+    return reader;
   }
 
-  get pageCount(): number {
-    return this.pages.length;
+  /**
+   * Facts of page `index`, read from its directory on first use. Reading
+   * pages in order walks the directory chain once (libtiff steps to the next
+   * directory; going back restarts from the first).
+   */
+  page(index: number): TiffPage {
+    const known = this.infos[index];
+    if (known) return known;
+    if (this.handle === 0) throw new TiffError(this.fileName, 'the reader is closed');
+    if (!(index >= 0 && index < this.pageCount)) throw new TiffError(this.fileName, `page ${index} does not exist (the file has ${this.pageCount})`);
+    const m = this.m;
+    if (this.infoPtr === 0) this.infoPtr = ptr(m._malloc(PAGE_FIELDS * 8));
+    if (m._tiff_page_info(this.handle, index, this.infoPtr) !== 0) {
+      throw new TiffError(this.fileName, `page ${index}: ${m.UTF8ToString(ptr(m._tiff_error(this.handle))) || 'cannot read its directory'}`);
+    }
+    const v = new Float64Array(m.HEAPU8.buffer, this.infoPtr, PAGE_FIELDS).slice();
+    const page: TiffPage = {
+      index,
+      fileName: this.fileName,
+      width: v[0],
+      height: v[1],
+      bitsPerSample: v[2],
+      samplesPerPixel: v[3],
+      sampleFormat: v[4],
+      sampleFormatName: SAMPLE_FORMAT_NAMES[v[4]] ?? String(v[4]),
+      compression: v[5],
+      compressionName: COMPRESSION_NAMES[v[5]] ?? String(v[5]),
+      photometric: v[6],
+      photometricName: PHOTOMETRIC_NAMES[v[6]] ?? String(v[6]),
+      planarConfig: v[7],
+      tiled: v[8] === 1,
+      tileWidth: v[9],
+      tileHeight: v[10],
+      rowsPerStrip: v[11],
+      xResolution: v[12],
+      yResolution: v[13],
+      resolutionUnit: v[14],
+      reducedResolution: (v[15] & 1) === 1,
+      bigEndian: v[16] === 1,
+      bigTiff: v[17] === 1,
+      description: m.UTF8ToString(ptr(m._tiff_page_description(this.handle, index))),
+      dtype: sampleType(v[2], v[4]),
+    };
+    this.infos[index] = page;
+    return page;
+  }
+
+  /** Facts of every page (reads all directories). */
+  get pages(): TiffPage[] {
+    return Array.from({ length: this.pageCount }, (_, i) => this.page(i));
   }
 
   get closed(): boolean {
@@ -200,8 +217,7 @@ export class TiffReader {
   readPage(index: number, into?: SampleArray, offset = 0): SampleArray {
     if (this.handle === 0) throw new TiffError(this.fileName, 'the reader is closed');
     const m = this.m;
-    const page = this.pages[index];
-    if (!page) throw new TiffError(this.fileName, `page ${index} does not exist (the file has ${this.pages.length})`);
+    const page = this.page(index);
     const bytes = m._tiff_page_bytes(this.handle, index);
     if (!(bytes > 0) || !page.dtype) {
       const reason = m.UTF8ToString(ptr(m._tiff_error(this.handle)));
@@ -228,6 +244,8 @@ export class TiffReader {
   /** Frees libtiff's state and the file's bytes in the Wasm heap. */
   close(): void {
     if (this.handle === 0) return;
+    if (this.infoPtr) this.m._free(this.infoPtr);
+    this.infoPtr = 0;
     this.m._tiff_close(this.handle);
     this.handle = 0;
   }
@@ -324,33 +342,41 @@ export async function loadTiffStack(sources: TiffSource | TiffSource[], options:
     const reader = await TiffReader.open(bytes, name);
     try {
       if (!first) {
-        first = reader.pages.find((p) => !p.reducedResolution) ?? reader.pages[0];
+        // The first full-resolution page sets the stack's shape (thumbnails come first in some files).
+        for (let i = 0; i < reader.pageCount && !first; i++) if (!reader.page(i).reducedResolution) first = reader.page(i);
+        first ??= reader.page(0);
         if (!first.dtype) throw new TiffError(name, unsupportedSamples(first));
         if (first.width * first.height === 0) throw new TiffError(name, 'the image is empty (0 pixels)');
       }
-      const use = reader.pages.filter((p) => !p.reducedResolution && sameShape(p, first!));
-      if (use.length === 0) {
-        throw new TiffError(name, `its pages (${describeShape(reader.pages[0])}) do not match the stack (${describeShape(first)})`);
-      }
-      skipped += reader.pages.length - use.length;
-      // The stack's size is known only file by file: assume the others are like this one.
-      estimatedTotal = filled + use.length * (files.length - f);
       const perPage = first.width * first.height * first.samplesPerPixel;
-      if (!data || filled + use.length > capacityPages) {
-        capacityPages = Math.max(filled + use.length, estimatedTotal);
-        const grown = allocateSamples(first.dtype!, perPage * capacityPages);
-        if (data) grown.set(data.subarray(0, filled * perPage) as never);
-        data = grown;
-      }
-      for (const p of use) {
-        reader.readPage(p.index, data, filled * perPage);
+      let used = 0;
+      // One forward walk: each page's directory is read once, then its data decoded.
+      for (let i = 0; i < reader.pageCount; i++) {
+        const p = reader.page(i);
+        if (p.reducedResolution || !sameShape(p, first)) {
+          skipped++;
+          continue;
+        }
+        if (!data || filled + 1 > capacityPages) {
+          // The stack's size is known only file by file: assume the rest are like this one.
+          estimatedTotal = filled + (reader.pageCount - i) + reader.pageCount * (files.length - f - 1);
+          capacityPages = Math.max(filled + 1, estimatedTotal);
+          const grown = allocateSamples(first.dtype!, perPage * capacityPages);
+          if (data) grown.set(data.subarray(0, filled * perPage) as never);
+          data = grown;
+        }
+        reader.readPage(i, data, filled * perPage);
         pages.push(p);
         filled++;
+        used++;
         decodeMs += performance.now() - t0;
         options.onProgress?.(filled, Math.max(estimatedTotal, filled));
         if (options.yieldBetweenPages) await new Promise((r) => setTimeout(r, 0));
         if (options.signal?.aborted) throw new TiffError(name, 'loading was cancelled');
         t0 = performance.now();
+      }
+      if (used === 0) {
+        throw new TiffError(name, `its pages (${describeShape(reader.page(0))}) do not match the stack (${describeShape(first)})`);
       }
       decodeMs += performance.now() - t0;
     } finally {
