@@ -50,18 +50,22 @@ int main(int argc, char **argv) {
       return 1;
     }
     int pages = tiff_page_count(t);
+    /* Like the page: one walk over the pages, each decoded into its place in the volume. */
     double bytes = 0;
-    for (int p = 0; p < pages; p++) bytes += tiff_page_bytes(t, p);
-    /* Like the page: one volume buffer, each page decoded into its place. */
-    uint8_t *volume = malloc((size_t)bytes);
-    double at = 0;
+    size_t capacity = 0;
+    uint8_t *volume = NULL;
     for (int p = 0; p < pages; p++) {
       double n = tiff_page_bytes(t, p);
-      if (tiff_read_page(t, p, volume + (size_t)at, n)) {
+      if ((size_t)(bytes + n) > capacity) {
+        capacity = (size_t)(n * pages);
+        if (capacity < (size_t)(bytes + n)) capacity = (size_t)(bytes + n);
+        volume = realloc(volume, capacity);
+      }
+      if (tiff_read_page(t, p, volume + (size_t)bytes, n)) {
         fprintf(stderr, "%s\n", tiff_error(t));
         return 1;
       }
-      at += n;
+      bytes += n;
     }
     free(volume);
     tiff_close(t);
