@@ -50,6 +50,8 @@ interface Request {
   earlierMs: number;
   /** Blocks decoded by earlier attempts (a vertex overflow happens after the cache update). */
   earlierNew: number;
+  /** resetCache() count when the last attempt was recorded. */
+  cacheEpoch: number;
 }
 
 /** Attempts per isovalue: one, plus a cache growth, plus a vertex growth, plus slack. */
@@ -66,6 +68,8 @@ export class Isosurface implements SurfaceEngine {
   private budget: number;
   private readonly isoWord = new Float32Array(1);
   private lastStats?: IsosurfaceStats;
+  /** Increases with every resetCache(): a vertices-only retry needs the same cache as its attempt. */
+  private cacheEpoch = 0;
 
   private constructor(
     private readonly gpu: GpuContext,
@@ -207,7 +211,7 @@ export class Isosurface implements SurfaceEngine {
     const f = Math.fround(iso);
     const replaced = this.pending;
     if (replaced) for (const w of replaced.waiters) w.reject(new IsosurfaceSupersededError(replaced.iso, f));
-    this.pending = { iso: f, waiters: waiter ? [waiter] : [], grew: false, attempts: 0, earlierMs: 0, earlierNew: 0 };
+    this.pending = { iso: f, waiters: waiter ? [waiter] : [], grew: false, attempts: 0, earlierMs: 0, earlierNew: 0, cacheEpoch: this.cacheEpoch };
     if (!this.inFlight) this.launchPending();
   }
 
@@ -226,6 +230,7 @@ export class Isosurface implements SurfaceEngine {
   private launch(r: Request, verticesOnly = false): void {
     this.inFlight = r;
     r.attempts++;
+    r.cacheEpoch = this.cacheEpoch;
     try {
       this.record(r, verticesOnly);
     } catch (e) {
@@ -276,7 +281,8 @@ export class Isosurface implements SurfaceEngine {
     if (status !== 0) {
       r.earlierMs += raw.gpuMs;
       // A vertices-only retry reads these counters again; a full one does not.
-      const verticesOnly = status === STATUS_VERTEX_OVERFLOW;
+      // (Only if the cache was not reset while the attempt ran.)
+      const verticesOnly = status === STATUS_VERTEX_OVERFLOW && r.cacheEpoch === this.cacheEpoch;
       if (!verticesOnly) r.earlierNew += raw.counters[C.new];
       if (this.pending) {
         // A newer isovalue is waiting: compute that one (it grows what it needs).
@@ -409,6 +415,7 @@ export class Isosurface implements SurfaceEngine {
    */
   resetCache(): void {
     if (this.destroyed) return;
+    this.cacheEpoch++;
     this.cache.reset(this.initialSlots);
     this.mc.resize(this.initialSlots);
     this.refreshDrawData();
