@@ -189,8 +189,9 @@ async function start(): Promise<void> {
     void load();
   };
   const openFiles = (files: File[]): void => {
-    if (files.length > 1) messages.show(`Opening ${files[0].name} (one volume at a time; ${files.length - 1} other file(s) ignored).`, 'info', 4000);
-    open(() => loader.loadFile(files[0]));
+    const stack = files.length > 1 && files.every((f) => /\.tiff?$/i.test(f.name));
+    if (files.length > 1 && !stack) messages.show(`Opening ${files[0].name} (one volume at a time; ${files.length - 1} other file(s) ignored).`, 'info', 4000);
+    open(() => loader.loadFiles(files));
   };
   acceptDrops(byId('drop-overlay'), openFiles);
   wireControls({

@@ -6,6 +6,7 @@
 //   header-less .zfp       -> shape and rate from the name (or given), uploaded
 //   name_XxYxZ_dtype.raw   -> compressed on the GPU at the chosen rate
 //   .nrrd (raw or gzip)    -> compressed on the GPU at the chosen rate
+//   TIFF stack             -> read by libtiff (Wasm, src/loaders/tiff.ts), compressed likewise
 //   "default"              -> generated (procedural.ts), compressed at DEFAULT_VOLUME_RATE
 //
 // inspectVolumeFile says what a file is and what is still missing (a raw
@@ -29,7 +30,7 @@ export const DEFAULT_VOLUME_RATE = 8;
 /** The name that stands for the built-in volume on the command line. */
 export const DEFAULT_VOLUME_NAME = 'default';
 
-export type VolumeFileKind = 'zfp' | 'zfp-headerless' | 'raw' | 'nrrd';
+export type VolumeFileKind = 'zfp' | 'zfp-headerless' | 'raw' | 'nrrd' | 'tiff';
 
 export class VolumeFileError extends Error {
   constructor(message: string) {
@@ -57,6 +58,10 @@ export interface VolumeFileFacts {
   /** Raw and NRRD: compressed here, so a rate is chosen (default DEFAULT_RAW_RATE). */
   compresses: boolean;
   nrrd?: NrrdVolume;
+  /** TIFF: the samples, converted to a type the encoder takes. */
+  samples?: Uint8Array;
+  /** TIFF stacks: the files, in stack order. */
+  files?: string[];
 }
 
 export interface OpenRequest {
@@ -174,7 +179,7 @@ export async function inspectVolumeFile(fileName: string, bytes: Uint8Array): Pr
       return { ...base, kind: 'nrrd', dims: nrrd.dims, dtype: nrrd.dtype, missing: [], compresses: true, nrrd };
     }
     case 'tiff':
-      throw new VolumeFileError(`${fileName}: TIFF stacks are not supported here yet; save the volume as name_XxYxZ_dtype.raw or .nrrd`);
+      return inspectTiffStack([{ name: fileName, bytes }]);
     case 'las':
     case 'laz':
       throw new VolumeFileError(`${fileName}: this is a ${detected.kind.toUpperCase()} point cloud, not a volume; open it in the LIDAR example page`);
@@ -186,6 +191,38 @@ export async function inspectVolumeFile(fileName: string, bytes: Uint8Array): Pr
           'name_XxYxZ_dtype.raw (uint8, int8, uint16, int16, float32, float64) and .nrrd',
       );
   }
+}
+
+/**
+ * A TIFF stack (one multi-page file, or single-page files ordered by name) as
+ * a volume: x, y from the pages, z = page. One sample per pixel; 32-bit
+ * integer samples become float64 (the encoder's widest exact type).
+ */
+export async function inspectTiffStack(sources: { name: string; bytes: Uint8Array | Blob }[]): Promise<VolumeFileFacts> {
+  const { loadTiffStack, TiffError } = await import('../loaders/tiff.ts');
+  const fileName = sources.length === 1 ? sources[0].name : `${sources[0].name} … (${sources.length} files)`;
+  let v: Awaited<ReturnType<typeof loadTiffStack>>;
+  try {
+    v = await loadTiffStack(sources);
+  } catch (e) {
+    if (e instanceof TiffError) throw new VolumeFileError(e.message);
+    throw e;
+  }
+  if (v.samplesPerPixel !== 1) {
+    throw new VolumeFileError(`${fileName}: ${v.samplesPerPixel} samples per pixel (colour); an isosurface needs one value per voxel (save a single channel)`);
+  }
+  let dtype: DType;
+  let data: ArrayBufferView;
+  if (v.dtype === 'uint32' || v.dtype === 'int32') {
+    dtype = 'float64';
+    data = Float64Array.from(v.data as ArrayLike<number>);
+  } else {
+    dtype = v.dtype;
+    data = v.data;
+  }
+  const samples = new Uint8Array(data.buffer, data.byteOffset, data.byteLength);
+  const bytes = sources.reduce((n, s) => n + (s.bytes instanceof Blob ? s.bytes.size : s.bytes.byteLength), 0);
+  return { fileName, kind: 'tiff', bytes, dims: v.dims, dtype, missing: [], compresses: true, samples, files: v.files };
 }
 
 /** The rate `rate` is a usable zfp rate (checked before compressing). */
@@ -202,7 +239,7 @@ export function checkRate(fileName: string, rate: number | undefined): number {
 export async function openVolumeFile(device: GPUDevice, facts: VolumeFileFacts, bytes: Uint8Array, req: OpenRequest = {}, opts: OpenOptions = {}): Promise<OpenedVolume> {
   const { fileName } = facts;
   const display = fileName.split(/[\\/]/).pop() ?? fileName;
-  const common = { name: display, fileName, kind: facts.kind, sourceBytes: bytes.byteLength };
+  const common = { name: display, fileName, kind: facts.kind, sourceBytes: facts.bytes };
   switch (facts.kind) {
     case 'zfp':
     case 'zfp-headerless': {
@@ -227,11 +264,12 @@ export async function openVolumeFile(device: GPUDevice, facts: VolumeFileFacts, 
       return { ...common, stream, dims: info.dims, sourceDtype: 'float32', compressedBytes: info.paddedBytes, rate: info.rate, compressedHere: false };
     }
     case 'raw':
-    case 'nrrd': {
-      const dims = req.dims ?? facts.dims;
-      const dtype = req.dtype ?? facts.dtype;
+    case 'nrrd':
+    case 'tiff': {
+      const dims = facts.kind === 'raw' ? (req.dims ?? facts.dims) : facts.dims;
+      const dtype = facts.kind === 'raw' ? (req.dtype ?? facts.dtype) : facts.dtype;
       if (!dims || !dtype) throw new VolumeFileError(`${fileName}: give the volume's dimensions and sample type (the name carries none)`);
-      const data = facts.kind === 'nrrd' ? facts.nrrd!.data : bytes;
+      const data = facts.kind === 'nrrd' ? facts.nrrd!.data : facts.kind === 'tiff' ? facts.samples! : bytes;
       if (sizeOf(dims, dtype) !== data.byteLength) {
         throw new VolumeFileError(`${fileName}: ${formatDims(dims)} ${dtype} is ${sizeOf(dims, dtype)} bytes, the file has ${data.byteLength}`);
       }

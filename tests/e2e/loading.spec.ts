@@ -170,6 +170,50 @@ test('the form asks what a name does not say; Escape cancels and keeps the volum
   await form.locator('.form-ok').click();
   await waitForLoad(page, before);
   expect((await pageState(page)).volume).toMatchObject({ kind: 'zfp-headerless', dims: [64, 64, 64], rate: 4 });
+
+  // The original project's naming carries the rate: no questions.
+  before = await loads(page);
+  await dropFromUrl(page, '/data/zfp-vectors/ironProt_68x68x68_float32.rate4.zfp', 'ironProt_68x68x68_float32.raw.crate4.zfp');
+  await waitForLoad(page, before);
+  expect((await pageState(page)).volume).toMatchObject({ kind: 'zfp-headerless', dims: [68, 68, 68], rate: 4, fileName: 'ironProt_68x68x68_float32.raw.crate4.zfp' });
+  await expect(form).toBeHidden();
+
+  // NRRD (raw encoding): shape and type from its header, the form only asks the rate.
+  // The same samples as the raw file at the same rate give the same surface.
+  before = await loads(page);
+  await dropFromUrl(page, `${SHARED_VOLUMES}neghip_66x66x66_uint8.raw`);
+  await acceptVolumeForm(page);
+  await waitForLoad(page, before);
+  await setIsovalue(page, 80.37);
+  const rawTriangles = await trianglesShown(page);
+  before = await loads(page);
+  await page.evaluate(async (url) => {
+    const data = new Uint8Array(await (await fetch(url)).arrayBuffer());
+    const header = new TextEncoder().encode('NRRD0004\n# made in the test\ntype: uint8\ndimension: 3\nsizes: 66 66 66\nencoding: raw\nspacings: 1 1 1\n\n');
+    const dt = new DataTransfer();
+    dt.items.add(new File([header, data], 'neghip.nrrd'));
+    document.getElementById('view')!.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+  }, `${SHARED_VOLUMES}neghip_66x66x66_uint8.raw`);
+  await expect(form).toBeVisible();
+  await expect(form.locator('[name="nx"]')).toHaveValue('66');
+  await expect(form.locator('[name="nx"]')).toBeDisabled();
+  await expect(form.locator('[name="dtype"]')).toHaveValue('uint8');
+  await form.locator('.form-ok').click();
+  await waitForLoad(page, before);
+  expect((await pageState(page)).volume).toMatchObject({ kind: 'nrrd', dims: [66, 66, 66], rate: 8, fileName: 'neghip.nrrd' });
+  await setIsovalue(page, 80.37);
+  expect(await trianglesShown(page)).toBe(rawTriangles);
+
+  // A TIFF stack (ImageJ, 114 pages): libtiff in Wasm reads it, the form asks the rate.
+  before = await loads(page);
+  await dropFromUrl(page, '/data/tiff/morpholibj_bat-cochlea-volume.tif');
+  await expect(form).toBeVisible();
+  await expect(form.locator('[name="nz"]')).toHaveValue('114');
+  await form.locator('.form-ok').click();
+  await waitForLoad(page, before);
+  expect((await pageState(page)).volume).toMatchObject({ kind: 'tiff', dims: [121, 154, 114], rate: 8 });
+  await expect(page.locator('#volume-info dd[data-key="source"]')).toContainText('uint8 TIFF');
+  expect(await trianglesShown(page)).toBeGreaterThan(1000);
 });
 
 test('the bonsai (256³, rate 4) opens from ?url= with the isovalue of the link', async ({ page }) => {

@@ -7,6 +7,7 @@
 import type { GpuContext } from '../../gpu/device.ts';
 import type { IsosurfaceStats } from '../../isosurface/types.ts';
 import {
+  inspectTiffStack,
   inspectVolumeFile,
   openDefaultVolume,
   openVolumeFile,
@@ -78,6 +79,18 @@ export class VolumeLoader {
     });
   }
 
+  /** Several files: a TIFF stack when they are all TIFF (ordered by name), else the first one. */
+  loadFiles(files: File[]): Promise<void> {
+    if (files.length > 1 && files.every((f) => /\.tiff?$/i.test(f.name))) {
+      return this.run(`${files.length} TIFF files (a stack)`, async (signal, progress) => {
+        progress('Reading the TIFF stack…', undefined);
+        const facts = await inspectTiffStack(files.map((f) => ({ name: f.name, bytes: f })));
+        return this.openFacts(facts, new Uint8Array(0), signal, progress);
+      });
+    }
+    return this.loadFile(files[0]);
+  }
+
   loadUrl(url: string): Promise<void> {
     let resolved: URL;
     try {
@@ -103,6 +116,10 @@ export class VolumeLoader {
   private async open(fileName: string, bytes: Uint8Array, signal: AbortSignal, progress: (text: string, f?: number) => void): Promise<OpenedVolume | undefined> {
     progress('Checking the file…', 0.3);
     const facts: VolumeFileFacts = await inspectVolumeFile(fileName, bytes);
+    return this.openFacts(facts, bytes, signal, progress);
+  }
+
+  private async openFacts(facts: VolumeFileFacts, bytes: Uint8Array, signal: AbortSignal, progress: (text: string, f?: number) => void): Promise<OpenedVolume | undefined> {
     let request = {};
     if (facts.missing.length > 0 || facts.compresses) {
       progress('Waiting for the volume’s description…', 0.3);

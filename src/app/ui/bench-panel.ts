@@ -7,7 +7,7 @@
 import { recordsToCsv, runBenchmark, type BenchResult, type BenchSummary, type SurfaceEngine } from '../../bench/harness.ts';
 import { BENCH_MODES, isBenchMode, type BenchMode } from '../../bench/sequences.ts';
 import { byId, download, el } from '../dom.ts';
-import { formatCount, formatIso, formatMs, formatPercent } from '../format.ts';
+import { formatCount, formatMs, formatPercent } from '../format.ts';
 import { drawBenchChart, MODE_COLORS } from './bench-chart.ts';
 
 export interface BenchContext {
@@ -68,12 +68,16 @@ export class BenchPanel {
     return this.last;
   }
 
-  /** A new volume: the default range is its whole value range. */
+  /**
+   * A new volume: the default range is the middle 80 % of its values, as in
+   * `cli bench` (the paper leaves out noise and nearly empty surfaces).
+   */
   setVolume(valueRange: [number, number] | undefined): void {
     this.run.disabled = !valueRange;
     if (!valueRange) return;
-    this.lo.value = formatIso(valueRange[0], valueRange);
-    this.hi.value = formatIso(valueRange[1], valueRange);
+    const [lo, hi] = valueRange;
+    this.lo.value = String(Number((lo + 0.1 * (hi - lo)).toPrecision(6)));
+    this.hi.value = String(Number((hi - 0.1 * (hi - lo)).toPrecision(6)));
   }
 
   private modes(): BenchMode[] {

@@ -14,7 +14,7 @@ export function volumeRows(v: OpenedVolume, blockCount: number, valueRange: [num
   const decoded = nx * ny * nz * 4;
   const source =
     v.kind === 'default' ? 'generated, compressed on the GPU' :
-    v.compressedHere ? `${v.sourceDtype} ${v.kind === 'nrrd' ? 'NRRD' : 'raw'}, compressed on the GPU` :
+    v.compressedHere ? `${v.sourceDtype} ${v.kind === 'nrrd' ? 'NRRD' : v.kind === 'tiff' ? 'TIFF' : 'raw'}, compressed on the GPU` :
     v.kind === 'zfp' ? 'zfp stream with header' : 'header-less zfp stream';
   return [
     ['name', v.name],

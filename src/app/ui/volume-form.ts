@@ -43,8 +43,8 @@ export class VolumeForm {
     const title = facts.compresses ? 'Compress on the GPU' : 'Open a header-less zfp stream';
     q<HTMLElement>('#volume-form-title').textContent = title;
     q<HTMLElement>('.form-file').textContent = `${facts.fileName} (${formatBytes(facts.bytes)})`;
-    const dimsEditable = facts.kind !== 'nrrd' && (facts.missing.includes('dims') || facts.kind === 'raw');
-    const dtypeShown = facts.kind === 'raw' || facts.kind === 'nrrd';
+    const dimsEditable = facts.missing.includes('dims') || facts.kind === 'raw';
+    const dtypeShown = facts.compresses;
     const dtypeEditable = facts.kind === 'raw';
     for (const [i, n] of ['nx', 'ny', 'nz'].entries()) {
       const input = f.elements.namedItem(n) as HTMLInputElement;
@@ -93,7 +93,10 @@ export class VolumeForm {
       const streamBytes = fixedRateStreamBytes(blocks, Math.floor(64 * rate + 0.5));
       if (facts.compresses) {
         const t = dtype ?? 'uint8';
-        const expect = facts.kind === 'nrrd' ? facts.nrrd!.data.byteLength : dims[0] * dims[1] * dims[2] * DTYPE_BYTES[t];
+        const expect =
+          facts.kind === 'nrrd' ? facts.nrrd!.data.byteLength :
+          facts.kind === 'tiff' ? facts.samples!.byteLength :
+          dims[0] * dims[1] * dims[2] * DTYPE_BYTES[t];
         if (facts.kind === 'raw' && expect !== facts.bytes) {
           problem = `${dims.join(' × ')} ${t} is ${expect.toLocaleString('en-US')} bytes; the file has ${facts.bytes.toLocaleString('en-US')}.`;
         } else {

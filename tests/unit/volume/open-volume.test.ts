@@ -59,6 +59,16 @@ describe('inspectVolumeFile', () => {
     await expect(inspectVolumeFile('x_64x64x64_float32.rate3.zfp', read(vectors, 'fuel_p8decoded_64x64x64_float32.rate4.zfp'))).rejects.toThrow(/^x_64x64x64_float32\.rate3\.zfp: /);
   });
 
+  it('reads multi-page TIFF files as volumes through libtiff', async () => {
+    const tiff = join(sharedData, 'tiff');
+    const bat = await inspectVolumeFile('morpholibj_bat-cochlea-volume.tif', read(tiff, 'morpholibj_bat-cochlea-volume.tif'));
+    expect(bat).toMatchObject({ kind: 'tiff', dims: [121, 154, 114], dtype: 'uint8', missing: [], compresses: true });
+    expect(bat.samples!.byteLength).toBe(121 * 154 * 114);
+    const stack = await inspectVolumeFile('imagejs_stack.tif', read(tiff, 'imagejs_stack.tif'));
+    expect(stack).toMatchObject({ kind: 'tiff', dims: [128, 128, 10], dtype: 'uint16' });
+    await expect(inspectVolumeFile('imagejs_image-lzw.tif', read(tiff, 'imagejs_image-lzw.tif'))).rejects.toThrow(/^imagejs_image-lzw\.tif: 3 samples per pixel/);
+  });
+
   it('points non-volumes elsewhere', async () => {
     await expect(inspectVolumeFile('laspy_simple.las', read(join(sharedData, 'las'), 'laspy_simple.las'))).rejects.toThrow(/point cloud/);
     await expect(inspectVolumeFile('notes.txt', new TextEncoder().encode('hello'))).rejects.toThrow(/^notes\.txt: not a volume/);
@@ -99,6 +109,19 @@ describe('openVolumeFile', () => {
     opened.stream.destroy();
     // A wrong rate is the codec's error, naming the user's file (not a made-up name).
     await expect(openVolumeFile(gpu.device, facts, bytes, { dims: [64, 64, 64], rate: 5 })).rejects.toThrow(/^stream\.zfp: /);
+  });
+
+  gpuTest('compresses a TIFF stack like the same samples as raw', async ({ gpu }) => {
+    const tiff = join(sharedData, 'tiff');
+    const facts = await inspectVolumeFile('morpholibj_bat-cochlea-volume.tif', read(tiff, 'morpholibj_bat-cochlea-volume.tif'));
+    const opened = await openVolumeFile(gpu.device, facts, new Uint8Array(0), { rate: 4 });
+    expect(opened).toMatchObject({ kind: 'tiff', dims: [121, 154, 114], sourceDtype: 'uint8', rate: 4 });
+    const encoder = await ZfpEncoder.create(gpu.device);
+    const ref = await encoder.compressToStream(facts.samples!, 'uint8', [121, 154, 114], 4);
+    expect(await opened.stream.readBytes()).toEqual(await ref.readBytes());
+    opened.stream.destroy();
+    ref.destroy();
+    encoder.destroy();
   });
 
   gpuTest('the built-in volume is the generated field at the default rate', async ({ gpu }) => {
