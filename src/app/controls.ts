@@ -17,6 +17,8 @@ export interface ControlActions {
   setSmooth: (on: boolean) => void;
   setColors: (front: string, back: string) => void;
   setUpAxis: (up: 'x' | 'y' | 'z') => void;
+  /** Escape: stop a load in progress (the current volume stays). */
+  cancelLoad: () => void;
 }
 
 /** Files dragged anywhere over the page are dropped on the view. */
@@ -83,6 +85,10 @@ export function wireControls(a: ControlActions): void {
   document.addEventListener('keydown', (e) => {
     if (e.defaultPrevented || e.ctrlKey || e.metaKey || e.altKey || isTyping(e.target)) return;
     if (document.querySelector('dialog[open]')) return;
+    if (e.key === 'Escape') {
+      a.cancelLoad();
+      return;
+    }
     // The canvas handles its own keys (R, F, +, -) when focused.
     const onCanvas = e.target instanceof HTMLCanvasElement;
     switch (e.key) {

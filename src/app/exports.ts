@@ -19,9 +19,8 @@ function baseName(session: Session): string {
 }
 
 function isoTag(session: Session): string {
-  const s = session.current?.iso;
-  const iso = session.current ? (window.zfpiso?.iso ?? 0) : 0;
-  return s ? `_iso${Number(iso.toPrecision(6))}` : '';
+  const iso = session.drawnIsovalue;
+  return iso === undefined ? '' : `_iso${Number(iso.toPrecision(6))}`;
 }
 
 export async function savePng(viewer: Viewer, session: Session, messages: Messages): Promise<void> {
@@ -45,7 +44,7 @@ export async function savePly(session: Session, messages: Messages): Promise<voi
     }
     const soup = decodeVertices(packed, count, v.iso.info);
     const mesh = weldVertices(soup);
-    const iso = window.zfpiso?.stats?.isovalue ?? window.zfpiso?.iso ?? NaN;
+    const iso = session.drawnIsovalue ?? NaN;
     const ply = encodePly(mesh, [
       `isosurface of ${v.opened.name} at isovalue ${iso}`,
       `voxel index coordinates: voxel (i, j, k) at (i, j, k); volume ${v.iso.info.dims.join(' x ')}`,

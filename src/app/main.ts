@@ -219,6 +219,9 @@ async function start(): Promise<void> {
       surface.style.smooth = on;
       viewer.requestFrame();
     },
+    cancelLoad: () => {
+      if (loader.busy) loader.cancel();
+    },
     setUpAxis: (up) => {
       viewer.setUpAxis(up);
       link?.schedule();

@@ -94,11 +94,19 @@ export class Session {
     this.lastLatency = undefined;
     this.showStats(v.firstStats);
     p.state.loads++;
+    document.title = `${v.opened.name} — ZFP isosurfaces`;
     if (old) {
       old.iso.destroy();
       old.opened.stream.destroy();
     }
     p.viewer.requestFrame();
+  }
+
+  /** The isovalue of the surface on screen (as the user gave it, else the GPU's float32). */
+  get drawnIsovalue(): number | undefined {
+    const { state } = this.p;
+    if (!this.current || !state.stats) return undefined;
+    return state.iso !== undefined && Math.fround(state.iso) === state.stats.isovalue ? state.iso : state.stats.isovalue;
   }
 
   /** The user moved the isovalue. */
