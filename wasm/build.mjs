@@ -1,9 +1,11 @@
 #!/usr/bin/env node
 // `npm run build:wasm`: fetches the library sources from the package
 // registries (libtiff, zlib and libjpeg-turbo as Debian source packages,
-// LASzip from the PyPI sdist of `laszip`), builds them with Debian's
-// Emscripten, links our thin C APIs (wasm/las, wasm/tiff) and writes ES-module
-// `.js` + `.wasm` pairs to wasm/dist/, which are committed.
+// LASzip from the PyPI sdist of `laszip`, zfp 1.0.1 from the one vendored by
+// the PyPI sdist of `hdf5plugin`),
+// builds them with Debian's Emscripten, links our thin C APIs (wasm/las,
+// wasm/tiff, wasm/zfp) and writes ES-module `.js` + `.wasm` pairs to
+// wasm/dist/, which are committed.
 //
 //   node wasm/build.mjs            build and write wasm/dist/
 //   node wasm/build.mjs --check    rebuild into wasm/.build/check/ and compare
@@ -174,20 +176,28 @@ function fetchSources() {
       writeFileSync(req, `${pkg.package}==${pkg.version} --hash=sha256:${pkg.sha256}\n`);
       const python = which('python3') ?? which('python');
       if (!python) throw new BuildError('python3 with pip is needed to fetch the LASzip sdist from PyPI');
-      run(python, ['-m', 'pip', 'download', '-q', '--disable-pip-version-check', '--no-deps', '--no-binary', ':all:', '--require-hashes', '-r', req, '-d', downloads]);
+      // pipNoBinary: build an sdist's metadata with its build dependencies as wheels (--no-binary :all: would build them from source).
+      run(python, ['-m', 'pip', 'download', '-q', '--disable-pip-version-check', '--no-deps', '--no-binary', pkg.pipNoBinary ?? ':all:', '--require-hashes', '-r', req, '-d', downloads]);
       checkHashes({ [pkg.file]: pkg.sha256 });
     }
     const dir = join(srcRoot, `${pkg.package}-${pkg.version}`);
     if (!existsSync(join(dir, '.extracted'))) {
       rmSync(dir, { recursive: true, force: true });
-      run('tar', ['-xzf', file, '-C', srcRoot]);
+      // `extract`: only these members of a large archive (hdf5plugin: zfp's tree).
+      run('tar', ['-xzf', file, '-C', srcRoot, ...(pkg.extract ?? [])]);
       writeFileSync(join(dir, '.extracted'), '');
     }
   }
 }
 
+function pypiSource(name) {
+  const pkg = sources.pypi.find((p) => p.package === name);
+  if (!pkg) throw new BuildError(`wasm/sources.json has no PyPI entry for ${name}`);
+  return pkg;
+}
+
 function laszipDir() {
-  const vendor = join(srcRoot, `laszip-${sources.pypi[0].version}`, 'src', 'vendor');
+  const vendor = join(srcRoot, `laszip-${pypiSource('laszip').version}`, 'src', 'vendor');
   const name = readdirSync(vendor).find((n) => n.startsWith('LASzip'));
   if (!name) throw new BuildError(`no LASzip source under ${vendor}`);
   return join(vendor, name);
@@ -207,6 +217,13 @@ const LASZIP_SOURCES = [
   'laswriteitemcompressed_v2.cpp', 'laswriteitemcompressed_v3.cpp', 'laswriteitemcompressed_v4.cpp', 'laswritepoint.cpp', 'laszip.cpp',
   'laszip_dll.cpp',
 ];
+// zfp 1.0.1's library (src/CMakeLists.txt of zfp: every codec, bitstream, zfp.c).
+const ZFP_SOURCES = [
+  'bitstream.c', 'zfp.c',
+  ...['1', '2', '3', '4'].flatMap((d) => ['f', 'd', 'i', 'l'].flatMap((t) => [`decode${d}${t}.c`, `encode${d}${t}.c`])),
+];
+// The zfp 1.0.1 release as hdf5plugin's sdist vendors it (zfpy's sdist lacks include/zfp/bitstream.inl).
+const zfpDir = () => join(srcRoot, `hdf5plugin-${pypiSource('hdf5plugin').version}`, 'lib', 'zfp');
 const ZLIB_SOURCES = ['adler32.c', 'compress.c', 'crc32.c', 'deflate.c', 'infback.c', 'inffast.c', 'inflate.c', 'inftrees.c', 'trees.c', 'uncompr.c', 'zutil.c'];
 
 // CMake's check_type_size misreads sizes under Debian's Emscripten toolchain
@@ -345,11 +362,16 @@ async function buildLaszip(tc) {
   );
 }
 
+async function buildZfp(tc) {
+  const dir = zfpDir();
+  await compileArchive(tc, 'zfp', join(dir, 'src'), ZFP_SOURCES, [...tc.cflags, '-std=c11', `-I${join(dir, 'include')}`], false);
+}
+
 function libraryStamp(tc) {
   const h = createHash('sha256');
-  h.update(JSON.stringify({ sources, tc: { ...tc, env: undefined, cmake: undefined }, LASZIP_SOURCES, ZLIB_SOURCES, WASM32_TYPE_SIZES, WASM32_JPEG_TYPE_SIZES }));
+  h.update(JSON.stringify({ sources, tc: { ...tc, env: undefined, cmake: undefined }, LASZIP_SOURCES, ZLIB_SOURCES, ZFP_SOURCES, WASM32_TYPE_SIZES, WASM32_JPEG_TYPE_SIZES }));
   // The library recipes themselves (editing the rest of this script keeps the cache).
-  for (const fn of [compileArchive, cmakeBuild, buildZlib, buildJpeg, buildTiff, buildLaszip]) h.update(fn.toString());
+  for (const fn of [compileArchive, cmakeBuild, buildZlib, buildJpeg, buildTiff, buildLaszip, buildZfp]) h.update(fn.toString());
   if (tc.kind === 'wasm') h.update(emccVersion());
   return h.digest('hex');
 }
@@ -363,7 +385,7 @@ async function buildLibraries(tc) {
   }
   rmSync(tc.prefix, { recursive: true, force: true });
   mkdirSync(join(tc.prefix, 'include'), { recursive: true });
-  for (const [name, fn] of [['zlib', buildZlib], ['libjpeg-turbo', buildJpeg], ['libtiff', buildTiff], ['LASzip', buildLaszip]]) {
+  for (const [name, fn] of [['zlib', buildZlib], ['libjpeg-turbo', buildJpeg], ['libtiff', buildTiff], ['LASzip', buildLaszip], ['zfp', buildZfp]]) {
     log(`building ${name} (${tc.kind})...`);
     await fn(tc);
   }
@@ -373,6 +395,7 @@ async function buildLibraries(tc) {
 // ---------------------------------------------------------------- modules
 
 const LAS_EXPORTS = ['_malloc', '_free', '_las_open', '_las_error', '_las_info', '_las_header_string', '_las_read', '_las_close'];
+const ZFP_EXPORTS = ['_malloc', '_free', '_zfp_api_info', '_zfp_api_decode', '_zfp_api_decode_raw', '_zfp_api_error'];
 const TIFF_EXPORTS = ['_malloc', '_free', '_tiff_open', '_tiff_error', '_tiff_page_count', '_tiff_page_info', '_tiff_page_description', '_tiff_page_bytes', '_tiff_read_page', '_tiff_close'];
 
 function moduleFlags(exportName, exportsList) {
@@ -420,21 +443,37 @@ function linkModules(tc, outDir) {
     ],
     { env: tc.env, cwd: here },
   );
-  const outputs = ['las.js', 'las.wasm', 'tiff.js', 'tiff.wasm'];
+  log('linking zfp.js/zfp.wasm...');
+  run(
+    'emcc',
+    [
+      ...tc.cflags, '-std=c11', `-I${join(zfpDir(), 'include')}`, join(here, 'zfp', 'zfp_api.c'), join(lib, 'libzfp.a'),
+      ...moduleFlags('createZfpModule', ZFP_EXPORTS), '-o', join(outDir, 'zfp.js'),
+    ],
+    { env: tc.env, cwd: here },
+  );
+  const outputs = ['las.js', 'las.wasm', 'tiff.js', 'tiff.wasm', 'zfp.js', 'zfp.wasm'];
   const info = {
     comment: 'Written by wasm/build.mjs; `npm run build:wasm -- --check` rebuilds and compares these files byte for byte.',
     emcc: emccVersion(),
     libraries: {
-      LASzip: `${laszipVersion()} (PyPI laszip==${sources.pypi[0].version} sdist)`,
+      LASzip: `${laszipVersion()} (PyPI laszip==${pypiSource('laszip').version} sdist)`,
       libtiff: `Debian tiff ${sources.debian.find((p) => p.package === 'tiff').version}`,
       zlib: `Debian zlib ${sources.debian.find((p) => p.package === 'zlib').version}`,
       libjpeg: `Debian libjpeg-turbo ${sources.debian.find((p) => p.package === 'libjpeg-turbo').version}`,
+      zfp: `zfp ${zfpVersion()} (lib/zfp of the PyPI hdf5plugin==${pypiSource('hdf5plugin').version} sdist)`,
     },
-    flags: { c: tc.cflags.filter((f) => !f.startsWith('-ffile-prefix-map')), cxx: tc.cxxflags.filter((f) => !f.startsWith('-ffile-prefix-map')), las: moduleFlags('createLasModule', LAS_EXPORTS), tiff: moduleFlags('createTiffModule', TIFF_EXPORTS) },
+    flags: { c: tc.cflags.filter((f) => !f.startsWith('-ffile-prefix-map')), cxx: tc.cxxflags.filter((f) => !f.startsWith('-ffile-prefix-map')), las: moduleFlags('createLasModule', LAS_EXPORTS), tiff: moduleFlags('createTiffModule', TIFF_EXPORTS), zfp: moduleFlags('createZfpModule', ZFP_EXPORTS) },
     files: Object.fromEntries(outputs.map((f) => [f, { bytes: statSync(join(outDir, f)).size, sha256: sha256File(join(outDir, f)) }])),
   };
   writeFileSync(join(outDir, 'build-info.json'), JSON.stringify(info, null, 2) + '\n');
   return [...outputs, 'build-info.json'];
+}
+
+function zfpVersion() {
+  const h = readFileSync(join(zfpDir(), 'include', 'zfp', 'version.h'), 'utf8');
+  const v = ['MAJOR', 'MINOR', 'PATCH'].map((k) => new RegExp(`ZFP_VERSION_${k}\\s+(\\d+)`).exec(h)?.[1] ?? '?');
+  return v.join('.');
 }
 
 function laszipVersion() {

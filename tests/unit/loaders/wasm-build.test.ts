@@ -16,13 +16,14 @@ const hasEmcc = spawnSync('sh', ['-c', 'command -v emcc'], { encoding: 'utf8' })
 
 describe('committed Wasm modules', () => {
   test('files match build-info.json (sizes and sha256)', () => {
-    for (const name of ['las.js', 'las.wasm', 'tiff.js', 'tiff.wasm']) {
+    for (const name of ['las.js', 'las.wasm', 'tiff.js', 'tiff.wasm', 'zfp.js', 'zfp.wasm']) {
       const bytes = readFileSync(`${wasmDir}dist/${name}`);
       expect(bytes.length, name).toBe(info.files[name].bytes);
       expect(createHash('sha256').update(bytes).digest('hex'), name).toBe(info.files[name].sha256);
     }
     expect(info.libraries.LASzip).toMatch(/^LASzip 3\.\d+\.\d+/);
     expect(info.libraries.libtiff).toMatch(/^Debian tiff 4\./);
+    expect(info.libraries.zfp).toMatch(/^zfp 1\.0\.1 /);
   });
 
   test('both modules start and export their C API', async () => {
@@ -48,7 +49,7 @@ describe('reproducible build', () => {
       const r = spawnSync(process.execPath, [`${wasmDir}build.mjs`, '--check'], { encoding: 'utf8', timeout: 1_500_000 });
       const output = `${r.stdout}${r.stderr}`;
       expect(r.status, output).toBe(0);
-      expect(output).toMatch(/reproducible: las\.js, las\.wasm, tiff\.js, tiff\.wasm, build-info\.json are identical/);
+      expect(output).toMatch(/reproducible: las\.js, las\.wasm, tiff\.js, tiff\.wasm, zfp\.js, zfp\.wasm, build-info\.json are identical/);
     },
     1_600_000,
   );
