@@ -235,3 +235,24 @@ test('?url= of another origin is refused, and the built-in volume opens instead'
   await expect(page.locator('#messages .message').first()).toContainText("only volumes served by this page's own origin");
   expect((await pageState(page)).volume?.kind).toBe('default');
 });
+
+test('Escape (or Cancel) stops a load in progress and keeps the current volume', async ({ page }) => {
+  await openApp(page);
+  const before = await pageState(page);
+  await dropFromUrl(page, `${SHARED_VOLUMES}bonsai_256x256x256_float32.rate4.zfp`);
+  await expect(page.locator('#progress')).toBeVisible();
+  await expect(page.locator('#progress .progress-title')).toHaveText('bonsai_256x256x256_float32.rate4.zfp');
+  await page.keyboard.press('Escape');
+  await waitIdle(page);
+  await expect(page.locator('#progress')).toBeHidden();
+  await expect(page.locator('#messages .message').last()).toContainText('Opening bonsai_256x256x256_float32.rate4.zfp was cancelled');
+  const after = await pageState(page);
+  expect(after.loads).toBe(before.loads);
+  expect(after.volume).toEqual(before.volume);
+
+  // The Cancel button does the same.
+  await dropFromUrl(page, `${SHARED_VOLUMES}bonsai_256x256x256_float32.rate4.zfp`);
+  await page.locator('#progress .progress-cancel').click();
+  await waitIdle(page);
+  expect((await pageState(page)).volume).toEqual(before.volume);
+});
