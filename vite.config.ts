@@ -13,6 +13,7 @@ export default defineConfig({
         main: 'index.html',
         lidar: 'lidar.html',
         neuron: 'neuron.html',
+        paperBench: 'paper-bench.html',
       },
     },
   },

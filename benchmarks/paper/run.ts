@@ -1,0 +1,588 @@
+// `npm run bench:paper [-- --quick] [--volume FILE[:lo,hi]] ...`: the paper's
+// comparison benchmarks, headless, in one command (Usher & Pascucci, LDAV
+// 2020, Tables 2, 3 and 5 and Figure 6):
+//
+//   1. serial marching cubes: native C++ (g++ -O3), the same C++ in Wasm and
+//      the TypeScript version, in Node and in headless Chromium;
+//   2. the naive data-parallel marching cubes in WebGPU over the whole volume;
+//   3. full-volume zfp decompression at rates 2, 4, 8: our WebGPU decoder,
+//      zfp's serial C decoder (zfpy) and zfp's C decoder in Wasm (Node, Chromium);
+//   4. the block-compressed isosurface pipeline: random, sweep up, sweep down.
+//
+// Writes benchmarks/results/<date>-<adapter>[-quick].json and .md (the
+// report: one table per paper table, our figures beside the published ones).
+// The full run fits 30 minutes and --quick 5 on a 2-core machine without a
+// GPU (WebGPU on SwiftShader); see benchmarks/paper/README.md.
+import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { cpus, loadavg, tmpdir, totalmem } from 'node:os';
+import { join } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { isovalueSequence, type BenchMode } from '../../src/bench/sequences.ts';
+import { describeAdapter, type AdapterSummary } from '../../src/gpu/device.ts';
+import { requestNodeGpu } from '../../src/gpu/node-gpu.ts';
+import { timeNaiveMc } from '../../src/examples/paper-bench/gpu-measure.ts';
+import { meanAfterFirst, type SerialTimes } from '../../src/examples/paper-bench/measure.ts';
+import { ZfpDecoder } from '../../src/zfp/decoder.ts';
+import { runBlock, type BlockResult } from './block.ts';
+import { BrowserBench } from './browser.ts';
+import { checkAgainstPaper } from './paper-figures.ts';
+import { writeReport } from './report.ts';
+import { nativeBinary, runSerialNode } from './serial.ts';
+import { prepareVolume, sharedVolumes, userVolume, type PreparedVolume, type VolumeSpec } from './volumes.ts';
+import { mbPerSecond, runZfpVolume, type ZfpRateResult } from './zfp.ts';
+
+const ROOT = fileURLToPath(new URL('../../', import.meta.url));
+const SHARED_DATA = join(ROOT, '..', 'shared', 'data');
+const PAPER_TEX = join(ROOT, '..', 'shared', 'reference', 'paper.tex');
+const MODES: BenchMode[] = ['random', 'sweep-up', 'sweep-down'];
+
+// ---------------------------------------------------------------- plans
+
+interface Plan {
+  limitSeconds: number;
+  sharedVolumes: string[];
+  /** Isovalues for serial MC (Node and Chromium). */
+  serial: number;
+  /** Surfaces of the naive GPU MC, by volume size. */
+  naiveCount: (voxels: number) => number;
+  /** Surfaces per mode of the block-compressed benchmark, by volume size. */
+  blockCount: (voxels: number) => number;
+  zfpRuns: number;
+  zfpRates: number[];
+  /** Safety caps (seconds): a loop past its cap stops early and the report says so. */
+  naiveCapSeconds: number;
+  blockCapSecondsPerMode: number;
+  browserCallTimeoutSeconds: number;
+}
+
+/**
+ * Full: 100 isovalues everywhere the paper has 100, except where SwiftShader
+ * is slowest: the naive MC touches every cell (about 2-5 s per bonsai surface
+ * there), so 50 surfaces on a 256^3 volume; the block pipeline (1-2 s per
+ * bonsai surface) keeps 100 per mode up to 256^3. Both scale down with the
+ * volume beyond. Measured on the 2-core development machine under load: about
+ * 15 minutes in all. Quick: fuel and hydrogen, 10 of everything, 3 decode runs.
+ */
+const PLANS: Record<'full' | 'quick', Plan> = {
+  full: {
+    limitSeconds: 30 * 60,
+    sharedVolumes: ['fuel', 'hydrogen', 'bonsai'],
+    serial: 100,
+    naiveCount: (voxels) => (voxels <= 128 ** 3 ? 100 : Math.max(10, Math.round((50 * 256 ** 3) / voxels))),
+    blockCount: (voxels) => Math.max(10, Math.min(100, Math.round((100 * 256 ** 3) / voxels))),
+    zfpRuns: 10,
+    zfpRates: [2, 4, 8],
+    naiveCapSeconds: 300,
+    blockCapSecondsPerMode: 240,
+    browserCallTimeoutSeconds: 600,
+  },
+  quick: {
+    limitSeconds: 5 * 60,
+    sharedVolumes: ['fuel', 'hydrogen'],
+    serial: 10,
+    naiveCount: () => 10,
+    blockCount: () => 10,
+    zfpRuns: 3,
+    zfpRates: [2, 4, 8],
+    naiveCapSeconds: 25,
+    blockCapSecondsPerMode: 15,
+    browserCallTimeoutSeconds: 180,
+  },
+};
+
+// ---------------------------------------------------------------- arguments
+
+const USAGE = `usage: npm run bench:paper -- [--quick] [--volume FILE[:lo,hi]]... [--volumes fuel,hydrogen,bonsai|none]
+       [--count N] [--seed S] [--rate R] [--no-browser] [--browser-webgpu] [--out DIR]
+  --quick            fuel and hydrogen, 10 isovalues, 3 decode runs (about 3-5 minutes)
+  --volume FILE      also a volume of yours: zfp (fixed rate) or name_XxYxZ_dtype.raw (compressed on the GPU at --rate, default 8);
+                     :lo,hi gives its isovalue range (default: from the data)
+  --volumes LIST     which shared volumes (default: all three; quick: fuel,hydrogen)
+  --count N          isovalues per method and mode everywhere (overrides the plan)
+  --no-browser       skip the Chromium columns
+  --browser-webgpu   also run the naive MC and our zfp decoder in Chromium's WebGPU
+  --out DIR          where the JSON and Markdown go (default benchmarks/results)`;
+
+interface Args {
+  quick: boolean;
+  volumes: string[];
+  shared?: string[];
+  count?: number;
+  seed: number;
+  rate?: number;
+  browser: boolean;
+  browserWebGpu: boolean;
+  out: string;
+}
+
+function parseArgs(argv: string[]): Args {
+  const a: Args = { quick: false, volumes: [], seed: 1, browser: true, browserWebGpu: false, out: join(ROOT, 'benchmarks', 'results') };
+  for (let i = 0; i < argv.length; i++) {
+    const k = argv[i];
+    const next = () => {
+      const v = argv[++i];
+      if (v === undefined) throw new UsageError(`${k} needs a value`);
+      return v;
+    };
+    const int = (v: string) => {
+      const n = Number(v);
+      if (!Number.isInteger(n)) throw new UsageError(`${k} takes an integer (got ${v})`);
+      return n;
+    };
+    if (k === '--quick') a.quick = true;
+    else if (k === '--volume') a.volumes.push(next());
+    else if (k === '--volumes') a.shared = next() === 'none' ? [] : argv[i].split(',');
+    else if (k === '--count') a.count = int(next());
+    else if (k === '--seed') a.seed = int(next());
+    else if (k === '--rate') a.rate = Number(next());
+    else if (k === '--no-browser') a.browser = false;
+    else if (k === '--browser-webgpu') a.browserWebGpu = true;
+    else if (k === '--out') a.out = next();
+    else if (k === '--help' || k === '-h') {
+      console.log(USAGE);
+      process.exit(0);
+    } else throw new UsageError(`unknown option ${k}`);
+  }
+  if (a.count !== undefined && a.count < 2) throw new UsageError('--count must be at least 2 (the first surface is discarded)');
+  if (a.rate !== undefined && !(a.rate > 0)) throw new UsageError('--rate must be positive');
+  for (const s of a.shared ?? []) if (!['fuel', 'hydrogen', 'bonsai'].includes(s)) throw new UsageError(`--volumes: unknown shared volume ${s} (fuel, hydrogen, bonsai)`);
+  return a;
+}
+
+class UsageError extends Error {}
+
+// ---------------------------------------------------------------- result
+
+export interface SerialEntry {
+  volume: string;
+  label: string;
+  isovalues: number[];
+  native?: SerialTimes;
+  wasmNode: SerialTimes;
+  jsNode: SerialTimes;
+  wasmChromium?: SerialTimes;
+  jsChromium?: SerialTimes;
+  means: { native?: number; wasmNode: number; jsNode: number; wasmChromium?: number; jsChromium?: number };
+}
+
+export interface NaiveEntry {
+  volume: string;
+  label: string;
+  paperName?: string;
+  isovalues: number[];
+  ms: number[];
+  wallMs: number[];
+  triangles: number[];
+  activeCells: number[];
+  stagesMeanMs: Record<string, number>;
+  trianglesMatchSerial: boolean;
+  memoryBytes: number;
+  /** Serial native mean over the same isovalues (first discarded). */
+  serialNativeMs?: number;
+  chromiumMs?: number[];
+  cappedAt?: number;
+}
+
+export interface PaperBenchResult {
+  benchmark: 'paper';
+  version: 1;
+  date: string;
+  mode: 'full' | 'quick';
+  command: string;
+  limits: { seconds: number };
+  durations: { totalSeconds: number; sections: Record<string, number> };
+  machine: { cpu: string; cores: number; memoryGiB: number; node: string; dawn: string; platform: string; loadAverage: { start: number[]; end: number[] } };
+  adapter: AdapterSummary;
+  adapterDescription: string;
+  adapterSlug: string;
+  gpuTiming: string;
+  chromium: { version?: string; userAgent?: string; flags: string[]; hardwareConcurrency?: number; error?: string };
+  serialNative: { compiler?: string; error?: string };
+  settings: { seed: number; serialCounts: number; naiveCounts: Record<string, number>; blockCounts: Record<string, number>; zfpRuns: number; zfpRates: number[]; plan: Record<string, unknown> };
+  volumes: { key: string; label: string; file: string; how: string; dims: readonly number[]; rate: number; range: [number, number]; rangeSource: string; dataRange: [number, number] }[];
+  serial: SerialEntry[];
+  naive: (NaiveEntry & { paperName?: string })[];
+  zfp: ZfpRateResult[];
+  block: (BlockResult & { trianglesMatchSerial?: boolean; cappedModes: string[] })[];
+  headline: {
+    serial: { wasmNodeVsNative?: number; jsNodeVsNative?: number; wasmChromiumVsNative?: number; jsChromiumVsNative?: number; jsNodeVsWasmNode?: number; jsChromiumVsWasmChromium?: number };
+    naiveVsBlock: { volume: string; label: string; surfaces: number; naiveMs: number; blockMs: number; ratio: number; blockRandomAllMs: number }[];
+    zfp: { rate: number; webgpuVsSerial: number; wasmNodeVsSerial: number; wasmChromiumVsSerial?: number }[];
+  };
+  notes: string[];
+  paperCheck: string[] | null;
+  errors: { section: string; volume?: string; message: string }[];
+}
+
+// ---------------------------------------------------------------- helpers
+
+const t0 = performance.now();
+const elapsed = () => (performance.now() - t0) / 1000;
+function log(s: string): void {
+  console.error(`[bench:paper ${elapsed().toFixed(0).padStart(4)} s] ${s}`);
+}
+
+function cpuModel(): string {
+  try {
+    const m = /^model name\s*:\s*(.+)$/m.exec(readFileSync('/proc/cpuinfo', 'utf8'));
+    if (m) return m[1].trim();
+  } catch {
+    /* not Linux */
+  }
+  return cpus()[0]?.model ?? 'unknown CPU';
+}
+
+function dawnVersion(): string {
+  try {
+    return JSON.parse(readFileSync(join(ROOT, 'node_modules', 'webgpu', 'package.json'), 'utf8')).version;
+  } catch {
+    return '?';
+  }
+}
+
+const mean = (xs: number[]) => xs.reduce((s, x) => s + x, 0) / Math.max(1, xs.length);
+const defined = <T>(x: T | undefined): x is T => x !== undefined && !(typeof x === 'number' && !Number.isFinite(x));
+
+function localDate(d: Date): string {
+  const p = (n: number) => String(n).padStart(2, '0');
+  return `${d.getFullYear()}-${p(d.getMonth() + 1)}-${p(d.getDate())}`;
+}
+
+// ---------------------------------------------------------------- main
+
+async function main(): Promise<void> {
+  const args = parseArgs(process.argv.slice(2));
+  const mode = args.quick ? 'quick' : 'full';
+  const plan = PLANS[mode];
+  const command = ['npm run bench:paper', ...(process.argv.length > 2 ? ['--', ...process.argv.slice(2)] : [])].join(' ');
+  const loadStart = loadavg();
+  const sections: Record<string, number> = {};
+  const errors: PaperBenchResult['errors'] = [];
+  const notes: string[] = [];
+  const section = async <T>(name: string, fn: () => Promise<T>): Promise<T> => {
+    const s = performance.now();
+    try {
+      return await fn();
+    } finally {
+      sections[name] = (sections[name] ?? 0) + (performance.now() - s) / 1000;
+    }
+  };
+  const attempt = async (name: string, volume: string | undefined, fn: () => Promise<void>) => {
+    try {
+      await fn();
+    } catch (e) {
+      const message = (e as Error).message ?? String(e);
+      errors.push({ section: name, volume, message });
+      log(`ERROR in ${name}${volume ? ` (${volume})` : ''}: ${message}`);
+    }
+  };
+
+  if (!existsSync(join(ROOT, '.venv', 'bin', 'python'))) {
+    throw new Error(`${join(ROOT, '.venv', 'bin', 'python')} is missing: run \`npm test\` once (it installs tests/python-requirements.txt into .venv, with zfpy)`);
+  }
+  const specs: VolumeSpec[] = [];
+  if (existsSync(SHARED_DATA)) {
+    const wanted = args.shared ?? plan.sharedVolumes;
+    specs.push(...sharedVolumes(SHARED_DATA).filter((v) => wanted.includes(v.key)));
+  } else if (!args.volumes.length) {
+    throw new Error(`the shared volumes are not at ${SHARED_DATA}; give volumes with --volume FILE`);
+  }
+  for (const v of args.volumes) {
+    const spec = userVolume(v);
+    if (!existsSync(spec.path)) throw new UsageError(`--volume ${spec.path}: no such file`);
+    specs.push(spec);
+  }
+  if (specs.length === 0) throw new UsageError('no volumes: give --volume FILE or leave --volumes out');
+
+  log(`${mode} run: ${specs.map((s) => s.key).join(', ')}; limit ${plan.limitSeconds / 60} min`);
+  const gpu = await requestNodeGpu({ label: 'benchPaper.device', onFailure: (f) => log(`WebGPU ${f.kind}: ${f.message}`) });
+  const adapterDescription = describeAdapter(gpu.adapter);
+  const adapterSlug = (gpu.adapter.architecture || gpu.adapter.vendor || 'unknown').toLowerCase().replace(/[^a-z0-9]+/g, '-').replace(/^-|-$/g, '');
+  log(`adapter: ${adapterDescription}`);
+  const decoder = await ZfpDecoder.create(gpu.device);
+  const dir = mkdtempSync(join(tmpdir(), 'bench-paper-'));
+  const volumes: PreparedVolume[] = [];
+  const result: Partial<PaperBenchResult> = {};
+  let browser: BrowserBench | undefined;
+  const chromium: PaperBenchResult['chromium'] = { flags: [] };
+  const serial: SerialEntry[] = [];
+  const naive: NaiveEntry[] = [];
+  const zfp: ZfpRateResult[] = [];
+  const block: PaperBenchResult['block'] = [];
+  const naiveCounts: Record<string, number> = {};
+  const blockCounts: Record<string, number> = {};
+  const native = nativeBinary(ROOT);
+  const serialCount = args.count ?? plan.serial;
+  if (native.error) log(`native serial MC unavailable: ${native.error}`);
+
+  try {
+    // -------------------------------------------------------------- volumes
+    await section('volumes', async () => {
+      for (const spec of specs) {
+        await attempt('volumes', spec.key, async () => {
+          const v = await prepareVolume(gpu, decoder, spec, dir, args.rate);
+          volumes.push(v);
+          naiveCounts[v.key] = args.count ?? plan.naiveCount(v.dims[0] * v.dims[1] * v.dims[2]);
+          blockCounts[v.key] = args.count ?? plan.blockCount(v.dims[0] * v.dims[1] * v.dims[2]);
+          log(`${v.label}: ${v.dims.join('x')}, ${v.how}; range ${v.range.map((x) => x.toFixed(2)).join('..')} (${v.rangeSource})`);
+        });
+      }
+    });
+    const isovaluesOf = (v: PreparedVolume, n: number) => isovalueSequence('random', n, v.range, args.seed);
+
+    // -------------------------------------------------------------- serial, Node
+    await section('serial MC (Node)', async () => {
+      for (const v of volumes) {
+        await attempt('serial MC (Node)', v.key, async () => {
+          const isovalues = isovaluesOf(v, serialCount);
+          log(`serial MC in Node: ${v.label}, ${isovalues.length} isovalues (native, Wasm, JS)...`);
+          const r = await runSerialNode(v, isovalues, native.path, native.error);
+          serial.push({
+            volume: v.key,
+            label: v.label,
+            isovalues,
+            native: r.native,
+            wasmNode: r.wasm,
+            jsNode: r.js,
+            means: { native: r.native ? meanAfterFirst(r.native.ms) : undefined, wasmNode: meanAfterFirst(r.wasm.ms), jsNode: meanAfterFirst(r.js.ms) },
+          });
+        });
+      }
+    });
+
+    // -------------------------------------------------------------- zfp decompression (Node side writes the streams)
+    await section('zfp decompression', async () => {
+      for (const v of volumes) {
+        await attempt('zfp decompression', v.key, async () => {
+          log(`zfp decompression: ${v.label}, rates ${plan.zfpRates.join(', ')}, ${plan.zfpRuns} runs (+1)...`);
+          zfp.push(...(await runZfpVolume(ROOT, gpu, decoder, v, dir, plan.zfpRates, plan.zfpRuns)));
+        });
+      }
+    });
+
+    // -------------------------------------------------------------- Chromium
+    if (args.browser) {
+      await section('Chromium', async () => {
+        await attempt('Chromium', undefined, async () => {
+          browser = await BrowserBench.start(ROOT, dir, gpu.adapter.software, log);
+          Object.assign(chromium, { version: browser.info.chromium, userAgent: browser.info.userAgent, flags: browser.info.flags, hardwareConcurrency: browser.info.hardwareConcurrency });
+          log(`Chromium ${browser.info.chromium} ready`);
+        });
+        if (!browser) {
+          chromium.error = errors.find((e) => e.section === 'Chromium')?.message;
+          return;
+        }
+        const timeout = plan.browserCallTimeoutSeconds * 1000;
+        for (const s of serial) {
+          const v = volumes.find((x) => x.key === s.volume)!;
+          await attempt('serial MC (Chromium)', v.key, async () => {
+            log(`serial MC in Chromium: ${v.label}, ${s.isovalues.length} isovalues (Wasm, JS)...`);
+            const t = await browser!.serialMc({ url: browser!.dataUrl(v.rawPath.split('/').pop()!), dims: v.dims, isovalues: s.isovalues, methods: ['js', 'wasm'] }, timeout);
+            const bad = t.js!.triangles.findIndex((n, i) => n !== s.jsNode.triangles[i]);
+            if (bad >= 0) throw new Error(`Chromium gave ${t.js!.triangles[bad]} triangles at iso ${s.isovalues[bad]}, Node ${s.jsNode.triangles[bad]}`);
+            s.jsChromium = t.js;
+            s.wasmChromium = t.wasm;
+            s.means.jsChromium = meanAfterFirst(t.js!.ms);
+            s.means.wasmChromium = meanAfterFirst(t.wasm!.ms);
+          });
+        }
+        for (const z of zfp) {
+          await attempt('zfp Wasm (Chromium)', z.volume, async () => {
+            log(`zfp Wasm decode in Chromium: ${z.file}...`);
+            const t = await browser!.zfpWasm({ url: browser!.dataUrl(z.file), runs: plan.zfpRuns + 1 }, timeout);
+            z.wasmChromiumMs = t.ms;
+            z.mbps.wasmChromium = mbPerSecond(z.floatBytes, t.ms);
+          });
+        }
+      });
+    } else {
+      chromium.error = 'skipped (--no-browser)';
+    }
+
+    // -------------------------------------------------------------- naive GPU MC
+    await section('naive GPU MC', async () => {
+      for (const v of volumes) {
+        await attempt('naive GPU MC', v.key, async () => {
+          const count = naiveCounts[v.key];
+          const isovalues = isovaluesOf(v, count);
+          const s = serial.find((x) => x.volume === v.key);
+          const capacity = s ? 3 * Math.max(...s.jsNode.triangles) : undefined;
+          log(`naive GPU MC: ${v.label}, ${count} isovalues...`);
+          const start = performance.now();
+          const t = await timeNaiveMc(gpu.device, decoder, v.stream, isovalues, {
+            vertexCapacity: capacity,
+            cancelled: () => performance.now() - start > plan.naiveCapSeconds * 1000,
+            onProgress: (d, n) => {
+              if (d % 10 === 0) log(`  naive ${v.key} ${d}/${n}`);
+            },
+          });
+          const res = t.results;
+          const done = res.length;
+          const stages: Record<string, number> = {};
+          for (const r of res.slice(1)) for (const st of r.stages) stages[st.label] = (stages[st.label] ?? 0) + st.ms / Math.max(1, done - 1);
+          const matches = s ? res.every((r, i) => i >= s.jsNode.triangles.length || r.triangles === s.jsNode.triangles[i]) : true;
+          if (!matches) errors.push({ section: 'naive GPU MC', volume: v.key, message: 'triangle counts differ from the serial MC' });
+          const entry: NaiveEntry = {
+            volume: v.key,
+            label: v.label,
+            paperName: v.paperName,
+            isovalues: isovalues.slice(0, done),
+            ms: res.map((r) => r.gpuMs),
+            wallMs: res.map((r) => r.wallMs),
+            triangles: res.map((r) => r.triangles),
+            activeCells: res.map((r) => r.activeCells),
+            stagesMeanMs: stages,
+            trianglesMatchSerial: matches,
+            memoryBytes: t.volumeBytes + t.workingBytes,
+            serialNativeMs: s?.native && done > 1 ? meanAfterFirst(s.native.ms.slice(0, done)) : undefined,
+            cappedAt: done < count ? done : undefined,
+          };
+          if (done < count) notes.push(`Naive GPU MC on ${v.label} stopped after ${done} of ${count} surfaces (${plan.naiveCapSeconds} s cap).`);
+          if (browser && args.browserWebGpu) {
+            const zfile = zfp.find((z) => z.volume === v.key && z.rate === v.rate)?.file;
+            if (zfile) {
+              log(`naive MC in Chromium's WebGPU: ${v.label}...`);
+              const c = await browser.naiveMc({ url: browser.dataUrl(zfile), isovalues: entry.isovalues, vertexCapacity: capacity }, plan.browserCallTimeoutSeconds * 1000);
+              entry.chromiumMs = c.ms;
+            } else notes.push(`No Chromium naive MC for ${v.label}: its rate ${v.rate} is not among the zfp table's rates.`);
+          }
+          naive.push(entry);
+        });
+      }
+    });
+
+    // -------------------------------------------------------------- block-compressed
+    await section('block-compressed', async () => {
+      for (const v of volumes) {
+        await attempt('block-compressed', v.key, async () => {
+          const count = blockCounts[v.key];
+          log(`block-compressed: ${v.label}, ${count} isovalues per mode...`);
+          const b = await runBlock(gpu, v, MODES, count, args.seed, {
+            capSecondsPerMode: plan.blockCapSecondsPerMode,
+            onProgress: (m, d, n) => {
+              if (d % 25 === 0) log(`  block ${v.key} ${m} ${d}/${n}`);
+            },
+          });
+          const s = serial.find((x) => x.volume === v.key);
+          const random = b.records.filter((r) => r.mode === 'random');
+          const trianglesMatchSerial = s ? random.every((r) => r.index >= s.jsNode.triangles.length || r.triangles === s.jsNode.triangles[r.index]) : undefined;
+          if (trianglesMatchSerial === false) errors.push({ section: 'block-compressed', volume: v.key, message: 'random-mode triangle counts differ from the serial MC' });
+          const cappedModes = MODES.filter((m) => b.records.filter((r) => r.mode === m).length < count);
+          for (const m of cappedModes) notes.push(`Block-compressed ${m} on ${v.label} stopped after ${b.records.filter((r) => r.mode === m).length} of ${count} surfaces (${plan.blockCapSecondsPerMode} s cap per mode).`);
+          block.push({ ...b, trianglesMatchSerial, cappedModes });
+        });
+      }
+    });
+  } finally {
+    if (browser) await browser.close();
+    for (const v of volumes) v.stream.destroy();
+    decoder.destroy();
+    rmSync(dir, { recursive: true, force: true });
+  }
+
+  // -------------------------------------------------------------- headline
+  const serialRatio = (num: (s: SerialEntry) => number | undefined, den: (s: SerialEntry) => number | undefined) => {
+    const rs = serial.map((s) => (defined(num(s)) && defined(den(s)) ? num(s)! / den(s)! : undefined)).filter(defined);
+    return rs.length ? mean(rs) : undefined;
+  };
+  const naiveVsBlock: PaperBenchResult['headline']['naiveVsBlock'] = [];
+  for (const n of naive) {
+    const b = block.find((x) => x.volume === n.volume);
+    if (!b || n.ms.length < 2) continue;
+    const random = b.records.filter((r) => r.mode === 'random' && !r.discarded);
+    const same = random.filter((r) => r.index < n.ms.length);
+    if (!same.length) continue;
+    const blockMs = mean(same.map((r) => r.gpuMs));
+    const naiveMs = mean(n.ms.slice(1, 1 + same.length));
+    naiveVsBlock.push({ volume: n.volume, label: n.label, surfaces: same.length, naiveMs, blockMs, ratio: naiveMs / blockMs, blockRandomAllMs: mean(random.map((r) => r.gpuMs)) });
+  }
+  const rates = [...new Set(zfp.map((z) => z.rate))];
+  const zfpHeadline = rates.map((rate) => {
+    const zs = zfp.filter((z) => z.rate === rate);
+    const chromium = zs.filter((z) => defined(z.mbps.wasmChromium));
+    return {
+      rate,
+      webgpuVsSerial: mean(zs.map((z) => z.mbps.webgpu / z.mbps.zfpySerial)),
+      wasmNodeVsSerial: mean(zs.map((z) => z.mbps.wasmNode / z.mbps.zfpySerial)),
+      wasmChromiumVsSerial: chromium.length ? mean(chromium.map((z) => z.mbps.wasmChromium! / z.mbps.zfpySerial)) : undefined,
+    };
+  });
+
+  notes.push(
+    'Isovalues: `isovalueSequence` of src/bench/sequences.ts (seeded mulberry32, float32), the same generator as the block benchmark\'s random mode, so every method computes the same surfaces; a method run on fewer isovalues takes a prefix of the same sequence.',
+    'Means: every method\'s first surface (or decode) is discarded as a warm-up, as in the paper; the JSON keeps every sample, and medians can be computed from it.',
+    `Counts: serial MC ${serialCount} isovalues per volume; naive GPU MC ${Object.entries(naiveCounts).map(([k, c]) => `${k} ${c}`).join(', ')}; each block-compressed mode ${Object.entries(blockCounts).map(([k, c]) => `${k} ${c}`).join(', ')} (${mode === 'full' ? 'the paper\'s 100, except the naive MC on volumes above 128³: on SwiftShader it needs seconds per surface (all 16.6 M cells of the bonsai), so 50 on a 256³ volume, and both GPU methods scale down with the volume beyond 256³, to fit the 30-minute budget' : 'quick run'}); zfp ${plan.zfpRuns} decodes per rate after a discarded first. Time caps per loop (naive ${plan.naiveCapSeconds} s per volume, block ${plan.blockCapSecondsPerMode} s per mode) stop a loop early on a slow or busy machine, and are reported.`,
+    'Fuel is a float32 raw file: compressed on the GPU at rate 8 for the GPU pipelines, which is lossless for this data (its values are zfp\'s precision-8 decode), so all methods contour the raw values. Hydrogen (rate 8) and bonsai (rate 4) are used as compressed; serial and naive MC contour their zfp decode.',
+    "Serial MC in Chromium runs in the page's main thread (paper-bench.html, built by Vite into a temporary folder and served locally); Wasm and JS take turns per isovalue, as in Node.",
+    'zfp in the paper was 0.5.5-rc1 (serial CPU decoder, and their WebGPU/Vulkan ports of its CUDA decoder); here zfp 1.0.1 (zfpy for the native serial decoder, the same C in Wasm) and our own WebGPU decoder, bit-identical to zfp.',
+  );
+
+  const loadEnd = loadavg();
+  const total = elapsed();
+  const full: PaperBenchResult = {
+    benchmark: 'paper',
+    version: 1,
+    date: new Date().toISOString(),
+    mode,
+    command,
+    limits: { seconds: plan.limitSeconds },
+    durations: { totalSeconds: total, sections },
+    machine: { cpu: cpuModel(), cores: cpus().length, memoryGiB: Math.round(totalmem() / 2 ** 30), node: process.version, dawn: dawnVersion(), platform: `${process.platform} ${process.arch}`, loadAverage: { start: loadStart, end: loadEnd } },
+    adapter: gpu.adapter,
+    adapterDescription,
+    adapterSlug,
+    gpuTiming: gpu.device.features.has('timestamp-query') ? 'timestamp queries' : 'queue wall time (no timestamp-query)',
+    chromium,
+    serialNative: native.error ? { error: native.error } : { compiler: native.compiler },
+    settings: {
+      seed: args.seed,
+      serialCounts: serialCount,
+      naiveCounts,
+      blockCounts,
+      zfpRuns: plan.zfpRuns,
+      zfpRates: plan.zfpRates,
+      plan: { limitSeconds: plan.limitSeconds, naiveCapSeconds: plan.naiveCapSeconds, blockCapSecondsPerMode: plan.blockCapSecondsPerMode, browserCallTimeoutSeconds: plan.browserCallTimeoutSeconds },
+    },
+    volumes: volumes.map((v) => ({ key: v.key, label: v.label, file: v.path.replace(join(ROOT, '..') + '/', '../'), how: v.how, dims: v.dims, rate: v.rate, range: v.range, rangeSource: v.rangeSource, dataRange: v.dataRange })),
+    serial,
+    naive,
+    zfp,
+    block,
+    headline: {
+      serial: {
+        wasmNodeVsNative: serialRatio((s) => s.means.wasmNode, (s) => s.means.native),
+        jsNodeVsNative: serialRatio((s) => s.means.jsNode, (s) => s.means.native),
+        wasmChromiumVsNative: serialRatio((s) => s.means.wasmChromium, (s) => s.means.native),
+        jsChromiumVsNative: serialRatio((s) => s.means.jsChromium, (s) => s.means.native),
+        jsNodeVsWasmNode: serialRatio((s) => s.means.jsNode, (s) => s.means.wasmNode),
+        jsChromiumVsWasmChromium: serialRatio((s) => s.means.jsChromium, (s) => s.means.wasmChromium),
+      },
+      naiveVsBlock,
+      zfp: zfpHeadline,
+    },
+    notes,
+    paperCheck: checkAgainstPaper(PAPER_TEX),
+    errors,
+  };
+  Object.assign(result, full);
+  const base = join(args.out, `${localDate(new Date())}-${adapterSlug}${mode === 'quick' ? '-quick' : ''}`);
+  // Arrays of numbers on one line: the samples stay readable and the file small.
+  const json = JSON.stringify(full, null, 2).replace(/\[\s+(-?[\d.eE+-]+(?:,\s+-?[\d.eE+-]+)*)\s+\]/g, (_, inner: string) => `[${inner.split(/,\s+/).join(', ')}]`);
+  mkdirSync(args.out, { recursive: true });
+  writeFileSync(`${base}.json`, json + '\n');
+  console.log(`wrote ${base}.json`);
+  writeFileSync(`${base}.md`, writeReport(full));
+  console.log(`wrote ${base}.md`);
+  console.log(`\n${mode} run: ${(total / 60).toFixed(1)} min (limit ${plan.limitSeconds / 60} min)${errors.length ? `; ${errors.length} error(s), see the report` : ''}`);
+  gpu.device.destroy();
+  if (errors.length) process.exitCode = 1;
+}
+
+main().catch((e) => {
+  if (e instanceof UsageError) {
+    console.error(`bench:paper: ${e.message}\n${USAGE}`);
+    process.exit(2);
+  }
+  console.error(e);
+  process.exit(1);
+});
