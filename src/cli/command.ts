@@ -35,6 +35,21 @@ export class UsageError extends Error {
   }
 }
 
+/**
+ * The command ran but did not do all it was asked (e.g. a surface over the
+ * memory budget): `result` is still written to --json, the message printed,
+ * and the exit status is 1.
+ */
+export class CommandFailed extends Error {
+  constructor(
+    message: string,
+    readonly result: unknown,
+  ) {
+    super(message);
+    this.name = 'CommandFailed';
+  }
+}
+
 export function stringOption(args: ParsedArgs, name: string): string | undefined {
   const v = args.values[name];
   return typeof v === 'string' ? v : undefined;

@@ -4,7 +4,7 @@ import { writeFileSync } from 'node:fs';
 import { parseArgs } from 'node:util';
 import { describeAdapter, WebGpuUnavailableError, type GpuContext } from '../gpu/device.ts';
 import { requestNodeGpu } from '../gpu/node-gpu.ts';
-import { UsageError, type CliCommand, type CliContext, type ParsedArgs } from './command.ts';
+import { CommandFailed, UsageError, type CliCommand, type CliContext, type ParsedArgs } from './command.ts';
 import { commands } from './commands/index.ts';
 
 function usage(): string {
@@ -67,15 +67,22 @@ async function main(argv: string[]): Promise<number> {
     return 0;
   }
   const ctx = makeContext();
-  try {
-    const result = await command.run(ctx, args);
+  const writeJson = (result: unknown) => {
     const json = args.values.json;
     if (typeof json === 'string') {
       writeFileSync(json, JSON.stringify(result, null, 2) + '\n');
       ctx.log(`wrote ${json}`);
     }
+  };
+  try {
+    writeJson(await command.run(ctx, args));
     return 0;
   } catch (e) {
+    if (e instanceof CommandFailed) {
+      writeJson(e.result);
+      console.error(`error: ${e.message}`);
+      return 1;
+    }
     if (e instanceof UsageError) {
       console.error(`error: ${e.message}\nusage: npm run cli -- ${command.usage}`);
       return 2;

@@ -1,6 +1,7 @@
 // From a file's bytes (or the built-in default volume) to a fixed-rate zfp
-// stream on the GPU: the one path the page, the CLI and the tests share, so
-// they compute the same surfaces for the same input.
+// stream on the GPU: the one path the page, the CLI (extract, bench), the
+// benchmarks and the tests share, so they compute the same surfaces for the
+// same input.
 //
 //   zfp with header       -> validated and uploaded as is
 //   header-less .zfp       -> shape and rate from the name (or given), uploaded
@@ -11,7 +12,9 @@
 //
 // inspectVolumeFile says what a file is and what is still missing (a raw
 // file without shape, a header-less stream without rate) so a caller can ask
-// for it; openVolumeFile does the work. Errors name the file.
+// for it; openVolumeFile does the work. openVolumeBytes does both for callers
+// that cannot ask (the CLI: what is missing must come with the call).
+// Errors name the file.
 
 import { detectFile } from '../formats/detect.ts';
 import { blockGridOf, fixedRateStreamBytes, MIN_FLOAT_BLOCK_BITS, openZfpStream } from '../zfp/format.ts';
@@ -22,6 +25,7 @@ import { DTYPE_BYTES, type DType } from './dtype.ts';
 import { formatDims, parseVolumeName, type Dims } from './naming.ts';
 import { NrrdError, parseNrrd, type NrrdVolume } from './nrrd.ts';
 import { generateDefaultVolume } from './procedural.ts';
+import type { TiffVolume } from '../loaders/tiff.ts';
 
 /** Rate (bits per value) raw volumes are compressed at unless the user picks another. */
 export const DEFAULT_RAW_RATE = 8;
@@ -40,6 +44,16 @@ export class VolumeFileError extends Error {
 }
 
 export type MissingField = 'dims' | 'dtype' | 'rate';
+
+/**
+ * Who reads the file, for the wording of errors: the page ("not a volume this
+ * page reads"; point clouds go to the LIDAR page) or a CLI command.
+ */
+export type VolumeReader = 'page' | 'command';
+
+export interface InspectOptions {
+  reader?: VolumeReader;
+}
 
 export interface VolumeFileFacts {
   fileName: string;
@@ -129,7 +143,8 @@ function sizeOf(dims: Dims, dtype: DType): number {
 }
 
 /** Says what a file is and what is missing; throws (naming the file) when it cannot be a volume. */
-export async function inspectVolumeFile(fileName: string, bytes: Uint8Array): Promise<VolumeFileFacts> {
+export async function inspectVolumeFile(fileName: string, bytes: Uint8Array, opts: InspectOptions = {}): Promise<VolumeFileFacts> {
+  const reader = opts.reader ?? 'page';
   const detected = detectFile(fileName, bytes.subarray(0, 64));
   const name = detected.name;
   const base = { fileName, bytes: bytes.byteLength };
@@ -182,13 +197,17 @@ export async function inspectVolumeFile(fileName: string, bytes: Uint8Array): Pr
       return inspectTiffStack([{ name: fileName, bytes }]);
     case 'las':
     case 'laz':
-      throw new VolumeFileError(`${fileName}: this is a ${detected.kind.toUpperCase()} point cloud, not a volume; open it in the LIDAR example page`);
+      throw new VolumeFileError(
+        reader === 'page'
+          ? `${fileName}: this is a ${detected.kind.toUpperCase()} point cloud, not a volume; open it in the LIDAR example page`
+          : `${fileName}: this is a ${detected.kind.toUpperCase()} point cloud, not a volume this command reads (\`cli las\` describes it)`,
+      );
     case 'swc':
-      throw new VolumeFileError(`${fileName}: this is an SWC neuron tracing, not a volume`);
+      throw new VolumeFileError(`${fileName}: this is an SWC neuron tracing, not a volume${reader === 'page' ? '; open it in the neuron example page' : ''}`);
     default:
       throw new VolumeFileError(
-        `${fileName}: not a volume this page reads (${detected.why}). Supported: .zfp (with header, or named name_XxYxZ_float32.raw.crateR.zfp), ` +
-          'name_XxYxZ_dtype.raw (uint8, int8, uint16, int16, float32, float64) and .nrrd',
+        `${fileName}: not a volume this ${reader} reads (${detected.why}). Supported: .zfp (with header, or named name_XxYxZ_float32.raw.crateR.zfp), ` +
+          'name_XxYxZ_dtype.raw (uint8, int8, uint16, int16, float32, float64), .nrrd and TIFF stacks',
       );
   }
 }
@@ -201,19 +220,51 @@ export async function inspectVolumeFile(fileName: string, bytes: Uint8Array): Pr
 export async function inspectTiffStack(sources: { name: string; bytes: Uint8Array | Blob }[]): Promise<VolumeFileFacts> {
   const { loadTiffStack, TiffError } = await import('../loaders/tiff.ts');
   const fileName = sources.length === 1 ? sources[0].name : `${sources[0].name} … (${sources.length} files)`;
-  let v: Awaited<ReturnType<typeof loadTiffStack>>;
+  let v: TiffVolume;
   try {
     v = await loadTiffStack(sources);
   } catch (e) {
     if (e instanceof TiffError) throw new VolumeFileError(e.message);
     throw e;
   }
-  if (v.samplesPerPixel !== 1) {
-    throw new VolumeFileError(`${fileName}: ${v.samplesPerPixel} samples per pixel (colour); an isosurface needs one value per voxel (save a single channel)`);
-  }
+  const bytes = sources.reduce((n, s) => n + (s.bytes instanceof Blob ? s.bytes.size : s.bytes.byteLength), 0);
+  return tiffVolumeFacts(fileName, v, bytes);
+}
+
+export interface TiffFactsOptions {
+  /**
+   * Several samples per pixel: refuse (the default; an isosurface of colour
+   * makes no sense) or take their mean as float32 (what the neuron page's
+   * volume rendering shows of multi-channel stacks).
+   */
+  channels?: 'refuse' | 'mean';
+}
+
+/**
+ * The facts of a TIFF stack already decoded by libtiff (src/loaders/tiff.ts),
+ * so a page that shows the stack itself compresses the same samples without
+ * decoding the files again. The samples are shared with `v` where their type
+ * needs no conversion (layout [page][y][x] = voxel (x, y, z), x fastest, as
+ * the encoder takes it).
+ */
+export function tiffVolumeFacts(fileName: string, v: TiffVolume, bytes: number, opts: TiffFactsOptions = {}): VolumeFileFacts {
+  const channels = v.samplesPerPixel;
   let dtype: DType;
   let data: ArrayBufferView;
-  if (v.dtype === 'uint32' || v.dtype === 'int32') {
+  if (channels !== 1) {
+    if (opts.channels !== 'mean') {
+      throw new VolumeFileError(`${fileName}: ${channels} samples per pixel (colour); an isosurface needs one value per voxel (save a single channel)`);
+    }
+    const n = v.data.length / channels;
+    const mean = new Float32Array(n);
+    for (let i = 0; i < n; i++) {
+      let s = 0;
+      for (let c = 0; c < channels; c++) s += v.data[i * channels + c];
+      mean[i] = s / channels;
+    }
+    dtype = 'float32';
+    data = mean;
+  } else if (v.dtype === 'uint32' || v.dtype === 'int32') {
     dtype = 'float64';
     data = Float64Array.from(v.data as ArrayLike<number>);
   } else {
@@ -221,7 +272,6 @@ export async function inspectTiffStack(sources: { name: string; bytes: Uint8Arra
     data = v.data;
   }
   const samples = new Uint8Array(data.buffer, data.byteOffset, data.byteLength);
-  const bytes = sources.reduce((n, s) => n + (s.bytes instanceof Blob ? s.bytes.size : s.bytes.byteLength), 0);
   return { fileName, kind: 'tiff', bytes, dims: v.dims, dtype, missing: [], compresses: true, samples, files: v.files };
 }
 
@@ -280,6 +330,61 @@ export async function openVolumeFile(device: GPUDevice, facts: VolumeFileFacts, 
       return { ...common, stream, dims, sourceDtype: dtype, compressedBytes: stream.info.paddedBytes, rate: stream.info.rate, compressedHere: true };
     }
   }
+}
+
+/** Compresses an uncompressed volume on the GPU (fixed rate, with header), with the device's shared encoder. */
+export async function compressOnGpu(device: GPUDevice, data: Uint8Array, dtype: DType, dims: Dims, rate: number, fileName: string): Promise<ZfpGpuStream> {
+  const encoder = await encoderFor(device);
+  return encoder.compressToStream(data, dtype, dims, rate, { header: true, fileName });
+}
+
+export interface OpenBytesOptions extends OpenOptions, InspectOptions {
+  /**
+   * Raw, NRRD, TIFF: the rate to compress at (default DEFAULT_RAW_RATE).
+   * Header-less zfp: the stream's rate when the name carries none.
+   */
+  rate?: number;
+  /** Shape and sample type of a raw file whose name carries none. */
+  dims?: Dims;
+  dtype?: DType;
+}
+
+/** Why `facts` cannot be opened without asking, worded for `reader`. */
+function missingMessage(facts: VolumeFileFacts, reader: VolumeReader): string {
+  const { fileName } = facts;
+  if (facts.kind === 'raw') {
+    return `${fileName}: a raw volume needs its shape and type in the name (name_XxYxZ_dtype.raw)`;
+  }
+  if (facts.missing.includes('dims')) return `${fileName}: no zfp header and no shape in the name (name it name_XxYxZ_float32.raw.crateR.zfp)`;
+  const fit = facts.fittingRates?.length ? ` (rates that fit its size: ${facts.fittingRates.join(', ')})` : '';
+  return `${fileName}: no zfp header and no rate in the name (name_XxYxZ_float32.raw.crateR.zfp)${reader === 'command' ? '; give it with --rate R' : ''}${fit}`;
+}
+
+/**
+ * Inspects and opens in one step, for callers that cannot ask (the CLI):
+ * what the file does not say must be in `opts`, else a VolumeFileError says
+ * what is missing. Header-less streams take the rate in their name first.
+ */
+export async function openVolumeBytes(device: GPUDevice, bytes: Uint8Array, fileName: string, opts: OpenBytesOptions = {}): Promise<OpenedVolume> {
+  const reader = opts.reader ?? 'command';
+  const facts = await inspectVolumeFile(fileName, bytes, { reader });
+  const req: OpenRequest = {};
+  if (facts.kind === 'zfp-headerless') req.rate = facts.rate ?? opts.rate;
+  else if (facts.compresses) req.rate = opts.rate;
+  if (facts.missing.includes('dims')) req.dims = opts.dims;
+  if (facts.missing.includes('dtype')) req.dtype = opts.dtype;
+  const unmet = facts.missing.filter((m) => req[m] === undefined);
+  if (unmet.length > 0) throw new VolumeFileError(missingMessage(facts, reader));
+  return openVolumeFile(device, facts, bytes, req, opts);
+}
+
+const KIND_LABEL: Record<VolumeFileKind, string> = { zfp: 'zfp file', 'zfp-headerless': 'header-less zfp file', raw: 'raw', nrrd: 'NRRD', tiff: 'TIFF stack' };
+
+/** One line on what was opened and how, e.g. "uint8 raw 66x66x66 compressed on the GPU at rate 8" (CLI logs and JSON). */
+export function describeOpenedVolume(v: OpenedVolume): string {
+  if (v.kind === 'default') return `the built-in volume "${v.name}", ${formatDims(v.dims)} float32 compressed on the GPU at rate ${v.rate}`;
+  if (!v.compressedHere) return `${KIND_LABEL[v.kind]} (${v.stream.info.mode}), used as is`;
+  return `${KIND_LABEL[v.kind]} ${formatDims(v.dims)} ${v.sourceDtype} compressed on the GPU at rate ${v.rate}`;
 }
 
 /** The built-in volume (procedural.ts), compressed on the GPU at DEFAULT_VOLUME_RATE. */

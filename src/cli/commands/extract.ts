@@ -1,22 +1,25 @@
 // `extract IN --iso a,b,c [--rate R] [--cache-budget MB] [--ply PREFIX]`:
 // isosurfaces of a volume with the GPU pipeline (src/isosurface/), one after
 // the other with the block cache kept between them. IN is a zfp file or an
-// uncompressed volume (raw `name_XxYxZ_dtype.raw`, NRRD), compressed on the
-// GPU at --rate (default 8) first, or `default`: the page's built-in volume. Per isovalue: counts, cache behaviour,
-// surface area and bounding box in voxel index space (voxel (i, j, k) at
-// (i, j, k), as VTK places them), GPU time; --ply writes each soup.
+// uncompressed volume (raw `name_XxYxZ_dtype.raw`, NRRD, TIFF stack),
+// compressed on the GPU at --rate (default 8) first, or `default`: the page's
+// built-in volume; opened as the page opens it (src/volume/open-volume.ts).
+// Per isovalue: counts, cache behaviour, surface area and bounding box in
+// voxel index space (voxel (i, j, k) at (i, j, k), as VTK places them), GPU
+// time; --ply writes each soup. A surface over the memory budget is recorded
+// as {iso, error}, the others are still computed, and the exit status is 1.
 import { readFileSync, writeFileSync } from 'node:fs';
 import { basename } from 'node:path';
 import { describeAdapter } from '../../gpu/device.ts';
 import { Isosurface } from '../../isosurface/isosurface.ts';
 import { soupToPly } from '../../isosurface/ply.ts';
+import { formatMB } from '../../isosurface/budget.ts';
 import { IsosurfaceBudgetError } from '../../isosurface/types.ts';
 import { decodeVertices } from '../../isosurface/vertex-format.ts';
-import { loadVolumeInput, VolumeInputError } from '../../isosurface/volume-input.ts';
-import { isDefaultVolume, openDefaultVolume } from '../../volume/open-volume.ts';
+import { describeOpenedVolume, isDefaultVolume, openDefaultVolume, openVolumeBytes, VolumeFileError } from '../../volume/open-volume.ts';
 import { meshMetrics } from '../../mc/mesh-metrics.ts';
 import { ZfpFormatError } from '../../zfp/format.ts';
-import { numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
+import { CommandFailed, numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
 
 export interface ExtractRecord {
   iso: number;
@@ -43,19 +46,23 @@ export function budgetOption(args: Parameters<typeof numberOption>[0]): number |
   return mb * 2 ** 20;
 }
 
-/** Opens IN as a GPU zfp stream, with user mistakes as UsageErrors (shared with `bench`). */
+/** Opens IN as a GPU zfp stream (src/volume/open-volume.ts, as the page does), with user mistakes as UsageErrors (shared with `bench`). */
 export async function openInput(device: GPUDevice, path: string, rate: number | undefined) {
   if (rate !== undefined && !(rate > 0)) throw new UsageError('--rate must be positive');
-  if (isDefaultVolume(path)) {
-    // The page's built-in volume (src/volume/open-volume.ts): same field, same rate, same stream.
-    const v = await openDefaultVolume(device, rate === undefined ? {} : { rate });
-    return { stream: v.stream, how: `the built-in volume "${v.name}", ${v.dims.join('x')} float32 compressed on the GPU at rate ${v.rate}`, rate: v.rate };
+  // `default`: the page's built-in volume, same field, same rate, same stream.
+  let bytes: Uint8Array | undefined;
+  if (!isDefaultVolume(path)) {
+    try {
+      bytes = new Uint8Array(readFileSync(path));
+    } catch (e) {
+      throw new UsageError(`cannot read ${path}: ${(e as Error).message}`);
+    }
   }
-  const bytes = new Uint8Array(readFileSync(path));
   try {
-    return await loadVolumeInput(device, bytes, basename(path), { rate });
+    const v = bytes ? await openVolumeBytes(device, bytes, basename(path), { rate, reader: 'command' }) : await openDefaultVolume(device, rate === undefined ? {} : { rate });
+    return { stream: v.stream, how: describeOpenedVolume(v), rate: v.rate };
   } catch (e) {
-    if (e instanceof VolumeInputError || e instanceof ZfpFormatError) throw new UsageError(e.message);
+    if (e instanceof VolumeFileError || e instanceof ZfpFormatError) throw new UsageError(e.message);
     throw e;
   }
 }
@@ -124,7 +131,7 @@ export const extractCommand: CliCommand = {
       iso.destroy();
       volume.stream.destroy();
     }
-    return {
+    const result = {
       input,
       how: volume.how,
       dims: iso.info.dims,
@@ -134,5 +141,15 @@ export const extractCommand: CliCommand = {
       memoryBudgetBytes: iso.memoryBudget,
       isosurfaces: records,
     };
+    // Surfaces that did not fit are failures: the JSON still gets every record, then the exit status says so.
+    const failed = records.filter((r): r is { iso: number; error: string } => 'error' in r);
+    if (failed.length > 0) {
+      throw new CommandFailed(
+        `${failed.length} of ${records.length} isosurfaces did not fit the GPU memory budget of ${formatMB(iso.memoryBudget)} ` +
+          `(iso ${failed.map((f) => f.iso).join(', ')}); raise it with --cache-budget MB`,
+        result,
+      );
+    }
+    return result;
   },
 };

@@ -1,6 +1,6 @@
 // The shared volume-opening path (page and CLI): what each kind of file is,
-// what must be asked, the errors users see, and that what is opened decodes
-// to the same values as the codec's own path.
+// what must be asked (page) or given (CLI), the errors users see, and that
+// what is opened decodes to the same values as the codec's own path.
 import { readFileSync } from 'node:fs';
 import { join } from 'node:path';
 import { describe, expect, it } from 'vitest';
@@ -9,9 +9,11 @@ import { ZfpEncoder } from '../../../src/zfp/encoder.ts';
 import { loadZfpStream } from '../../../src/zfp/gpu-stream.ts';
 import {
   DEFAULT_VOLUME_RATE,
+  describeOpenedVolume,
   fittingRates,
   inspectVolumeFile,
   openDefaultVolume,
+  openVolumeBytes,
   openVolumeFile,
 } from '../../../src/volume/open-volume.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
@@ -70,7 +72,10 @@ describe('inspectVolumeFile', () => {
   });
 
   it('points non-volumes elsewhere', async () => {
-    await expect(inspectVolumeFile('laspy_simple.las', read(join(sharedData, 'las'), 'laspy_simple.las'))).rejects.toThrow(/point cloud/);
+    const las = read(join(sharedData, 'las'), 'laspy_simple.las');
+    await expect(inspectVolumeFile('laspy_simple.las', las)).rejects.toThrow(/point cloud, not a volume; open it in the LIDAR example page/);
+    await expect(inspectVolumeFile('laspy_simple.las', las, { reader: 'command' })).rejects.toThrow(/point cloud, not a volume this command reads/);
+    await expect(inspectVolumeFile('notes.txt', new TextEncoder().encode('hello'), { reader: 'command' })).rejects.toThrow(/^notes\.txt: not a volume this command reads/);
     await expect(inspectVolumeFile('notes.txt', new TextEncoder().encode('hello'))).rejects.toThrow(/^notes\.txt: not a volume/);
     await expect(inspectVolumeFile('bad.nrrd', new TextEncoder().encode('NRRD0004\ntype: float\ndimension: 2\nsizes: 2 2\nencoding: raw\n\n'))).rejects.toThrow(/^bad\.nrrd: only 3D/);
   });
@@ -133,5 +138,41 @@ describe('openVolumeFile', () => {
     expect(a).toEqual(b);
     opened.stream.destroy();
     same.destroy();
+  });
+});
+
+describe('openVolumeBytes (the CLI: what the file does not say comes with the call)', () => {
+  gpuTest('header-less streams: the rate in the name first, else the one given, else a message', async ({ gpu }) => {
+    const bytes = read(vectors, 'fuel_p8decoded_64x64x64_float32.rate4.zfp');
+    const expected = new Float32Array(read(vectors, 'fuel_p8decoded_64x64x64_float32.rate4.decoded.raw').buffer);
+    await expect(openVolumeBytes(gpu.device, bytes, 'fuel_64x64x64_float32.zfp')).rejects.toThrow(
+      /^fuel_64x64x64_float32\.zfp: no zfp header and no rate in the name .*give it with --rate R \(rates that fit its size: 4\)$/,
+    );
+    const named = await openVolumeBytes(gpu.device, bytes, 'fuel_64x64x64_float32.rate4.zfp', { rate: 5 });
+    const given = await openVolumeBytes(gpu.device, bytes, 'fuel_64x64x64_float32.zfp', { rate: 4 });
+    for (const v of [named, given]) {
+      expect(v).toMatchObject({ kind: 'zfp-headerless', rate: 4, compressedHere: false });
+      expect(await decode(gpu.device, v.stream)).toEqual(expected);
+      v.stream.destroy();
+    }
+    expect(describeOpenedVolume(named)).toMatch(/^header-less zfp file \(fixed rate 4.*\), used as is$/);
+  });
+
+  gpuTest('raw volumes: shape and type from the name or given; TIFF stacks as the page compresses them', async ({ gpu }) => {
+    const bytes = read(volumes, 'neghip_66x66x66_uint8.raw');
+    await expect(openVolumeBytes(gpu.device, bytes, 'scan.raw')).rejects.toThrow(/^scan\.raw: a raw volume needs its shape and type in the name/);
+    const given = await openVolumeBytes(gpu.device, bytes, 'scan.raw', { dims: [66, 66, 66], dtype: 'uint8', rate: 6 });
+    const facts = await inspectVolumeFile('neghip_66x66x66_uint8.raw', bytes);
+    const page = await openVolumeFile(gpu.device, facts, bytes, { rate: 6 });
+    expect(await given.stream.readBytes()).toEqual(await page.stream.readBytes());
+    expect(describeOpenedVolume(given)).toBe('raw 66x66x66 uint8 compressed on the GPU at rate 6');
+
+    const tif = read(join(sharedData, 'tiff'), 'imagejs_stack.tif');
+    const cli = await openVolumeBytes(gpu.device, tif, 'imagejs_stack.tif');
+    const pageTiff = await openVolumeFile(gpu.device, await inspectVolumeFile('imagejs_stack.tif', tif), tif, {});
+    expect(cli).toMatchObject({ kind: 'tiff', dims: [128, 128, 10], sourceDtype: 'uint16', rate: 8 });
+    expect(await cli.stream.readBytes()).toEqual(await pageTiff.stream.readBytes());
+    expect(describeOpenedVolume(cli)).toBe('TIFF stack 128x128x10 uint16 compressed on the GPU at rate 8');
+    for (const v of [given, page, cli, pageTiff]) v.stream.destroy();
   });
 });
