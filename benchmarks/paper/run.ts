@@ -61,7 +61,8 @@ interface Plan {
  * there), so 50 surfaces on a 256^3 volume; the block pipeline (1-2 s per
  * bonsai surface) keeps 100 per mode up to 256^3. Both scale down with the
  * volume beyond. Measured on the 2-core development machine under load: about
- * 15 minutes in all. Quick: fuel and hydrogen, 10 of everything, 3 decode runs.
+ * 15 minutes in all. Quick: fuel and hydrogen, 20 isovalues for serial MC and
+ * 10 for the GPU methods, 3 decode runs: about a minute.
  */
 const PLANS: Record<'full' | 'quick', Plan> = {
   full: {
@@ -79,7 +80,7 @@ const PLANS: Record<'full' | 'quick', Plan> = {
   quick: {
     limitSeconds: 5 * 60,
     sharedVolumes: ['fuel', 'hydrogen'],
-    serial: 10,
+    serial: 20,
     naiveCount: () => 10,
     blockCount: () => 10,
     zfpRuns: 3,
@@ -94,7 +95,7 @@ const PLANS: Record<'full' | 'quick', Plan> = {
 
 const USAGE = `usage: npm run bench:paper -- [--quick] [--volume FILE[:lo,hi]]... [--volumes fuel,hydrogen,bonsai|none]
        [--count N] [--seed S] [--rate R] [--no-browser] [--browser-webgpu] [--out DIR]
-  --quick            fuel and hydrogen, 10 isovalues, 3 decode runs (about 3-5 minutes)
+  --quick            fuel and hydrogen, 20 isovalues for serial MC, 10 for the GPU methods, 3 decode runs (1-2 minutes)
   --volume FILE      also a volume of yours: zfp (fixed rate) or name_XxYxZ_dtype.raw (compressed on the GPU at --rate, default 8);
                      :lo,hi gives its isovalue range (default: from the data)
   --volumes LIST     which shared volumes (default: all three; quick: fuel,hydrogen)
