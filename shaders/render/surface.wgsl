@@ -8,12 +8,17 @@
 // VTK's ComputeNormals gives, without a normal buffer. A neighbour voxel in a
 // block that is not cached (or outside the volume) gives a one-sided
 // difference instead.
+//
+// World space: voxel (i, j, k) sits at (i, j, k) * voxel_size (1 on the main
+// page; a microscope stack's spacing on the neuron page, where the surface
+// shares the space of the volume rendering and the traces).
 struct Surface {
   block_grid: vec4u,   // blocks per axis; w: 1 = gradient normals, 0 = flat
   dims: vec4i,         // voxels per axis
   front: vec4f,        // front (outside) colour; a: ambient
   back: vec4f,         // back (inside) colour;  a: specular strength
   extra: vec4f,        // x: rim strength, y: depth cue, z: near, w: far (eye distance)
+  voxel_size: vec4f,   // xyz: world size of a voxel
 };
 @group(1) @binding(0) var<uniform> surface: Surface;
 @group(1) @binding(1) var<storage, read> slot_data: array<f32>;
@@ -22,7 +27,9 @@ struct Surface {
 const NOT_CACHED: u32 = 0xffffffffu;
 
 struct VsOut {
-  @builtin(position) clip: vec4f,
+  // Invariant: the depth-only entry point (vs_depth) must put every vertex at
+  // exactly the same depth, so the volume renderer stops where the surface is drawn.
+  @builtin(position) @invariant clip: vec4f,
   @location(0) world: vec3f,
   // Toward decreasing values (out of the value >= iso region); zero when unknown.
   @location(1) normal: vec3f,
@@ -85,17 +92,33 @@ fn edge_gradient(p: vec3f) -> vec3f {
   return mix(gradient(g0), gradient(g0 + axis), t);
 }
 
+fn world_of(p: vec3f) -> vec3f {
+  return p * surface.voxel_size.xyz;
+}
+
 @vertex
 fn vs(@location(0) v: vec2u) -> VsOut {
   let p = decode_vertex_position(v.x, v.y, surface.block_grid.xyz);
   var out: VsOut;
-  out.clip = frame.view_proj * vec4f(p, 1.0);
-  out.world = p;
+  out.world = world_of(p);
+  out.clip = frame.view_proj * vec4f(out.world, 1.0);
   out.normal = vec3f(0.0);
   if (surface.block_grid.w != 0u) {
-    out.normal = -edge_gradient(p);
+    // The gradient in index space, per world unit: d/dx_world = d/dx_index / voxel size.
+    out.normal = -edge_gradient(p) / surface.voxel_size.xyz;
   }
   return out;
+}
+
+struct DepthOut {
+  @builtin(position) @invariant clip: vec4f,
+};
+
+// Depth only (opaque-layer pre-pass of the neuron page): no normals, so no cache reads.
+@vertex
+fn vs_depth(@location(0) v: vec2u) -> DepthOut {
+  let p = decode_vertex_position(v.x, v.y, surface.block_grid.xyz);
+  return DepthOut(frame.view_proj * vec4f(world_of(p), 1.0));
 }
 
 fn to_srgb(c: vec3f) -> vec3f {

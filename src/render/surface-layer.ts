@@ -1,7 +1,9 @@
 // Draws the isosurface: the compressed-vertex soup of an IsosurfaceDrawData
 // (one vertex buffer and one GPU-written drawIndirect record per shard), lit
 // with smooth normals from the volume gradient read from the block cache
-// (see shaders/render/surface.wgsl), two-sided, with a headlight.
+// (see shaders/render/surface.wgsl), two-sided, with a headlight. Voxel
+// (i, j, k) is drawn at (i, j, k) * voxelSize; with `depthPrepass` it also
+// draws its depth alone, for a volume renderer that stops its rays there.
 
 import { vec3 } from 'gl-matrix';
 import surfaceWgsl from '../../shaders/render/surface.wgsl?raw';
@@ -45,11 +47,18 @@ export const DEFAULT_SURFACE_STYLE: SurfaceStyle = {
   depthCue: 0.35,
 };
 
-const UNIFORM_BYTES = 80;
+const UNIFORM_BYTES = 96;
+
+export interface SurfaceLayerOptions {
+  /** Also build the depth-only pipeline (drawDepth), for a depth pre-pass of opaque layers. */
+  depthPrepass?: boolean;
+}
 
 export class SurfaceLayer implements RenderLayer {
   visible = true;
   style: SurfaceStyle = { ...DEFAULT_SURFACE_STYLE };
+  /** World size of a voxel (a microscope stack's spacing); the main page draws in voxel units. */
+  voxelSize: [number, number, number] = [1, 1, 1];
   private data: IsosurfaceDrawData | undefined;
   private bindGroup: GPUBindGroup | undefined;
   private boundVersion = -1;
@@ -60,6 +69,7 @@ export class SurfaceLayer implements RenderLayer {
     private readonly target: RenderTarget,
     private readonly pipeline: GPURenderPipeline,
     private readonly layout: GPUBindGroupLayout,
+    private readonly depthPipeline: GPURenderPipeline | undefined,
   ) {
     this.uniforms = target.device.createBuffer({
       label: 'SurfaceLayer.uniforms',
@@ -68,7 +78,7 @@ export class SurfaceLayer implements RenderLayer {
     });
   }
 
-  static async create(target: RenderTarget): Promise<SurfaceLayer> {
+  static async create(target: RenderTarget, options: SurfaceLayerOptions = {}): Promise<SurfaceLayer> {
     const { device } = target;
     const module = await createShaderModule(device, 'SurfaceLayer.shader', [
       frameSnippet,
@@ -83,20 +93,31 @@ export class SurfaceLayer implements RenderLayer {
         { binding: 2, visibility: GPUShaderStage.VERTEX, buffer: { type: 'read-only-storage' } },
       ],
     });
-    const pipeline = await device.createRenderPipelineAsync({
-      label: 'SurfaceLayer.pipeline',
-      layout: device.createPipelineLayout({ label: 'SurfaceLayer', bindGroupLayouts: [target.frameBindGroupLayout, layout] }),
-      vertex: {
-        module,
-        entryPoint: 'vs',
-        buffers: [{ arrayStride: 8, stepMode: 'vertex', attributes: [{ shaderLocation: 0, offset: 0, format: 'uint32x2' }] }],
-      },
-      fragment: { module, entryPoint: 'fs', targets: [{ format: target.format }] },
-      // Two-sided: no culling; the fragment shader tells the sides apart.
-      primitive: { topology: 'triangle-list', cullMode: 'none' },
-      depthStencil: { format: DEPTH_FORMAT, depthWriteEnabled: true, depthCompare: 'less' },
-    });
-    return new SurfaceLayer(target, pipeline, layout);
+    const pipelineLayout = device.createPipelineLayout({ label: 'SurfaceLayer', bindGroupLayouts: [target.frameBindGroupLayout, layout] });
+    const buffers: GPUVertexBufferLayout[] = [{ arrayStride: 8, stepMode: 'vertex', attributes: [{ shaderLocation: 0, offset: 0, format: 'uint32x2' }] }];
+    // Two-sided: no culling; the fragment shader tells the sides apart.
+    const primitive: GPUPrimitiveState = { topology: 'triangle-list', cullMode: 'none' };
+    const depthStencil: GPUDepthStencilState = { format: DEPTH_FORMAT, depthWriteEnabled: true, depthCompare: 'less' };
+    const [pipeline, depthPipeline] = await Promise.all([
+      device.createRenderPipelineAsync({
+        label: 'SurfaceLayer.pipeline',
+        layout: pipelineLayout,
+        vertex: { module, entryPoint: 'vs', buffers },
+        fragment: { module, entryPoint: 'fs', targets: [{ format: target.format }] },
+        primitive,
+        depthStencil,
+      }),
+      options.depthPrepass
+        ? device.createRenderPipelineAsync({
+            label: 'SurfaceLayer.depthPipeline',
+            layout: pipelineLayout,
+            vertex: { module, entryPoint: 'vs_depth', buffers },
+            primitive,
+            depthStencil,
+          })
+        : undefined,
+    ]);
+    return new SurfaceLayer(target, pipeline, layout, depthPipeline);
   }
 
   /** The surface to draw (undefined: nothing). Bind groups follow `data.version`. */
@@ -138,24 +159,42 @@ export class SurfaceLayer implements RenderLayer {
     i32.set([...info.dims, 0], 4);
     f32.set([...s.front, s.ambient], 8);
     f32.set([...s.back, s.specular], 12);
-    // Depth-cue range: the eye distance to the volume's bounding sphere.
-    const centre = vec3.fromValues((info.dims[0] - 1) / 2, (info.dims[1] - 1) / 2, (info.dims[2] - 1) / 2);
-    const radius = 0.5 * Math.hypot(info.dims[0] - 1, info.dims[1] - 1, info.dims[2] - 1);
+    // Depth-cue range: the eye distance to the volume's bounding sphere (world space).
+    const extent = [0, 1, 2].map((a) => (info.dims[a] - 1) * this.voxelSize[a]);
+    const centre = vec3.fromValues(extent[0] / 2, extent[1] / 2, extent[2] / 2);
+    const radius = 0.5 * Math.hypot(extent[0], extent[1], extent[2]);
     const eyeDist = vec3.distance(this.target.camera.eyePosition(), centre);
     f32.set([s.rim, s.depthCue, Math.max(0, eyeDist - radius), eyeDist + radius], 16);
+    f32.set([...this.voxelSize, 0], 20);
     this.target.device.queue.writeBuffer(this.uniforms, 0, this.scratch);
   }
 
-  draw(pass: GPURenderPassEncoder): void {
+  /** Whether there is a surface to draw (DepthDrawer of a depth pre-pass). */
+  get hasDepth(): boolean {
+    return this.visible && this.data !== undefined && this.data.shards.length > 0;
+  }
+
+  private drawWith(pass: GPURenderPassEncoder, pipeline: GPURenderPipeline): void {
     const data = this.data;
     if (!this.visible || !data || data.shards.length === 0) return;
+    // Written at every draw (the camera moves); the pre-pass and the frame see the same values.
     this.writeUniforms(data);
-    pass.setPipeline(this.pipeline);
+    pass.setPipeline(pipeline);
     pass.setBindGroup(1, this.ensureBindGroup(data));
     for (const shard of data.shards) {
       pass.setVertexBuffer(0, shard.vertices);
       pass.drawIndirect(shard.drawArgs, shard.drawArgsOffset);
     }
+  }
+
+  draw(pass: GPURenderPassEncoder): void {
+    this.drawWith(pass, this.pipeline);
+  }
+
+  /** Depth only, into a pass with a depth attachment and no colour target (needs `depthPrepass`). */
+  drawDepth(pass: GPURenderPassEncoder): void {
+    if (!this.depthPipeline) throw new Error('SurfaceLayer.drawDepth: create the layer with { depthPrepass: true }');
+    this.drawWith(pass, this.depthPipeline);
   }
 
   destroy(): void {

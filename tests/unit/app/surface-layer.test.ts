@@ -1,7 +1,10 @@
 // The surface renderer on Dawn, off screen: a sphere's isosurface is drawn
 // lit in the outside colour from outside and in the inside colour from
 // within; gradient normals shade it smoothly where flat normals show facets;
-// uncached neighbour blocks (one-sided differences) still shade sensibly.
+// uncached neighbour blocks (one-sided differences) still shade sensibly;
+// anisotropic voxels put it where the camera's projection of the scaled soup
+// is; the depth-only pass writes exactly the depths the lit pass draws at.
+import { mat4, vec4 } from 'gl-matrix';
 import { describe, expect } from 'vitest';
 import { ArcballCamera } from '../../../src/render/camera.ts';
 import { SurfaceLayer } from '../../../src/render/surface-layer.ts';
@@ -21,7 +24,8 @@ function sphereVolume(n: number): Float32Array {
   return v;
 }
 
-async function render(device: GPUDevice, layer: SurfaceLayer, camera: ArcballCamera, layout: GPUBindGroupLayout): Promise<Uint8Array> {
+/** The layer drawn into a SIZE x SIZE image; with `prepass`, its depth alone first into the same depth buffer. */
+async function render(device: GPUDevice, layer: SurfaceLayer, camera: ArcballCamera, layout: GPUBindGroupLayout, prepass = false): Promise<Uint8Array> {
   const color = device.createTexture({ size: [SIZE, SIZE], format: 'rgba8unorm', usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC });
   const depth = device.createTexture({ size: [SIZE, SIZE], format: DEPTH_FORMAT, usage: GPUTextureUsage.RENDER_ATTACHMENT });
   const uniforms = device.createBuffer({ size: FRAME_UNIFORM_BYTES, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
@@ -29,9 +33,18 @@ async function render(device: GPUDevice, layer: SurfaceLayer, camera: ArcballCam
   const group = device.createBindGroup({ layout, entries: [{ binding: 0, resource: { buffer: uniforms } }] });
   const read = device.createBuffer({ size: SIZE * SIZE * 4, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
   const encoder = device.createCommandEncoder();
+  if (prepass) {
+    const depthPass = encoder.beginRenderPass({
+      colorAttachments: [],
+      depthStencilAttachment: { view: depth.createView(), depthClearValue: 1, depthLoadOp: 'clear', depthStoreOp: 'store' },
+    });
+    depthPass.setBindGroup(0, group);
+    layer.drawDepth(depthPass);
+    depthPass.end();
+  }
   const pass = encoder.beginRenderPass({
     colorAttachments: [{ view: color.createView(), clearValue: { r: 0, g: 0, b: 0, a: 1 }, loadOp: 'clear', storeOp: 'store' }],
-    depthStencilAttachment: { view: depth.createView(), depthClearValue: 1, depthLoadOp: 'clear', depthStoreOp: 'store' },
+    depthStencilAttachment: { view: depth.createView(), depthClearValue: 1, depthLoadOp: prepass ? 'load' : 'clear', depthStoreOp: 'store' },
   });
   pass.setBindGroup(0, group);
   layer.draw(pass);
@@ -137,6 +150,64 @@ describe('SurfaceLayer', () => {
     expect(covered).toBeGreaterThan(SIZE * SIZE * 0.08);
     // One-sided differences of a smooth field: nearly the same image.
     expect(diff / covered / 3).toBeLessThan(12);
+    layer.destroy();
+    surface.destroy();
+  });
+
+  gpuTest('draws voxel (i, j, k) at (i, j, k) * voxelSize', async ({ gpu }) => {
+    const { device } = gpu;
+    const dims: Dims = [24, 24, 24];
+    const values = sphereVolume(24);
+    const surface = createCpuSurface(device, values, dims, 11.3);
+    const frameLayout = createFrameBindGroupLayout(device);
+    const camera = new ArcballCamera();
+    const layer = await SurfaceLayer.create({ device, format: 'rgba8unorm', frameBindGroupLayout: frameLayout, camera });
+    layer.setDrawData(surface.data);
+    layer.voxelSize = [1, 0.75, 2.5];
+    camera.fit({ min: [0, 0, 0], max: [23, 17.25, 57.5] });
+    const img = await render(device, layer, camera, frameLayout);
+    // The covered pixels' bounding box, against the CPU projection of the scaled soup's vertices.
+    const box = (xs: number[], ys: number[]) => [Math.min(...xs), Math.min(...ys), Math.max(...xs), Math.max(...ys)];
+    const xs: number[] = [], ys: number[] = [];
+    for (let y = 0; y < SIZE; y++) for (let x = 0; x < SIZE; x++) if (lum(img, x, y) > 0) (xs.push(x), ys.push(y));
+    const drawn = box(xs, ys);
+    const vp = camera.viewProjection(mat4.create());
+    const soup = marchingCubes(values, dims, 11.3).positions;
+    const px: number[] = [], py: number[] = [];
+    for (let i = 0; i < soup.length; i += 3) {
+      const c = vec4.transformMat4(vec4.create(), [soup[i], soup[i + 1] * 0.75, soup[i + 2] * 2.5, 1], vp);
+      px.push(((c[0] / c[3] + 1) / 2) * SIZE - 0.5);
+      py.push(((1 - c[1] / c[3]) / 2) * SIZE - 0.5);
+    }
+    const expected = box(px, py);
+    // An ellipsoid 2.5x taller than wide, not the sphere of the unscaled soup.
+    expect(drawn[3] - drawn[1]).toBeGreaterThan(1.8 * (drawn[2] - drawn[0]));
+    drawn.forEach((v, i) => expect(Math.abs(v - expected[i])).toBeLessThanOrEqual(1.5));
+    layer.destroy();
+    surface.destroy();
+  });
+
+  gpuTest('the depth-only pass writes the depths the lit pass draws at', async ({ gpu }) => {
+    const { device } = gpu;
+    const dims: Dims = [24, 24, 24];
+    const surface = createCpuSurface(device, sphereVolume(24), dims, 11.3);
+    const frameLayout = createFrameBindGroupLayout(device);
+    const camera = new ArcballCamera();
+    const layer = await SurfaceLayer.create({ device, format: 'rgba8unorm', frameBindGroupLayout: frameLayout, camera }, { depthPrepass: true });
+    layer.setDrawData(surface.data);
+    layer.voxelSize = [0.5, 0.5, 1.5];
+    camera.fit({ min: [0, 0, 0], max: [11.5, 11.5, 34.5] });
+    expect(layer.hasDepth).toBe(true);
+    const covered = (img: Uint8Array) => {
+      let n = 0;
+      for (let i = 0; i < SIZE * SIZE; i++) if (img[4 * i] + img[4 * i + 1] + img[4 * i + 2] > 0) n++;
+      return n;
+    };
+    expect(covered(await render(device, layer, camera, frameLayout))).toBeGreaterThan(SIZE * SIZE * 0.05);
+    // Depth test 'less' against the pre-pass: every fragment ties with what the pre-pass wrote, so none is drawn.
+    expect(covered(await render(device, layer, camera, frameLayout, true))).toBe(0);
+    layer.visible = false;
+    expect(layer.hasDepth).toBe(false);
     layer.destroy();
     surface.destroy();
   });
