@@ -5,7 +5,6 @@
 // stays. A newer load cancels an older one.
 
 import type { GpuContext } from '../../gpu/device.ts';
-import type { IsosurfaceStats } from '../../isosurface/types.ts';
 import {
   inspectTiffStack,
   inspectVolumeFile,
@@ -15,19 +14,14 @@ import {
   type OpenPhase,
   type VolumeFileFacts,
 } from '../../volume/open-volume.ts';
-import { createIsosurface, type PageIsosurface } from '../engine.ts';
+import type { PageIsosurface } from '../engine.ts';
 import { formatBytes } from '../format.ts';
 import type { ProgressView } from '../ui/progress.ts';
 import type { VolumeForm } from '../ui/volume-form.ts';
+import { loadErrorMessage, openFirstSurface, type SurfaceVolume } from './first-surface.ts';
 import { fetchVolume, fileNameOfUrl, LoadCancelled, readFile, resolveSameOrigin } from './read.ts';
 
-export interface LoadedVolume {
-  opened: OpenedVolume;
-  iso: PageIsosurface;
-  /** [min, max] per block. */
-  ranges: Float32Array;
-  initialIso: number;
-  firstStats: IsosurfaceStats;
+export interface LoadedVolume extends SurfaceVolume {
   /** How long the whole load took, ms. */
   loadMs: number;
 }
@@ -50,12 +44,6 @@ const PHASE_TEXT: Record<OpenPhase, string> = {
   upload: 'Uploading the stream to the GPU…',
   compress: 'Compressing on the GPU…',
 };
-
-/** The message for a failed load: the error's own text when it names the file, else prefixed with it. */
-export function loadErrorMessage(what: string, e: unknown): string {
-  const text = e instanceof Error ? e.message : String(e);
-  return text.includes(what) ? text : `${what}: ${text}`;
-}
 
 export class VolumeLoader {
   private generation = 0;
@@ -145,31 +133,29 @@ export class VolumeLoader {
     const set = (text: string, f?: number) => {
       if (job === this.generation) progress.set(text, f);
     };
-    let opened: OpenedVolume | undefined;
-    let iso: PageIsosurface | undefined;
     try {
-      opened = await produce(signal, set);
-      if (!opened || signal.aborted) throw new LoadCancelled();
-      set('Computing block ranges…', 0.65);
-      const budget = this.deps.memoryBudget();
-      iso = await createIsosurface(gpu, opened.stream, budget !== undefined ? { memoryBudgetBytes: budget } : {});
-      if (signal.aborted) throw new LoadCancelled();
-      const ranges = await iso.readBlockRanges();
-      const initialIso = this.deps.chooseIso(opened, iso, ranges);
-      set('Extracting the surface…', 0.8);
-      const firstStats = await iso.compute(initialIso);
-      if (signal.aborted) throw new LoadCancelled();
-      this.deps.onLoaded({ opened, iso, ranges, initialIso, firstStats, loadMs: performance.now() - started });
-      opened = undefined;
-      iso = undefined;
+      const opened = await produce(signal, set);
+      if (!opened) throw new LoadCancelled();
+      // openFirstSurface owns the stream from here (and frees it on failure or cancel).
+      const surface = await openFirstSurface(gpu, opened, {
+        memoryBudget: this.deps.memoryBudget(),
+        chooseIso: this.deps.chooseIso,
+        signal,
+        onStage: (stage) => (stage === 'ranges' ? set('Computing block ranges…', 0.65) : set('Extracting the surface…', 0.8)),
+      });
+      try {
+        this.deps.onLoaded({ ...surface, loadMs: performance.now() - started });
+      } catch (e) {
+        surface.iso.destroy();
+        surface.opened.stream.destroy();
+        throw e;
+      }
     } catch (e) {
       if (job !== this.generation) {
         // Replaced by a newer load: nothing to say.
       } else if (e instanceof LoadCancelled || signal.aborted) this.deps.onCancelled(what);
       else this.deps.onError(loadErrorMessage(what, e));
     } finally {
-      iso?.destroy();
-      opened?.stream.destroy();
       if (job === this.generation) {
         this.controller = undefined;
         progress.finish();

@@ -3,10 +3,13 @@
 // transfer function, with SWC reconstructions as tubes or lines in the same
 // space, so traces can be checked against the image.
 //
-// Opaque layers (the traces; the isosurface of the main page once it can be
-// fed from here) draw into a depth pre-pass that the ray marcher reads, so
-// rays stop at them: adding a layer means implementing DepthDrawer and
-// RenderLayer and registering it like the SwcLayer below.
+// The stack is also compressed on the GPU and fed to the main page's
+// isosurface pipeline (isosurface.ts), drawn in the same space.
+//
+// Opaque layers (the traces, the isosurface) draw into a depth pre-pass that
+// the ray marcher reads, so rays stop at them: adding a layer means
+// implementing DepthDrawer and RenderLayer and registering it like the
+// SwcLayer below.
 import { setInfoList } from '../../app/info-list.ts';
 import { Messages } from '../../app/messages.ts';
 import { parseSwc, swcTypeColor, swcTypeName, SwcError } from '../../loaders/swc.ts';
@@ -14,6 +17,7 @@ import { loadTiffStack, TiffError, type TiffVolume } from '../../loaders/tiff.ts
 import { BoxLayer } from '../../render/box-layer.ts';
 import type { Bounds } from '../../render/camera.ts';
 import { Viewer } from '../../render/viewer.ts';
+import { tiffVolumeFacts } from '../../volume/open-volume.ts';
 import {
   acceptFiles,
   byId,
@@ -29,6 +33,7 @@ import {
 } from '../common.ts';
 import { makeDemoNeuron } from './demo.ts';
 import { DepthPrepass } from './depth-prepass.ts';
+import { NeuronIsosurface, type StackSource, type SurfaceState } from './isosurface.ts';
 import { FILE_COLORS, SwcLayer, type Trace, type TraceColoring, type TraceStyle } from './swc-layer.ts';
 import { COLORMAP_NAMES, drawTransferFunction, type ColormapName, type TransferFunction } from './transfer-function.ts';
 import { VolumeLayer, type RenderMode, type VolumeSummary } from './volume-layer.ts';
@@ -41,6 +46,8 @@ interface NeuronState extends ExamplePageState {
   volume?: { name: string; dims: Vec3; dtype: string; spacing: Vec3; files: number; loadMs: number };
   traces: { name: string; samples: number; visible: boolean }[];
   demo: boolean;
+  /** The isosurface of the stack on screen. */
+  surface?: SurfaceState;
 }
 
 declare global {
@@ -77,14 +84,17 @@ async function start(): Promise<void> {
   const prepass = new DepthPrepass(viewer);
   const traces = await SwcLayer.create(viewer);
   prepass.add(traces);
+  const progress = new Progress();
+  const surface = await NeuronIsosurface.create(gpu, viewer, prepass, messages, progress, () => updateHud());
+  state.surface = surface.state;
   const volume = await VolumeLayer.create(viewer, prepass);
   const box = await BoxLayer.create(viewer);
   // Opaque first, then the volume composited over them.
   viewer.addLayer(box);
   viewer.addLayer(traces);
+  viewer.addLayer(surface.layer);
   viewer.addLayer(volume);
 
-  const progress = new Progress();
   const hud = byId('view-badge');
   const emptyHint = byId('empty-hint');
   const tfCanvas = byId<HTMLCanvasElement>('tf-canvas');
@@ -254,11 +264,14 @@ async function start(): Promise<void> {
   };
 
   let framesAtLastHud = 0;
-  const updateHud = () => {
+  function updateHud(): void {
     const parts: string[] = [];
     if (state.volume) parts.push(`volume ${state.volume.dims.join('×')}`);
     const samples = loaded.filter((t) => t.visible).reduce((s, t) => s + t.tree.count, 0);
     if (samples > 0) parts.push(`${formatCount(samples)} trace samples`);
+    const iso = surface.state;
+    if (iso.computing) parts.push('isosurface…');
+    else if (iso.visible && iso.triangles !== undefined) parts.push(`${formatCount(iso.triangles)} triangles`);
     if (parts.length === 0) {
       hud.hidden = true;
       return;
@@ -268,7 +281,7 @@ async function start(): Promise<void> {
     parts.push(drawing && viewer.fps > 0 ? `${viewer.fps.toFixed(0)} fps` : 'idle');
     hud.hidden = false;
     hud.textContent = parts.join(' · ');
-  };
+  }
   setInterval(updateHud, 500);
 
   const showVolume = (name: string, v: { dims: Vec3; data: TiffVolume['data']; channels: number; spacing?: Vec3; unit?: string; dtype: string; files: number; decodeMs: number; loadMs: number; pages?: number }) => {
@@ -292,7 +305,8 @@ async function start(): Promise<void> {
 
   // ------------------------------------------------------------ loading
 
-  const loadStack = async (files: File[], token: number) => {
+  /** Decodes and shows the stack; returns it for the isosurface (undefined when a newer load replaced it). */
+  const loadStack = async (files: File[], token: number): Promise<StackSource | undefined> => {
     const t0 = performance.now();
     const what = files.length === 1 ? files[0].name : `${files.length} TIFF files`;
     progress.start(`Decoding ${what}`);
@@ -301,10 +315,12 @@ async function start(): Promise<void> {
       yieldBetweenPages: true,
       onProgress: (done, total) => progress.set(done / total, `${formatCount(done)} / ${formatCount(total)} pages`),
     });
-    if (token !== loadToken) return;
+    if (token !== loadToken) return undefined;
     progress.start('Uploading to the GPU');
     await nextFrame();
     clearDemo();
+    // The isosurface reads the same samples (multi-channel stacks: their mean, as the ray marcher shows them).
+    const facts = tiffVolumeFacts(what, v, files.reduce((n, f) => n + f.size, 0), { channels: 'mean' });
     showVolume(what, {
       dims: v.dims,
       data: v.data,
@@ -318,6 +334,7 @@ async function start(): Promise<void> {
       pages: v.pages.length,
     });
     if (v.skippedPages > 0) messages.show(`${what}: ${v.skippedPages} page(s) of another size (thumbnails, previews) were left out.`, 'info', 8000);
+    return { name: what, facts, bytes: new Uint8Array(0), spacing };
   };
 
   const loadTraces = async (files: File[]) => {
@@ -353,9 +370,11 @@ async function start(): Promise<void> {
     if (other.length > 0) messages.show(`Ignored ${other.map((f) => f.name).join(', ')}: this page reads .tif/.tiff stacks and .swc traces.`, 'info', 8000);
     state.loading = true;
     try {
-      if (tiffs.length > 0) await loadStack(tiffs, token);
+      const stack = tiffs.length > 0 ? await loadStack(tiffs, token) : undefined;
       if (swcs.length > 0) await loadTraces(swcs);
       if (token === loadToken) fit(false);
+      // The volume and traces are on screen; the isosurface follows (its errors are its own messages).
+      if (stack && token === loadToken) await surface.setStack(stack);
     } catch (e) {
       const text = e instanceof TiffError ? e.message : (e as Error).message ?? String(e);
       messages.show(`Could not load the stack. ${text}`);
@@ -388,6 +407,12 @@ async function start(): Promise<void> {
     });
     renderTraces();
     fit(true);
+    void surface.setStack({
+      name: 'the demo cell',
+      facts: { fileName: 'demo cell (synthetic)', kind: 'raw', bytes: demo.volume.byteLength, dims: demo.dims, dtype: 'uint8', missing: [], compresses: true },
+      bytes: demo.volume,
+      spacing: demo.spacing,
+    });
   };
 
   acceptFiles(stage, byId('drop-overlay'), byId<HTMLInputElement>('file-input'), (files) => void loadFiles(files));
