@@ -1,7 +1,7 @@
 // GPU ray-marched volume rendering of a 3D texture through a transfer
 // function. The proxy geometry is the volume's box drawn with its back faces,
 // so rays also start correctly when the camera is inside the box. Rays stop
-// at opaque geometry (neuron traces, later an isosurface) by reading the
+// at opaque geometry (neuron traces, the isosurface) by reading the
 // depth those layers wrote in a pre-pass. Output is premultiplied alpha.
 // Needs frame.wgsl (group 0).
 

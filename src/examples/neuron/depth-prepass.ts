@@ -1,11 +1,15 @@
-// Depth of the opaque layers (neuron traces now, an isosurface later) in a
+// Depth of the opaque layers (neuron traces, the isosurface) in a
 // texture of its own, drawn before the frame's main pass, so the volume
 // renderer can stop its rays where they meet opaque geometry. The viewer's
 // own depth buffer cannot be sampled while it is the pass's attachment.
 import { DEPTH_FORMAT, type Viewer } from '../../render/viewer.ts';
 
 export interface DepthDrawer {
-  /** Records depth-only draws (pipelines with no colour target) into `pass`. */
+  /**
+   * Records depth-only draws (pipelines with no colour target) into `pass`.
+   * The pre-pass records in the first before-frame hook, so what a drawer
+   * draws must be set before the frame, not in a later hook.
+   */
   drawDepth(pass: GPURenderPassEncoder): void;
   /** Whether there is anything to draw. */
   readonly hasDepth: boolean;
