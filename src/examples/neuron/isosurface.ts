@@ -64,6 +64,7 @@ export class NeuronIsosurface {
   private build: AbortController | undefined;
   private readonly isoControl: IsoControl;
   private readonly statsList = byId('surface-stats');
+  private readonly rateSelect = byId<HTMLSelectElement>('surface-rate');
 
   private constructor(
     private readonly gpu: GpuContext,
@@ -100,7 +101,7 @@ export class NeuronIsosurface {
     };
     color.addEventListener('input', applyColor);
     applyColor();
-    const rate = byId<HTMLSelectElement>('surface-rate');
+    const rate = this.rateSelect;
     this.state.rate = Number(rate.value);
     rate.addEventListener('change', () => {
       this.state.rate = Number(rate.value);
@@ -154,6 +155,11 @@ export class NeuronIsosurface {
     } catch (e) {
       if (e instanceof LoadCancelled || signal.aborted) return;
       this.messages.show(`No isosurface: ${loadErrorMessage(source.name, e)}`);
+      // A failed change of rate: the surface on screen (and its rate) stay.
+      if (this.current) {
+        this.state.rate = this.current.opened.rate;
+        this.rateSelect.value = String(this.current.opened.rate);
+      }
     } finally {
       if (this.build === controller) {
         this.build = undefined;

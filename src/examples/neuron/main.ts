@@ -33,7 +33,7 @@ import {
 } from '../common.ts';
 import { makeDemoNeuron } from './demo.ts';
 import { DepthPrepass } from './depth-prepass.ts';
-import { NeuronIsosurface, type StackSource, type SurfaceState } from './isosurface.ts';
+import { NeuronIsosurface, type SurfaceState } from './isosurface.ts';
 import { FILE_COLORS, SwcLayer, type Trace, type TraceColoring, type TraceStyle } from './swc-layer.ts';
 import { COLORMAP_NAMES, drawTransferFunction, type ColormapName, type TransferFunction } from './transfer-function.ts';
 import { VolumeLayer, type RenderMode, type VolumeSummary } from './volume-layer.ts';
@@ -305,8 +305,12 @@ async function start(): Promise<void> {
 
   // ------------------------------------------------------------ loading
 
-  /** Decodes and shows the stack; returns it for the isosurface (undefined when a newer load replaced it). */
-  const loadStack = async (files: File[], token: number): Promise<StackSource | undefined> => {
+  /**
+   * Decodes and shows the stack, and starts its isosurface (at once, so the
+   * surface on screen always belongs to the volume on screen); resolves with
+   * the surface's computation, or undefined when a newer load replaced it.
+   */
+  const loadStack = async (files: File[], token: number): Promise<Promise<void> | undefined> => {
     const t0 = performance.now();
     const what = files.length === 1 ? files[0].name : `${files.length} TIFF files`;
     progress.start(`Decoding ${what}`);
@@ -334,7 +338,7 @@ async function start(): Promise<void> {
       pages: v.pages.length,
     });
     if (v.skippedPages > 0) messages.show(`${what}: ${v.skippedPages} page(s) of another size (thumbnails, previews) were left out.`, 'info', 8000);
-    return { name: what, facts, bytes: new Uint8Array(0), spacing };
+    return surface.setStack({ name: what, facts, bytes: new Uint8Array(0), spacing });
   };
 
   const loadTraces = async (files: File[]) => {
@@ -370,11 +374,11 @@ async function start(): Promise<void> {
     if (other.length > 0) messages.show(`Ignored ${other.map((f) => f.name).join(', ')}: this page reads .tif/.tiff stacks and .swc traces.`, 'info', 8000);
     state.loading = true;
     try {
-      const stack = tiffs.length > 0 ? await loadStack(tiffs, token) : undefined;
+      const surfaceDone = tiffs.length > 0 ? await loadStack(tiffs, token) : undefined;
       if (swcs.length > 0) await loadTraces(swcs);
       if (token === loadToken) fit(false);
       // The volume and traces are on screen; the isosurface follows (its errors are its own messages).
-      if (stack && token === loadToken) await surface.setStack(stack);
+      await surfaceDone;
     } catch (e) {
       const text = e instanceof TiffError ? e.message : (e as Error).message ?? String(e);
       messages.show(`Could not load the stack. ${text}`);
