@@ -102,7 +102,8 @@ const USAGE = `usage: npm run bench:paper -- [--quick] [--volume FILE[:lo,hi]]..
   --count N          isovalues per method and mode everywhere (overrides the plan)
   --no-browser       skip the Chromium columns
   --browser-webgpu   also run the naive MC and our zfp decoder in Chromium's WebGPU
-  --out DIR          where the JSON and Markdown go (default benchmarks/results)`;
+  --out DIR          where the JSON and Markdown go (default benchmarks/results)
+  --report FILE.json only rewrite the Markdown report of an earlier run from its JSON`;
 
 interface Args {
   quick: boolean;
@@ -252,6 +253,16 @@ function localDate(d: Date): string {
 // ---------------------------------------------------------------- main
 
 async function main(): Promise<void> {
+  const reportAt = process.argv.indexOf('--report');
+  if (reportAt >= 0) {
+    // Rewrites the Markdown of an earlier run from its JSON (e.g. after improving the report).
+    const file = process.argv[reportAt + 1];
+    if (!file?.endsWith('.json') || !existsSync(file)) throw new UsageError('--report takes the JSON of an earlier run');
+    const md = file.replace(/\.json$/, '.md');
+    writeFileSync(md, writeReport(JSON.parse(readFileSync(file, 'utf8')) as PaperBenchResult));
+    console.log(`wrote ${md}`);
+    return;
+  }
   const args = parseArgs(process.argv.slice(2));
   const mode = args.quick ? 'quick' : 'full';
   const plan = PLANS[mode];
