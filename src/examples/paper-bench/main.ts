@@ -208,6 +208,9 @@ async function runForm(): Promise<void> {
 function setUp(): void {
   const select = byId<HTMLSelectElement>('volume');
   for (const p of PRESETS) select.append(new Option(p.label, p.url));
+  // A chosen file replaces the preset (clearing the file brings the preset back).
+  const fileInput = byId<HTMLInputElement>('file-input');
+  fileInput.addEventListener('change', () => (select.disabled = (fileInput.files?.length ?? 0) > 0));
   byId<HTMLFormElement>('form').addEventListener('submit', (e) => {
     e.preventDefault();
     runButton.disabled = true;
