@@ -107,7 +107,8 @@ export function writeReport(r: PaperBenchResult): string {
   out.push('');
   out.push(
     'Over the whole decompressed volume in GPU memory (`src/mc/naive-gpu.ts`): mark active cells, scan, compact their IDs, per-cell vertex counts, scan, emit; ' +
-      `every pass after the first dispatched indirectly from GPU counts. GPU time from the first to the last pass (${r.gpuTiming}), one surface per submission; ` +
+      `every pass after the first dispatched indirectly from GPU counts. GPU time from the first to the last pass (${r.gpuTiming}), one surface per submission, ` +
+      "in Node (Dawn, the WebGPU implementation Chrome uses, without the browser) and in Chromium's WebGPU: the analogue of the paper's native Vulkan vs browser WebGPU columns; " +
       'the same isovalues as the serial table (a prefix of them where fewer), first discarded. Triangles equal the serial ones at every isovalue' +
       (r.naive.some((n) => !n.trianglesMatchSerial) ? ' **except where marked**' : '') +
       '.',
@@ -115,7 +116,7 @@ export function writeReport(r: PaperBenchResult): string {
   out.push('');
   out.push(
     table(
-      ['volume', 'surfaces', 'mean triangles', `ours, Dawn (${software ? 'SwiftShader' : 'GPU'}) ms`, ...(r.naive.some((n) => n.chromiumMs) ? ['ours, Chromium ms'] : []), 'serial native ms (same isovalues)', 'GPU memory (volume + per-cell + soup)', 'paper Surface Pro 7 Vulkan / WebGPU', 'paper RTX 2070 Vulkan / WebGPU'],
+      ['volume', 'surfaces', 'mean triangles', `ours, Dawn in Node (${software ? 'SwiftShader' : 'GPU'}) ms`, ...(r.naive.some((n) => n.chromiumMs) ? ["ours, Chromium's WebGPU ms"] : []), 'serial native ms (same isovalues)', 'GPU memory (volume + per-cell + soup)', 'paper Surface Pro 7 Vulkan / WebGPU', 'paper RTX 2070 Vulkan / WebGPU'],
       r.naive.map((n) => {
         const p = NAIVE_MC.find((x) => x.dataset === n.paperName);
         return [
@@ -145,11 +146,12 @@ export function writeReport(r: PaperBenchResult): string {
   out.push('');
 
   // ------------------------------------------------------------ zfp
+  const chromeGpu = r.zfp.some((z) => z.mbps.webgpuChromium !== undefined);
   out.push('## Full-volume ZFP decompression (paper Table 3)');
   out.push('');
   out.push(
     `Each volume's decoded field compressed by zfpy (zfp 1.0.1) at fixed rates ${r.settings.zfpRates.join(', ')} with header, then decoded whole ${r.settings.zfpRuns} times after a discarded first; ` +
-      'MB/s = decompressed float32 bytes (10⁶) per second, from the mean time. Ours: GPU time of the decode pass; zfp serial: zfp\'s serial C decoder (native, the zfpy wheel), ' +
+      'MB/s = decompressed float32 bytes (10⁶) per second, from the mean time. Ours: GPU time of the decode pass, in Node (Dawn) and in Chromium\'s WebGPU (the paper\'s Vulkan and WebGPU columns are native vs browser likewise); zfp serial: zfp\'s serial C decoder (native, the zfpy wheel), ' +
       '`zfp_decompress` into a preallocated array (`zfpy._decompress(..., out=)`), and `zfpy.decompress_numpy` as users call it (header, allocation, decode); ' +
       "zfp Wasm: zfp 1.0.1's C decoder compiled with Debian's emcc -O3 (`wasm/dist/zfp.wasm`), its `zfp_decompress` call into a preallocated heap array. All decoders gave bit-identical fields" +
       (r.zfp.some((z) => !z.bitIdentical) ? ' **except where marked**' : '') +
@@ -158,12 +160,13 @@ export function writeReport(r: PaperBenchResult): string {
   out.push('');
   out.push(
     table(
-      ['volume', 'rate', 'compressed', 'ours, WebGPU MB/s', 'zfp serial MB/s', 'zfpy.decompress_numpy MB/s', 'zfp Wasm, Node MB/s', 'zfp Wasm, Chromium MB/s', 'ours / serial', 'Wasm (Node) / serial'],
+      ['volume', 'rate', 'compressed', 'ours, WebGPU (Dawn) MB/s', ...(chromeGpu ? ['ours, WebGPU (Chromium) MB/s'] : []), 'zfp serial MB/s', 'zfpy.decompress_numpy MB/s', 'zfp Wasm, Node MB/s', 'zfp Wasm, Chromium MB/s', 'ours (Dawn) / serial', 'Wasm (Node) / serial'],
       r.zfp.map((z) => [
         r.volumes.find((v) => v.key === z.volume)?.label ?? z.volume,
         z.rate,
         mib(z.compressedBytes),
         f1(z.mbps.webgpu, 0),
+        ...(chromeGpu ? [f1(z.mbps.webgpuChromium, 0)] : []),
         f1(z.mbps.zfpySerial, 0),
         f1(z.mbps.zfpyDecompressNumpy, 0),
         f1(z.mbps.wasmNode, 0),

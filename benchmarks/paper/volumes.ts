@@ -37,6 +37,8 @@ export interface PreparedVolume extends VolumeSpec {
   dataRange: [number, number];
   /** The decoded field as raw float32 (native binary, the browser page). */
   rawPath: string;
+  /** The stream the GPU methods use, as a zfp file with header (the page's WebGPU runs); absent for header-less input. */
+  zfpPath?: string;
 }
 
 /**
@@ -100,6 +102,11 @@ export async function prepareVolume(gpu: GpuContext, decoder: ZfpDecoder, spec: 
   const dataRange = interestingRange(values, dims);
   const rawPath = join(dir, `${spec.key}_${dims.join('x')}_float32.raw`);
   writeFileSync(rawPath, new Uint8Array(values.buffer, values.byteOffset, values.byteLength));
+  let zfpPath: string | undefined;
+  if (input.stream.info.hasHeader) {
+    zfpPath = join(dir, `${spec.key}.stream.zfp`);
+    writeFileSync(zfpPath, await input.stream.readBytes());
+  }
   return {
     ...spec,
     dims,
@@ -111,5 +118,6 @@ export async function prepareVolume(gpu: GpuContext, decoder: ZfpDecoder, spec: 
     rangeSource: spec.rangeSource ?? 'from the data: 10th-90th percentile of the maxima of blocks spanning > 5% of the value range',
     dataRange,
     rawPath,
+    zfpPath,
   };
 }

@@ -55,6 +55,8 @@ export interface ZfpRateResult {
   /** ms per run, first included (it is discarded in the means). */
   webgpuMs: number[];
   webgpuTiming: string;
+  /** Our decoder in Chromium's WebGPU (the same code, the browser's Dawn). */
+  webgpuChromiumMs?: number[];
   /** zfp_decompress into a preallocated array (zfpy._decompress with out=). */
   zfpyMs: number[];
   /** zfpy.decompress_numpy (header, allocation, decode), as users call it. */
@@ -64,7 +66,7 @@ export interface ZfpRateResult {
   wasmChromiumError?: string;
   /** zfpy, our WebGPU decoder and the Wasm decoder gave the same bits. */
   bitIdentical: boolean;
-  mbps: { webgpu: number; zfpySerial: number; zfpyDecompressNumpy: number; wasmNode: number; wasmChromium?: number };
+  mbps: { webgpu: number; webgpuChromium?: number; zfpySerial: number; zfpyDecompressNumpy: number; wasmNode: number; wasmChromium?: number };
 }
 
 export function mbPerSecond(floatBytes: number, ms: number[]): number {
