@@ -110,20 +110,28 @@ export class Isosurface implements SurfaceEngine {
     if (perShard < 1) throw new RangeError(`maxVertexBindingBytes must hold at least one vertex (${VERTEX_BYTES} bytes)`);
     let slots = Math.max(1, Math.min(blockCount, options.initialCacheSlots ?? Math.ceil(blockCount / 10)));
     let vertices = Math.max(1, options.initialVertexCapacity ?? Math.min(2 ** 22, Math.max(2 ** 16, blockCount * 8)));
-    // The initial buffers must fit the budget too: scale both down if not.
-    const initialBytes = cacheBytesFor(slots, blockCount) + vertexBytesFor(vertices, perShard);
-    if (initialBytes > budget) {
-      const f = budget / initialBytes;
-      slots = Math.max(1, Math.floor(slots * f));
-      vertices = Math.max(1, Math.floor(vertices * f));
-      const bytes = cacheBytesFor(slots, blockCount) + vertexBytesFor(vertices, perShard);
-      if (bytes > budget) {
+    // The initial buffers must fit the budget too: shrink both (keeping their
+    // ratio) until they do; the per-block and per-shard bytes do not shrink.
+    const bytesAt = (s: number, v: number) => cacheBytesFor(s, blockCount) + vertexBytesFor(v, perShard);
+    if (bytesAt(slots, vertices) > budget) {
+      const smallest = bytesAt(1, 1);
+      if (smallest > budget) {
         throw new IsosurfaceBudgetError(
-          `${stream.info.fileName}: the smallest cache and vertex buffers need ${formatMB(bytes)}, the budget is ${formatMB(budget)}; raise it`,
-          bytes,
+          `${stream.info.fileName}: the smallest cache and vertex buffers need ${formatMB(smallest)}, the budget is ${formatMB(budget)}; raise it`,
+          smallest,
           budget,
         );
       }
+      // Largest scale factor in (0, 1] that fits, by bisection on the factor.
+      let lo = 0;
+      let hi = 1;
+      for (let i = 0; i < 40; i++) {
+        const f = (lo + hi) / 2;
+        if (bytesAt(Math.max(1, Math.floor(slots * f)), Math.max(1, Math.floor(vertices * f))) <= budget) lo = f;
+        else hi = f;
+      }
+      slots = Math.max(1, Math.floor(slots * lo));
+      vertices = Math.max(1, Math.floor(vertices * lo));
     }
 
     const volume = device.createBuffer({ label: 'Isosurface.volume', size: 32, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });

@@ -43,6 +43,28 @@ describe('Isosurface', () => {
     stream.destroy();
   });
 
+  gpuTest('a budget below the default starting sizes shrinks them to fit; below the smallest it is refused', async ({ gpu }) => {
+    const { stream } = await setup(gpu.device);
+    const { cacheBytesFor, vertexBytesFor } = await import('../../../src/isosurface/budget.ts');
+    const blocks = stream.info.blockCount;
+    const perShard = Math.floor(gpu.limits.maxStorageBufferBindingSize / 8);
+    const smallest = cacheBytesFor(1, blocks) + vertexBytesFor(1, perShard);
+    // Just above the smallest buffers: far below the default 10% of blocks + 64k vertices.
+    const budget = smallest + 3000;
+    const iso = await Isosurface.create(gpu, stream, { memoryBudgetBytes: budget });
+    const stats = await iso.compute(Math.fround(iso.info.valueRange[0] + 0.9 * (iso.info.valueRange[1] - iso.info.valueRange[0]))).catch((e: unknown) => e);
+    // Whether or not the surface fits, the starting buffers did.
+    const used = stats instanceof Error ? undefined : stats;
+    if (used) expect(used.cacheBytes + used.vertexBytes).toBeLessThanOrEqual(budget);
+    else expect(stats).toBeInstanceOf(IsosurfaceBudgetError);
+    iso.destroy();
+    const refused = await Isosurface.create(gpu, stream, { memoryBudgetBytes: smallest - 1 }).catch((e: unknown) => e);
+    expect(refused).toBeInstanceOf(IsosurfaceBudgetError);
+    expect((refused as IsosurfaceBudgetError).neededBytes).toBe(smallest);
+    expect((refused as Error).message).toContain(`need ${formatMB(smallest)}`);
+    stream.destroy();
+  });
+
   gpuTest('a surface over the memory budget is refused with a clear error and the previous one stays drawn', async ({ gpu }) => {
     const { stream, decoded } = await setup(gpu.device);
     const budget = 100_000;
