@@ -1,7 +1,7 @@
 // Isovalue sequences of the paper's benchmark (section 4.6): 100 random
 // isovalues, a sweep up and a sweep down over a range of interest. Seeded,
 // so the page and the CLI compute exactly the same surfaces.
-import { mulberry32 } from '../volume/procedural.ts';
+import { mulberry32 } from '../util/random.ts';
 
 export type BenchMode = 'random' | 'sweep-up' | 'sweep-down';
 export const BENCH_MODES: readonly BenchMode[] = ['random', 'sweep-up', 'sweep-down'];

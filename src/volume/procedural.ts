@@ -9,6 +9,7 @@
 
 import { DEFAULT_VIEW_DIRECTION } from '../render/camera.ts';
 import type { Dims } from './naming.ts';
+import { mulberry32 } from '../util/random.ts';
 
 export interface ProceduralVolume {
   name: string;
@@ -16,18 +17,6 @@ export interface ProceduralVolume {
   data: Float32Array;
   /** An isovalue that shows both structures. */
   defaultIsovalue: number;
-}
-
-/** Small deterministic PRNG (mulberry32). */
-export function mulberry32(seed: number): () => number {
-  let a = seed >>> 0;
-  return () => {
-    a = (a + 0x6d2b79f5) >>> 0;
-    let t = a;
-    t = Math.imul(t ^ (t >>> 15), t | 1);
-    t ^= t + Math.imul(t ^ (t >>> 7), t | 61);
-    return ((t ^ (t >>> 14)) >>> 0) / 4294967296;
-  };
 }
 
 /** 2D value noise on a seeded lattice, smooth (quintic) interpolation. */

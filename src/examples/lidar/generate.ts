@@ -4,19 +4,9 @@
 // real classified tile. Deterministic for a given seed. Coordinates are in
 // metres, relative to the tile's centre (like the loader's positions).
 import type { LasChunk } from '../../loaders/las.ts';
+import { mulberry32 } from '../../util/random.ts';
 
 export const GENERATED_EXTENT = 2000;
-
-function mulberry32(seed: number): () => number {
-  let a = seed >>> 0;
-  return () => {
-    a = (a + 0x6d2b79f5) >>> 0;
-    let t = a;
-    t = Math.imul(t ^ (t >>> 15), t | 1);
-    t ^= t + Math.imul(t ^ (t >>> 7), t | 61);
-    return ((t ^ (t >>> 14)) >>> 0) / 4294967296;
-  };
-}
 
 // Value noise on an integer lattice with smooth interpolation.
 function hash2(ix: number, iy: number): number {

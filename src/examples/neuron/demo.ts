@@ -5,6 +5,7 @@
 // traces can be compared the way a neuroanatomist checks a reconstruction.
 // Deterministic for a given seed.
 import type { SwcTree } from '../../loaders/swc.ts';
+import { mulberry32 } from '../../util/random.ts';
 
 export interface DemoNeuron {
   tree: SwcTree;
@@ -13,17 +14,6 @@ export interface DemoNeuron {
   dims: [number, number, number];
   /** Microns per voxel. */
   spacing: [number, number, number];
-}
-
-function mulberry32(seed: number): () => number {
-  let a = seed >>> 0;
-  return () => {
-    a = (a + 0x6d2b79f5) >>> 0;
-    let t = a;
-    t = Math.imul(t ^ (t >>> 15), t | 1);
-    t ^= t + Math.imul(t ^ (t >>> 7), t | 61);
-    return ((t ^ (t >>> 14)) >>> 0) / 4294967296;
-  };
 }
 
 interface Sample {

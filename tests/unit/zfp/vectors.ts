@@ -2,6 +2,7 @@
 import { readFileSync } from 'node:fs';
 import { join } from 'node:path';
 import { sharedData } from '../../helpers/python.ts';
+import { mulberry32 } from '../../../src/util/random.ts';
 
 export const vectorDir = join(sharedData, 'zfp-vectors');
 
@@ -32,13 +33,4 @@ export function firstDifference(a: Uint8Array, b: Uint8Array): string {
 }
 
 /** Deterministic pseudo-random numbers (mulberry32). */
-export function rng(seed: number): () => number {
-  let s = seed >>> 0;
-  return () => {
-    s = (s + 0x6d2b79f5) >>> 0;
-    let t = s;
-    t = Math.imul(t ^ (t >>> 15), t | 1);
-    t ^= t + Math.imul(t ^ (t >>> 7), t | 61);
-    return ((t ^ (t >>> 14)) >>> 0) / 4294967296;
-  };
-}
+export const rng = mulberry32;
