@@ -5,7 +5,7 @@ import type { Viewer } from '../render/viewer.ts';
 import { download } from './dom.ts';
 import { captureViewPng } from './export/screenshot.ts';
 import { decodeVertices } from '../isosurface/vertex-format.ts';
-import { encodePly, weldVertices } from './export/ply.ts';
+import { encodePly, weldVertices } from '../mc/ply.ts';
 import { formatBytes } from './format.ts';
 import type { Messages } from './messages.ts';
 import type { Session } from './session.ts';

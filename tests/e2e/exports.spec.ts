@@ -3,7 +3,7 @@
 // volume), and a link that reopens the same isovalue and camera.
 import { readFileSync } from 'node:fs';
 import { expect, test } from '@playwright/test';
-import { parsePly } from '../../src/app/export/ply.ts';
+import { parsePly } from '../../src/mc/ply.ts';
 import { encodeViewState } from '../../src/app/url-state.ts';
 import { openApp, waitForFrames } from './page.ts';
 import { setIsovalue, trianglesShown } from './volume-page.ts';

@@ -12,7 +12,7 @@ import { readFileSync, writeFileSync } from 'node:fs';
 import { basename } from 'node:path';
 import { describeAdapter } from '../../gpu/device.ts';
 import { Isosurface } from '../../isosurface/isosurface.ts';
-import { soupToPly } from '../../isosurface/ply.ts';
+import { encodePly, weldVertices } from '../../mc/ply.ts';
 import { formatMB } from '../../isosurface/budget.ts';
 import { IsosurfaceBudgetError } from '../../isosurface/types.ts';
 import { decodeVertices } from '../../isosurface/vertex-format.ts';
@@ -119,7 +119,7 @@ export const extractCommand: CliCommand = {
         };
         if (plyPrefix) {
           record.ply = `${plyPrefix}-iso${stats.isovalue}.ply`;
-          writeFileSync(record.ply, soupToPly(positions, `iso ${stats.isovalue} of ${basename(input)}, voxel index space`));
+          writeFileSync(record.ply, encodePly(weldVertices(positions), [`iso ${stats.isovalue} of ${basename(input)}, voxel index space`]));
         }
         records.push(record);
         ctx.log(

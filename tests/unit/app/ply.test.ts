@@ -2,7 +2,7 @@
 // made (within the 10-bit quantization), welding keeps every triangle and
 // merges shared corners, and the file reads back as written.
 import { describe, expect, it } from 'vitest';
-import { encodePly, parsePly, weldVertices } from '../../../src/app/export/ply.ts';
+import { encodePly, parsePly, weldVertices } from '../../../src/mc/ply.ts';
 import { decodeVertices } from '../../../src/isosurface/vertex-format.ts';
 import { marchingCubes } from '../../../src/mc/serial-mc.ts';
 import { packTriangleSoup } from '../../../src/render/testing/cpu-surface.ts';

@@ -1,9 +1,9 @@
-// The current surface as a binary little-endian PLY mesh: float x, y, z in
+// A surface as a binary little-endian PLY mesh: float x, y, z in
 // voxel index coordinates (voxel (i, j, k) at (i, j, k)), 3 vertex indices per
 // face. Vertices shared by neighbouring triangles are welded (the soup's
 // copies of a vertex decode to the same floats), so mesh tools see a
-// connected surface; faces keep the soup's order, one per triangle.
-
+// connected surface; faces keep the soup's order, one per triangle. Used by
+// the page's PLY export and `cli extract --ply`.
 
 export interface WeldedMesh {
   /** xyz per unique vertex */
