@@ -52,11 +52,12 @@ describe('Isosurface', () => {
     // Just above the smallest buffers: far below the default 10% of blocks + 64k vertices.
     const budget = smallest + 3000;
     const iso = await Isosurface.create(gpu, stream, { memoryBudgetBytes: budget });
-    const stats = await iso.compute(Math.fround(iso.info.valueRange[0] + 0.9 * (iso.info.valueRange[1] - iso.info.valueRange[0]))).catch((e: unknown) => e);
+    const result: IsosurfaceStats | Error = await iso
+      .compute(Math.fround(iso.info.valueRange[0] + 0.9 * (iso.info.valueRange[1] - iso.info.valueRange[0])))
+      .catch((e: Error) => e);
     // Whether or not the surface fits, the starting buffers did.
-    const used = stats instanceof Error ? undefined : stats;
-    if (used) expect(used.cacheBytes + used.vertexBytes).toBeLessThanOrEqual(budget);
-    else expect(stats).toBeInstanceOf(IsosurfaceBudgetError);
+    if (result instanceof Error) expect(result).toBeInstanceOf(IsosurfaceBudgetError);
+    else expect(result.cacheBytes + result.vertexBytes).toBeLessThanOrEqual(budget);
     iso.destroy();
     const refused = await Isosurface.create(gpu, stream, { memoryBudgetBytes: smallest - 1 }).catch((e: unknown) => e);
     expect(refused).toBeInstanceOf(IsosurfaceBudgetError);
