@@ -2,7 +2,7 @@
 // (src/bench/harness.ts, the same as `cli bench` and the page's Benchmark
 // button) on the Isosurface pipeline: random, sweep up and sweep down, each
 // from a cold cache, seeded, first surface of each mode discarded.
-import { runBenchmark, type BenchRecord, type BenchSummary } from '../../src/bench/harness.ts';
+import { runBenchmark, type BenchRecord, type BenchSummary, type SurfaceEngine } from '../../src/bench/harness.ts';
 import type { BenchMode } from '../../src/bench/sequences.ts';
 import type { GpuContext } from '../../src/gpu/device.ts';
 import { Isosurface } from '../../src/isosurface/isosurface.ts';
@@ -29,7 +29,17 @@ export async function runBlock(
   modes: BenchMode[],
   count: number,
   seed: number,
-  opts: { capSecondsPerMode?: number; onProgress?: (mode: BenchMode, done: number, total: number) => void } = {},
+  opts: {
+    capSecondsPerMode?: number;
+    onProgress?: (mode: BenchMode, done: number, total: number) => void;
+    /**
+     * Called after each surface of the random mode with its isovalue and index,
+     * to measure another method on the same isovalue right then (the naive MC):
+     * both then see the same machine load. Returns the ms it took, which is
+     * taken out of that record's wall time and of the mode's time cap.
+     */
+    pairRandom?: (iso: number, index: number) => Promise<number | undefined>;
+  } = {},
 ): Promise<BlockResult> {
   const iso = await Isosurface.create(gpu, v.stream);
   try {
@@ -38,16 +48,31 @@ export async function runBlock(
     for (const mode of modes) {
       const start = performance.now();
       const cap = (opts.capSecondsPerMode ?? Infinity) * 1000;
-      const one = await runBenchmark(iso, {
+      let pairedMs = 0;
+      const spent: number[] = [];
+      let index = 0;
+      const engine: SurfaceEngine = {
+        resetCache: () => iso.resetCache(),
+        compute: async (x) => {
+          const stats = await iso.compute(x);
+          const extra = mode === 'random' && opts.pairRandom ? ((await opts.pairRandom(x, index)) ?? 0) : 0;
+          spent.push(extra);
+          pairedMs += extra;
+          index++;
+          return stats;
+        },
+      };
+      const one = await runBenchmark(engine, {
         modes: [mode],
         count,
         range: v.range,
         seed,
         onProgress: (d, t) => opts.onProgress?.(mode, d, t),
-        cancelled: () => performance.now() - start > cap,
+        cancelled: () => performance.now() - start - pairedMs > cap,
       });
+      one.records.forEach((r, i) => (r.wallMs -= spent[i] ?? 0));
       result.records.push(...one.records);
-      result.summaries.push(...one.summaries);
+      result.summaries.push(...one.summaries.map((sum) => ({ ...sum, meanWallMs: sum.meanWallMs - (spent.slice(1).reduce((a, b) => a + b, 0) / Math.max(1, spent.length - 1)) })));
     }
     const stages: Record<string, Record<string, number>> = {};
     let cacheBytesMax = 0;

@@ -107,8 +107,9 @@ export function writeReport(r: PaperBenchResult): string {
   out.push('');
   out.push(
     'Over the whole decompressed volume in GPU memory (`src/mc/naive-gpu.ts`): mark active cells, scan, compact their IDs, per-cell vertex counts, scan, emit; ' +
-      `every pass after the first dispatched indirectly from GPU counts. GPU time from the first to the last pass (${r.gpuTiming}), one surface per submission, ` +
-      "in Node (Dawn, the WebGPU implementation Chrome uses, without the browser) and in Chromium's WebGPU: the analogue of the paper's native Vulkan vs browser WebGPU columns; " +
+      `every pass after the first dispatched indirectly from GPU counts. GPU time from the first to the last pass (${r.gpuTiming}), one surface per submission; ` +
+      'in Node each naive surface is computed right after the block pipeline\'s surface at the same isovalue during its random mode, so both see the same machine load; ' +
+      "measured in Node (Dawn, the WebGPU implementation Chrome uses, without the browser) and in Chromium's WebGPU: the analogue of the paper's native Vulkan vs browser WebGPU columns; " +
       'the same isovalues as the serial table (a prefix of them where fewer), first discarded. Triangles equal the serial ones at every isovalue' +
       (r.naive.some((n) => !n.trianglesMatchSerial) ? ' **except where marked**' : '') +
       '.',
