@@ -5,7 +5,7 @@ import { setInfoList } from '../app/info-list.ts';
 import { Messages, showFatal } from '../app/messages.ts';
 import { decodeViewState, encodeViewState } from '../app/url-state.ts';
 import { BROWSER_HELP, describeAdapter, requestGpu, WebGpuUnavailableError, type GpuContext } from '../gpu/device.ts';
-import type { Viewer } from '../render/viewer.ts';
+import { Viewer } from '../render/viewer.ts';
 
 export function byId<T extends HTMLElement>(id: string): T {
   const el = document.getElementById(id);
@@ -151,4 +151,41 @@ export function formatLength(x: number, unit = 'm'): string {
 /** Lets the browser paint (progress bars) between chunks of synchronous work. */
 export function nextFrame(): Promise<void> {
   return new Promise((r) => setTimeout(r, 0));
+}
+
+export interface ExampleViewer {
+  stage: HTMLElement;
+  messages: Messages;
+  gpu: GpuContext;
+  viewer: Viewer;
+  /** The camera in the URL hash: restore() after the first fit, write() happens on every change. */
+  cameraUrl: { restore(): boolean; write(): void };
+}
+
+/**
+ * Start-up of the viewer pages (LIDAR, neuron): the device (failures shown
+ * over the view), a Viewer whose camera is kept in the URL hash, and the test
+ * state wired to it. Undefined when WebGPU is unavailable (the page says why).
+ */
+export async function startExampleViewer(state: ExamplePageState, deviceLabel: string, clearColor: GPUColor): Promise<ExampleViewer | undefined> {
+  const stage = byId('stage');
+  const messages = new Messages(byId('messages'));
+  const gpu = await startGpu(stage, messages, deviceLabel);
+  if (!gpu) {
+    state.status = 'error';
+    return undefined;
+  }
+  state.adapter = gpu.adapter;
+  let cameraUrl: ReturnType<typeof syncCameraWithUrl> | undefined;
+  const viewer = new Viewer(gpu.device, byId<HTMLCanvasElement>('view'), { clearColor, onCameraChange: () => cameraUrl?.write() });
+  cameraUrl = syncCameraWithUrl(viewer);
+  state.framesDrawn = () => viewer.framesDrawn;
+  return { stage, messages, gpu, viewer, cameraUrl };
+}
+
+/** Runs a page's start-up; if it throws, its message replaces the view. */
+export function runPage(start: () => Promise<void>): void {
+  start().catch((e: unknown) => {
+    showFatal(document.getElementById('stage') ?? document.body, `The page failed to start: ${(e as Error).message ?? String(e)}`);
+  });
 }

@@ -2,11 +2,9 @@
 // chunks straight to the GPU) or generate a survey, and look at it as
 // billboarded splats coloured by RGB, intensity, elevation or class.
 import { setInfoList } from '../../app/info-list.ts';
-import { Messages } from '../../app/messages.ts';
 import { LasError, LasReader, type LasHeader } from '../../loaders/las.ts';
 import { BoxLayer } from '../../render/box-layer.ts';
 import type { Bounds } from '../../render/camera.ts';
-import { Viewer } from '../../render/viewer.ts';
 import {
   acceptFiles,
   byId,
@@ -17,8 +15,8 @@ import {
   nextFrame,
   Progress,
   publishState,
-  startGpu,
-  syncCameraWithUrl,
+  runPage,
+  startExampleViewer,
   type ExamplePageState,
 } from '../common.ts';
 import { generatePointCloud } from './generate.ts';
@@ -103,24 +101,12 @@ class CloudStats {
 }
 
 async function start(): Promise<void> {
-  const stage = byId('stage');
-  const messages = new Messages(byId('messages'));
   const state = publishState<LidarState>({ status: 'loading', framesDrawn: () => 0, pointCount: 0, loading: false, colorMode: 'rgb' });
   window.lidar = state;
 
-  const gpu = await startGpu(stage, messages, 'lidar.device');
-  if (!gpu) {
-    state.status = 'error';
-    return;
-  }
-  state.adapter = gpu.adapter;
-  let cameraUrl: ReturnType<typeof syncCameraWithUrl> | undefined;
-  const viewer = new Viewer(gpu.device, byId<HTMLCanvasElement>('view'), {
-    clearColor: { r: 0.075, g: 0.082, b: 0.1, a: 1 },
-    onCameraChange: () => cameraUrl?.write(),
-  });
-  cameraUrl = syncCameraWithUrl(viewer);
-  state.framesDrawn = () => viewer.framesDrawn;
+  const started = await startExampleViewer(state, 'lidar.device', { r: 0.075, g: 0.082, b: 0.1, a: 1 });
+  if (!started) return;
+  const { stage, messages, gpu, viewer, cameraUrl } = started;
   const points = await PointLayer.create(viewer);
   const box = await BoxLayer.create(viewer);
   viewer.addLayer(points);
@@ -217,7 +203,7 @@ async function start(): Promise<void> {
   const frame = (bounds: Bounds, restoreCamera: boolean) => {
     box.setBounds(bounds, [0.42, 0.47, 0.55, 1]);
     viewer.camera.fit(bounds);
-    if (restoreCamera) cameraUrl!.restore();
+    if (restoreCamera) cameraUrl.restore();
     viewer.requestFrame();
   };
 
@@ -414,12 +400,4 @@ async function start(): Promise<void> {
   }
 }
 
-start().catch((e: unknown) => {
-  const stage = document.getElementById('stage') ?? document.body;
-  const el = document.createElement('div');
-  el.className = 'fatal message';
-  el.id = 'fatal';
-  el.textContent = `The page failed to start: ${(e as Error).message ?? String(e)}`;
-  stage.append(el);
-  document.body.dataset.status = 'error';
-});
+runPage(start);

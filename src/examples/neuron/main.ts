@@ -11,12 +11,10 @@
 // implementing DepthDrawer and RenderLayer and registering it like the
 // SwcLayer below.
 import { setInfoList } from '../../app/info-list.ts';
-import { Messages } from '../../app/messages.ts';
 import { parseSwc, swcTypeColor, swcTypeName, SwcError } from '../../loaders/swc.ts';
 import { loadTiffStack, TiffError, type TiffVolume } from '../../loaders/tiff.ts';
 import { BoxLayer } from '../../render/box-layer.ts';
 import type { Bounds } from '../../render/camera.ts';
-import { Viewer } from '../../render/viewer.ts';
 import { tiffVolumeFacts } from '../../volume/open-volume.ts';
 import {
   acceptFiles,
@@ -27,8 +25,8 @@ import {
   nextFrame,
   Progress,
   publishState,
-  startGpu,
-  syncCameraWithUrl,
+  runPage,
+  startExampleViewer,
   type ExamplePageState,
 } from '../common.ts';
 import { makeDemoNeuron } from './demo.ts';
@@ -62,24 +60,12 @@ interface LoadedTrace extends Trace {
 }
 
 async function start(): Promise<void> {
-  const stage = byId('stage');
-  const messages = new Messages(byId('messages'));
   const state = publishState<NeuronState>({ status: 'loading', framesDrawn: () => 0, loading: false, traces: [], demo: false });
   window.neuron = state;
 
-  const gpu = await startGpu(stage, messages, 'neuron.device');
-  if (!gpu) {
-    state.status = 'error';
-    return;
-  }
-  state.adapter = gpu.adapter;
-  let cameraUrl: ReturnType<typeof syncCameraWithUrl> | undefined;
-  const viewer = new Viewer(gpu.device, byId<HTMLCanvasElement>('view'), {
-    clearColor: { r: 0.035, g: 0.04, b: 0.05, a: 1 },
-    onCameraChange: () => cameraUrl?.write(),
-  });
-  cameraUrl = syncCameraWithUrl(viewer);
-  state.framesDrawn = () => viewer.framesDrawn;
+  const started = await startExampleViewer(state, 'neuron.device', { r: 0.035, g: 0.04, b: 0.05, a: 1 });
+  if (!started) return;
+  const { stage, messages, gpu, viewer, cameraUrl } = started;
 
   const prepass = new DepthPrepass(viewer);
   const traces = await SwcLayer.create(viewer);
@@ -258,7 +244,7 @@ async function start(): Promise<void> {
     emptyHint.hidden = b !== undefined;
     if (!b) return;
     viewer.camera.fit(b);
-    if (restore && firstFit) cameraUrl!.restore();
+    if (restore && firstFit) cameraUrl.restore();
     firstFit = false;
     viewer.requestFrame();
   };
@@ -432,12 +418,4 @@ async function start(): Promise<void> {
   viewer.requestFrame();
 }
 
-start().catch((e: unknown) => {
-  const stage = document.getElementById('stage') ?? document.body;
-  const el = document.createElement('div');
-  el.className = 'fatal message';
-  el.id = 'fatal';
-  el.textContent = `The page failed to start: ${(e as Error).message ?? String(e)}`;
-  stage.append(el);
-  document.body.dataset.status = 'error';
-});
+runPage(start);
