@@ -65,6 +65,9 @@ fn compact_values(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nw
   }
 }
 
+// The same loop as compact_values, written out again: a shared function taking
+// a write-ids flag would make this entry point statically use `values`, and
+// its automatic layout would then demand a values buffer it never reads.
 @compute @workgroup_size(WG)
 fn compact_ids(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
                @builtin(local_invocation_index) lid: u32) {

@@ -2,6 +2,8 @@
 // per-block [min, max] ranges (read once at load): a profile drawn under the
 // isovalue slider so users see where surfaces are and what they cost.
 
+import { fitCanvas2d } from './canvas-2d.ts';
+
 export interface BlockProfile {
   lo: number;
   hi: number;
@@ -32,16 +34,9 @@ export function computeBlockProfile(ranges: Float32Array, lo: number, hi: number
 
 /** Draws the profile (log scale) and a marker at `iso`. */
 export function drawBlockProfile(canvas: HTMLCanvasElement, profile: BlockProfile, iso: number | undefined): void {
-  const dpr = window.devicePixelRatio || 1;
-  const w = Math.max(1, Math.round(canvas.clientWidth * dpr));
-  const h = Math.max(1, Math.round(canvas.clientHeight * dpr));
-  if (canvas.width !== w || canvas.height !== h) {
-    canvas.width = w;
-    canvas.height = h;
-  }
-  const g = canvas.getContext('2d');
-  if (!g) return;
-  g.clearRect(0, 0, w, h);
+  const fitted = fitCanvas2d(canvas);
+  if (!fitted) return;
+  const { g, w, h, dpr } = fitted;
   const n = profile.counts.length;
   let max = 1;
   for (const c of profile.counts) max = Math.max(max, c);

@@ -2,6 +2,8 @@
 // ramp over the window [lo, hi] of normalised data values, baked into a
 // 256-entry RGBA texture, and drawn as a small preview for the panel.
 
+import { fitCanvas2d } from '../../app/ui/canvas-2d.ts';
+
 export type ColormapName = 'fluorescence' | 'grayscale' | 'hot' | 'viridis' | 'magma' | 'cool';
 
 type Stops = [number, [number, number, number]][];
@@ -91,16 +93,9 @@ export function drawTransferFunction(
   windowHi: number,
   histogram: Float64Array | undefined,
 ): void {
-  const dpr = Math.min(2, window.devicePixelRatio || 1);
-  const w = Math.max(1, Math.round(canvas.clientWidth * dpr));
-  const h = Math.max(1, Math.round(canvas.clientHeight * dpr));
-  if (canvas.width !== w || canvas.height !== h) {
-    canvas.width = w;
-    canvas.height = h;
-  }
-  const g = canvas.getContext('2d');
-  if (!g) return;
-  g.clearRect(0, 0, w, h);
+  const fitted = fitCanvas2d(canvas, 2);
+  if (!fitted) return;
+  const { g, w, h, dpr } = fitted;
   // Histogram (log counts) as a faint backdrop.
   if (histogram && histogram.length > 0) {
     let max = 0;
