@@ -44,10 +44,18 @@ export async function savePly(session: Session, messages: Messages): Promise<voi
     }
     const soup = decodeVertices(packed, count, v.iso.info);
     const mesh = weldVertices(soup);
+    // What is on screen: voxel (i, j, k) at (i, j, k) * voxel size (1 unless the file or the user gave one).
+    const size = session.spacing;
+    const isotropicUnit = size.every((s) => s === 1);
+    if (!isotropicUnit) {
+      for (let i = 0; i < mesh.positions.length; i++) mesh.positions[i] *= size[i % 3];
+    }
     const iso = session.drawnIsovalue ?? NaN;
     const ply = encodePly(mesh, [
       `isosurface of ${v.opened.name} at isovalue ${iso}`,
-      `voxel index coordinates: voxel (i, j, k) at (i, j, k); volume ${v.iso.info.dims.join(' x ')}`,
+      isotropicUnit
+        ? `voxel index coordinates: voxel (i, j, k) at (i, j, k); volume ${v.iso.info.dims.join(' x ')}`
+        : `world coordinates: voxel (i, j, k) at (i * ${size[0]}, j * ${size[1]}, k * ${size[2]}); volume ${v.iso.info.dims.join(' x ')}`,
       'made by zfp-isosurface-webgpu (marching cubes on the GPU, zfp fixed-rate blocks)',
     ]);
     download(new Blob([ply as BlobPart], { type: 'application/octet-stream' }), `${baseName(session)}${isoTag(session)}.ply`);

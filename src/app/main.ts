@@ -18,6 +18,7 @@ import { BudgetControl, defaultBudgetBytes } from './ui/budget-control.ts';
 import { Hud } from './ui/hud.ts';
 import { IsoControl } from './ui/iso-control.ts';
 import { ProgressView } from './ui/progress.ts';
+import { SpacingControl } from './ui/spacing-control.ts';
 import { StatsPanel } from './ui/stats-panel.ts';
 import { VolumeForm } from './ui/volume-form.ts';
 import { ViewLink } from './view-link.ts';
@@ -100,6 +101,11 @@ async function start(): Promise<void> {
     },
     (iso) => session.setIsovalue(iso),
   );
+  const spacing = new SpacingControl(
+    [byId('spacing-x'), byId('spacing-y'), byId('spacing-z')],
+    byId('spacing-note'),
+    (s) => session.setSpacing(s),
+  );
   const budget = new BudgetControl(byId('budget-mb'), byId('budget-bar'), byId('budget-note'), defaultBudgetBytes(gpu.limits), (bytes) =>
     session.current?.iso.setMemoryBudget(bytes),
   );
@@ -142,6 +148,7 @@ async function start(): Promise<void> {
     surface,
     box,
     isoControl,
+    spacing,
     stats,
     budget,
     hud,
@@ -152,6 +159,7 @@ async function start(): Promise<void> {
     volumeInfo: byId('volume-info'),
   });
   session.pendingCamera = initialView.camera;
+  session.pendingSpacing = initialView.spacing;
 
   let nextUrl: string | undefined;
   const loader = new VolumeLoader({

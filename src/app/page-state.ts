@@ -14,6 +14,8 @@ export interface PageVolumeState {
   rate: number;
   valueRange: [number, number];
   blockCount: number;
+  /** World size of a voxel along x, y, z (the file's, or what the user set). */
+  spacing: Dims;
 }
 
 export interface PageState {

@@ -17,6 +17,7 @@ import type { BenchPanel } from './ui/bench-panel.ts';
 import type { BudgetControl } from './ui/budget-control.ts';
 import type { Hud } from './ui/hud.ts';
 import type { IsoControl } from './ui/iso-control.ts';
+import type { Spacing, SpacingControl } from './ui/spacing-control.ts';
 import { StatsPanel, volumeRows } from './ui/stats-panel.ts';
 import type { ViewLink } from './view-link.ts';
 
@@ -25,6 +26,7 @@ export interface SessionParts {
   surface: SurfaceLayer;
   box: BoxLayer;
   isoControl: IsoControl;
+  spacing: SpacingControl;
   stats: StatsPanel;
   budget: BudgetControl;
   hud: Hud;
@@ -39,6 +41,8 @@ export class Session {
   current: LoadedVolume | undefined;
   /** Camera to restore on the first volume (from the link the page was opened with). */
   pendingCamera: CameraState | undefined;
+  /** Voxel size to use for the first volume instead of the file's (from the link). */
+  pendingSpacing: Spacing | undefined;
   private requestedAt = new Map<number, number>();
   private lastLatency: number | undefined;
 
@@ -65,10 +69,12 @@ export class Session {
         );
       } else p.messages.show(`Isosurface: ${e.message}`);
     });
-    const max = info.dims.map((n) => n - 1) as [number, number, number];
-    const bounds = { min: [0, 0, 0] as [number, number, number], max };
-    p.box.setBounds(bounds);
-    p.viewer.fitTo(bounds);
+    p.spacing.setVolume(v.opened.spacing);
+    if (this.pendingSpacing) p.spacing.setUserValue(this.pendingSpacing);
+    p.link.setSpacing(this.pendingSpacing);
+    this.pendingSpacing = undefined;
+    p.spacing.setEnabled(true);
+    this.applySpacing(v, p.spacing.value);
     if (this.pendingCamera) {
       p.viewer.camera.setState(this.pendingCamera);
       this.pendingCamera = undefined;
@@ -88,6 +94,7 @@ export class Session {
       rate: v.opened.rate,
       valueRange: info.valueRange,
       blockCount: info.blockCount,
+      spacing: p.spacing.value,
     };
     p.state.iso = v.initialIso;
     p.surface.setDrawData(v.iso.drawData);
@@ -107,6 +114,31 @@ export class Session {
     const { state } = this.p;
     if (!this.current || !state.stats) return undefined;
     return state.iso !== undefined && Math.fround(state.iso) === state.stats.isovalue ? state.iso : state.stats.isovalue;
+  }
+
+  /** The user changed the voxel size: the surface keeps its triangles, the world stretches; the view fits it. */
+  setSpacing(spacing: Spacing): void {
+    const v = this.current;
+    if (!v) return;
+    this.applySpacing(v, spacing);
+    if (this.p.state.volume) this.p.state.volume.spacing = spacing;
+    this.p.link.setSpacing(spacing);
+    this.p.viewer.requestFrame();
+  }
+
+  /** World size of a voxel of the volume on screen (PLY export writes world coordinates). */
+  get spacing(): Spacing {
+    return this.p.spacing.value;
+  }
+
+  /** Voxel (i, j, k) at (i, j, k) * spacing: surface, box and the fitted view. */
+  private applySpacing(v: LoadedVolume, spacing: Spacing): void {
+    const { p } = this;
+    p.surface.voxelSize = [...spacing];
+    const max = v.iso.info.dims.map((n, a) => (n - 1) * spacing[a]) as [number, number, number];
+    const bounds = { min: [0, 0, 0] as [number, number, number], max };
+    p.box.setBounds(bounds);
+    p.viewer.fitTo(bounds);
   }
 
   /** The user moved the isovalue. */

@@ -1,11 +1,14 @@
 // The view in the URL hash, so a link reopens the same surface and camera:
-// #iso=0.5&cam=qx,qy,qz,qw,tx,ty,tz,d . The volume itself comes from
-// ?url=... (same origin) or is the built-in default.
+// #iso=0.5&cam=qx,qy,qz,qw,tx,ty,tz,d[&vox=sx,sy,sz] (vox: a voxel size the
+// user set, over the file's). The volume itself comes from ?url=... (same
+// origin) or is the built-in default.
 import type { CameraState } from '../render/camera.ts';
 
 export interface ViewState {
   iso?: number;
   camera?: CameraState;
+  /** Voxel size set by the user (absent: the file's own). */
+  spacing?: [number, number, number];
 }
 
 const round = (x: number) => Number(x.toPrecision(7));
@@ -17,6 +20,7 @@ export function encodeViewState(s: ViewState): string {
     const c = s.camera;
     parts.push(`cam=${[...c.rotation, ...c.target, c.distance].map(round).join(',')}`);
   }
+  if (s.spacing) parts.push(`vox=${s.spacing.map(round).join(',')}`);
   return parts.join('&');
 }
 
@@ -33,6 +37,8 @@ export function decodeViewState(hash: string): ViewState {
       distance: cam[7],
     };
   }
+  const vox = params.get('vox')?.split(',').map(Number);
+  if (vox && vox.length === 3 && vox.every((v) => Number.isFinite(v) && v > 0)) out.spacing = [vox[0], vox[1], vox[2]];
   return out;
 }
 

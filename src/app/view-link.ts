@@ -8,6 +8,7 @@ import { decodeViewState, encodeViewState, writeViewState, type ViewState } from
 export class ViewLink {
   private timer: ReturnType<typeof setTimeout> | undefined;
   private iso: number | undefined;
+  private spacing: [number, number, number] | undefined;
 
   constructor(private readonly camera: ArcballCamera) {}
 
@@ -18,6 +19,12 @@ export class ViewLink {
 
   setIso(iso: number | undefined): void {
     this.iso = iso;
+    this.schedule();
+  }
+
+  /** A voxel size the user set (undefined: the file's own, not written). */
+  setSpacing(spacing: [number, number, number] | undefined): void {
+    this.spacing = spacing;
     this.schedule();
   }
 
@@ -34,7 +41,7 @@ export class ViewLink {
   }
 
   state(): ViewState {
-    return { iso: this.iso, camera: this.camera.getState() };
+    return { iso: this.iso, camera: this.camera.getState(), spacing: this.spacing };
   }
 
   /** The full link to this view. */

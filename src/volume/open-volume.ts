@@ -76,6 +76,8 @@ export interface VolumeFileFacts {
   samples?: Uint8Array;
   /** TIFF stacks: the files, in stack order. */
   files?: string[];
+  /** World size of a voxel along x, y, z, when the file gives it (NRRD spacings, ImageJ calibration). */
+  spacing?: Dims;
 }
 
 export interface OpenRequest {
@@ -105,6 +107,8 @@ export interface OpenedVolume {
   compressedHere: boolean;
   /** The default volume's suggested isovalue. */
   defaultIsovalue?: number;
+  /** World size of a voxel along x, y, z, when the file gives it. */
+  spacing?: Dims;
 }
 
 export interface OpenOptions {
@@ -191,7 +195,7 @@ export async function inspectVolumeFile(fileName: string, bytes: Uint8Array, opt
         if (e instanceof NrrdError) throw new VolumeFileError(`${fileName}: ${e.message}`);
         throw e;
       }
-      return { ...base, kind: 'nrrd', dims: nrrd.dims, dtype: nrrd.dtype, missing: [], compresses: true, nrrd };
+      return { ...base, kind: 'nrrd', dims: nrrd.dims, dtype: nrrd.dtype, missing: [], compresses: true, nrrd, spacing: nrrd.spacing };
     }
     case 'tiff':
       return inspectTiffStack([{ name: fileName, bytes }]);
@@ -272,7 +276,7 @@ export function tiffVolumeFacts(fileName: string, v: TiffVolume, bytes: number, 
     data = v.data;
   }
   const samples = new Uint8Array(data.buffer, data.byteOffset, data.byteLength);
-  return { fileName, kind: 'tiff', bytes, dims: v.dims, dtype, missing: [], compresses: true, samples, files: v.files };
+  return { fileName, kind: 'tiff', bytes, dims: v.dims, dtype, missing: [], compresses: true, samples, files: v.files, spacing: v.spacing };
 }
 
 /** The rate `rate` is a usable zfp rate (checked before compressing). */
@@ -289,7 +293,7 @@ export function checkRate(fileName: string, rate: number | undefined): number {
 export async function openVolumeFile(device: GPUDevice, facts: VolumeFileFacts, bytes: Uint8Array, req: OpenRequest = {}, opts: OpenOptions = {}): Promise<OpenedVolume> {
   const { fileName } = facts;
   const display = fileName.split(/[\\/]/).pop() ?? fileName;
-  const common = { name: display, fileName, kind: facts.kind, sourceBytes: facts.bytes };
+  const common = { name: display, fileName, kind: facts.kind, sourceBytes: facts.bytes, spacing: facts.spacing };
   switch (facts.kind) {
     case 'zfp':
     case 'zfp-headerless': {

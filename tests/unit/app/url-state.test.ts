@@ -8,6 +8,13 @@ describe('view state in the URL hash', () => {
     expect(back.iso).toBeCloseTo(37.37, 5);
     expect(back.camera?.rotation[3]).toBeCloseTo(0.927, 6);
     expect(back.camera?.distance).toBeCloseTo(250.5, 4);
+    expect(back.spacing).toBeUndefined();
+  });
+  it('round-trips a voxel size the user set', () => {
+    const back = decodeViewState('#' + encodeViewState({ iso: 1, spacing: [0.5, 0.5, 2.25] }));
+    expect(back.spacing).toEqual([0.5, 0.5, 2.25]);
+    expect(decodeViewState('#vox=1,0,2').spacing).toBeUndefined();
+    expect(decodeViewState('#vox=1,2').spacing).toBeUndefined();
   });
   it('ignores malformed values', () => {
     expect(decodeViewState('#iso=abc&cam=1,2,3')).toEqual({});
