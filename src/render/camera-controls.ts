@@ -1,7 +1,9 @@
 // Mouse, touch and keyboard habits of 3D viewers for an ArcballCamera:
 // left-drag rotates, right-drag / shift-drag / middle-drag pans, wheel (or
-// pinch) zooms, double-click or R resets, F fits. Calls `onChange` after
-// every camera change so the owner can redraw and update the URL.
+// trackpad pinch) zooms, double-click or R resets, F fits; on touch screens
+// one finger rotates and two pinch to zoom and move together to pan. Calls
+// `onChange` after every camera change so the owner can redraw and update
+// the URL.
 
 import type { ArcballCamera } from './camera.ts';
 
@@ -14,6 +16,10 @@ export interface CameraControlsOptions {
 
 export class CameraControls {
   private drag: { mode: 'rotate' | 'pan'; x: number; y: number; id: number } | undefined;
+  /** Fingers on the element (client pixels), by pointer id. */
+  private readonly touches = new Map<number, [number, number]>();
+  /** Two fingers down: their distance (pixels) and midpoint (NDC) at the last move. */
+  private pinch: { distance: number; mid: [number, number] } | undefined;
   private readonly disposers: (() => void)[] = [];
 
   constructor(
@@ -46,25 +52,63 @@ export class CameraControls {
     this.options.onChange();
   }
 
-  private ndc(e: PointerEvent): [number, number] {
+  private ndc(clientX: number, clientY: number): [number, number] {
     const r = this.element.getBoundingClientRect();
-    return [((e.clientX - r.left) / r.width) * 2 - 1, 1 - ((e.clientY - r.top) / r.height) * 2];
+    return [((clientX - r.left) / r.width) * 2 - 1, 1 - ((clientY - r.top) / r.height) * 2];
   }
 
   private pointerDown(e: PointerEvent): void {
+    if (e.pointerType === 'touch') {
+      this.touches.set(e.pointerId, [e.clientX, e.clientY]);
+      this.capture(e);
+      if (this.touches.size === 2) {
+        // A second finger turns the one-finger rotation into pinch and pan.
+        this.drag = undefined;
+        this.pinch = this.pinchState();
+      } else if (this.touches.size === 1) {
+        this.drag = { mode: 'rotate', ...this.at(e), id: e.pointerId };
+      }
+      return;
+    }
     if (this.drag) return;
     const pan = e.button === 2 || e.button === 1 || e.shiftKey;
-    const [x, y] = this.ndc(e);
-    this.drag = { mode: pan ? 'pan' : 'rotate', x, y, id: e.pointerId };
+    this.drag = { mode: pan ? 'pan' : 'rotate', ...this.at(e), id: e.pointerId };
+    this.capture(e);
+  }
+
+  private at(e: PointerEvent): { x: number; y: number } {
+    return this.atClient([e.clientX, e.clientY]);
+  }
+
+  private capture(e: PointerEvent): void {
     this.element.setPointerCapture(e.pointerId);
     this.element.focus({ preventScroll: true });
     e.preventDefault();
   }
 
+  private pinchState(): { distance: number; mid: [number, number] } {
+    const [a, b] = [...this.touches.values()];
+    return {
+      distance: Math.max(1, Math.hypot(a[0] - b[0], a[1] - b[1])),
+      mid: this.ndc((a[0] + b[0]) / 2, (a[1] + b[1]) / 2),
+    };
+  }
+
   private pointerMove(e: PointerEvent): void {
+    if (this.touches.has(e.pointerId)) {
+      this.touches.set(e.pointerId, [e.clientX, e.clientY]);
+      if (this.pinch && this.touches.size >= 2) {
+        const now = this.pinchState();
+        this.camera.zoom(this.pinch.distance / now.distance);
+        this.camera.pan(now.mid[0] - this.pinch.mid[0], now.mid[1] - this.pinch.mid[1]);
+        this.pinch = now;
+        this.options.onChange();
+        return;
+      }
+    }
     const d = this.drag;
     if (!d || d.id !== e.pointerId) return;
-    const [x, y] = this.ndc(e);
+    const [x, y] = this.ndc(e.clientX, e.clientY);
     if (d.mode === 'rotate') this.camera.rotateArcball(d.x, d.y, x, y);
     else this.camera.pan(x - d.x, y - d.y);
     d.x = x;
@@ -73,9 +117,20 @@ export class CameraControls {
   }
 
   private pointerUp(e: PointerEvent): void {
-    if (this.drag?.id !== e.pointerId) return;
-    this.drag = undefined;
+    if (this.touches.delete(e.pointerId)) {
+      if (this.touches.size < 2) this.pinch = undefined;
+      // Lifting one of two fingers: the other rotates from where it is, without a jump.
+      const [rest] = [...this.touches.entries()];
+      this.drag = this.touches.size === 1 ? { mode: 'rotate', ...this.atClient(rest[1]), id: rest[0] } : undefined;
+    } else if (this.drag?.id === e.pointerId) {
+      this.drag = undefined;
+    } else return;
     if (this.element.hasPointerCapture(e.pointerId)) this.element.releasePointerCapture(e.pointerId);
+  }
+
+  private atClient([cx, cy]: [number, number]): { x: number; y: number } {
+    const [x, y] = this.ndc(cx, cy);
+    return { x, y };
   }
 
   private wheel(e: WheelEvent): void {

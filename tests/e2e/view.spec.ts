@@ -94,3 +94,53 @@ test('dragging, panning and zooming change the view; R and double-click reset it
   await view.dblclick();
   expect((await canvasPixels(page)).equals(home)).toBe(true);
 });
+
+test.describe('on a touch screen', () => {
+  test.use({ hasTouch: true });
+
+  test('one finger rotates; two fingers pinch to zoom and move together to pan', async ({ page }) => {
+    await openApp(page);
+    const box = (await page.locator('#view').boundingBox())!;
+    const cx = box.x + box.width / 2, cy = box.y + box.height / 2;
+    // Chromium delivers touch moves aligned to animation frames, after the protocol call returns:
+    // read the camera once it has stopped changing from one pair of frames to the next.
+    const camera = () =>
+      page.evaluate(async () => {
+        const frames = () => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
+        let last = '';
+        for (;;) {
+          await frames();
+          const now = window.zfpiso!.camera!();
+          if (JSON.stringify(now) === last) return now;
+          last = JSON.stringify(now);
+        }
+      });
+    // Chromium's own touch input (through the DevTools protocol), so the page gets real touch pointer events.
+    const cdp = await page.context().newCDPSession(page);
+    const touch = async (type: 'touchStart' | 'touchMove' | 'touchEnd', points: [number, number][]) => {
+      await cdp.send('Input.dispatchTouchEvent', { type, touchPoints: points.map(([x, y], id) => ({ x, y, id })) });
+    };
+    const home = await camera();
+
+    await touch('touchStart', [[cx, cy]]);
+    for (let i = 1; i <= 5; i++) await touch('touchMove', [[cx + 20 * i, cy]]);
+    await touch('touchEnd', []);
+    const rotated = await camera();
+    expect(rotated.rotation).not.toEqual(home.rotation);
+    expect(rotated.distance).toBeCloseTo(home.distance, 6);
+
+    // Spread two fingers apart: closer, the rotation kept.
+    await touch('touchStart', [[cx - 40, cy], [cx + 40, cy]]);
+    for (let i = 1; i <= 5; i++) await touch('touchMove', [[cx - 40 - 16 * i, cy], [cx + 40 + 16 * i, cy]]);
+    const pinched = await camera();
+    expect(pinched.distance).toBeLessThan(rotated.distance * 0.6);
+    expect(pinched.rotation).toEqual(rotated.rotation);
+    // Both fingers move together: a pan (the target moves; distance and rotation stay).
+    for (let i = 1; i <= 5; i++) await touch('touchMove', [[cx - 120 + 10 * i, cy + 10 * i], [cx + 120 + 10 * i, cy + 10 * i]]);
+    await touch('touchEnd', []);
+    const panned = await camera();
+    expect(panned.target).not.toEqual(pinched.target);
+    expect(panned.distance).toBeCloseTo(pinched.distance, 6);
+    expect(panned.rotation).toEqual(rotated.rotation);
+  });
+});
