@@ -15,7 +15,7 @@ export interface PageVolumeState {
   valueRange: [number, number];
   blockCount: number;
   /** World size of a voxel along x, y, z (the file's, or what the user set). */
-  spacing: Dims;
+  spacing: [number, number, number];
 }
 
 export interface PageState {

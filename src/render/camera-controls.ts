@@ -66,18 +66,19 @@ export class CameraControls {
         this.drag = undefined;
         this.pinch = this.pinchState();
       } else if (this.touches.size === 1) {
-        this.drag = { mode: 'rotate', ...this.at(e), id: e.pointerId };
+        this.startDrag('rotate', e.pointerId, e.clientX, e.clientY);
       }
       return;
     }
     if (this.drag) return;
     const pan = e.button === 2 || e.button === 1 || e.shiftKey;
-    this.drag = { mode: pan ? 'pan' : 'rotate', ...this.at(e), id: e.pointerId };
+    this.startDrag(pan ? 'pan' : 'rotate', e.pointerId, e.clientX, e.clientY);
     this.capture(e);
   }
 
-  private at(e: PointerEvent): { x: number; y: number } {
-    return this.atClient([e.clientX, e.clientY]);
+  private startDrag(mode: 'rotate' | 'pan', id: number, clientX: number, clientY: number): void {
+    const [x, y] = this.ndc(clientX, clientY);
+    this.drag = { mode, x, y, id };
   }
 
   private capture(e: PointerEvent): void {
@@ -118,19 +119,17 @@ export class CameraControls {
 
   private pointerUp(e: PointerEvent): void {
     if (this.touches.delete(e.pointerId)) {
-      if (this.touches.size < 2) this.pinch = undefined;
-      // Lifting one of two fingers: the other rotates from where it is, without a jump.
-      const [rest] = [...this.touches.entries()];
-      this.drag = this.touches.size === 1 ? { mode: 'rotate', ...this.atClient(rest[1]), id: rest[0] } : undefined;
+      // The fingers left carry on from where they are, without a jump: two or more pinch, one rotates.
+      this.pinch = this.touches.size >= 2 ? this.pinchState() : undefined;
+      this.drag = undefined;
+      if (this.touches.size === 1) {
+        const [[id, [x, y]]] = this.touches;
+        this.startDrag('rotate', id, x, y);
+      }
     } else if (this.drag?.id === e.pointerId) {
       this.drag = undefined;
     } else return;
     if (this.element.hasPointerCapture(e.pointerId)) this.element.releasePointerCapture(e.pointerId);
-  }
-
-  private atClient([cx, cy]: [number, number]): { x: number; y: number } {
-    const [x, y] = this.ndc(cx, cy);
-    return { x, y };
   }
 
   private wheel(e: WheelEvent): void {

@@ -77,7 +77,7 @@ export interface VolumeFileFacts {
   /** TIFF stacks: the files, in stack order. */
   files?: string[];
   /** World size of a voxel along x, y, z, when the file gives it (NRRD spacings, ImageJ calibration). */
-  spacing?: Dims;
+  spacing?: [number, number, number];
 }
 
 export interface OpenRequest {
@@ -108,7 +108,7 @@ export interface OpenedVolume {
   /** The default volume's suggested isovalue. */
   defaultIsovalue?: number;
   /** World size of a voxel along x, y, z, when the file gives it. */
-  spacing?: Dims;
+  spacing?: [number, number, number];
 }
 
 export interface OpenOptions {

@@ -3,9 +3,8 @@
 // since many raw CT and microscope volumes have thicker slices than pixels
 // and look squashed without it.
 
-import type { Dims } from '../../volume/naming.ts';
-
-export type Spacing = Dims;
+/** World size of a voxel along x, y, z. */
+export type Spacing = [number, number, number];
 
 export class SpacingControl {
   private spacing: Spacing = [1, 1, 1];
