@@ -7,7 +7,7 @@ import { writeFileSync } from 'node:fs';
 import { basename, join } from 'node:path';
 import { readFileSync } from 'node:fs';
 import type { GpuContext } from '../../src/gpu/device.ts';
-import { loadVolumeInput } from '../../src/isosurface/volume-input.ts';
+import { describeOpenedVolume, openVolumeBytes } from '../../src/volume/open-volume.ts';
 import type { Dims3 } from '../../src/mc/serial-mc.ts';
 import { interestingRange } from '../../src/examples/paper-bench/measure.ts';
 import type { ZfpDecoder } from '../../src/zfp/decoder.ts';
@@ -96,7 +96,7 @@ export function userVolume(arg: string): VolumeSpec {
 /** Opens a volume on the GPU, decodes it once, and writes the decoded field to `dir`. */
 export async function prepareVolume(gpu: GpuContext, decoder: ZfpDecoder, spec: VolumeSpec, dir: string, rate?: number): Promise<PreparedVolume> {
   const bytes = new Uint8Array(readFileSync(spec.path));
-  const input = await loadVolumeInput(gpu.device, bytes, basename(spec.path), rate === undefined ? {} : { rate });
+  const input = await openVolumeBytes(gpu.device, bytes, basename(spec.path), { reader: 'command', ...(rate === undefined ? {} : { rate }) });
   const dims = [...input.stream.info.dims] as Dims3;
   const values = (await decoder.readVolume(input.stream))!;
   const dataRange = interestingRange(values, dims);
@@ -110,7 +110,7 @@ export async function prepareVolume(gpu: GpuContext, decoder: ZfpDecoder, spec: 
   return {
     ...spec,
     dims,
-    how: input.how,
+    how: describeOpenedVolume(input),
     rate: input.rate,
     stream: input.stream,
     values,

@@ -7,7 +7,7 @@
 // "in Chromium" columns of its report.
 import { Messages } from '../../app/messages.ts';
 import { describeAdapter, requestGpu, type GpuContext } from '../../gpu/device.ts';
-import { compressOnGpu } from '../../isosurface/volume-input.ts';
+import { compressOnGpu } from '../../volume/open-volume.ts';
 import type { Dims3 } from '../../mc/serial-mc.ts';
 import { isovalueSequence } from '../../bench/sequences.ts';
 import { summarize } from '../../bench/stats.ts';
