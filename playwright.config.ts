@@ -1,8 +1,9 @@
 import { defineConfig } from '@playwright/test';
-import { chromiumPath, chromiumWebGpuArgs } from './tests/e2e/chromium.ts';
+import { chromiumLaunchOptions } from './tests/e2e/chromium.ts';
 
 // End-to-end tests of the built page in Debian's headless Chromium, with
-// WebGPU on SwiftShader (flags: ../shared/docs/TOOLCHAIN.md).
+// WebGPU on SwiftShader, with the flag set probed at set-up
+// (scripts/setup/chromium-flags.mjs; background: ../shared/docs/TOOLCHAIN.md).
 // E2E_PORT picks another port (and build folder) for the preview server, so
 // two runs can go side by side.
 const port = Number(process.env.E2E_PORT ?? 4173);
@@ -20,7 +21,7 @@ export default defineConfig({
     baseURL: `http://127.0.0.1:${port}`,
     screenshot: 'only-on-failure',
     trace: 'off',
-    launchOptions: { executablePath: chromiumPath(), args: chromiumWebGpuArgs },
+    launchOptions: chromiumLaunchOptions(),
     viewport: { width: 1100, height: 720 },
   },
   webServer: {

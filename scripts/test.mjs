@@ -10,6 +10,7 @@ import { spawnSync } from 'node:child_process';
 import { existsSync, mkdirSync, readFileSync, rmSync } from 'node:fs';
 import { join } from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { chromiumWebGpuLaunch } from './setup/chromium-flags.mjs';
 import { ensureNodeModules } from './setup/npm-deps.mjs';
 import { ensurePythonEnv } from './setup/python-env.mjs';
 import { ensureSystemPackages } from './setup/system-deps.mjs';
@@ -50,7 +51,15 @@ function unit(extra) {
   return { passed: report.numPassedTests, failed: report.numFailedTests + extraFail };
 }
 
-function e2e(extra) {
+async function e2e(extra) {
+  // The flag set that draws a WebGPU canvas here (probed once, then cached).
+  try {
+    const launch = await chromiumWebGpuLaunch();
+    console.log(`\nChromium flags: ${launch.name} (${launch.chromium}): ${launch.args.join(' ')}${Object.entries(launch.env).map(([k, v]) => ` ${k}=${v}`).join('')}`);
+  } catch (e) {
+    console.error(`\n[setup] ${e.message}`);
+    return { passed: 0, failed: 1, note: 'no Chromium flag set draws a WebGPU canvas' };
+  }
   const out = join(results, 'playwright.json');
   rmSync(out, { force: true });
   const status = run(npx('playwright'), ['test', '--reporter=list,json', ...extra], { PLAYWRIGHT_JSON_OUTPUT_NAME: out });
@@ -61,7 +70,7 @@ function e2e(extra) {
   return { passed: expected + flaky, failed: unexpected + extraFail };
 }
 
-function main() {
+async function main() {
   const args = process.argv.slice(2);
   const chosen = args.length > 0 && SUITES.includes(args[0]) ? [args[0]] : SUITES;
   const extra = args.length > 0 && SUITES.includes(args[0]) ? args.slice(1) : [];
@@ -84,7 +93,7 @@ function main() {
   const totals = { passed: 0, failed: 0 };
   const lines = [];
   for (const suite of chosen) {
-    const r = suite === 'typecheck' ? typecheck() : suite === 'unit' ? unit(extra) : e2e(extra);
+    const r = suite === 'typecheck' ? typecheck() : suite === 'unit' ? unit(extra) : await e2e(extra);
     totals.passed += r.passed;
     totals.failed += r.failed;
     lines.push(`${suite.padEnd(10)} ${r.passed} passed, ${r.failed} failed${r.note ? ` (${r.note})` : ''}`);
@@ -96,4 +105,4 @@ function main() {
 }
 
 if (!existsSync(join(root, 'package.json'))) throw new Error('run from the repository');
-main();
+await main();

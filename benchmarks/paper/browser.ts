@@ -11,7 +11,7 @@ import { tmpdir } from 'node:os';
 import { extname, join, normalize, resolve, sep } from 'node:path';
 import type { Browser, Page } from '@playwright/test';
 import type { PaperBenchApi } from '../../src/examples/paper-bench/main.ts';
-import { chromiumPath, chromiumWebGpuArgs } from '../../tests/e2e/chromium.ts';
+import { chromiumLaunchOptions, chromiumPath } from '../../tests/e2e/chromium.ts';
 
 const TYPES: Record<string, string> = {
   '.html': 'text/html; charset=utf-8',
@@ -90,9 +90,12 @@ export class BrowserBench {
       });
       server = await serveFolders({ '/bench-data/': dataDir, '/': buildDir });
       const baseUrl = `http://127.0.0.1:${(server.address() as AddressInfo).port}`;
-      const flags = software ? chromiumWebGpuArgs : ['--no-sandbox', '--enable-unsafe-webgpu', '--enable-features=Vulkan', '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run'];
+      // No GPU: the flag set probed to draw on SwiftShader on this machine.
+      const probed = software ? chromiumLaunchOptions() : undefined;
+      if (probed) log(`Chromium flags: ${probed.args.join(' ')}`);
+      const flags = probed?.args ?? ['--no-sandbox', '--enable-unsafe-webgpu', '--enable-features=Vulkan', '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run'];
       const { chromium } = await import('@playwright/test');
-      browser = await chromium.launch({ executablePath: executable, args: flags, headless: true, timeout: 120_000 });
+      browser = await chromium.launch({ executablePath: probed?.executablePath ?? executable, args: flags, env: probed?.env, headless: true, timeout: 120_000 });
       const page = await browser.newPage();
       const pageErrors: string[] = [];
       page.on('pageerror', (e) => pageErrors.push(e.message));
