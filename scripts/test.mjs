@@ -1,11 +1,14 @@
 #!/usr/bin/env node
 // `npm test`: installs what the tests need (npm packages, Debian's Chromium,
-// the Python reference tools), then runs every suite: type check, unit tests
-// (vitest on Dawn), the Wasm module checks, and page tests (Playwright in
-// headless Chromium). The last line is `N passed, N failed` over all suites.
+// the Python reference tools, Deno), then runs every suite: type check, unit
+// tests (vitest on Dawn), `limits` (the zfp and isosurface GPU tests again on
+// a device with WebGPU's default limits), `wgpu` (the GPU unit tests on wgpu
+// in Deno: scripts/test-wgpu.mjs), and page tests (Playwright in headless
+// Chromium, with the flag set probed by scripts/setup/chromium-flags.mjs).
+// The last line is `N passed, N failed` over all suites.
 //
-// `npm test -- unit` / `-- e2e` / `-- typecheck` runs only those suites; other
-// arguments after a suite name go to its runner (e.g. `npm test -- unit tests/unit/zfp`).
+// `npm test -- unit` / `-- limits` / `-- wgpu` / `-- e2e` / `-- typecheck` runs only that suite;
+// other arguments after a suite name go to its runner (e.g. `npm test -- unit tests/unit/zfp`).
 import { spawnSync } from 'node:child_process';
 import { existsSync, mkdirSync, readFileSync, rmSync } from 'node:fs';
 import { join } from 'node:path';
@@ -14,10 +17,15 @@ import { chromiumWebGpuLaunch } from './setup/chromium-flags.mjs';
 import { ensureNodeModules } from './setup/npm-deps.mjs';
 import { ensurePythonEnv } from './setup/python-env.mjs';
 import { ensureSystemPackages } from './setup/system-deps.mjs';
+import { runWgpuTests } from './test-wgpu.mjs';
 
 const root = fileURLToPath(new URL('..', import.meta.url));
 const results = join(root, 'test-results');
-const SUITES = ['typecheck', 'unit', 'e2e'];
+const SUITES = ['typecheck', 'unit', 'limits', 'wgpu', 'e2e'];
+// The `limits` suite: the GPU tests of these folders again on a device with
+// WebGPU's default limits (tests/helpers/gpu.ts), so sharding and fallbacks run.
+const LIMITS_TESTS = ['tests/unit/zfp/decoder.test.ts', 'tests/unit/zfp/encoder.test.ts', 'tests/unit/zfp/offsets.test.ts', 'tests/unit/isosurface/'];
+const LIMITS_EXCLUDE = ['tests/unit/isosurface/cli.test.ts'];
 
 function run(cmd, args, env = {}) {
   console.log(`\n$ ${cmd} ${args.join(' ')}`);
@@ -40,15 +48,29 @@ function typecheck() {
   return { passed: status === 0 ? 1 : 0, failed: status === 0 ? 0 : 1 };
 }
 
-function unit(extra) {
-  const out = join(results, 'vitest.json');
+function unit(extra, { report = 'vitest.json', env = {} } = {}) {
+  const out = join(results, report);
   rmSync(out, { force: true });
-  const status = run(npx('vitest'), ['run', '--reporter=default', '--reporter=json', `--outputFile.json=${out}`, ...extra]);
+  const status = run(npx('vitest'), ['run', '--reporter=default', '--reporter=json', `--outputFile.json=${out}`, ...extra], env);
   const report = readJson(out);
   if (!report) return { passed: 0, failed: 1, note: `vitest exited with ${status} and wrote no report` };
   // A crashed worker or an error outside tests fails the suite even if every test passed.
   const extraFail = status !== 0 && report.numFailedTests === 0 ? 1 : 0;
   return { passed: report.numPassedTests, failed: report.numFailedTests + extraFail };
+}
+
+function limits(extra) {
+  const files = extra.length > 0 ? extra : [...LIMITS_TESTS, ...LIMITS_EXCLUDE.map((f) => `--exclude=${f}`)];
+  return unit(files, { report: 'vitest-default-limits.json', env: { ZFPISO_TEST_LIMITS: 'default' } });
+}
+
+async function wgpu(extra) {
+  try {
+    return await runWgpuTests(extra.length > 0 ? extra.map((f) => join(root, f)) : undefined);
+  } catch (e) {
+    console.error(`\n[wgpu] ${e.message}`);
+    return { passed: 0, failed: 1, note: e.message.split('\n')[0] };
+  }
 }
 
 async function e2e(extra) {
@@ -93,7 +115,7 @@ async function main() {
   const totals = { passed: 0, failed: 0 };
   const lines = [];
   for (const suite of chosen) {
-    const r = suite === 'typecheck' ? typecheck() : suite === 'unit' ? unit(extra) : await e2e(extra);
+    const r = suite === 'typecheck' ? typecheck() : suite === 'unit' ? unit(extra) : suite === 'limits' ? limits(extra) : suite === 'wgpu' ? await wgpu(extra) : await e2e(extra);
     totals.passed += r.passed;
     totals.failed += r.failed;
     lines.push(`${suite.padEnd(10)} ${r.passed} passed, ${r.failed} failed${r.note ? ` (${r.note})` : ''}`);

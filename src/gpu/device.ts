@@ -80,6 +80,12 @@ export interface RequestGpuOptions {
   onFailure?: (failure: GpuFailure) => void;
   powerPreference?: GPUPowerPreference;
   label?: string;
+  /**
+   * 'adapter' (default): the adapter's limits. 'default': WebGPU's default
+   * limits (128 MiB storage binding, 16 KiB workgroup storage, 256
+   * invocations), like a laptop GPU; tests use it to exercise the fallbacks.
+   */
+  limits?: 'adapter' | 'default';
 }
 
 export function summarizeAdapter(info: GPUAdapterInfo | undefined): AdapterSummary {
@@ -110,7 +116,7 @@ export async function requestGpu(gpu: GPU | undefined, options: RequestGpuOption
   if (!adapter) throw new WebGpuUnavailableError(`WebGPU is present but no GPU adapter was found. ${BROWSER_HELP}`);
 
   const requiredLimits: Record<string, number> = {};
-  for (const name of RAISED_LIMITS) {
+  for (const name of options.limits === 'default' ? [] : RAISED_LIMITS) {
     const value = (adapter.limits as unknown as Record<string, number | undefined>)[name];
     if (typeof value === 'number') requiredLimits[name] = value;
   }

@@ -12,10 +12,20 @@ export interface TestGpu extends GpuContext {
 
 const SCOPES: GPUErrorFilter[] = ['validation', 'out-of-memory', 'internal'];
 
+/**
+ * ZFPISO_TEST_LIMITS=default: devices get WebGPU's default limits instead of
+ * the adapter's (SwiftShader's are far above a laptop GPU's), so sharding and
+ * fallbacks run. `npm test` runs the isosurface and zfp tests both ways.
+ */
+export const testLimits: 'adapter' | 'default' = process.env.ZFPISO_TEST_LIMITS === 'default' ? 'default' : 'adapter';
+
 /** Creates a device and starts error scopes; `finishTestGpu` checks them. */
 export async function createTestGpu(): Promise<TestGpu> {
   const failures: GpuFailure[] = [];
-  const ctx = await requestNodeGpu({ label: 'test.device', onFailure: (f) => failures.push(f) });
+  const ctx = await requestNodeGpu({ label: 'test.device', limits: testLimits, onFailure: (f) => failures.push(f) });
+  if (testLimits === 'default' && ctx.limits.maxStorageBufferBindingSize > 128 * 2 ** 20) {
+    throw new Error(`ZFPISO_TEST_LIMITS=default, yet the device allows ${ctx.limits.maxStorageBufferBindingSize} B storage bindings`);
+  }
   for (const filter of SCOPES) ctx.device.pushErrorScope(filter);
   return { ...ctx, failures };
 }
