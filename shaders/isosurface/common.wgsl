@@ -61,9 +61,3 @@ fn block_index_of(c: vec3u, grid: vec3u) -> u32 {
   return c.x + grid.x * (c.y + grid.y * c.z);
 }
 
-fn write_dispatch_args(args: ptr<storage, array<u32>, read_write>, at: u32, workgroups: u32) {
-  let g = dispatch_grid(workgroups);
-  (*args)[at] = g.x;
-  (*args)[at + 1u] = g.y;
-  (*args)[at + 2u] = g.z;
-}

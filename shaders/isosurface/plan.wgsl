@@ -7,6 +7,15 @@
 
 @group(0) @binding(0) var<storage, read_write> counters: array<u32>;
 
+// Writes counters[at..at+3] directly: a ptr<storage> parameter would need
+// WGSL's unrestricted_pointer_parameters, which naga (Firefox) rejects.
+fn write_dispatch_args(at: u32, workgroups: u32) {
+  let g = dispatch_grid(workgroups);
+  counters[at] = g.x;
+  counters[at + 1u] = g.y;
+  counters[at + 2u] = g.z;
+}
+
 // After the active list: is the cache large enough? The update succeeds iff
 // new <= available, and available = slots - (active - new), so iff
 // active <= slots: known before touching any cache state.
@@ -20,9 +29,9 @@ fn plan_cache() {
   counters[C_ACTIVE_GATED] = active_gated;
   counters[C_SLOTS_GATED] = slots_gated;
   counters[C_STATUS] = select(STATUS_CACHE_SHORTFALL, 0u, fits);
-  write_dispatch_args(&counters, A_SLOTS, ceil_div(slots_gated, 64u));
-  write_dispatch_args(&counters, A_MARK, ceil_div(active_gated, 64u));
-  write_dispatch_args(&counters, A_MC, active_gated);
+  write_dispatch_args(A_SLOTS, ceil_div(slots_gated, 64u));
+  write_dispatch_args(A_MARK, ceil_div(active_gated, 64u));
+  write_dispatch_args(A_MC, active_gated);
 }
 
 // After the scan of the new-block mask: "exit if n_new = 0" (the availability
@@ -35,7 +44,7 @@ fn plan_update() {
   counters[C_SLOTS_USED] = min(counters[C_SLOTS_USED] + fresh, counters[C_SLOTS]);
   counters[C_AVAIL_SCAN] = select(0u, counters[C_SLOTS_GATED], fresh > 0u);
   counters[C_COMPACT_NEW] = select(0u, counters[C_ACTIVE_GATED], fresh > 0u);
-  write_dispatch_args(&counters, A_ASSIGN, ceil_div(fresh, 64u));
+  write_dispatch_args(A_ASSIGN, ceil_div(fresh, 64u));
 }
 
 // After the block vertex counts are scanned: do the vertices fit? Then each
