@@ -5,9 +5,18 @@
 import { spawnSync } from 'node:child_process';
 import { fileURLToPath } from 'node:url';
 import { ensureNodeModules } from './setup/npm-deps.mjs';
+import { ensureSystemPackages, hasGpuDeviceNodes } from './setup/system-deps.mjs';
 
 const root = fileURLToPath(new URL('..', import.meta.url));
 ensureNodeModules(root, { quiet: true });
+// Dawn needs the Vulkan loader, and SwiftShader (from Debian's chromium) where
+// there is no GPU: installed here when root, else the command is printed and
+// the CLI goes on (help works; GPU commands then fail saying the same).
+try {
+  ensureSystemPackages({ chromium: !hasGpuDeviceNodes(), purpose: 'the CLI (WebGPU in Node through Dawn)', quiet: true });
+} catch (e) {
+  console.error(`warning: ${e.message}`);
+}
 const result = spawnSync(
   process.execPath,
   [

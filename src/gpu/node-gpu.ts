@@ -1,6 +1,7 @@
 // WebGPU for Node (CLI, unit tests, benchmarks) through Dawn's `webgpu`
 // package. On a machine without a GPU, Dawn is pointed at SwiftShader's Vulkan
 // driver, which Debian's Chromium ships; with a GPU the GPU's driver is used.
+import { spawnSync } from 'node:child_process';
 import { existsSync, readdirSync } from 'node:fs';
 import { requestGpu, WebGpuUnavailableError, type GpuContext, type RequestGpuOptions } from './device.ts';
 
@@ -63,8 +64,39 @@ function useSwiftShader(): void {
   process.env.VK_LOADER_LAYERS_DISABLE ??= '~implicit~';
 }
 
+function hasVulkanLoader(): boolean {
+  const r = spawnSync('ldconfig', ['-p'], { encoding: 'utf8' });
+  // The cache can list a library that was removed since: check the file.
+  if (r.status === 0) return [...r.stdout.matchAll(/libvulkan\.so\.1 .*=> (\S+)/g)].some((m) => existsSync(m[1]));
+  return ['/usr/lib/x86_64-linux-gnu/libvulkan.so.1', '/usr/lib/aarch64-linux-gnu/libvulkan.so.1', '/usr/lib64/libvulkan.so.1'].some((p) => existsSync(p));
+}
+
+/** Why Dawn found no adapter, and what to install: advice for a command line, not a browser. */
+export function nodeGpuHelp(): string {
+  const missing = [...(hasVulkanLoader() ? [] : ['libvulkan1']), ...(existsSync(SWIFTSHADER_ICD) ? [] : ['chromium'])];
+  const icd = process.env.VK_ICD_FILENAMES;
+  return (
+    'Dawn (WebGPU in Node) found no Vulkan adapter. ' +
+    (missing.length > 0
+      ? `Missing: ${missing.includes('libvulkan1') ? 'the Vulkan loader libvulkan.so.1 (Debian package libvulkan1)' : ''}${missing.length === 2 ? ' and ' : ''}${missing.includes('chromium') ? `SwiftShader's Vulkan driver ${SWIFTSHADER_ICD} (Debian package chromium)` : ''}. ` +
+        `Install: sudo apt-get install -y ${missing.join(' ')} (npm run cli and npm test do it themselves when run as root).`
+      : `The Vulkan loader and SwiftShader are installed${icd ? `; VK_ICD_FILENAMES=${icd} is set: check that it names a working driver` : ''}. ` +
+        'ZFPISO_ADAPTER=swiftshader forces SwiftShader; with a GPU, check its Vulkan driver (vulkaninfo).')
+  );
+}
+
 /** Creates a device in Node: a real GPU when there is one, else SwiftShader. */
 export async function requestNodeGpu(options: RequestGpuOptions = {}, choice = adapterChoiceFromEnv()): Promise<GpuContext> {
+  try {
+    return await requestNodeGpuOrFail(options, choice);
+  } catch (e) {
+    // requestGpu's message is the browser's advice; say what Node needs.
+    if (e instanceof WebGpuUnavailableError && /no GPU adapter|navigator\.gpu/.test(e.message)) throw new WebGpuUnavailableError(nodeGpuHelp());
+    throw e;
+  }
+}
+
+async function requestNodeGpuOrFail(options: RequestGpuOptions, choice: NodeAdapterChoice): Promise<GpuContext> {
   const { create } = await loadDawn();
   const userSetIcd = process.env.VK_ICD_FILENAMES !== undefined;
   if (choice === 'swiftshader' || (choice === 'auto' && !userSetIcd && !hasGpuDeviceNodes())) {

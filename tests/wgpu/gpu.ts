@@ -2,7 +2,7 @@
 // test, failing on any WebGPU error), on the runtime's own navigator.gpu
 // (Deno: wgpu) instead of Dawn.
 import { requestGpu, type GpuContext, type GpuFailure } from '../../src/gpu/device.ts';
-import { test } from './vitest-shim.ts';
+import { formatName, test } from './vitest-shim.ts';
 
 export interface TestGpu extends GpuContext {
   failures: GpuFailure[];
@@ -52,3 +52,8 @@ export function gpuTest(name: string, fn: (ctx: { gpu: TestGpu }) => unknown | P
     timeoutMs,
   );
 }
+
+/** `gpuTest.for(cases)(name, (case, { gpu }) => ...)` */
+gpuTest.for = <T>(cases: readonly T[]) => (name: string, fn: (c: T, ctx: { gpu: TestGpu }) => unknown, timeoutMs?: number) => {
+  for (const c of cases) gpuTest(formatName(name, c), (ctx) => fn(c, ctx), timeoutMs);
+};

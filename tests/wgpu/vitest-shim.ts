@@ -36,6 +36,16 @@ export function describe(name: string, body: () => void): void {
 export function test(name: string, fn: Fn, timeoutMs = 120_000): void {
   registered.push({ name: [...prefix, name].join(' > '), fn, timeoutMs, file: hooks });
 }
+/** vitest's name formatting for `.for`/`.each`: %i %d %f %s %j %o take the case's values in order. */
+export function formatName(name: string, c: unknown): string {
+  const values = Array.isArray(c) ? [...c] : [c];
+  return name.replace(/%[idfsjo%]/g, (m) => (m === '%%' ? '%' : show(values.shift())));
+}
+
+/** `test.for(cases)(name, (case, ctx) => ...)` */
+test.for = <T>(cases: readonly T[]) => (name: string, fn: (c: T, ctx: object) => unknown, timeoutMs?: number) => {
+  for (const c of cases) test(formatName(name, c), () => fn(c, {}), timeoutMs);
+};
 export const it = test;
 
 export function beforeAll(fn: Fn): void {
