@@ -36,6 +36,11 @@ export const WGPU_TESTS = [
   'tests/unit/isosurface/no-readback.test.ts',
   'tests/unit/isosurface/behaviour.test.ts',
   'tests/unit/isosurface/vtk.test.ts',
+  'tests/unit/isosurface/vtk-bonsai.test.ts',
+  'tests/unit/volume/open-volume.test.ts',
+  'tests/unit/volume/tiff-isosurface.test.ts',
+  'tests/unit/app/surface-layer.test.ts',
+  'tests/unit/render/pipelines.test.ts',
 ];
 
 function findDeno() {
