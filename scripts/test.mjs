@@ -48,8 +48,8 @@ function typecheck() {
   return { passed: status === 0 ? 1 : 0, failed: status === 0 ? 0 : 1 };
 }
 
-function unit(extra, { report = 'vitest.json', env = {} } = {}) {
-  const out = join(results, report);
+function unit(extra, { reportName = 'vitest.json', env = {} } = {}) {
+  const out = join(results, reportName);
   rmSync(out, { force: true });
   const status = run(npx('vitest'), ['run', '--reporter=default', '--reporter=json', `--outputFile.json=${out}`, ...extra], env);
   const report = readJson(out);
@@ -61,7 +61,7 @@ function unit(extra, { report = 'vitest.json', env = {} } = {}) {
 
 function limits(extra) {
   const files = extra.length > 0 ? extra : [...LIMITS_TESTS, ...LIMITS_EXCLUDE.map((f) => `--exclude=${f}`)];
-  return unit(files, { report: 'vitest-default-limits.json', env: { ZFPISO_TEST_LIMITS: 'default' } });
+  return unit(files, { reportName: 'vitest-default-limits.json', env: { ZFPISO_TEST_LIMITS: 'default' } });
 }
 
 async function wgpu(extra) {
