@@ -115,10 +115,12 @@ async function main() {
   const totals = { passed: 0, failed: 0 };
   const lines = [];
   for (const suite of chosen) {
+    const started = Date.now();
     const r = suite === 'typecheck' ? typecheck() : suite === 'unit' ? unit(extra) : suite === 'limits' ? limits(extra) : suite === 'wgpu' ? await wgpu(extra) : await e2e(extra);
     totals.passed += r.passed;
     totals.failed += r.failed;
-    lines.push(`${suite.padEnd(10)} ${r.passed} passed, ${r.failed} failed${r.note ? ` (${r.note})` : ''}`);
+    const minutes = ((Date.now() - started) / 60_000).toFixed(1);
+    lines.push(`${suite.padEnd(10)} ${r.passed} passed, ${r.failed} failed${r.note ? ` (${r.note})` : ''}, ${minutes} min`);
   }
   console.log('\nsummary');
   for (const l of lines) console.log(`  ${l}`);
