@@ -143,8 +143,7 @@ def convert(spec: str, out: str, opts: Options | None = None, client=None, worke
     start = time.perf_counter()
     out = os.path.abspath(out)
     work_dir = out + ".input"
-    volume = volume or open_input(spec, opts.chunk, work_dir, dims=opts.dims, dtype=opts.dtype,
-                                  rate=(opts.rate or [None])[0])
+    volume = volume or open_input(spec, opts.chunk, work_dir, dims=opts.dims, dtype=opts.dtype)
     try:
         return _convert(volume, out, opts, client, workers, progress, start, work_dir)
     finally:

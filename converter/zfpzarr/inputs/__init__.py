@@ -24,7 +24,7 @@ def _split_inner(spec: str) -> tuple[str, str | None]:
     return path, inner or None
 
 
-def open_input(spec: str, chunk: int, work_dir: str, dims=None, dtype=None, rate=None) -> Volume:
+def open_input(spec: str, chunk: int, work_dir: str, dims=None, dtype=None) -> Volume:
     if spec.startswith("gen:"):
         return open_generated(spec, chunk)
     path, inner = _split_inner(spec)
@@ -45,7 +45,7 @@ def open_input(spec: str, chunk: int, work_dir: str, dims=None, dtype=None, rate
         raise InputError(f"{path}: cannot be read ({e.strerror})") from None
     lower = path.lower()
     if head.startswith(ZFP_MAGIC) or lower.endswith(".zfp"):
-        return open_zfp(path, chunk, rate)
+        return open_zfp(path, chunk)
     if head.startswith(b"NRRD000"):
         return open_nrrd(path, chunk, work_dir)
     if head[:4] in (b"II*\0", b"MM\0*", b"II+\0", b"MM\0+") or lower.endswith(TIFF_EXT):

@@ -43,7 +43,7 @@ class ZfpSource(LazySource):
         return np.array(slab[zs.start - zb0 * 4 : zs.stop - zb0 * 4, ys, xs])
 
 
-def open_zfp(path: str, chunk: int, rate: float | None) -> Volume:
+def open_zfp(path: str, chunk: int) -> Volume:
     size = os.path.getsize(path)
     with open(path, "rb") as f:
         head = f.read(32)
@@ -64,11 +64,11 @@ def open_zfp(path: str, chunk: int, rate: float | None) -> Volume:
         dims = (h["nx"], h["ny"], h["nz"])
     else:
         info = parse_name(path)
-        if "dims" not in info or (rate is None and "rate" not in info):
+        if "dims" not in info or "rate" not in info:
             raise InputError(f"{path}: no zfp header; a header-less stream needs its shape and rate in the name "
-                             "(name_XxYxZ_float32.raw.crateR.zfp) or --dims and --rate")
+                             "(name_XxYxZ_float32.raw.crateR.zfp)")
         dims = info["dims"]
-        bits = int(math.floor(64 * (rate if rate is not None else info["rate"]) + 0.5))
+        bits = int(math.floor(64 * info["rate"] + 0.5))
         header_bits = 0
     shape, _ = check_volume(path, (dims[2], dims[1], dims[0]), np.float32)
     blocks = math.ceil(dims[0] / 4) * math.ceil(dims[1] / 4) * math.ceil(dims[2] / 4)
