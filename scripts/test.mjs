@@ -1,10 +1,10 @@
 #!/usr/bin/env node
 // `npm test`: installs what the tests need (npm packages, Debian's Chromium,
 // the Python reference tools), then runs every suite: type check, unit tests
-// (vitest on Dawn), the Wasm module checks, and page tests (Playwright in
-// headless Chromium). The last line is `N passed, N failed` over all suites.
+// (vitest on Dawn), the Wasm module checks, the Python converter (pytest),
+// and page tests (Playwright in headless Chromium). The last line is `N passed, N failed` over all suites.
 //
-// `npm test -- unit` / `-- e2e` / `-- typecheck` runs only those suites; other
+// `npm test -- unit` / `-- converter` / `-- e2e` / `-- typecheck` runs only those suites; other
 // arguments after a suite name go to its runner (e.g. `npm test -- unit tests/unit/zfp`).
 import { spawnSync } from 'node:child_process';
 import { existsSync, mkdirSync, readFileSync, rmSync } from 'node:fs';
@@ -12,11 +12,13 @@ import { join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { ensureNodeModules } from './setup/npm-deps.mjs';
 import { ensurePythonEnv } from './setup/python-env.mjs';
+import { ensureConverterEnv } from './setup/converter-env.mjs';
+import { runConverterTests } from './converter-tests.mjs';
 import { ensureSystemPackages } from './setup/system-deps.mjs';
 
 const root = fileURLToPath(new URL('..', import.meta.url));
 const results = join(root, 'test-results');
-const SUITES = ['typecheck', 'unit', 'e2e'];
+const SUITES = ['typecheck', 'unit', 'converter', 'e2e'];
 
 function run(cmd, args, env = {}) {
   console.log(`\n$ ${cmd} ${args.join(' ')}`);
@@ -72,6 +74,7 @@ function main() {
     ensureNodeModules(root);
     ensureSystemPackages();
     ensurePythonEnv(root);
+    ensureConverterEnv(root);
   } catch (e) {
     setupError = e;
   }
@@ -84,7 +87,7 @@ function main() {
   const totals = { passed: 0, failed: 0 };
   const lines = [];
   for (const suite of chosen) {
-    const r = suite === 'typecheck' ? typecheck() : suite === 'unit' ? unit(extra) : e2e(extra);
+    const r = suite === 'typecheck' ? typecheck() : suite === 'unit' ? unit(extra) : suite === 'converter' ? runConverterTests(root, results, extra) : e2e(extra);
     totals.passed += r.passed;
     totals.failed += r.failed;
     lines.push(`${suite.padEnd(10)} ${r.passed} passed, ${r.failed} failed${r.note ? ` (${r.note})` : ''}`);

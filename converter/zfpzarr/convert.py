@@ -127,6 +127,14 @@ def compute(arrays, client=None, workers: int | None = None, progress: bool = Fa
     return dask.compute(*arrays, scheduler="threads", num_workers=workers)
 
 
+def _remove_partial_files(out: str) -> None:
+    """Files a killed run was writing (never renamed into place)."""
+    for root, _, files in os.walk(out):
+        for f in files:
+            if f.endswith(".partial"):
+                os.remove(os.path.join(root, f))
+
+
 def _bytes_under(path: str) -> int:
     total = 0
     for root, _, files in os.walk(path):
@@ -182,6 +190,8 @@ def _convert(volume: Volume, out, opts, client, workers, progress, start, work_d
                                                int(np.prod(layout.chunk_grid)),
                                                int(np.prod(layout.unit_grid)) - len(existing), len(existing)))
         ranges = compute(tasks, client, workers, progress)
+        if state == "resume":
+            _remove_partial_files(out)
         for layout, r in zip(layouts, ranges):
             write_ranges(out, layout.level, r)
         lo, hi = float(np.min(ranges[0][..., 0])), float(np.max(ranges[0][..., 1]))
