@@ -241,3 +241,17 @@ def test_existing_paths_are_not_clobbered(tmp_path, volume, cli):
     r = cli(good, "--out", out, "--quiet", "--rate", "4")
     assert r.returncode == 0 and "already complete" in r.stdout
     assert cli(good, "--out", out, "--quiet", "--rate", "6", "--overwrite").returncode == 0
+
+
+def test_levels_count_and_per_level_rates(tmp_path):
+    out = tmp_path / "l.zarr"
+    s = convert("gen:40x36x20", str(out), Options(rate=[8, 4], chunk=8, levels=2))
+    assert [l.shape for l in s.levels] == [(20, 36, 40), (10, 18, 20)]
+    meta = [json.loads((out / str(i) / "zarr.json").read_text()) for i in range(2)]
+    assert [m["codecs"][0]["configuration"]["rate"] for m in meta] == [8, 4]
+    deep = tmp_path / "d.zarr"
+    s = convert("gen:40x36x20", str(deep), Options(rate=[8], chunk=8, levels=12))
+    # halving stops at one voxel: 40 -> 20 -> 10 -> 5 -> 3 -> 2 -> 1
+    assert [l.shape[2] for l in s.levels] == [40, 20, 10, 5, 3, 2, 1]
+    auto = convert("gen:40x36x20", str(tmp_path / "a.zarr"), Options(rate=[8], chunk=8))
+    assert [l.shape[2] for l in auto.levels] == [40, 20, 10, 5]
