@@ -157,7 +157,7 @@ def open_nrrd(path: str, chunk: int, work_dir: str) -> Volume:
         sizes = [int(v) for v in fields["sizes"].split()]
     except ValueError:
         raise InputError(f"{path}: NRRD sizes '{fields['sizes']}' are not integers") from None
-    if int(fields["dimension"]) != 3 or len(sizes) != 3:
+    if fields["dimension"].strip() != "3" or len(sizes) != 3:
         raise InputError(f"{path}: NRRD dimension {fields['dimension']}; only 3D volumes are supported")
     dt = np.dtype(t)
     if dt.itemsize > 1:
@@ -177,9 +177,10 @@ def open_nrrd(path: str, chunk: int, work_dir: str) -> Volume:
         offset = 0
         if not os.path.isfile(data_path):
             raise InputError(f"{path}: its data file {data_path} does not exist")
-    skip = int(fields.get("byte skip", "0"))
+    skip_text = fields.get("byte skip", "0")
+    skip = int(skip_text) if skip_text.lstrip("-").isdigit() else -1
     if skip < 0:
-        raise InputError(f"{path}: NRRD 'byte skip: {skip}' is not supported")
+        raise InputError(f"{path}: NRRD 'byte skip: {skip_text}' is not supported")
     shape = (sizes[2], sizes[1], sizes[0])
     check_volume(path, shape, dt)
     if encoding != "raw":
