@@ -76,10 +76,10 @@ def connect(scheduler: str, workers: int | None, memory_limit: str):
 def format_summary(s: Summary) -> str:
     lines = [f"{s.out}: {'already complete, nothing to do' if s.state == 'complete' else 'complete'}"
              f"{' (resumed)' if s.state == 'resume' else ''}",
-             f"  {'level':>5}  {'dims (x y z)':>18}  {'rate':>5}  {'chunks':>8}  {'written':>8}  {'skipped':>8}"]
+             f"  {'level':>5}  {'dims (x y z)':>18}  {'rate':>5}  {'chunks':>8}  {'files written':>13}  {'skipped':>8}"]
     for l in s.levels:
         dims = f"{l.shape[2]}x{l.shape[1]}x{l.shape[0]}"
-        lines.append(f"  {l.level:>5}  {dims:>18}  {l.rate:>5g}  {l.chunks:>8}  {l.units_written:>8}  {l.units_skipped:>8}")
+        lines.append(f"  {l.level:>5}  {dims:>18}  {l.rate:>5g}  {l.chunks:>8}  {l.units_written:>13}  {l.units_skipped:>8}")
     lines.append(f"  value range {s.value_range[0]:g} .. {s.value_range[1]:g} (decoded)")
     lines.append(f"  in {s.bytes_in:,} B, out {s.bytes_out:,} B, ratio {s.ratio:.2f}, "
                  f"{s.seconds:.1f} s, {s.mb_per_s:.1f} MB/s of input")
