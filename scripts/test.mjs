@@ -1,14 +1,15 @@
 #!/usr/bin/env node
 // `npm test`: installs what the tests need (npm packages, Debian's Chromium,
-// the Python reference tools, Deno), then runs every suite: type check, unit
-// tests (vitest on Dawn), `limits` (the zfp and isosurface GPU tests again on
-// a device with WebGPU's default limits), `wgpu` (the GPU unit tests on wgpu
-// in Deno: scripts/test-wgpu.mjs), and page tests (Playwright in headless
+// the Python reference tools, the converter's environment, Deno), then runs
+// every suite: type check, unit tests (vitest on Dawn), `limits` (the zfp and
+// isosurface GPU tests again on a device with WebGPU's default limits), `wgpu`
+// (the GPU unit tests on wgpu in Deno: scripts/test-wgpu.mjs), `converter`
+// (the Python converter's pytest suite), and page tests (Playwright in headless
 // Chromium, with the flag set probed by scripts/setup/chromium-flags.mjs).
 // The last line is `N passed, N failed` over all suites.
 //
-// `npm test -- unit` / `-- limits` / `-- wgpu` / `-- e2e` / `-- typecheck` runs only that suite;
-// other arguments after a suite name go to its runner (e.g. `npm test -- unit tests/unit/zfp`).
+// `npm test -- unit` / `-- limits` / `-- wgpu` / `-- converter` / `-- e2e` / `-- typecheck` runs only
+// that suite; other arguments after a suite name go to its runner (e.g. `npm test -- unit tests/unit/zfp`).
 import { spawnSync } from 'node:child_process';
 import { existsSync, mkdirSync, readFileSync, rmSync } from 'node:fs';
 import { join } from 'node:path';
@@ -16,12 +17,14 @@ import { fileURLToPath } from 'node:url';
 import { chromiumWebGpuLaunch } from './setup/chromium-flags.mjs';
 import { ensureNodeModules } from './setup/npm-deps.mjs';
 import { ensurePythonEnv } from './setup/python-env.mjs';
+import { ensureConverterEnv } from './setup/converter-env.mjs';
+import { runConverterTests } from './converter-tests.mjs';
 import { ensureSystemPackages } from './setup/system-deps.mjs';
 import { runWgpuTests } from './test-wgpu.mjs';
 
 const root = fileURLToPath(new URL('..', import.meta.url));
 const results = join(root, 'test-results');
-const SUITES = ['typecheck', 'unit', 'limits', 'wgpu', 'e2e'];
+const SUITES = ['typecheck', 'unit', 'limits', 'wgpu', 'converter', 'e2e'];
 // The `limits` suite: the GPU tests of these folders again on a device with
 // WebGPU's default limits (tests/helpers/gpu.ts), so sharding and fallbacks run.
 const LIMITS_TESTS = ['tests/unit/zfp/decoder.test.ts', 'tests/unit/zfp/encoder.test.ts', 'tests/unit/zfp/offsets.test.ts', 'tests/unit/isosurface/'];
@@ -103,6 +106,7 @@ async function main() {
     ensureNodeModules(root);
     ensureSystemPackages();
     ensurePythonEnv(root);
+    ensureConverterEnv(root);
   } catch (e) {
     setupError = e;
   }
@@ -116,7 +120,13 @@ async function main() {
   const lines = [];
   for (const suite of chosen) {
     const started = Date.now();
-    const r = suite === 'typecheck' ? typecheck() : suite === 'unit' ? unit(extra) : suite === 'limits' ? limits(extra) : suite === 'wgpu' ? await wgpu(extra) : await e2e(extra);
+    const r =
+      suite === 'typecheck' ? typecheck()
+      : suite === 'unit' ? unit(extra)
+      : suite === 'limits' ? limits(extra)
+      : suite === 'wgpu' ? await wgpu(extra)
+      : suite === 'converter' ? runConverterTests(root, results, extra)
+      : await e2e(extra);
     totals.passed += r.passed;
     totals.failed += r.failed;
     const minutes = ((Date.now() - started) / 60_000).toFixed(1);
