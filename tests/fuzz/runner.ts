@@ -95,16 +95,20 @@ export async function runTarget(target: FuzzTarget, opts: FuzzOptions): Promise<
     problems: [],
   };
   const rejections = new Map<string, number>();
+  // Highest rss / ArrayBuffer memory during the current case (reset before each).
+  let casePeak = { rss: 0, arrayBuffers: 0 };
   const sample = () => {
     const m = process.memoryUsage();
     if (m.rss > report.peakRssBytes) report.peakRssBytes = m.rss;
     if (m.arrayBuffers > report.peakArrayBufferBytes) report.peakArrayBufferBytes = m.arrayBuffers;
+    casePeak = { rss: Math.max(casePeak.rss, m.rss), arrayBuffers: Math.max(casePeak.arrayBuffers, m.arrayBuffers) };
     return m;
   };
   const sampler = setInterval(sample, 10);
   try {
     for (let i = 0; i < opts.casesPerReader; i++) {
       const c = makeCase(seeds, i, opts.runSeed, target.reader);
+      casePeak = { rss: 0, arrayBuffers: 0 };
       const before = sample();
       const guard = installAllocationGuard(opts.allocLimitBytes);
       const t0 = performance.now();
@@ -138,12 +142,12 @@ export async function runTarget(target: FuzzTarget, opts: FuzzOptions): Promise<
         guard.release();
       }
       const ms = performance.now() - t0;
-      const after = sample();
+      sample();
       report.largestRequestBytes = Math.max(report.largestRequestBytes, guard.largest);
-      const grew = Math.max(after.rss - before.rss, after.arrayBuffers - before.arrayBuffers);
-      if (outcome !== 'alloc' && outcome !== 'crash' && outcome !== 'hang' && grew > opts.allocLimitBytes) {
+      const grew = Math.max(casePeak.rss - before.rss, casePeak.arrayBuffers - before.arrayBuffers);
+      if (outcome !== 'alloc' && outcome !== 'hang' && grew > opts.allocLimitBytes) {
         outcome = 'alloc';
-        message = `the process grew by ${grew} bytes during the case (limit ${opts.allocLimitBytes})`;
+        message = `the process grew by ${grew} bytes during the case (limit ${opts.allocLimitBytes})${message ? `; ${message}` : ''}`;
       }
       report.cases++;
       report.totalMs += ms;
