@@ -1,7 +1,7 @@
 // The fuzz suite (tests/fuzz/): mutated files through every reader, as the
 // page and the CLI open them. Fails on any crash (an error that is not the
 // reader's clean rejection naming the file), hang or allocation above the
-// limit. CI runs FUZZ_CASES per reader (default 300); longer runs:
+// limit. CI runs FUZZ_CASES per reader (default 500); longer runs:
 //   FUZZ_CASES=2000 npx vitest run tests/unit/fuzz/fuzz.test.ts
 // FUZZ_SEED changes the run seed, FUZZ_READERS=zfp,nrrd picks readers. The
 // table and the problems go to test-results/fuzz-<cases>.json.
@@ -12,7 +12,7 @@ import { formatFuzzTable, runTarget, type ReaderReport } from '../../fuzz/runner
 import { coreFuzzTargets } from '../../fuzz/targets-core.ts';
 import { wasmFuzzTargets } from '../../fuzz/targets-wasm.ts';
 
-const cases = Number(process.env.FUZZ_CASES ?? 300);
+const cases = Number(process.env.FUZZ_CASES ?? 500);
 const runSeed = Number(process.env.FUZZ_SEED ?? 13);
 const only = process.env.FUZZ_READERS?.split(',');
 const targets = [...coreFuzzTargets, ...wasmFuzzTargets].filter((t) => !only || only.includes(t.reader));
