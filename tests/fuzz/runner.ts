@@ -169,7 +169,7 @@ export async function runTarget(target: FuzzTarget, opts: FuzzOptions): Promise<
   return report;
 }
 
-const mib = (n: number) => `${(n / 2 ** 20).toFixed(0)} MiB`;
+const mib = (n: number) => (n >= 2 ** 20 ? `${(n / 2 ** 20).toFixed(0)} MiB` : `${(n / 1024).toFixed(0)} KiB`);
 
 /** The table of issue 13's closing note, one row per reader. */
 export function formatFuzzTable(reports: readonly ReaderReport[]): string {

@@ -7,7 +7,6 @@
 import { describeAdapter } from '../../gpu/device.ts';
 import { runBenchmark } from '../../bench/harness.ts';
 import { BENCH_MODES, isBenchMode, type BenchMode } from '../../bench/sequences.ts';
-import { Isosurface } from '../../isosurface/isosurface.ts';
 import { numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
 import { budgetOption, createInputIsosurface, openInput } from './extract.ts';
 
