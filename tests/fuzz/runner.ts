@@ -95,21 +95,25 @@ export async function runTarget(target: FuzzTarget, opts: FuzzOptions): Promise<
     problems: [],
   };
   const rejections = new Map<string, number>();
-  // Highest rss / ArrayBuffer memory during the current case (reset before each).
-  let casePeak = { rss: 0, arrayBuffers: 0 };
+  // Largest rise of rss / ArrayBuffer memory above its lowest point so far in the current case
+  // (reset before each), so garbage of an earlier case collected meanwhile does not hide an allocation.
+  let caseLow = { rss: Infinity, arrayBuffers: Infinity };
+  let caseRise = 0;
   const sample = () => {
     const m = process.memoryUsage();
     if (m.rss > report.peakRssBytes) report.peakRssBytes = m.rss;
     if (m.arrayBuffers > report.peakArrayBufferBytes) report.peakArrayBufferBytes = m.arrayBuffers;
-    casePeak = { rss: Math.max(casePeak.rss, m.rss), arrayBuffers: Math.max(casePeak.arrayBuffers, m.arrayBuffers) };
+    caseLow = { rss: Math.min(caseLow.rss, m.rss), arrayBuffers: Math.min(caseLow.arrayBuffers, m.arrayBuffers) };
+    caseRise = Math.max(caseRise, m.rss - caseLow.rss, m.arrayBuffers - caseLow.arrayBuffers);
     return m;
   };
   const sampler = setInterval(sample, 10);
   try {
     for (let i = 0; i < opts.casesPerReader; i++) {
       const c = makeCase(seeds, i, opts.runSeed, target.reader);
-      casePeak = { rss: 0, arrayBuffers: 0 };
-      const before = sample();
+      caseLow = { rss: Infinity, arrayBuffers: Infinity };
+      caseRise = 0;
+      sample();
       const guard = installAllocationGuard(opts.allocLimitBytes);
       const t0 = performance.now();
       let outcome: Outcome;
@@ -144,7 +148,7 @@ export async function runTarget(target: FuzzTarget, opts: FuzzOptions): Promise<
       const ms = performance.now() - t0;
       sample();
       report.largestRequestBytes = Math.max(report.largestRequestBytes, guard.largest);
-      const grew = Math.max(casePeak.rss - before.rss, casePeak.arrayBuffers - before.arrayBuffers);
+      const grew = caseRise;
       if (outcome !== 'alloc' && outcome !== 'hang' && grew > opts.allocLimitBytes) {
         outcome = 'alloc';
         message = `the process grew by ${grew} bytes during the case (limit ${opts.allocLimitBytes})${message ? `; ${message}` : ''}`;

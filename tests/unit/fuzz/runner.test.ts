@@ -28,6 +28,17 @@ describe('fuzz runner', () => {
     const alloc = await runTarget(target(async () => new Float64Array(2 ** 28)), opts);
     expect(alloc.allocs).toBe(3);
     expect(alloc.problems[0].message).toMatch(/new Float64Array\(268435456\) of 2147483648 bytes requested \(limit 1073741824\)/);
+    // memory that does not pass through the guarded constructors (Buffer, engine allocations): seen by sampling
+    const grown = await runTarget(
+      target(async () => {
+        const b = Buffer.alloc(100 << 20, 1);
+        await new Promise((r) => setTimeout(r, 60));
+        return b.length;
+      }),
+      { ...opts, allocLimitBytes: 64 << 20, casesPerReader: 1 },
+    );
+    expect(grown.allocs).toBe(1);
+    expect(grown.problems[0].message).toMatch(/the process grew by \d+ bytes during the case \(limit 67108864\)/);
     // the guard is gone after the run
     expect(new Float64Array(4).length).toBe(4);
   });
