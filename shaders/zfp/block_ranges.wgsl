@@ -1,5 +1,5 @@
-// Per-block [min, max] of the decoded values over the voxels inside the
-// volume (padding excluded), 2 f32 per block in raster block order. One
+// Per-block [min, max] of the finite decoded values over the voxels inside
+// the volume (padding excluded), 2 f32 per block in raster block order. One
 // dispatch per shard over the shard's blocks.
 
 @group(1) @binding(0) var<storage, read_write> ranges: array<f32>;
@@ -16,12 +16,18 @@ fn block_ranges(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
   let nx = min(4u, d.x - c.x);
   let ny = min(4u, d.y - c.y);
   let nz = min(4u, d.z - c.z);
-  var lo = bitcast<f32>(v[0]);
-  var hi = lo;
+  // NaN and +-Inf are skipped (a zfp file may decode to them; volumes we
+  // compress have none): a block with no finite value gets the empty range
+  // [FLT_MAX, -FLT_MAX], which no isovalue falls in and which leaves the
+  // neighbourhood ranges and the volume's value range untouched.
+  var lo = 0x1.fffffep+127f;
+  var hi = -0x1.fffffep+127f;
   for (var z = 0u; z < nz; z++) {
     for (var y = 0u; y < ny; y++) {
       for (var x = 0u; x < nx; x++) {
-        let f = bitcast<f32>(v[16u * z + 4u * y + x]);
+        let bits = v[16u * z + 4u * y + x];
+        if ((bits & 0x7f800000u) == 0x7f800000u) { continue; }
+        let f = bitcast<f32>(bits);
         lo = min(lo, f);
         hi = max(hi, f);
       }

@@ -180,6 +180,7 @@ async function start(): Promise<void> {
       setUrlParameter(volumeUrl);
     },
     onError: (m) => messages.show(m),
+    onNotice: (m) => messages.show(m, 'info', 15000),
     onCancelled: (what) => messages.show(`Opening ${what} was cancelled; the current volume stays.`, 'info', 4000),
     onBusy: (busy) => {
       state.loading = busy;

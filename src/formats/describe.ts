@@ -74,7 +74,9 @@ export function describeFile(fileName: string, bytes: number, head: Uint8Array, 
       out.dims = name.dims;
       out.dtype = name.dtype;
       if (!name.dims || !name.dtype) out.problems.push('the name carries no shape and type (expected name_XxYxZ_dtype.raw)');
-      else {
+      else if (name.dims.some((n) => !Number.isSafeInteger(n) || n < 1)) {
+        out.problems.push(`the shape ${name.dims.join('x')} in the name is impossible: every dimension must be a whole number from 1 up`);
+      } else {
         const expect = name.dims[0] * name.dims[1] * name.dims[2] * DTYPE_BYTES[name.dtype];
         if (expect !== bytes) out.problems.push(`${name.dims.join('x')} ${name.dtype} is ${expect} bytes, the file has ${bytes}`);
       }

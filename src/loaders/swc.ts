@@ -15,10 +15,15 @@ export interface SwcTree {
   radii: Float64Array;
   /** Parent id per sample; -1 for roots. */
   parentIds: Int32Array;
-  /** Index of the parent sample, or -1 (root, or a parent id missing from the file). */
+  /**
+   * Index of the parent sample, or -1: roots, parent ids missing from the
+   * file, self-parents and samples on a parent cycle (links not drawn).
+   */
   parentIndex: Int32Array;
   /** The comment lines (without '#'). */
   comments: string[];
+  /** What is wrong with the tree (checkSwcTree), in words; empty for a sound tree. */
+  problems?: string[];
 }
 
 /** A line that is not an SWC sample; the message names the file and line. */
@@ -118,7 +123,7 @@ export function parseSwc(text: string, fileName = 'swc'): SwcTree {
   for (let i = 0; i < ids.length; i++) index.set(ids[i], i);
   const parentIndex = new Int32Array(ids.length);
   for (let i = 0; i < ids.length; i++) parentIndex[i] = parents[i] === -1 ? -1 : (index.get(parents[i]) ?? -1);
-  return {
+  const tree: SwcTree = {
     fileName,
     count: ids.length,
     ids: Int32Array.from(ids),
@@ -129,6 +134,99 @@ export function parseSwc(text: string, fileName = 'swc'): SwcTree {
     parentIndex,
     comments,
   };
+  // Draw what is valid: links of self-parents and of samples on a cycle are dropped.
+  const check = checkSwcTree(tree);
+  tree.parentIndex = check.parentIndex;
+  tree.problems = check.problems;
+  return tree;
+}
+
+export interface SwcCheck {
+  /** Samples whose parent is themselves. */
+  selfParents: number;
+  /** Samples on parent cycles, and the number of cycles. */
+  cycleSamples: number;
+  cycles: number;
+  /** Samples whose parent id (not -1) is not in the file. */
+  danglingParents: number;
+  /** Samples with parent -1. */
+  roots: number;
+  duplicateIds: number;
+  /** parentIndex with the links of self-parents and cycle samples removed (-1). */
+  parentIndex: Int32Array;
+  /** Segments (sample to parent) drawn. */
+  drawnSegments: number;
+  /** One sentence per kind of problem, with counts and the first ids. */
+  problems: string[];
+}
+
+function firstIds(list: number[]): string {
+  return list.slice(0, 5).join(', ') + (list.length > 5 ? ', …' : '');
+}
+
+/**
+ * Checks that the samples form trees: every parent id is -1 or a sample of
+ * the file, no sample is its own parent, no chain of parents loops, and
+ * there is a root. Says what was found; the returned parentIndex keeps only
+ * valid links (what the neuron page draws).
+ */
+export function checkSwcTree(t: SwcTree): SwcCheck {
+  const n = t.count;
+  const index = new Map<number, number>();
+  for (let i = 0; i < n; i++) index.set(t.ids[i], i);
+  const parent = new Int32Array(n);
+  const self: number[] = [];
+  const dangling: number[] = [];
+  let roots = 0;
+  for (let i = 0; i < n; i++) {
+    const p = t.parentIds[i];
+    if (p === -1) {
+      parent[i] = -1;
+      roots++;
+    } else if (p === t.ids[i]) {
+      parent[i] = -1;
+      self.push(t.ids[i]);
+    } else {
+      const j = index.get(p);
+      parent[i] = j ?? -1;
+      if (j === undefined) dangling.push(t.ids[i]);
+    }
+  }
+  // Cycles: follow parents from each unvisited sample; meeting the current walk again closes a cycle.
+  const state = new Uint8Array(n); // 0 new, 1 on the current walk, 2 done
+  const onCycle: number[] = [];
+  let cycles = 0;
+  const walk: number[] = [];
+  for (let s = 0; s < n; s++) {
+    if (state[s] !== 0) continue;
+    walk.length = 0;
+    let i = s;
+    while (i >= 0 && state[i] === 0) {
+      state[i] = 1;
+      walk.push(i);
+      i = parent[i];
+    }
+    if (i >= 0 && state[i] === 1) {
+      cycles++;
+      let k = i;
+      do {
+        onCycle.push(k);
+        k = parent[k];
+      } while (k !== i);
+    }
+    for (const w of walk) state[w] = 2;
+  }
+  for (const k of onCycle) parent[k] = -1;
+  let drawn = 0;
+  for (let i = 0; i < n; i++) if (parent[i] >= 0) drawn++;
+  const problems: string[] = [];
+  if (self.length) problems.push(`${self.length} sample${self.length > 1 ? 's are their' : ' is its'} own parent (id ${firstIds(self)}); not linked`);
+  if (cycles) {
+    problems.push(`${cycles} parent cycle${cycles > 1 ? 's' : ''} (${onCycle.length} samples, id ${firstIds(onCycle.map((k) => t.ids[k]))}); their links are not drawn`);
+  }
+  if (dangling.length) problems.push(`${dangling.length} sample${dangling.length > 1 ? 's name' : ' names'} a parent that is not in the file (id ${firstIds(dangling)}); drawn unlinked`);
+  if (roots === 0) problems.push('no root (no sample has parent -1)');
+  return { selfParents: self.length, cycleSamples: onCycle.length, cycles, danglingParents: dangling.length, roots, duplicateIds: n - index.size, parentIndex: parent, drawnSegments: drawn, problems };
 }
 
 export interface SwcStats {

@@ -71,9 +71,51 @@ function parseSpacing(fields: Record<string, string>, axes: number): [number, nu
   return undefined;
 }
 
-async function gunzip(bytes: Uint8Array): Promise<Uint8Array> {
-  const stream = new Blob([bytes as BlobPart]).stream().pipeThrough(new DecompressionStream('gzip'));
-  return new Uint8Array(await new Response(stream).arrayBuffer());
+/** Largest sample data this reader takes (bytes): the page holds the samples in memory before compressing them. */
+export const NRRD_MAX_DATA_BYTES = 2 ** 32;
+
+/**
+ * Inflates a gzip payload, stopping as soon as `need` bytes are out (the rest
+ * is ignored, as for raw data): a gzip bomb costs at most `need` bytes.
+ * Memory grows with what actually comes out, not with what the header claims.
+ * DecompressionStream: in browsers and in Node (>= 18) alike.
+ */
+async function gunzipPrefix(bytes: Uint8Array, need: number): Promise<Uint8Array> {
+  // Feed the input in slices so inflating never runs far ahead of the reads.
+  const slice = 1 << 16;
+  let at = 0;
+  const input = new ReadableStream<BufferSource>({
+    pull(controller) {
+      if (at >= bytes.length) controller.close();
+      else {
+        controller.enqueue(bytes.slice(at, at + slice));
+        at += slice;
+      }
+    },
+  });
+  const reader = input.pipeThrough(new DecompressionStream('gzip')).getReader();
+  let out = new Uint8Array(Math.min(need, Math.max(1 << 16, bytes.length * 4)));
+  let filled = 0;
+  try {
+    while (filled < need) {
+      const { done, value } = await reader.read();
+      if (done) break;
+      const take = Math.min(value.length, need - filled);
+      if (filled + take > out.length) {
+        const grown = new Uint8Array(Math.min(need, Math.max(out.length * 2, filled + take)));
+        grown.set(out.subarray(0, filled));
+        out = grown;
+      }
+      out.set(value.subarray(0, take), filled);
+      filled += take;
+    }
+  } catch (e) {
+    const why = e instanceof Error ? e.message : String(e);
+    throw new NrrdError(`the gzip data is damaged after ${filled} of ${need} bytes (${why})`);
+  } finally {
+    reader.cancel().catch(() => {});
+  }
+  return out.subarray(0, filled);
 }
 
 /** Parses a NRRD file with attached data; throws NrrdError with the reason. */
@@ -93,13 +135,20 @@ export async function parseNrrd(bytes: Uint8Array): Promise<NrrdVolume> {
   if (spatial.length !== 3) throw new NrrdError(`only 3D volumes are supported (this file has ${sizes.length} axes: ${sizes.join(' x ')})`);
   const dims = spatial as Dims;
   const encoding = (fields.encoding ?? '').toLowerCase();
-  let payload = bytes.subarray(dataOffset);
-  if (encoding === 'gzip' || encoding === 'gz') payload = await gunzip(payload);
-  else if (encoding !== 'raw') throw new NrrdError(`encoding "${fields.encoding ?? '(missing)'}" is not supported (raw or gzip)`);
+  const gzip = encoding === 'gzip' || encoding === 'gz';
+  if (!gzip && encoding !== 'raw') throw new NrrdError(`encoding "${fields.encoding ?? '(missing)'}" is not supported (raw or gzip)`);
   const width = DTYPE_BYTES[dtype];
+  // Sizes are integers < 2^53 each; the product is checked before anything is allocated.
   const need = dims[0] * dims[1] * dims[2] * width;
-  if (payload.length < need) throw new NrrdError(`truncated: ${dims.join('x')} ${dtype} needs ${need} bytes of data, the file has ${payload.length}`);
-  const data = payload.slice(0, need);
+  if (!(need <= NRRD_MAX_DATA_BYTES)) {
+    throw new NrrdError(`${dims.join('x')} ${dtype} is ${need} bytes of samples, more than the ${NRRD_MAX_DATA_BYTES} bytes (4 GiB) this reader takes`);
+  }
+  const stored = bytes.subarray(dataOffset);
+  const payload = gzip ? await gunzipPrefix(stored, need) : stored;
+  if (payload.length < need) {
+    throw new NrrdError(`truncated: ${dims.join('x')} ${dtype} needs ${need} bytes of data, the file has ${payload.length}${gzip ? ' (after gunzip)' : ''}`);
+  }
+  const data = payload.length === need && gzip ? payload : payload.slice(0, need);
   const endian = (fields.endian ?? 'little').toLowerCase();
   if (endian === 'big' && width > 1) {
     for (let i = 0; i < data.length; i += width) data.subarray(i, i + width).reverse();

@@ -24,6 +24,7 @@ import { ZfpEncoder } from '../zfp/encoder.ts';
 import { DTYPE_BYTES, type DType } from './dtype.ts';
 import { formatDims, parseVolumeName, type Dims } from './naming.ts';
 import { NrrdError, parseNrrd, type NrrdVolume } from './nrrd.ts';
+import { allNonFiniteMessage, countNonFinite, nonFiniteNotice, nonFiniteTotal, replaceNonFinite, type NonFiniteCount } from './non-finite.ts';
 import { generateDefaultVolume } from './procedural.ts';
 import type { TiffVolume } from '../loaders/tiff.ts';
 
@@ -109,6 +110,10 @@ export interface OpenedVolume {
   defaultIsovalue?: number;
   /** World size of a voxel along x, y, z, when the file gives it. */
   spacing?: [number, number, number];
+  /** What the user should know about the file (non-finite values replaced, bytes ignored), one sentence each. */
+  notes: string[];
+  /** Float volumes compressed here: NaN/Inf counts (replaced before compression, see non-finite.ts). */
+  nonFinite?: NonFiniteCount;
 }
 
 export interface OpenOptions {
@@ -146,6 +151,27 @@ function sizeOf(dims: Dims, dtype: DType): number {
   return dims[0] * dims[1] * dims[2] * DTYPE_BYTES[dtype];
 }
 
+/** Dimensions from a name or a form: whole numbers from 1 up, or a VolumeFileError naming the file. */
+function checkNamedDims(fileName: string, dims: Dims, where: string): void {
+  if (dims.some((n) => !Number.isSafeInteger(n) || n < 1)) {
+    throw new VolumeFileError(`${fileName}: the shape ${formatDims(dims)} ${where} is impossible: every dimension must be a whole number from 1 up`);
+  }
+}
+
+/**
+ * The value range of an opened volume (Isosurface.info.valueRange, from the
+ * GPU's block ranges, which skip NaN and Inf): a VolumeFileError naming the
+ * file when the volume has no finite value, so the page and the CLI refuse it
+ * instead of offering isovalues in [Infinity, -Infinity].
+ */
+export function checkValueRange(fileName: string, range: readonly [number, number]): [number, number] {
+  const [lo, hi] = range;
+  if (!(Number.isFinite(lo) && Number.isFinite(hi) && lo <= hi && Math.abs(lo) < 3.4e38 && Math.abs(hi) < 3.4e38)) {
+    throw new VolumeFileError(`${fileName}: the volume has no finite values (every decoded value is NaN or infinite): there is no surface to draw`);
+  }
+  return [lo, hi];
+}
+
 /** Says what a file is and what is missing; throws (naming the file) when it cannot be a volume. */
 export async function inspectVolumeFile(fileName: string, bytes: Uint8Array, opts: InspectOptions = {}): Promise<VolumeFileFacts> {
   const reader = opts.reader ?? 'page';
@@ -162,6 +188,7 @@ export async function inspectVolumeFile(fileName: string, bytes: Uint8Array, opt
         throw new VolumeFileError(`${fileName}: the name says ${name.dtype}; only float32 zfp streams are supported`);
       }
       const facts: VolumeFileFacts = { ...base, kind: 'zfp-headerless', dtype: 'float32', dims: name.dims, rate: name.rate, missing: [], compresses: false };
+      if (name.dims) checkNamedDims(fileName, name.dims, 'in the name');
       if (!name.dims) facts.missing.push('dims');
       if (name.rate === undefined) {
         if (name.dims) {
@@ -177,6 +204,7 @@ export async function inspectVolumeFile(fileName: string, bytes: Uint8Array, opt
     }
     case 'raw': {
       const facts: VolumeFileFacts = { ...base, kind: 'raw', dims: name.dims, dtype: name.dtype, missing: [], compresses: true };
+      if (name.dims) checkNamedDims(fileName, name.dims, 'in the name');
       if (!name.dims) facts.missing.push('dims');
       if (!name.dtype) facts.missing.push('dtype');
       if (name.dims && name.dtype && sizeOf(name.dims, name.dtype) !== bytes.byteLength) {
@@ -294,6 +322,7 @@ export async function openVolumeFile(device: GPUDevice, facts: VolumeFileFacts, 
   const { fileName } = facts;
   const display = fileName.split(/[\\/]/).pop() ?? fileName;
   const common = { name: display, fileName, kind: facts.kind, sourceBytes: facts.bytes, spacing: facts.spacing };
+  if (req.dims) checkNamedDims(fileName, req.dims, 'given');
   switch (facts.kind) {
     case 'zfp':
     case 'zfp-headerless': {
@@ -315,7 +344,8 @@ export async function openVolumeFile(device: GPUDevice, facts: VolumeFileFacts, 
         stream = loadZfpStream(device, bytes, fileName, { rate: req.rate ?? facts.rate });
       }
       const info = stream.info;
-      return { ...common, stream, dims: info.dims, sourceDtype: 'float32', compressedBytes: info.paddedBytes, rate: info.rate, compressedHere: false };
+      const notes = info.notes.map((n) => `${fileName}: ${n}`);
+      return { ...common, stream, dims: info.dims, sourceDtype: 'float32', compressedBytes: info.paddedBytes, rate: info.rate, compressedHere: false, notes };
     }
     case 'raw':
     case 'nrrd':
@@ -323,15 +353,30 @@ export async function openVolumeFile(device: GPUDevice, facts: VolumeFileFacts, 
       const dims = facts.kind === 'raw' ? (req.dims ?? facts.dims) : facts.dims;
       const dtype = facts.kind === 'raw' ? (req.dtype ?? facts.dtype) : facts.dtype;
       if (!dims || !dtype) throw new VolumeFileError(`${fileName}: give the volume's dimensions and sample type (the name carries none)`);
-      const data = facts.kind === 'nrrd' ? facts.nrrd!.data : facts.kind === 'tiff' ? facts.samples! : bytes;
+      let data = facts.kind === 'nrrd' ? facts.nrrd!.data : facts.kind === 'tiff' ? facts.samples! : bytes;
       if (sizeOf(dims, dtype) !== data.byteLength) {
         throw new VolumeFileError(`${fileName}: ${formatDims(dims)} ${dtype} is ${sizeOf(dims, dtype)} bytes, the file has ${data.byteLength}`);
       }
       const rate = checkRate(fileName, req.rate ?? DEFAULT_RAW_RATE);
+      const notes: string[] = [];
+      const nonFinite = countNonFinite(data, dtype);
+      if (nonFinite && nonFiniteTotal(nonFinite) > 0) {
+        if (nonFiniteTotal(nonFinite) === nonFinite.values) throw new VolumeFileError(`${fileName}: ${allNonFiniteMessage(nonFinite)}`);
+        data = replaceNonFinite(data, dtype as 'float32' | 'float64', nonFinite);
+        notes.push(`${fileName}: ${nonFiniteNotice(nonFinite)}`);
+      }
       opts.onPhase?.('compress');
       const encoder = opts.encoder ?? (await encoderFor(device));
-      const stream = await encoder.compressToStream(data, dtype, dims, rate, { header: true, fileName });
-      return { ...common, stream, dims, sourceDtype: dtype, compressedBytes: stream.info.paddedBytes, rate: stream.info.rate, compressedHere: true };
+      let stream: ZfpGpuStream;
+      try {
+        stream = await encoder.compressToStream(data, dtype, dims, rate, { header: true, fileName });
+      } catch (e) {
+        // The shape or rate cannot be written as a zfp stream: the reader's error, naming the file.
+        if (e instanceof ZfpFormatError) throw new VolumeFileError(e.message.includes(fileName) ? e.message : `${fileName}: ${e.message}`);
+        throw e;
+      }
+      const nf = nonFinite && nonFiniteTotal(nonFinite) > 0 ? { nonFinite } : {};
+      return { ...common, stream, dims, sourceDtype: dtype, compressedBytes: stream.info.paddedBytes, rate: stream.info.rate, compressedHere: true, notes, ...nf };
     }
   }
 }
@@ -412,6 +457,7 @@ export async function openDefaultVolume(device: GPUDevice, opts: OpenOptions & {
     rate: stream.info.rate,
     compressedHere: true,
     defaultIsovalue: volume.defaultIsovalue,
+    notes: [],
   };
 }
 

@@ -88,6 +88,10 @@ function checkBitsPerBlock(fileName: string, bits: number, rateText: string): vo
   if (bits > 0x8000) fail(fileName, `${rateText} gives ${bits} bits per block; zfp allows at most 32768`);
 }
 
+function checkRate(fileName: string, rate: number, where: string): void {
+  if (!Number.isFinite(rate) || rate <= 0) fail(fileName, `the rate ${where} (${rate}) is not a positive number of bits per value`);
+}
+
 function checkDims(fileName: string, dims: Dims, where: string): void {
   if (dims.some((n) => !Number.isSafeInteger(n) || n < 1)) fail(fileName, `absurd size ${formatDims(dims)} ${where}: every dimension must be at least 1`);
   const grid = blockGridOf(dims);
@@ -184,6 +188,7 @@ function headerless(fileName: string, fileBytes: number, opts: OpenZfpOptions): 
         : ` (the size fits rate ${fits.join(' or ')})`;
     fail(fileName, `no zfp header and no rate: give the rate (--rate R) or name the file ${name.base}_${formatDims(name.dims)}_float32.raw.crateR.zfp${hint}`);
   }
+  checkRate(fileName, rate, opts.rate === undefined ? 'in the file name' : 'given');
   const bits = bitsPerBlockForRate(rate);
   checkDims(fileName, name.dims, 'in the file name');
   checkBitsPerBlock(fileName, bits, `rate ${rate}`);
@@ -224,6 +229,7 @@ export function openZfpStream(bytes: Uint8Array, fileName: string, opts: OpenZfp
 
 /** Stream info for a volume we are about to compress. */
 export function planZfpStream(fileName: string, dims: Dims, rate: number, withHeader: boolean): ZfpStreamInfo {
+  checkRate(fileName, rate, 'asked for');
   const bits = bitsPerBlockForRate(rate);
   checkDims(fileName, dims, '');
   checkBitsPerBlock(fileName, bits, `rate ${rate}`);

@@ -6,7 +6,7 @@
 
 import type { GpuContext } from '../../gpu/device.ts';
 import type { IsosurfaceStats } from '../../isosurface/types.ts';
-import type { OpenedVolume } from '../../volume/open-volume.ts';
+import { checkValueRange, type OpenedVolume } from '../../volume/open-volume.ts';
 import { createIsosurface, type PageIsosurface } from '../engine.ts';
 import { LoadCancelled } from './read.ts';
 
@@ -39,6 +39,8 @@ export async function openFirstSurface(gpu: GpuContext, opened: OpenedVolume, op
     opts.onStage?.('ranges');
     iso = await createIsosurface(gpu, opened.stream, opts.memoryBudget !== undefined ? { memoryBudgetBytes: opts.memoryBudget } : {});
     if (signal?.aborted) throw new LoadCancelled();
+    // No finite value (a zfp file of NaN/Inf): refused here, named, before any isovalue is chosen.
+    checkValueRange(opened.fileName, iso.info.valueRange);
     const ranges = await iso.readBlockRanges();
     const initialIso = opts.chooseIso(opened, iso, ranges);
     opts.onStage?.('surface');

@@ -37,6 +37,8 @@ export interface LoaderDeps {
   onLoaded: (volume: LoadedVolume) => void;
   onError: (message: string) => void;
   onCancelled: (what: string) => void;
+  /** What the user should know about a volume that opened (OpenedVolume.notes: NaN/Inf replaced, ...). */
+  onNotice?: (message: string) => void;
   onBusy: (busy: boolean) => void;
 }
 
@@ -145,6 +147,7 @@ export class VolumeLoader {
       });
       try {
         this.deps.onLoaded({ ...surface, loadMs: performance.now() - started });
+        for (const note of surface.opened.notes) this.deps.onNotice?.(note);
       } catch (e) {
         surface.iso.destroy();
         surface.opened.stream.destroy();

@@ -7,9 +7,8 @@
 import { describeAdapter } from '../../gpu/device.ts';
 import { runBenchmark } from '../../bench/harness.ts';
 import { BENCH_MODES, isBenchMode, type BenchMode } from '../../bench/sequences.ts';
-import { Isosurface } from '../../isosurface/isosurface.ts';
 import { numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
-import { budgetOption, openInput } from './extract.ts';
+import { budgetOption, createInputIsosurface, openInput } from './extract.ts';
 
 function modesOption(text: string | undefined): BenchMode[] {
   if (text === undefined) return [...BENCH_MODES];
@@ -47,7 +46,7 @@ export const benchCommand: CliCommand = {
     const gpu = await ctx.gpu();
     const volume = await openInput(gpu.device, input, numberOption(args, 'rate'));
     ctx.log(`${input}: ${volume.how}`);
-    const iso = await Isosurface.create(gpu, volume.stream, budget === undefined ? {} : { memoryBudgetBytes: budget });
+    const iso = await createInputIsosurface(ctx, gpu, volume, budget);
     try {
       // Default range: the middle 80% of the values (the paper excludes noise and near-empty surfaces).
       const [lo, hi] = iso.info.valueRange;

@@ -6,6 +6,7 @@ import { readFileSync, writeFileSync } from 'node:fs';
 import { basename } from 'node:path';
 import { DTYPE_BYTES, DTYPES, isDType, type DType } from '../../volume/dtype.ts';
 import { formatDims, parseVolumeName, type Dims } from '../../volume/naming.ts';
+import { allNonFiniteMessage, countNonFinite, nonFiniteNotice, nonFiniteTotal, replaceNonFinite } from '../../volume/non-finite.ts';
 import { ZfpEncoder } from '../../zfp/encoder.ts';
 import { planZfpStream, ZfpFormatError } from '../../zfp/format.ts';
 import { numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
@@ -39,7 +40,7 @@ export const compressCommand: CliCommand = {
     if (dtypeText !== undefined && !isDType(dtypeText)) throw new UsageError(`--dtype must be one of ${DTYPES.join(', ')} (got "${dtypeText}")`);
     const dtype: DType | undefined = (dtypeText as DType | undefined) ?? name.dtype;
     if (!dtype) throw new UsageError(`${input}: the name carries no type: give --dtype (${DTYPES.join(', ')})`);
-    const bytes = new Uint8Array(readFileSync(input));
+    let bytes: Uint8Array = new Uint8Array(readFileSync(input));
     const expect = dims[0] * dims[1] * dims[2] * DTYPE_BYTES[dtype];
     if (bytes.byteLength !== expect) throw new UsageError(`${input}: ${formatDims(dims)} ${dtype} is ${expect} bytes, the file has ${bytes.byteLength}`);
 
@@ -48,6 +49,15 @@ export const compressCommand: CliCommand = {
     } catch (e) {
       if (e instanceof ZfpFormatError) throw new UsageError(e.message);
       throw e;
+    }
+    // zfp cannot store NaN/Inf: replaced as the page and `extract` do (src/volume/non-finite.ts), and said so.
+    const nonFinite = countNonFinite(bytes, dtype);
+    const notes: string[] = [];
+    if (nonFinite && nonFiniteTotal(nonFinite) > 0) {
+      if (nonFiniteTotal(nonFinite) === nonFinite.values) throw new UsageError(`${input}: ${allNonFiniteMessage(nonFinite)}`);
+      bytes = replaceNonFinite(bytes, dtype as 'float32' | 'float64', nonFinite);
+      notes.push(`${input}: ${nonFiniteNotice(nonFinite)}`);
+      ctx.log(`note: ${notes[0]}`);
     }
     const { device } = await ctx.gpu();
     const encoder = await ZfpEncoder.create(device);
@@ -79,6 +89,7 @@ export const compressCommand: CliCommand = {
         compressionRatio: floatBytes / result.bytes.byteLength,
         seconds,
         gbPerSecond: floatBytes / seconds / 1e9,
+        notes,
         timing: 'wall time of upload, GPU encode and read-back (file I/O excluded); GB/s of float32 data',
       };
       ctx.log(

@@ -16,7 +16,7 @@ import { encodePly, weldVertices } from '../../mc/ply.ts';
 import { formatMB } from '../../isosurface/budget.ts';
 import { IsosurfaceBudgetError } from '../../isosurface/types.ts';
 import { decodeVertices } from '../../isosurface/vertex-format.ts';
-import { describeOpenedVolume, isDefaultVolume, openDefaultVolume, openVolumeBytes, VolumeFileError } from '../../volume/open-volume.ts';
+import { checkValueRange, describeOpenedVolume, isDefaultVolume, openDefaultVolume, openVolumeBytes, VolumeFileError } from '../../volume/open-volume.ts';
 import { meshMetrics } from '../../mc/mesh-metrics.ts';
 import { ZfpFormatError } from '../../zfp/format.ts';
 import { CommandFailed, numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
@@ -36,6 +36,26 @@ export interface ExtractRecord {
   cacheSlots: number;
   grew: boolean;
   ply?: string;
+}
+
+/**
+ * The pipeline for an opened input, refusing (UsageError, exit status 2) a
+ * volume without finite values; logs what the user should know (NaN/Inf
+ * replaced). Frees the stream on failure (shared with `bench`).
+ */
+export async function createInputIsosurface(ctx: { log(m: string): void }, gpu: Parameters<typeof Isosurface.create>[0], volume: Awaited<ReturnType<typeof openInput>>, budget: number | undefined) {
+  for (const note of volume.notes) ctx.log(`note: ${note}`);
+  let iso: Isosurface | undefined;
+  try {
+    iso = await Isosurface.create(gpu, volume.stream, budget === undefined ? {} : { memoryBudgetBytes: budget });
+    checkValueRange(volume.fileName, iso.info.valueRange);
+    return iso;
+  } catch (e) {
+    iso?.destroy();
+    volume.stream.destroy();
+    if (e instanceof VolumeFileError) throw new UsageError(e.message);
+    throw e;
+  }
 }
 
 /** --cache-budget MB -> bytes (shared with `bench`). */
@@ -60,7 +80,7 @@ export async function openInput(device: GPUDevice, path: string, rate: number | 
   }
   try {
     const v = bytes ? await openVolumeBytes(device, bytes, basename(path), { rate, reader: 'command' }) : await openDefaultVolume(device, rate === undefined ? {} : { rate });
-    return { stream: v.stream, how: describeOpenedVolume(v), rate: v.rate };
+    return { stream: v.stream, how: describeOpenedVolume(v), rate: v.rate, notes: v.notes, fileName: v.fileName };
   } catch (e) {
     if (e instanceof VolumeFileError || e instanceof ZfpFormatError) throw new UsageError(e.message);
     throw e;
@@ -86,7 +106,7 @@ export const extractCommand: CliCommand = {
     const gpu = await ctx.gpu();
     const volume = await openInput(gpu.device, input, numberOption(args, 'rate'));
     ctx.log(`${input}: ${volume.how}`);
-    const iso = await Isosurface.create(gpu, volume.stream, budget === undefined ? {} : { memoryBudgetBytes: budget });
+    const iso = await createInputIsosurface(ctx, gpu, volume, budget);
     const records: (ExtractRecord | { iso: number; error: string })[] = [];
     try {
       for (const value of isovalues) {
@@ -137,6 +157,7 @@ export const extractCommand: CliCommand = {
       dims: iso.info.dims,
       blockGrid: iso.info.blockGrid,
       valueRange: iso.info.valueRange,
+      notes: volume.notes,
       adapter: describeAdapter(gpu.adapter),
       memoryBudgetBytes: iso.memoryBudget,
       isosurfaces: records,

@@ -152,6 +152,7 @@ export class NeuronIsosurface {
         onStage: (stage) => this.progress.set(stage === 'ranges' ? 0.5 : 0.75, stage === 'ranges' ? 'block ranges…' : 'extracting the surface…'),
       });
       this.install(surface);
+      for (const note of opened.notes) this.messages.show(note, 'info', 15000);
     } catch (e) {
       if (e instanceof LoadCancelled || signal.aborted) return;
       this.messages.show(`No isosurface: ${loadErrorMessage(source.name, e)}`);

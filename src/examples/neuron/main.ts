@@ -332,6 +332,8 @@ async function start(): Promise<void> {
     for (const f of files) {
       try {
         const tree = parseSwc(await f.text(), f.name);
+        // Not a sound tree: say what was found; only the valid links are drawn.
+        if (tree.problems?.length) messages.show(`${f.name}: ${tree.problems.join('; ')}.`, 'info');
         loaded.push({ name: f.name, tree, visible: true, demo: false, color: FILE_COLORS[loaded.length % FILE_COLORS.length] });
       } catch (e) {
         messages.show(e instanceof SwcError ? `Could not read a trace. ${e.message}` : `${f.name}: ${(e as Error).message}`);

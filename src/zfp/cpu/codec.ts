@@ -294,7 +294,9 @@ export function decodeVolume(words: Uint32Array, dims: Dims3, bitsPerBlock: numb
   return out;
 }
 
-/** Per-block [min, max] over the voxels inside the volume, raster block order (x fastest). */
+const FLT_MAX = 3.4028234663852886e38;
+
+/** Per-block [min, max] of the finite values over the voxels inside the volume, raster block order (x fastest). */
 export function blockRanges(vol: Float32Array, dims: Dims3): Float32Array {
   const [X, Y, Z] = dims;
   const [bx, by, bz] = dims.map((n) => Math.ceil(n / 4));
@@ -303,11 +305,13 @@ export function blockRanges(vol: Float32Array, dims: Dims3): Float32Array {
   for (let k = 0; k < bz; k++) {
     for (let j = 0; j < by; j++) {
       for (let i = 0; i < bx; i++, b++) {
-        let lo = Infinity, hi = -Infinity;
+        // Non-finite values are skipped; no finite value: the empty range [FLT_MAX, -FLT_MAX] (as the GPU kernel).
+        let lo = FLT_MAX, hi = -FLT_MAX;
         for (let z = 4 * k; z < Math.min(4 * k + 4, Z); z++) {
           for (let y = 4 * j; y < Math.min(4 * j + 4, Y); y++) {
             for (let x = 4 * i; x < Math.min(4 * i + 4, X); x++) {
               const v = vol[x + X * (y + Y * z)];
+              if (!Number.isFinite(v)) continue;
               if (v < lo) lo = v;
               if (v > hi) hi = v;
             }
