@@ -150,11 +150,11 @@ export class Isosurface implements SurfaceEngine {
       BlockCache.create(device, { stream, decoder, counters, scan, compact, compactIds, activeIds: active.activeIds, maxWorkgroupsPerDimension: maxWg }, slots),
       active.readBlockRanges(),
     ]);
-    const load = options.blockLoad ?? (gpu.adapter.software ? 'direct' : 'workgroup');
     const mc = await BlockMarchingCubes.create(
       device,
-      { load, volume, counters, scan, compactIds, activeIds: active.activeIds, blockToSlot: cache.blockToSlot, maxWorkgroupsPerDimension: maxWg },
+      { volume, counters, scan, activeIds: active.activeIds, blockToSlot: cache.blockToSlot, maxWorkgroupsPerDimension: maxWg, maxBindingBytes: limits.maxStorageBufferBindingSize },
       slots,
+      vertices,
     );
     const shards = new VertexShards(device, perShard, vertices);
     let lo = Infinity;
@@ -341,7 +341,7 @@ export class Isosurface implements SurfaceEngine {
       cacheSlots: this.cache.capacity,
       cacheSlotsUsed: c[C.slotsUsed],
       cacheBytes: this.cache.byteSize + this.mc.byteSize,
-      vertexBytes: this.shards.byteSize,
+      vertexBytes: this.shards.byteSize + this.mc.cellBytes,
       gpuMs: raw.gpuMs + r.earlierMs,
       stages,
       timingSource: raw.source,
@@ -393,6 +393,7 @@ export class Isosurface implements SurfaceEngine {
     }
     if (vertices > this.shards.capacity) {
       this.shards.resize(vertices);
+      this.mc.resizeCells(vertices);
       this.writeShardCounters();
     }
     this.refreshDrawData();

@@ -14,6 +14,7 @@ export const C = {
   vertexCapacity: 2,
   shards: 3,
   perShard: 4,
+  cellCapacity: 5,
   active: 8,
   activeGated: 9,
   slotsGated: 10,
@@ -27,6 +28,9 @@ export const C = {
   drawnVertices: 18,
   drawnOccupied: 19,
   compactNew: 20,
+  cells: 21,
+  activeGroups: 22,
+  groupBlocks: 23,
 } as const;
 
 /** Word offsets of indirect dispatch arguments (x, y, z) in the counters buffer. */
@@ -34,7 +38,8 @@ export const A = {
   slots: 24,
   mark: 28,
   assign: 32,
-  mc: 36,
+  expand: 36,
+  groupBlocks: 40,
 } as const;
 
 export const STATUS_CACHE_SHORTFALL = 1;
@@ -56,3 +61,5 @@ export const DRAW_ARGS_BYTES = 16;
 export const SLOT_BYTES = 256;
 /** Bytes of one compressed vertex. */
 export const VERTEX_BYTES = 8;
+/** Bytes of one entry of the emitting-cell list: (entry << 6 | cell) and its first vertex. */
+export const CELL_RECORD_BYTES = 8;
