@@ -10,7 +10,7 @@ const NONE: u32 = 0xffffffffu;
 // Ages of slots holding a block saturate here (the sort compares 16 bits).
 const AGE_MAX: u32 = 0xfffeu;
 
-// Words of the counters buffer. 0-4 are written by the host (at creation and
+// Words of the counters buffer. 0-7 are written by the host (at creation and
 // after growth), the rest by the kernels and primitives of one computation.
 const C_BLOCKS: u32 = 0u;          // blocks in the volume
 const C_SLOTS: u32 = 1u;           // cache slots (capacity)
@@ -18,6 +18,8 @@ const C_VERTEX_CAPACITY: u32 = 2u; // vertices the shards hold together
 const C_SHARDS: u32 = 3u;          // vertex shards
 const C_PER_SHARD: u32 = 4u;       // vertices per full shard
 const C_CELL_CAPACITY: u32 = 5u;   // entries of the emitting-cell list
+const C_GROUPS: u32 = 6u;          // groups of blocks (active_groups.wgsl)
+const C_GROUP_SIZE: u32 = 7u;      // blocks per group (edge^3)
 const C_ACTIVE: u32 = 8u;          // active blocks (scan total)
 const C_ACTIVE_GATED: u32 = 9u;    // active blocks, or 0 when the cache is too small
 const C_SLOTS_GATED: u32 = 10u;    // slots, or 0 when the cache is too small

@@ -7,6 +7,14 @@
 
 @group(0) @binding(0) var<storage, read_write> counters: array<u32>;
 
+// After the active groups are counted: how many blocks of theirs to test.
+@compute @workgroup_size(1)
+fn plan_groups() {
+  let blocks = counters[C_ACTIVE_GROUPS] * counters[C_GROUP_SIZE];
+  counters[C_GROUP_BLOCKS] = blocks;
+  write_dispatch_args(&counters, A_GROUP_BLOCKS, ceil_div(blocks, 64u));
+}
+
 // After the active list: is the cache large enough? The update succeeds iff
 // new <= available, and available = slots - (active - new), so iff
 // active <= slots: known before touching any cache state.

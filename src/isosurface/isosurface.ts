@@ -19,11 +19,11 @@ import { StreamCompact, StreamCompactIds } from '../primitives/compact.ts';
 import { ExclusiveScan } from '../primitives/scan.ts';
 import { ZfpDecoder } from '../zfp/decoder.ts';
 import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
-import { ActiveBlocks } from './active-blocks.ts';
+import { ActiveBlocks, groupGrid } from './active-blocks.ts';
 import { BlockMarchingCubes } from './block-mc.ts';
 import { cacheBytesFor, defaultMemoryBudget, formatMB, grownCapacity, vertexBytesFor } from './budget.ts';
 import { Counters } from './counters.ts';
-import { C, DRAW_ARGS_BYTES, STATUS_CACHE_SHORTFALL, STATUS_VERTEX_OVERFLOW, VERTEX_BYTES } from './layout.ts';
+import { C, DEFAULT_GROUP_EDGE_BLOCKS, DRAW_ARGS_BYTES, STATUS_CACHE_SHORTFALL, STATUS_VERTEX_OVERFLOW, VERTEX_BYTES } from './layout.ts';
 import { BlockCache } from './lru-cache.ts';
 import { StatsReadback, type RawStats } from './stats-readback.ts';
 import {
@@ -134,18 +134,21 @@ export class Isosurface implements SurfaceEngine {
       vertices = Math.max(1, Math.floor(vertices * lo));
     }
 
+    const groupEdge = options.groupEdgeBlocks ?? DEFAULT_GROUP_EDGE_BLOCKS;
+    if (!Number.isInteger(groupEdge) || groupEdge < 1 || groupEdge > 64) throw new RangeError(`groupEdgeBlocks must be an integer in 1..64 (got ${groupEdge})`);
+    const groupEntries = groupGrid(blockGrid, groupEdge).reduce((a, b) => a * b, 1) * groupEdge ** 3;
     const volume = device.createBuffer({ label: 'Isosurface.volume', size: 32, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
     device.queue.writeBuffer(volume, 0, new Uint32Array([...dims, blockCount, ...blockGrid, 0]));
     const primitiveOptions = { maxWorkgroupsPerDimension: maxWg };
     const [counters, decoder, scan, compact, compactIds] = await Promise.all([
       Counters.create(device, maxWg),
       ZfpDecoder.create(device, primitiveOptions),
-      ExclusiveScan.create(device, { capacity: blockCount, ...primitiveOptions }),
+      ExclusiveScan.create(device, { capacity: Math.max(blockCount, groupEntries), ...primitiveOptions }),
       StreamCompact.create(device, primitiveOptions),
       StreamCompactIds.create(device, primitiveOptions),
     ]);
     counters.set('blocks', blockCount);
-    const active = await ActiveBlocks.create(device, { stream, decoder, volume, counters, scan, compactIds, maxWorkgroupsPerDimension: maxWg });
+    const active = await ActiveBlocks.create(device, { stream, decoder, volume, counters, scan, compact, compactIds, maxWorkgroupsPerDimension: maxWg, groupEdge });
     const [cache, ranges] = await Promise.all([
       BlockCache.create(device, { stream, decoder, counters, scan, compact, compactIds, activeIds: active.activeIds, maxWorkgroupsPerDimension: maxWg }, slots),
       active.readBlockRanges(),

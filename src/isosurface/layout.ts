@@ -15,6 +15,8 @@ export const C = {
   shards: 3,
   perShard: 4,
   cellCapacity: 5,
+  groups: 6,
+  groupSize: 7,
   active: 8,
   activeGated: 9,
   slotsGated: 10,
@@ -48,6 +50,9 @@ export const STATUS_VERTEX_OVERFLOW = 2;
 /** The counters buffer: 64 words. */
 export const COUNTER_WORDS = 64;
 export const COUNTERS_BYTES = COUNTER_WORDS * 4;
+
+/** Default edge, in blocks, of the groups of the active-block selection (16^3 voxels). */
+export const DEFAULT_GROUP_EDGE_BLOCKS = 4;
 
 /** Vertex shard records in shard_info: 64 words apart (a storage offset alignment). */
 export const SHARD_RECORD_BYTES = 256;

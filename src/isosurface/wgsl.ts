@@ -2,6 +2,7 @@
 // composed of.
 import commonWgsl from '../../shaders/isosurface/common.wgsl?raw';
 import activeBlocksWgsl from '../../shaders/isosurface/active_blocks.wgsl?raw';
+import activeGroupsWgsl from '../../shaders/isosurface/active_groups.wgsl?raw';
 import lruWgsl from '../../shaders/isosurface/lru.wgsl?raw';
 import planWgsl from '../../shaders/isosurface/plan.wgsl?raw';
 import blockMcCommonWgsl from '../../shaders/isosurface/block_mc_common.wgsl?raw';
@@ -27,6 +28,7 @@ const base = [dispatchSnippet, isosurfaceCommonSnippet];
 
 export const isosurfaceWgsl = {
   activeBlocks: [...base, part('active_blocks', activeBlocksWgsl)],
+  activeGroups: [...base, part('active_groups', activeGroupsWgsl)],
   lru: [...base, part('lru', lruWgsl)],
   plan: [...base, part('plan', planWgsl)],
   blockClassify: [...base, mcCaseTableSnippet, part('block_mc_common', blockMcCommonWgsl), part('block_classify', blockClassifyWgsl)],
