@@ -69,20 +69,25 @@ fn classify_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) n
   }
   var vertices = 0u;
   var cells = 0u;
+  // Most active blocks have no sign change at all (their neighbourhood range
+  // covers iso, their own voxels do not): all 125 bits equal, nothing to mesh.
+  let any_inside = (layers[0] | layers[1] | layers[2] | layers[3] | layers[4]) != 0u;
+  let all_inside = (layers[0] & layers[1] & layers[2] & layers[3] & layers[4]) == 0x1ffffffu;
+  let mixed = any_inside && !all_inside;
   for (var z = 0u; z < 4u; z++) {
     let lower = layers[z];
     let upper = layers[z + 1u];
     for (var y = 0u; y < 4u; y++) {
       var word = 0u;
-      if (z < ext.z && y < ext.y) {
+      if (mixed && z < ext.z && y < ext.y) {
         for (var x = 0u; x < ext.x; x++) {
           let r = select(0u, 1u, x == 3u) | select(0u, 2u, y == 3u) | select(0u, 4u, z == 3u);
           let s = x + 5u * y;
           let code = ((lower >> s) & 3u) | (((lower >> (s + 5u)) & 3u) << 2u) | (((upper >> s) & 3u) << 4u) | (((upper >> (s + 5u)) & 3u) << 6u);
-          let n = select(case_vertex_count(code), 0u, ((blocked >> r) & 1u) == 1u);
-          if (n > 0u) {
+          // every case but 0 and 255 has triangles
+          if (code != 0u && code != 255u && ((blocked >> r) & 1u) == 0u) {
             word |= code << (8u * x);
-            vertices += n;
+            vertices += case_vertex_count(code);
             cells += 1u;
           }
         }
