@@ -197,15 +197,10 @@ export class BlockMarchingCubes {
     return this.groups;
   }
 
-  /**
-   * Records the classification of the active blocks, the scans of their
-   * vertex and cell counts, and plan_vertices (overflow check, expansion and
-   * shard arguments, draw arguments).
-   */
-  encodeCounts(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: VertexShards): void {
+  /** Records classify_blocks over the active blocks (case codes, vertex and cell counts, occupied count). */
+  encodeClassify(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: VertexShards): void {
     const g = this.bind(slotData, shards);
-    const { counters, scan } = this.parts;
-    const e = this.entries;
+    const { counters } = this.parts;
     encoder.clearBuffer(this.occupied);
     const pass = encoder.beginComputePass({ label: 'Isosurface.classifyBlocks' });
     pass.setPipeline(this.classifyPipeline);
@@ -214,13 +209,18 @@ export class BlockMarchingCubes {
     pass.dispatchWorkgroupsIndirect(counters.buffer, Counters.offset(A.mark));
     pass.end();
     encoder.copyBufferToBuffer(this.occupied, 0, counters.buffer, Counters.offset(C.occupied), 4);
+  }
+
+  /** Records the scans of the vertex counts (-> offsets, vertices) and cell counts (-> offsets, cells). */
+  encodeScans(encoder: GPUCommandEncoder): void {
+    const { counters, scan } = this.parts;
+    const e = this.entries;
     const active = counters.count('activeGated');
     scan.encode(encoder, { input: e.vertexCounts, output: e.vertexOffsets, count: active, totalOut: counters.count('vertices') });
     scan.encode(encoder, { input: e.cellCounts, output: e.cellOffsets, count: active, totalOut: counters.count('cells') });
-    this.encodePlanVertices(encoder, slotData, shards);
   }
 
-  /** Records plan_vertices alone (after a vertex overflow, once the shards have grown). */
+  /** Records plan_vertices: overflow check, expansion and shard arguments, draw arguments. */
   encodePlanVertices(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: VertexShards): void {
     const g = this.bind(slotData, shards);
     const pass = encoder.beginComputePass({ label: 'Isosurface.planVertices' });
@@ -230,13 +230,20 @@ export class BlockMarchingCubes {
     pass.end();
   }
 
-  /** Records the expansion of the cell list and the vertex pass of every shard (each dispatch sized on the GPU). */
-  encodeVertices(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: VertexShards): void {
+  /** Records expand_cells: the emitting-cell list (dispatch sized by plan_vertices, 0 when the surface does not fit). */
+  encodeCellList(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: VertexShards): void {
     const g = this.bind(slotData, shards);
-    const pass = encoder.beginComputePass({ label: 'Isosurface.emitVertices' });
+    const pass = encoder.beginComputePass({ label: 'Isosurface.expandCells' });
     pass.setPipeline(this.expandPipeline);
     pass.setBindGroup(0, g.expand);
     pass.dispatchWorkgroupsIndirect(this.parts.counters.buffer, Counters.offset(A.expand));
+    pass.end();
+  }
+
+  /** Records the vertex pass of every shard (each dispatch sized on the GPU). */
+  encodeVertices(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: VertexShards): void {
+    const g = this.bind(slotData, shards);
+    const pass = encoder.beginComputePass({ label: 'Isosurface.emitVertices' });
     pass.setPipeline(this.emitPipeline);
     pass.setBindGroup(0, g.common);
     pass.setBindGroup(1, g.cells);

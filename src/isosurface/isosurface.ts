@@ -267,15 +267,16 @@ export class Isosurface implements SurfaceEngine {
     s.mark(encoder, 2);
     if (!verticesOnly) this.cache.encodeDecode(encoder);
     s.mark(encoder, 3);
-    if (verticesOnly) {
-      this.counters.set('status', 0);
-      this.mc.encodePlanVertices(encoder, this.cache.slotData, this.shards);
-    } else {
-      this.mc.encodeCounts(encoder, this.cache.slotData, this.shards);
-    }
+    if (!verticesOnly) this.mc.encodeClassify(encoder, this.cache.slotData, this.shards);
     s.mark(encoder, 4);
-    this.mc.encodeVertices(encoder, this.cache.slotData, this.shards);
+    if (verticesOnly) this.counters.set('status', 0);
+    else this.mc.encodeScans(encoder);
+    this.mc.encodePlanVertices(encoder, this.cache.slotData, this.shards);
     s.mark(encoder, 5);
+    this.mc.encodeCellList(encoder, this.cache.slotData, this.shards);
+    s.mark(encoder, 6);
+    this.mc.encodeVertices(encoder, this.cache.slotData, this.shards);
+    s.mark(encoder, 7);
     const staging = s.encodeCopy(encoder, this.counters.buffer);
     device.queue.submit([encoder.finish()]);
     const submittedAt = performance.now();
