@@ -78,6 +78,7 @@ export class Isosurface implements SurfaceEngine {
     private readonly counters: Counters,
     private readonly decoder: ZfpDecoder,
     private readonly scan: ExclusiveScan,
+    private readonly slotScan: ExclusiveScan,
     private readonly compact: StreamCompact,
     private readonly compactIds: StreamCompactIds,
     private readonly active: ActiveBlocks,
@@ -140,22 +141,26 @@ export class Isosurface implements SurfaceEngine {
     const volume = device.createBuffer({ label: 'Isosurface.volume', size: 32, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
     device.queue.writeBuffer(volume, 0, new Uint32Array([...dims, blockCount, ...blockGrid, 0]));
     const primitiveOptions = { maxWorkgroupsPerDimension: maxWg };
-    const [counters, decoder, scan, compact, compactIds] = await Promise.all([
+    // Two scans: one over the groups and the blocks of active groups, one
+    // sized to the cache slots for the cache update and the block counts, so
+    // their levels (dispatches) follow the cache, not the volume.
+    const [counters, decoder, scan, slotScan, compact, compactIds] = await Promise.all([
       Counters.create(device, maxWg),
       ZfpDecoder.create(device, primitiveOptions),
-      ExclusiveScan.create(device, { capacity: Math.max(blockCount, groupEntries), ...primitiveOptions }),
+      ExclusiveScan.create(device, { capacity: groupEntries, ...primitiveOptions }),
+      ExclusiveScan.create(device, { capacity: slots, ...primitiveOptions }),
       StreamCompact.create(device, primitiveOptions),
       StreamCompactIds.create(device, primitiveOptions),
     ]);
     counters.set('blocks', blockCount);
     const active = await ActiveBlocks.create(device, { stream, decoder, volume, counters, scan, compact, compactIds, maxWorkgroupsPerDimension: maxWg, groupEdge });
     const [cache, ranges] = await Promise.all([
-      BlockCache.create(device, { stream, decoder, counters, scan, compact, compactIds, activeIds: active.activeIds, maxWorkgroupsPerDimension: maxWg }, slots),
+      BlockCache.create(device, { stream, decoder, counters, scan: slotScan, compact, compactIds, activeIds: active.activeIds, maxWorkgroupsPerDimension: maxWg }, slots),
       active.readBlockRanges(),
     ]);
     const mc = await BlockMarchingCubes.create(
       device,
-      { volume, counters, scan, activeIds: active.activeIds, blockToSlot: cache.blockToSlot, maxWorkgroupsPerDimension: maxWg, maxBindingBytes: limits.maxStorageBufferBindingSize },
+      { volume, counters, scan: slotScan, activeIds: active.activeIds, blockToSlot: cache.blockToSlot, maxWorkgroupsPerDimension: maxWg, maxBindingBytes: limits.maxStorageBufferBindingSize },
       slots,
       vertices,
     );
@@ -167,7 +172,7 @@ export class Isosurface implements SurfaceEngine {
       hi = Math.max(hi, ranges[2 * b + 1]);
     }
     const info: VolumeInfo = { dims: [...dims], blockGrid: [...blockGrid], blockCount, valueRange: [lo, hi] };
-    const iso = new Isosurface(gpu, stream, volume, counters, decoder, scan, compact, compactIds, active, cache, mc, shards, new StatsReadback(device, options.timing ?? true), slots, info, budget);
+    const iso = new Isosurface(gpu, stream, volume, counters, decoder, scan, slotScan, compact, compactIds, active, cache, mc, shards, new StatsReadback(device, options.timing ?? true), slots, info, budget);
     iso.writeShardCounters();
     return iso;
   }
@@ -494,6 +499,7 @@ export class Isosurface implements SurfaceEngine {
     this.compact.destroy();
     this.compactIds.destroy();
     this.scan.destroy();
+    this.slotScan.destroy();
     this.decoder.destroy();
     this.counters.destroy();
     this.volume.destroy();
