@@ -9,7 +9,8 @@ const { readFileSync } = await import('node:fs');
 const gpu = await requestNodeGpu({ label: 'passes' });
 const file = process.env.FILE ?? 'bonsai_256x256x256_float32.rate4.zfp';
 const stream = loadZfpStream(gpu.device, new Uint8Array(readFileSync(`${root}/../shared/data/volumes/${file}`)), file);
-const iso = await Isosurface.create(gpu, stream);
+// caches and vertex buffers large enough that no growth (a second submission) happens
+const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: stream.info.blockCount, initialVertexCapacity: 2 ** 23 });
 const isos = (process.env.ISOS ?? '37.37,40.37').split(',').map(Number);
 await iso.compute(isos[0]);
 await iso.compute(isos[0]);
