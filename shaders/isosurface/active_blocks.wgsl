@@ -3,11 +3,12 @@
 // as lying in [min, max] over its 27-block neighbourhood (if the block is
 // entirely below iso and a neighbour reaches it, the pair's hull covers iso,
 // and conversely). So `neighbourhood_ranges` runs once at load and each
-// isovalue needs one compare per block (`active_mask`).
+// isovalue needs one compare per block (`mark_group_blocks` in
+// active_groups.wgsl, for the blocks of the active groups only).
 // A cell emits triangles only when some corner is >= iso and some is < iso
 // (value >= iso is inside), hence the test lo < iso <= hi; every block such
 // a cell touches has all the cell's corners in its neighbourhood, so it is
-// active too (block_mc.wgsl relies on this).
+// active too (block_mc_common.wgsl relies on this).
 
 @group(0) @binding(0) var<uniform> volume: VolumeParams;
 @group(0) @binding(1) var<storage, read> block_ranges: array<vec2f>;
@@ -33,18 +34,4 @@ fn neighbourhood_range(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroup
     }
   }
   neighbourhood_ranges[b] = r;
-}
-
-@group(0) @binding(1) var<storage, read> ranges: array<vec2f>;
-@group(0) @binding(2) var<storage, read_write> active_mask: array<u32>;
-
-@compute @workgroup_size(64)
-fn mark_active_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
-                      @builtin(local_invocation_index) lid: u32) {
-  let b = grid_invocation_index(wid, nwg, lid, 64u);
-  if (b >= volume.block_count) {
-    return;
-  }
-  let r = ranges[b];
-  active_mask[b] = select(0u, 1u, r.x < volume.iso && volume.iso <= r.y);
 }

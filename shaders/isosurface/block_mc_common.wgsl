@@ -1,8 +1,17 @@
-// Block marching cubes: one workgroup of 64 invocations per block, one
-// invocation per dual cell (x + 4y + 16z). This file holds what both ways of
-// reading the block's voxels share (block_mc_workgroup.wgsl: through
-// workgroup memory; block_mc_direct.wgsl: each invocation reads its corners
-// from the cache; see src/isosurface/README.md for when each is used).
+// Block marching cubes over the active blocks, in work proportional to the
+// surface (src/isosurface/README.md):
+//   classify_blocks  one invocation per active block: the inside bits of its
+//                    5^3 neighbourhood (block + its +x/+y/+z neighbour
+//                    voxels), every cell's case once; writes the block's
+//                    case codes (64 bytes), vertex count and emitting-cell count
+//   (scans of both counts give each block's first vertex and first cell)
+//   expand_cells     one invocation per active block with emitting cells:
+//                    writes each emitting cell's record (entry, cell) and
+//                    first vertex into the cell list
+//   emit_vertices    one invocation per emitting cell (of one vertex shard):
+//                    its corners, its case, its vertices
+// No workgroup memory, no barriers, no atomics but the occupied-block counter:
+// nothing depends on the workgroup size, the subgroup size or the scheduling.
 //
 // Which cells may emit: cell (i, j, k) of the volume is meshed iff it is inside
 // the volume (i + 1 < nx, ...; so zfp's padding in partial blocks is never
@@ -12,94 +21,39 @@
 // has no sign change and emits nothing anyway. Voxels of uncached neighbours
 // are never read.
 //
-// Needs common.wgsl, dispatch.wgsl, shaders/mc/case_table.wgsl, vertex_format.wgsl.
+// This file: the bindings and helpers classify_blocks (block_classify.wgsl)
+// and emit_vertices (block_emit.wgsl) share. Each kernel is its own module, so
+// no two resource variables of a module share a binding.
+// Needs common.wgsl, dispatch.wgsl, shaders/mc/case_table.wgsl.
 
+// ---- group 0 of classify and emit: the volume and the cache
 @group(0) @binding(0) var<uniform> volume: VolumeParams;
 // packCaseTable(): case c in words 2c, 2c+1, read as 4 words per vec4.
 @group(0) @binding(1) var<uniform> case_table: array<vec4u, 128>;
-@group(0) @binding(2) var<storage, read> slot_data: array<f32>;
+// The slot data as rows of 4 voxels: voxel (x, y, z) of slot s is row s * 16 + y + 4z, component x.
+@group(0) @binding(2) var<storage, read> slot_rows: array<vec4f>;
 @group(0) @binding(3) var<storage, read> block_to_slot: array<u32>;
 @group(0) @binding(4) var<storage, read> active_ids: array<u32>;
-
-// Pass 2 (vertices): the occupied blocks reaching one shard.
-@group(1) @binding(0) var<storage, read> occupied_list: array<u32>;   // entries of the active list
-@group(1) @binding(1) var<storage, read> vertex_offsets: array<u32>;  // exclusive scan of the block vertex counts
-@group(2) @binding(0) var<storage, read> shard: array<u32, 8>;        // this shard's record (plan.wgsl)
-@group(2) @binding(1) var<storage, read_write> shard_vertices: array<vec2u>;
-
-// A cell's corner values (corner q = x + 2y + 4z) and case (0 if it may not emit).
-struct Cell {
-  values: array<f32, 8>,
-  case_index: u32,
-}
-
-fn cell_of(lid: u32) -> vec3u {
-  return vec3u(lid & 3u, (lid >> 2u) & 3u, lid >> 4u);
-}
-
-fn cell_inside_volume(c: vec3u, l: vec3u) -> bool {
-  return all(c * 4u + l + 1u < volume.dims);
-}
-
-fn case_of(values: array<f32, 8>) -> u32 {
-  var v = values;
-  var c = 0u;
-  for (var q = 0u; q < 8u; q++) {
-    c |= select(0u, 1u << q, v[q] >= volume.iso);
-  }
-  return c;
-}
 
 fn case_words(c: u32) -> vec2u {
   let w = case_table[c >> 1u];
   return select(w.xy, w.zw, (c & 1u) == 1u);
 }
 
-fn cell_vertex_count(c: u32) -> u32 {
+fn case_vertex_count(c: u32) -> u32 {
   return 3u * mc_case_triangles(case_words(c));
 }
 
-// Per-cell vertex counts (<= 15) of a block, eight 4-bit fields per word, for
-// the workgroup's exclusive scan: one atomicOr per cell and one barrier, then
-// each invocation adds up the fields below its own with a few word operations.
-var<workgroup> cell_counts: array<atomic<u32>, 8>;
-
-fn nibble_sum(w: u32) -> u32 {
-  let bytes = (w & 0x0f0f0f0fu) + ((w >> 4u) & 0x0f0f0f0fu);  // four sums <= 30
-  return (bytes * 0x01010101u) >> 24u;                        // their sum <= 120, no carries
+fn cell_of(cell: u32) -> vec3u {
+  return vec3u(cell & 3u, (cell >> 2u) & 3u, cell >> 4u);
 }
 
-// Vertices of cells before `lid` in the block (after the barrier that follows the atomicOrs).
-fn cells_before(lid: u32) -> u32 {
-  var sum = 0u;
-  for (var k = 0u; k < (lid >> 3u); k++) {
-    sum += nibble_sum(atomicLoad(&cell_counts[k]));
+// Slot of block c + d (d in {0, 1}^3), NONE outside the grid or not cached.
+fn neighbour_slot(c: vec3u, d: vec3u) -> u32 {
+  let n = c + d;
+  if (any(n >= volume.grid)) {
+    return NONE;
   }
-  let below = (1u << (4u * (lid & 7u))) - 1u;
-  return sum + nibble_sum(atomicLoad(&cell_counts[lid >> 3u]) & below);
+  return block_to_slot[block_index_of(n, volume.grid)];
 }
 
-// Writes the cell's vertices first.. (global indices) that fall in this shard.
-fn emit_cell(cell: Cell, l: vec3u, b: u32, first: u32) {
-  var values = cell.values;
-  let words = case_words(cell.case_index);
-  let n = 3u * mc_case_triangles(words);
-  let base = shard[S_BASE];
-  let size = arrayLength(&shard_vertices);
-  for (var m = 0u; m < n; m++) {
-    let v = first + m;
-    if (v < base || v - base >= size) {
-      continue;
-    }
-    let e = mc_case_edge(words, m);
-    let lower = mc_edge_lower(e);
-    let v0 = values[lower];
-    let v1 = values[mc_edge_upper(e)];
-    // the project's interpolation formula (src/mc/README.md), from the lower corner
-    let t = (volume.iso - v0) / (v1 - v0);
-    var p = vec3f(l + mc_corner_offset(lower));
-    let axis = mc_edge_axis(e);
-    p[axis] = p[axis] + t;
-    shard_vertices[v - base] = vec2u(encode_vertex_position(p), b);
-  }
-}

@@ -10,13 +10,16 @@ const NONE: u32 = 0xffffffffu;
 // Ages of slots holding a block saturate here (the sort compares 16 bits).
 const AGE_MAX: u32 = 0xfffeu;
 
-// Words of the counters buffer. 0-4 are written by the host (at creation and
+// Words of the counters buffer. 0-7 are written by the host (at creation and
 // after growth), the rest by the kernels and primitives of one computation.
 const C_BLOCKS: u32 = 0u;          // blocks in the volume
 const C_SLOTS: u32 = 1u;           // cache slots (capacity)
 const C_VERTEX_CAPACITY: u32 = 2u; // vertices the shards hold together
 const C_SHARDS: u32 = 3u;          // vertex shards
 const C_PER_SHARD: u32 = 4u;       // vertices per full shard
+const C_CELL_CAPACITY: u32 = 5u;   // entries of the emitting-cell list
+const C_GROUPS: u32 = 6u;          // groups of blocks (active_groups.wgsl)
+const C_GROUP_SIZE: u32 = 7u;      // blocks per group (edge^3)
 const C_ACTIVE: u32 = 8u;          // active blocks (scan total)
 const C_ACTIVE_GATED: u32 = 9u;    // active blocks, or 0 when the cache is too small
 const C_SLOTS_GATED: u32 = 10u;    // slots, or 0 when the cache is too small
@@ -24,24 +27,28 @@ const C_NEW: u32 = 11u;            // active blocks not cached (scan total)
 const C_AVAIL_SCAN: u32 = 12u;     // slots to scan for availability: slots, or 0 when nothing is new
 const C_AVAIL: u32 = 13u;          // available slots (scan total; 0 when nothing is new)
 const C_VERTICES: u32 = 14u;       // vertices of the surface (scan total)
-const C_OCCUPIED: u32 = 15u;       // active blocks that emit triangles (scan total)
+const C_OCCUPIED: u32 = 15u;       // active blocks that emit triangles (counted by classify_blocks)
 const C_STATUS: u32 = 16u;         // STATUS_* bits of this computation
 const C_SLOTS_USED: u32 = 17u;     // slots holding a block (kept across computations)
 const C_DRAWN_VERTICES: u32 = 18u; // vertices in the draw arguments now
 const C_DRAWN_OCCUPIED: u32 = 19u; // occupied blocks of the drawn surface
 const C_COMPACT_NEW: u32 = 20u;    // active entries to compact into the new list: active gated, or 0 when nothing is new
+const C_CELLS: u32 = 21u;          // emitting cells (scan total)
+const C_ACTIVE_GROUPS: u32 = 22u;  // active groups of blocks (scan total)
+const C_GROUP_BLOCKS: u32 = 23u;   // blocks of the active groups: active groups x blocks per group
 // Indirect dispatch arguments (x, y, z), written by the plan kernels.
 const A_SLOTS: u32 = 24u;   // age_slots: ceil(slots gated / 64) workgroups
-const A_MARK: u32 = 28u;    // mark_active: ceil(active gated / 64)
+const A_MARK: u32 = 28u;    // mark_cached, classify_blocks: ceil(active gated / 64)
 const A_ASSIGN: u32 = 32u;  // assign_slots: ceil(new / 64)
-const A_MC: u32 = 36u;      // block MC count pass: one workgroup per active block
+const A_EXPAND: u32 = 36u;  // expand_cells: ceil(active gated / 64), or 0 when the surface does not fit
+const A_GROUP_BLOCKS: u32 = 40u;  // mark_group_blocks, compact_block_ids: ceil(group blocks / 64)
 
 const STATUS_CACHE_SHORTFALL: u32 = 1u;  // more active blocks than slots: nothing was assigned or meshed
 const STATUS_VERTEX_OVERFLOW: u32 = 2u;  // more vertices than capacity: nothing was written, draw args kept
 
 // Vertex shard records (shard_info), 64 words (256 bytes) apart.
-const S_FIRST: u32 = 0u;      // first entry of the occupied list whose vertices reach this shard
-const S_COUNT: u32 = 1u;      // occupied entries to process for this shard
+const S_FIRST: u32 = 0u;      // first entry of the cell list whose vertices reach this shard
+const S_COUNT: u32 = 1u;      // cell-list entries to process for this shard
 const S_BASE: u32 = 2u;       // global index of the shard's first vertex
 const S_ARGS: u32 = 4u;       // dispatch arguments (x, y, z) of the vertex pass for this shard
 const SHARD_STRIDE: u32 = 64u;

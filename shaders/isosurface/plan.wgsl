@@ -16,6 +16,14 @@ fn write_dispatch_args(at: u32, workgroups: u32) {
   counters[at + 2u] = g.z;
 }
 
+// After the active groups are counted: how many blocks of theirs to test.
+@compute @workgroup_size(1)
+fn plan_groups() {
+  let blocks = counters[C_ACTIVE_GROUPS] * counters[C_GROUP_SIZE];
+  counters[C_GROUP_BLOCKS] = blocks;
+  write_dispatch_args(A_GROUP_BLOCKS, ceil_div(blocks, 64u));
+}
+
 // After the active list: is the cache large enough? The update succeeds iff
 // new <= available, and available = slots - (active - new), so iff
 // active <= slots: known before touching any cache state.
@@ -31,7 +39,6 @@ fn plan_cache() {
   counters[C_STATUS] = select(STATUS_CACHE_SHORTFALL, 0u, fits);
   write_dispatch_args(A_SLOTS, ceil_div(slots_gated, 64u));
   write_dispatch_args(A_MARK, ceil_div(active_gated, 64u));
-  write_dispatch_args(A_MC, active_gated);
 }
 
 // After the scan of the new-block mask: "exit if n_new = 0" (the availability
@@ -47,25 +54,27 @@ fn plan_update() {
   write_dispatch_args(A_ASSIGN, ceil_div(fresh, 64u));
 }
 
-// After the block vertex counts are scanned: do the vertices fit? Then each
-// shard gets the range of occupied blocks whose vertices reach it (binary
-// searches over their output ranges, which increase along the list), its
-// dispatch arguments and its draw arguments. Otherwise the shards' dispatches
-// are empty and the draw arguments keep the previous surface.
-@group(0) @binding(1) var<storage, read> occupied_list: array<u32>;
-@group(0) @binding(2) var<storage, read> vertex_offsets: array<u32>;
-@group(0) @binding(3) var<storage, read> vertex_counts: array<u32>;
-@group(0) @binding(4) var<storage, read_write> shard_info: array<u32>;
-@group(0) @binding(5) var<storage, read_write> draw_args: array<u32>;
+// After the block counts are scanned: do the vertices (and the cell list)
+// fit? Then the cell list is expanded, and each shard gets the range of
+// emitting cells whose vertices reach it (binary searches over the active
+// entries' output ranges, which increase along the list; entries without
+// vertices have empty ranges), its dispatch arguments and its draw
+// arguments. Otherwise the expansion and the shards' dispatches are empty
+// and the draw arguments keep the previous surface.
+@group(0) @binding(1) var<storage, read> vertex_offsets: array<u32>;
+@group(0) @binding(2) var<storage, read> vertex_counts: array<u32>;
+@group(0) @binding(3) var<storage, read> cell_offsets: array<u32>;
+@group(0) @binding(4) var<storage, read> cell_counts: array<u32>;
+@group(0) @binding(5) var<storage, read_write> shard_info: array<u32>;
+@group(0) @binding(6) var<storage, read_write> draw_args: array<u32>;
 
-// First occupied entry j in [0, n) whose output range ends after `vertex`.
+// First active entry i in [0, n) whose output range ends after `vertex`.
 fn first_ending_after(vertex: u32, n: u32) -> u32 {
   var lo = 0u;
   var hi = n;
   while (lo < hi) {
     let mid = lo + (hi - lo) / 2u;
-    let i = occupied_list[mid];
-    if (vertex_offsets[i] + vertex_counts[i] > vertex) {
+    if (vertex_offsets[mid] + vertex_counts[mid] > vertex) {
       hi = mid;
     } else {
       lo = mid + 1u;
@@ -78,12 +87,13 @@ fn first_ending_after(vertex: u32, n: u32) -> u32 {
 fn plan_vertices() {
   let total = counters[C_VERTICES];
   var status = counters[C_STATUS];
-  if (status == 0u && total > counters[C_VERTEX_CAPACITY]) {
+  if (status == 0u && (total > counters[C_VERTEX_CAPACITY] || counters[C_CELLS] > counters[C_CELL_CAPACITY])) {
     status |= STATUS_VERTEX_OVERFLOW;
     counters[C_STATUS] = status;
   }
   let ok = status == 0u;
-  let occupied = counters[C_OCCUPIED];
+  let entries = counters[C_ACTIVE_GATED];
+  write_dispatch_args(A_EXPAND, select(0u, ceil_div(entries, 64u), ok));
   let per_shard = counters[C_PER_SHARD];
   let shards = counters[C_SHARDS];
   for (var k = 0u; k < shards; k++) {
@@ -92,12 +102,12 @@ fn plan_vertices() {
     var first = 0u;
     var count = 0u;
     if (ok && total > base) {
-      first = first_ending_after(base, occupied);
-      // blocks starting before the shard's end: end at vertex base + per_shard - 1 or later
-      count = first_ending_after(base + per_shard - 1u, occupied);
-      // the last block reaching the shard is the first one ending after its last vertex,
-      // unless the surface ends inside the shard
-      count = min(count + 1u, occupied) - first;
+      let first_entry = first_ending_after(base, entries);
+      // the last entry reaching the shard is the first one ending after its
+      // last vertex, unless the surface ends inside the shard
+      let last_entry = min(first_ending_after(base + per_shard - 1u, entries), entries - 1u);
+      first = cell_offsets[first_entry];
+      count = cell_offsets[last_entry] + cell_counts[last_entry] - first;
       draw_args[4u * k] = min(total - base, per_shard);
     } else if (ok) {
       draw_args[4u * k] = 0u;
@@ -105,13 +115,13 @@ fn plan_vertices() {
     shard_info[r + S_FIRST] = first;
     shard_info[r + S_COUNT] = count;
     shard_info[r + S_BASE] = base;
-    let g = dispatch_grid(count);
+    let g = dispatch_grid(ceil_div(count, 64u));
     shard_info[r + S_ARGS] = g.x;
     shard_info[r + S_ARGS + 1u] = g.y;
     shard_info[r + S_ARGS + 2u] = g.z;
   }
   if (ok) {
     counters[C_DRAWN_VERTICES] = total;
-    counters[C_DRAWN_OCCUPIED] = occupied;
+    counters[C_DRAWN_OCCUPIED] = counters[C_OCCUPIED];
   }
 }

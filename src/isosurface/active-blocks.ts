@@ -1,15 +1,23 @@
-// Active blocks (DESIGN.md step 1): per-block value ranges from the decoder
-// at load, widened once to each block's 27-block neighbourhood on the GPU;
-// per isovalue one compare per block, a scan and an ID compaction give the
-// active list I_active (raster order) and its length in the counters.
+// Active blocks (DESIGN.md step 1), hierarchically: per-block value ranges
+// from the decoder at load, widened once to each block's 27-block
+// neighbourhood, and per group of edge^3 blocks the range of its blocks'
+// neighbourhood ranges (shaders/isosurface/active_groups.wgsl). Per isovalue:
+//   mark_active_groups  one compare per group; scan (-> activeGroups) and ID compaction
+//   plan_groups         active groups x blocks per group, dispatch arguments
+//   mark_group_blocks   one compare per block of the active groups (with its id)
+//   scan (-> active) and compaction of the ids: the active list I_active
+// So only the groups scale with the volume; a surface costs the same in a
+// small volume and in a large mostly-empty one. The active list is
+// group-major (lru-model.ts activeBlocks gives the same order).
 import { dispatchLinear } from '../gpu/dispatch.ts';
 import { readF32 } from '../gpu/buffers.ts';
 import type { ExclusiveScan } from '../primitives/scan.ts';
-import type { StreamCompactIds } from '../primitives/compact.ts';
+import type { StreamCompact, StreamCompactIds } from '../primitives/compact.ts';
 import type { ZfpDecoder } from '../zfp/decoder.ts';
 import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
-import type { Counters } from './counters.ts';
+import { Counters } from './counters.ts';
 import { bindGroup, bindGroupLayout, computePipeline, storageBuffer } from './gpu-util.ts';
+import { A } from './layout.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
 
 export interface ActiveBlocksParts {
@@ -19,8 +27,16 @@ export interface ActiveBlocksParts {
   volume: GPUBuffer;
   counters: Counters;
   scan: ExclusiveScan;
+  compact: StreamCompact;
   compactIds: StreamCompactIds;
   maxWorkgroupsPerDimension: number;
+  /** Blocks per group along each axis. */
+  groupEdge: number;
+}
+
+/** The group grid of a block grid: ceil(grid / edge) per axis. */
+export function groupGrid(blockGrid: readonly number[], edge: number): [number, number, number] {
+  return [Math.ceil(blockGrid[0] / edge), Math.ceil(blockGrid[1] / edge), Math.ceil(blockGrid[2] / edge)];
 }
 
 export class ActiveBlocks {
@@ -28,42 +44,89 @@ export class ActiveBlocks {
   readonly blockRanges: GPUBuffer;
   /** 2 f32 per block: min and max over the block and its 26 neighbours. */
   readonly neighbourhoodRanges: GPUBuffer;
-  /** u32 per block: 1 if active for the current isovalue. */
-  readonly activeMask: GPUBuffer;
-  readonly activeOffsets: GPUBuffer;
-  /** Active block ids, ascending; the first counters[active] entries are valid. */
+  /** 2 f32 per group: min and max over its blocks' neighbourhood ranges. */
+  readonly groupRanges: GPUBuffer;
+  readonly groupMask: GPUBuffer;
+  readonly groupOffsets: GPUBuffer;
+  readonly activeGroupIds: GPUBuffer;
+  /** Per block of the active groups (groups x edge^3 entries at most): mask, offsets, block id. */
+  readonly blockMask: GPUBuffer;
+  readonly blockOffsets: GPUBuffer;
+  readonly blockIds: GPUBuffer;
+  /** Active block ids, group-major; the first counters[active] entries are valid. */
   readonly activeIds: GPUBuffer;
-  private readonly maskGroup: GPUBindGroup;
+  readonly groupCount: number;
+  readonly groupSize: number;
+  private readonly groupParams: GPUBuffer;
+  private readonly common: GPUBindGroup;
+  private readonly markGroupsGroup: GPUBindGroup;
+  private readonly markBlocksGroup: GPUBindGroup;
 
   private constructor(
     private readonly device: GPUDevice,
     private readonly parts: ActiveBlocksParts,
-    private readonly maskPipeline: GPUComputePipeline,
-    maskLayout: GPUBindGroupLayout,
+    private readonly markGroups: GPUComputePipeline,
+    private readonly markBlocks: GPUComputePipeline,
+    layouts: { common: GPUBindGroupLayout; markGroups: GPUBindGroupLayout; markBlocks: GPUBindGroupLayout },
   ) {
-    const blocks = parts.stream.info.blockCount;
+    const { blockCount, blockGrid } = parts.stream.info;
+    const edge = parts.groupEdge;
+    const grid = groupGrid(blockGrid, edge);
+    this.groupCount = grid[0] * grid[1] * grid[2];
+    this.groupSize = edge ** 3;
+    const entries = this.groupCount * this.groupSize;
     this.blockRanges = parts.decoder.computeBlockRanges(parts.stream);
-    this.neighbourhoodRanges = storageBuffer(device, 'Isosurface.neighbourhoodRanges', blocks * 8);
-    this.activeMask = storageBuffer(device, 'Isosurface.activeMask', blocks * 4);
-    this.activeOffsets = storageBuffer(device, 'Isosurface.activeOffsets', blocks * 4);
-    this.activeIds = storageBuffer(device, 'Isosurface.activeIds', blocks * 4);
-    this.maskGroup = bindGroup(device, 'Isosurface.activeMask.bindGroup', maskLayout, [parts.volume, this.neighbourhoodRanges, this.activeMask]);
+    this.neighbourhoodRanges = storageBuffer(device, 'Isosurface.neighbourhoodRanges', blockCount * 8);
+    this.groupRanges = storageBuffer(device, 'Isosurface.groupRanges', this.groupCount * 8);
+    this.groupMask = storageBuffer(device, 'Isosurface.groupMask', this.groupCount * 4);
+    this.groupOffsets = storageBuffer(device, 'Isosurface.groupOffsets', this.groupCount * 4);
+    this.activeGroupIds = storageBuffer(device, 'Isosurface.activeGroupIds', this.groupCount * 4);
+    this.blockMask = storageBuffer(device, 'Isosurface.groupBlockMask', entries * 4);
+    this.blockOffsets = storageBuffer(device, 'Isosurface.groupBlockOffsets', entries * 4);
+    this.blockIds = storageBuffer(device, 'Isosurface.groupBlockIds', entries * 4);
+    this.activeIds = storageBuffer(device, 'Isosurface.activeIds', blockCount * 4);
+    this.groupParams = device.createBuffer({ label: 'Isosurface.groupParams', size: 32, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
+    device.queue.writeBuffer(this.groupParams, 0, new Uint32Array([...grid, edge, this.groupCount, this.groupSize, 0, 0]));
+    parts.counters.set('groups', this.groupCount);
+    parts.counters.set('groupSize', this.groupSize);
+    this.common = bindGroup(device, 'Isosurface.activeGroups.bindGroup', layouts.common, [parts.volume, this.groupParams]);
+    this.markGroupsGroup = bindGroup(device, 'Isosurface.markActiveGroups.bindGroup', layouts.markGroups, [this.groupRanges, this.groupMask], 2);
+    this.markBlocksGroup = bindGroup(
+      device,
+      'Isosurface.markGroupBlocks.bindGroup',
+      layouts.markBlocks,
+      [parts.counters.buffer, this.activeGroupIds, this.neighbourhoodRanges, this.blockMask, this.blockIds],
+      4,
+    );
   }
 
-  /** Computes the block ranges and their neighbourhood ranges (one submission). */
+  /** Computes the block ranges, their neighbourhood ranges and the group ranges (one submission). */
   static async create(device: GPUDevice, parts: ActiveBlocksParts): Promise<ActiveBlocks> {
-    const layout = bindGroupLayout(device, 'Isosurface.activeBlocks.layout', ['uniform', 'read', 'rw']);
+    const neighbourhoodLayout = bindGroupLayout(device, 'Isosurface.neighbourhoodRange.layout', ['uniform', 'read', 'rw']);
+    const layouts = {
+      common: bindGroupLayout(device, 'Isosurface.activeGroups.layout', ['uniform', 'uniform']),
+      load: bindGroupLayout(device, 'Isosurface.groupRange.layout', ['read', 'rw']),
+      markGroups: bindGroupLayout(device, 'Isosurface.markActiveGroups.layout', ['read', 'rw'], 2),
+      markBlocks: bindGroupLayout(device, 'Isosurface.markGroupBlocks.layout', ['read', 'read', 'read', 'rw', 'rw'], 4),
+    };
     const constants = { MAX_WG_PER_DIM: parts.maxWorkgroupsPerDimension };
-    const [neighbourhood, mask] = await Promise.all([
-      computePipeline(device, 'Isosurface.neighbourhoodRange', isosurfaceWgsl.activeBlocks, 'neighbourhood_range', [layout], constants),
-      computePipeline(device, 'Isosurface.markActiveBlocks', isosurfaceWgsl.activeBlocks, 'mark_active_blocks', [layout], constants),
+    const groups = isosurfaceWgsl.activeGroups;
+    const [neighbourhood, groupRange, markGroups, markBlocks] = await Promise.all([
+      computePipeline(device, 'Isosurface.neighbourhoodRange', isosurfaceWgsl.activeBlocks, 'neighbourhood_range', [neighbourhoodLayout], constants),
+      computePipeline(device, 'Isosurface.groupRange', groups, 'group_range', [layouts.common, layouts.load], constants),
+      computePipeline(device, 'Isosurface.markActiveGroups', groups, 'mark_active_groups', [layouts.common, layouts.markGroups], constants),
+      computePipeline(device, 'Isosurface.markGroupBlocks', groups, 'mark_group_blocks', [layouts.common, layouts.markBlocks], constants),
     ]);
-    const active = new ActiveBlocks(device, parts, mask, layout);
+    const active = new ActiveBlocks(device, parts, markGroups, markBlocks, layouts);
     const encoder = device.createCommandEncoder({ label: 'Isosurface.neighbourhoodRanges' });
     const pass = encoder.beginComputePass({ label: 'Isosurface.neighbourhoodRanges' });
     pass.setPipeline(neighbourhood);
-    pass.setBindGroup(0, bindGroup(device, 'Isosurface.neighbourhoodRange.bindGroup', layout, [parts.volume, active.blockRanges, active.neighbourhoodRanges]));
+    pass.setBindGroup(0, bindGroup(device, 'Isosurface.neighbourhoodRange.bindGroup', neighbourhoodLayout, [parts.volume, active.blockRanges, active.neighbourhoodRanges]));
     dispatchLinear(pass, Math.ceil(parts.stream.info.blockCount / 64), parts.maxWorkgroupsPerDimension);
+    pass.setPipeline(groupRange);
+    pass.setBindGroup(0, active.common);
+    pass.setBindGroup(1, bindGroup(device, 'Isosurface.groupRange.bindGroup', layouts.load, [active.neighbourhoodRanges, active.groupRanges]));
+    dispatchLinear(pass, Math.ceil(active.groupCount / 64), parts.maxWorkgroupsPerDimension);
     pass.end();
     device.queue.submit([encoder.finish()]);
     return active;
@@ -73,17 +136,33 @@ export class ActiveBlocks {
     return this.parts.stream.info.blockCount;
   }
 
-  /** Records the active mask, its scan (total -> counters.active) and the active list. */
-  encode(encoder: GPUCommandEncoder, timestampWrites?: GPUComputePassTimestampWrites): void {
-    const { counters, scan, compactIds, maxWorkgroupsPerDimension } = this.parts;
-    const pass = encoder.beginComputePass({ label: 'Isosurface.activeMask', timestampWrites });
-    pass.setPipeline(this.maskPipeline);
-    pass.setBindGroup(0, this.maskGroup);
-    dispatchLinear(pass, Math.ceil(this.blockCount / 64), maxWorkgroupsPerDimension);
+  /** Entries the scan must hold: every block of every group. */
+  get scanCapacity(): number {
+    return this.groupCount * this.groupSize;
+  }
+
+  /** Records the selection: active groups, then the active list and its length (counters.active). */
+  encode(encoder: GPUCommandEncoder): void {
+    const { counters, scan, compact, compactIds, maxWorkgroupsPerDimension } = this.parts;
+    let pass = encoder.beginComputePass({ label: 'Isosurface.markActiveGroups' });
+    pass.setPipeline(this.markGroups);
+    pass.setBindGroup(0, this.common);
+    pass.setBindGroup(1, this.markGroupsGroup);
+    dispatchLinear(pass, Math.ceil(this.groupCount / 64), maxWorkgroupsPerDimension);
     pass.end();
-    const all = counters.count('blocks');
-    scan.encode(encoder, { input: this.activeMask, output: this.activeOffsets, count: all, totalOut: counters.count('active') });
-    compactIds.encode(encoder, { mask: this.activeMask, offsets: this.activeOffsets, output: this.activeIds, count: all });
+    const groups = counters.count('groups');
+    scan.encode(encoder, { input: this.groupMask, output: this.groupOffsets, count: groups, totalOut: counters.count('activeGroups') });
+    compactIds.encode(encoder, { mask: this.groupMask, offsets: this.groupOffsets, output: this.activeGroupIds, count: groups });
+    pass = encoder.beginComputePass({ label: 'Isosurface.markGroupBlocks' });
+    counters.encodePlanGroups(pass);
+    pass.setPipeline(this.markBlocks);
+    pass.setBindGroup(0, this.common);
+    pass.setBindGroup(1, this.markBlocksGroup);
+    pass.dispatchWorkgroupsIndirect(counters.buffer, Counters.offset(A.groupBlocks));
+    pass.end();
+    const entries = counters.count('groupBlocks');
+    scan.encode(encoder, { input: this.blockMask, output: this.blockOffsets, count: entries, totalOut: counters.count('active') });
+    compact.encode(encoder, { mask: this.blockMask, offsets: this.blockOffsets, values: this.blockIds, output: this.activeIds, count: entries });
   }
 
   /** The per-block (min, max) ranges, 2 f32 per block in raster block order (waits for the GPU). */
@@ -93,10 +172,17 @@ export class ActiveBlocks {
 
   /** Bytes held (fixed per volume). */
   get byteSize(): number {
-    return this.blockRanges.size + this.neighbourhoodRanges.size + this.activeMask.size + this.activeOffsets.size + this.activeIds.size;
+    return this.buffers().reduce((n, b) => n + b.size, 0);
+  }
+
+  private buffers(): GPUBuffer[] {
+    return [
+      this.blockRanges, this.neighbourhoodRanges, this.groupRanges, this.groupMask, this.groupOffsets, this.activeGroupIds,
+      this.blockMask, this.blockOffsets, this.blockIds, this.activeIds, this.groupParams,
+    ];
   }
 
   destroy(): void {
-    for (const b of [this.blockRanges, this.neighbourhoodRanges, this.activeMask, this.activeOffsets, this.activeIds]) b.destroy();
+    for (const b of this.buffers()) b.destroy();
   }
 }

@@ -1,55 +1,66 @@
-// Block marching cubes over the cached blocks (DESIGN.md steps 4-6), in
-// fewer passes than the paper: one pass over the active blocks gives each
-// block's vertex count (0 = not occupied), a scan of the counts gives every
-// block's output offset and the total, a scan + ID compaction of "count > 0"
-// gives the occupied list, and one vertex pass per shard runs over the
-// occupied blocks whose output reaches that shard.
-//
-// Two ways to read a block's voxels, the same results (shaders/isosurface/):
-// 'workgroup' (block_mc_workgroup.wgsl) stages the block and its +x/+y/+z
-// neighbour voxels in workgroup memory, the paper's design; 'direct'
-// (block_mc_direct.wgsl) lets each invocation read its 8 corners from the
-// cache, with no workgroup memory in the count pass, which measured several
-// times faster on SwiftShader (README.md).
+// Block marching cubes over the cached blocks (DESIGN.md steps 4-6), in work
+// proportional to the surface (shaders/isosurface/block_*.wgsl):
+//   classify_blocks  one invocation per active block classifies its 64 cells
+//                    once: case codes, vertex count, emitting-cell count
+//   scans            vertex counts -> each block's first vertex and the total;
+//                    cell counts -> each block's first cell and the total
+//   plan_vertices    overflow check, expansion and shard arguments, draw args
+//   expand_cells     the emitting-cell list (record, first vertex)
+//   emit_vertices    one invocation per emitting cell, per shard
+// So the vertex pass runs once per emitting cell, not once per cell of every
+// active block, and each block's voxels are classified once.
 import { createCaseTableBuffer } from '../mc/case-table-wgsl.ts';
-import type { StreamCompactIds } from '../primitives/compact.ts';
 import type { ExclusiveScan } from '../primitives/scan.ts';
 import { Counters } from './counters.ts';
 import { bindGroup, bindGroupLayout, computePipeline, storageBuffer } from './gpu-util.ts';
-import { A } from './layout.ts';
+import { A, C, CELL_RECORD_BYTES } from './layout.ts';
 import { VertexShards } from './vertex-output.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
 
-export type BlockLoad = 'workgroup' | 'direct';
-
 export interface BlockMcParts {
-  load: BlockLoad;
   volume: GPUBuffer;
   counters: Counters;
   scan: ExclusiveScan;
-  compactIds: StreamCompactIds;
   activeIds: GPUBuffer;
   blockToSlot: GPUBuffer;
   maxWorkgroupsPerDimension: number;
+  /** maxStorageBufferBindingSize: the cell list is two bindings of 4 bytes per cell. */
+  maxBindingBytes: number;
 }
 
-/** Bytes per cache slot of the per-active-block buffers (5 u32 per entry). */
-export const MC_BYTES_PER_SLOT = 20;
+/** Bytes per cache slot of the per-active-block buffers: 16 case words + 4 counts/offsets. */
+export const MC_BYTES_PER_SLOT = 80;
+
+/** Entries of the emitting-cell list for `vertices` vertices (every emitting cell has >= 3). */
+export function cellCapacityFor(vertices: number, maxBindingBytes = Infinity): number {
+  return Math.max(1, Math.min(Math.floor(vertices / 3) + 1, Math.floor(maxBindingBytes / 4)));
+}
+
+/** Bytes of the emitting-cell list for a vertex capacity (counted with the vertex output). */
+export function cellBytesFor(vertices: number, maxBindingBytes = Infinity): number {
+  return cellCapacityFor(vertices, maxBindingBytes) * CELL_RECORD_BYTES;
+}
 
 interface EntryBuffers {
   capacity: number;
+  cases: GPUBuffer;
   vertexCounts: GPUBuffer;
   vertexOffsets: GPUBuffer;
-  occupiedMask: GPUBuffer;
-  occupiedOffsets: GPUBuffer;
-  occupiedList: GPUBuffer;
+  cellCounts: GPUBuffer;
+  cellOffsets: GPUBuffer;
+}
+
+interface CellBuffers {
+  capacity: number;
+  records: GPUBuffer;
+  first: GPUBuffer;
 }
 
 interface Layouts {
   common: GPUBindGroupLayout;
-  count: GPUBindGroupLayout;
-  occupancy: GPUBindGroupLayout;
-  emit: GPUBindGroupLayout;
+  classify: GPUBindGroupLayout;
+  expand: GPUBindGroupLayout;
+  cells: GPUBindGroupLayout;
   shard: GPUBindGroupLayout;
   plan: GPUBindGroupLayout;
 }
@@ -58,81 +69,108 @@ interface Groups {
   slotData: GPUBuffer;
   shards: VertexShards['shards'];
   common: GPUBindGroup;
-  count: GPUBindGroup;
-  occupancy: GPUBindGroup;
-  emit: GPUBindGroup;
+  classify: GPUBindGroup;
+  expand: GPUBindGroup;
+  cells: GPUBindGroup;
   plan: GPUBindGroup;
   shardGroups: GPUBindGroup[];
 }
 
 export class BlockMarchingCubes {
   private entries: EntryBuffers;
+  private cells: CellBuffers;
   private groups?: Groups;
   private readonly caseTable: GPUBuffer;
+  /** classify_blocks' atomic count of occupied blocks, copied to counters.occupied. */
+  private readonly occupied: GPUBuffer;
 
   private constructor(
     private readonly device: GPUDevice,
     private readonly parts: BlockMcParts,
     private readonly layouts: Layouts,
-    private readonly countPipeline: GPUComputePipeline,
-    /** 'direct' only: occupancy from the counts. */
-    private readonly occupancyPipeline: GPUComputePipeline | undefined,
+    private readonly classifyPipeline: GPUComputePipeline,
+    private readonly expandPipeline: GPUComputePipeline,
     private readonly emitPipeline: GPUComputePipeline,
     private readonly planPipeline: GPUComputePipeline,
     capacity: number,
+    vertexCapacity: number,
   ) {
     this.caseTable = createCaseTableBuffer(device, GPUBufferUsage.UNIFORM);
-    this.entries = this.allocate(capacity);
+    this.occupied = storageBuffer(device, 'Isosurface.occupiedCount', 4, GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST);
+    this.entries = this.allocateEntries(capacity);
+    this.cells = this.allocateCells(vertexCapacity);
   }
 
-  static async create(device: GPUDevice, parts: BlockMcParts, capacity: number): Promise<BlockMarchingCubes> {
-    const direct = parts.load === 'direct';
+  static async create(device: GPUDevice, parts: BlockMcParts, capacity: number, vertexCapacity: number): Promise<BlockMarchingCubes> {
     const layouts: Layouts = {
       common: bindGroupLayout(device, 'Isosurface.blockMc.layout', ['uniform', 'uniform', 'read', 'read', 'read']),
-      count: bindGroupLayout(device, 'Isosurface.countVertices.layout', direct ? ['read', 'rw'] : ['read', 'rw', 'rw']),
-      occupancy: bindGroupLayout(device, 'Isosurface.occupancy.layout', ['read', 'read', 'rw']),
-      emit: bindGroupLayout(device, 'Isosurface.emitVertices.layout', ['read', 'read']),
+      classify: bindGroupLayout(device, 'Isosurface.classifyBlocks.layout', ['read', 'rw', 'rw', 'rw', 'rw']),
+      expand: bindGroupLayout(device, 'Isosurface.expandCells.layout', ['uniform', 'read', 'read', 'read', 'read', 'read', 'rw', 'rw']),
+      cells: bindGroupLayout(device, 'Isosurface.emitVertices.layout', ['read', 'read']),
       shard: bindGroupLayout(device, 'Isosurface.shard.layout', ['read', 'rw']),
-      plan: bindGroupLayout(device, 'Isosurface.planVertices.layout', ['rw', 'read', 'read', 'read', 'rw', 'rw']),
+      plan: bindGroupLayout(device, 'Isosurface.planVertices.layout', ['rw', 'read', 'read', 'read', 'read', 'rw', 'rw']),
     };
     const constants = { MAX_WG_PER_DIM: parts.maxWorkgroupsPerDimension };
-    const wgsl = direct ? isosurfaceWgsl.blockMcDirect : isosurfaceWgsl.blockMcWorkgroup;
-    const suffix = direct ? '_direct' : '';
-    const [count, occupancy, emit, plan] = await Promise.all([
-      computePipeline(device, 'Isosurface.countVertices', wgsl, `count_vertices${suffix}`, [layouts.common, layouts.count], constants),
-      direct ? computePipeline(device, 'Isosurface.occupancy', wgsl, 'occupied_from_counts', [layouts.common, layouts.occupancy], constants) : undefined,
-      computePipeline(device, 'Isosurface.emitVertices', wgsl, `emit_vertices${suffix}`, [layouts.common, layouts.emit, layouts.shard], constants),
+    const [classify, expand, emit, plan] = await Promise.all([
+      computePipeline(device, 'Isosurface.classifyBlocks', isosurfaceWgsl.blockClassify, 'classify_blocks', [layouts.common, layouts.classify], constants),
+      computePipeline(device, 'Isosurface.expandCells', isosurfaceWgsl.blockExpand, 'expand_cells', [layouts.expand], constants),
+      computePipeline(device, 'Isosurface.emitVertices', isosurfaceWgsl.blockEmit, 'emit_vertices', [layouts.common, layouts.cells, layouts.shard], constants),
       computePipeline(device, 'Isosurface.planVertices', isosurfaceWgsl.plan, 'plan_vertices', [layouts.plan], constants),
     ]);
-    return new BlockMarchingCubes(device, parts, layouts, count, occupancy, emit, plan, capacity);
+    return new BlockMarchingCubes(device, parts, layouts, classify, expand, emit, plan, capacity, vertexCapacity);
   }
 
-  private allocate(capacity: number): EntryBuffers {
-    const words = (label: string) => storageBuffer(this.device, `Isosurface.${label}`, capacity * 4);
+  private allocateEntries(capacity: number): EntryBuffers {
+    const words = (label: string, perEntry = 1) => storageBuffer(this.device, `Isosurface.${label}`, capacity * 4 * perEntry);
     return {
       capacity,
-      // cleared before each count pass in the 'direct' variant (atomic sums)
-      vertexCounts: storageBuffer(this.device, 'Isosurface.vertexCounts', capacity * 4, GPUBufferUsage.COPY_DST),
+      cases: words('blockCases', 16),
+      vertexCounts: words('vertexCounts'),
       vertexOffsets: words('vertexOffsets'),
-      occupiedMask: words('occupiedMask'),
-      occupiedOffsets: words('occupiedOffsets'),
-      occupiedList: words('occupiedList'),
+      cellCounts: words('cellCounts'),
+      cellOffsets: words('cellOffsets'),
+    };
+  }
+
+  private allocateCells(vertexCapacity: number): CellBuffers {
+    const capacity = cellCapacityFor(vertexCapacity, this.parts.maxBindingBytes);
+    this.parts.counters.set('cellCapacity', capacity);
+    return {
+      capacity,
+      records: storageBuffer(this.device, 'Isosurface.cellRecords', capacity * 4),
+      first: storageBuffer(this.device, 'Isosurface.cellFirstVertex', capacity * 4),
     };
   }
 
   private destroyEntries(e: EntryBuffers): void {
-    for (const b of [e.vertexCounts, e.vertexOffsets, e.occupiedMask, e.occupiedOffsets, e.occupiedList]) b.destroy();
+    for (const b of [e.cases, e.vertexCounts, e.vertexOffsets, e.cellCounts, e.cellOffsets]) b.destroy();
   }
 
+  /** Per-active-block buffers and the case table (counted with the cache). */
   get byteSize(): number {
     return this.entries.capacity * MC_BYTES_PER_SLOT + this.caseTable.size;
+  }
+
+  /** The emitting-cell list (counted with the vertex output). */
+  get cellBytes(): number {
+    return this.cells.capacity * CELL_RECORD_BYTES;
   }
 
   /** Per-active-block buffers for `capacity` active blocks (the cache's slot count). Call between submissions. */
   resize(capacity: number): void {
     if (capacity === this.entries.capacity) return;
     this.destroyEntries(this.entries);
-    this.entries = this.allocate(capacity);
+    this.entries = this.allocateEntries(capacity);
+    this.groups = undefined;
+  }
+
+  /** The cell list for a new vertex capacity. Call between submissions. */
+  resizeCells(vertexCapacity: number): void {
+    const capacity = cellCapacityFor(vertexCapacity, this.parts.maxBindingBytes);
+    if (capacity === this.cells.capacity) return;
+    this.cells.records.destroy();
+    this.cells.first.destroy();
+    this.cells = this.allocateCells(vertexCapacity);
     this.groups = undefined;
   }
 
@@ -143,49 +181,46 @@ export class BlockMarchingCubes {
     const d = this.device;
     const p = this.parts;
     const e = this.entries;
+    const c = this.cells;
     const L = this.layouts;
+    const counters = p.counters.buffer;
     this.groups = {
       slotData,
       shards: shards.shards,
       common: bindGroup(d, 'Isosurface.blockMc.bindGroup', L.common, [p.volume, this.caseTable, slotData, p.blockToSlot, p.activeIds]),
-      count: bindGroup(d, 'Isosurface.countVertices.bindGroup', L.count, p.load === 'direct' ? [p.counters.buffer, e.vertexCounts] : [p.counters.buffer, e.vertexCounts, e.occupiedMask]),
-      occupancy: bindGroup(d, 'Isosurface.occupancy.bindGroup', L.occupancy, [p.counters.buffer, e.vertexCounts, e.occupiedMask]),
-      emit: bindGroup(d, 'Isosurface.emitVertices.bindGroup', L.emit, [e.occupiedList, e.vertexOffsets]),
-      plan: bindGroup(d, 'Isosurface.planVertices.bindGroup', L.plan, [p.counters.buffer, e.occupiedList, e.vertexOffsets, e.vertexCounts, shards.shardInfo, shards.drawArgs]),
+      classify: bindGroup(d, 'Isosurface.classifyBlocks.bindGroup', L.classify, [counters, e.cases, e.vertexCounts, e.cellCounts, this.occupied]),
+      expand: bindGroup(d, 'Isosurface.expandCells.bindGroup', L.expand, [this.caseTable, counters, e.cases, e.cellCounts, e.cellOffsets, e.vertexOffsets, c.records, c.first]),
+      cells: bindGroup(d, 'Isosurface.emitVertices.bindGroup', L.cells, [c.records, c.first]),
+      plan: bindGroup(d, 'Isosurface.planVertices.bindGroup', L.plan, [counters, e.vertexOffsets, e.vertexCounts, e.cellOffsets, e.cellCounts, shards.shardInfo, shards.drawArgs]),
       shardGroups: shards.shards.map((s, k) => bindGroup(d, `Isosurface.shard${k}.bindGroup`, L.shard, [shards.shardRecord(k), s.vertices])),
     };
     return this.groups;
   }
 
-  /**
-   * Records the count pass, the scans of counts and occupancy, the occupied
-   * list, and plan_vertices (overflow check, shard ranges, draw arguments).
-   */
-  encodeCounts(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: VertexShards): void {
+  /** Records classify_blocks over the active blocks (case codes, vertex and cell counts, occupied count). */
+  encodeClassify(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: VertexShards): void {
     const g = this.bind(slotData, shards);
-    const { counters, scan, compactIds } = this.parts;
-    const e = this.entries;
-    if (this.occupancyPipeline) encoder.clearBuffer(e.vertexCounts);
-    const pass = encoder.beginComputePass({ label: 'Isosurface.countVertices' });
-    pass.setPipeline(this.countPipeline);
+    const { counters } = this.parts;
+    encoder.clearBuffer(this.occupied);
+    const pass = encoder.beginComputePass({ label: 'Isosurface.classifyBlocks' });
+    pass.setPipeline(this.classifyPipeline);
     pass.setBindGroup(0, g.common);
-    pass.setBindGroup(1, g.count);
-    pass.dispatchWorkgroupsIndirect(counters.buffer, Counters.offset(A.mc));
-    if (this.occupancyPipeline) {
-      // one invocation per active entry: the mark pass's arguments
-      pass.setPipeline(this.occupancyPipeline);
-      pass.setBindGroup(1, g.occupancy);
-      pass.dispatchWorkgroupsIndirect(counters.buffer, Counters.offset(A.mark));
-    }
+    pass.setBindGroup(1, g.classify);
+    pass.dispatchWorkgroupsIndirect(counters.buffer, Counters.offset(A.mark));
     pass.end();
-    const active = counters.count('activeGated');
-    scan.encode(encoder, { input: e.vertexCounts, output: e.vertexOffsets, count: active, totalOut: counters.count('vertices') });
-    scan.encode(encoder, { input: e.occupiedMask, output: e.occupiedOffsets, count: active, totalOut: counters.count('occupied') });
-    compactIds.encode(encoder, { mask: e.occupiedMask, offsets: e.occupiedOffsets, output: e.occupiedList, count: active });
-    this.encodePlanVertices(encoder, slotData, shards);
+    encoder.copyBufferToBuffer(this.occupied, 0, counters.buffer, Counters.offset(C.occupied), 4);
   }
 
-  /** Records plan_vertices alone (after a vertex overflow, once the shards have grown). */
+  /** Records the scans of the vertex counts (-> offsets, vertices) and cell counts (-> offsets, cells). */
+  encodeScans(encoder: GPUCommandEncoder): void {
+    const { counters, scan } = this.parts;
+    const e = this.entries;
+    const active = counters.count('activeGated');
+    scan.encode(encoder, { input: e.vertexCounts, output: e.vertexOffsets, count: active, totalOut: counters.count('vertices') });
+    scan.encode(encoder, { input: e.cellCounts, output: e.cellOffsets, count: active, totalOut: counters.count('cells') });
+  }
+
+  /** Records plan_vertices: overflow check, expansion and shard arguments, draw arguments. */
   encodePlanVertices(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: VertexShards): void {
     const g = this.bind(slotData, shards);
     const pass = encoder.beginComputePass({ label: 'Isosurface.planVertices' });
@@ -195,13 +230,23 @@ export class BlockMarchingCubes {
     pass.end();
   }
 
+  /** Records expand_cells: the emitting-cell list (dispatch sized by plan_vertices, 0 when the surface does not fit). */
+  encodeCellList(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: VertexShards): void {
+    const g = this.bind(slotData, shards);
+    const pass = encoder.beginComputePass({ label: 'Isosurface.expandCells' });
+    pass.setPipeline(this.expandPipeline);
+    pass.setBindGroup(0, g.expand);
+    pass.dispatchWorkgroupsIndirect(this.parts.counters.buffer, Counters.offset(A.expand));
+    pass.end();
+  }
+
   /** Records the vertex pass of every shard (each dispatch sized on the GPU). */
   encodeVertices(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: VertexShards): void {
     const g = this.bind(slotData, shards);
     const pass = encoder.beginComputePass({ label: 'Isosurface.emitVertices' });
     pass.setPipeline(this.emitPipeline);
     pass.setBindGroup(0, g.common);
-    pass.setBindGroup(1, g.emit);
+    pass.setBindGroup(1, g.cells);
     for (let k = 0; k < shards.shards.length; k++) {
       pass.setBindGroup(2, g.shardGroups[k]);
       pass.dispatchWorkgroupsIndirect(shards.shardInfo, VertexShards.dispatchArgsOffset(k));
@@ -211,6 +256,9 @@ export class BlockMarchingCubes {
 
   destroy(): void {
     this.destroyEntries(this.entries);
+    this.cells.records.destroy();
+    this.cells.first.destroy();
     this.caseTable.destroy();
+    this.occupied.destroy();
   }
 }

@@ -2,7 +2,7 @@
 // shared by the Isosurface and the CPU model of the cache (lru-model.ts), so
 // both grow to the same capacities.
 import { CACHE_BYTES_PER_SLOT } from './lru-cache.ts';
-import { MC_BYTES_PER_SLOT } from './block-mc.ts';
+import { cellBytesFor, MC_BYTES_PER_SLOT } from './block-mc.ts';
 import { VertexShards } from './vertex-output.ts';
 
 /** Bytes the cache takes at `slots` slots: slot data, maps, scratch, per-active buffers, blockToSlot. */
@@ -10,8 +10,9 @@ export function cacheBytesFor(slots: number, blockCount: number): number {
   return slots * (CACHE_BYTES_PER_SLOT + MC_BYTES_PER_SLOT) + blockCount * 4;
 }
 
+/** Bytes the vertex output takes at `vertices` vertices: the shards and the emitting-cell list. */
 export function vertexBytesFor(vertices: number, perShard: number): number {
-  return VertexShards.bytesFor(vertices, perShard);
+  return VertexShards.bytesFor(vertices, perShard) + cellBytesFor(vertices);
 }
 
 /**

@@ -18,6 +18,7 @@ export class Counters {
     private readonly device: GPUDevice,
     private readonly planCache: GPUComputePipeline,
     private readonly planUpdate: GPUComputePipeline,
+    private readonly planGroups: GPUComputePipeline,
     layout: GPUBindGroupLayout,
   ) {
     this.buffer = device.createBuffer({
@@ -31,11 +32,12 @@ export class Counters {
   static async create(device: GPUDevice, maxWorkgroupsPerDimension: number): Promise<Counters> {
     const layout = bindGroupLayout(device, 'Isosurface.plan.layout', ['rw']);
     const constants = { MAX_WG_PER_DIM: maxWorkgroupsPerDimension };
-    const [cache, update] = await Promise.all([
+    const [cache, update, groups] = await Promise.all([
       computePipeline(device, 'Isosurface.planCache', isosurfaceWgsl.plan, 'plan_cache', [layout], constants),
       computePipeline(device, 'Isosurface.planUpdate', isosurfaceWgsl.plan, 'plan_update', [layout], constants),
+      computePipeline(device, 'Isosurface.planGroups', isosurfaceWgsl.plan, 'plan_groups', [layout], constants),
     ]);
-    return new Counters(device, cache, update, layout);
+    return new Counters(device, cache, update, groups, layout);
   }
 
   /** The counter as a GpuCount (for the primitives and the decoder). */
@@ -49,7 +51,7 @@ export class Counters {
   }
 
   /** Host-written words (capacities); queue-ordered, so call between submissions. */
-  set(name: 'blocks' | 'slots' | 'vertexCapacity' | 'shards' | 'perShard' | 'slotsUsed' | 'status', value: number): void {
+  set(name: 'blocks' | 'slots' | 'vertexCapacity' | 'cellCapacity' | 'groups' | 'groupSize' | 'shards' | 'perShard' | 'slotsUsed' | 'status', value: number): void {
     this.word[0] = value;
     this.device.queue.writeBuffer(this.buffer, C[name] * 4, this.word);
   }
@@ -57,6 +59,13 @@ export class Counters {
   /** Records plan_cache (is the cache large enough; gated counts and arguments). */
   encodePlanCache(pass: GPUComputePassEncoder): void {
     pass.setPipeline(this.planCache);
+    pass.setBindGroup(0, this.group);
+    pass.dispatchWorkgroups(1);
+  }
+
+  /** Records plan_groups (blocks of the active groups to test; their dispatch arguments). */
+  encodePlanGroups(pass: GPUComputePassEncoder): void {
+    pass.setPipeline(this.planGroups);
     pass.setBindGroup(0, this.group);
     pass.dispatchWorkgroups(1);
   }

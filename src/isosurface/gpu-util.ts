@@ -8,10 +8,11 @@ export type BindingKind = 'uniform' | 'read' | 'rw';
 
 const TYPES: Record<BindingKind, GPUBufferBindingType> = { uniform: 'uniform', read: 'read-only-storage', rw: 'storage' };
 
-export function bindGroupLayout(device: GPUDevice, label: string, kinds: BindingKind[]): GPUBindGroupLayout {
+/** Bindings firstBinding, firstBinding + 1, ... of the given kinds. */
+export function bindGroupLayout(device: GPUDevice, label: string, kinds: BindingKind[], firstBinding = 0): GPUBindGroupLayout {
   return device.createBindGroupLayout({
     label,
-    entries: kinds.map((k, binding) => ({ binding, visibility: GPUShaderStage.COMPUTE, buffer: { type: TYPES[k] } })),
+    entries: kinds.map((k, i) => ({ binding: firstBinding + i, visibility: GPUShaderStage.COMPUTE, buffer: { type: TYPES[k] } })),
   });
 }
 
@@ -31,11 +32,11 @@ export function computePipeline(
 
 export type Resource = GPUBuffer | GPUBufferBinding;
 
-export function bindGroup(device: GPUDevice, label: string, layout: GPUBindGroupLayout, resources: Resource[]): GPUBindGroup {
+export function bindGroup(device: GPUDevice, label: string, layout: GPUBindGroupLayout, resources: Resource[], firstBinding = 0): GPUBindGroup {
   return device.createBindGroup({
     label,
     layout,
-    entries: resources.map((r, binding) => ({ binding, resource: 'mapState' in r ? { buffer: r } : r })),
+    entries: resources.map((r, i) => ({ binding: firstBinding + i, resource: 'mapState' in r ? { buffer: r } : r })),
   });
 }
 

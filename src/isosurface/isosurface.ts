@@ -19,11 +19,11 @@ import { StreamCompact, StreamCompactIds } from '../primitives/compact.ts';
 import { ExclusiveScan } from '../primitives/scan.ts';
 import { ZfpDecoder } from '../zfp/decoder.ts';
 import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
-import { ActiveBlocks } from './active-blocks.ts';
+import { ActiveBlocks, groupGrid } from './active-blocks.ts';
 import { BlockMarchingCubes } from './block-mc.ts';
 import { cacheBytesFor, defaultMemoryBudget, formatMB, grownCapacity, vertexBytesFor } from './budget.ts';
 import { Counters } from './counters.ts';
-import { C, DRAW_ARGS_BYTES, STATUS_CACHE_SHORTFALL, STATUS_VERTEX_OVERFLOW, VERTEX_BYTES } from './layout.ts';
+import { C, DEFAULT_GROUP_EDGE_BLOCKS, DRAW_ARGS_BYTES, STATUS_CACHE_SHORTFALL, STATUS_VERTEX_OVERFLOW, VERTEX_BYTES } from './layout.ts';
 import { BlockCache } from './lru-cache.ts';
 import { StatsReadback, type RawStats } from './stats-readback.ts';
 import {
@@ -78,6 +78,7 @@ export class Isosurface implements SurfaceEngine {
     private readonly counters: Counters,
     private readonly decoder: ZfpDecoder,
     private readonly scan: ExclusiveScan,
+    private readonly slotScan: ExclusiveScan,
     private readonly compact: StreamCompact,
     private readonly compactIds: StreamCompactIds,
     private readonly active: ActiveBlocks,
@@ -134,27 +135,34 @@ export class Isosurface implements SurfaceEngine {
       vertices = Math.max(1, Math.floor(vertices * lo));
     }
 
+    const groupEdge = options.groupEdgeBlocks ?? DEFAULT_GROUP_EDGE_BLOCKS;
+    if (!Number.isInteger(groupEdge) || groupEdge < 1 || groupEdge > 64) throw new RangeError(`groupEdgeBlocks must be an integer in 1..64 (got ${groupEdge})`);
+    const groupEntries = groupGrid(blockGrid, groupEdge).reduce((a, b) => a * b, 1) * groupEdge ** 3;
     const volume = device.createBuffer({ label: 'Isosurface.volume', size: 32, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
     device.queue.writeBuffer(volume, 0, new Uint32Array([...dims, blockCount, ...blockGrid, 0]));
     const primitiveOptions = { maxWorkgroupsPerDimension: maxWg };
-    const [counters, decoder, scan, compact, compactIds] = await Promise.all([
+    // Two scans: one over the groups and the blocks of active groups, one
+    // sized to the cache slots for the cache update and the block counts, so
+    // their levels (dispatches) follow the cache, not the volume.
+    const [counters, decoder, scan, slotScan, compact, compactIds] = await Promise.all([
       Counters.create(device, maxWg),
       ZfpDecoder.create(device, primitiveOptions),
-      ExclusiveScan.create(device, { capacity: blockCount, ...primitiveOptions }),
+      ExclusiveScan.create(device, { capacity: groupEntries, ...primitiveOptions }),
+      ExclusiveScan.create(device, { capacity: slots, ...primitiveOptions }),
       StreamCompact.create(device, primitiveOptions),
       StreamCompactIds.create(device, primitiveOptions),
     ]);
     counters.set('blocks', blockCount);
-    const active = await ActiveBlocks.create(device, { stream, decoder, volume, counters, scan, compactIds, maxWorkgroupsPerDimension: maxWg });
+    const active = await ActiveBlocks.create(device, { stream, decoder, volume, counters, scan, compact, compactIds, maxWorkgroupsPerDimension: maxWg, groupEdge });
     const [cache, ranges] = await Promise.all([
-      BlockCache.create(device, { stream, decoder, counters, scan, compact, compactIds, activeIds: active.activeIds, maxWorkgroupsPerDimension: maxWg }, slots),
+      BlockCache.create(device, { stream, decoder, counters, scan: slotScan, compact, compactIds, activeIds: active.activeIds, maxWorkgroupsPerDimension: maxWg }, slots),
       active.readBlockRanges(),
     ]);
-    const load = options.blockLoad ?? (gpu.adapter.software ? 'direct' : 'workgroup');
     const mc = await BlockMarchingCubes.create(
       device,
-      { load, volume, counters, scan, compactIds, activeIds: active.activeIds, blockToSlot: cache.blockToSlot, maxWorkgroupsPerDimension: maxWg },
+      { volume, counters, scan: slotScan, activeIds: active.activeIds, blockToSlot: cache.blockToSlot, maxWorkgroupsPerDimension: maxWg, maxBindingBytes: limits.maxStorageBufferBindingSize },
       slots,
+      vertices,
     );
     const shards = new VertexShards(device, perShard, vertices);
     let lo = Infinity;
@@ -164,7 +172,7 @@ export class Isosurface implements SurfaceEngine {
       hi = Math.max(hi, ranges[2 * b + 1]);
     }
     const info: VolumeInfo = { dims: [...dims], blockGrid: [...blockGrid], blockCount, valueRange: [lo, hi] };
-    const iso = new Isosurface(gpu, stream, volume, counters, decoder, scan, compact, compactIds, active, cache, mc, shards, new StatsReadback(device, options.timing ?? true), slots, info, budget);
+    const iso = new Isosurface(gpu, stream, volume, counters, decoder, scan, slotScan, compact, compactIds, active, cache, mc, shards, new StatsReadback(device, options.timing ?? true), slots, info, budget);
     iso.writeShardCounters();
     return iso;
   }
@@ -264,15 +272,16 @@ export class Isosurface implements SurfaceEngine {
     s.mark(encoder, 2);
     if (!verticesOnly) this.cache.encodeDecode(encoder);
     s.mark(encoder, 3);
-    if (verticesOnly) {
-      this.counters.set('status', 0);
-      this.mc.encodePlanVertices(encoder, this.cache.slotData, this.shards);
-    } else {
-      this.mc.encodeCounts(encoder, this.cache.slotData, this.shards);
-    }
+    if (!verticesOnly) this.mc.encodeClassify(encoder, this.cache.slotData, this.shards);
     s.mark(encoder, 4);
-    this.mc.encodeVertices(encoder, this.cache.slotData, this.shards);
+    if (verticesOnly) this.counters.set('status', 0);
+    else this.mc.encodeScans(encoder);
+    this.mc.encodePlanVertices(encoder, this.cache.slotData, this.shards);
     s.mark(encoder, 5);
+    this.mc.encodeCellList(encoder, this.cache.slotData, this.shards);
+    s.mark(encoder, 6);
+    this.mc.encodeVertices(encoder, this.cache.slotData, this.shards);
+    s.mark(encoder, 7);
     const staging = s.encodeCopy(encoder, this.counters.buffer);
     device.queue.submit([encoder.finish()]);
     const submittedAt = performance.now();
@@ -341,7 +350,7 @@ export class Isosurface implements SurfaceEngine {
       cacheSlots: this.cache.capacity,
       cacheSlotsUsed: c[C.slotsUsed],
       cacheBytes: this.cache.byteSize + this.mc.byteSize,
-      vertexBytes: this.shards.byteSize,
+      vertexBytes: this.shards.byteSize + this.mc.cellBytes,
       gpuMs: raw.gpuMs + r.earlierMs,
       stages,
       timingSource: raw.source,
@@ -393,6 +402,7 @@ export class Isosurface implements SurfaceEngine {
     }
     if (vertices > this.shards.capacity) {
       this.shards.resize(vertices);
+      this.mc.resizeCells(vertices);
       this.writeShardCounters();
     }
     this.refreshDrawData();
@@ -489,6 +499,7 @@ export class Isosurface implements SurfaceEngine {
     this.compact.destroy();
     this.compactIds.destroy();
     this.scan.destroy();
+    this.slotScan.destroy();
     this.decoder.destroy();
     this.counters.destroy();
     this.volume.destroy();

@@ -14,6 +14,9 @@ export const C = {
   vertexCapacity: 2,
   shards: 3,
   perShard: 4,
+  cellCapacity: 5,
+  groups: 6,
+  groupSize: 7,
   active: 8,
   activeGated: 9,
   slotsGated: 10,
@@ -27,6 +30,9 @@ export const C = {
   drawnVertices: 18,
   drawnOccupied: 19,
   compactNew: 20,
+  cells: 21,
+  activeGroups: 22,
+  groupBlocks: 23,
 } as const;
 
 /** Word offsets of indirect dispatch arguments (x, y, z) in the counters buffer. */
@@ -34,7 +40,8 @@ export const A = {
   slots: 24,
   mark: 28,
   assign: 32,
-  mc: 36,
+  expand: 36,
+  groupBlocks: 40,
 } as const;
 
 export const STATUS_CACHE_SHORTFALL = 1;
@@ -43,6 +50,9 @@ export const STATUS_VERTEX_OVERFLOW = 2;
 /** The counters buffer: 64 words. */
 export const COUNTER_WORDS = 64;
 export const COUNTERS_BYTES = COUNTER_WORDS * 4;
+
+/** Default edge, in blocks, of the groups of the active-block selection (16^3 voxels). */
+export const DEFAULT_GROUP_EDGE_BLOCKS = 4;
 
 /** Vertex shard records in shard_info: 64 words apart (a storage offset alignment). */
 export const SHARD_RECORD_BYTES = 256;
@@ -56,3 +66,5 @@ export const DRAW_ARGS_BYTES = 16;
 export const SLOT_BYTES = 256;
 /** Bytes of one compressed vertex. */
 export const VERTEX_BYTES = 8;
+/** Bytes of one entry of the emitting-cell list: (entry << 6 | cell) and its first vertex. */
+export const CELL_RECORD_BYTES = 8;

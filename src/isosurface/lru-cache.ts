@@ -31,6 +31,7 @@ export interface BlockCacheParts {
   stream: ZfpGpuStream;
   decoder: ZfpDecoder;
   counters: Counters;
+  /** Sized to the slots (grown with the cache; shared with the block MC, whose counts are per active block <= slots). */
   scan: ExclusiveScan;
   compact: StreamCompact;
   compactIds: StreamCompactIds;
@@ -228,6 +229,7 @@ export class BlockCache {
       this.groups = this.makeGroups();
       this.destroySlots(old);
       this.sort.grow(capacity);
+      this.parts.scan.grow(capacity);
     }
     this.clear(capacity);
   }
@@ -252,6 +254,7 @@ export class BlockCache {
     this.groups = this.makeGroups();
     this.destroySlots(old);
     this.sort.grow(capacity);
+    this.parts.scan.grow(capacity);
     this.parts.counters.set('slots', capacity);
   }
 

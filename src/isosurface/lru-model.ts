@@ -2,13 +2,18 @@
 // lru-cache.ts): the reference the cache tests compare the GPU state with,
 // slot for slot. Also the CPU rule for active blocks.
 import type { Dims } from '../volume/naming.ts';
-import { AGE_MAX, NONE } from './layout.ts';
+import { AGE_MAX, DEFAULT_GROUP_EDGE_BLOCKS, NONE } from './layout.ts';
 
-/** Active blocks (ascending) for `iso`: lo < iso <= hi over the 27-block neighbourhood of each block. */
-export function activeBlocks(ranges: Float32Array, grid: Dims, iso: number): number[] {
+/**
+ * Active blocks for `iso`: lo < iso <= hi over the 27-block neighbourhood of
+ * each block, in the GPU's order (active-blocks.ts): group-major over groups
+ * of `groupEdge`^3 blocks in raster order, raster order within each group.
+ */
+export function activeBlocks(ranges: Float32Array, grid: Dims, iso: number, groupEdge = DEFAULT_GROUP_EDGE_BLOCKS): number[] {
   const [gx, gy, gz] = grid;
   const t = Math.fround(iso);
-  const out: number[] = [];
+  const out: { b: number; key: number }[] = [];
+  const groups = [Math.ceil(gx / groupEdge), Math.ceil(gy / groupEdge), Math.ceil(gz / groupEdge)];
   for (let z = 0; z < gz; z++) {
     for (let y = 0; y < gy; y++) {
       for (let x = 0; x < gx; x++) {
@@ -23,11 +28,16 @@ export function activeBlocks(ranges: Float32Array, grid: Dims, iso: number): num
             }
           }
         }
-        if (lo < t && t <= hi) out.push(x + gx * (y + gy * z));
+        if (lo < t && t <= hi) {
+          const e = groupEdge;
+          const group = Math.floor(x / e) + groups[0] * (Math.floor(y / e) + groups[1] * Math.floor(z / e));
+          const local = (x % e) + e * ((y % e) + e * (z % e));
+          out.push({ b: x + gx * (y + gy * z), key: group * e ** 3 + local });
+        }
       }
     }
   }
-  return out;
+  return out.sort((a, b) => a.key - b.key).map((a) => a.b);
 }
 
 export interface ModelUpdate {

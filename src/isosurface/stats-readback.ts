@@ -13,7 +13,7 @@ import type { PassTiming, TimingSource } from '../gpu/timing.ts';
 import { COUNTERS_BYTES } from './layout.ts';
 
 /** The timed stages, in order. */
-export const STAGES = ['active blocks', 'cache update', 'decompress', 'block counts', 'vertices'] as const;
+export const STAGES = ['active blocks', 'cache update', 'decompress', 'classify', 'counts and plan', 'cell list', 'vertices'] as const;
 const MARKERS = STAGES.length + 1;
 
 export interface RawStats {

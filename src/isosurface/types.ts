@@ -25,13 +25,11 @@ export interface IsosurfaceOptions {
    */
   maxWorkgroupsPerDimension?: number;
   /**
-   * Added by the pipeline: how the block marching cubes reads a block's
-   * voxels. 'workgroup' stages the block and its neighbour voxels in
-   * workgroup memory (the paper's design); 'direct' reads each cell's corners
-   * from the cache (faster on CPU implementations). Same output. Default:
-   * 'direct' on software adapters (SwiftShader), else 'workgroup'.
+   * Added by the pipeline: edge, in blocks, of the groups of the hierarchical
+   * active-block selection (groups first, then the blocks of active groups).
+   * Default 4 (16^3 voxels); a chunked store uses its chunk (64^3 voxels: 16).
    */
-  blockLoad?: 'workgroup' | 'direct';
+  groupEdgeBlocks?: number;
 }
 
 export interface VolumeInfo {

@@ -2,11 +2,13 @@
 // composed of.
 import commonWgsl from '../../shaders/isosurface/common.wgsl?raw';
 import activeBlocksWgsl from '../../shaders/isosurface/active_blocks.wgsl?raw';
+import activeGroupsWgsl from '../../shaders/isosurface/active_groups.wgsl?raw';
 import lruWgsl from '../../shaders/isosurface/lru.wgsl?raw';
 import planWgsl from '../../shaders/isosurface/plan.wgsl?raw';
 import blockMcCommonWgsl from '../../shaders/isosurface/block_mc_common.wgsl?raw';
-import blockMcWorkgroupWgsl from '../../shaders/isosurface/block_mc_workgroup.wgsl?raw';
-import blockMcDirectWgsl from '../../shaders/isosurface/block_mc_direct.wgsl?raw';
+import blockClassifyWgsl from '../../shaders/isosurface/block_classify.wgsl?raw';
+import blockExpandWgsl from '../../shaders/isosurface/block_expand.wgsl?raw';
+import blockEmitWgsl from '../../shaders/isosurface/block_emit.wgsl?raw';
 import vertexFormatWgsl from '../../shaders/isosurface/vertex_format.wgsl?raw';
 import type { WgslPart } from '../gpu/wgsl.ts';
 import { mcCaseTableSnippet } from '../mc/case-table-wgsl.ts';
@@ -26,8 +28,10 @@ const base = [dispatchSnippet, isosurfaceCommonSnippet];
 
 export const isosurfaceWgsl = {
   activeBlocks: [...base, part('active_blocks', activeBlocksWgsl)],
+  activeGroups: [...base, part('active_groups', activeGroupsWgsl)],
   lru: [...base, part('lru', lruWgsl)],
   plan: [...base, part('plan', planWgsl)],
-  blockMcWorkgroup: [...base, mcCaseTableSnippet, vertexFormatSnippet, part('block_mc_common', blockMcCommonWgsl), part('block_mc_workgroup', blockMcWorkgroupWgsl)],
-  blockMcDirect: [...base, mcCaseTableSnippet, vertexFormatSnippet, part('block_mc_common', blockMcCommonWgsl), part('block_mc_direct', blockMcDirectWgsl)],
+  blockClassify: [...base, mcCaseTableSnippet, part('block_mc_common', blockMcCommonWgsl), part('block_classify', blockClassifyWgsl)],
+  blockExpand: [...base, mcCaseTableSnippet, part('block_expand', blockExpandWgsl)],
+  blockEmit: [...base, mcCaseTableSnippet, vertexFormatSnippet, part('block_mc_common', blockMcCommonWgsl), part('block_emit', blockEmitWgsl)],
 } satisfies Record<string, WgslPart[]>;

@@ -6,8 +6,8 @@
 // match the CPU soup within half a step plus rounding, where it is unambiguous.
 // Sizes not multiples of 4, single-block volumes, volumes without cells, 2D/3D
 // dispatch grids, several vertex shards and stream shards, growth from a
-// one-slot cache and a one-vertex buffer; both ways of reading the blocks
-// ('workgroup' memory and 'direct' reads) on every case.
+// one-slot cache and a one-vertex buffer; groups of 1, 3 and the default
+// number of blocks in the active-block selection on every case.
 import { describe, expect } from 'vitest';
 import { Isosurface } from '../../../src/isosurface/isosurface.ts';
 import type { IsosurfaceOptions } from '../../../src/isosurface/types.ts';
@@ -80,9 +80,10 @@ describe('block marching cubes = serial marching cubes', () => {
       const stream = await compressVolume(device, values, c.dims, 16, c.maxShardBytes);
       if (c.maxShardBytes) expect(stream.shards.length).toBeGreaterThan(2);
       const decoded = await decodeVolume(device, stream);
-      for (const blockLoad of ['workgroup', 'direct'] as const) {
-        const iso = await Isosurface.create(gpu, stream, { ...c.options, blockLoad });
-        await checkSurfaces(iso, decoded, c, blockLoad);
+      // groups of 1 block, of 3 (partial groups at the edges), the default
+      for (const groupEdgeBlocks of [1, 3, undefined]) {
+        const iso = await Isosurface.create(gpu, stream, { ...c.options, groupEdgeBlocks });
+        await checkSurfaces(iso, decoded, c, `groups of ${groupEdgeBlocks ?? 'default'} blocks`);
         iso.destroy();
       }
       stream.destroy();

@@ -1,0 +1,96 @@
+// Hierarchical active-block selection: groups of edge^3 blocks (in raster
+// order over the group grid; a chunked store's chunks are such groups), each
+// with the range of its blocks' neighbourhood ranges, computed once at load.
+// Per isovalue: one compare per group, then one compare per block of the
+// active groups only, so the cost follows the surface, not the volume.
+// A block is active (lo < iso <= hi over its 27-block neighbourhood,
+// active_blocks.wgsl) only if its group's range covers iso, so no active
+// block is missed. The active list is group-major: the active groups in
+// raster order, the blocks of each in raster order within the group.
+// Every kernel has its own bindings in group 1 (no two resource variables of
+// this module share a binding).
+
+struct GroupParams {
+  grid: vec3u,      // groups per axis
+  edge: u32,        // blocks per group along each axis
+  count: u32,       // groups
+  per_group: u32,   // edge^3
+  pad0: u32,
+  pad1: u32,
+}
+
+@group(0) @binding(0) var<uniform> volume: VolumeParams;
+@group(0) @binding(1) var<uniform> groups: GroupParams;
+
+// Block coordinates of block `local` (raster order within the group) of group g (may lie outside the grid).
+fn group_block(g: u32, local: u32) -> vec3u {
+  let gc = vec3u(g % groups.grid.x, (g / groups.grid.x) % groups.grid.y, g / (groups.grid.x * groups.grid.y));
+  let e = groups.edge;
+  return gc * e + vec3u(local % e, (local / e) % e, local / (e * e));
+}
+
+// ---- at load: each group's range over its blocks' neighbourhood ranges
+@group(1) @binding(0) var<storage, read> load_neighbourhood_ranges: array<vec2f>;
+@group(1) @binding(1) var<storage, read_write> load_group_ranges: array<vec2f>;
+
+@compute @workgroup_size(64)
+fn group_range(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+               @builtin(local_invocation_index) lid: u32) {
+  let g = grid_invocation_index(wid, nwg, lid, 64u);
+  if (g >= groups.count) {
+    return;
+  }
+  // an empty range (lo > hi) covers no isovalue
+  var r = vec2f(3.0e38, -3.0e38);
+  for (var local = 0u; local < groups.per_group; local++) {
+    let c = group_block(g, local);
+    if (all(c < volume.grid)) {
+      let o = load_neighbourhood_ranges[block_index_of(c, volume.grid)];
+      r = vec2f(min(r.x, o.x), max(r.y, o.y));
+    }
+  }
+  load_group_ranges[g] = r;
+}
+
+// ---- per isovalue, pass 1: one compare per group
+@group(1) @binding(2) var<storage, read> mark_group_ranges: array<vec2f>;
+@group(1) @binding(3) var<storage, read_write> group_mask: array<u32>;
+
+@compute @workgroup_size(64)
+fn mark_active_groups(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+                      @builtin(local_invocation_index) lid: u32) {
+  let g = grid_invocation_index(wid, nwg, lid, 64u);
+  if (g >= groups.count) {
+    return;
+  }
+  let r = mark_group_ranges[g];
+  group_mask[g] = select(0u, 1u, r.x < volume.iso && volume.iso <= r.y);
+}
+
+// ---- per isovalue, pass 2: one compare per block of the active groups
+// (entry i = active group i / per_group, block i % per_group of it); the
+// block ids go along for the compaction into the active list.
+@group(1) @binding(4) var<storage, read> blocks_counters: array<u32>;
+@group(1) @binding(5) var<storage, read> blocks_active_groups: array<u32>;
+@group(1) @binding(6) var<storage, read> blocks_neighbourhood_ranges: array<vec2f>;
+@group(1) @binding(7) var<storage, read_write> block_mask: array<u32>;
+@group(1) @binding(8) var<storage, read_write> block_ids: array<u32>;
+
+@compute @workgroup_size(64)
+fn mark_group_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+                     @builtin(local_invocation_index) lid: u32) {
+  let i = grid_invocation_index(wid, nwg, lid, 64u);
+  if (i >= blocks_counters[C_GROUP_BLOCKS]) {
+    return;
+  }
+  let c = group_block(blocks_active_groups[i / groups.per_group], i % groups.per_group);
+  var is_active = false;
+  var b = 0u;
+  if (all(c < volume.grid)) {
+    b = block_index_of(c, volume.grid);
+    let r = blocks_neighbourhood_ranges[b];
+    is_active = r.x < volume.iso && volume.iso <= r.y;
+  }
+  block_mask[i] = select(0u, 1u, is_active);
+  block_ids[i] = b;
+}

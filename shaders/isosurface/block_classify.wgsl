@@ -1,0 +1,104 @@
+// classify_blocks: see block_mc_common.wgsl. Needs block_mc_common.wgsl.
+
+// ---- classify_blocks
+@group(1) @binding(0) var<storage, read> classify_counters: array<u32>;
+// Occupied blocks of this surface (cleared before the pass, then copied to
+// counters[C_OCCUPIED]: the counters are this pass's indirect arguments, so
+// they cannot be bound writable here).
+@group(1) @binding(4) var<storage, read_write> occupied_count: atomic<u32>;
+@group(1) @binding(1) var<storage, read_write> block_cases: array<u32>;     // 16 words per active entry: 4 cases per row (y, z)
+@group(1) @binding(2) var<storage, read_write> block_vertices: array<u32>;  // vertices per active entry
+@group(1) @binding(3) var<storage, read_write> block_cells: array<u32>;     // emitting cells per active entry
+
+// Inside bits (value >= iso) of row (y, z) of the 5^3 neighbourhood, at bits shift..shift+4.
+fn row_bits(slots: ptr<function, array<u32, 8>>, y: u32, z: u32, shift: u32) -> u32 {
+  let d = 2u * (y >> 2u) + 4u * (z >> 2u);
+  let row = (y & 3u) + 4u * (z & 3u);
+  let iso = volume.iso;
+  var bits = 0u;
+  let s0 = (*slots)[d];
+  if (s0 != NONE) {
+    let v = slot_rows[s0 * 16u + row];
+    bits = select(0u, 1u, v.x >= iso) | select(0u, 2u, v.y >= iso) | select(0u, 4u, v.z >= iso) | select(0u, 8u, v.w >= iso);
+  }
+  let s1 = (*slots)[d + 1u];
+  if (s1 != NONE) {
+    bits |= select(0u, 16u, slot_rows[s1 * 16u + row].x >= iso);
+  }
+  return bits << shift;
+}
+
+@compute @workgroup_size(64)
+fn classify_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+                   @builtin(local_invocation_index) lid: u32) {
+  let i = grid_invocation_index(wid, nwg, lid, 64u);
+  if (i >= classify_counters[C_ACTIVE_GATED]) {
+    return;
+  }
+  let b = active_ids[i];
+  let c = block_coords_of(b, volume.grid);
+  // The 8 blocks the cells of b touch (d = dx + 2dy + 4dz); `missing` has bit d
+  // set for those not cached (or outside the grid).
+  var slots: array<u32, 8>;
+  var missing = 0u;
+  for (var d = 0u; d < 8u; d++) {
+    let s = neighbour_slot(c, mc_corner_offset(d));
+    slots[d] = s;
+    missing |= select(0u, 1u << d, s == NONE);
+  }
+  // blocked: bit r set when a cell reaching the neighbours r (bit 0: x = 3,
+  // bit 1: y = 3, bit 2: z = 3) touches a missing block.
+  var blocked = 0u;
+  for (var r = 0u; r < 8u; r++) {
+    for (var d = 1u; d < 8u; d++) {
+      if ((d & ~r) == 0u && ((missing >> d) & 1u) == 1u) {
+        blocked |= 1u << r;
+      }
+    }
+  }
+  // Cells inside the volume: l < ext on each axis (dims - 4c >= 1).
+  let ext = min(vec3u(4u), volume.dims - c * 4u - 1u);
+  // Inside bits of the 5^3 neighbourhood, layer z at bits x + 5y.
+  var layers: array<u32, 5>;
+  for (var z = 0u; z < 5u; z++) {
+    var layer = 0u;
+    for (var y = 0u; y < 5u; y++) {
+      layer |= row_bits(&slots, y, z, 5u * y);
+    }
+    layers[z] = layer;
+  }
+  var vertices = 0u;
+  var cells = 0u;
+  // Most active blocks have no sign change at all (their neighbourhood range
+  // covers iso, their own voxels do not): all 125 bits equal, nothing to mesh.
+  let any_inside = (layers[0] | layers[1] | layers[2] | layers[3] | layers[4]) != 0u;
+  let all_inside = (layers[0] & layers[1] & layers[2] & layers[3] & layers[4]) == 0x1ffffffu;
+  let mixed = any_inside && !all_inside;
+  for (var z = 0u; z < 4u; z++) {
+    let lower = layers[z];
+    let upper = layers[z + 1u];
+    for (var y = 0u; y < 4u; y++) {
+      var word = 0u;
+      if (mixed && z < ext.z && y < ext.y) {
+        for (var x = 0u; x < ext.x; x++) {
+          let r = select(0u, 1u, x == 3u) | select(0u, 2u, y == 3u) | select(0u, 4u, z == 3u);
+          let s = x + 5u * y;
+          let code = ((lower >> s) & 3u) | (((lower >> (s + 5u)) & 3u) << 2u) | (((upper >> s) & 3u) << 4u) | (((upper >> (s + 5u)) & 3u) << 6u);
+          // every case but 0 and 255 has triangles
+          if (code != 0u && code != 255u && ((blocked >> r) & 1u) == 0u) {
+            word |= code << (8u * x);
+            vertices += case_vertex_count(code);
+            cells += 1u;
+          }
+        }
+      }
+      block_cases[16u * i + y + 4u * z] = word;
+    }
+  }
+  block_vertices[i] = vertices;
+  block_cells[i] = cells;
+  if (cells > 0u) {
+    atomicAdd(&occupied_count, 1u);
+  }
+}
+
