@@ -29,7 +29,18 @@
 #define EMSCRIPTEN_KEEPALIVE
 #endif
 
+// LASzip reports warnings (e.g. about a corrupt chunk table) through a
+// message handler that writes to stderr by default; this module has no file
+// system, so stdio would fail inside the glue. Declared here from LASzip's
+// lasmessage.hpp (not on the include path of the module build).
+#include <laszip_common.h>
+typedef void (*LASMessageHandler)(LAS_MESSAGE_TYPE type, const char* msg, void* user_data);
+void set_las_message_handler(LASMessageHandler callback, void* user_data);
+
 namespace {
+
+// LASzip's messages are dropped: failures come back through laszip_get_error.
+void ignore_message(LAS_MESSAGE_TYPE, const char*, void*) {}
 
 // A read-only, seekable stream buffer over memory we do not own.
 class MemoryBuffer : public std::streambuf {
@@ -199,7 +210,17 @@ bool check_layout(const uint8_t* d, uint64_t size, char* msg, size_t cap) {
                     (unsigned long long)vlr_count, (unsigned long long)(i + 1), (unsigned long long)offset);
       return false;
     }
-    at += 54 + get_u16(d + at + 20);
+    // LASzip's own VLR lists its compressed items (6 bytes each) after a 34-byte
+    // preamble; LASzip reads as many as it says, past the record when it lies.
+    const uint64_t len = get_u16(d + at + 20);
+    if (get_u16(d + at + 18) == 22204 && std::memcmp(d + at + 2, "laszip encoded", 14) == 0) {
+      if (len < 34 || 34 + 6 * uint64_t(get_u16(d + at + 54 + 32)) > len) {
+        std::snprintf(msg, cap, "corrupt LAZ header: the compression record (%llu bytes) lists %u items, more than it holds",
+                      (unsigned long long)len, len < 34 ? 0u : unsigned(get_u16(d + at + 54 + 32)));
+        return false;
+      }
+    }
+    at += 54 + len;
   }
   const bool v14 = minor >= 4 && header_size >= 375;
   if (v14) {
@@ -276,6 +297,7 @@ EMSCRIPTEN_KEEPALIVE LasReader* las_open(uint8_t* data, uint32_t size) {
     set_error(r, layout, false);
     return r;
   }
+  set_las_message_handler(ignore_message, nullptr);
   if (laszip_create(&r->laszip) || !r->laszip) {
     set_error(r, "could not create the LASzip reader", false);
     return r;

@@ -122,6 +122,13 @@ describe('LAS/LAZ', () => {
       expect((await lasRejects(vlrs, `vlrs-${name}`)).message).toMatch(/announces 4294967280 variable-length records, but record \d+ does not fit/);
       await lasStillWorks();
     }
+    // LASzip's own VLR claiming more compressed items than it holds (LASzip read past it and trapped).
+    const items = las('laspy_simple.laz');
+    const at = Buffer.from(items).indexOf('laszip encoded');
+    expect(at).toBeGreaterThan(0);
+    new DataView(items.buffer, items.byteOffset).setUint16(at - 2 + 54 + 32, 32768, true);
+    expect((await lasRejects(items, 'items.laz')).message).toMatch(/^items\.laz: corrupt LAZ header: the compression record \(\d+ bytes\) lists 32768 items/);
+    await lasStillWorks();
     expect(await loadLasWasm()).toBe(m); // nothing failed inside the module
     expect(m.HEAPU8.buffer.byteLength - heapBefore).toBeLessThan(64 << 20);
   });
