@@ -5,7 +5,7 @@ import { defineConfig } from 'vitest/config';
 // per file. The page itself is tested with Playwright (tests/e2e).
 export default defineConfig({
   test: {
-    include: ['tests/unit/**/*.test.ts'],
+    include: ['tests/unit/**/*.test.ts', 'tests/fuzz/**/*.test.ts'],
     environment: 'node',
     pool: 'forks',
     // SwiftShader runs on the CPU; two cores here.

@@ -73,8 +73,25 @@ function aptInstall(packages) {
     throw new BuildError(`missing tools; install them with: sudo apt-get install -y ${packages.join(' ')}`);
   }
   log(`installing ${packages.join(' ')} (apt-get)...`);
+  const install = ['install', '-y', '-qq', '--no-install-recommends', ...packages];
+  try {
+    apt(install);
+  } catch {
+    // A fresh machine may have no package lists yet.
+    apt(['update', '-qq']);
+    apt(install);
+  }
+}
+
+/**
+ * apt-get under the shared lock (flock, from util-linux, when the machine has
+ * it). Runs in / since the work folder may not exist yet (spawnSync reports a
+ * missing cwd as ENOENT of the command).
+ */
+function apt(argv) {
   const env = { ...process.env, DEBIAN_FRONTEND: 'noninteractive' };
-  run('flock', ['/tmp/apt.lock', 'apt-get', 'install', '-y', '-qq', '--no-install-recommends', ...packages], { env });
+  if (which('flock')) run('flock', ['/tmp/apt.lock', 'apt-get', ...argv], { env, cwd: '/' });
+  else run('apt-get', argv, { env, cwd: '/' });
 }
 
 // ---------------------------------------------------------------- toolchain
@@ -129,7 +146,7 @@ function ensureDebSrc() {
     '/etc/apt/sources.list.d/debian-src.sources',
     `${stanza('http://deb.debian.org/debian', 'bookworm bookworm-updates')}\n${stanza('http://deb.debian.org/debian-security', 'bookworm-security')}`,
   );
-  run('flock', ['/tmp/apt.lock', 'apt-get', 'update', '-qq']);
+  apt(['update', '-qq']);
 }
 
 function verified(files) {
@@ -394,7 +411,7 @@ async function buildLibraries(tc) {
 
 // ---------------------------------------------------------------- modules
 
-const LAS_EXPORTS = ['_malloc', '_free', '_las_open', '_las_error', '_las_info', '_las_header_string', '_las_read', '_las_close'];
+const LAS_EXPORTS = ['_malloc', '_free', '_las_open', '_las_error', '_las_info', '_las_header_string', '_las_read', '_las_outside', '_las_close'];
 const ZFP_EXPORTS = ['_malloc', '_free', '_zfp_api_info', '_zfp_api_decode', '_zfp_api_decode_raw', '_zfp_api_error'];
 const TIFF_EXPORTS = ['_malloc', '_free', '_tiff_open', '_tiff_error', '_tiff_page_count', '_tiff_page_info', '_tiff_page_description', '_tiff_page_bytes', '_tiff_read_page', '_tiff_close'];
 

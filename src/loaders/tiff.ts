@@ -7,7 +7,7 @@
 // heap; each page is decoded there and copied straight into its place in the
 // volume; the file's Wasm memory is freed before the next file is opened.
 import createTiffModule, { type TiffWasm } from '../../wasm/dist/tiff.js';
-import { copyIntoHeap, formatBytes, instantiateWasm, ptr, streamIntoHeap } from './wasm-module.ts';
+import { copyIntoHeap, describeWasmFailure, formatBytes, instantiateWasm, ptr, streamIntoHeap, WasmSlot } from './wasm-module.ts';
 
 export type SampleType = 'uint8' | 'int8' | 'uint16' | 'int16' | 'uint32' | 'int32' | 'float32' | 'float64';
 export type SampleArray = Uint8Array | Int8Array | Uint16Array | Int16Array | Uint32Array | Int32Array | Float32Array | Float64Array;
@@ -54,6 +54,8 @@ export interface TiffPage {
   description: string;
   /** The decoded sample type, or undefined when this build cannot decode the page. */
   dtype?: SampleType;
+  /** Bytes of (possibly compressed) strip or tile data the page stores in the file. */
+  dataBytes: number;
 }
 
 /** A file that is not a readable TIFF (or stack); the message names the file. */
@@ -67,18 +69,30 @@ export class TiffError extends Error {
   }
 }
 
-let wasm: Promise<TiffWasm> | undefined;
+const slot = new WasmSlot(() => instantiateWasm(createTiffModule, new URL('../../wasm/dist/tiff.wasm', import.meta.url), 'TIFF'));
 
-/** The libtiff module (instantiated once per page or process). */
+/** The libtiff module (instantiated once per page or process; replaced after it failed on a file). */
 export function loadTiffWasm(): Promise<TiffWasm> {
-  wasm ??= instantiateWasm(createTiffModule, new URL('../../wasm/dist/tiff.wasm', import.meta.url), 'TIFF').catch((e: unknown) => {
-    wasm = undefined;
-    throw e;
-  });
-  return wasm;
+  return slot.get();
 }
 
-const PAGE_FIELDS = 18;
+/** A failure inside the module (trap, glue error): the module is replaced, the file rejected. */
+function moduleFailure(m: TiffWasm, fileName: string, e: unknown): TiffError {
+  if (e instanceof TiffError) return e;
+  const what = describeWasmFailure(e);
+  slot.discard(m, `${fileName}: ${what}`);
+  return new TiffError(fileName, `the file is corrupt in a way the TIFF decoder could not handle (${what})`);
+}
+
+const PAGE_FIELDS = 19;
+/** The largest decoded page, as in wasm/tiff/tiff_api.c (MAX_PAGE_BYTES). */
+export const MAX_TIFF_PAGE_BYTES = 2 ** 30;
+/** The largest volume loadTiffStack builds (one typed array). */
+export const MAX_TIFF_VOLUME_BYTES = 2 ** 31;
+/** What loadTiffStack allocates before the first page has decoded. */
+const FIRST_ALLOCATION_BYTES = 64 * 2 ** 20;
+/** No codec in the build expands data more than this (tiff_api.c, MAX_EXPANSION). */
+const MAX_EXPANSION = 4096;
 
 export function sampleType(bits: number, format: number): SampleType | undefined {
   if (format === 3) return bits === 32 ? 'float32' : bits === 64 ? 'float64' : undefined;
@@ -103,6 +117,14 @@ const ARRAY_TYPES = {
 
 export function allocateSamples(dtype: SampleType, length: number): SampleArray {
   return new ARRAY_TYPES[dtype](length);
+}
+
+function closeQuietly(m: TiffWasm, handle: number, fileName: string): void {
+  try {
+    m._tiff_close(handle);
+  } catch (e) {
+    moduleFailure(m, fileName, e);
+  }
 }
 
 /** An open TIFF file in the Wasm heap. Call close() when done. */
@@ -137,14 +159,19 @@ export class TiffReader {
       throw new TiffError(fileName, (e as Error).message.replace(`${fileName}: `, ''));
     }
     // tiff_open owns `data` from here on, also when it fails.
-    const handle = ptr(m._tiff_open(data, size));
-    if (handle === 0) throw new TiffError(fileName, 'out of WebAssembly memory');
-    const error = m.UTF8ToString(ptr(m._tiff_error(handle)));
-    if (error) {
-      m._tiff_close(handle);
-      throw new TiffError(fileName, error);
+    let handle = 0;
+    let pageCount = 0;
+    try {
+      handle = ptr(m._tiff_open(data, size));
+      if (handle === 0) throw new TiffError(fileName, 'out of WebAssembly memory');
+      const error = m.UTF8ToString(ptr(m._tiff_error(handle)));
+      if (error) throw new TiffError(fileName, error);
+      pageCount = m._tiff_page_count(handle);
+    } catch (e) {
+      if (handle !== 0 && e instanceof TiffError) closeQuietly(m, handle, fileName);
+      throw moduleFailure(m, fileName, e);
     }
-    const reader = new TiffReader(m, handle, fileName, m._tiff_page_count(handle));
+    const reader = new TiffReader(m, handle, fileName, pageCount);
     try {
       reader.page(0);
     } catch (e) {
@@ -152,6 +179,18 @@ export class TiffReader {
       throw e;
     }
     return reader;
+  }
+
+  /** Runs calls into the module; a failure there discards the module and rejects the file. */
+  private guard<R>(f: () => R): R {
+    try {
+      return f();
+    } catch (e) {
+      if (e instanceof TiffError) throw e;
+      this.handle = 0;
+      this.infoPtr = 0;
+      throw moduleFailure(this.m, this.fileName, e);
+    }
   }
 
   /**
@@ -162,10 +201,15 @@ export class TiffReader {
   page(index: number): TiffPage {
     const known = this.infos[index];
     if (known) return known;
+    return this.guard(() => this.readPageInfo(index));
+  }
+
+  private readPageInfo(index: number): TiffPage {
     if (this.handle === 0) throw new TiffError(this.fileName, 'the reader is closed');
     if (!(index >= 0 && index < this.pageCount)) throw new TiffError(this.fileName, `page ${index} does not exist (the file has ${this.pageCount})`);
     const m = this.m;
     if (this.infoPtr === 0) this.infoPtr = ptr(m._malloc(PAGE_FIELDS * 8));
+    if (this.infoPtr === 0) throw new TiffError(this.fileName, 'out of WebAssembly memory');
     if (m._tiff_page_info(this.handle, index, this.infoPtr) !== 0) {
       throw new TiffError(this.fileName, `page ${index}: ${m.UTF8ToString(ptr(m._tiff_error(this.handle))) || 'cannot read its directory'}`);
     }
@@ -196,6 +240,7 @@ export class TiffReader {
       bigTiff: v[17] === 1,
       description: m.UTF8ToString(ptr(m._tiff_page_description(this.handle, index))),
       dtype: sampleType(v[2], v[4]),
+      dataBytes: v[18],
     };
     this.infos[index] = page;
     return page;
@@ -216,13 +261,19 @@ export class TiffReader {
    */
   readPage(index: number, into?: SampleArray, offset = 0): SampleArray {
     if (this.handle === 0) throw new TiffError(this.fileName, 'the reader is closed');
-    const m = this.m;
     const page = this.page(index);
+    return this.guard(() => this.decodePage(page, index, into, offset));
+  }
+
+  private decodePage(page: TiffPage, index: number, into: SampleArray | undefined, offset: number): SampleArray {
+    const m = this.m;
     const bytes = m._tiff_page_bytes(this.handle, index);
     if (!(bytes > 0) || !page.dtype) {
       const reason = m.UTF8ToString(ptr(m._tiff_error(this.handle)));
       throw new TiffError(this.fileName, `page ${index}: ${reason || 'cannot be decoded'}`);
     }
+    // The C API refuses larger pages; never hand _malloc (32-bit sizes) more than it can give.
+    if (bytes > MAX_TIFF_PAGE_BYTES) throw new TiffError(this.fileName, `page ${index} is ${formatBytes(bytes)}, more than the largest page this reader decodes (${formatBytes(MAX_TIFF_PAGE_BYTES)})`);
     const out = ptr(m._malloc(bytes));
     if (out === 0) throw new TiffError(this.fileName, `out of WebAssembly memory for a ${formatBytes(bytes)} page`);
     try {
@@ -241,13 +292,22 @@ export class TiffReader {
     }
   }
 
-  /** Frees libtiff's state and the file's bytes in the Wasm heap. */
+  /**
+   * Frees libtiff's state and the file's bytes in the Wasm heap. Never throws
+   * (it runs in `finally` blocks, where it must not replace the real outcome).
+   */
   close(): void {
     if (this.handle === 0) return;
-    if (this.infoPtr) this.m._free(this.infoPtr);
-    this.infoPtr = 0;
-    this.m._tiff_close(this.handle);
+    const { handle, infoPtr } = this;
     this.handle = 0;
+    this.infoPtr = 0;
+    try {
+      if (infoPtr) this.m._free(infoPtr);
+    } catch (e) {
+      moduleFailure(this.m, this.fileName, e);
+      return;
+    }
+    closeQuietly(this.m, handle, this.fileName);
   }
 }
 
@@ -347,6 +407,10 @@ export async function loadTiffStack(sources: TiffSource | TiffSource[], options:
         first ??= reader.page(0);
         if (!first.dtype) throw new TiffError(name, unsupportedSamples(first));
         if (first.width * first.height === 0) throw new TiffError(name, 'the image is empty (0 pixels)');
+        const bytes = pageBytes(first);
+        if (bytes > MAX_TIFF_PAGE_BYTES) {
+          throw new TiffError(name, `the pages are ${describeShape(first)} (${formatBytes(bytes)} each), more than the largest page this reader decodes (${formatBytes(MAX_TIFF_PAGE_BYTES)})`);
+        }
       }
       const perPage = first.width * first.height * first.samplesPerPixel;
       let used = 0;
@@ -357,10 +421,34 @@ export async function loadTiffStack(sources: TiffSource | TiffSource[], options:
           skipped++;
           continue;
         }
+        // A directory's size claims are checked against the data it stores before anything is allocated.
+        const expansion = p.compression === 1 ? 1 : MAX_EXPANSION;
+        if (pageBytes(p) > p.dataBytes * expansion) {
+          throw new TiffError(
+            name,
+            p.compression === 1
+              ? `truncated or corrupt file: page ${i} is ${describeShape(p)} (${formatBytes(pageBytes(p))}) but its strips hold ${formatBytes(p.dataBytes)}`
+              : `corrupt file: page ${i} claims ${describeShape(p)} (${formatBytes(pageBytes(p))}) from ${formatBytes(p.dataBytes)} of compressed data`,
+          );
+        }
         if (!data || filled + 1 > capacityPages) {
           // The stack's size is known only file by file: assume the rest are like this one.
           estimatedTotal = filled + (reader.pageCount - i) + reader.pageCount * (files.length - f - 1);
-          capacityPages = Math.max(filled + 1, estimatedTotal);
+          // Directories are not trusted: allocate no more pages than the files' bytes can expand to.
+          const bytesLeft = files.slice(f).reduce((sum, s) => sum + (s.bytes instanceof Uint8Array ? s.bytes.byteLength : s.bytes.size), 0);
+          const plausible = filled + Math.floor((bytesLeft * (p.compression === 1 ? 1 : MAX_EXPANSION)) / pageBytes(first)) + 1;
+          const maxPages = Math.floor(MAX_TIFF_VOLUME_BYTES / pageBytes(first));
+          if (filled + 1 > maxPages) {
+            throw new TiffError(
+              name,
+              `the stack has at least ${(filled + 1).toLocaleString('en-US')} pages of ${describeShape(first)} (${formatBytes((filled + 1) * pageBytes(first))}), ` +
+                `more than the largest volume this reader loads (${formatBytes(MAX_TIFF_VOLUME_BYTES)})`,
+            );
+          }
+          // Before any page has decoded, trust the directories for at most 64 MiB; after, grow to
+          // the estimate (at least doubling, so a stack of many files is copied O(log n) times).
+          const want = filled === 0 ? Math.min(estimatedTotal, Math.floor(FIRST_ALLOCATION_BYTES / pageBytes(first))) : Math.max(estimatedTotal, 2 * capacityPages);
+          capacityPages = Math.min(maxPages, plausible, Math.max(filled + 1, want));
           const grown = allocateSamples(first.dtype!, perPage * capacityPages);
           if (data) grown.set(data.subarray(0, filled * perPage) as never);
           data = grown;
@@ -416,6 +504,11 @@ function unsupportedSamples(p: TiffPage): string {
     return `unsupported sample format ${p.sampleFormat} (unsigned, signed integer and IEEE float are supported)`;
   }
   return `unsupported sample size: ${p.bitsPerSample} bits per sample (8, 16 and 32-bit integers are supported)`;
+}
+
+/** Decoded bytes of one page (samples of 8 to 64 bits). */
+function pageBytes(p: TiffPage): number {
+  return p.width * p.height * p.samplesPerPixel * Math.max(1, p.bitsPerSample / 8);
 }
 
 function sameShape(p: TiffPage, q: TiffPage): boolean {

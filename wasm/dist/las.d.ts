@@ -25,6 +25,8 @@ export interface LasWasm extends EmscriptenModule {
   _las_info(reader: number, out: number): number;
   _las_header_string(reader: number, which: number): number;
   _las_read(reader: number, n: number, positions: number, rgb: number, intensity: number, classification: number, xyz: number, records: number): number;
+  /** Points read so far outside the header's bounds; -1 when the bounds are not finite. */
+  _las_outside(reader: number): number;
   _las_close(reader: number): void;
 }
 

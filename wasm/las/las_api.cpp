@@ -12,6 +12,7 @@
 
 #include <laszip_api.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -28,7 +29,18 @@
 #define EMSCRIPTEN_KEEPALIVE
 #endif
 
+// LASzip reports warnings (e.g. about a corrupt chunk table) through a
+// message handler that writes to stderr by default; this module has no file
+// system, so stdio would fail inside the glue. Declared here from LASzip's
+// lasmessage.hpp (not on the include path of the module build).
+#include <laszip_common.h>
+typedef void (*LASMessageHandler)(LAS_MESSAGE_TYPE type, const char* msg, void* user_data);
+void set_las_message_handler(LASMessageHandler callback, void* user_data);
+
 namespace {
+
+// LASzip's messages are dropped: failures come back through laszip_get_error.
+void ignore_message(LAS_MESSAGE_TYPE, const char*, void*) {}
 
 // A read-only, seekable stream buffer over memory we do not own.
 class MemoryBuffer : public std::streambuf {
@@ -72,6 +84,8 @@ struct LasReader {
   int64_t count = 0;
   int64_t next = 0;  // index of the next point to read
   double centre[3] = {0, 0, 0};
+  bool check_bounds = false;  // the header's bounds are finite and ordered
+  int64_t outside = 0;        // points read so far that lie outside them
   char error[600] = {0};
 
   LasReader(uint8_t* bytes, size_t size) : data(bytes), buffer(bytes, size), stream(&buffer) {}
@@ -153,6 +167,108 @@ int write_record(const laszip_point* pt, int format, int record_length, uint8_t*
   return record_length;
 }
 
+// Little-endian field readers for the raw header (the file is at least 227 bytes when used).
+inline uint16_t get_u16(const uint8_t* p) { uint16_t v; std::memcpy(&v, p, 2); return v; }
+inline uint32_t get_u32(const uint8_t* p) { uint32_t v; std::memcpy(&v, p, 4); return v; }
+inline uint64_t get_u64(const uint8_t* p) { uint64_t v; std::memcpy(&v, p, 8); return v; }
+inline double get_f64(const uint8_t* p) { double v; std::memcpy(&v, p, 8); return v; }
+
+// The largest point count a header may announce: above 2^53 a JavaScript
+// number cannot even hold it exactly.
+const uint64_t MAX_POINT_COUNT = (uint64_t(1) << 53) - 1;
+
+// Checks every size in the raw header against the file's length before
+// LASzip sees it: LASzip allocates from these fields (the VLR array, the
+// bytes between the VLRs and the point data, each EVLR) and reports some
+// inconsistencies through stdio, which this module does not have. All
+// arithmetic in 64 bits. Writes the problem to `msg` and returns false.
+bool check_layout(const uint8_t* d, uint64_t size, char* msg, size_t cap) {
+  if (size < 227) {
+    std::snprintf(msg, cap, "truncated file: %llu bytes, shorter than a LAS header (227 bytes)", (unsigned long long)size);
+    return false;
+  }
+  const unsigned minor = d[25];
+  const uint64_t header_size = get_u16(d + 94);
+  const uint64_t offset = get_u32(d + 96);
+  const uint64_t vlr_count = get_u32(d + 100);
+  const uint64_t record_length = get_u16(d + 105);
+  if (header_size < 227 || header_size > size) {
+    std::snprintf(msg, cap, "corrupt header: header size %llu (must be at least 227 and within the file's %llu bytes)",
+                  (unsigned long long)header_size, (unsigned long long)size);
+    return false;
+  }
+  if (offset < header_size || offset > size) {
+    std::snprintf(msg, cap, "corrupt header: the point data is said to start at byte %llu, %s", (unsigned long long)offset,
+                  offset < header_size ? "inside the header" : "past the end of the file");
+    return false;
+  }
+  // Variable-length records lie between the header and the point data, 54 bytes each plus their payload.
+  uint64_t at = header_size;
+  for (uint64_t i = 0; i < vlr_count; i++) {
+    if (at + 54 > offset || at + 54 + get_u16(d + at + 20) > offset) {
+      std::snprintf(msg, cap, "corrupt header: it announces %llu variable-length records, but record %llu does not fit before the point data (byte %llu)",
+                    (unsigned long long)vlr_count, (unsigned long long)(i + 1), (unsigned long long)offset);
+      return false;
+    }
+    // LASzip's own VLR lists its compressed items (6 bytes each) after a 34-byte
+    // preamble; LASzip reads as many as it says, past the record when it lies.
+    const uint64_t len = get_u16(d + at + 20);
+    if (get_u16(d + at + 18) == 22204 && std::memcmp(d + at + 2, "laszip encoded", 14) == 0) {
+      if (len < 34 || 34 + 6 * uint64_t(get_u16(d + at + 54 + 32)) > len) {
+        std::snprintf(msg, cap, "corrupt LAZ header: the compression record (%llu bytes) lists %u items, more than it holds",
+                      (unsigned long long)len, len < 34 ? 0u : unsigned(get_u16(d + at + 54 + 32)));
+        return false;
+      }
+    }
+    at += 54 + len;
+  }
+  const bool v14 = minor >= 4 && header_size >= 375;
+  if (v14) {
+    // Extended VLRs (LAS 1.4) follow the point data, 60 bytes each plus a 64-bit payload length.
+    const uint64_t evlr_start = get_u64(d + 235);
+    const uint64_t evlr_count = get_u32(d + 243);
+    uint64_t e = evlr_start;
+    for (uint64_t i = 0; i < evlr_count; i++) {
+      if (e > size || size - e < 60 || get_u64(d + e + 20) > size - e - 60) {
+        std::snprintf(msg, cap, "corrupt header: it announces %llu extended variable-length records, but record %llu does not fit in the file",
+                      (unsigned long long)evlr_count, (unsigned long long)(i + 1));
+        return false;
+      }
+      e += 60 + get_u64(d + e + 20);
+    }
+  }
+  const uint64_t legacy = get_u32(d + 107);
+  const uint64_t count = legacy ? legacy : v14 ? get_u64(d + 247) : 0;
+  if (count > MAX_POINT_COUNT) {
+    std::snprintf(msg, cap, "corrupt header: it announces %llu points, an impossible count", (unsigned long long)count);
+    return false;
+  }
+  if (record_length == 0) {
+    std::snprintf(msg, cap, "corrupt header: the point record length is 0");
+    return false;
+  }
+  // Without compression every record must be in the file (a division: no product can wrap).
+  const bool compressed = (d[104] & 0x80) != 0;
+  if (!compressed && count > (size - offset) / record_length) {
+    std::snprintf(msg, cap, "truncated file: the header announces %llu points of %llu bytes from byte %llu, but the file has %llu bytes",
+                  (unsigned long long)count, (unsigned long long)record_length, (unsigned long long)offset, (unsigned long long)size);
+    return false;
+  }
+  const char* axis = "xyz";
+  for (int a = 0; a < 3; a++) {
+    const double scale = get_f64(d + 131 + 8 * a), offset_a = get_f64(d + 155 + 8 * a);
+    if (!std::isfinite(scale) || scale == 0) {
+      std::snprintf(msg, cap, "corrupt header: the %c scale factor is %g (it must be a finite, non-zero number)", axis[a], scale);
+      return false;
+    }
+    if (!std::isfinite(offset_a)) {
+      std::snprintf(msg, cap, "corrupt header: the %c offset is %g (it must be finite)", axis[a], offset_a);
+      return false;
+    }
+  }
+  return true;
+}
+
 bool finite_bounds(const laszip_header* h) {
   const double v[6] = {h->min_x, h->min_y, h->min_z, h->max_x, h->max_y, h->max_z};
   for (double x : v)
@@ -176,6 +292,12 @@ EMSCRIPTEN_KEEPALIVE LasReader* las_open(uint8_t* data, uint32_t size) {
     set_error(r, "not a LAS/LAZ file (the file does not start with the signature \"LASF\")", false);
     return r;
   }
+  char layout[300];
+  if (!check_layout(data, size, layout, sizeof(layout))) {
+    set_error(r, layout, false);
+    return r;
+  }
+  set_las_message_handler(ignore_message, nullptr);
   if (laszip_create(&r->laszip) || !r->laszip) {
     set_error(r, "could not create the LASzip reader", false);
     return r;
@@ -189,30 +311,39 @@ EMSCRIPTEN_KEEPALIVE LasReader* las_open(uint8_t* data, uint32_t size) {
     set_error(r, "cannot access the LAS header", true);
     return r;
   }
-  // As LASzip does: the legacy 32-bit count, or the LAS 1.4 64-bit one when it is 0.
-  const int64_t count = r->header->number_of_point_records ? int64_t(r->header->number_of_point_records)
-                                                           : int64_t(r->header->extended_number_of_point_records);
-  r->count = count;
+  // As LASzip does: the legacy 32-bit count, or the LAS 1.4 64-bit one when it is 0
+  // (both checked against the file and MAX_POINT_COUNT above, in the raw header).
+  const uint64_t count = r->header->number_of_point_records ? uint64_t(r->header->number_of_point_records)
+                                                            : uint64_t(r->header->extended_number_of_point_records);
   const laszip_header* h = r->header;
+  if (count > MAX_POINT_COUNT) {
+    set_error(r, "corrupt header: an impossible point count", false);
+    return r;
+  }
+  r->count = int64_t(count);
   if (h->point_data_format > 10) {
     char msg[120];
     std::snprintf(msg, sizeof(msg), "unsupported point data format %d (LAS defines 0 to 10)", int(h->point_data_format));
     set_error(r, msg, false);
     return r;
   }
-  // Without compression, all records must be in the file: a truncated LAS
-  // would otherwise only fail after decoding most of it.
-  if (!r->compressed) {
-    uint64_t need = uint64_t(h->offset_to_point_data) + uint64_t(count) * h->point_data_record_length;
-    if (need > size) {
-      char msg[200];
-      std::snprintf(msg, sizeof(msg), "truncated file: the header announces %lld points (%llu bytes) but the file has %u bytes",
-                    (long long)count, (unsigned long long)need, size);
-      set_error(r, msg, false);
-      return r;
-    }
+  if (h->point_data_record_length < base_record_length(h->point_data_format)) {
+    char msg[160];
+    std::snprintf(msg, sizeof(msg), "corrupt header: point records of %d bytes are too short for point format %d (at least %d bytes)",
+                  int(h->point_data_record_length), int(h->point_data_format), base_record_length(h->point_data_format));
+    set_error(r, msg, false);
+    return r;
+  }
+  // Without compression, all records must be in the file (64-bit division, no product to wrap).
+  if (!r->compressed && count > (uint64_t(size) - std::min<uint64_t>(size, h->offset_to_point_data)) / h->point_data_record_length) {
+    char msg[200];
+    std::snprintf(msg, sizeof(msg), "truncated file: the header announces %llu points of %d bytes but the file has %u bytes",
+                  (unsigned long long)count, int(h->point_data_record_length), size);
+    set_error(r, msg, false);
+    return r;
   }
   if (finite_bounds(h)) {
+    r->check_bounds = true;
     r->centre[0] = 0.5 * (h->min_x + h->max_x);
     r->centre[1] = 0.5 * (h->min_y + h->max_y);
     r->centre[2] = 0.5 * (h->min_z + h->max_z);
@@ -285,6 +416,10 @@ EMSCRIPTEN_KEEPALIVE int32_t las_read(LasReader* r, int32_t n, float* positions,
   const double sx = h->x_scale_factor, sy = h->y_scale_factor, sz = h->z_scale_factor;
   const double ox = h->x_offset - r->centre[0], oy = h->y_offset - r->centre[1], oz = h->z_offset - r->centre[2];
   const laszip_point* pt = r->point;
+  // Half a unit of the integer grid: the header's bounds are rounded scaled values.
+  const double tx = 0.5 * std::fabs(sx) + 1e-9 * std::max(std::fabs(h->min_x), std::fabs(h->max_x));
+  const double ty = 0.5 * std::fabs(sy) + 1e-9 * std::max(std::fabs(h->min_y), std::fabs(h->max_y));
+  const double tz = 0.5 * std::fabs(sz) + 1e-9 * std::max(std::fabs(h->min_z), std::fabs(h->max_z));
   for (int32_t i = 0; i < n; i++) {
     if (laszip_read_point(r->laszip)) {
       char msg[160];
@@ -292,6 +427,10 @@ EMSCRIPTEN_KEEPALIVE int32_t las_read(LasReader* r, int32_t n, float* positions,
                     (long long)r->count);
       set_error(r, msg, true);
       return -1;
+    }
+    if (r->check_bounds) {
+      const double x = pt->X * sx + h->x_offset, y = pt->Y * sy + h->y_offset, z = pt->Z * sz + h->z_offset;
+      if (x < h->min_x - tx || x > h->max_x + tx || y < h->min_y - ty || y > h->max_y + ty || z < h->min_z - tz || z > h->max_z + tz) r->outside++;
     }
     if (positions) {
       // Scale in float64 and subtract the centre before rounding to float32.
@@ -316,6 +455,9 @@ EMSCRIPTEN_KEEPALIVE int32_t las_read(LasReader* r, int32_t n, float* positions,
   }
   return n;
 }
+
+// Points read so far that lie outside the header's bounds (-1: the bounds are not finite or not ordered).
+EMSCRIPTEN_KEEPALIVE double las_outside(LasReader* r) { return r && r->check_bounds ? double(r->outside) : -1; }
 
 // Frees the reader, LASzip's state and the file bytes.
 EMSCRIPTEN_KEEPALIVE void las_close(LasReader* r) {

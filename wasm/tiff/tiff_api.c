@@ -99,6 +99,34 @@ static int mem_map(thandle_t h, void **base, toff_t *size) {
 
 static void mem_unmap(thandle_t h, void *base, toff_t size) { (void)h, (void)base, (void)size; }
 
+/* The largest decoded page (bytes): the caller mallocs it in a 32-bit heap. */
+#define MAX_PAGE_BYTES ((uint64_t)1 << 30)
+/* No codec in this build expands data more than this (deflate ~1032:1, LZW
+ * ~2730:1, JPEG far less); a page claiming more is a lie about its size. */
+#define MAX_EXPANSION 4096
+
+/* Sum of the byte counts of the current page's strips or tiles, each clamped
+ * to the file (0 with tiff_error set when the strile count is impossible). */
+static uint64_t data_bytes(TiffFile *f, int *ok) {
+  TIFF *t = f->tif;
+  const uint32_t striles = TIFFIsTiled(t) ? TIFFNumberOfTiles(t) : TIFFNumberOfStrips(t);
+  *ok = 1;
+  /* Every strip or tile has an offset and a byte count stored in the file;
+   * libtiff's virtual strips of a chopped-up strip are at least 8 KiB each. */
+  if ((uint64_t)striles > f->size) {
+    set_error(f, "corrupt directory: %u %s claimed in a file of %llu bytes", (unsigned)striles, TIFFIsTiled(t) ? "tiles" : "strips",
+              (unsigned long long)f->size);
+    *ok = 0;
+    return 0;
+  }
+  uint64_t total = 0;
+  for (uint32_t i = 0; i < striles; i++) {
+    uint64_t off = TIFFGetStrileOffset(t, i), count = TIFFGetStrileByteCount(t, i);
+    if (off < f->size) total += count < f->size - off ? count : f->size - off;
+  }
+  return total;
+}
+
 static int go_to(TiffFile *f, int page) {
   if (page < 0 || page >= f->pages) {
     set_error(f, "page %d does not exist (the file has %d)", page, f->pages);
@@ -187,12 +215,16 @@ EMSCRIPTEN_KEEPALIVE int tiff_page_info(TiffFile *f, int page, double *out) {
   } else {
     TIFFGetFieldDefaulted(t, TIFFTAG_ROWSPERSTRIP, &rows_per_strip);
   }
+  int data_ok = 1;
+  const uint64_t stored = data_bytes(f, &data_ok);
+  if (!data_ok) return 1;
   int has_xres = TIFFGetField(t, TIFFTAG_XRESOLUTION, &xres);
   int has_yres = TIFFGetField(t, TIFFTAG_YRESOLUTION, &yres);
   TIFFGetFieldDefaulted(t, TIFFTAG_RESOLUTIONUNIT, &res_unit);
   double v[] = {
       width, height, bits, spp, format, compression, photometric, planar, tiled, tile_w, tile_h, rows_per_strip,
       has_xres ? xres : 0, has_yres ? yres : 0, res_unit, subfile, TIFFIsBigEndian(t) ? 1 : 0, TIFFIsBigTIFF(t) ? 1 : 0,
+      (double)stored,
   };
   memcpy(out, v, sizeof v);
   return 0;
@@ -248,7 +280,31 @@ static uint64_t page_bytes(TiffFile *f, uint32_t *w, uint32_t *h, uint16_t *spp,
     TIFFSetField(t, TIFFTAG_JPEGCOLORMODE, JPEGCOLORMODE_RGB);
   }
   *bytes_per_sample = (uint16_t)(bits / 8);
-  return (uint64_t)*w * *h * *spp * *bytes_per_sample;
+  /* At most 2^32 * 2^32 * 2^16 * 8: fits no integer type, so check in steps. */
+  const uint64_t pixels = (uint64_t)*w * *h;
+  if (pixels == 0) {
+    set_error(f, "the image is empty (%u x %u pixels)", (unsigned)*w, (unsigned)*h);
+    return 0;
+  }
+  if (pixels > MAX_PAGE_BYTES || pixels * *spp * *bytes_per_sample > MAX_PAGE_BYTES) {
+    set_error(f, "the page is %u x %u pixels of %u x %u-bit samples (%.2f GiB), more than the largest page this reader decodes (1 GiB)",
+              (unsigned)*w, (unsigned)*h, (unsigned)*spp, (unsigned)bits, (double)pixels * *spp * *bytes_per_sample / (1 << 30));
+    return 0;
+  }
+  const uint64_t need = pixels * *spp * *bytes_per_sample;
+  int ok = 1;
+  const uint64_t stored = data_bytes(f, &ok);
+  if (!ok) return 0;
+  if (need > stored * (compression == COMPRESSION_NONE ? 1 : MAX_EXPANSION)) {
+    if (compression == COMPRESSION_NONE)
+      set_error(f, "truncated or corrupt file: the page needs %llu bytes of samples but its strips hold %llu bytes", (unsigned long long)need,
+                (unsigned long long)stored);
+    else
+      set_error(f, "corrupt file: the page claims %llu bytes of samples from only %llu bytes of compressed data", (unsigned long long)need,
+                (unsigned long long)stored);
+    return 0;
+  }
+  return need;
 }
 
 EMSCRIPTEN_KEEPALIVE double tiff_page_bytes(TiffFile *f, int page) {
@@ -292,7 +348,7 @@ EMSCRIPTEN_KEEPALIVE int tiff_read_page(TiffFile *f, int page, uint8_t *out, dou
     if (!f->error[0]) set_error(f, "page %d is empty", page);
     return 1;
   }
-  if ((double)need > out_size) {
+  if (!(out_size >= (double)need)) {
     set_error(f, "output buffer too small for page %d", page);
     return 1;
   }

@@ -48,6 +48,8 @@ export const lasCommand: CliCommand = {
         ctx.log(`read ${reader.pointsRead} of ${h.pointCount} points`);
       }
       const ms = performance.now() - t0;
+      const warnings = reader.warnings;
+      for (const w of warnings) console.error(`warning: ${w}`);
       const result = {
         file: path,
         pointCount: h.pointCount,
@@ -68,6 +70,8 @@ export const lasCommand: CliCommand = {
         recordsSha256: records.digest('hex'),
         systemIdentifier: h.systemIdentifier,
         generatingSoftware: h.generatingSoftware,
+        /** Problems that did not stop the file from loading (points outside the header's bounds, ...). */
+        warnings,
         loadMs: ms,
       };
       console.log(`${name}: LAS ${h.version}, point format ${h.pointFormat}${h.compressed ? ' (LAZ)' : ''}, ${h.pointCount} points${h.hasRGB ? ', RGB' : ''}`);

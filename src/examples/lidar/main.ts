@@ -280,6 +280,8 @@ async function start(): Promise<void> {
         if (token !== loadToken) return;
       }
       finishStyle();
+      // The file loaded, but something in it is wrong: say so instead of showing it as if it were fine.
+      for (const w of reader.warnings) messages.show(`Warning: ${w}`, 'info');
       await gpu.device.queue.onSubmittedWorkDone();
       state.loadMs = performance.now() - t0;
       setInfoList(byId('cloud-info'), [
