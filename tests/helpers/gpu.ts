@@ -2,15 +2,11 @@
 // (SwiftShader here, a GPU where there is one), and fails if anything on it
 // raises a validation, out-of-memory or internal error, captured or not.
 import { test as base } from 'vitest';
-import type { GpuContext, GpuFailure } from '../../src/gpu/device.ts';
+import type { GpuFailure } from '../../src/gpu/device.ts';
 import { requestNodeGpu } from '../../src/gpu/node-gpu.ts';
+import { finishTestGpu, pushTestScopes, type TestGpu } from './gpu-scopes.ts';
 
-export interface TestGpu extends GpuContext {
-  /** Errors seen so far (uncaptured errors and device loss). */
-  failures: GpuFailure[];
-}
-
-const SCOPES: GPUErrorFilter[] = ['validation', 'out-of-memory', 'internal'];
+export { finishTestGpu, type TestGpu };
 
 /**
  * ZFPISO_TEST_LIMITS=default: devices get WebGPU's default limits instead of
@@ -26,22 +22,8 @@ export async function createTestGpu(): Promise<TestGpu> {
   if (testLimits === 'default' && ctx.limits.maxStorageBufferBindingSize > 128 * 2 ** 20) {
     throw new Error(`ZFPISO_TEST_LIMITS=default, yet the device allows ${ctx.limits.maxStorageBufferBindingSize} B storage bindings`);
   }
-  for (const filter of SCOPES) ctx.device.pushErrorScope(filter);
+  pushTestScopes(ctx.device);
   return { ...ctx, failures };
-}
-
-/** Waits for the queue, pops the scopes and destroys the device; throws on any error. */
-export async function finishTestGpu(gpu: TestGpu): Promise<void> {
-  const { device } = gpu;
-  await device.queue.onSubmittedWorkDone();
-  const scoped: (GPUError | null)[] = [];
-  for (let i = 0; i < SCOPES.length; i++) scoped.push(await device.popErrorScope());
-  device.destroy();
-  const messages = [
-    ...scoped.filter((e): e is GPUError => e !== null).map((e) => `WebGPU error: ${e.message}`),
-    ...gpu.failures.map((f) => `WebGPU ${f.kind}: ${f.message}`),
-  ];
-  if (messages.length > 0) throw new Error(messages.join('\n'));
 }
 
 /**
