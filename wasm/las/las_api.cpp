@@ -37,6 +37,14 @@
 typedef void (*LASMessageHandler)(LAS_MESSAGE_TYPE type, const char* msg, void* user_data);
 void set_las_message_handler(LASMessageHandler callback, void* user_data);
 
+#ifdef __EMSCRIPTEN__
+// This module has no file system. LASzip's malloc_las reads /proc/meminfo
+// before every allocation above 1 MB, and the stdio read of a file the glue
+// cannot serve fails inside the glue; so no file ever opens here (LASzip then
+// skips its free-memory warning and allocates as usual).
+extern "C" FILE* fopen(const char*, const char*) { return nullptr; }
+#endif
+
 namespace {
 
 // LASzip's messages are dropped: failures come back through laszip_get_error.
@@ -177,6 +185,36 @@ inline double get_f64(const uint8_t* p) { double v; std::memcpy(&v, p, 8); retur
 // number cannot even hold it exactly.
 const uint64_t MAX_POINT_COUNT = (uint64_t(1) << 53) - 1;
 
+// The LAZ chunk table (LASzip's layout: at the start of the point data the
+// 64-bit position of the table, -1 meaning "in the last 8 bytes"; at the
+// table a version (0) and the chunk count). LASzip allocates 8 bytes per
+// chunk from that count before it decodes the table: in wasm32 the product
+// wraps past 4 GiB (a heap overflow), and below that a flipped bit asks for
+// hundreds of MB. Every chunk holds at least one point and one byte, so the
+// count is bounded by the points and by the bytes before the table.
+bool check_chunk_table(const uint8_t* d, uint64_t size, uint64_t offset, uint64_t count, char* msg, size_t cap) {
+  const uint64_t chunks_start = offset + 8;
+  if (chunks_start > size) {
+    std::snprintf(msg, cap, "truncated LAZ file: no room for the chunk table's position after byte %llu", (unsigned long long)offset);
+    return false;
+  }
+  uint64_t table = get_u64(d + offset);
+  if (table == ~uint64_t(0) && size >= chunks_start + 8) table = get_u64(d + size - 8);
+  // A compressor interrupted before writing the table: LASzip rebuilds it while reading.
+  if (table + 8 == chunks_start) return true;
+  // A table outside the file (a truncated file): LASzip cannot seek there and
+  // reports the first point it cannot read, as for any truncated file.
+  if (table < chunks_start || table > size || size - table < 8) return true;
+  const uint64_t chunks = get_u32(d + table + 4);
+  const uint64_t limit = std::min<uint64_t>({table - chunks_start, std::max<uint64_t>(count, 1), uint64_t(1) << 26});
+  if (chunks > limit) {
+    std::snprintf(msg, cap, "corrupt LAZ file: the chunk table announces %llu chunks for %llu points in %llu bytes of compressed points",
+                  (unsigned long long)chunks, (unsigned long long)count, (unsigned long long)(table - chunks_start));
+    return false;
+  }
+  return true;
+}
+
 // Checks every size in the raw header against the file's length before
 // LASzip sees it: LASzip allocates from these fields (the VLR array, the
 // bytes between the VLRs and the point data, each EVLR) and reports some
@@ -204,6 +242,7 @@ bool check_layout(const uint8_t* d, uint64_t size, char* msg, size_t cap) {
   }
   // Variable-length records lie between the header and the point data, 54 bytes each plus their payload.
   uint64_t at = header_size;
+  bool laszip_vlr = false;
   for (uint64_t i = 0; i < vlr_count; i++) {
     if (at + 54 > offset || at + 54 + get_u16(d + at + 20) > offset) {
       std::snprintf(msg, cap, "corrupt header: it announces %llu variable-length records, but record %llu does not fit before the point data (byte %llu)",
@@ -219,6 +258,7 @@ bool check_layout(const uint8_t* d, uint64_t size, char* msg, size_t cap) {
                       (unsigned long long)len, len < 34 ? 0u : unsigned(get_u16(d + at + 54 + 32)));
         return false;
       }
+      laszip_vlr = true;
     }
     at += 54 + len;
   }
@@ -254,6 +294,7 @@ bool check_layout(const uint8_t* d, uint64_t size, char* msg, size_t cap) {
                   (unsigned long long)count, (unsigned long long)record_length, (unsigned long long)offset, (unsigned long long)size);
     return false;
   }
+  if (compressed && laszip_vlr && !check_chunk_table(d, size, offset, count, msg, cap)) return false;
   const char* axis = "xyz";
   for (int a = 0; a < 3; a++) {
     const double scale = get_f64(d + 131 + 8 * a), offset_a = get_f64(d + 155 + 8 * a);

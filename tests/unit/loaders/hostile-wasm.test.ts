@@ -133,6 +133,27 @@ describe('LAS/LAZ', () => {
     expect(m.HEAPU8.buffer.byteLength - heapBefore).toBeLessThan(64 << 20);
   });
 
+  test('a LAZ chunk table that announces more chunks than points or bytes is refused before LASzip allocates for it', async () => {
+    const m = await loadLasWasm();
+    const heapBefore = m.HEAPU8.buffer.byteLength;
+    const name = 'lazperf_autzen_trim.laz';
+    const tableOf = (b: Uint8Array) => {
+      const v = new DataView(b.buffer, b.byteOffset);
+      return Number(v.getBigUint64(v.getUint32(96, true), true));
+    };
+    // 2^25 + 3: one flipped bit (the fuzz case: LASzip asked for 256 MiB, then read
+    // /proc/meminfo through stdio, which this module does not have); 2^29: 8 bytes a
+    // chunk wrap a 32-bit size to 8 bytes, and LASzip would write past them.
+    for (const chunks of [2 ** 25 + 3, 2 ** 29, 0xffff_ffff]) {
+      const b = las(name);
+      new DataView(b.buffer, b.byteOffset).setUint32(tableOf(b) + 4, chunks, true);
+      expect((await lasRejects(b, `chunks-${name}`)).message).toMatch(new RegExp(`corrupt LAZ file: the chunk table announces ${chunks} chunks for 110000 points`));
+      await lasStillWorks();
+    }
+    expect(await loadLasWasm()).toBe(m); // nothing failed inside the module
+    expect(m.HEAPU8.buffer.byteLength - heapBefore).toBeLessThan(64 << 20);
+  });
+
   test('impossible headers: count -1, NaN and zero scales, record length 0', async () => {
     const cases: [string, (dv: DataView) => void, RegExp][] = [
       ['count-1.las', (dv) => dv.setUint32(107, 0xffff_ffff, true), /truncated file: the header announces 4294967295 points/],
