@@ -27,7 +27,7 @@ import { requestNodeGpu } from '../src/gpu/node-gpu.ts';
 import { Isosurface } from '../src/isosurface/isosurface.ts';
 import type { IsosurfaceStats } from '../src/isosurface/types.ts';
 import { compressOnGpu } from '../src/volume/open-volume.ts';
-import type { Dims } from '../src/volume/naming.ts';
+import type { Dims } from '../src/core/naming.ts';
 import { ZfpDecoder } from '../src/zfp/decoder.ts';
 import { loadZfpStream, type ZfpGpuStream } from '../src/zfp/gpu-stream.ts';
 import { printTable, writeJson } from './lib/report.ts';

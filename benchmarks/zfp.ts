@@ -16,7 +16,7 @@ import { ZfpDecoder } from '../src/zfp/decoder.ts';
 import { ZfpEncoder } from '../src/zfp/encoder.ts';
 import { openZfpStream, planZfpStream } from '../src/zfp/format.ts';
 import { ZfpGpuStream } from '../src/zfp/gpu-stream.ts';
-import { formatDims } from '../src/volume/naming.ts';
+import { formatDims } from '../src/core/naming.ts';
 import { printTable, repeat, writeJson, type Stats } from './lib/report.ts';
 
 const root = fileURLToPath(new URL('..', import.meta.url));

@@ -3,7 +3,7 @@
 // headline ratios, and what was chosen and why.
 import { meanAfterFirst } from '../../src/examples/paper-bench/measure.ts';
 import { BLOCK, NAIVE_MC, SERIAL_MC, ZFP } from './paper-figures.ts';
-import type { PaperBenchResult } from './run.ts';
+import type { PaperBenchResult } from './result.ts';
 
 const f1 = (x: number | undefined | null, digits = 1) => (x === undefined || x === null || !Number.isFinite(x) ? '–' : x.toFixed(digits));
 const ms = (x: number | undefined | null) => (x === undefined || x === null || !Number.isFinite(x) ? '–' : x >= 100 ? x.toFixed(0) : x >= 10 ? x.toFixed(1) : x.toFixed(2));

@@ -15,7 +15,7 @@ import { timeGpuDecode } from '../../src/examples/paper-bench/gpu-measure.ts';
 import { meanAfterFirst, timeZfpWasm } from '../../src/examples/paper-bench/measure.ts';
 import type { ZfpDecoder } from '../../src/zfp/decoder.ts';
 import { loadZfpStream } from '../../src/zfp/gpu-stream.ts';
-import { decodeZfpWasm } from './zfp-wasm.ts';
+import { decodeZfpWasm } from '../../src/loaders/zfp-wasm.ts';
 import type { PreparedVolume } from './volumes.ts';
 
 const ZFPY = `

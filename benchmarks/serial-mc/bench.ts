@@ -13,7 +13,7 @@ import { join } from 'node:path';
 import { marchingCubes } from '../../src/mc/serial-mc.ts';
 import { loadMcReference, loadMcVolume, rng, ROOT } from '../../tests/unit/mc/reference.ts';
 import { printTable, summarize, writeJson, type Cell } from '../lib/report.ts';
-import { WasmSerialMc } from './wasm-mc.ts';
+import { WasmSerialMc } from '../../src/mc/serial-mc-wasm.ts';
 
 function arg(name: string): string | undefined {
   const i = process.argv.indexOf(`--${name}`);

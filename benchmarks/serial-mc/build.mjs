@@ -2,8 +2,9 @@
 // Builds the serial C++ marching cubes (serial_mc.cpp):
 //   node benchmarks/serial-mc/build.mjs [native] [wasm] [--if-stale]
 // native: g++ -O3 -> benchmarks/serial-mc/build/serial_mc (ignored; made at bench/test time)
-// wasm:   Debian's emcc 3.1.6 -O3 -> benchmarks/serial-mc/dist/serial_mc.{js,wasm} (committed,
-//         so runs need no Emscripten), plus serial_mc.d.ts for the TS wrapper (wasm-mc.ts).
+// wasm:   Debian's emcc 3.1.6 -O3 -> wasm/dist/serial_mc.{js,wasm} (committed, beside the other
+//         modules, so runs need no Emscripten), plus serial_mc.d.ts for the TS wrapper
+//         (src/mc/serial-mc-wasm.ts).
 // With no target, both. --if-stale rebuilds the native binary only when a source is newer.
 // The case table (mc_tables.h) is generated with src/mc/case-table-data.ts by
 // tools/mc/derive-case-table.py; the unit tests check the two agree.
@@ -13,6 +14,7 @@ import { join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
 const here = fileURLToPath(new URL('.', import.meta.url));
+const dist = fileURLToPath(new URL('../../wasm/dist/', import.meta.url));
 const sources = ['serial_mc.cpp', 'mc_tables.h'].map((f) => join(here, f));
 export const nativeBinary = join(here, 'build', 'serial_mc');
 
@@ -69,12 +71,12 @@ export default function createSerialMc(options?: SerialMcOptions): Promise<Seria
 
 export function buildWasm() {
   if (!has('emcc')) throw new Error('emcc not found: apt-get install -y emscripten (see TOOLCHAIN.md)');
-  mkdirSync(join(here, 'dist'), { recursive: true });
+  mkdirSync(dist, { recursive: true });
   run('emcc', [
     '-O3',
     'serial_mc.cpp',
     '-o',
-    'dist/serial_mc.js',
+    join(dist, 'serial_mc.js'),
     '--no-entry',
     '-sMODULARIZE=1',
     '-sEXPORT_ES6=1',
@@ -88,7 +90,7 @@ export function buildWasm() {
     "-sEXPORTED_FUNCTIONS=['_mc_marching_cubes','_mc_free','_mc_alloc']",
     "-sEXPORTED_RUNTIME_METHODS=['HEAPU8','HEAPU32','HEAPF32']",
   ]);
-  writeFileSync(join(here, 'dist', 'serial_mc.d.ts'), DTS);
+  writeFileSync(join(dist, 'serial_mc.d.ts'), DTS);
 }
 
 const isMain = process.argv[1] && fileURLToPath(import.meta.url) === process.argv[1];

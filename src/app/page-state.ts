@@ -4,7 +4,7 @@ import type { BenchResult } from '../bench/harness.ts';
 import type { AdapterSummary } from '../gpu/device.ts';
 import type { IsosurfaceStats } from '../isosurface/types.ts';
 import type { CameraState } from '../render/camera.ts';
-import type { Dims } from '../volume/naming.ts';
+import type { Dims } from '../core/naming.ts';
 
 export interface PageVolumeState {
   name: string;

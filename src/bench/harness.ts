@@ -3,6 +3,7 @@
 // first (pipeline warm-up) from the summaries.
 import { summarize } from './stats.ts';
 import { isovalueSequence, type BenchMode } from './sequences.ts';
+import { hitRate } from '../isosurface/types.ts';
 
 /** What one surface computation reports (from the GPU statistics). */
 export interface SurfaceStats {
@@ -61,10 +62,6 @@ export interface BenchResult {
   options: { modes: BenchMode[]; count: number; range: [number, number]; seed: number };
   records: BenchRecord[];
   summaries: BenchSummary[];
-}
-
-export function hitRate(active: number, fresh: number): number {
-  return active === 0 ? 1 : 1 - fresh / active;
 }
 
 export function summarizeMode(mode: BenchMode, records: BenchRecord[]): BenchSummary {

@@ -1,8 +1,8 @@
 // A summary of a file as far as our parsers can tell from its name, size and
 // first bytes: what `cli info` prints and the page shows before loading.
 
-import { DTYPE_BYTES } from '../volume/dtype.ts';
-import type { Dims } from '../volume/naming.ts';
+import { DTYPE_BYTES } from '../core/dtype.ts';
+import type { Dims } from '../core/naming.ts';
 import { describeZfpStream } from '../zfp/format.ts';
 import { describeMode, parseZfpHeader, ZfpFormatError } from '../zfp/header.ts';
 import { detectFile, type FileKind } from './detect.ts';

@@ -2,7 +2,7 @@
 // before any real parser runs. Used by `cli info` and the page's loader to
 // pick a parser and to word errors.
 
-import { parseVolumeName, type NameInfo } from '../volume/naming.ts';
+import { parseVolumeName, type NameInfo } from '../core/naming.ts';
 import { hasZfpMagic } from '../zfp/header.ts';
 
 export type FileKind =

@@ -14,7 +14,6 @@
 // recomputes that isovalue, unless a newer one is waiting.
 import type { GpuContext } from '../gpu/device.ts';
 import { readU32 } from '../gpu/buffers.ts';
-import { hitRate, type SurfaceEngine } from '../bench/harness.ts';
 import { StreamCompact, StreamCompactIds } from '../primitives/compact.ts';
 import { ExclusiveScan } from '../primitives/scan.ts';
 import { ZfpDecoder } from '../zfp/decoder.ts';
@@ -27,6 +26,7 @@ import { C, DEFAULT_GROUP_EDGE_BLOCKS, DRAW_ARGS_BYTES, STATUS_CACHE_SHORTFALL, 
 import { BlockCache } from './lru-cache.ts';
 import { StatsReadback, type RawStats } from './stats-readback.ts';
 import {
+  hitRate,
   IsosurfaceBudgetError,
   IsosurfaceSupersededError,
   type IsosurfaceDrawData,
@@ -57,7 +57,7 @@ interface Request {
 /** Attempts per isovalue: one, plus a cache growth, plus a vertex growth, plus slack. */
 const MAX_ATTEMPTS = 4;
 
-export class Isosurface implements SurfaceEngine {
+export class Isosurface {
   readonly info: VolumeInfo;
   readonly drawData: IsosurfaceDrawData;
   private readonly statsListeners = new Set<(stats: IsosurfaceStats) => void>();

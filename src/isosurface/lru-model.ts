@@ -1,7 +1,7 @@
 // CPU model of the block cache (paper Algorithm 1 as the GPU runs it, see
 // lru-cache.ts): the reference the cache tests compare the GPU state with,
 // slot for slot. Also the CPU rule for active blocks.
-import type { Dims } from '../volume/naming.ts';
+import type { Dims } from '../core/naming.ts';
 import { AGE_MAX, DEFAULT_GROUP_EDGE_BLOCKS, NONE } from './layout.ts';
 
 /**

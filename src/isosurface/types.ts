@@ -2,7 +2,7 @@
 // users: the page (renderer, stats panel, benchmark), the CLI and the tests.
 
 import type { PassTiming, TimingSource } from '../gpu/timing.ts';
-import type { Dims } from '../volume/naming.ts';
+import type { Dims } from '../core/naming.ts';
 
 export interface IsosurfaceOptions {
   /** Cache slots to start with (one slot = one decoded 4x4x4 block, 256 bytes). Default: 10% of the blocks. */
@@ -122,4 +122,9 @@ export class IsosurfaceSupersededError extends Error {
     super(`the surface at iso ${isovalue} was not computed: iso ${replacedBy} replaced it`);
     this.name = 'IsosurfaceSupersededError';
   }
+}
+
+/** Share of a surface's active blocks that were already cached (1 when none are active). */
+export function hitRate(active: number, fresh: number): number {
+  return active === 0 ? 1 : 1 - fresh / active;
 }

@@ -1,7 +1,7 @@
 // The compressed vertex format on the CPU (the WGSL side is
 // shaders/isosurface/vertex_format.wgsl): 2 u32 per vertex, the position
 // relative to the block origin quantized to 10 bits per axis, and the block id.
-import type { Dims } from '../volume/naming.ts';
+import type { Dims } from '../core/naming.ts';
 
 /** Voxels per quantization step: 4 / 1023. */
 export const VERTEX_QUANTUM = 4 / 1023;

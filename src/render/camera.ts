@@ -3,6 +3,7 @@
 // by every page. State is plain numbers so it fits in a URL hash.
 
 import { mat3, mat4, quat, vec3 } from 'gl-matrix';
+import { DEFAULT_VIEW_DIRECTION } from '../core/view.ts';
 
 export interface CameraState {
   /** Rotation from world to eye orientation, [x, y, z, w]. */
@@ -11,8 +12,6 @@ export interface CameraState {
   distance: number;
 }
 
-/** Where a y-up fit looks from (toward the centre): front, right, a little above. */
-export const DEFAULT_VIEW_DIRECTION: readonly [number, number, number] = [0.62, 0.5, 1];
 
 /** The world axis shown pointing up by fit() and reset: LIDAR and terrain use z, CT and ParaView's default y. */
 export type UpAxis = 'x' | 'y' | 'z';

@@ -10,7 +10,7 @@
 // turn into +-Inf) count as infinite. The value range, the block profile and
 // the isovalue choice therefore see only the finite values.
 
-import type { DType } from './dtype.ts';
+import type { DType } from '../core/dtype.ts';
 
 const FLT_MAX = 3.4028234663852886e38;
 

@@ -3,8 +3,8 @@
 // We read attached data with raw or gzip encoding, 3 dimensions (or 4 with a
 // leading axis of size 1), and the scalar types the compressor accepts.
 
-import { DTYPE_BYTES, type DType } from './dtype.ts';
-import type { Dims } from './naming.ts';
+import { DTYPE_BYTES, type DType } from '../core/dtype.ts';
+import type { Dims } from '../core/naming.ts';
 
 export class NrrdError extends Error {
   constructor(message: string) {

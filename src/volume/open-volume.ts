@@ -21,8 +21,8 @@ import { blockGridOf, fixedRateStreamBytes, MIN_FLOAT_BLOCK_BITS, openZfpStream 
 import { ZfpFormatError } from '../zfp/header.ts';
 import { loadZfpStream, type ZfpGpuStream } from '../zfp/gpu-stream.ts';
 import { ZfpEncoder } from '../zfp/encoder.ts';
-import { DTYPE_BYTES, type DType } from './dtype.ts';
-import { formatDims, parseVolumeName, type Dims } from './naming.ts';
+import { DTYPE_BYTES, type DType } from '../core/dtype.ts';
+import { formatDims, parseVolumeName, type Dims } from '../core/naming.ts';
 import { NrrdError, parseNrrd, type NrrdVolume } from './nrrd.ts';
 import { allNonFiniteMessage, countNonFinite, nonFiniteNotice, nonFiniteTotal, replaceNonFinite, type NonFiniteCount } from './non-finite.ts';
 import { generateDefaultVolume } from './procedural.ts';

@@ -7,8 +7,8 @@
 //     one side so inner shells show through, like a CT scan's skin and bone.
 // value = max(sheet, shells), so a surface of the union shows both at once.
 
-import { DEFAULT_VIEW_DIRECTION } from '../render/camera.ts';
-import type { Dims } from './naming.ts';
+import { DEFAULT_VIEW_DIRECTION } from '../core/view.ts';
+import type { Dims } from '../core/naming.ts';
 import { mulberry32 } from '../util/random.ts';
 
 export interface ProceduralVolume {

@@ -11,9 +11,9 @@
 // whole z rows of blocks (each shard one storage binding), and the input is
 // uploaded one slab of z planes per shard, so neither needs to fit a binding.
 
-import type { DType } from '../volume/dtype.ts';
-import { DTYPE_BYTES } from '../volume/dtype.ts';
-import { formatDims, type Dims } from '../volume/naming.ts';
+import type { DType } from '../core/dtype.ts';
+import { DTYPE_BYTES } from '../core/dtype.ts';
+import { formatDims, type Dims } from '../core/naming.ts';
 import { dispatchLinear } from '../gpu/dispatch.ts';
 import { createComputePipeline } from '../gpu/wgsl.ts';
 import { planZfpStream, ZfpFormatError, type ZfpStreamInfo } from './format.ts';

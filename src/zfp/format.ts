@@ -10,8 +10,8 @@
 // `payloadBitOffset + b * bitsPerBlock`; bits are LSB-first in little-endian
 // 64-bit words; zfp pads the stream with zeros to a whole 64-bit word.
 
-import { DTYPES, type DType } from '../volume/dtype.ts';
-import { formatDims, parseVolumeName, type Dims } from '../volume/naming.ts';
+import { DTYPES, type DType } from '../core/dtype.ts';
+import { formatDims, parseVolumeName, type Dims } from '../core/naming.ts';
 import { describeMode, hasZfpMagic, parseZfpHeader, ZfpFormatError, type ZfpHeader } from './header.ts';
 
 export { ZfpFormatError } from './header.ts';

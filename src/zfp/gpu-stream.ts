@@ -15,7 +15,7 @@
 // that is not a multiple of 0.5 starts inside a word), so no shifting copy of
 // the stream is needed and the file's bytes go to the GPU as they are.
 
-import { formatDims } from '../volume/naming.ts';
+import { formatDims } from '../core/naming.ts';
 import { openZfpStream, type OpenZfpOptions, type ZfpStreamInfo } from './format.ts';
 
 export interface ZfpShard {

@@ -11,7 +11,7 @@ import numpy as np
 
 from .base import InputError, LazySource, Volume, check_volume, file_identity, lazy_array
 
-# Same rule as src/volume/naming.ts: _XxYxZ then an optional _dtype.
+# Same rule as src/core/naming.ts: _XxYxZ then an optional _dtype.
 _SHAPE = re.compile(r"_(\d+)x(\d+)x(\d+)(?:_([a-z]+\d*))?", re.IGNORECASE)
 _RATE = re.compile(r"\.c?rate(\d+(?:\.\d+)?)(?=\.|$)", re.IGNORECASE)
 PAGE_DTYPES = ("uint8", "int8", "uint16", "int16", "float32", "float64")

@@ -3,8 +3,8 @@
 // rate raw and NRRD volumes are compressed at. Prefilled from the name;
 // Enter opens, Escape cancels (the current volume stays).
 
-import { DTYPE_BYTES, isDType, type DType } from '../../volume/dtype.ts';
-import type { Dims } from '../../volume/naming.ts';
+import { DTYPE_BYTES, isDType, type DType } from '../../core/dtype.ts';
+import type { Dims } from '../../core/naming.ts';
 import { DEFAULT_RAW_RATE, type OpenRequest, type VolumeFileFacts } from '../../volume/open-volume.ts';
 import { blockGridOf, fixedRateStreamBytes } from '../../zfp/format.ts';
 import { formatBytes } from '../format.ts';

@@ -4,8 +4,8 @@
 // come from the name (`name_XxYxZ_dtype.raw`) unless given.
 import { readFileSync, writeFileSync } from 'node:fs';
 import { basename } from 'node:path';
-import { DTYPE_BYTES, DTYPES, isDType, type DType } from '../../volume/dtype.ts';
-import { formatDims, parseVolumeName, type Dims } from '../../volume/naming.ts';
+import { DTYPE_BYTES, DTYPES, isDType, type DType } from '../../core/dtype.ts';
+import { formatDims, parseVolumeName, type Dims } from '../../core/naming.ts';
 import { allNonFiniteMessage, countNonFinite, nonFiniteNotice, nonFiniteTotal, replaceNonFinite } from '../../volume/non-finite.ts';
 import { ZfpEncoder } from '../../zfp/encoder.ts';
 import { planZfpStream, ZfpFormatError } from '../../zfp/format.ts';

@@ -4,7 +4,7 @@
 // the name (`name_XxYxZ_float32.raw.crate4.zfp`) or --rate.
 import { closeSync, openSync, readFileSync, writeSync } from 'node:fs';
 import { basename } from 'node:path';
-import { formatDims } from '../../volume/naming.ts';
+import { formatDims } from '../../core/naming.ts';
 import { ZfpDecoder } from '../../zfp/decoder.ts';
 import { openZfpStream, ZfpFormatError } from '../../zfp/format.ts';
 import { ZfpGpuStream } from '../../zfp/gpu-stream.ts';

@@ -4,8 +4,8 @@
 // same code: serial marching cubes in TypeScript and in WebAssembly (the C++
 // twin, benchmarks/serial-mc/), zfp's C decoder in WebAssembly, and the
 // isovalue range of interest of a volume.
-import { WasmSerialMc } from '../../../benchmarks/serial-mc/wasm-mc.ts';
-import { ZfpWasmStream } from '../../../benchmarks/paper/zfp-wasm.ts';
+import { WasmSerialMc } from '../../mc/serial-mc-wasm.ts';
+import { ZfpWasmStream } from '../../loaders/zfp-wasm.ts';
 import { marchingCubes, type Dims3 } from '../../mc/serial-mc.ts';
 
 export type SerialMethod = 'js' | 'wasm';

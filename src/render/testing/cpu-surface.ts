@@ -4,7 +4,7 @@
 // pipeline. Not a product path.
 import type { IsosurfaceDrawData } from '../../isosurface/types.ts';
 import { marchingCubes } from '../../mc/serial-mc.ts';
-import type { Dims } from '../../volume/naming.ts';
+import type { Dims } from '../../core/naming.ts';
 
 /** Packs a triangle soup (voxel coordinates) into u32 pairs (position in its cell's block, block id). */
 export function packTriangleSoup(positions: Float32Array, dims: Dims): Uint32Array {

@@ -7,7 +7,7 @@ import { join } from 'node:path';
 import { describe, expect, test } from 'vitest';
 import { checkAgainstPaper } from '../../../benchmarks/paper/paper-figures.ts';
 import { writeReport } from '../../../benchmarks/paper/report.ts';
-import type { PaperBenchResult } from '../../../benchmarks/paper/run.ts';
+import type { PaperBenchResult } from '../../../benchmarks/paper/result.ts';
 import { userVolume } from '../../../benchmarks/paper/volumes.ts';
 import { interestingRange, meanAfterFirst } from '../../../src/examples/paper-bench/measure.ts';
 import { ROOT } from '../mc/reference.ts';

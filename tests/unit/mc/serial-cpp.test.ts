@@ -6,7 +6,7 @@ import { mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect, test } from 'vitest';
-import { WasmSerialMc } from '../../../benchmarks/serial-mc/wasm-mc.ts';
+import { WasmSerialMc } from '../../../src/mc/serial-mc-wasm.ts';
 import { meshMetrics } from '../../../src/mc/mesh-metrics.ts';
 import { marchingCubes } from '../../../src/mc/serial-mc.ts';
 import { ROOT, SHARED_DATA, asFloat32, loadMcReference, rng } from './reference.ts';

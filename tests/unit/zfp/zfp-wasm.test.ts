@@ -1,4 +1,4 @@
-// zfp's C decoder compiled to WebAssembly (wasm/dist/zfp.*, benchmarks/paper/zfp-wasm.ts):
+// zfp's C decoder compiled to WebAssembly (wasm/dist/zfp.*, src/loaders/zfp-wasm.ts):
 // every fixed-rate test vector (rates 2, 4, 8, 16; block-aligned and partial
 // border blocks), with and without zfp's header, decodes bit for bit to
 // zfpy's output (zfp-vectors/*.decoded.raw); the header facts are read; and
@@ -6,7 +6,7 @@
 import { readFileSync } from 'node:fs';
 import { join } from 'node:path';
 import { describe, expect, test } from 'vitest';
-import { decodeZfpWasm, decodeZfpWasmRaw, ZfpWasmError, ZfpWasmStream } from '../../../benchmarks/paper/zfp-wasm.ts';
+import { decodeZfpWasm, decodeZfpWasmRaw, ZfpWasmError, ZfpWasmStream } from '../../../src/loaders/zfp-wasm.ts';
 import { SHARED_DATA } from '../mc/reference.ts';
 
 const DIR = join(SHARED_DATA, 'zfp-vectors');

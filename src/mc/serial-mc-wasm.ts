@@ -1,7 +1,8 @@
-// The serial C++ marching cubes compiled to WebAssembly (dist/, made by build.mjs),
+// The serial C++ marching cubes (benchmarks/serial-mc/serial_mc.cpp) compiled to
+// WebAssembly (wasm/dist/serial_mc.*, made by benchmarks/serial-mc/build.mjs),
 // wrapped for TypeScript in Node and in the browser. The volume is copied into the
 // Wasm heap once; each run then contours it in place.
-import createSerialMc, { type SerialMcModule } from './dist/serial_mc.js';
+import createSerialMc, { type SerialMcModule } from '../../wasm/dist/serial_mc.js';
 
 type Dims3 = readonly [number, number, number];
 
@@ -11,7 +12,7 @@ export interface WasmRun {
   positions: Float32Array | null;
 }
 
-const wasmUrl = new URL('./dist/serial_mc.wasm', import.meta.url);
+const wasmUrl = new URL('../../wasm/dist/serial_mc.wasm', import.meta.url);
 
 async function wasmBytes(): Promise<Uint8Array> {
   if (typeof process !== 'undefined' && process.versions?.node) {

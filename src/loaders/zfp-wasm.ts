@@ -5,7 +5,7 @@
 // `decode()` then runs zfp_decompress on it into an output array that also
 // lives in the heap, so a timed decode is zfp's work alone.
 import createZfpModule, { type ZfpWasm } from '../../wasm/dist/zfp.js';
-import { copyIntoHeap, instantiateWasm, ptr } from '../../src/loaders/wasm-module.ts';
+import { copyIntoHeap, instantiateWasm, ptr } from './wasm-module.ts';
 
 let module: Promise<ZfpWasm> | undefined;
 
