@@ -12,7 +12,7 @@ const root = resolve(import.meta.dirname, '../../..');
 const src = join(root, 'src');
 
 /** Higher layers may import lower ones; folders in one layer may not import each other. */
-export const LAYERS: Record<string, number> = {
+const LAYERS: Record<string, number> = {
   core: 0, // dims, the file-naming rule, data types, the default view direction
   util: 0,
   gpu: 1,
@@ -44,7 +44,7 @@ function sources(dir: string): string[] {
 }
 
 /** Relative specifiers of static imports, re-exports and dynamic imports with a literal. */
-export function importsOf(text: string): string[] {
+function importsOf(text: string): string[] {
   const code = text.replace(/\/\*[\s\S]*?\*\//g, '').replace(/^\s*\/\/.*$/gm, '');
   const specs = new Set<string>();
   for (const m of code.matchAll(/(?:\bfrom\s*|\bimport\s*\(\s*|^\s*import\s+)['"]([^'"]+)['"]/gm)) specs.add(m[1]);
