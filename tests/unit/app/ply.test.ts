@@ -7,7 +7,7 @@ import { decodeVertices } from '../../../src/isosurface/vertex-format.ts';
 import { marchingCubes } from '../../../src/mc/serial-mc.ts';
 import { packTriangleSoup } from '../../../src/render/testing/cpu-surface.ts';
 import { generateDefaultVolume } from '../../../src/volume/procedural.ts';
-import type { Dims } from '../../../src/volume/naming.ts';
+import type { Dims } from '../../../src/core/naming.ts';
 
 function sphere(n: number): Float32Array {
   const v = new Float32Array(n * n * n);

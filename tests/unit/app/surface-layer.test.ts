@@ -10,7 +10,7 @@ import { ArcballCamera } from '../../../src/render/camera.ts';
 import { SurfaceLayer } from '../../../src/render/surface-layer.ts';
 import { createCpuSurface } from '../../../src/render/testing/cpu-surface.ts';
 import { createFrameBindGroupLayout, DEPTH_FORMAT, FRAME_UNIFORM_BYTES, frameUniformData } from '../../../src/render/viewer.ts';
-import type { Dims } from '../../../src/volume/naming.ts';
+import type { Dims } from '../../../src/core/naming.ts';
 import { marchingCubes } from '../../../src/mc/serial-mc.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 

@@ -8,7 +8,7 @@ import { Isosurface } from '../../../src/isosurface/isosurface.ts';
 import { formatMB } from '../../../src/isosurface/budget.ts';
 import { IsosurfaceBudgetError, IsosurfaceSupersededError, type IsosurfaceStats } from '../../../src/isosurface/types.ts';
 import { marchingCubes } from '../../../src/mc/serial-mc.ts';
-import type { Dims } from '../../../src/volume/naming.ts';
+import type { Dims } from '../../../src/core/naming.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { compressVolume, decodeVolume, makeField } from './helpers.ts';
 

@@ -13,7 +13,7 @@ import { Isosurface } from '../../../src/isosurface/isosurface.ts';
 import type { IsosurfaceOptions } from '../../../src/isosurface/types.ts';
 import { meshMetrics } from '../../../src/mc/mesh-metrics.ts';
 import { marchingCubes } from '../../../src/mc/serial-mc.ts';
-import type { Dims } from '../../../src/volume/naming.ts';
+import type { Dims } from '../../../src/core/naming.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { rng } from '../mc/reference.ts';
 import { compressVolume, decodeVolume, drawnSoup, makeField, VERTEX_TOLERANCE, type FieldKind } from './helpers.ts';

@@ -1,7 +1,7 @@
 // Shared by the isosurface tests: test volumes, compressing them on the GPU,
 // decoding them back (what the surfaces must be computed from), and the
 // decoded soup of the drawn surface.
-import type { Dims } from '../../../src/volume/naming.ts';
+import type { Dims } from '../../../src/core/naming.ts';
 import type { Isosurface } from '../../../src/isosurface/isosurface.ts';
 import { decodeVertices } from '../../../src/isosurface/vertex-format.ts';
 import { ZfpDecoder } from '../../../src/zfp/decoder.ts';

@@ -8,7 +8,7 @@ import { describe, expect } from 'vitest';
 import { grownCapacity } from '../../../src/isosurface/budget.ts';
 import { Isosurface } from '../../../src/isosurface/isosurface.ts';
 import { activeBlocks, LruCacheModel } from '../../../src/isosurface/lru-model.ts';
-import type { Dims } from '../../../src/volume/naming.ts';
+import type { Dims } from '../../../src/core/naming.ts';
 import { blockRanges } from '../../../src/zfp/cpu/codec.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { compressVolume, decodeVolume, makeField } from './helpers.ts';

@@ -12,7 +12,7 @@ import type { IsosurfaceDrawData, IsosurfaceStats } from '../../../src/isosurfac
 import { vertexFormatSnippet } from '../../../src/isosurface/wgsl.ts';
 import { readU32 } from '../../../src/gpu/buffers.ts';
 import { createShaderModule } from '../../../src/gpu/wgsl.ts';
-import type { Dims } from '../../../src/volume/naming.ts';
+import type { Dims } from '../../../src/core/naming.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { compressVolume, makeField } from './helpers.ts';
 

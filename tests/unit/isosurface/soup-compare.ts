@@ -14,7 +14,7 @@
 // order of matching never matters.
 import { CASE_VERTEX_COUNT, caseIndex } from '../../../src/mc/case-table.ts';
 import { marchingCubes } from '../../../src/mc/serial-mc.ts';
-import type { Dims } from '../../../src/volume/naming.ts';
+import type { Dims } from '../../../src/core/naming.ts';
 
 interface Tri {
   block: number;

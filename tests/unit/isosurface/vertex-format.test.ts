@@ -8,7 +8,7 @@ import { createComputePipeline } from '../../../src/gpu/wgsl.ts';
 import { A, AGE_MAX, C, NONE, S, SHARD_RECORD_BYTES, STATUS_CACHE_SHORTFALL, STATUS_VERTEX_OVERFLOW } from '../../../src/isosurface/layout.ts';
 import { decodeVertices, encodeVertexPosition, VERTEX_QUANTUM } from '../../../src/isosurface/vertex-format.ts';
 import { vertexFormatSnippet } from '../../../src/isosurface/wgsl.ts';
-import type { Dims } from '../../../src/volume/naming.ts';
+import type { Dims } from '../../../src/core/naming.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { rng } from '../mc/reference.ts';
 
