@@ -33,6 +33,8 @@ export const C = {
   cells: 21,
   activeGroups: 22,
   groupBlocks: 23,
+  /** Host-written id of the submission (its statistics are checked against it). */
+  request: 44,
 } as const;
 
 /** Word offsets of indirect dispatch arguments (x, y, z) in the counters buffer. */

@@ -30,6 +30,12 @@ export interface IsosurfaceOptions {
    * Default 4 (16^3 voxels); a chunked store uses its chunk (64^3 voxels: 16).
    */
   groupEdgeBlocks?: number;
+  /**
+   * Added by the pipeline: computations submitted and not yet read back at
+   * once (scrubbing records the next surface without waiting for the
+   * previous statistics). Default 2.
+   */
+  maxSurfacesInFlight?: number;
 }
 
 export interface VolumeInfo {
@@ -121,5 +127,17 @@ export class IsosurfaceSupersededError extends Error {
   constructor(readonly isovalue: number, readonly replacedBy: number) {
     super(`the surface at iso ${isovalue} was not computed: iso ${replacedBy} replaced it`);
     this.name = 'IsosurfaceSupersededError';
+  }
+}
+
+/**
+ * Added by the pipeline: a computation failed on the GPU (a validation error
+ * or out of memory in its submission). Nothing of it ran; the previous
+ * surface stays drawn.
+ */
+export class IsosurfaceGpuError extends Error {
+  constructor(message: string, readonly isovalue: number) {
+    super(`Isosurface: ${message}`);
+    this.name = 'IsosurfaceGpuError';
   }
 }
