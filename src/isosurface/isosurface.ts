@@ -528,10 +528,21 @@ export class Isosurface implements SurfaceEngine {
    */
   resetCache(): void {
     if (this.destroyed) return;
+    const { device } = this;
+    device.pushErrorScope('out-of-memory');
+    device.pushErrorScope('validation');
     this.cacheEpoch++;
     this.cache.reset(this.initialSlots);
     this.mc.resize(this.initialSlots);
     this.refreshDrawData();
+    const validation = device.popErrorScope();
+    const oom = device.popErrorScope();
+    void Promise.all([validation, oom]).then(([v, m]) => {
+      const e = v ?? m;
+      if (!e || this.destroyed) return;
+      const error = new IsosurfaceGpuError(`emptying the block cache failed on the GPU (${v ? 'validation error' : 'out of memory'}: ${e.message.replace(/\s+/g, ' ').trim()})`, NaN);
+      for (const l of this.errorListeners) l(error);
+    });
   }
 
   /** Bytes the cache and vertex buffers may grow to (applies from the next growth on). */
