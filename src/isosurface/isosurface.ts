@@ -21,9 +21,9 @@ import { ZfpDecoder } from '../zfp/decoder.ts';
 import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
 import { ActiveBlocks, groupGrid } from './active-blocks.ts';
 import { BlockMarchingCubes } from './block-mc.ts';
-import { cacheBytesFor, defaultMemoryBudget, formatMB, grownCapacity, vertexBytesFor } from './budget.ts';
+import { cacheBytesFor, defaultMemoryBudget, formatMB, grownCapacity, maxCacheSlots, vertexBytesFor } from './budget.ts';
 import { Counters } from './counters.ts';
-import { C, DEFAULT_GROUP_EDGE_BLOCKS, DRAW_ARGS_BYTES, STATUS_CACHE_SHORTFALL, STATUS_VERTEX_OVERFLOW, VERTEX_BYTES } from './layout.ts';
+import { C, DEFAULT_GROUP_EDGE_BLOCKS, DRAW_ARGS_BYTES, SLOT_BYTES, STATUS_CACHE_SHORTFALL, STATUS_VERTEX_OVERFLOW, VERTEX_BYTES } from './layout.ts';
 import { BlockCache } from './lru-cache.ts';
 import { StatsReadback, type RawStats } from './stats-readback.ts';
 import {
@@ -109,6 +109,8 @@ export class Isosurface implements SurfaceEngine {
     info: VolumeInfo,
     budget: number,
     private readonly maxInFlight: number,
+    /** Slots whose data fits one storage binding (the cache never grows beyond). */
+    private readonly maxSlots: number,
   ) {
     this.info = info;
     this.budget = budget;
@@ -129,7 +131,8 @@ export class Isosurface implements SurfaceEngine {
     const bindingBytes = Math.min(options.maxVertexBindingBytes ?? Infinity, limits.maxStorageBufferBindingSize, limits.maxBufferSize);
     const perShard = Math.floor(bindingBytes / VERTEX_BYTES);
     if (perShard < 1) throw new RangeError(`maxVertexBindingBytes must hold at least one vertex (${VERTEX_BYTES} bytes)`);
-    let slots = Math.max(1, Math.min(blockCount, options.initialCacheSlots ?? Math.ceil(blockCount / 10)));
+    const maxSlots = maxCacheSlots(limits, options.maxStorageBindingBytes);
+    let slots = Math.max(1, Math.min(blockCount, maxSlots, options.initialCacheSlots ?? Math.ceil(blockCount / 10)));
     let vertices = Math.max(1, options.initialVertexCapacity ?? Math.min(2 ** 22, Math.max(2 ** 16, blockCount * 8)));
     // The initial buffers must fit the budget too: shrink both (keeping their
     // ratio) until they do; the per-block and per-shard bytes do not shrink.
@@ -160,6 +163,15 @@ export class Isosurface implements SurfaceEngine {
     const groupEdge = options.groupEdgeBlocks ?? DEFAULT_GROUP_EDGE_BLOCKS;
     if (!Number.isInteger(groupEdge) || groupEdge < 1 || groupEdge > 64) throw new RangeError(`groupEdgeBlocks must be an integer in 1..64 (got ${groupEdge})`);
     const groupEntries = groupGrid(blockGrid, groupEdge).reduce((a, b) => a * b, 1) * groupEdge ** 3;
+    // Per-block buffers are bound whole too: neighbourhood ranges (8 B per block), the group-grid lists (4 B per entry).
+    const perBlockBinding = Math.max(blockCount * 8, groupEntries * 4);
+    const storageBinding = Math.min(options.maxStorageBindingBytes ?? Infinity, limits.maxStorageBufferBindingSize, limits.maxBufferSize);
+    if (perBlockBinding > storageBinding) {
+      throw new RangeError(
+        `${stream.info.fileName}: ${blockCount} blocks need ${formatMB(perBlockBinding)} per-block buffers in one storage binding; ` +
+          `this device binds at most ${formatMB(storageBinding)} (maxStorageBufferBindingSize)`,
+      );
+    }
     const volume = device.createBuffer({ label: 'Isosurface.volume', size: 32, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
     device.queue.writeBuffer(volume, 0, new Uint32Array([...dims, blockCount, ...blockGrid, 0]));
     const primitiveOptions = { maxWorkgroupsPerDimension: maxWg };
@@ -194,7 +206,7 @@ export class Isosurface implements SurfaceEngine {
       hi = Math.max(hi, ranges[2 * b + 1]);
     }
     const info: VolumeInfo = { dims: [...dims], blockGrid: [...blockGrid], blockCount, valueRange: [lo, hi] };
-    const iso = new Isosurface(gpu, stream, volume, counters, decoder, scan, slotScan, compact, compactIds, active, cache, mc, shards, new StatsReadback(device, options.timing ?? true), slots, info, budget, maxInFlight);
+    const iso = new Isosurface(gpu, stream, volume, counters, decoder, scan, slotScan, compact, compactIds, active, cache, mc, shards, new StatsReadback(device, options.timing ?? true), slots, info, budget, maxInFlight, maxSlots);
     iso.writeShardCounters();
     return iso;
   }
@@ -467,6 +479,13 @@ export class Isosurface implements SurfaceEngine {
     );
   }
 
+  private bindingError(iso: number, slots: number): Error {
+    return new Error(
+      `Isosurface: the surface at iso ${iso} needs ${slots} cache slots (${formatMB(slots * SLOT_BYTES)} of decoded blocks), ` +
+        `but this device binds at most ${this.maxSlots} slots (${formatMB(this.maxSlots * SLOT_BYTES)}: maxStorageBufferBindingSize) in one buffer. The previous surface is kept.`,
+    );
+  }
+
   /** Grows what the status says was too small (between submissions; nothing in flight). */
   private grow(status: number, c: Uint32Array, iso: number): void {
     const blocks = this.info.blockCount;
@@ -477,7 +496,8 @@ export class Isosurface implements SurfaceEngine {
     let minVertices = vertices;
     if (status & STATUS_CACHE_SHORTFALL) {
       minSlots = c[C.active];
-      slots = grownCapacity(slots, minSlots, blocks);
+      if (minSlots > this.maxSlots) throw this.bindingError(iso, minSlots);
+      slots = grownCapacity(slots, minSlots, Math.min(blocks, this.maxSlots));
     }
     if (status & STATUS_VERTEX_OVERFLOW) {
       minVertices = c[C.vertices];

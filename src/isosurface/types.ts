@@ -17,6 +17,13 @@ export interface IsosurfaceOptions {
   memoryBudgetBytes?: number;
   /** Largest vertex buffer binding (tests lower it to force several shards). Default: the device limit. */
   maxVertexBindingBytes?: number;
+  /**
+   * Added by the pipeline: largest storage binding (default: the device's
+   * maxStorageBufferBindingSize; tests lower it). The cache's slot data
+   * (256 B per slot) is one binding, so the cache holds at most this / 256
+   * slots; a surface with more active blocks is refused with a clear error.
+   */
+  maxStorageBindingBytes?: number;
   /** Record per-stage GPU times (timestamp queries where present). Default true. */
   timing?: boolean;
   /**
