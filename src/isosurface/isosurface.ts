@@ -594,6 +594,22 @@ export class Isosurface implements SurfaceEngine {
     return out;
   }
 
+  /** The normals of the drawn surface (u32 octahedral per vertex, vertex_format.wgsl), in readVertices' order. */
+  async readNormals(): Promise<Uint32Array> {
+    const { device } = this;
+    const shards = this.shards.shards;
+    const args = await readU32(device, this.shards.drawArgs, 0, (shards.length * DRAW_ARGS_BYTES) / 4);
+    const counts = shards.map((_, k) => args[4 * k]);
+    const out = new Uint32Array(counts.reduce((a, b) => a + b, 0));
+    let at = 0;
+    for (let k = 0; k < shards.length; k++) {
+      if (counts[k] === 0) continue;
+      out.set(await readU32(device, shards[k].normals, 0, counts[k]), at);
+      at += counts[k];
+    }
+    return out;
+  }
+
   /** Per-block (min, max), 2 f32 per block in raster block order (for the page's block-count profile). */
   readBlockRanges(): Promise<Float32Array> {
     return this.active.readBlockRanges();

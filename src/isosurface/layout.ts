@@ -68,5 +68,7 @@ export const DRAW_ARGS_BYTES = 16;
 export const SLOT_BYTES = 256;
 /** Bytes of one compressed vertex. */
 export const VERTEX_BYTES = 8;
+/** Bytes of one vertex normal (octahedral, vertex_format.wgsl), in a buffer parallel to the vertices. */
+export const NORMAL_BYTES = 4;
 /** Bytes of one entry of the emitting-cell list: (entry << 6 | cell) and its first vertex. */
 export const CELL_RECORD_BYTES = 8;

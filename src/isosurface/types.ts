@@ -94,6 +94,12 @@ export interface VertexShard {
    * VERTEX and STORAGE.
    */
   vertices: GPUBuffer;
+  /**
+   * Added by the pipeline: per vertex of `vertices`, its normal (u32,
+   * octahedral: decode_vertex_normal in vertex_format.wgsl; 0 = none), the
+   * volume gradient computed once per surface. Usage includes VERTEX.
+   */
+  normals: GPUBuffer;
   /** drawIndirect arguments [vertexCount, instanceCount, firstVertex, firstInstance], written by the GPU. */
   drawArgs: GPUBuffer;
   drawArgsOffset: number;

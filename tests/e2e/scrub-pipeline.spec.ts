@@ -169,3 +169,32 @@ test('scrubbing: each surface is drawn before its statistics are mapped, and sur
   expect(drawnBeforeStats).toBe(computes.length);
   expect(submittedWhileMapPending).toBeGreaterThan(0);
 });
+
+test('frame time at ~2.4 M triangles (bonsai at iso 20.37): printed', async ({ page }) => {
+  test.setTimeout(300_000);
+  await page.addInitScript(instrument);
+  await openApp(page, `/?url=${VOLUME}#iso=20.37`);
+  await settle(page);
+  const triangles = await page.evaluate(() => window.zfpiso!.stats!.triangles);
+  const frames: number[] = [];
+  const box = (await page.locator('#view').boundingBox())!;
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  for (let i = 0; i < 6; i++) {
+    const from = await page.evaluate(() => window.__trace.length);
+    await page.mouse.wheel(0, i % 2 ? 40 : -40);
+    await page.waitForFunction((n) => window.__trace.slice(n).some((e) => e.k === 'done'), from, { timeout: 60_000 });
+    const tr = (await page.evaluate(() => window.__trace)).slice(from);
+    const done = tr.find((e) => e.k === 'done')!;
+    frames.push(done.t - done.of!);
+    // let any frame requested meanwhile finish before the next one
+    await page.waitForTimeout(200);
+    await page.waitForFunction(() => {
+      const tr = window.__trace;
+      const frames = tr.filter((e) => e.k === 'submit' && e.label === 'Viewer.frame').length;
+      return tr.filter((e) => e.k === 'done').length >= frames;
+    });
+  }
+  const kept = frames.slice(1);
+  console.log(`[frame-time] ${VOLUME.split('/').pop()} iso 20.37, ${triangles} triangles: frame submit -> GPU done median ${median(kept).toFixed(0)} ms (${kept.map((x) => x.toFixed(0)).join(', ')})`);
+  expect(triangles).toBeGreaterThan(2e6);
+});
