@@ -5,6 +5,47 @@
 @group(1) @binding(1) var<storage, read> cell_first: array<u32>;
 @group(2) @binding(0) var<storage, read> shard: array<u32, 8>;        // this shard's record (plan.wgsl)
 @group(2) @binding(1) var<storage, read_write> shard_vertices: array<vec2u>;
+@group(2) @binding(2) var<storage, read_write> shard_normals: array<u32>;
+
+// Normals, once per surface (the renderer reads them, nothing per frame): the
+// central-difference gradient at both ends of the vertex's edge, interpolated
+// at the vertex -- the gradient VTK's ComputeNormals gives. A neighbour voxel
+// outside the volume or in a block not cached gives a one-sided difference.
+// The voxel at global grid point g: (value, 1) when it is readable, (0, 0) otherwise.
+fn grid_voxel(g: vec3i) -> vec2f {
+  if (any(g < vec3i(0)) || any(g >= vec3i(volume.dims))) {
+    return vec2f(0.0);
+  }
+  let slot = block_to_slot[block_index_of(vec3u(g) >> vec3u(2u), volume.grid)];
+  if (slot == NONE) {
+    return vec2f(0.0);
+  }
+  let v = vec3u(g) & vec3u(3u);
+  return vec2f(slot_rows[slot * 16u + v.y + 4u * v.z][v.x], 1.0);
+}
+
+fn partial_derivative(g: vec3i, center: vec2f, axis: vec3i) -> f32 {
+  let p = grid_voxel(g + axis);
+  let m = grid_voxel(g - axis);
+  if (p.y > 0.0 && m.y > 0.0) {
+    return 0.5 * (p.x - m.x);
+  }
+  if (center.y == 0.0) {
+    return 0.0;
+  }
+  if (p.y > 0.0) {
+    return p.x - center.x;
+  }
+  if (m.y > 0.0) {
+    return center.x - m.x;
+  }
+  return 0.0;
+}
+
+fn grid_gradient(g: vec3i) -> vec3f {
+  let c = grid_voxel(g);
+  return vec3f(partial_derivative(g, c, vec3i(1, 0, 0)), partial_derivative(g, c, vec3i(0, 1, 0)), partial_derivative(g, c, vec3i(0, 0, 1)));
+}
 
 @compute @workgroup_size(64)
 fn emit_vertices(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
@@ -54,5 +95,10 @@ fn emit_vertices(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg
     let axis = mc_edge_axis(e);
     p[axis] = p[axis] + t;
     shard_vertices[v - base] = vec2u(encode_vertex_position(p), b);
+    // Outward (toward decreasing values): minus the gradient.
+    let g0 = vec3i(c * 4u + l + mc_corner_offset(lower));
+    var step = vec3i(0);
+    step[axis] = 1;
+    shard_normals[v - base] = encode_vertex_normal(-mix(grid_gradient(g0), grid_gradient(g0 + step), t));
   }
 }

@@ -36,6 +36,8 @@ const C_COMPACT_NEW: u32 = 20u;    // active entries to compact into the new lis
 const C_CELLS: u32 = 21u;          // emitting cells (scan total)
 const C_ACTIVE_GROUPS: u32 = 22u;  // active groups of blocks (scan total)
 const C_GROUP_BLOCKS: u32 = 23u;   // blocks of the active groups: active groups x blocks per group
+// (Words 24-43: indirect arguments below.)
+const C_REQUEST: u32 = 44u;        // host-written id of the submission; its statistics carry it (no stale counters)
 // Indirect dispatch arguments (x, y, z), written by the plan kernels.
 const A_SLOTS: u32 = 24u;   // age_slots: ceil(slots gated / 64) workgroups
 const A_MARK: u32 = 28u;    // mark_cached, classify_blocks: ceil(active gated / 64)

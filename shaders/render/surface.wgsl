@@ -1,13 +1,11 @@
 // The isosurface: a soup of compressed vertices (shaders/isosurface/
 // vertex_format.wgsl), shaded with smooth normals from the volume gradient.
 //
-// Normals: a marching-cubes vertex lies on a grid edge between two voxels.
-// We take the central-difference gradient at both ends, read from the
-// decoded-block cache (every block the drawn surface touches is cached), and
-// interpolate it at the vertex's position on the edge -- the same gradient
-// VTK's ComputeNormals gives, without a normal buffer. A neighbour voxel in a
-// block that is not cached (or outside the volume) gives a one-sided
-// difference instead.
+// Normals: computed once per surface by the pipeline's vertex pass
+// (block_emit.wgsl: the central-difference gradient at both ends of the
+// vertex's grid edge, interpolated at the vertex -- the gradient VTK's
+// ComputeNormals gives) and stored per vertex, octahedral-encoded, in a
+// buffer parallel to the vertices: the vertex shader only decodes it.
 //
 // World space: voxel (i, j, k) sits at (i, j, k) * voxel_size (1 on the main
 // page; a microscope stack's spacing on the neuron page, where the surface
@@ -21,10 +19,6 @@ struct Surface {
   voxel_size: vec4f,   // xyz: world size of a voxel
 };
 @group(1) @binding(0) var<uniform> surface: Surface;
-@group(1) @binding(1) var<storage, read> slot_data: array<f32>;
-@group(1) @binding(2) var<storage, read> block_to_slot: array<u32>;
-
-const NOT_CACHED: u32 = 0xffffffffu;
 
 struct VsOut {
   // Invariant: the depth-only entry point (vs_depth) must put every vertex at
@@ -35,69 +29,12 @@ struct VsOut {
   @location(1) normal: vec3f,
 };
 
-// The voxel at grid point g: (value, 1) when it is cached, (0, 0) otherwise.
-fn voxel(g: vec3i) -> vec2f {
-  if (any(g < vec3i(0)) || any(g >= surface.dims.xyz)) {
-    return vec2f(0.0);
-  }
-  let b = vec3u(g) >> vec3u(2u);
-  let grid = surface.block_grid.xyz;
-  let slot = block_to_slot[b.x + grid.x * (b.y + grid.y * b.z)];
-  if (slot == NOT_CACHED) {
-    return vec2f(0.0);
-  }
-  let l = vec3u(g) & vec3u(3u);
-  return vec2f(slot_data[slot * 64u + l.x + 4u * l.y + 16u * l.z], 1.0);
-}
-
-// One component of the gradient at g along `axis` (central, else one-sided).
-fn partial(g: vec3i, center: vec2f, axis: vec3i) -> f32 {
-  let p = voxel(g + axis);
-  let m = voxel(g - axis);
-  if (p.y > 0.0 && m.y > 0.0) {
-    return 0.5 * (p.x - m.x);
-  }
-  if (center.y == 0.0) {
-    return 0.0;
-  }
-  if (p.y > 0.0) {
-    return p.x - center.x;
-  }
-  if (m.y > 0.0) {
-    return center.x - m.x;
-  }
-  return 0.0;
-}
-
-fn gradient(g: vec3i) -> vec3f {
-  let c = voxel(g);
-  return vec3f(partial(g, c, vec3i(1, 0, 0)), partial(g, c, vec3i(0, 1, 0)), partial(g, c, vec3i(0, 0, 1)));
-}
-
-// Gradient at a vertex on a grid edge: the edge runs along the axis whose
-// coordinate is farthest from a whole number; the other two are whole.
-fn edge_gradient(p: vec3f) -> vec3f {
-  let r = round(p);
-  let d = abs(p - r);
-  var axis = vec3i(1, 0, 0);
-  var t = p.x - floor(p.x);
-  if (d.y > d.x && d.y >= d.z) {
-    axis = vec3i(0, 1, 0);
-    t = p.y - floor(p.y);
-  } else if (d.z > d.x && d.z > d.y) {
-    axis = vec3i(0, 0, 1);
-    t = p.z - floor(p.z);
-  }
-  let g0 = select(vec3i(r), vec3i(floor(p)), axis != vec3i(0));
-  return mix(gradient(g0), gradient(g0 + axis), t);
-}
-
 fn world_of(p: vec3f) -> vec3f {
   return p * surface.voxel_size.xyz;
 }
 
 @vertex
-fn vs(@location(0) v: vec2u) -> VsOut {
+fn vs(@location(0) v: vec2u, @location(1) packed_normal: u32) -> VsOut {
   let p = decode_vertex_position(v.x, v.y, surface.block_grid.xyz);
   var out: VsOut;
   out.world = world_of(p);
@@ -105,7 +42,7 @@ fn vs(@location(0) v: vec2u) -> VsOut {
   out.normal = vec3f(0.0);
   if (surface.block_grid.w != 0u) {
     // The gradient in index space, per world unit: d/dx_world = d/dx_index / voxel size.
-    out.normal = -edge_gradient(p) / surface.voxel_size.xyz;
+    out.normal = decode_vertex_normal(packed_normal) / surface.voxel_size.xyz;
   }
   return out;
 }
@@ -114,7 +51,7 @@ struct DepthOut {
   @builtin(position) @invariant clip: vec4f,
 };
 
-// Depth only (opaque-layer pre-pass of the neuron page): no normals, so no cache reads.
+// Depth only (opaque-layer pre-pass of the neuron page): positions only.
 @vertex
 fn vs_depth(@location(0) v: vec2u) -> DepthOut {
   let p = decode_vertex_position(v.x, v.y, surface.block_grid.xyz);

@@ -14,6 +14,8 @@ export interface PageIsosurface {
   compute(iso: number): Promise<IsosurfaceStats>;
   onStats(listener: (stats: IsosurfaceStats) => void): unknown;
   onError(listener: (error: Error) => void): unknown;
+  /** After each computation's submission: a frame drawn from then on shows that surface. */
+  onSubmit(listener: (iso: number) => void): unknown;
   resetCache(): Promise<void> | void;
   setMemoryBudget(bytes: number): void;
   /** Packed vertex pairs of the current surface. */

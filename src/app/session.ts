@@ -59,6 +59,11 @@ export class Session {
     v.iso.onStats((s) => {
       if (this.current === v) this.showStats(s);
     });
+    // The draw reads GPU-written arguments: the frame after the submission
+    // shows the new surface; the statistics only update the panel.
+    v.iso.onSubmit(() => {
+      if (this.current === v) p.viewer.requestFrame();
+    });
     v.iso.onError((e) => {
       if (this.current !== v) return;
       if (e instanceof IsosurfaceBudgetError) {

@@ -107,7 +107,7 @@ export class BlockMarchingCubes {
       classify: bindGroupLayout(device, 'Isosurface.classifyBlocks.layout', ['read', 'rw', 'rw', 'rw', 'rw']),
       expand: bindGroupLayout(device, 'Isosurface.expandCells.layout', ['uniform', 'read', 'read', 'read', 'read', 'read', 'rw', 'rw']),
       cells: bindGroupLayout(device, 'Isosurface.emitVertices.layout', ['read', 'read']),
-      shard: bindGroupLayout(device, 'Isosurface.shard.layout', ['read', 'rw']),
+      shard: bindGroupLayout(device, 'Isosurface.shard.layout', ['read', 'rw', 'rw']),
       plan: bindGroupLayout(device, 'Isosurface.planVertices.layout', ['rw', 'read', 'read', 'read', 'read', 'rw', 'rw']),
     };
     const constants = { MAX_WG_PER_DIM: parts.maxWorkgroupsPerDimension };
@@ -192,7 +192,7 @@ export class BlockMarchingCubes {
       expand: bindGroup(d, 'Isosurface.expandCells.bindGroup', L.expand, [this.caseTable, counters, e.cases, e.cellCounts, e.cellOffsets, e.vertexOffsets, c.records, c.first]),
       cells: bindGroup(d, 'Isosurface.emitVertices.bindGroup', L.cells, [c.records, c.first]),
       plan: bindGroup(d, 'Isosurface.planVertices.bindGroup', L.plan, [counters, e.vertexOffsets, e.vertexCounts, e.cellOffsets, e.cellCounts, shards.shardInfo, shards.drawArgs]),
-      shardGroups: shards.shards.map((s, k) => bindGroup(d, `Isosurface.shard${k}.bindGroup`, L.shard, [shards.shardRecord(k), s.vertices])),
+      shardGroups: shards.shards.map((s, k) => bindGroup(d, `Isosurface.shard${k}.bindGroup`, L.shard, [shards.shardRecord(k), s.vertices, s.normals])),
     };
     return this.groups;
   }

@@ -3,6 +3,7 @@
 // both grow to the same capacities.
 import { CACHE_BYTES_PER_SLOT } from './lru-cache.ts';
 import { cellBytesFor, MC_BYTES_PER_SLOT } from './block-mc.ts';
+import { SLOT_BYTES } from './layout.ts';
 import { VertexShards } from './vertex-output.ts';
 
 /** Bytes the cache takes at `slots` slots: slot data, maps, scratch, per-active buffers, blockToSlot. */
@@ -31,4 +32,17 @@ export function defaultMemoryBudget(limits: GPUSupportedLimits): number {
 
 export function formatMB(bytes: number): string {
   return `${(bytes / 2 ** 20).toFixed(bytes < 10 * 2 ** 20 ? 2 : 1)} MB`;
+}
+
+/**
+ * Most cache slots on a device: the slot data (256 B per slot) is bound
+ * whole by the decoder, classification and vertex passes, so it must fit one
+ * storage binding (and one buffer). The other per-slot buffers are 64 B per
+ * slot or less.
+ */
+export function maxCacheSlots(limits: GPUSupportedLimits, maxStorageBindingBytes = Infinity): number {
+  const bytes = Math.min(maxStorageBindingBytes, limits.maxStorageBufferBindingSize, limits.maxBufferSize);
+  const slots = Math.floor(bytes / SLOT_BYTES);
+  if (slots < 1) throw new RangeError(`maxStorageBindingBytes must hold at least one cache slot (${SLOT_BYTES} bytes)`);
+  return slots;
 }

@@ -20,14 +20,15 @@ import { ZfpDecoder } from '../zfp/decoder.ts';
 import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
 import { ActiveBlocks, groupGrid } from './active-blocks.ts';
 import { BlockMarchingCubes } from './block-mc.ts';
-import { cacheBytesFor, defaultMemoryBudget, formatMB, grownCapacity, vertexBytesFor } from './budget.ts';
+import { cacheBytesFor, defaultMemoryBudget, formatMB, grownCapacity, maxCacheSlots, vertexBytesFor } from './budget.ts';
 import { Counters } from './counters.ts';
-import { C, DEFAULT_GROUP_EDGE_BLOCKS, DRAW_ARGS_BYTES, STATUS_CACHE_SHORTFALL, STATUS_VERTEX_OVERFLOW, VERTEX_BYTES } from './layout.ts';
+import { C, DEFAULT_GROUP_EDGE_BLOCKS, DRAW_ARGS_BYTES, SLOT_BYTES, STATUS_CACHE_SHORTFALL, STATUS_VERTEX_OVERFLOW, VERTEX_BYTES } from './layout.ts';
 import { BlockCache } from './lru-cache.ts';
 import { StatsReadback, type RawStats } from './stats-readback.ts';
 import {
   hitRate,
   IsosurfaceBudgetError,
+  IsosurfaceGpuError,
   IsosurfaceSupersededError,
   type IsosurfaceDrawData,
   type IsosurfaceOptions,
@@ -39,6 +40,14 @@ import { VertexShards } from './vertex-output.ts';
 interface Waiter {
   resolve(stats: IsosurfaceStats): void;
   reject(error: Error): void;
+}
+
+/** One submission of a request (a request is submitted again after growth). */
+interface Attempt {
+  r: Request;
+  /** Written into the counters (C.request): its statistics must carry it. */
+  id: number;
+  verticesOnly: boolean;
 }
 
 interface Request {
@@ -54,6 +63,13 @@ interface Request {
   cacheEpoch: number;
 }
 
+/**
+ * Computations on the GPU at once while scrubbing: the next is recorded while
+ * the previous one's statistics are still on their way, yet a new isovalue
+ * never queues behind more than one older surface.
+ */
+const DEFAULT_SURFACES_IN_FLIGHT = 2;
+
 /** Attempts per isovalue: one, plus a cache growth, plus a vertex growth, plus slack. */
 const MAX_ATTEMPTS = 4;
 
@@ -62,8 +78,11 @@ export class Isosurface {
   readonly drawData: IsosurfaceDrawData;
   private readonly statsListeners = new Set<(stats: IsosurfaceStats) => void>();
   private readonly errorListeners = new Set<(error: Error) => void>();
+  private readonly submitListeners = new Set<(iso: number) => void>();
   private pending?: Request;
-  private inFlight?: Request;
+  /** Submitted attempts whose statistics are not read yet, oldest first. */
+  private readonly inFlight: Attempt[] = [];
+  private nextId = 1;
   private destroyed = false;
   private budget: number;
   private readonly isoWord = new Float32Array(1);
@@ -89,6 +108,9 @@ export class Isosurface {
     private readonly initialSlots: number,
     info: VolumeInfo,
     budget: number,
+    private readonly maxInFlight: number,
+    /** Slots whose data fits one storage binding (the cache never grows beyond). */
+    private readonly maxSlots: number,
   ) {
     this.info = info;
     this.budget = budget;
@@ -109,7 +131,8 @@ export class Isosurface {
     const bindingBytes = Math.min(options.maxVertexBindingBytes ?? Infinity, limits.maxStorageBufferBindingSize, limits.maxBufferSize);
     const perShard = Math.floor(bindingBytes / VERTEX_BYTES);
     if (perShard < 1) throw new RangeError(`maxVertexBindingBytes must hold at least one vertex (${VERTEX_BYTES} bytes)`);
-    let slots = Math.max(1, Math.min(blockCount, options.initialCacheSlots ?? Math.ceil(blockCount / 10)));
+    const maxSlots = maxCacheSlots(limits, options.maxStorageBindingBytes);
+    let slots = Math.max(1, Math.min(blockCount, maxSlots, options.initialCacheSlots ?? Math.ceil(blockCount / 10)));
     let vertices = Math.max(1, options.initialVertexCapacity ?? Math.min(2 ** 22, Math.max(2 ** 16, blockCount * 8)));
     // The initial buffers must fit the budget too: shrink both (keeping their
     // ratio) until they do; the per-block and per-shard bytes do not shrink.
@@ -135,9 +158,20 @@ export class Isosurface {
       vertices = Math.max(1, Math.floor(vertices * lo));
     }
 
+    const maxInFlight = options.maxSurfacesInFlight ?? DEFAULT_SURFACES_IN_FLIGHT;
+    if (!Number.isInteger(maxInFlight) || maxInFlight < 1) throw new RangeError(`maxSurfacesInFlight must be a positive integer (got ${maxInFlight})`);
     const groupEdge = options.groupEdgeBlocks ?? DEFAULT_GROUP_EDGE_BLOCKS;
     if (!Number.isInteger(groupEdge) || groupEdge < 1 || groupEdge > 64) throw new RangeError(`groupEdgeBlocks must be an integer in 1..64 (got ${groupEdge})`);
     const groupEntries = groupGrid(blockGrid, groupEdge).reduce((a, b) => a * b, 1) * groupEdge ** 3;
+    // Per-block buffers are bound whole too: neighbourhood ranges (8 B per block), the group-grid lists (4 B per entry).
+    const perBlockBinding = Math.max(blockCount * 8, groupEntries * 4);
+    const storageBinding = Math.min(options.maxStorageBindingBytes ?? Infinity, limits.maxStorageBufferBindingSize, limits.maxBufferSize);
+    if (perBlockBinding > storageBinding) {
+      throw new RangeError(
+        `${stream.info.fileName}: ${blockCount} blocks need ${formatMB(perBlockBinding)} per-block buffers in one storage binding; ` +
+          `this device binds at most ${formatMB(storageBinding)} (maxStorageBufferBindingSize)`,
+      );
+    }
     const volume = device.createBuffer({ label: 'Isosurface.volume', size: 32, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
     device.queue.writeBuffer(volume, 0, new Uint32Array([...dims, blockCount, ...blockGrid, 0]));
     const primitiveOptions = { maxWorkgroupsPerDimension: maxWg };
@@ -172,7 +206,7 @@ export class Isosurface {
       hi = Math.max(hi, ranges[2 * b + 1]);
     }
     const info: VolumeInfo = { dims: [...dims], blockGrid: [...blockGrid], blockCount, valueRange: [lo, hi] };
-    const iso = new Isosurface(gpu, stream, volume, counters, decoder, scan, slotScan, compact, compactIds, active, cache, mc, shards, new StatsReadback(device, options.timing ?? true), slots, info, budget);
+    const iso = new Isosurface(gpu, stream, volume, counters, decoder, scan, slotScan, compact, compactIds, active, cache, mc, shards, new StatsReadback(device, options.timing ?? true), slots, info, budget, maxInFlight, maxSlots);
     iso.writeShardCounters();
     return iso;
   }
@@ -181,9 +215,9 @@ export class Isosurface {
     return this.gpu.device;
   }
 
-  // ---- requests: newest wins, at most one in flight
+  // ---- requests: newest wins, a bounded number in flight
 
-  /** Computes the surface at `iso` (float32) as soon as nothing else is in flight; never waits. */
+  /** Computes the surface at `iso` (float32): submitted at once unless `maxSurfacesInFlight` are on the GPU; never waits. */
   setIsovalue(iso: number): void {
     this.request(iso);
   }
@@ -205,6 +239,16 @@ export class Isosurface {
     return () => this.errorListeners.delete(listener);
   }
 
+  /**
+   * Called right after a computation is submitted: a frame drawn from then on
+   * shows its surface (the draw reads GPU-written arguments), so a renderer
+   * requests a frame here rather than waiting for the statistics.
+   */
+  onSubmit(listener: (iso: number) => void): () => void {
+    this.submitListeners.add(listener);
+    return () => this.submitListeners.delete(listener);
+  }
+
   /** The statistics of the surface drawn now, if any. */
   get currentStats(): IsosurfaceStats | undefined {
     return this.lastStats;
@@ -212,7 +256,7 @@ export class Isosurface {
 
   /** True while a computation is on the GPU or waiting. */
   get busy(): boolean {
-    return this.inFlight !== undefined || this.pending !== undefined;
+    return this.inFlight.length > 0 || this.pending !== undefined;
   }
 
   private request(iso: number, waiter?: Waiter): void {
@@ -228,36 +272,92 @@ export class Isosurface {
     const replaced = this.pending;
     if (replaced) for (const w of replaced.waiters) w.reject(new IsosurfaceSupersededError(replaced.iso, f));
     this.pending = { iso: f, waiters: waiter ? [waiter] : [], grew: false, attempts: 0, earlierMs: 0, earlierNew: 0, cacheEpoch: this.cacheEpoch };
-    if (!this.inFlight) this.launchPending();
+    this.pump();
   }
 
-  private launchPending(): void {
-    const r = this.pending;
-    this.pending = undefined;
-    if (r) this.launch(r);
-  }
-
-  /**
-   * Records and submits the computation of r.iso: one command buffer, no
-   * waits. `verticesOnly` resumes after a vertex overflow: the cache update
-   * and the block counts of the failed attempt are still in their buffers
-   * (nothing ran since), so only plan_vertices and the vertex pass run again.
-   */
-  private launch(r: Request, verticesOnly = false): void {
-    this.inFlight = r;
-    r.attempts++;
-    r.cacheEpoch = this.cacheEpoch;
-    try {
-      this.record(r, verticesOnly);
-    } catch (e) {
-      this.fail(r, e instanceof Error ? e : new Error(String(e)));
+  /** Submits the pending request if fewer than maxSurfacesInFlight are on the GPU. */
+  private pump(): void {
+    while (this.pending && this.inFlight.length < this.maxInFlight && !this.destroyed) {
+      const r = this.pending;
+      this.pending = undefined;
+      this.launch(r, false);
     }
   }
 
-  private record(r: Request, verticesOnly: boolean): void {
+  /**
+   * Records and submits one attempt at r.iso: one command buffer, no waits,
+   * inside validation and out-of-memory error scopes that are popped
+   * asynchronously with the statistics. `prepare` (growth) runs inside the
+   * scopes too. `verticesOnly` resumes after a vertex overflow: the cache
+   * update and the block counts of the failed attempt are still in their
+   * buffers (nothing was submitted since), so only plan_vertices and the
+   * vertex pass run again.
+   */
+  private launch(r: Request, verticesOnly: boolean, prepare?: () => void): void {
     const { device } = this;
+    const a: Attempt = { r, id: this.nextId++ >>> 0, verticesOnly };
+    r.attempts++;
+    this.inFlight.push(a);
+    device.pushErrorScope('out-of-memory');
+    device.pushErrorScope('validation');
+    let staging: GPUBuffer | undefined;
+    let thrown: Error | undefined;
+    try {
+      prepare?.();
+      r.cacheEpoch = this.cacheEpoch;
+      staging = this.record(a);
+    } catch (e) {
+      thrown = e instanceof Error ? e : new Error(String(e));
+    }
+    const validation = device.popErrorScope();
+    const oom = device.popErrorScope();
+    const submittedAt = performance.now();
+    if (!thrown) {
+      for (const l of this.submitListeners) {
+        try {
+          l(r.iso);
+        } catch (e) {
+          queueMicrotask(() => {
+            throw e;
+          });
+        }
+      }
+    }
+    void this.settle(a, staging, thrown, validation, oom, submittedAt);
+  }
+
+  /** Waits for the attempt's error scopes and statistics (off the critical path) and acts on them. */
+  private async settle(a: Attempt, staging: GPUBuffer | undefined, thrown: Error | undefined, validation: Promise<GPUError | null>, oom: Promise<GPUError | null>, submittedAt: number): Promise<void> {
+    const raw = staging ? this.stats.read(staging, submittedAt).catch((e: unknown) => (e instanceof Error ? e : new Error(String(e)))) : undefined;
+    let v: GPUError | null;
+    let m: GPUError | null;
+    try {
+      [v, m] = await Promise.all([validation, oom]);
+    } catch (e) {
+      [v, m] = [null, null];
+      thrown ??= e instanceof Error ? e : new Error(String(e));
+    }
+    const stats = raw ? await raw : undefined;
+    if (thrown) return this.fail(a, thrown);
+    const gpuError = v ?? m;
+    if (gpuError) {
+      const kind = v ? 'validation error' : 'out of memory';
+      return this.fail(a, new IsosurfaceGpuError(`the computation of the surface at iso ${a.r.iso} failed on the GPU (${kind}: ${gpuError.message.replace(/\s+/g, ' ').trim()}); the previous surface is kept`, a.r.iso));
+    }
+    if (!stats || stats instanceof Error) return this.fail(a, stats ?? new Error('Isosurface: no statistics'));
+    // The staging buffer holds this submission's counters, or it is a failure (never another surface's).
+    if (stats.counters[C.request] !== a.id) {
+      return this.fail(a, new IsosurfaceGpuError(`the statistics of the surface at iso ${a.r.iso} are not its own (request ${stats.counters[C.request]}, expected ${a.id}): the computation did not run`, a.r.iso));
+    }
+    this.finish(a, stats);
+  }
+
+  private record(a: Attempt): GPUBuffer {
+    const { device } = this;
+    const { r, verticesOnly } = a;
     this.isoWord[0] = r.iso;
     device.queue.writeBuffer(this.volume, 28, this.isoWord);
+    this.counters.set('request', a.id);
     const encoder = device.createCommandEncoder({ label: 'Isosurface.compute' });
     const s = this.stats;
     s.mark(encoder, 0);
@@ -283,54 +383,61 @@ export class Isosurface {
     this.mc.encodeVertices(encoder, this.cache.slotData, this.shards);
     s.mark(encoder, 7);
     const staging = s.encodeCopy(encoder, this.counters.buffer);
-    device.queue.submit([encoder.finish()]);
-    const submittedAt = performance.now();
-    s.read(staging, submittedAt).then(
-      (raw) => this.finish(r, raw),
-      (e) => this.fail(r, e instanceof Error ? e : new Error(String(e))),
-    );
+    try {
+      device.queue.submit([encoder.finish()]);
+    } catch (e) {
+      s.release(staging);
+      throw e;
+    }
+    return staging;
   }
 
-  private finish(r: Request, raw: RawStats): void {
-    this.inFlight = undefined;
-    if (this.destroyed) return;
+  private settled(a: Attempt): boolean {
+    const i = this.inFlight.indexOf(a);
+    if (i >= 0) this.inFlight.splice(i, 1);
+    return !this.destroyed;
+  }
+
+  private finish(a: Attempt, raw: RawStats): void {
+    if (!this.settled(a)) return;
+    const r = a.r;
     const status = raw.counters[C.status];
     if (status !== 0) {
       r.earlierMs += raw.gpuMs;
       // A vertices-only retry reads these counters again; a full one does not.
-      // (Only if the cache was not reset while the attempt ran.)
-      const verticesOnly = status === STATUS_VERTEX_OVERFLOW && r.cacheEpoch === this.cacheEpoch;
+      // (Only if nothing was submitted since and the cache was not reset.)
+      const verticesOnly = status === STATUS_VERTEX_OVERFLOW && r.cacheEpoch === this.cacheEpoch && a.id === ((this.nextId - 1) >>> 0);
       if (!verticesOnly) r.earlierNew += raw.counters[C.new];
-      if (this.pending) {
-        // A newer isovalue is waiting: compute that one (it grows what it needs).
-        for (const w of r.waiters) w.reject(new IsosurfaceSupersededError(r.iso, this.pending.iso));
-        this.launchPending();
+      const newer = this.pending ?? this.inFlight[this.inFlight.length - 1]?.r;
+      if (newer) {
+        // A newer isovalue is waiting or already on the GPU (submitted with
+        // the same capacities: it grows what it needs if it fails too).
+        for (const w of r.waiters) w.reject(new IsosurfaceSupersededError(r.iso, newer.iso));
+        this.pump();
         return;
       }
-      try {
-        if (r.attempts >= MAX_ATTEMPTS) throw new Error(`Isosurface: iso ${r.iso} still does not fit after ${r.attempts} attempts (status ${status})`);
-        this.grow(status, raw.counters, r.iso);
-      } catch (e) {
-        this.fail(r, e as Error);
+      if (r.attempts >= MAX_ATTEMPTS) {
+        this.fail(a, new Error(`Isosurface: iso ${r.iso} still does not fit after ${r.attempts} attempts (status ${status})`), false);
         return;
       }
       r.grew = true;
-      this.launch(r, verticesOnly);
+      // Nothing is in flight now: growth replaces buffers between submissions.
+      this.launch(r, verticesOnly, () => this.grow(status, raw.counters, r.iso));
       return;
     }
     const stats = this.toStats(r, raw);
     this.lastStats = stats;
     for (const l of this.statsListeners) l(stats);
     for (const w of r.waiters) w.resolve(stats);
-    this.launchPending();
+    this.pump();
   }
 
-  private fail(r: Request, error: Error): void {
-    this.inFlight = undefined;
+  private fail(a: Attempt, error: Error, remove = true): void {
+    if (remove && !this.settled(a)) return;
     if (this.destroyed) return;
     for (const l of this.errorListeners) l(error);
-    for (const w of r.waiters) w.reject(error);
-    this.launchPending();
+    for (const w of a.r.waiters) w.reject(error);
+    this.pump();
   }
 
   private toStats(r: Request, raw: RawStats): IsosurfaceStats {
@@ -372,6 +479,13 @@ export class Isosurface {
     );
   }
 
+  private bindingError(iso: number, slots: number): Error {
+    return new Error(
+      `Isosurface: the surface at iso ${iso} needs ${slots} cache slots (${formatMB(slots * SLOT_BYTES)} of decoded blocks), ` +
+        `but this device binds at most ${this.maxSlots} slots (${formatMB(this.maxSlots * SLOT_BYTES)}: maxStorageBufferBindingSize) in one buffer. The previous surface is kept.`,
+    );
+  }
+
   /** Grows what the status says was too small (between submissions; nothing in flight). */
   private grow(status: number, c: Uint32Array, iso: number): void {
     const blocks = this.info.blockCount;
@@ -382,7 +496,8 @@ export class Isosurface {
     let minVertices = vertices;
     if (status & STATUS_CACHE_SHORTFALL) {
       minSlots = c[C.active];
-      slots = grownCapacity(slots, minSlots, blocks);
+      if (minSlots > this.maxSlots) throw this.bindingError(iso, minSlots);
+      slots = grownCapacity(slots, minSlots, Math.min(blocks, this.maxSlots));
     }
     if (status & STATUS_VERTEX_OVERFLOW) {
       minVertices = c[C.vertices];
@@ -433,10 +548,21 @@ export class Isosurface {
    */
   resetCache(): void {
     if (this.destroyed) return;
+    const { device } = this;
+    device.pushErrorScope('out-of-memory');
+    device.pushErrorScope('validation');
     this.cacheEpoch++;
     this.cache.reset(this.initialSlots);
     this.mc.resize(this.initialSlots);
     this.refreshDrawData();
+    const validation = device.popErrorScope();
+    const oom = device.popErrorScope();
+    void Promise.all([validation, oom]).then(([v, m]) => {
+      const e = v ?? m;
+      if (!e || this.destroyed) return;
+      const error = new IsosurfaceGpuError(`emptying the block cache failed on the GPU (${v ? 'validation error' : 'out of memory'}: ${e.message.replace(/\s+/g, ' ').trim()})`, NaN);
+      for (const l of this.errorListeners) l(error);
+    });
   }
 
   /** Bytes the cache and vertex buffers may grow to (applies from the next growth on). */
@@ -468,6 +594,22 @@ export class Isosurface {
     return out;
   }
 
+  /** The normals of the drawn surface (u32 octahedral per vertex, vertex_format.wgsl), in readVertices' order. */
+  async readNormals(): Promise<Uint32Array> {
+    const { device } = this;
+    const shards = this.shards.shards;
+    const args = await readU32(device, this.shards.drawArgs, 0, (shards.length * DRAW_ARGS_BYTES) / 4);
+    const counts = shards.map((_, k) => args[4 * k]);
+    const out = new Uint32Array(counts.reduce((a, b) => a + b, 0));
+    let at = 0;
+    for (let k = 0; k < shards.length; k++) {
+      if (counts[k] === 0) continue;
+      out.set(await readU32(device, shards[k].normals, 0, counts[k]), at);
+      at += counts[k];
+    }
+    return out;
+  }
+
   /** Per-block (min, max), 2 f32 per block in raster block order (for the page's block-count profile). */
   readBlockRanges(): Promise<Float32Array> {
     return this.active.readBlockRanges();
@@ -488,9 +630,9 @@ export class Isosurface {
     if (this.destroyed) return;
     this.destroyed = true;
     const error = new Error('Isosurface: destroyed');
-    for (const r of [this.pending, this.inFlight]) for (const w of r?.waiters ?? []) w.reject(error);
+    for (const r of [this.pending, ...this.inFlight.map((a) => a.r)]) for (const w of r?.waiters ?? []) w.reject(error);
     this.pending = undefined;
-    this.inFlight = undefined;
+    this.inFlight.length = 0;
     this.stats.destroy();
     this.shards.destroy();
     this.mc.destroy();
@@ -505,5 +647,6 @@ export class Isosurface {
     this.volume.destroy();
     this.statsListeners.clear();
     this.errorListeners.clear();
+    this.submitListeners.clear();
   }
 }

@@ -33,6 +33,8 @@ export const C = {
   cells: 21,
   activeGroups: 22,
   groupBlocks: 23,
+  /** Host-written id of the submission (its statistics are checked against it). */
+  request: 44,
 } as const;
 
 /** Word offsets of indirect dispatch arguments (x, y, z) in the counters buffer. */
@@ -66,5 +68,7 @@ export const DRAW_ARGS_BYTES = 16;
 export const SLOT_BYTES = 256;
 /** Bytes of one compressed vertex. */
 export const VERTEX_BYTES = 8;
+/** Bytes of one vertex normal (octahedral, vertex_format.wgsl), in a buffer parallel to the vertices. */
+export const NORMAL_BYTES = 4;
 /** Bytes of one entry of the emitting-cell list: (entry << 6 | cell) and its first vertex. */
 export const CELL_RECORD_BYTES = 8;

@@ -56,7 +56,7 @@ export class StatsReadback {
 
   /** Records the copies of counters and timestamps; returns the staging buffer to read after submit. */
   encodeCopy(encoder: GPUCommandEncoder, counters: GPUBuffer): GPUBuffer {
-    // The ring holds three; a fourth only if three reads are outstanding (not in normal use).
+    // One per submission in flight: the ring grows to the number of reads outstanding.
     const staging = this.free.pop() ?? this.createStaging();
     encoder.copyBufferToBuffer(counters, 0, staging, 0, COUNTERS_BYTES);
     if (this.querySet && this.resolveBuffer) {
@@ -64,6 +64,11 @@ export class StatsReadback {
       encoder.copyBufferToBuffer(this.resolveBuffer, 0, staging, COUNTERS_BYTES, MARKERS * 8);
     }
     return staging;
+  }
+
+  /** Returns a staging buffer that was not submitted. */
+  release(staging: GPUBuffer): void {
+    this.free.push(staging);
   }
 
   /** Maps `staging` once the GPU is done (requested a microtask after the call). */

@@ -17,6 +17,13 @@ export interface IsosurfaceOptions {
   memoryBudgetBytes?: number;
   /** Largest vertex buffer binding (tests lower it to force several shards). Default: the device limit. */
   maxVertexBindingBytes?: number;
+  /**
+   * Added by the pipeline: largest storage binding (default: the device's
+   * maxStorageBufferBindingSize; tests lower it). The cache's slot data
+   * (256 B per slot) is one binding, so the cache holds at most this / 256
+   * slots; a surface with more active blocks is refused with a clear error.
+   */
+  maxStorageBindingBytes?: number;
   /** Record per-stage GPU times (timestamp queries where present). Default true. */
   timing?: boolean;
   /**
@@ -30,6 +37,12 @@ export interface IsosurfaceOptions {
    * Default 4 (16^3 voxels); a chunked store uses its chunk (64^3 voxels: 16).
    */
   groupEdgeBlocks?: number;
+  /**
+   * Added by the pipeline: computations submitted and not yet read back at
+   * once (scrubbing records the next surface without waiting for the
+   * previous statistics). Default 2.
+   */
+  maxSurfacesInFlight?: number;
 }
 
 export interface VolumeInfo {
@@ -81,6 +94,12 @@ export interface VertexShard {
    * VERTEX and STORAGE.
    */
   vertices: GPUBuffer;
+  /**
+   * Added by the pipeline: per vertex of `vertices`, its normal (u32,
+   * octahedral: decode_vertex_normal in vertex_format.wgsl; 0 = none), the
+   * volume gradient computed once per surface. Usage includes VERTEX.
+   */
+  normals: GPUBuffer;
   /** drawIndirect arguments [vertexCount, instanceCount, firstVertex, firstInstance], written by the GPU. */
   drawArgs: GPUBuffer;
   drawArgsOffset: number;
@@ -121,6 +140,18 @@ export class IsosurfaceSupersededError extends Error {
   constructor(readonly isovalue: number, readonly replacedBy: number) {
     super(`the surface at iso ${isovalue} was not computed: iso ${replacedBy} replaced it`);
     this.name = 'IsosurfaceSupersededError';
+  }
+}
+
+/**
+ * Added by the pipeline: a computation failed on the GPU (a validation error
+ * or out of memory in its submission). Nothing of it ran; the previous
+ * surface stays drawn.
+ */
+export class IsosurfaceGpuError extends Error {
+  constructor(message: string, readonly isovalue: number) {
+    super(`Isosurface: ${message}`);
+    this.name = 'IsosurfaceGpuError';
   }
 }
 

@@ -1,13 +1,15 @@
 // The vertex output: the triangle soup in the compressed format (8 bytes per
-// vertex), split into shards of at most one storage binding each. Vertex i
+// vertex) and its normals (4 bytes per vertex, a parallel buffer), split into shards of at most one storage binding each. Vertex i
 // lives in shard floor(i / perShard) at i mod perShard. Each shard has a
 // drawIndirect record and a shard_info record (plan.wgsl), both written on
 // the GPU: the draw count of shard k is clamp(total - k * perShard, 0, perShard).
-import { DRAW_ARGS_BYTES, SHARD_RECORD_BINDING, SHARD_RECORD_BYTES, VERTEX_BYTES } from './layout.ts';
+import { DRAW_ARGS_BYTES, NORMAL_BYTES, SHARD_RECORD_BINDING, SHARD_RECORD_BYTES, VERTEX_BYTES } from './layout.ts';
 import type { VertexShard } from './types.ts';
 
 export interface ShardBuffer {
   vertices: GPUBuffer;
+  /** One octahedral normal (u32) per vertex, written with the vertices. */
+  normals: GPUBuffer;
   /** Global index of the shard's first vertex. */
   base: number;
   /** Vertices the shard holds. */
@@ -61,17 +63,17 @@ export class VertexShards {
 
   /** What the renderer binds (types.ts VertexShard). */
   get drawShards(): VertexShard[] {
-    return this.list.map((s, k) => ({ vertices: s.vertices, drawArgs: this.drawArgsBuffer, drawArgsOffset: k * DRAW_ARGS_BYTES }));
+    return this.list.map((s, k) => ({ vertices: s.vertices, normals: s.normals, drawArgs: this.drawArgsBuffer, drawArgsOffset: k * DRAW_ARGS_BYTES }));
   }
 
   get byteSize(): number {
-    return this.list.reduce((n, s) => n + s.vertices.size, 0) + this.drawArgsBuffer.size + this.shardInfoBuffer.size;
+    return this.list.reduce((n, s) => n + s.vertices.size + s.normals.size, 0) + this.drawArgsBuffer.size + this.shardInfoBuffer.size;
   }
 
   /** Bytes the buffers take at `capacity` vertices. */
   static bytesFor(capacity: number, perShard: number): number {
     const shards = Math.max(1, Math.ceil(capacity / perShard));
-    return Math.max(capacity, 1) * VERTEX_BYTES + shards * (DRAW_ARGS_BYTES + SHARD_RECORD_BYTES);
+    return Math.max(capacity, 1) * (VERTEX_BYTES + NORMAL_BYTES) + shards * (DRAW_ARGS_BYTES + SHARD_RECORD_BYTES);
   }
 
   private allocate(capacity: number): void {
@@ -84,6 +86,11 @@ export class VertexShards {
         vertices: d.createBuffer({
           label: `Isosurface.vertices${k}`,
           size: size * VERTEX_BYTES,
+          usage: GPUBufferUsage.VERTEX | GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC,
+        }),
+        normals: d.createBuffer({
+          label: `Isosurface.normals${k}`,
+          size: size * NORMAL_BYTES,
           usage: GPUBufferUsage.VERTEX | GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC,
         }),
         base: k * this.perShard,
@@ -109,7 +116,10 @@ export class VertexShards {
   }
 
   private destroyBuffers(): void {
-    for (const s of this.list) s.vertices.destroy();
+    for (const s of this.list) {
+      s.vertices.destroy();
+      s.normals.destroy();
+    }
     this.drawArgsBuffer.destroy();
     this.shardInfoBuffer.destroy();
   }

@@ -96,10 +96,10 @@ export class ArcballCamera {
 
   view(out = mat4.create()): mat4 {
     // eye = R^-1 * (0, 0, d) + target; view = T(0,0,-d) * R * T(-target)
-    mat4.fromTranslation(out, [0, 0, -this.distance]);
-    const rot = mat4.fromQuat(mat4.create(), this.rotation);
+    mat4.fromTranslation(out, vec3.set(scratchV, 0, 0, -this.distance));
+    const rot = mat4.fromQuat(scratchM, this.rotation);
     mat4.multiply(out, out, rot);
-    mat4.translate(out, out, [-this.target[0], -this.target[1], -this.target[2]]);
+    mat4.translate(out, out, vec3.set(scratchV, -this.target[0], -this.target[1], -this.target[2]));
     return out;
   }
 
@@ -111,12 +111,13 @@ export class ArcballCamera {
   }
 
   viewProjection(out = mat4.create()): mat4 {
-    return mat4.multiply(out, this.projection(), this.view());
+    // (scratchP/scratchView: no allocation per frame; out may not alias them)
+    return mat4.multiply(out, this.projection(scratchP), this.view(scratchView));
   }
 
   eyePosition(out = vec3.create()): vec3 {
-    const inv = quat.invert(quat.create(), this.rotation);
-    vec3.transformQuat(out, [0, 0, this.distance], inv);
+    const inv = quat.invert(scratchQ, this.rotation);
+    vec3.transformQuat(out, vec3.set(scratchV, 0, 0, this.distance), inv);
     return vec3.add(out, out, this.target);
   }
 
@@ -148,6 +149,14 @@ export class ArcballCamera {
     this.distance = Math.min(Math.max(this.distance * factor, this.sceneRadius * 0.02), this.sceneRadius * 50);
   }
 }
+
+// Scratch for the per-frame matrices (view, viewProjection, eyePosition): the
+// render loop allocates nothing. Each is used within one call only.
+const scratchV = vec3.create();
+const scratchQ = quat.create();
+const scratchM = mat4.create();
+const scratchP = mat4.create();
+const scratchView = mat4.create();
 
 function arcballVector(x: number, y: number): vec3 {
   const d = x * x + y * y;

@@ -1,7 +1,8 @@
 // Draws the isosurface: the compressed-vertex soup of an IsosurfaceDrawData
-// (one vertex buffer and one GPU-written drawIndirect record per shard), lit
-// with smooth normals from the volume gradient read from the block cache
-// (see shaders/render/surface.wgsl), two-sided, with a headlight. Voxel
+// (per shard a vertex buffer, its normal buffer and a GPU-written
+// drawIndirect record), lit with smooth normals from the volume gradient
+// (computed once per surface by the pipeline; see shaders/render/surface.wgsl),
+// two-sided, with a headlight. Nothing is allocated per frame. Voxel
 // (i, j, k) is drawn at (i, j, k) * voxelSize; with `depthPrepass` it also
 // draws its depth alone, for a volume renderer that stops its rays there.
 
@@ -64,6 +65,9 @@ export class SurfaceLayer implements RenderLayer {
   private boundVersion = -1;
   private readonly uniforms: GPUBuffer;
   private readonly scratch = new ArrayBuffer(UNIFORM_BYTES);
+  private readonly views = { u32: new Uint32Array(this.scratch), i32: new Int32Array(this.scratch), f32: new Float32Array(this.scratch) };
+  private readonly centre = vec3.create();
+  private readonly eye = vec3.create();
 
   private constructor(
     private readonly target: RenderTarget,
@@ -89,12 +93,11 @@ export class SurfaceLayer implements RenderLayer {
       label: 'SurfaceLayer.layout',
       entries: [
         { binding: 0, visibility: GPUShaderStage.VERTEX | GPUShaderStage.FRAGMENT, buffer: { type: 'uniform' } },
-        { binding: 1, visibility: GPUShaderStage.VERTEX, buffer: { type: 'read-only-storage' } },
-        { binding: 2, visibility: GPUShaderStage.VERTEX, buffer: { type: 'read-only-storage' } },
       ],
     });
     const pipelineLayout = device.createPipelineLayout({ label: 'SurfaceLayer', bindGroupLayouts: [target.frameBindGroupLayout, layout] });
-    const buffers: GPUVertexBufferLayout[] = [{ arrayStride: 8, stepMode: 'vertex', attributes: [{ shaderLocation: 0, offset: 0, format: 'uint32x2' }] }];
+    const positions: GPUVertexBufferLayout = { arrayStride: 8, stepMode: 'vertex', attributes: [{ shaderLocation: 0, offset: 0, format: 'uint32x2' }] };
+    const normals: GPUVertexBufferLayout = { arrayStride: 4, stepMode: 'vertex', attributes: [{ shaderLocation: 1, offset: 0, format: 'uint32' }] };
     // Two-sided: no culling; the fragment shader tells the sides apart.
     const primitive: GPUPrimitiveState = { topology: 'triangle-list', cullMode: 'none' };
     const depthStencil: GPUDepthStencilState = { format: DEPTH_FORMAT, depthWriteEnabled: true, depthCompare: 'less' };
@@ -102,7 +105,7 @@ export class SurfaceLayer implements RenderLayer {
       device.createRenderPipelineAsync({
         label: 'SurfaceLayer.pipeline',
         layout: pipelineLayout,
-        vertex: { module, entryPoint: 'vs', buffers },
+        vertex: { module, entryPoint: 'vs', buffers: [positions, normals] },
         fragment: { module, entryPoint: 'fs', targets: [{ format: target.format }] },
         primitive,
         depthStencil,
@@ -111,7 +114,7 @@ export class SurfaceLayer implements RenderLayer {
         ? device.createRenderPipelineAsync({
             label: 'SurfaceLayer.depthPipeline',
             layout: pipelineLayout,
-            vertex: { module, entryPoint: 'vs_depth', buffers },
+            vertex: { module, entryPoint: 'vs_depth', buffers: [positions] },
             primitive,
             depthStencil,
           })
@@ -140,8 +143,6 @@ export class SurfaceLayer implements RenderLayer {
         layout: this.layout,
         entries: [
           { binding: 0, resource: { buffer: this.uniforms } },
-          { binding: 1, resource: { buffer: data.slotData } },
-          { binding: 2, resource: { buffer: data.blockToSlot } },
         ],
       });
       this.boundVersion = data.version;
@@ -152,20 +153,40 @@ export class SurfaceLayer implements RenderLayer {
   private writeUniforms(data: IsosurfaceDrawData): void {
     const { info } = data;
     const s = this.style;
-    const u32 = new Uint32Array(this.scratch);
-    const i32 = new Int32Array(this.scratch);
-    const f32 = new Float32Array(this.scratch);
-    u32.set([...info.blockGrid, s.smooth ? 1 : 0], 0);
-    i32.set([...info.dims, 0], 4);
-    f32.set([...s.front, s.ambient], 8);
-    f32.set([...s.back, s.specular], 12);
+    const { u32, i32, f32 } = this.views;
+    u32[0] = info.blockGrid[0];
+    u32[1] = info.blockGrid[1];
+    u32[2] = info.blockGrid[2];
+    u32[3] = s.smooth ? 1 : 0;
+    i32[4] = info.dims[0];
+    i32[5] = info.dims[1];
+    i32[6] = info.dims[2];
+    i32[7] = 0;
+    f32[8] = s.front[0];
+    f32[9] = s.front[1];
+    f32[10] = s.front[2];
+    f32[11] = s.ambient;
+    f32[12] = s.back[0];
+    f32[13] = s.back[1];
+    f32[14] = s.back[2];
+    f32[15] = s.specular;
     // Depth-cue range: the eye distance to the volume's bounding sphere (world space).
-    const extent = [0, 1, 2].map((a) => (info.dims[a] - 1) * this.voxelSize[a]);
-    const centre = vec3.fromValues(extent[0] / 2, extent[1] / 2, extent[2] / 2);
-    const radius = 0.5 * Math.hypot(extent[0], extent[1], extent[2]);
-    const eyeDist = vec3.distance(this.target.camera.eyePosition(), centre);
-    f32.set([s.rim, s.depthCue, Math.max(0, eyeDist - radius), eyeDist + radius], 16);
-    f32.set([...this.voxelSize, 0], 20);
+    let r2 = 0;
+    for (let a = 0; a < 3; a++) {
+      const extent = (info.dims[a] - 1) * this.voxelSize[a];
+      this.centre[a] = extent / 2;
+      r2 += extent * extent;
+    }
+    const radius = 0.5 * Math.sqrt(r2);
+    const eyeDist = vec3.distance(this.target.camera.eyePosition(this.eye), this.centre);
+    f32[16] = s.rim;
+    f32[17] = s.depthCue;
+    f32[18] = Math.max(0, eyeDist - radius);
+    f32[19] = eyeDist + radius;
+    f32[20] = this.voxelSize[0];
+    f32[21] = this.voxelSize[1];
+    f32[22] = this.voxelSize[2];
+    f32[23] = 0;
     this.target.device.queue.writeBuffer(this.uniforms, 0, this.scratch);
   }
 
@@ -181,8 +202,10 @@ export class SurfaceLayer implements RenderLayer {
     this.writeUniforms(data);
     pass.setPipeline(pipeline);
     pass.setBindGroup(1, this.ensureBindGroup(data));
+    const withNormals = pipeline === this.pipeline;
     for (const shard of data.shards) {
       pass.setVertexBuffer(0, shard.vertices);
+      if (withNormals) pass.setVertexBuffer(1, shard.normals);
       pass.drawIndirect(shard.drawArgs, shard.drawArgsOffset);
     }
   }

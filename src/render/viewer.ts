@@ -21,18 +21,30 @@ export function createFrameBindGroupLayout(device: GPUDevice, label = 'Viewer.fr
   });
 }
 
-/** The frame uniforms for `camera` on a width x height target (camera.aspect is set from them). */
+const frameScratch = { viewProj: mat4.create(), view: mat4.create(), eye: vec3.create(), toLight: vec3.create() };
+
+/** The frame uniforms for `camera` on a width x height target (camera.aspect is set from them). Allocates nothing given `out`. */
 export function frameUniformData(camera: ArcballCamera, width: number, height: number, out = new Float32Array(FRAME_UNIFORM_BYTES / 4)): Float32Array {
+  const t = frameScratch;
   camera.aspect = width / height;
-  out.set(camera.viewProjection(mat4.create()) as Float32Array, 0);
-  out.set(camera.view(mat4.create()) as Float32Array, 16);
-  const eye = camera.eyePosition();
-  out.set([eye[0], eye[1], eye[2], 1], 32);
+  out.set(camera.viewProjection(t.viewProj) as Float32Array, 0);
+  out.set(camera.view(t.view) as Float32Array, 16);
+  const eye = camera.eyePosition(t.eye);
+  out[32] = eye[0];
+  out[33] = eye[1];
+  out[34] = eye[2];
+  out[35] = 1;
   // Headlight: toward the eye.
-  const toLight = vec3.sub(vec3.create(), eye, camera.target);
+  const toLight = vec3.sub(t.toLight, eye, camera.target);
   vec3.normalize(toLight, toLight);
-  out.set([toLight[0], toLight[1], toLight[2], 0], 36);
-  out.set([width, height, 1 / width, 1 / height], 40);
+  out[36] = toLight[0];
+  out[37] = toLight[1];
+  out[38] = toLight[2];
+  out[39] = 0;
+  out[40] = width;
+  out[41] = height;
+  out[42] = 1 / width;
+  out[43] = 1 / height;
   return out;
 }
 
@@ -62,9 +74,17 @@ export class Viewer {
   private readonly context: GPUCanvasContext;
   private readonly frameUniforms: GPUBuffer;
   private depth: GPUTexture | undefined;
+  private depthView: GPUTextureView | undefined;
+  /** Reused every frame (only the colour view changes): the frame loop allocates no descriptors. */
+  private readonly colorAttachment: GPURenderPassColorAttachment;
+  private readonly depthAttachment: GPURenderPassDepthStencilAttachment;
+  private readonly passDescriptor: GPURenderPassDescriptor;
+  private readonly encoderDescriptor: GPUCommandEncoderDescriptor = { label: 'Viewer.frame' };
+  private readonly submitList: GPUCommandBuffer[] = [];
   private readonly layers: RenderLayer[] = [];
   private readonly beforeFrame: ((encoder: GPUCommandEncoder) => void)[] = [];
   private frameRequested = false;
+  private readonly onAnimationFrame = (t: number): void => this.frame(t);
   private readonly resizeObserver: ResizeObserver;
   private fpsWindow: number[] = [];
   private readonly scratch = new Float32Array(FRAME_UNIFORM_BYTES / 4);
@@ -82,6 +102,9 @@ export class Viewer {
     this.format = navigator.gpu.getPreferredCanvasFormat();
     context.configure({ device, format: this.format, alphaMode: 'opaque' });
     this.clearColor = options.clearColor ?? { r: 0.09, g: 0.1, b: 0.12, a: 1 };
+    this.colorAttachment = { view: undefined as unknown as GPUTextureView, clearValue: this.clearColor, loadOp: 'clear', storeOp: 'store' };
+    this.depthAttachment = { view: undefined as unknown as GPUTextureView, depthClearValue: 1, depthLoadOp: 'clear', depthStoreOp: 'store' };
+    this.passDescriptor = { label: 'Viewer.pass', colorAttachments: [this.colorAttachment], depthStencilAttachment: this.depthAttachment };
 
     this.frameUniforms = device.createBuffer({
       label: 'Viewer.frameUniforms',
@@ -166,7 +189,7 @@ export class Viewer {
   requestFrame(): void {
     if (this.frameRequested || this.destroyed) return;
     this.frameRequested = true;
-    requestAnimationFrame((t) => this.frame(t));
+    requestAnimationFrame(this.onAnimationFrame);
   }
 
   /**
@@ -177,9 +200,9 @@ export class Viewer {
     if (!this.destroyed) this.frame(performance.now());
   }
 
-  private ensureDepth(): GPUTexture {
+  private ensureDepthView(): GPUTextureView {
     const { width, height } = this.canvas;
-    if (!this.depth || this.depth.width !== width || this.depth.height !== height) {
+    if (!this.depth || !this.depthView || this.depth.width !== width || this.depth.height !== height) {
       this.depth?.destroy();
       this.depth = this.device.createTexture({
         label: 'Viewer.depth',
@@ -187,8 +210,9 @@ export class Viewer {
         format: DEPTH_FORMAT,
         usage: GPUTextureUsage.RENDER_ATTACHMENT,
       });
+      this.depthView = this.depth.createView();
     }
-    return this.depth;
+    return this.depthView;
   }
 
   private writeFrameUniforms(): void {
@@ -204,19 +228,18 @@ export class Viewer {
     this.fps = this.fpsWindow.length > 1 ? ((this.fpsWindow.length - 1) * 1000) / (time - this.fpsWindow[0]) : 0;
 
     this.writeFrameUniforms();
-    const encoder = this.device.createCommandEncoder({ label: 'Viewer.frame' });
+    const encoder = this.device.createCommandEncoder(this.encoderDescriptor);
     for (const hook of this.beforeFrame) hook(encoder);
-    const pass = encoder.beginRenderPass({
-      label: 'Viewer.pass',
-      colorAttachments: [
-        { view: this.context.getCurrentTexture().createView(), clearValue: this.clearColor, loadOp: 'clear', storeOp: 'store' },
-      ],
-      depthStencilAttachment: { view: this.ensureDepth().createView(), depthClearValue: 1, depthLoadOp: 'clear', depthStoreOp: 'store' },
-    });
+    this.colorAttachment.view = this.context.getCurrentTexture().createView();
+    this.colorAttachment.clearValue = this.clearColor;
+    this.depthAttachment.view = this.ensureDepthView();
+    const pass = encoder.beginRenderPass(this.passDescriptor);
     pass.setBindGroup(0, this.frameBindGroup);
     for (const layer of this.layers) layer.draw(pass);
     pass.end();
-    this.device.queue.submit([encoder.finish()]);
+    this.submitList[0] = encoder.finish();
+    this.device.queue.submit(this.submitList);
+    this.submitList.length = 0;
     this.framesDrawn++;
   }
 

@@ -17,6 +17,10 @@ export interface DepthDrawer {
 
 export class DepthPrepass {
   private texture: GPUTexture | undefined;
+  private textureView: GPUTextureView | undefined;
+  /** Reused every frame (the view changes only on resize): the render loop allocates no descriptors. */
+  private readonly depthAttachment: GPURenderPassDepthStencilAttachment = { view: undefined as unknown as GPUTextureView, depthClearValue: 1, depthLoadOp: 'clear', depthStoreOp: 'store' };
+  private readonly passDescriptor: GPURenderPassDescriptor = { label: 'DepthPrepass.pass', colorAttachments: [], depthStencilAttachment: this.depthAttachment };
   private readonly drawers: DepthDrawer[] = [];
   private readonly listeners: (() => void)[] = [];
   private readonly removeHook: () => void;
@@ -41,7 +45,8 @@ export class DepthPrepass {
   }
 
   get view(): GPUTextureView {
-    return this.ensureTexture().createView();
+    this.ensureTexture();
+    return this.textureView!;
   }
 
   private ensureTexture(): GPUTexture {
@@ -54,17 +59,16 @@ export class DepthPrepass {
         format: DEPTH_FORMAT,
         usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.TEXTURE_BINDING,
       });
+      this.textureView = this.texture.createView();
       for (const l of this.listeners) l();
     }
     return this.texture;
   }
 
   private record(encoder: GPUCommandEncoder): void {
-    const pass = encoder.beginRenderPass({
-      label: 'DepthPrepass.pass',
-      colorAttachments: [],
-      depthStencilAttachment: { view: this.ensureTexture().createView(), depthClearValue: 1, depthLoadOp: 'clear', depthStoreOp: 'store' },
-    });
+    this.ensureTexture();
+    this.depthAttachment.view = this.textureView!;
+    const pass = encoder.beginRenderPass(this.passDescriptor);
     pass.setBindGroup(0, this.viewer.frameBindGroup);
     for (const d of this.drawers) if (d.hasDepth) d.drawDepth(pass);
     pass.end();

@@ -179,6 +179,9 @@ export class NeuronIsosurface {
     v.iso.onStats((s) => {
       if (this.current === v) this.showStats(s);
     });
+    v.iso.onSubmit(() => {
+      if (this.current === v) this.viewer.requestFrame();
+    });
     v.iso.onError((e) => {
       if (this.current !== v) return;
       this.messages.show(

@@ -34,6 +34,8 @@ const SEGMENT_FLOATS = 12;
 
 export class SwcLayer implements RenderLayer, DepthDrawer {
   private readonly uniforms: GPUBuffer;
+  /** Written every frame (made once: the render loop allocates nothing). */
+  private readonly uniformData = new Float32Array(4);
   private segments: GPUBuffer | undefined;
   private bindGroup: GPUBindGroup | undefined;
   private count = 0;
@@ -169,7 +171,12 @@ export class SwcLayer implements RenderLayer, DepthDrawer {
   private writeUniforms(): void {
     const cam = this.viewer.camera;
     const focal = this.viewer.canvas.height / 2 / Math.tan(cam.fovY / 2);
-    this.viewer.device.queue.writeBuffer(this.uniforms, 0, new Float32Array([focal, this.minPx, this.radiusScale, 0]));
+    const u = this.uniformData;
+    u[0] = focal;
+    u[1] = this.minPx;
+    u[2] = this.radiusScale;
+    u[3] = 0;
+    this.viewer.device.queue.writeBuffer(this.uniforms, 0, u);
   }
 
   private drawWith(pass: GPURenderPassEncoder, line: GPURenderPipeline, tube: GPURenderPipeline, joint: GPURenderPipeline): void {

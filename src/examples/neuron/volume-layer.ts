@@ -81,6 +81,12 @@ export class VolumeLayer implements RenderLayer {
   opacity = 0.35;
   window: [number, number] = [0, 1];
   private readonly scratch = new ArrayBuffer(UNIFORM_BYTES);
+  // Written every frame: views and matrices made once (the render loop allocates nothing).
+  private readonly f32 = new Float32Array(this.scratch);
+  private readonly u32 = new Uint32Array(this.scratch);
+  private readonly viewProj = mat4.create();
+  private readonly inverse = mat4.create();
+  private readonly size: Vec3 = [0, 0, 0];
 
   private constructor(
     private readonly viewer: Viewer,
@@ -268,13 +274,18 @@ export class VolumeLayer implements RenderLayer {
   private writeUniforms(): void {
     if (!this.texture) return;
     const cam = this.viewer.camera;
-    const inv = mat4.invert(mat4.create(), cam.viewProjection(mat4.create())) ?? mat4.create();
-    const f = new Float32Array(this.scratch);
-    const u = new Uint32Array(this.scratch);
-    f.set(inv as Float32Array, 0);
-    const size = [0, 1, 2].map((a) => this.box.max[a] - this.box.min[a]);
-    f.set([...this.box.min, 0], 16);
-    f.set([...size, 0], 20);
+    const f = this.f32;
+    const u = this.u32;
+    if (!mat4.invert(this.inverse, cam.viewProjection(this.viewProj))) mat4.identity(this.inverse);
+    f.set(this.inverse as Float32Array, 0);
+    const size = this.size;
+    for (let a = 0; a < 3; a++) {
+      size[a] = this.box.max[a] - this.box.min[a];
+      f[16 + a] = this.box.min[a];
+      f[20 + a] = size[a];
+    }
+    f[19] = 0;
+    f[23] = 0;
     const step = this.refStep / this.quality;
     f[24] = step;
     f[25] = this.opacity;

@@ -30,6 +30,68 @@ export function packTriangleSoup(positions: Float32Array, dims: Dims): Uint32Arr
   return out;
 }
 
+/**
+ * Per vertex of a soup (voxel coordinates), the outward normal (minus the
+ * volume gradient) the pipeline writes (block_emit.wgsl), computed on the
+ * CPU: central differences at both ends of the vertex's grid edge (the axis
+ * whose coordinate is farthest from a whole number), interpolated at the
+ * vertex; a neighbour outside the volume or in a block `readable` rejects
+ * gives a one-sided difference. Unnormalized.
+ */
+export function soupNormals(values: Float32Array, dims: Dims, positions: Float32Array, readable: (block: number) => boolean = () => true): Float32Array {
+  const [nx, ny, nz] = dims;
+  const grid = dims.map((n) => Math.ceil(n / 4));
+  const voxel = (x: number, y: number, z: number): number | undefined => {
+    if (x < 0 || y < 0 || z < 0 || x >= nx || y >= ny || z >= nz) return undefined;
+    if (!readable((x >> 2) + grid[0] * ((y >> 2) + grid[1] * (z >> 2)))) return undefined;
+    return values[x + nx * (y + ny * z)];
+  };
+  const gradient = (g: number[]): number[] => {
+    const c = voxel(g[0], g[1], g[2]);
+    return [0, 1, 2].map((a) => {
+      const p = [...g];
+      const m = [...g];
+      p[a]++;
+      m[a]--;
+      const vp = voxel(p[0], p[1], p[2]);
+      const vm = voxel(m[0], m[1], m[2]);
+      if (vp !== undefined && vm !== undefined) return 0.5 * (vp - vm);
+      if (c === undefined) return 0;
+      if (vp !== undefined) return vp - c;
+      if (vm !== undefined) return c - vm;
+      return 0;
+    });
+  };
+  const out = new Float32Array(positions.length);
+  for (let i = 0; i < positions.length; i += 3) {
+    const p = [positions[i], positions[i + 1], positions[i + 2]];
+    const d = p.map((x) => Math.abs(x - Math.round(x)));
+    const axis = d[1] > d[0] && d[1] >= d[2] ? 1 : d[2] > d[0] && d[2] > d[1] ? 2 : 0;
+    const t = p[axis] - Math.floor(p[axis]);
+    const g0 = p.map((x, a) => (a === axis ? Math.floor(x) : Math.round(x)));
+    const g1 = g0.map((x, a) => (a === axis ? x + 1 : x));
+    const a0 = gradient(g0);
+    const a1 = gradient(g1);
+    for (let a = 0; a < 3; a++) out[i + a] = -(a0[a] + t * (a1[a] - a0[a]));
+  }
+  return out;
+}
+
+/** Octahedral encoding of normals (vertex_format.wgsl encode_vertex_normal): u32 per vertex, 0 = none. */
+export function encodeNormals(normals: Float32Array): Uint32Array {
+  const out = new Uint32Array(normals.length / 3);
+  for (let i = 0; i < out.length; i++) {
+    const [x, y, z] = [normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]];
+    const l1 = Math.abs(x) + Math.abs(y) + Math.abs(z);
+    if (!(l1 > 1e-30)) continue;
+    let o = [x / l1, y / l1];
+    if (z < 0) o = [(1 - Math.abs(o[1])) * (o[0] >= 0 ? 1 : -1), (1 - Math.abs(o[0])) * (o[1] >= 0 ? 1 : -1)];
+    const q = o.map((v) => Math.round((Math.min(1, Math.max(-1, v)) * 0.5 + 0.5) * 65534) + 1);
+    out[i] = (q[0] | (q[1] << 16)) >>> 0;
+  }
+  return out;
+}
+
 /** Every block's 64 values (x + 4y + 16z), zero outside the volume. */
 export function blocksOf(values: Float32Array, dims: Dims): Float32Array {
   const [nx, ny, nz] = dims;
@@ -50,9 +112,11 @@ export interface CpuSurface {
   destroy(): void;
 }
 
-export function createCpuSurface(device: GPUDevice, values: Float32Array, dims: Dims, iso: number): CpuSurface {
+/** `readable`: blocks whose voxels the normals may use (default all; the pipeline reads only cached blocks). */
+export function createCpuSurface(device: GPUDevice, values: Float32Array, dims: Dims, iso: number, readable?: (block: number) => boolean): CpuSurface {
   const mc = marchingCubes(values, dims, iso);
   const packed = packTriangleSoup(mc.positions, dims);
+  const normals = encodeNormals(soupNormals(values, dims, mc.positions, readable));
   const blockGrid = dims.map((n) => Math.ceil(n / 4)) as Dims;
   const blockCount = blockGrid[0] * blockGrid[1] * blockGrid[2];
   const make = (label: string, data: ArrayBufferView, usage: number) => {
@@ -61,6 +125,7 @@ export function createCpuSurface(device: GPUDevice, values: Float32Array, dims: 
     return buffer;
   };
   const vertices = make('CpuSurface.vertices', packed, GPUBufferUsage.VERTEX | GPUBufferUsage.STORAGE);
+  const normalBuffer = make('CpuSurface.normals', normals, GPUBufferUsage.VERTEX | GPUBufferUsage.STORAGE);
   const drawArgs = make('CpuSurface.drawArgs', new Uint32Array([mc.triangleCount * 3, 1, 0, 0]), GPUBufferUsage.INDIRECT | GPUBufferUsage.STORAGE);
   const slotData = make('CpuSurface.slotData', blocksOf(values, dims), GPUBufferUsage.STORAGE);
   const blockToSlot = make('CpuSurface.blockToSlot', Uint32Array.from({ length: blockCount }, (_, i) => i), GPUBufferUsage.STORAGE);
@@ -72,14 +137,14 @@ export function createCpuSurface(device: GPUDevice, values: Float32Array, dims: 
   return {
     triangles: mc.triangleCount,
     data: {
-      shards: [{ vertices, drawArgs, drawArgsOffset: 0 }],
+      shards: [{ vertices, normals: normalBuffer, drawArgs, drawArgsOffset: 0 }],
       info: { dims, blockGrid, blockCount, valueRange: [lo, hi] },
       slotData,
       blockToSlot,
       version: 0,
     },
     destroy() {
-      for (const b of [vertices, drawArgs, slotData, blockToSlot]) b.destroy();
+      for (const b of [vertices, normalBuffer, drawArgs, slotData, blockToSlot]) b.destroy();
     },
   };
 }
