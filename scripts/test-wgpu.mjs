@@ -37,6 +37,7 @@ export const WGPU_TESTS = [
   'tests/unit/isosurface/behaviour.test.ts',
   'tests/unit/isosurface/vtk.test.ts',
   'tests/unit/isosurface/vtk-bonsai.test.ts',
+  'tests/unit/store/chunked-volume.test.ts',
   'tests/unit/volume/open-volume.test.ts',
   'tests/unit/volume/tiff-isosurface.test.ts',
   'tests/unit/app/surface-layer.test.ts',

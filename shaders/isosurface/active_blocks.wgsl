@@ -21,6 +21,10 @@ fn neighbourhood_range(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroup
   if (b >= volume.block_count) {
     return;
   }
+  neighbourhood_ranges[b] = neighbourhood_of(b);
+}
+
+fn neighbourhood_of(b: u32) -> vec2f {
   let c = block_coords_of(b, volume.grid);
   let lo = max(c, vec3u(1u)) - 1u;
   let hi = min(c + 1u, volume.grid - 1u);
@@ -33,5 +37,41 @@ fn neighbourhood_range(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroup
       }
     }
   }
-  neighbourhood_ranges[b] = r;
+  return r;
+}
+
+// ---- chunked volumes: after chunks arrived in (or left) the pool, the
+// neighbourhood ranges of every block within one block of those chunks
+// (entry i: block i % (C/4 + 2)^3 of the chunk's box grown by one block).
+struct ChunkRegion {
+  count: u32,         // chunks in region_chunks
+  chunk_blocks: u32,  // blocks per chunk edge
+  pad0: u32,
+  pad1: u32,
+  chunk_grid: vec3u,  // chunks per axis
+  pad2: u32,
+}
+
+@group(1) @binding(0) var<storage, read> region_chunks: array<u32>;
+@group(1) @binding(1) var<uniform> region: ChunkRegion;
+
+@compute @workgroup_size(64)
+fn neighbourhood_range_chunks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+                              @builtin(local_invocation_index) lid: u32) {
+  let i = grid_invocation_index(wid, nwg, lid, 64u);
+  let e = region.chunk_blocks + 2u;
+  let per = e * e * e;
+  if (i >= region.count * per) {
+    return;
+  }
+  let chunk = region_chunks[i / per];
+  let l = i % per;
+  let g = region.chunk_grid;
+  let cc = vec3u(chunk % g.x, (chunk / g.x) % g.y, chunk / (g.x * g.y));
+  let c = vec3i(cc * region.chunk_blocks) - vec3i(1) + vec3i(vec3u(l % e, (l / e) % e, l / (e * e)));
+  if (any(c < vec3i(0)) || any(vec3u(c) >= volume.grid)) {
+    return;
+  }
+  let b = block_index_of(vec3u(c), volume.grid);
+  neighbourhood_ranges[b] = neighbourhood_of(b);
 }

@@ -40,6 +40,10 @@ fn group_range(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: 
   if (g >= groups.count) {
     return;
   }
+  load_group_ranges[g] = group_range_of(g);
+}
+
+fn group_range_of(g: u32) -> vec2f {
   // an empty range (lo > hi) covers no isovalue
   var r = vec2f(3.0e38, -3.0e38);
   for (var local = 0u; local < groups.per_group; local++) {
@@ -49,7 +53,40 @@ fn group_range(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: 
       r = vec2f(min(r.x, o.x), max(r.y, o.y));
     }
   }
-  load_group_ranges[g] = r;
+  return r;
+}
+
+// ---- chunked volumes (groups are the chunks): after chunks arrived or
+// left, the ranges of those groups and their 26 neighbours, whose blocks'
+// neighbourhood ranges may have changed (entry i: neighbour i % 27 of chunk
+// changed_chunks[i / 27]).
+struct ChangedChunks {
+  count: u32,
+  pad0: u32,
+  pad1: u32,
+  pad2: u32,
+}
+
+@group(2) @binding(0) var<storage, read> changed_chunks: array<u32>;
+@group(2) @binding(1) var<uniform> changed: ChangedChunks;
+
+@compute @workgroup_size(64)
+fn group_range_chunks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+                      @builtin(local_invocation_index) lid: u32) {
+  let i = grid_invocation_index(wid, nwg, lid, 64u);
+  if (i >= changed.count * 27u) {
+    return;
+  }
+  let chunk = changed_chunks[i / 27u];
+  let k = i % 27u;
+  let gg = groups.grid;
+  let cc = vec3u(chunk % gg.x, (chunk / gg.x) % gg.y, chunk / (gg.x * gg.y));
+  let c = vec3i(cc) + vec3i(i32(k % 3u), i32((k / 3u) % 3u), i32(k / 9u)) - vec3i(1);
+  if (any(c < vec3i(0)) || any(vec3u(c) >= gg)) {
+    return;
+  }
+  let g = u32(c.x) + gg.x * (u32(c.y) + gg.y * u32(c.z));
+  load_group_ranges[g] = group_range_of(g);
 }
 
 // ---- per isovalue, pass 1: one compare per group

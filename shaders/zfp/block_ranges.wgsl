@@ -9,6 +9,13 @@ fn block_ranges(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
                 @builtin(local_invocation_index) lid: u32) {
   let b = stream.shard_first_block + linear_workgroup_index(wid, nwg) * 64u + lid;
   if (b >= stream.shard_end_block) { return; }
+  let r = block_value_range(b);
+  ranges[2u * b] = r.x;
+  ranges[2u * b + 1u] = r.y;
+}
+
+// [min, max] of block b's finite decoded values inside the volume.
+fn block_value_range(b: u32) -> vec2f {
   var v: array<u32, 64>;
   decode_block(b, &v);
   let c = block_coords(b) * 4u;
@@ -33,6 +40,5 @@ fn block_ranges(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
       }
     }
   }
-  ranges[2u * b] = lo;
-  ranges[2u * b + 1u] = hi;
+  return vec2f(lo, hi);
 }

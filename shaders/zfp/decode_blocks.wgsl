@@ -1,8 +1,8 @@
 // Decodes a GPU list of blocks into cache slots: entry i < count decodes block
 // block_ids[i] into slot slot_ids[i] (64 values, x + 4y + 16z). Dispatched
 // indirectly (IndirectArgs, shaders/primitives/indirect_args.wgsl: a 1D, 2D
-// or 3D grid, count in dispatch_args[3]) once per stream shard; entries whose
-// block is in another shard are skipped.
+// or 3D grid, count in dispatch_args[3]) once per stream (or pool) shard;
+// entries whose block is in another shard, or in no resident chunk, are skipped.
 
 @group(1) @binding(0) var<storage, read> block_ids: array<u32>;
 @group(1) @binding(1) var<storage, read> slot_ids: array<u32>;
@@ -15,7 +15,7 @@ fn decode_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg
   let i = (wid.x + nwg.x * (wid.y + nwg.y * wid.z)) * 64u + lid;
   if (i >= dispatch_args[3]) { return; }
   let b = block_ids[i];
-  if (b < stream.shard_first_block || b >= stream.shard_end_block) { return; }
+  if (!block_in_shard(b)) { return; }
   var v: array<u32, 64>;
   decode_block(b, &v);
   let base = slot_ids[i] * 64u;

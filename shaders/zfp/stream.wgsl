@@ -1,8 +1,9 @@
 // One shard of a fixed-rate zfp stream (bind group 0 of every decoder
 // kernel): the 32-bit words holding blocks [shard_first_block,
 // shard_end_block), and where they are. Block b starts at bit
-// (b - shard_first_block) * bits_per_block + shard_bit_base of `stream_words`.
-// Needs u64.wgsl.
+// (b - shard_first_block) * bits_per_block + shard_bit_base of `stream_words`
+// (stream_address.wgsl), or where a page table says (pool_address.wgsl).
+// Needs u64.wgsl and one of the two address snippets.
 
 struct StreamParams {
   dims: vec3u,            // nx, ny, nz of the field
@@ -17,12 +18,6 @@ struct StreamParams {
 
 @group(0) @binding(0) var<storage, read> stream_words: array<u32>;
 @group(0) @binding(1) var<uniform> stream: StreamParams;
-
-// (word, bit) where block b (inside this shard) starts.
-fn block_start(b: u32) -> vec2u {
-  let bit = u64_add32(u64_mul(b - stream.shard_first_block, stream.bits_per_block), stream.shard_bit_base);
-  return u64_bit_to_word(bit);
-}
 
 // Block coordinates of raster block index b (x fastest).
 fn block_coords(b: u32) -> vec3u {

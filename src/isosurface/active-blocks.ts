@@ -13,15 +13,17 @@ import { dispatchLinear } from '../gpu/dispatch.ts';
 import { readF32 } from '../gpu/buffers.ts';
 import type { ExclusiveScan } from '../primitives/scan.ts';
 import type { StreamCompact, StreamCompactIds } from '../primitives/compact.ts';
+import type { ChunkedVolume } from '../zfp/chunked-volume.ts';
 import type { ZfpDecoder } from '../zfp/decoder.ts';
-import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
+import type { BlockSource, ZfpGpuStream } from '../zfp/gpu-stream.ts';
 import { Counters } from './counters.ts';
 import { bindGroup, bindGroupLayout, computePipeline, storageBuffer } from './gpu-util.ts';
 import { A } from './layout.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
 
 export interface ActiveBlocksParts {
-  stream: ZfpGpuStream;
+  /** A whole stream (ranges computed at load), or a chunk pool (ranges follow the chunks as they come and go). */
+  stream: BlockSource;
   decoder: ZfpDecoder;
   /** VolumeParams uniform (common.wgsl). */
   volume: GPUBuffer;
@@ -61,13 +63,16 @@ export class ActiveBlocks {
   private readonly common: GPUBindGroup;
   private readonly markGroupsGroup: GPUBindGroup;
   private readonly markBlocksGroup: GPUBindGroup;
+  /** Chunked volumes only: the changed chunks and the bind groups of their range updates. */
+  private readonly chunkUpdate?: ChunkUpdate;
 
   private constructor(
     private readonly device: GPUDevice,
     private readonly parts: ActiveBlocksParts,
     private readonly markGroups: GPUComputePipeline,
     private readonly markBlocks: GPUComputePipeline,
-    layouts: { common: GPUBindGroupLayout; markGroups: GPUBindGroupLayout; markBlocks: GPUBindGroupLayout },
+    layouts: ActiveLayouts,
+    chunkPipelines?: { neighbourhood: GPUComputePipeline; groups: GPUComputePipeline },
   ) {
     const { blockCount, blockGrid } = parts.stream.info;
     const edge = parts.groupEdge;
@@ -75,7 +80,9 @@ export class ActiveBlocks {
     this.groupCount = grid[0] * grid[1] * grid[2];
     this.groupSize = edge ** 3;
     const entries = this.groupCount * this.groupSize;
-    this.blockRanges = parts.decoder.computeBlockRanges(parts.stream);
+    const pool = parts.stream.addressing === 'pool' ? (parts.stream as ChunkedVolume) : undefined;
+    // A pool starts empty: every block has the empty range until its chunk arrives.
+    this.blockRanges = pool ? emptyRanges(device, blockCount) : parts.decoder.computeBlockRanges(parts.stream as ZfpGpuStream);
     this.neighbourhoodRanges = storageBuffer(device, 'Isosurface.neighbourhoodRanges', blockCount * 8);
     this.groupRanges = storageBuffer(device, 'Isosurface.groupRanges', this.groupCount * 8);
     this.groupMask = storageBuffer(device, 'Isosurface.groupMask', this.groupCount * 4);
@@ -98,26 +105,93 @@ export class ActiveBlocks {
       [parts.counters.buffer, this.activeGroupIds, this.neighbourhoodRanges, this.blockMask, this.blockIds],
       4,
     );
+    if (pool && chunkPipelines) {
+      if (pool.chunkBlocks !== edge) throw new RangeError(`${pool.info.fileName}: the groups must be the chunks (groupEdgeBlocks ${edge}, chunk edge ${pool.chunkBlocks} blocks)`);
+      const list = device.createBuffer({ label: 'Isosurface.changedChunks', size: Math.max(4, pool.chunkCount * 4), usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST });
+      const uniform = (label: string, size: number) => device.createBuffer({ label, size, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
+      const decodeParams = uniform('Isosurface.changedChunks.decodeParams', 16);
+      const regionParams = uniform('Isosurface.changedChunks.regionParams', 32);
+      const groupParams = uniform('Isosurface.changedChunks.groupParams', 16);
+      this.chunkUpdate = {
+        pool,
+        list,
+        decodeParams,
+        regionParams,
+        groupParams,
+        neighbourhood: chunkPipelines.neighbourhood,
+        groups: chunkPipelines.groups,
+        neighbourhoodGroup: bindGroup(device, 'Isosurface.neighbourhoodRange.bindGroup', layouts.neighbourhood, [parts.volume, this.blockRanges, this.neighbourhoodRanges]),
+        regionGroup: bindGroup(device, 'Isosurface.neighbourhoodRangeChunks.bindGroup', layouts.region, [list, regionParams]),
+        loadGroup: bindGroup(device, 'Isosurface.groupRange.bindGroup', layouts.load, [this.neighbourhoodRanges, this.groupRanges]),
+        changedGroup: bindGroup(device, 'Isosurface.groupRangeChunks.bindGroup', layouts.changed, [list, groupParams]),
+        words: new Uint32Array(8),
+      };
+    }
+  }
+
+  /**
+   * Chunked volumes: records the range updates of the chunks put or evicted
+   * since the last surface (their blocks' ranges from the pool, the
+   * neighbourhood ranges within one block of them, the ranges of their
+   * groups and the groups around them). Cost follows the changed chunks.
+   * Call right before the submission that follows (the chunk list is
+   * written with queue.writeBuffer).
+   */
+  encodeChunkUpdates(encoder: GPUCommandEncoder): number {
+    const u = this.chunkUpdate;
+    if (!u) return 0;
+    const changed = u.pool.takeChangedChunks();
+    if (changed.length === 0) return 0;
+    const { device } = this;
+    const count = changed.length;
+    const cb = u.pool.chunkBlocks;
+    device.queue.writeBuffer(u.list, 0, new Uint32Array(changed));
+    u.words.set([count, cb ** 3, 0, 0]);
+    device.queue.writeBuffer(u.decodeParams, 0, u.words, 0, 4);
+    u.words.set([count, cb, 0, 0, ...u.pool.layout.chunkGrid, 0]);
+    device.queue.writeBuffer(u.regionParams, 0, u.words, 0, 8);
+    u.words.set([count, 0, 0, 0]);
+    device.queue.writeBuffer(u.groupParams, 0, u.words, 0, 4);
+    const pass = encoder.beginComputePass({ label: 'Isosurface.chunkUpdates' });
+    this.parts.decoder.encodeChunkBlockRanges(pass, { pool: u.pool, chunkList: u.list, params: u.decodeParams, count, ranges: this.blockRanges });
+    pass.setPipeline(u.neighbourhood);
+    pass.setBindGroup(0, u.neighbourhoodGroup);
+    pass.setBindGroup(1, u.regionGroup);
+    dispatchLinear(pass, Math.ceil((count * (cb + 2) ** 3) / 64), this.parts.maxWorkgroupsPerDimension);
+    pass.setPipeline(u.groups);
+    pass.setBindGroup(0, this.common);
+    pass.setBindGroup(1, u.loadGroup);
+    pass.setBindGroup(2, u.changedGroup);
+    dispatchLinear(pass, Math.ceil((count * 27) / 64), this.parts.maxWorkgroupsPerDimension);
+    pass.end();
+    return count;
   }
 
   /** Computes the block ranges, their neighbourhood ranges and the group ranges (one submission). */
   static async create(device: GPUDevice, parts: ActiveBlocksParts): Promise<ActiveBlocks> {
-    const neighbourhoodLayout = bindGroupLayout(device, 'Isosurface.neighbourhoodRange.layout', ['uniform', 'read', 'rw']);
-    const layouts = {
+    const layouts: ActiveLayouts = {
+      neighbourhood: bindGroupLayout(device, 'Isosurface.neighbourhoodRange.layout', ['uniform', 'read', 'rw']),
+      region: bindGroupLayout(device, 'Isosurface.neighbourhoodRangeChunks.layout', ['read', 'uniform']),
       common: bindGroupLayout(device, 'Isosurface.activeGroups.layout', ['uniform', 'uniform']),
       load: bindGroupLayout(device, 'Isosurface.groupRange.layout', ['read', 'rw']),
       markGroups: bindGroupLayout(device, 'Isosurface.markActiveGroups.layout', ['read', 'rw'], 2),
       markBlocks: bindGroupLayout(device, 'Isosurface.markGroupBlocks.layout', ['read', 'read', 'read', 'rw', 'rw'], 4),
+      changed: bindGroupLayout(device, 'Isosurface.groupRangeChunks.layout', ['read', 'uniform']),
     };
+    const neighbourhoodLayout = layouts.neighbourhood;
     const constants = { MAX_WG_PER_DIM: parts.maxWorkgroupsPerDimension };
     const groups = isosurfaceWgsl.activeGroups;
-    const [neighbourhood, groupRange, markGroups, markBlocks] = await Promise.all([
+    const pooled = parts.stream.addressing === 'pool';
+    const [neighbourhood, groupRange, markGroups, markBlocks, chunkNeighbourhood, chunkGroups] = await Promise.all([
       computePipeline(device, 'Isosurface.neighbourhoodRange', isosurfaceWgsl.activeBlocks, 'neighbourhood_range', [neighbourhoodLayout], constants),
       computePipeline(device, 'Isosurface.groupRange', groups, 'group_range', [layouts.common, layouts.load], constants),
       computePipeline(device, 'Isosurface.markActiveGroups', groups, 'mark_active_groups', [layouts.common, layouts.markGroups], constants),
       computePipeline(device, 'Isosurface.markGroupBlocks', groups, 'mark_group_blocks', [layouts.common, layouts.markBlocks], constants),
+      pooled ? computePipeline(device, 'Isosurface.neighbourhoodRangeChunks', isosurfaceWgsl.activeBlocks, 'neighbourhood_range_chunks', [neighbourhoodLayout, layouts.region], constants) : undefined,
+      pooled ? computePipeline(device, 'Isosurface.groupRangeChunks', groups, 'group_range_chunks', [layouts.common, layouts.load, layouts.changed], constants) : undefined,
     ]);
-    const active = new ActiveBlocks(device, parts, markGroups, markBlocks, layouts);
+    const chunkPipelines = chunkNeighbourhood && chunkGroups ? { neighbourhood: chunkNeighbourhood, groups: chunkGroups } : undefined;
+    const active = new ActiveBlocks(device, parts, markGroups, markBlocks, layouts, chunkPipelines);
     const encoder = device.createCommandEncoder({ label: 'Isosurface.neighbourhoodRanges' });
     const pass = encoder.beginComputePass({ label: 'Isosurface.neighbourhoodRanges' });
     pass.setPipeline(neighbourhood);
@@ -176,13 +250,52 @@ export class ActiveBlocks {
   }
 
   private buffers(): GPUBuffer[] {
+    const u = this.chunkUpdate;
     return [
       this.blockRanges, this.neighbourhoodRanges, this.groupRanges, this.groupMask, this.groupOffsets, this.activeGroupIds,
       this.blockMask, this.blockOffsets, this.blockIds, this.activeIds, this.groupParams,
+      ...(u ? [u.list, u.decodeParams, u.regionParams, u.groupParams] : []),
     ];
   }
 
   destroy(): void {
     for (const b of this.buffers()) b.destroy();
   }
+}
+
+interface ActiveLayouts {
+  neighbourhood: GPUBindGroupLayout;
+  region: GPUBindGroupLayout;
+  common: GPUBindGroupLayout;
+  load: GPUBindGroupLayout;
+  markGroups: GPUBindGroupLayout;
+  markBlocks: GPUBindGroupLayout;
+  changed: GPUBindGroupLayout;
+}
+
+interface ChunkUpdate {
+  pool: ChunkedVolume;
+  list: GPUBuffer;
+  decodeParams: GPUBuffer;
+  regionParams: GPUBuffer;
+  groupParams: GPUBuffer;
+  neighbourhood: GPUComputePipeline;
+  groups: GPUComputePipeline;
+  neighbourhoodGroup: GPUBindGroup;
+  regionGroup: GPUBindGroup;
+  loadGroup: GPUBindGroup;
+  changedGroup: GPUBindGroup;
+  words: Uint32Array<ArrayBuffer>;
+}
+
+/** 2 f32 per block, all [FLT_MAX, -FLT_MAX]: no isovalue falls in them. */
+function emptyRanges(device: GPUDevice, blocks: number): GPUBuffer {
+  const buffer = device.createBuffer({ label: 'Isosurface.blockRanges', size: Math.max(8, blocks * 8), usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST, mappedAtCreation: true });
+  const f = new Float32Array(buffer.getMappedRange());
+  for (let i = 0; i < f.length; i += 2) {
+    f[i] = 3.4028234663852886e38;
+    f[i + 1] = -3.4028234663852886e38;
+  }
+  buffer.unmap();
+  return buffer;
 }

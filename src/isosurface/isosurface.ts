@@ -17,7 +17,8 @@ import { readU32 } from '../gpu/buffers.ts';
 import { StreamCompact, StreamCompactIds } from '../primitives/compact.ts';
 import { ExclusiveScan } from '../primitives/scan.ts';
 import { ZfpDecoder } from '../zfp/decoder.ts';
-import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
+import type { ChunkedVolume } from '../zfp/chunked-volume.ts';
+import type { BlockSource } from '../zfp/gpu-stream.ts';
 import { ActiveBlocks, groupGrid } from './active-blocks.ts';
 import { BlockMarchingCubes } from './block-mc.ts';
 import { cacheBytesFor, defaultMemoryBudget, formatMB, grownCapacity, maxCacheSlots, vertexBytesFor } from './budget.ts';
@@ -92,7 +93,7 @@ export class Isosurface {
 
   private constructor(
     private readonly gpu: GpuContext,
-    private readonly stream: ZfpGpuStream,
+    private readonly stream: BlockSource,
     private readonly volume: GPUBuffer,
     private readonly counters: Counters,
     private readonly decoder: ZfpDecoder,
@@ -122,7 +123,13 @@ export class Isosurface {
    * neighbourhood ranges (one GPU pass at load, read back once for
    * info.valueRange), the cache at its initial capacity and the vertex shards.
    */
-  static async create(gpu: GpuContext, stream: ZfpGpuStream, options: IsosurfaceOptions = {}): Promise<Isosurface> {
+  /**
+   * `stream`: a whole zfp stream (ZfpGpuStream), or one level of a chunked
+   * store (ChunkedVolume: chunks come and go in a GPU pool; the groups of the
+   * active-block selection are its chunks, and a chunk's block ranges are
+   * computed on the GPU when it arrives).
+   */
+  static async create(gpu: GpuContext, stream: BlockSource, options: IsosurfaceOptions = {}): Promise<Isosurface> {
     const { device } = gpu;
     const limits = device.limits;
     const maxWg = options.maxWorkgroupsPerDimension ?? limits.maxComputeWorkgroupsPerDimension;
@@ -160,7 +167,8 @@ export class Isosurface {
 
     const maxInFlight = options.maxSurfacesInFlight ?? DEFAULT_SURFACES_IN_FLIGHT;
     if (!Number.isInteger(maxInFlight) || maxInFlight < 1) throw new RangeError(`maxSurfacesInFlight must be a positive integer (got ${maxInFlight})`);
-    const groupEdge = options.groupEdgeBlocks ?? DEFAULT_GROUP_EDGE_BLOCKS;
+    const pool = stream.addressing === 'pool' ? (stream as ChunkedVolume) : undefined;
+    const groupEdge = pool ? pool.chunkBlocks : (options.groupEdgeBlocks ?? DEFAULT_GROUP_EDGE_BLOCKS);
     if (!Number.isInteger(groupEdge) || groupEdge < 1 || groupEdge > 64) throw new RangeError(`groupEdgeBlocks must be an integer in 1..64 (got ${groupEdge})`);
     const groupEntries = groupGrid(blockGrid, groupEdge).reduce((a, b) => a * b, 1) * groupEdge ** 3;
     // Per-block buffers are bound whole too: neighbourhood ranges (8 B per block), the group-grid lists (4 B per entry).
@@ -188,9 +196,10 @@ export class Isosurface {
     ]);
     counters.set('blocks', blockCount);
     const active = await ActiveBlocks.create(device, { stream, decoder, volume, counters, scan, compact, compactIds, maxWorkgroupsPerDimension: maxWg, groupEdge });
+    // A pool starts empty: its value range is the store's (the caller knows it), not the blocks'.
     const [cache, ranges] = await Promise.all([
       BlockCache.create(device, { stream, decoder, counters, scan: slotScan, compact, compactIds, activeIds: active.activeIds, maxWorkgroupsPerDimension: maxWg }, slots),
-      active.readBlockRanges(),
+      pool ? new Float32Array(0) : active.readBlockRanges(),
     ]);
     const mc = await BlockMarchingCubes.create(
       device,
@@ -201,10 +210,11 @@ export class Isosurface {
     const shards = new VertexShards(device, perShard, vertices);
     let lo = Infinity;
     let hi = -Infinity;
-    for (let b = 0; b < blockCount; b++) {
+    for (let b = 0; b < ranges.length / 2; b++) {
       lo = Math.min(lo, ranges[2 * b]);
       hi = Math.max(hi, ranges[2 * b + 1]);
     }
+    if (pool) [lo, hi] = [0, 0];
     const info: VolumeInfo = { dims: [...dims], blockGrid: [...blockGrid], blockCount, valueRange: [lo, hi] };
     const iso = new Isosurface(gpu, stream, volume, counters, decoder, scan, slotScan, compact, compactIds, active, cache, mc, shards, new StatsReadback(device, options.timing ?? true), slots, info, budget, maxInFlight, maxSlots);
     iso.writeShardCounters();
@@ -362,6 +372,7 @@ export class Isosurface {
     const s = this.stats;
     s.mark(encoder, 0);
     if (!verticesOnly) {
+      this.active.encodeChunkUpdates(encoder);
       this.active.encode(encoder);
       const pass = encoder.beginComputePass({ label: 'Isosurface.planCache' });
       this.counters.encodePlanCache(pass);

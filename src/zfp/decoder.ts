@@ -14,7 +14,8 @@
 
 import { dispatchLinear } from '../gpu/dispatch.ts';
 import { createComputePipeline } from '../gpu/wgsl.ts';
-import { maxShardBytesFor, streamBindGroupLayout, type ZfpGpuStream } from './gpu-stream.ts';
+import { poolBindGroupLayout, type ChunkedVolume } from './chunked-volume.ts';
+import { maxShardBytesFor, streamBindGroupLayout, type BlockSource, type ZfpGpuStream } from './gpu-stream.ts';
 import {
   BindGroupCache,
   binding,
@@ -32,7 +33,8 @@ import { zfpWgsl } from './wgsl.ts';
 export type { ComputeTarget, GpuBufferRef, GpuCount } from './gpu-util.ts';
 
 export interface DecodeBlocksArgs {
-  stream: ZfpGpuStream;
+  /** A whole stream, or chunks in a pool (ChunkedVolume). */
+  stream: BlockSource;
   /** u32 block id (raster block order) per list entry. STORAGE usage. */
   blockIds: GpuBufferRef;
   /** u32 destination slot per list entry. STORAGE usage. */
@@ -50,6 +52,18 @@ export interface BlockRangesArgs {
   /** 2 f32 (min, max) per block, raster block order; blockCount * 8 bytes. STORAGE usage. */
   ranges: GpuBufferRef;
   timestampWrites?: GPUComputePassTimestampWrites;
+}
+
+export interface ChunkBlockRangesArgs {
+  pool: ChunkedVolume;
+  /** u32 chunk indices; ranges of their blocks are recomputed (empty for chunks not resident). */
+  chunkList: GpuBufferRef;
+  /** ChunkListParams uniform (pool_ranges.wgsl): count, blocks per chunk. */
+  params: GpuBufferRef;
+  /** Chunks in the list (known on the CPU: the pool's changed chunks). */
+  count: number;
+  /** 2 f32 per block of the level, raster block order. */
+  ranges: GpuBufferRef;
 }
 
 export interface DecodeVolumeArgs {
@@ -71,6 +85,8 @@ export class ZfpDecoder {
     private readonly decodeBlocksPipeline: GPUComputePipeline,
     private readonly decodeVolumePipeline: GPUComputePipeline,
     private readonly rangesPipeline: GPUComputePipeline,
+    private readonly decodePoolBlocksPipeline: GPUComputePipeline,
+    private readonly poolRangesPipeline: GPUComputePipeline,
     /** [x, y, z, count] of the indirect block-list dispatch. */
     private readonly args: IndirectArgs,
     private readonly maxWorkgroups: number,
@@ -97,8 +113,10 @@ export class ZfpDecoder {
     const blocksLayout = layout('ZfpDecoder.decodeBlocks.layout', storage(0, true), storage(1, true), storage(2, true), storage(3, false));
     const volumeLayout = layout('ZfpDecoder.decodeVolume.layout', uniform(0), storage(1, false));
     const rangesLayout = layout('ZfpDecoder.blockRanges.layout', storage(0, false));
+    const pool = poolBindGroupLayout(device);
+    const poolRangesLayout = layout('ZfpDecoder.chunkBlockRanges.layout', storage(0, false), storage(1, true), uniform(2));
 
-    const [blocks, volume, ranges, args] = await Promise.all([
+    const [blocks, volume, ranges, poolBlocks, poolRanges, args] = await Promise.all([
       createComputePipeline(device, 'ZfpDecoder.decodeBlocks', zfpWgsl.decodeBlocks, 'decode_blocks', {
         layout: pipelineLayout('ZfpDecoder.decodeBlocks', [stream, blocksLayout]),
       }),
@@ -108,12 +126,18 @@ export class ZfpDecoder {
       createComputePipeline(device, 'ZfpDecoder.blockRanges', zfpWgsl.blockRanges, 'block_ranges', {
         layout: pipelineLayout('ZfpDecoder.blockRanges', [stream, rangesLayout]),
       }),
+      createComputePipeline(device, 'ZfpDecoder.decodePoolBlocks', zfpWgsl.decodePoolBlocks, 'decode_blocks', {
+        layout: pipelineLayout('ZfpDecoder.decodePoolBlocks', [pool, blocksLayout]),
+      }),
+      createComputePipeline(device, 'ZfpDecoder.chunkBlockRanges', zfpWgsl.poolRanges, 'chunk_block_ranges', {
+        layout: pipelineLayout('ZfpDecoder.chunkBlockRanges', [pool, poolRangesLayout]),
+      }),
       IndirectArgs.create(device, { itemsPerWorkgroup: 64, maxWorkgroupsPerDimension: maxWorkgroups, label: 'ZfpDecoder.indirectArgs' }),
     ]);
-    return new ZfpDecoder(device, blocks, volume, ranges, args, maxWorkgroups);
+    return new ZfpDecoder(device, blocks, volume, ranges, poolBlocks, poolRanges, args, maxWorkgroups);
   }
 
-  private check(stream: ZfpGpuStream): void {
+  private check(stream: BlockSource): void {
     if (stream.device !== this.device) throw new Error('ZfpDecoder: the stream belongs to another device');
     if (stream.isDestroyed) throw new Error(`ZfpDecoder: the stream of ${stream.info.fileName} was destroyed`);
   }
@@ -143,7 +167,7 @@ export class ZfpDecoder {
       'ZfpDecoder.decodeBlocks',
       (pass) => {
         this.args.encode(pass, { count: a.count });
-        pass.setPipeline(this.decodeBlocksPipeline);
+        pass.setPipeline(a.stream.addressing === 'pool' ? this.decodePoolBlocksPipeline : this.decodeBlocksPipeline);
         pass.setBindGroup(1, listGroup);
         for (const shard of a.stream.shards) {
           pass.setBindGroup(0, shard.bindGroup);
@@ -152,6 +176,35 @@ export class ZfpDecoder {
       },
       a.timestampWrites,
     );
+  }
+
+  /**
+   * Recomputes the block ranges of the chunks in `chunkList` (once per pool
+   * shard: each shard's dispatch covers the chunks in its slots; chunks not
+   * resident get the empty range).
+   */
+  encodeChunkBlockRanges(target: ComputeTarget, a: ChunkBlockRangesArgs): void {
+    this.check(a.pool);
+    if (a.count === 0) return;
+    const group = this.groups.get(`poolRanges|${refKey(a.chunkList)}|${refKey(a.params)}|${refKey(a.ranges)}`, () =>
+      this.device.createBindGroup({
+        label: 'ZfpDecoder.chunkBlockRanges.bindGroup',
+        layout: this.poolRangesPipeline.getBindGroupLayout(1),
+        entries: [
+          { binding: 0, resource: binding(a.ranges) },
+          { binding: 1, resource: binding(a.chunkList) },
+          { binding: 2, resource: binding(a.params) },
+        ],
+      }),
+    );
+    inPass(target, 'ZfpDecoder.chunkBlockRanges', (pass) => {
+      pass.setPipeline(this.poolRangesPipeline);
+      pass.setBindGroup(1, group);
+      for (const shard of a.pool.shards) {
+        pass.setBindGroup(0, shard.bindGroup);
+        dispatchLinear(pass, Math.ceil((a.count * a.pool.chunkBlocks ** 3) / 64), this.maxWorkgroups);
+      }
+    });
   }
 
   /** Bytes of the ranges buffer for `stream`: 2 f32 per block. */

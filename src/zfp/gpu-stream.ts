@@ -107,8 +107,26 @@ export interface UploadOptions {
   label?: string;
 }
 
+/**
+ * Where the decoder finds blocks: a whole stream (ZfpGpuStream) or chunks in
+ * a pool (ChunkedVolume, chunked-volume.ts). The isosurface pipeline reads
+ * either through this one interface.
+ */
+export interface BlockSource {
+  readonly device: GPUDevice;
+  readonly info: Pick<ZfpStreamInfo, 'fileName' | 'dims' | 'blockGrid' | 'blockCount' | 'bitsPerBlock' | 'rate'>;
+  /** Bind group 0 of the decoder kernels, one per piece no larger than a storage binding. */
+  readonly shards: readonly { readonly bindGroup: GPUBindGroup; readonly firstBlock: number; readonly endBlock: number }[];
+  /** 'stream': blocks back to back (stream_address.wgsl); 'pool': chunks through a page table (pool_address.wgsl). */
+  readonly addressing: 'stream' | 'pool';
+  readonly isDestroyed: boolean;
+  /** Bytes of GPU memory held. */
+  readonly byteSize: number;
+}
+
 /** A zfp stream in GPU memory; owns its buffers (destroy() frees them). */
-export class ZfpGpuStream {
+export class ZfpGpuStream implements BlockSource {
+  readonly addressing = 'stream';
   private destroyed = false;
 
   private constructor(

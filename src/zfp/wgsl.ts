@@ -3,20 +3,27 @@ import { gridSnippet } from '../gpu/dispatch.ts';
 import type { WgslPart } from '../gpu/wgsl.ts';
 import u64 from '../../shaders/zfp/u64.wgsl?raw';
 import stream from '../../shaders/zfp/stream.wgsl?raw';
+import streamAddress from '../../shaders/zfp/stream_address.wgsl?raw';
+import poolAddress from '../../shaders/zfp/pool_address.wgsl?raw';
 import codec from '../../shaders/zfp/codec.wgsl?raw';
 import f64 from '../../shaders/zfp/f64.wgsl?raw';
 import decodeBlock from '../../shaders/zfp/decode_block.wgsl?raw';
 import decodeBlocks from '../../shaders/zfp/decode_blocks.wgsl?raw';
 import decodeVolume from '../../shaders/zfp/decode_volume.wgsl?raw';
 import blockRanges from '../../shaders/zfp/block_ranges.wgsl?raw';
+import poolRanges from '../../shaders/zfp/pool_ranges.wgsl?raw';
 import encode from '../../shaders/zfp/encode.wgsl?raw';
 
 const part = (name: string, code: string): WgslPart => ({ name: `shaders/zfp/${name}.wgsl`, code });
 
-const decoderBase = [gridSnippet, part('u64', u64), part('stream', stream), part('codec', codec), part('decode_block', decodeBlock)];
+// The decoder over a whole stream, or over chunks in a pool (page table).
+const decoderBase = [gridSnippet, part('u64', u64), part('stream', stream), part('stream_address', streamAddress), part('codec', codec), part('decode_block', decodeBlock)];
+const poolDecoderBase = [gridSnippet, part('u64', u64), part('stream', stream), part('pool_address', poolAddress), part('codec', codec), part('decode_block', decodeBlock)];
 
 export const zfpWgsl = {
   decodeBlocks: [...decoderBase, part('decode_blocks', decodeBlocks)],
+  decodePoolBlocks: [...poolDecoderBase, part('decode_blocks', decodeBlocks)],
+  poolRanges: [...poolDecoderBase, part('block_ranges', blockRanges), part('pool_ranges', poolRanges)],
   decodeVolume: [...decoderBase, part('decode_volume', decodeVolume)],
   blockRanges: [...decoderBase, part('block_ranges', blockRanges)],
   encode: [gridSnippet, part('u64', u64), part('codec', codec), part('f64', f64), part('encode', encode)],

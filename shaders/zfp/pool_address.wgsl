@@ -1,0 +1,42 @@
+// Where a block starts when the volume arrives as chunks (a chunked store,
+// src/zfp/chunked-volume.ts): every chunk of C^3 voxels is a zfp stream of
+// its own (header, then its (C/4)^3 blocks in raster order), copied whole
+// into a slot of a pool; the page table maps chunk -> slot (0xffffffff: not
+// resident). A pool shard holds slots [first_slot, end_slot) back to back,
+// slot_words 32-bit words each. The stream uniform still gives the level's
+// dims, block grid and bits per block; a block's blocks are those of the
+// whole level compressed as one stream (zfp codes each block alone).
+
+struct PoolParams {
+  chunk_grid: vec3u,    // chunks per axis
+  chunk_blocks: u32,    // blocks per chunk edge (C / 4)
+  slot_words: u32,      // words per pooled chunk (its stream padded to 64 bits)
+  header_bits: u32,     // where block 0 starts inside a chunk's stream
+  first_slot: u32,      // slots of this shard
+  end_slot: u32,
+}
+
+@group(0) @binding(2) var<storage, read> page_table: array<u32>;
+@group(0) @binding(3) var<uniform> pool: PoolParams;
+
+const POOL_NONE = 0xffffffffu;
+
+fn chunk_of_block(b: u32) -> u32 {
+  let c = block_coords(b) / pool.chunk_blocks;
+  return c.x + pool.chunk_grid.x * (c.y + pool.chunk_grid.y * c.z);
+}
+
+fn block_in_shard(b: u32) -> bool {
+  let slot = page_table[chunk_of_block(b)];
+  return slot != POOL_NONE && slot >= pool.first_slot && slot < pool.end_slot;
+}
+
+// (word, bit) where block b starts; only for blocks in this shard.
+fn block_start(b: u32) -> vec2u {
+  let slot = page_table[chunk_of_block(b)];
+  let l = block_coords(b) % pool.chunk_blocks;
+  let local = l.x + pool.chunk_blocks * (l.y + pool.chunk_blocks * l.z);
+  // < 2^32: a chunk holds at most 16^3 * ... bits; see ChunkedVolume's checks
+  let bit = pool.header_bits + local * stream.bits_per_block;
+  return vec2u((slot - pool.first_slot) * pool.slot_words + bit / 32u, bit % 32u);
+}

@@ -1,0 +1,298 @@
+// One level of a chunked zfp store on the GPU: a pool of compressed chunks
+// and a page table (chunk -> pool slot), the block source the isosurface
+// pipeline reads when a volume arrives chunk by chunk (src/store/).
+//
+// Every chunk is a zfp fixed-rate stream of its own, header included, as the
+// numcodecs zfpy codec writes it for a C^3 chunk; at a fixed rate all chunks
+// of a level have the same size, so the pool is an array of equal slots. Its
+// bytes go to the GPU as they are: decoding stays in WGSL
+// (shaders/zfp/pool_address.wgsl finds block b in its chunk's slot). zfp
+// codes every 4^3 block alone and C is a multiple of 4, so a chunk's blocks
+// are exactly those of the whole level compressed as one stream at the same
+// rate: a fully resident level gives the in-core pipeline's surface.
+//
+// The pool is cut into pieces no larger than one storage binding (shards,
+// each with its bind group 0 for the decoder kernels). put/evict write the
+// chunk and its page-table entry with queue.writeBuffer (ordered after work
+// already submitted) and note the chunk as changed; the isosurface pipeline
+// takes the changed chunks before its next surface and recomputes the block
+// ranges of just those chunks on the GPU (takeChangedChunks).
+
+import { formatDims } from '../core/naming.ts';
+import { openZfpStream, planZfpStream } from './format.ts';
+import { maxShardBytesFor, type BlockSource } from './gpu-stream.ts';
+
+/** One level of a chunked zfp store, as the GPU side needs it (facts only, no UI wording). */
+export interface ChunkLevelLayout {
+  /** Voxels of this level, x, y, z (x fastest). */
+  dims: [number, number, number];
+  /** Chunk edge C in voxels (a multiple of 4; chunks are C^3, edge chunks stored at full size). */
+  chunkEdge: number;
+  /** ceil(dims / C) per axis, x, y, z. */
+  chunkGrid: [number, number, number];
+  /** zfp fixed rate in bits per value. */
+  rate: number;
+  /** Bytes of one chunk as stored: a zfp stream with its header, identical for every chunk. */
+  chunkBytes: number;
+  /** For messages: the store and level, e.g. "http://host/bonsai.zarr level 1". */
+  name: string;
+}
+
+/** Chunk index = cx + gx * (cy + gy * cz) with (gx, gy, gz) = chunkGrid. */
+export type ChunkIndex = number;
+
+/** A chunk that cannot go into the pool (wrong bytes, pool full), or a layout that cannot be pooled. */
+export class ChunkError extends Error {
+  constructor(
+    message: string,
+    readonly chunk?: [number, number, number],
+  ) {
+    super(message);
+    this.name = 'ChunkError';
+  }
+}
+
+const NONE = 0xffffffff;
+const STREAM_PARAMS_BYTES = 48;
+const POOL_PARAMS_BYTES = 32;
+const PARAMS_STRIDE = 256;
+
+const layouts = new WeakMap<GPUDevice, GPUBindGroupLayout>();
+
+/** Bind group layout 0 of the decoder kernels over a pool (pool_address.wgsl), cached per device. */
+export function poolBindGroupLayout(device: GPUDevice): GPUBindGroupLayout {
+  let layout = layouts.get(device);
+  if (!layout) {
+    const visibility = GPUShaderStage.COMPUTE;
+    layout = device.createBindGroupLayout({
+      label: 'ChunkedVolume.layout',
+      entries: [
+        { binding: 0, visibility, buffer: { type: 'read-only-storage' } },
+        { binding: 1, visibility, buffer: { type: 'uniform' } },
+        { binding: 2, visibility, buffer: { type: 'read-only-storage' } },
+        { binding: 3, visibility, buffer: { type: 'uniform' } },
+      ],
+    });
+    layouts.set(device, layout);
+  }
+  return layout;
+}
+
+interface PoolShard {
+  buffer: GPUBuffer;
+  firstSlot: number;
+  endSlot: number;
+  bindGroup: GPUBindGroup;
+  firstBlock: number;
+  endBlock: number;
+}
+
+export interface ChunkedVolumeOptions {
+  /** Pool capacity in chunks. */
+  poolChunks: number;
+  /** Cap on one pool shard (default: the device's binding limit); tests use small values. */
+  maxShardBytes?: number;
+}
+
+export class ChunkedVolume implements BlockSource {
+  readonly addressing = 'pool';
+  readonly info: BlockSource['info'];
+  readonly shards: readonly PoolShard[];
+  /** Blocks per chunk edge (C / 4): the pipeline's groups are the chunks. */
+  readonly chunkBlocks: number;
+  readonly chunkCount: number;
+  /** Where block 0 starts inside a chunk's stream (96 or 148 bits). */
+  readonly headerBits: number;
+  private readonly pageTable: GPUBuffer;
+  private readonly params: GPUBuffer;
+  private readonly slotOf = new Map<ChunkIndex, number>();
+  private readonly freeSlots: number[] = [];
+  private readonly changed = new Set<ChunkIndex>();
+  private readonly word = new Uint32Array(1);
+  private destroyed = false;
+
+  private constructor(
+    readonly device: GPUDevice,
+    readonly layout: ChunkLevelLayout,
+    readonly poolChunks: number,
+    maxShardBytes: number,
+  ) {
+    const { dims, chunkEdge: edge, chunkGrid, rate, chunkBytes, name } = layout;
+    const planned = planZfpStream(`${name} chunk`, [edge, edge, edge], rate, true);
+    this.chunkBlocks = edge / 4;
+    this.headerBits = planned.payloadBitOffset;
+    this.chunkCount = chunkGrid[0] * chunkGrid[1] * chunkGrid[2];
+    const blockGrid: [number, number, number] = [Math.ceil(dims[0] / 4), Math.ceil(dims[1] / 4), Math.ceil(dims[2] / 4)];
+    const blockCount = blockGrid[0] * blockGrid[1] * blockGrid[2];
+    this.info = { fileName: name, dims: [...dims], blockGrid, blockCount, bitsPerBlock: planned.bitsPerBlock, rate: planned.rate };
+    const slotsPerShard = Math.min(poolChunks, Math.floor((maxShardBytes - 4) / chunkBytes));
+    if (slotsPerShard < 1) throw new ChunkError(`${name}: one chunk (${chunkBytes} bytes) does not fit one storage binding of ${maxShardBytes} bytes`);
+    const shardCount = Math.ceil(poolChunks / slotsPerShard);
+    this.pageTable = device.createBuffer({
+      label: `${name}.pageTable`,
+      size: Math.max(4, this.chunkCount * 4),
+      usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
+      mappedAtCreation: true,
+    });
+    new Uint32Array(this.pageTable.getMappedRange()).fill(NONE);
+    this.pageTable.unmap();
+    this.params = device.createBuffer({
+      label: `${name}.poolParams`,
+      size: PARAMS_STRIDE * (2 * shardCount - 1) + POOL_PARAMS_BYTES,
+      usage: GPUBufferUsage.UNIFORM,
+      mappedAtCreation: true,
+    });
+    const mapped = this.params.getMappedRange();
+    const shards: PoolShard[] = [];
+    const poolLayout = poolBindGroupLayout(device);
+    for (let i = 0; i < shardCount; i++) {
+      const firstSlot = i * slotsPerShard;
+      const endSlot = Math.min(poolChunks, firstSlot + slotsPerShard);
+      new Uint32Array(mapped, 2 * i * PARAMS_STRIDE, STREAM_PARAMS_BYTES / 4).set([...dims, planned.bitsPerBlock, ...blockGrid, blockCount, 0, blockCount, 0, 0]);
+      new Uint32Array(mapped, (2 * i + 1) * PARAMS_STRIDE, POOL_PARAMS_BYTES / 4).set([
+        ...chunkGrid, this.chunkBlocks, chunkBytes / 4, this.headerBits, firstSlot, endSlot,
+      ]);
+      // one zero word after the last slot: the bit reader may load the word after a block's last bit
+      const buffer = device.createBuffer({ label: `${name}.pool${i}`, size: (endSlot - firstSlot) * chunkBytes + 4, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST });
+      const bindGroup = device.createBindGroup({
+        label: `${name}.pool${i}.bindGroup`,
+        layout: poolLayout,
+        entries: [
+          { binding: 0, resource: { buffer } },
+          { binding: 1, resource: { buffer: this.params, offset: 2 * i * PARAMS_STRIDE, size: STREAM_PARAMS_BYTES } },
+          { binding: 2, resource: { buffer: this.pageTable } },
+          { binding: 3, resource: { buffer: this.params, offset: (2 * i + 1) * PARAMS_STRIDE, size: POOL_PARAMS_BYTES } },
+        ],
+      });
+      shards.push({ buffer, firstSlot, endSlot, bindGroup, firstBlock: 0, endBlock: blockCount });
+    }
+    this.params.unmap();
+    this.shards = shards;
+    for (let s = poolChunks - 1; s >= 0; s--) this.freeSlots.push(s);
+  }
+
+  /**
+   * A pool of `poolChunks` chunks for one level. Throws a ChunkError when the
+   * layout is inconsistent (chunk edge, grid, bytes) or a chunk cannot be
+   * addressed.
+   */
+  static create(gpu: { device: GPUDevice }, layout: ChunkLevelLayout, opts: ChunkedVolumeOptions): ChunkedVolume {
+    const { dims, chunkEdge: edge, chunkGrid, rate, chunkBytes, name } = layout;
+    const fail = (what: string): never => {
+      throw new ChunkError(`${name}: ${what}`);
+    };
+    if (!dims.every((n) => Number.isInteger(n) && n >= 1)) fail(`impossible dimensions ${dims.join('x')}`);
+    if (!Number.isInteger(edge) || edge < 4 || edge % 4 !== 0 || edge > 256) fail(`the chunk edge ${edge} is not a multiple of 4 between 4 and 256`);
+    if (!chunkGrid.every((g, i) => g === Math.ceil(dims[i] / edge))) fail(`the chunk grid ${chunkGrid.join('x')} does not cover ${formatDims(dims)} in chunks of ${edge}`);
+    let planned;
+    try {
+      planned = planZfpStream(`${name} chunk`, [edge, edge, edge], rate, true);
+    } catch (e) {
+      fail((e as Error).message);
+    }
+    if (chunkBytes !== planned!.paddedBytes) fail(`a ${edge}^3 chunk at rate ${rate} is ${planned!.paddedBytes} bytes as zfp writes it, not ${chunkBytes}`);
+    if (!Number.isInteger(opts.poolChunks) || opts.poolChunks < 1) fail(`the pool must hold at least one chunk (got ${opts.poolChunks})`);
+    const blocks = Math.ceil(dims[0] / 4) * Math.ceil(dims[1] / 4) * Math.ceil(dims[2] / 4);
+    if (blocks >= 2 ** 32) fail(`${blocks} blocks do not fit 32-bit block ids`);
+    return new ChunkedVolume(gpu.device, layout, opts.poolChunks, opts.maxShardBytes ?? maxShardBytesFor(gpu.device));
+  }
+
+  /** Bytes of GPU memory held: the pool, the page table and the parameters. */
+  get byteSize(): number {
+    return this.shards.reduce((n, s) => n + s.buffer.size, 0) + this.pageTable.size + this.params.size;
+  }
+
+  /** Same as byteSize (the name the store side uses for budget accounting). */
+  get poolBytes(): number {
+    return this.byteSize;
+  }
+
+  get residentCount(): number {
+    return this.slotOf.size;
+  }
+
+  get freeCount(): number {
+    return this.freeSlots.length;
+  }
+
+  get isDestroyed(): boolean {
+    return this.destroyed;
+  }
+
+  has(chunk: ChunkIndex): boolean {
+    return this.slotOf.has(chunk);
+  }
+
+  /** The resident chunks (any order). */
+  residentChunks(): ChunkIndex[] {
+    return [...this.slotOf.keys()];
+  }
+
+  chunkCoords(chunk: ChunkIndex): [number, number, number] {
+    const [gx, gy] = this.layout.chunkGrid;
+    return [chunk % gx, Math.floor(chunk / gx) % gy, Math.floor(chunk / (gx * gy))];
+  }
+
+  /**
+   * Copies a chunk's stored bytes into a free slot. Throws a ChunkError
+   * naming the level and the chunk's (x, y, z) when the bytes are not a zfp
+   * fixed-rate stream of this layout or the pool is full; the volume stays
+   * as it was.
+   */
+  put(chunk: ChunkIndex, bytes: Uint8Array): void {
+    if (this.destroyed) throw new ChunkError(`${this.layout.name}: the chunk pool was destroyed`);
+    if (!Number.isInteger(chunk) || chunk < 0 || chunk >= this.chunkCount) throw new ChunkError(`${this.layout.name}: there is no chunk ${chunk} (the level has ${this.chunkCount})`);
+    const at = this.chunkCoords(chunk);
+    const where = `${this.layout.name} chunk (${at.join(', ')})`;
+    const edge = this.layout.chunkEdge;
+    if (bytes.byteLength !== this.layout.chunkBytes) {
+      throw new ChunkError(`${where}: ${bytes.byteLength} bytes, but a ${edge}^3 chunk at rate ${this.layout.rate} is ${this.layout.chunkBytes} bytes`, at);
+    }
+    let info;
+    try {
+      info = openZfpStream(bytes, where);
+    } catch (e) {
+      throw new ChunkError((e as Error).message, at);
+    }
+    if (!info.hasHeader || info.dims.some((n) => n !== edge) || info.bitsPerBlock !== this.info.bitsPerBlock || info.payloadBitOffset !== this.headerBits) {
+      throw new ChunkError(`${where}: the chunk's zfp header says ${formatDims(info.dims)} at ${info.mode}; the level's chunks are ${edge}^3 at rate ${this.layout.rate}`, at);
+    }
+    let slot = this.slotOf.get(chunk);
+    if (slot === undefined) {
+      slot = this.freeSlots.pop();
+      if (slot === undefined) throw new ChunkError(`${where}: the pool is full (${this.poolChunks} chunks); evict one first`, at);
+      this.slotOf.set(chunk, slot);
+    }
+    const shard = this.shards.find((s) => slot! >= s.firstSlot && slot! < s.endSlot)!;
+    this.device.queue.writeBuffer(shard.buffer, (slot - shard.firstSlot) * this.layout.chunkBytes, bytes.buffer, bytes.byteOffset, bytes.byteLength);
+    this.word[0] = slot;
+    this.device.queue.writeBuffer(this.pageTable, chunk * 4, this.word);
+    this.changed.add(chunk);
+  }
+
+  /** Frees the chunk's slot; its blocks become inactive from the next surface on. */
+  evict(chunk: ChunkIndex): void {
+    const slot = this.slotOf.get(chunk);
+    if (slot === undefined || this.destroyed) return;
+    this.slotOf.delete(chunk);
+    this.freeSlots.push(slot);
+    this.word[0] = NONE;
+    this.device.queue.writeBuffer(this.pageTable, chunk * 4, this.word);
+    this.changed.add(chunk);
+  }
+
+  /** The chunks put or evicted since the last call (the pipeline recomputes their ranges). */
+  takeChangedChunks(): ChunkIndex[] {
+    const out = [...this.changed];
+    this.changed.clear();
+    return out;
+  }
+
+  destroy(): void {
+    if (this.destroyed) return;
+    this.destroyed = true;
+    for (const s of this.shards) s.buffer.destroy();
+    this.pageTable.destroy();
+    this.params.destroy();
+  }
+}
