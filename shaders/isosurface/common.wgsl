@@ -3,12 +3,8 @@
 // src/isosurface/layout.ts mirrors these numbers and a test checks them).
 // Needs shaders/primitives/dispatch.wgsl (grid helpers).
 
-// "No slot" / "no block" in blockToSlot and slotToBlock; also the age of an
-// empty slot (its low 16 bits, 0xffff, are above every valid slot's age, so
-// empty slots are taken before any block is evicted).
+// "No slot" / "no block" in blockToSlot, slotToBlock and the LRU log.
 const NONE: u32 = 0xffffffffu;
-// Ages of slots holding a block saturate here (the sort compares 16 bits).
-const AGE_MAX: u32 = 0xfffeu;
 
 // Words of the counters buffer. 0-7 are written by the host (at creation and
 // after growth), the rest by the kernels and primitives of one computation.
@@ -24,8 +20,8 @@ const C_ACTIVE: u32 = 8u;          // active blocks (scan total)
 const C_ACTIVE_GATED: u32 = 9u;    // active blocks, or 0 when the cache is too small
 const C_SLOTS_GATED: u32 = 10u;    // slots, or 0 when the cache is too small
 const C_NEW: u32 = 11u;            // active blocks not cached (scan total)
-const C_AVAIL_SCAN: u32 = 12u;     // slots to scan for availability: slots, or 0 when nothing is new
-const C_AVAIL: u32 = 13u;          // available slots (scan total; 0 when nothing is new)
+const C_LOG_COMPACT: u32 = 12u;    // LRU log entries to compact: the tail when the log is full, else 0
+const C_LOG_VALID: u32 = 13u;      // valid entries kept by a log compaction (scan total)
 const C_VERTICES: u32 = 14u;       // vertices of the surface (scan total)
 const C_OCCUPIED: u32 = 15u;       // active blocks that emit triangles (counted by classify_blocks)
 const C_STATUS: u32 = 16u;         // STATUS_* bits of this computation
@@ -38,8 +34,11 @@ const C_ACTIVE_GROUPS: u32 = 22u;  // active groups of blocks (scan total)
 const C_GROUP_BLOCKS: u32 = 23u;   // blocks of the active groups: active groups x blocks per group
 // (Words 24-43: indirect arguments below.)
 const C_REQUEST: u32 = 44u;        // host-written id of the submission; its statistics carry it (no stale counters)
+const C_LOG_SIZE: u32 = 45u;       // positions of the LRU log (a power of two >= 2 x slots; host)
+const C_LOG_TAIL: u32 = 46u;       // next free position of the LRU log
+const C_LOG_BASE: u32 = 47u;       // where this computation appends its active slots (plan_update)
 // Indirect dispatch arguments (x, y, z), written by the plan kernels.
-const A_SLOTS: u32 = 24u;   // age_slots: ceil(slots gated / 64) workgroups
+const A_SLOTS: u32 = 24u;   // rebuild_log after a log compaction: ceil(2 x log size / 64), or 0
 const A_MARK: u32 = 28u;    // mark_cached, classify_blocks: ceil(active gated / 64)
 const A_ASSIGN: u32 = 32u;  // assign_slots: ceil(new / 64)
 const A_EXPAND: u32 = 36u;  // expand_cells: ceil(active gated / 64), or 0 when the surface does not fit

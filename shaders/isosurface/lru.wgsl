@@ -1,40 +1,39 @@
-// The LRU block cache (paper Algorithm 1) between the primitives: slot ages,
-// marking new blocks and available slots, assigning slots. Every dispatch is
-// indirect, sized by the plan kernels from GPU counts; when the cache is too
-// small for the surface the counts are 0 and the cache state is left as it
-// was (see plan.wgsl).
+// The LRU block cache (paper Algorithm 1) between the primitives, in work
+// proportional to the active and new blocks, not to the capacity. Every
+// dispatch is indirect, sized by the plan kernels from GPU counts; when the
+// cache is too small for the surface the counts are 0 and the cache state is
+// left as it was (see plan.wgsl).
 //
-// State: slot_age[slot] (NONE for an empty slot, else 0..AGE_MAX),
-// slot_to_block[slot] (NONE = empty), block_to_slot[block] (NONE = not cached).
+// State: slot_to_block[slot] (NONE = empty), block_to_slot[block] (NONE =
+// not cached), and the LRU order as a log: positions [0, tail) of `log` hold
+// slots, least recently used first; `valid[p]` says whether position p is a
+// slot's current entry (each slot has exactly one valid entry; a slot used
+// again gets a new entry at the tail and its old one becomes a hole).
+// `tree` counts valid entries: a complete binary tree over the P = log size
+// positions (node 1 the root, node k's children 2k and 2k + 1, leaf of
+// position p at P + p), so the r-th least recently used slot is found by one
+// descent (log2 P reads) and an entry changes by one path of atomics.
+// Per computation: hits invalidate their entry (mark_cached), the i-th new
+// block takes the i-th valid entry's slot (pick_victims, assign_slots, which
+// invalidates it), and every active slot is appended in active-list order
+// (append_log). When the log is full it is compacted (scan + compaction of
+// the valid entries, then rebuild_log): amortized over the >= slots
+// computations' worth of appends since the last one.
 
-// ---- age_slots: every slot ages by one (saturating; empty slots keep NONE)
-// and starts out available.
-@group(0) @binding(0) var<storage, read> age_counters: array<u32>;
-@group(0) @binding(1) var<storage, read> age_slot_to_block: array<u32>;
-@group(0) @binding(2) var<storage, read_write> age_slot_age: array<u32>;
-@group(0) @binding(3) var<storage, read_write> age_avail_mask: array<u32>;
-
-@compute @workgroup_size(64)
-fn age_slots(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
-             @builtin(local_invocation_index) lid: u32) {
-  let s = grid_invocation_index(wid, nwg, lid, 64u);
-  if (s >= age_counters[C_SLOTS_GATED]) {
-    return;
-  }
-  if (age_slot_to_block[s] != NONE) {
-    age_slot_age[s] = min(age_slot_age[s] + 1u, AGE_MAX);
-  }
-  age_avail_mask[s] = 1u;
+fn tree_leaf_index(p: u32, log_size: u32) -> u32 {
+  return log_size + p;
 }
 
-// ---- mark_cached: per entry i of the active list, a cached block makes its
-// slot young and unavailable; an uncached one is new (new_mask[i] = 1).
+// ---- mark_cached: per entry i of the active list, a cached block's log
+// entry becomes a hole (it is appended again at the tail); an uncached one
+// is new (new_mask[i] = 1).
 @group(0) @binding(0) var<storage, read> mark_counters: array<u32>;
 @group(0) @binding(1) var<storage, read> mark_active_ids: array<u32>;
 @group(0) @binding(2) var<storage, read> mark_block_to_slot: array<u32>;
-@group(0) @binding(3) var<storage, read_write> mark_slot_age: array<u32>;
-@group(0) @binding(4) var<storage, read_write> mark_avail_mask: array<u32>;
-@group(0) @binding(5) var<storage, read_write> mark_new_mask: array<u32>;
+@group(0) @binding(3) var<storage, read> mark_slot_pos: array<u32>;
+@group(0) @binding(4) var<storage, read_write> mark_valid: array<u32>;
+@group(0) @binding(5) var<storage, read_write> mark_tree: array<atomic<u32>>;
+@group(0) @binding(6) var<storage, read_write> mark_new_mask: array<u32>;
 
 @compute @workgroup_size(64)
 fn mark_cached(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
@@ -45,23 +44,58 @@ fn mark_cached(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: 
   }
   let slot = mark_block_to_slot[mark_active_ids[i]];
   if (slot != NONE) {
-    mark_slot_age[slot] = 0u;
-    mark_avail_mask[slot] = 0u;
+    let p = mark_slot_pos[slot];
+    mark_valid[p] = 0u;
+    var k = tree_leaf_index(p, mark_counters[C_LOG_SIZE]);
+    while (k >= 1u) {
+      atomicSub(&mark_tree[k], 1u);
+      k = k >> 1u;
+    }
   }
   mark_new_mask[i] = select(0u, 1u, slot == NONE);
 }
 
-// ---- assign_slots: new block new_ids[i] goes to slot avail_sorted[i] (the
-// i-th oldest available slot), evicting the block that was there. Evicted
-// blocks are cached, new ones are not, so no two invocations write the same
-// block_to_slot entry. (The count of slots in use is kept by plan_update:
-// empty slots sort first, so the new blocks fill them first.)
+// ---- pick_victims: new block i takes the slot of the (i + 1)-th valid log
+// entry (least recently used first; hits are holes by now). Read only.
+@group(0) @binding(0) var<storage, read> pick_counters: array<u32>;
+@group(0) @binding(1) var<storage, read> pick_tree: array<u32>;
+@group(0) @binding(2) var<storage, read> pick_log: array<u32>;
+@group(0) @binding(3) var<storage, read_write> pick_victims: array<u32>;
+
+@compute @workgroup_size(64)
+fn pick_victims_of_new(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+                       @builtin(local_invocation_index) lid: u32) {
+  let i = grid_invocation_index(wid, nwg, lid, 64u);
+  if (i >= pick_counters[C_NEW]) {
+    return;
+  }
+  let log_size = pick_counters[C_LOG_SIZE];
+  var rank = i + 1u;
+  var k = 1u;
+  while (k < log_size) {
+    let left = pick_tree[2u * k];
+    if (rank <= left) {
+      k = 2u * k;
+    } else {
+      rank = rank - left;
+      k = 2u * k + 1u;
+    }
+  }
+  pick_victims[i] = pick_log[k - log_size];
+}
+
+// ---- assign_slots: new block new_ids[i] goes to slot victims[i], evicting
+// the block that was there; the slot's log entry becomes a hole (append_log
+// gives it a new one). Evicted blocks are cached, new ones are not, so no two
+// invocations write the same block_to_slot entry.
 @group(0) @binding(0) var<storage, read> assign_counters: array<u32>;
 @group(0) @binding(1) var<storage, read> assign_new_ids: array<u32>;
-@group(0) @binding(2) var<storage, read> assign_avail_sorted: array<u32>;
+@group(0) @binding(2) var<storage, read> assign_victims: array<u32>;
 @group(0) @binding(3) var<storage, read_write> assign_slot_to_block: array<u32>;
 @group(0) @binding(4) var<storage, read_write> assign_block_to_slot: array<u32>;
-@group(0) @binding(5) var<storage, read_write> assign_slot_age: array<u32>;
+@group(0) @binding(5) var<storage, read> assign_slot_pos: array<u32>;
+@group(0) @binding(6) var<storage, read_write> assign_valid: array<u32>;
+@group(0) @binding(7) var<storage, read_write> assign_tree: array<atomic<u32>>;
 
 @compute @workgroup_size(64)
 fn assign_slots(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
@@ -70,7 +104,7 @@ fn assign_slots(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
   if (i >= assign_counters[C_NEW]) {
     return;
   }
-  let slot = assign_avail_sorted[i];
+  let slot = assign_victims[i];
   let evicted = assign_slot_to_block[slot];
   if (evicted != NONE) {
     assign_block_to_slot[evicted] = NONE;
@@ -78,7 +112,119 @@ fn assign_slots(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
   let b = assign_new_ids[i];
   assign_slot_to_block[slot] = b;
   assign_block_to_slot[b] = slot;
-  assign_slot_age[slot] = 0u;
+  let p = assign_slot_pos[slot];
+  assign_valid[p] = 0u;
+  var k = tree_leaf_index(p, assign_counters[C_LOG_SIZE]);
+  while (k >= 1u) {
+    atomicSub(&assign_tree[k], 1u);
+    k = k >> 1u;
+  }
+}
+
+// ---- append_log: active entry i's slot (every active block is cached now)
+// gets log position base + i: the most recently used, in active-list order.
+@group(0) @binding(0) var<storage, read> append_counters: array<u32>;
+@group(0) @binding(1) var<storage, read> append_active_ids: array<u32>;
+@group(0) @binding(2) var<storage, read> append_block_to_slot: array<u32>;
+@group(0) @binding(3) var<storage, read_write> append_log: array<u32>;
+@group(0) @binding(4) var<storage, read_write> append_slot_pos: array<u32>;
+@group(0) @binding(5) var<storage, read_write> append_valid: array<u32>;
+@group(0) @binding(6) var<storage, read_write> append_tree: array<atomic<u32>>;
+
+@compute @workgroup_size(64)
+fn append_active(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+                 @builtin(local_invocation_index) lid: u32) {
+  let i = grid_invocation_index(wid, nwg, lid, 64u);
+  if (i >= append_counters[C_ACTIVE_GATED]) {
+    return;
+  }
+  let slot = append_block_to_slot[append_active_ids[i]];
+  let p = append_counters[C_LOG_BASE] + i;
+  append_log[p] = slot;
+  append_slot_pos[slot] = p;
+  append_valid[p] = 1u;
+  var k = tree_leaf_index(p, append_counters[C_LOG_SIZE]);
+  while (k >= 1u) {
+    atomicAdd(&append_tree[k], 1u);
+    k = k >> 1u;
+  }
+}
+
+// ---- rebuild_log: the log becomes [fresh slots first_fresh, first_fresh + 1,
+// ...] followed by the `kept` entries compacted into log_scratch (in order),
+// every other position a hole; slot positions and the tree follow (a node's
+// count is how much of its range lies below fresh + kept). Used after a
+// compaction (fresh 0), for an emptied cache (kept 0) and after growth (the
+// new slots first). One invocation per index in [0, 2 x log size).
+struct RebuildParams {
+  fresh: u32,
+  first_fresh: u32,
+  use_kept: u32,  // 1: kept = counters[C_LOG_VALID]; 0: kept = 0
+}
+
+@group(0) @binding(0) var<uniform> rebuild: RebuildParams;
+@group(0) @binding(2) var<storage, read> rebuild_scratch: array<u32>;
+@group(0) @binding(3) var<storage, read_write> rebuild_log_entries: array<u32>;
+@group(0) @binding(4) var<storage, read_write> rebuild_slot_pos: array<u32>;
+@group(0) @binding(5) var<storage, read_write> rebuild_valid: array<u32>;
+@group(0) @binding(6) var<storage, read_write> rebuild_tree: array<u32>;
+
+fn rebuild_entry(k: u32, log_size: u32, kept: u32) {
+  let entries = rebuild.fresh + kept;
+  if (k < log_size) {
+    var slot = NONE;
+    if (k < rebuild.fresh) {
+      slot = rebuild.first_fresh + k;
+    } else if (k < entries) {
+      slot = rebuild_scratch[k - rebuild.fresh];
+    }
+    rebuild_log_entries[k] = slot;
+    rebuild_valid[k] = select(0u, 1u, k < entries);
+    if (slot != NONE) {
+      rebuild_slot_pos[slot] = k;
+    }
+  }
+  if (k == 0u) {
+    rebuild_tree[0] = 0u; // node 0 is not in the tree
+    return;
+  }
+  let level = firstLeadingBit(k);
+  let span = log_size >> level;
+  let lo = (k - (1u << level)) * span;
+  rebuild_tree[k] = select(0u, min(entries - lo, span), entries > lo);
+}
+
+// Reset and growth (direct dispatch): also moves the tail.
+@group(0) @binding(1) var<storage, read_write> rebuild_counters: array<u32>;
+
+@compute @workgroup_size(64)
+fn rebuild_log(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+               @builtin(local_invocation_index) lid: u32) {
+  let k = grid_invocation_index(wid, nwg, lid, 64u);
+  let log_size = rebuild_counters[C_LOG_SIZE];
+  if (k >= 2u * log_size) {
+    return;
+  }
+  let kept = select(0u, rebuild_counters[C_LOG_VALID], rebuild.use_kept != 0u);
+  rebuild_entry(k, log_size, kept);
+  if (k == 0u) {
+    rebuild_counters[C_LOG_TAIL] = rebuild.fresh + kept;
+  }
+}
+
+// After a compaction within a computation (indirect dispatch from the
+// counters, so they are bound read-only here; plan_update moves the tail).
+@group(0) @binding(1) var<storage, read> compacted_counters: array<u32>;
+
+@compute @workgroup_size(64)
+fn rebuild_log_compacted(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+                         @builtin(local_invocation_index) lid: u32) {
+  let k = grid_invocation_index(wid, nwg, lid, 64u);
+  let log_size = compacted_counters[C_LOG_SIZE];
+  if (k >= 2u * log_size) {
+    return;
+  }
+  rebuild_entry(k, log_size, compacted_counters[C_LOG_VALID]);
 }
 
 // ---- fill_none: words [begin, end) of a buffer become NONE (emptying the

@@ -37,20 +37,32 @@ fn plan_cache() {
   counters[C_ACTIVE_GATED] = active_gated;
   counters[C_SLOTS_GATED] = slots_gated;
   counters[C_STATUS] = select(STATUS_CACHE_SHORTFALL, 0u, fits);
-  write_dispatch_args(A_SLOTS, ceil_div(slots_gated, 64u));
+  // The LRU log must have room for this computation's appends: compact it
+  // first when it has not (amortized: the log holds >= 2 x slots positions,
+  // and a compaction leaves exactly `slots` entries).
+  let log_size = counters[C_LOG_SIZE];
+  let compact = fits && counters[C_LOG_TAIL] + active_gated > log_size;
+  counters[C_LOG_COMPACT] = select(0u, counters[C_LOG_TAIL], compact);
+  write_dispatch_args(A_SLOTS, ceil_div(select(0u, 2u * log_size, compact), 64u));
   write_dispatch_args(A_MARK, ceil_div(active_gated, 64u));
 }
 
-// After the scan of the new-block mask: "exit if n_new = 0" (the availability
-// scan, compactions and sort get count 0). Empty slots sort before every
-// occupied one, so the new blocks fill min(new, empty) of them: that is how
-// many more slots hold a block after the assignment.
+// After the scan of the new-block mask: "exit if n_new = 0" (the victim
+// search and the assignment get count 0). Empty slots come first in the LRU
+// log, so the new blocks fill min(new, empty) of them: that is how many more
+// slots hold a block after the assignment.
 @compute @workgroup_size(1)
 fn plan_update() {
   let fresh = counters[C_NEW];
   counters[C_SLOTS_USED] = min(counters[C_SLOTS_USED] + fresh, counters[C_SLOTS]);
-  counters[C_AVAIL_SCAN] = select(0u, counters[C_SLOTS_GATED], fresh > 0u);
   counters[C_COMPACT_NEW] = select(0u, counters[C_ACTIVE_GATED], fresh > 0u);
+  // After a log compaction (plan_cache, rebuild_log_compacted) the kept entries end the log.
+  if (counters[C_LOG_COMPACT] > 0u) {
+    counters[C_LOG_TAIL] = counters[C_LOG_VALID];
+  }
+  // This computation's active slots go to log positions [base, base + active).
+  counters[C_LOG_BASE] = counters[C_LOG_TAIL];
+  counters[C_LOG_TAIL] = counters[C_LOG_TAIL] + counters[C_ACTIVE_GATED];
   write_dispatch_args(A_ASSIGN, ceil_div(fresh, 64u));
 }
 

@@ -3,12 +3,12 @@
 // both grow to the same capacities.
 import { CACHE_BYTES_PER_SLOT } from './lru-cache.ts';
 import { cellBytesFor, MC_BYTES_PER_SLOT } from './block-mc.ts';
-import { SLOT_BYTES } from './layout.ts';
+import { logBytesFor, SLOT_BYTES } from './layout.ts';
 import { VertexShards } from './vertex-output.ts';
 
-/** Bytes the cache takes at `slots` slots: slot data, maps, scratch, per-active buffers, blockToSlot. */
+/** Bytes the cache takes at `slots` slots: slot data, maps, the LRU log, per-active buffers, blockToSlot. */
 export function cacheBytesFor(slots: number, blockCount: number): number {
-  return slots * (CACHE_BYTES_PER_SLOT + MC_BYTES_PER_SLOT) + blockCount * 4;
+  return slots * (CACHE_BYTES_PER_SLOT + MC_BYTES_PER_SLOT) + logBytesFor(slots) + blockCount * 4;
 }
 
 /** Bytes the vertex output takes at `vertices` vertices: the shards and the emitting-cell list. */

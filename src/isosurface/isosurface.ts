@@ -626,15 +626,17 @@ export class Isosurface {
     return this.active.readBlockRanges();
   }
 
-  /** The cache state (tests): slot -> block, block -> slot, slot ages. */
-  async readCacheState(): Promise<{ slotToBlock: Uint32Array; blockToSlot: Uint32Array; slotAge: Uint32Array }> {
+  /** The cache state (tests): slot -> block, block -> slot, and the LRU order (slots, least recently used first). */
+  async readCacheState(): Promise<{ slotToBlock: Uint32Array; blockToSlot: Uint32Array; lruOrder: Uint32Array }> {
     const { device } = this;
-    const [slotToBlock, blockToSlot, slotAge] = await Promise.all([
+    const lru = this.cache.lruLog;
+    const [slotToBlock, blockToSlot, log, valid] = await Promise.all([
       readU32(device, this.cache.slotToBlock, 0, this.cache.capacity),
       readU32(device, this.cache.blockToSlot, 0, this.info.blockCount),
-      readU32(device, this.cache.slotAge, 0, this.cache.capacity),
+      readU32(device, lru.log, 0, lru.size),
+      readU32(device, lru.valid, 0, lru.size),
     ]);
-    return { slotToBlock, blockToSlot, slotAge };
+    return { slotToBlock, blockToSlot, lruOrder: log.filter((_, p) => valid[p] === 1) };
   }
 
   destroy(): void {

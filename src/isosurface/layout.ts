@@ -1,11 +1,8 @@
 // Numbers shared with the WGSL kernels (shaders/isosurface/common.wgsl holds
 // the same constants; tests/unit/isosurface/layout.test.ts checks they agree).
 
-/** "No slot" in blockToSlot, "no block" in slotToBlock, and the age of an empty slot. */
+/** "No slot" in blockToSlot, "no block" in slotToBlock and the LRU log. */
 export const NONE = 0xffffffff;
-/** Ages of slots holding a block saturate at AGE_MAX; the sort compares AGE_KEY_BITS bits (empty = 0xffff). */
-export const AGE_MAX = 0xfffe;
-export const AGE_KEY_BITS = 16;
 
 /** Word indices in the counters buffer (see common.wgsl for what each holds). */
 export const C = {
@@ -21,8 +18,8 @@ export const C = {
   activeGated: 9,
   slotsGated: 10,
   new: 11,
-  availScan: 12,
-  avail: 13,
+  logCompact: 12,
+  logValid: 13,
   vertices: 14,
   occupied: 15,
   status: 16,
@@ -35,6 +32,10 @@ export const C = {
   groupBlocks: 23,
   /** Host-written id of the submission (its statistics are checked against it). */
   request: 44,
+  /** Positions of the LRU log (host), its tail, and where a computation appends (lru.wgsl). */
+  logSize: 45,
+  logTail: 46,
+  logBase: 47,
 } as const;
 
 /** Word offsets of indirect dispatch arguments (x, y, z) in the counters buffer. */
@@ -72,3 +73,15 @@ export const VERTEX_BYTES = 8;
 export const NORMAL_BYTES = 4;
 /** Bytes of one entry of the emitting-cell list: (entry << 6 | cell) and its first vertex. */
 export const CELL_RECORD_BYTES = 8;
+
+/** Positions of the LRU log for `slots` slots: a power of two >= 2 x slots (at least 64). */
+export function logSizeFor(slots: number): number {
+  let p = 64;
+  while (p < 2 * slots) p *= 2;
+  return p;
+}
+
+/** Bytes of the LRU log at `slots` slots: log, valid flags, scan offsets, compaction scratch (4 B per position each) and the count tree (8 B per position). */
+export function logBytesFor(slots: number): number {
+  return logSizeFor(slots) * 24;
+}

@@ -1,30 +1,30 @@
 // The GPU-driven LRU block cache (paper Algorithm 1, DESIGN.md steps 2-3):
-// slot ages, slot <-> block maps, decoded slot data, and the per-computation
-// update recorded from GPU counts only:
+// slot <-> block maps, decoded slot data, the LRU order as a log with a count
+// tree (lru.wgsl), and the per-computation update recorded from GPU counts
+// only, in work proportional to the active and new blocks:
 //
-//   age_slots        every slot ages by one (saturating), all start available
-//   mark_cached      active cached blocks: slot age 0, slot unavailable; others are new
+//   (log full?)      scan + compaction of the log's valid entries, rebuild_log
+//                    (gated on the GPU: amortized over >= slots appends)
+//   mark_cached      active cached blocks: their log entry becomes a hole; others are new
 //   scan new         -> offsets, n_new
-//   plan_update      "exit if n_new = 0": later counts become 0
-//   scan available   -> offsets, n_avail
-//   compact          new block ids; available slot ids and their ages
-//   sort             available slots by age, oldest first (stable radix sort, 16-bit keys)
-//   assign_slots     new block i -> i-th oldest available slot, evicting its block
+//   plan_update      "exit if n_new = 0": later counts become 0; log base and tail
+//   compact          new block ids
+//   pick_victims     new block i -> the (i + 1)-th valid log entry's slot (tree descent)
+//   assign_slots     new block i -> that slot, evicting its block; its entry a hole
+//   append_active    every active slot appended to the log, in active-list order
 //   decode           the new blocks into their slots (ZfpDecoder.encodeDecodeBlocks)
 //
 // "Grow if n_new > n_avail" is decided on the GPU before any of this
 // (plan_cache: the update fits iff active <= slots); when it does not fit,
 // every count above is 0, the cache is left exactly as it was, and the host
 // grows the cache when it reads the statistics (see isosurface.ts).
-import { dispatchLinear } from '../gpu/dispatch.ts';
 import type { StreamCompact, StreamCompactIds } from '../primitives/compact.ts';
-import type { ExclusiveScan } from '../primitives/scan.ts';
-import { RadixSortByKey } from '../primitives/sort.ts';
+import { ExclusiveScan } from '../primitives/scan.ts';
 import type { ZfpDecoder } from '../zfp/decoder.ts';
 import type { BlockSource } from '../zfp/gpu-stream.ts';
 import { Counters } from './counters.ts';
 import { bindGroup, bindGroupLayout, computePipeline, storageBuffer } from './gpu-util.ts';
-import { A, AGE_KEY_BITS, SLOT_BYTES } from './layout.ts';
+import { A, logBytesFor, logSizeFor, SLOT_BYTES } from './layout.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
 
 export interface BlockCacheParts {
@@ -40,38 +40,60 @@ export interface BlockCacheParts {
   maxWorkgroupsPerDimension: number;
 }
 
-/** Bytes per slot of the buffers sized by the capacity (slot data, maps, scratch, sort). */
-export const CACHE_BYTES_PER_SLOT = SLOT_BYTES + 4 * (2 + 4 + 3) + 4 * 2 + 1;
+/** Bytes per slot of the buffers sized by the capacity (slot data, maps, slot positions, victims, new mask/offsets/ids); the log adds logBytesFor(slots). */
+export const CACHE_BYTES_PER_SLOT = SLOT_BYTES + 4 * 6;
 
 interface SlotBuffers {
   capacity: number;
+  logSize: number;
   slotData: GPUBuffer;
-  slotAge: GPUBuffer;
   slotToBlock: GPUBuffer;
-  availMask: GPUBuffer;
-  availOffsets: GPUBuffer;
-  availIds: GPUBuffer;
-  availAges: GPUBuffer;
+  slotPos: GPUBuffer;
+  victims: GPUBuffer;
   newMask: GPUBuffer;
   newOffsets: GPUBuffer;
   newIds: GPUBuffer;
+  log: GPUBuffer;
+  valid: GPUBuffer;
+  logOffsets: GPUBuffer;
+  logScratch: GPUBuffer;
+  tree: GPUBuffer;
 }
 
 interface Groups {
-  age: GPUBindGroup;
   mark: GPUBindGroup;
+  pick: GPUBindGroup;
   assign: GPUBindGroup;
+  append: GPUBindGroup;
+  /** rebuild_log after an in-computation compaction (fresh 0, kept from the counters). */
+  compacted: GPUBindGroup;
 }
 
 interface Pipelines {
-  age: GPUComputePipeline;
   mark: GPUComputePipeline;
+  pick: GPUComputePipeline;
   assign: GPUComputePipeline;
+  append: GPUComputePipeline;
+  rebuild: GPUComputePipeline;
+  rebuildCompacted: GPUComputePipeline;
   fill: GPUComputePipeline;
-  ageLayout: GPUBindGroupLayout;
   markLayout: GPUBindGroupLayout;
+  pickLayout: GPUBindGroupLayout;
   assignLayout: GPUBindGroupLayout;
+  appendLayout: GPUBindGroupLayout;
+  rebuildLayout: GPUBindGroupLayout;
+  rebuildCompactedLayout: GPUBindGroupLayout;
   fillLayout: GPUBindGroupLayout;
+}
+
+/** A direct dispatch of `workgroups` linear workgroups laid out as dispatch_grid does (1D, 2D, then 3D). */
+function dispatchGrid(pass: GPUComputePassEncoder, workgroups: number, max: number): void {
+  if (workgroups <= 0) return;
+  if (workgroups <= max) return pass.dispatchWorkgroups(workgroups);
+  const z = Math.ceil(workgroups / (max * max));
+  const rest = Math.ceil(workgroups / z);
+  const y = Math.ceil(rest / max);
+  pass.dispatchWorkgroups(Math.ceil(rest / y), y, z);
 }
 
 const FILL_SLOTS = 8;
@@ -83,27 +105,35 @@ export class BlockCache {
   private slots!: SlotBuffers;
   private groups!: Groups;
   private readonly fillParams: GPUBuffer;
+  /** rebuild_log parameters: [0] for a compaction (constant), [1] written by reset and growth. */
+  private readonly rebuildParams: GPUBuffer;
   private fillsRecorded = 0;
 
   private constructor(
     private readonly device: GPUDevice,
     private readonly parts: BlockCacheParts,
     private readonly pipelines: Pipelines,
-    private readonly sort: RadixSortByKey,
+    /** Sized to the log positions. */
+    private readonly logScan: ExclusiveScan,
     capacity: number,
   ) {
     const blocks = parts.stream.info.blockCount;
     this.blockToSlot = storageBuffer(device, 'Isosurface.blockToSlot', blocks * 4, GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST);
     this.fillParams = device.createBuffer({ label: 'Isosurface.fillParams', size: FILL_SLOTS * FILL_STRIDE, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
+    this.rebuildParams = device.createBuffer({ label: 'Isosurface.rebuildParams', size: 2 * FILL_STRIDE, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
+    device.queue.writeBuffer(this.rebuildParams, 0, new Uint32Array([0, 0, 1, 0]));
     this.slots = this.allocate(capacity);
     this.groups = this.makeGroups();
     this.clear(this.slots.capacity);
   }
 
   static async create(device: GPUDevice, parts: BlockCacheParts, capacity: number): Promise<BlockCache> {
-    const ageLayout = bindGroupLayout(device, 'Isosurface.ageSlots.layout', ['read', 'read', 'rw', 'rw']);
-    const markLayout = bindGroupLayout(device, 'Isosurface.markCached.layout', ['read', 'read', 'read', 'rw', 'rw', 'rw']);
-    const assignLayout = bindGroupLayout(device, 'Isosurface.assignSlots.layout', ['read', 'read', 'read', 'rw', 'rw', 'rw']);
+    const markLayout = bindGroupLayout(device, 'Isosurface.markCached.layout', ['read', 'read', 'read', 'read', 'rw', 'rw', 'rw']);
+    const pickLayout = bindGroupLayout(device, 'Isosurface.pickVictims.layout', ['read', 'read', 'read', 'rw']);
+    const assignLayout = bindGroupLayout(device, 'Isosurface.assignSlots.layout', ['read', 'read', 'read', 'rw', 'rw', 'read', 'rw', 'rw']);
+    const appendLayout = bindGroupLayout(device, 'Isosurface.appendActive.layout', ['read', 'read', 'read', 'rw', 'rw', 'rw', 'rw']);
+    const rebuildLayout = bindGroupLayout(device, 'Isosurface.rebuildLog.layout', ['uniform', 'rw', 'read', 'rw', 'rw', 'rw', 'rw']);
+    const rebuildCompactedLayout = bindGroupLayout(device, 'Isosurface.rebuildLogCompacted.layout', ['uniform', 'read', 'read', 'rw', 'rw', 'rw', 'rw']);
     const fillLayout = device.createBindGroupLayout({
       label: 'Isosurface.fillNone.layout',
       entries: [
@@ -113,14 +143,18 @@ export class BlockCache {
     });
     const constants = { MAX_WG_PER_DIM: parts.maxWorkgroupsPerDimension };
     const wgsl = isosurfaceWgsl.lru;
-    const [age, mark, assign, fill, sort] = await Promise.all([
-      computePipeline(device, 'Isosurface.ageSlots', wgsl, 'age_slots', [ageLayout], constants),
+    const [mark, pick, assign, append, rebuild, rebuildCompacted, fill, logScan] = await Promise.all([
       computePipeline(device, 'Isosurface.markCached', wgsl, 'mark_cached', [markLayout], constants),
+      computePipeline(device, 'Isosurface.pickVictims', wgsl, 'pick_victims_of_new', [pickLayout], constants),
       computePipeline(device, 'Isosurface.assignSlots', wgsl, 'assign_slots', [assignLayout], constants),
+      computePipeline(device, 'Isosurface.appendActive', wgsl, 'append_active', [appendLayout], constants),
+      computePipeline(device, 'Isosurface.rebuildLog', wgsl, 'rebuild_log', [rebuildLayout], constants),
+      computePipeline(device, 'Isosurface.rebuildLogCompacted', wgsl, 'rebuild_log_compacted', [rebuildCompactedLayout], constants),
       computePipeline(device, 'Isosurface.fillNone', wgsl, 'fill_none', [fillLayout], constants),
-      RadixSortByKey.create(device, { capacity, maxWorkgroupsPerDimension: parts.maxWorkgroupsPerDimension }),
+      ExclusiveScan.create(device, { capacity: logSizeFor(capacity), maxWorkgroupsPerDimension: parts.maxWorkgroupsPerDimension }),
     ]);
-    return new BlockCache(device, parts, { age, mark, assign, fill, ageLayout, markLayout, assignLayout, fillLayout }, sort, capacity);
+    const pipelines = { mark, pick, assign, append, rebuild, rebuildCompacted, fill, markLayout, pickLayout, assignLayout, appendLayout, rebuildLayout, rebuildCompactedLayout, fillLayout };
+    return new BlockCache(device, parts, pipelines, logScan, capacity);
   }
 
   get capacity(): number {
@@ -132,38 +166,47 @@ export class BlockCache {
     return this.slots.slotData;
   }
 
-  get slotAge(): GPUBuffer {
-    return this.slots.slotAge;
-  }
-
   get slotToBlock(): GPUBuffer {
     return this.slots.slotToBlock;
   }
 
-  /** Bytes of the slot data and bookkeeping (including blockToSlot and the sort's scratch). */
+  /** The LRU log (slots, least recently used first) and its valid flags; logSize positions. */
+  get lruLog(): { log: GPUBuffer; valid: GPUBuffer; size: number } {
+    return { log: this.slots.log, valid: this.slots.valid, size: this.slots.logSize };
+  }
+
+  /** Bytes of the slot data and bookkeeping (including blockToSlot and the LRU log). */
   get byteSize(): number {
-    const s = this.slots;
-    const own = [s.slotData, s.slotAge, s.slotToBlock, s.availMask, s.availOffsets, s.availIds, s.availAges, s.newMask, s.newOffsets, s.newIds];
-    return own.reduce((n, b) => n + b.size, 0) + this.blockToSlot.size + this.sort.capacity * 9;
+    return this.ownBuffers(this.slots).reduce((n, b) => n + b.size, 0) + this.blockToSlot.size;
+  }
+
+  private ownBuffers(s: SlotBuffers): GPUBuffer[] {
+    return [s.slotData, s.slotToBlock, s.slotPos, s.victims, s.newMask, s.newOffsets, s.newIds, s.log, s.valid, s.logOffsets, s.logScratch, s.tree];
   }
 
   private allocate(capacity: number): SlotBuffers {
     const d = this.device;
     const copy = GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST;
-    const words = (label: string, extra = 0) => storageBuffer(d, `Isosurface.${label}`, capacity * 4, extra);
-    return {
+    const words = (label: string, count: number, extra = 0) => storageBuffer(d, `Isosurface.${label}`, count * 4, extra);
+    const logSize = logSizeFor(capacity);
+    const s: SlotBuffers = {
       capacity,
+      logSize,
       slotData: storageBuffer(d, 'Isosurface.slotData', capacity * SLOT_BYTES, copy),
-      slotAge: words('slotAge', copy),
-      slotToBlock: words('slotToBlock', copy),
-      availMask: words('availMask'),
-      availOffsets: words('availOffsets'),
-      availIds: words('availIds'),
-      availAges: words('availAges'),
-      newMask: words('newMask'),
-      newOffsets: words('newOffsets'),
-      newIds: words('newIds'),
+      slotToBlock: words('slotToBlock', capacity, copy),
+      slotPos: words('slotPos', capacity),
+      victims: words('victims', capacity),
+      newMask: words('newMask', capacity),
+      newOffsets: words('newOffsets', capacity),
+      newIds: words('newIds', capacity),
+      log: words('lruLog', logSize, GPUBufferUsage.COPY_SRC),
+      valid: words('lruValid', logSize, GPUBufferUsage.COPY_SRC),
+      logOffsets: words('lruLogOffsets', logSize),
+      logScratch: words('lruLogScratch', logSize),
+      tree: words('lruTree', 2 * logSize),
     };
+    if (this.ownBuffers(s).reduce((n, b) => n + b.size, 0) !== capacity * CACHE_BYTES_PER_SLOT + logBytesFor(capacity)) throw new Error('BlockCache: byte accounting out of date');
+    return s;
   }
 
   private makeGroups(): Groups {
@@ -171,15 +214,30 @@ export class BlockCache {
     const p = this.pipelines;
     const s = this.slots;
     const counters = this.parts.counters.buffer;
+    const { activeIds } = this.parts;
     return {
-      age: bindGroup(d, 'Isosurface.ageSlots.bindGroup', p.ageLayout, [counters, s.slotToBlock, s.slotAge, s.availMask]),
-      mark: bindGroup(d, 'Isosurface.markCached.bindGroup', p.markLayout, [counters, this.parts.activeIds, this.blockToSlot, s.slotAge, s.availMask, s.newMask]),
-      assign: bindGroup(d, 'Isosurface.assignSlots.bindGroup', p.assignLayout, [counters, s.newIds, s.availIds, s.slotToBlock, this.blockToSlot, s.slotAge]),
+      mark: bindGroup(d, 'Isosurface.markCached.bindGroup', p.markLayout, [counters, activeIds, this.blockToSlot, s.slotPos, s.valid, s.tree, s.newMask]),
+      pick: bindGroup(d, 'Isosurface.pickVictims.bindGroup', p.pickLayout, [counters, s.tree, s.log, s.victims]),
+      assign: bindGroup(d, 'Isosurface.assignSlots.bindGroup', p.assignLayout, [counters, s.newIds, s.victims, s.slotToBlock, this.blockToSlot, s.slotPos, s.valid, s.tree]),
+      append: bindGroup(d, 'Isosurface.appendActive.bindGroup', p.appendLayout, [counters, activeIds, this.blockToSlot, s.log, s.slotPos, s.valid, s.tree]),
+      compacted: this.rebuildGroup(s, s.logScratch, 0, this.pipelines.rebuildCompactedLayout),
     };
   }
 
+  private rebuildGroup(s: SlotBuffers, scratch: GPUBuffer, params: 0 | 1, layout = this.pipelines.rebuildLayout): GPUBindGroup {
+    return bindGroup(this.device, 'Isosurface.rebuildLog.bindGroup', layout, [
+      { buffer: this.rebuildParams, offset: params * FILL_STRIDE, size: 16 },
+      this.parts.counters.buffer,
+      scratch,
+      s.log,
+      s.slotPos,
+      s.valid,
+      s.tree,
+    ]);
+  }
+
   private destroySlots(s: SlotBuffers): void {
-    for (const b of [s.slotData, s.slotAge, s.slotToBlock, s.availMask, s.availOffsets, s.availIds, s.availAges, s.newMask, s.newOffsets, s.newIds]) b.destroy();
+    for (const b of this.ownBuffers(s)) b.destroy();
   }
 
   /** Records words [begin, end) of `target` := NONE. At most FILL_SLOTS per submission. */
@@ -198,7 +256,7 @@ export class BlockCache {
         { binding: 1, resource: { buffer: target } },
       ],
     }), [offset]);
-    dispatchLinear(pass, Math.ceil((end - begin) / 64), this.parts.maxWorkgroupsPerDimension);
+    dispatchGrid(pass, Math.ceil((end - begin) / 64), this.parts.maxWorkgroupsPerDimension);
     pass.end();
   }
 
@@ -207,12 +265,23 @@ export class BlockCache {
     this.fillsRecorded = 0;
   }
 
-  /** Empties every slot and block entry (submits). Capacity stays. */
+  /** Records rebuild_log over the log of `s` with host parameters (fresh slots first_fresh.., then the kept entries of `scratch` if useKept). */
+  private encodeRebuild(encoder: GPUCommandEncoder, s: SlotBuffers, scratch: GPUBuffer, fresh: number, firstFresh: number, useKept: boolean): void {
+    this.device.queue.writeBuffer(this.rebuildParams, FILL_STRIDE, new Uint32Array([fresh, firstFresh, useKept ? 1 : 0, 0]));
+    this.parts.counters.set('logSize', s.logSize);
+    const pass = encoder.beginComputePass({ label: 'Isosurface.rebuildLog' });
+    pass.setPipeline(this.pipelines.rebuild);
+    pass.setBindGroup(0, this.rebuildGroup(s, scratch, 1));
+    dispatchGrid(pass, Math.ceil((2 * s.logSize) / 64), this.parts.maxWorkgroupsPerDimension);
+    pass.end();
+  }
+
+  /** Empties every slot and block entry (submits): the log holds the slots in order, all empty. Capacity stays. */
   private clear(capacity: number): void {
     const encoder = this.device.createCommandEncoder({ label: 'Isosurface.clearCache' });
     this.encodeFill(encoder, this.blockToSlot, 0, this.parts.stream.info.blockCount);
     this.encodeFill(encoder, this.slots.slotToBlock, 0, capacity);
-    this.encodeFill(encoder, this.slots.slotAge, 0, capacity);
+    this.encodeRebuild(encoder, this.slots, this.slots.logScratch, capacity, 0, false);
     this.submitFills(encoder);
     this.parts.counters.set('slots', capacity);
     this.parts.counters.set('slotsUsed', 0);
@@ -221,6 +290,7 @@ export class BlockCache {
   /**
    * Empties the cache, reallocating it at `capacity` slots if that differs
    * (call between submissions; replaces slotData when the capacity changes).
+   * The capacity may shrink back this way (Isosurface.resetCache).
    */
   reset(capacity = this.capacity): void {
     if (capacity !== this.capacity) {
@@ -228,7 +298,7 @@ export class BlockCache {
       this.slots = this.allocate(capacity);
       this.groups = this.makeGroups();
       this.destroySlots(old);
-      this.sort.grow(capacity);
+      this.logScan.grow(this.slots.logSize);
       this.parts.scan.grow(capacity);
     }
     this.clear(capacity);
@@ -236,57 +306,65 @@ export class BlockCache {
 
   /**
    * Grows to `capacity` slots keeping every cached block where it is: the old
-   * slot data, ages and maps are copied on the GPU, the new slots are empty
-   * (age NONE: taken first). Call between submissions; replaces slotData.
+   * slot data and maps are copied on the GPU, the new slots are empty and
+   * come first in the LRU log, followed by the old log's valid entries in
+   * order (scanned and compacted on the GPU). Call between submissions;
+   * replaces slotData.
    */
   grow(capacity: number): void {
     const old = this.slots;
     if (capacity <= old.capacity) return;
     const next = this.allocate(capacity);
+    const { counters, compact } = this.parts;
+    this.logScan.grow(Math.max(old.logSize, next.logSize));
     const encoder = this.device.createCommandEncoder({ label: 'Isosurface.growCache' });
     encoder.copyBufferToBuffer(old.slotData, 0, next.slotData, 0, old.capacity * SLOT_BYTES);
-    encoder.copyBufferToBuffer(old.slotAge, 0, next.slotAge, 0, old.capacity * 4);
     encoder.copyBufferToBuffer(old.slotToBlock, 0, next.slotToBlock, 0, old.capacity * 4);
-    this.encodeFill(encoder, next.slotAge, old.capacity, capacity);
     this.encodeFill(encoder, next.slotToBlock, old.capacity, capacity);
+    // The old log's valid entries, in order, into the new scratch (count: the old tail).
+    this.logScan.encode(encoder, { input: old.valid, output: next.logOffsets, count: counters.count('logTail'), totalOut: counters.count('logValid') });
+    compact.encode(encoder, { mask: old.valid, offsets: next.logOffsets, values: old.log, output: next.logScratch, count: counters.count('logTail') });
+    this.encodeRebuild(encoder, next, next.logScratch, capacity - old.capacity, old.capacity, true);
     this.submitFills(encoder);
     this.slots = next;
     this.groups = this.makeGroups();
     this.destroySlots(old);
-    this.sort.grow(capacity);
     this.parts.scan.grow(capacity);
-    this.parts.counters.set('slots', capacity);
+    counters.set('slots', capacity);
   }
 
   /** Records the cache update (everything before the decode). */
   encodeUpdate(encoder: GPUCommandEncoder): void {
-    const { counters, scan, compact, compactIds, activeIds } = this.parts;
+    const { counters, scan, compact, activeIds } = this.parts;
     const s = this.slots;
     const args = counters.buffer;
-    let pass = encoder.beginComputePass({ label: 'Isosurface.ageAndMark' });
-    pass.setPipeline(this.pipelines.age);
-    pass.setBindGroup(0, this.groups.age);
+    const g = this.groups;
+    // A full log is compacted first (all counts 0 otherwise).
+    this.logScan.encode(encoder, { input: s.valid, output: s.logOffsets, count: counters.count('logCompact'), totalOut: counters.count('logValid') });
+    compact.encode(encoder, { mask: s.valid, offsets: s.logOffsets, values: s.log, output: s.logScratch, count: counters.count('logCompact') });
+    let pass = encoder.beginComputePass({ label: 'Isosurface.markCached' });
+    pass.setPipeline(this.pipelines.rebuildCompacted);
+    pass.setBindGroup(0, g.compacted);
     pass.dispatchWorkgroupsIndirect(args, Counters.offset(A.slots));
     pass.setPipeline(this.pipelines.mark);
-    pass.setBindGroup(0, this.groups.mark);
+    pass.setBindGroup(0, g.mark);
     pass.dispatchWorkgroupsIndirect(args, Counters.offset(A.mark));
     pass.end();
     scan.encode(encoder, { input: s.newMask, output: s.newOffsets, count: counters.count('activeGated'), totalOut: counters.count('new') });
     pass = encoder.beginComputePass({ label: 'Isosurface.planUpdate' });
     counters.encodePlanUpdate(pass);
     pass.end();
-    const availScan = counters.count('availScan');
-    scan.encode(encoder, { input: s.availMask, output: s.availOffsets, count: availScan, totalOut: counters.count('avail') });
     compact.encode(encoder, { mask: s.newMask, offsets: s.newOffsets, values: activeIds, output: s.newIds, count: counters.count('compactNew') });
-    compactIds.encode(encoder, { mask: s.availMask, offsets: s.availOffsets, output: s.availIds, count: availScan });
-    compact.encode(encoder, { mask: s.availMask, offsets: s.availOffsets, values: s.slotAge, output: s.availAges, count: availScan });
-    // Oldest first; stable, so equal ages keep slot order (empty slots first
-    // in slot order, since their key 0xffff is above every age).
-    this.sort.encode(encoder, { keys: s.availAges, values: s.availIds, count: counters.count('avail'), descending: true, keyBits: AGE_KEY_BITS });
     pass = encoder.beginComputePass({ label: 'Isosurface.assignSlots' });
-    pass.setPipeline(this.pipelines.assign);
-    pass.setBindGroup(0, this.groups.assign);
+    pass.setPipeline(this.pipelines.pick);
+    pass.setBindGroup(0, g.pick);
     pass.dispatchWorkgroupsIndirect(args, Counters.offset(A.assign));
+    pass.setPipeline(this.pipelines.assign);
+    pass.setBindGroup(0, g.assign);
+    pass.dispatchWorkgroupsIndirect(args, Counters.offset(A.assign));
+    pass.setPipeline(this.pipelines.append);
+    pass.setBindGroup(0, g.append);
+    pass.dispatchWorkgroupsIndirect(args, Counters.offset(A.mark));
     pass.end();
   }
 
@@ -296,7 +374,7 @@ export class BlockCache {
     decoder.encodeDecodeBlocks(encoder, {
       stream,
       blockIds: this.slots.newIds,
-      slotIds: this.slots.availIds,
+      slotIds: this.slots.victims,
       count: counters.count('new'),
       slots: this.slots.slotData,
     });
@@ -306,6 +384,7 @@ export class BlockCache {
     this.destroySlots(this.slots);
     this.blockToSlot.destroy();
     this.fillParams.destroy();
-    this.sort.destroy();
+    this.rebuildParams.destroy();
+    this.logScan.destroy();
   }
 }

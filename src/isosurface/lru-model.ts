@@ -2,7 +2,7 @@
 // lru-cache.ts): the reference the cache tests compare the GPU state with,
 // slot for slot. Also the CPU rule for active blocks.
 import type { Dims } from '../core/naming.ts';
-import { AGE_MAX, DEFAULT_GROUP_EDGE_BLOCKS, NONE } from './layout.ts';
+import { DEFAULT_GROUP_EDGE_BLOCKS, NONE } from './layout.ts';
 
 /**
  * Active blocks for `iso`: lo < iso <= hi over the 27-block neighbourhood of
@@ -47,8 +47,16 @@ export interface ModelUpdate {
   evicted: number[];
 }
 
+/**
+ * The cache as the GPU keeps it (lru.wgsl): an LRU order of all slots, least
+ * recently used first (empty slots first, in slot order, from a reset; after
+ * growth the new slots first). Per update: the active blocks already cached
+ * are hits; the i-th new block (in active-list order) takes the i-th slot of
+ * the order that is not a hit, evicting its block; then every active slot
+ * moves to the end, in active-list order.
+ */
 export class LruCacheModel {
-  slotAge = new Uint32Array(0);
+  order: number[] = [];
   slotToBlock = new Uint32Array(0);
   readonly blockToSlot: Uint32Array;
   slotsUsed = 0;
@@ -59,60 +67,45 @@ export class LruCacheModel {
   }
 
   get capacity(): number {
-    return this.slotAge.length;
+    return this.slotToBlock.length;
   }
 
-  /** Everything empty (age NONE, no blocks), `capacity` slots. */
+  /** Everything empty, `capacity` slots in slot order. */
   reset(capacity: number): void {
-    this.slotAge = new Uint32Array(capacity).fill(NONE);
+    this.order = Array.from({ length: capacity }, (_, s) => s);
     this.slotToBlock = new Uint32Array(capacity).fill(NONE);
     this.blockToSlot.fill(NONE);
     this.slotsUsed = 0;
   }
 
-  /** New slots are empty; every cached block stays in its slot. */
+  /** New slots are empty and come first in the order; every cached block stays in its slot. */
   grow(capacity: number): void {
-    const age = new Uint32Array(capacity).fill(NONE);
+    const old = this.capacity;
     const map = new Uint32Array(capacity).fill(NONE);
-    age.set(this.slotAge);
     map.set(this.slotToBlock);
-    this.slotAge = age;
     this.slotToBlock = map;
+    this.order = [...Array.from({ length: capacity - old }, (_, i) => old + i), ...this.order];
   }
 
   /**
-   * One update for the active list (ascending block ids). Returns null when
-   * the cache is too small (more active blocks than slots), leaving it unchanged,
-   * as the GPU does.
+   * One update for the active list (in the GPU's order). Returns null when
+   * the cache is too small (more active blocks than slots), leaving it
+   * unchanged, as the GPU does.
    */
   update(active: readonly number[]): ModelUpdate | null {
     const slots = this.capacity;
     if (active.length > slots) return null;
-    // age_slots: age by one, saturating; empty slots keep NONE; all available
-    const available = new Uint8Array(slots).fill(1);
-    for (let s = 0; s < slots; s++) if (this.slotToBlock[s] !== NONE) this.slotAge[s] = Math.min(this.slotAge[s] + 1, AGE_MAX);
-    // mark_cached
+    const hits = new Set<number>();
     const newBlocks: number[] = [];
     for (const b of active) {
       const s = this.blockToSlot[b];
-      if (s !== NONE) {
-        this.slotAge[s] = 0;
-        available[s] = 0;
-      } else {
-        newBlocks.push(b);
-      }
+      if (s !== NONE) hits.add(s);
+      else newBlocks.push(b);
     }
     const evicted: number[] = [];
-    if (newBlocks.length === 0) return { newBlocks, evicted };
-    // available slots in slot order, sorted by the low 16 bits of the age,
-    // descending, stably (empty slots: 0xffff, first)
-    const order: number[] = [];
-    for (let s = 0; s < slots; s++) if (available[s]) order.push(s);
-    const key = (s: number) => this.slotAge[s] & 0xffff;
-    order.sort((a, b) => key(b) - key(a) || a - b);
-    this.slotsUsed = Math.min(this.slotsUsed + newBlocks.length, slots);
+    const untouched = this.order.filter((s) => !hits.has(s));
     newBlocks.forEach((b, i) => {
-      const s = order[i];
+      const s = untouched[i];
       const old = this.slotToBlock[s];
       if (old !== NONE) {
         this.blockToSlot[old] = NONE;
@@ -120,8 +113,9 @@ export class LruCacheModel {
       }
       this.slotToBlock[s] = b;
       this.blockToSlot[b] = s;
-      this.slotAge[s] = 0;
     });
+    this.slotsUsed = Math.min(this.slotsUsed + newBlocks.length, slots);
+    this.order = [...untouched.slice(newBlocks.length), ...active.map((b) => this.blockToSlot[b])];
     return { newBlocks, evicted };
   }
 }

@@ -77,17 +77,17 @@ print(json.dumps({'faces': nf, 'area': area}))
 
   it('extract: surfaces over the memory budget are recorded with the message, and the exit status is 1', () => {
     const out = join(dir, 'budget.json');
-    // 1.5 MB holds the small surface at 120.5 (1.22 MB), not the one at 20.5 (2828 active blocks, 1.71 MB); 120.5 again still fits.
-    const r = cli('extract', join(sharedData, file), '--iso', '120.5,20.5,120.5', '--cache-budget', '1.5', '--json', out);
+    // 1.75 MB holds the small surface at 120.5, not the one at 20.5 (2828 active blocks, 2.09 MB with 4-byte normals per vertex); 120.5 again still fits.
+    const r = cli('extract', join(sharedData, file), '--iso', '120.5,20.5,120.5', '--cache-budget', '1.75', '--json', out);
     expect(r.status, r.stderr).toBe(1);
     const result = JSON.parse(readFileSync(out, 'utf8'));
-    expect(result.memoryBudgetBytes).toBe(1.5 * 2 ** 20);
+    expect(result.memoryBudgetBytes).toBe(1.75 * 2 ** 20);
     const [ok, failed, again] = result.isosurfaces;
     expect(ok.triangles).toBeGreaterThan(0);
-    expect(failed).toEqual({ iso: 20.5, error: expect.stringMatching(/^the surface at iso 20\.5 needs [\d.]+ MB .*the budget is 1\.50 MB/) });
+    expect(failed).toEqual({ iso: 20.5, error: expect.stringMatching(/^the surface at iso 20\.5 needs [\d.]+ MB .*the budget is 1\.75 MB/) });
     expect(again.triangles).toBe(ok.triangles);
     expect(r.stderr).toContain(`error: ${failed.error}`);
-    expect(r.stderr).toMatch(/error: 1 of 3 isosurfaces did not fit the GPU memory budget of 1\.50 MB \(iso 20\.5\); raise it with --cache-budget MB/);
+    expect(r.stderr).toMatch(/error: 1 of 3 isosurfaces did not fit the GPU memory budget of 1\.75 MB \(iso 20\.5\); raise it with --cache-budget MB/);
   });
 
   it('bench: records and summaries, the same counts for the same seed', () => {

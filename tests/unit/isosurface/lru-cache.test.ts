@@ -1,13 +1,15 @@
 // The GPU cache against a CPU model of Algorithm 1 (src/isosurface/lru-model.ts):
 // a scripted sequence of isovalues on a small volume with a small cache must
 // give, after every surface, the same active and new block counts and the
-// same slot <-> block maps and slot ages, slot for slot: exactly the evictions
-// an LRU makes, including growth (the model grows by the same policy) and a
-// reset to the initial capacity.
+// same slot <-> block maps and LRU order, slot for slot: exactly the evictions
+// an LRU makes, including growth (the model grows by the same policy), log
+// compactions (the log's tail checked) and a reset to the initial capacity.
 import { describe, expect } from 'vitest';
 import { grownCapacity } from '../../../src/isosurface/budget.ts';
 import { Isosurface } from '../../../src/isosurface/isosurface.ts';
 import { activeBlocks, LruCacheModel } from '../../../src/isosurface/lru-model.ts';
+import { C, logSizeFor } from '../../../src/isosurface/layout.ts';
+import { readU32 } from '../../../src/gpu/buffers.ts';
 import type { Dims } from '../../../src/core/naming.ts';
 import { blockRanges } from '../../../src/zfp/cpu/codec.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
@@ -34,10 +36,16 @@ describe('LRU block cache', () => {
     let evictions = 0;
     let growths = 0;
     let hits = 0;
+    // The log's tail, as lru.wgsl keeps it: compacted to `slots` entries when
+    // a computation's appends would not fit, `slots` after a reset or growth.
+    let tail = initialSlots;
+    let compactions = 0;
+    const counters = (iso as unknown as { counters: { buffer: GPUBuffer } }).counters.buffer;
     for (const step of script) {
       if (step === 'reset') {
         await iso.resetCache();
         model.reset(initialSlots);
+        tail = initialSlots;
         continue;
       }
       const t = at(step);
@@ -47,7 +55,13 @@ describe('LRU block cache', () => {
         model.grow(grownCapacity(model.capacity, active.length, iso.info.blockCount));
         update = model.update(active)!;
         growths++;
+        tail = model.capacity;
       }
+      if (tail + active.length > logSizeFor(model.capacity)) {
+        tail = model.capacity;
+        compactions++;
+      }
+      tail += active.length;
       evictions += update.evicted.length;
       hits += active.length - update.newBlocks.length;
       const stats = await iso.compute(t);
@@ -59,12 +73,14 @@ describe('LRU block cache', () => {
       const state = await iso.readCacheState();
       expect([...state.slotToBlock], what).toEqual([...model.slotToBlock]);
       expect([...state.blockToSlot], what).toEqual([...model.blockToSlot]);
-      expect([...state.slotAge], what).toEqual([...model.slotAge]);
+      expect([...state.lruOrder], what).toEqual(model.order);
+      expect((await readU32(device, counters, C.logTail * 4, 1))[0], what).toBe(tail);
     }
     // the script exercised what it is for
     expect(evictions).toBeGreaterThan(20);
     expect(growths).toBeGreaterThanOrEqual(2);
     expect(hits).toBeGreaterThan(20);
+    expect(compactions).toBeGreaterThanOrEqual(2);
     iso.destroy();
     stream.destroy();
   });

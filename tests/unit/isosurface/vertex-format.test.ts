@@ -5,7 +5,7 @@ import { readFileSync } from 'node:fs';
 import { describe, expect, test } from 'vitest';
 import { readF32, readU32 } from '../../../src/gpu/buffers.ts';
 import { createComputePipeline } from '../../../src/gpu/wgsl.ts';
-import { A, AGE_MAX, C, NONE, S, SHARD_RECORD_BYTES, STATUS_CACHE_SHORTFALL, STATUS_VERTEX_OVERFLOW } from '../../../src/isosurface/layout.ts';
+import { A, C, NONE, S, SHARD_RECORD_BYTES, STATUS_CACHE_SHORTFALL, STATUS_VERTEX_OVERFLOW } from '../../../src/isosurface/layout.ts';
 import { decodeVertices, encodeVertexPosition, VERTEX_QUANTUM } from '../../../src/isosurface/vertex-format.ts';
 import { vertexFormatSnippet } from '../../../src/isosurface/wgsl.ts';
 import type { Dims } from '../../../src/core/naming.ts';
@@ -102,7 +102,6 @@ describe('vertex format', () => {
     for (const [name, word] of Object.entries(S)) expect(constants.get(`S_${snake(name)}`), name).toBe(word);
     expect(constants.get('SHARD_STRIDE')! * 4).toBe(SHARD_RECORD_BYTES);
     expect(constants.get('NONE')).toBe(NONE);
-    expect(constants.get('AGE_MAX')).toBe(AGE_MAX);
     expect(constants.get('STATUS_CACHE_SHORTFALL')).toBe(STATUS_CACHE_SHORTFALL);
     expect(constants.get('STATUS_VERTEX_OVERFLOW')).toBe(STATUS_VERTEX_OVERFLOW);
     const words = [...constants.entries()].filter(([k]) => k.startsWith('C_')).length;
