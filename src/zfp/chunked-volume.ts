@@ -197,6 +197,15 @@ export class ChunkedVolume implements BlockSource {
     return new ChunkedVolume(gpu.device, layout, opts.poolChunks, opts.maxShardBytes ?? maxShardBytesFor(gpu.device));
   }
 
+  /**
+   * Chunks of this layout one pool may hold on this device: pools are cut
+   * into binding-sized shards, so the bound is the page table's 32-bit slot
+   * numbers (and, in practice, the memory budget).
+   */
+  static maxPoolChunks(_gpu: { device: GPUDevice }, _layout: Pick<ChunkLevelLayout, 'chunkBytes'>): number {
+    return 2 ** 31;
+  }
+
   /** Bytes of GPU memory held: the pool, the page table and the parameters. */
   get byteSize(): number {
     return this.shards.reduce((n, s) => n + s.buffer.size, 0) + this.pageTable.size + this.params.size;
