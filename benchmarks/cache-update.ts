@@ -4,8 +4,10 @@
 // capacity). Surfaces with 100-480 active blocks are picked from a sweep of
 // the volume's range (FILE env, default the hydrogen atom, 32,768 blocks),
 // then cycled (CYCLES, default 4; the first discarded), each cycle from an
-// empty cache, with SLOTS (default 512,32768) slots each; prints the mean cache-update ms and the mean new
-// blocks per surface, and writes benchmarks/results/cache-update.json.
+// empty cache, with SLOTS (default 512,32768) slots each; prints the median
+// and mean cache-update ms and the mean new and active blocks per surface,
+// and writes benchmarks/results/cache-update.json (ROOT=other checkout runs
+// that code instead, for A/B, and writes nothing).
 const root = process.env.ROOT ?? new URL('..', import.meta.url).pathname;
 const { requestNodeGpu } = await import(`${root}/src/gpu/node-gpu.ts`);
 const { Isosurface } = await import(`${root}/src/isosurface/isosurface.ts`);
@@ -26,10 +28,11 @@ probe.destroy();
 // alternate between far-apart surfaces, so every surface brings new blocks into a small cache
 const order = picked.flatMap((_, i) => (i % 2 ? [picked[picked.length - 1 - (i >> 1)]] : [picked[i >> 1]]));
 const cycles = Number(process.env.CYCLES ?? 4);
-const rows: { slots: number; cacheUpdateMs: number; newBlocks: number; activeBlocks: number; surfaces: number }[] = [];
+const rows: { slots: number; cacheUpdateMs: number; cacheUpdateMedianMs: number; newBlocks: number; activeBlocks: number; surfaces: number }[] = [];
 for (const slots of (process.env.SLOTS ?? '512,32768').split(',').map(Number)) {
   const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: slots, initialVertexCapacity: 1 << 20 });
   let ms = 0;
+  const samples: number[] = [];
   let fresh = 0;
   let active = 0;
   let n = 0;
@@ -40,20 +43,23 @@ for (const slots of (process.env.SLOTS ?? '512,32768').split(',').map(Number)) {
       const s = await iso.compute(t);
       if (s.grew) throw new Error(`iso ${t}: the cache grew (${s.cacheSlots} slots): pick smaller surfaces`);
       if (c === 0) continue;
-      ms += s.stages.find((st: { label: string }) => st.label === 'cache update')!.ms;
+      const t1 = s.stages.find((st: { label: string }) => st.label === 'cache update')!.ms;
+      ms += t1;
+      samples.push(t1);
       fresh += s.newBlocks;
       active += s.activeBlocks;
       n++;
     }
   }
-  rows.push({ slots, cacheUpdateMs: ms / n, newBlocks: fresh / n, activeBlocks: active / n, surfaces: n });
+  samples.sort((a, b) => a - b);
+  rows.push({ slots, cacheUpdateMs: ms / n, cacheUpdateMedianMs: samples[(samples.length - 1) >> 1], newBlocks: fresh / n, activeBlocks: active / n, surfaces: n });
   iso.destroy();
 }
 console.log(`${file}: ${order.length} surfaces x ${cycles - 1} cycles (first cycle discarded), timing ${gpu.device.features.has('timestamp-query') ? 'timestamp-query' : 'none'}`);
-console.log('| slots | cache update ms (mean) | new blocks / surface | active blocks / surface |');
-console.log('|---:|---:|---:|---:|');
-for (const r of rows) console.log(`| ${r.slots} | ${r.cacheUpdateMs.toFixed(2)} | ${r.newBlocks.toFixed(1)} | ${r.activeBlocks.toFixed(1)} |`);
-if (rows.length > 1) console.log(`ratio largest / smallest: ${(rows[rows.length - 1].cacheUpdateMs / rows[0].cacheUpdateMs).toFixed(2)}x`);
+console.log('| slots | cache update ms (median) | (mean) | new blocks / surface | active blocks / surface |');
+console.log('|---:|---:|---:|---:|---:|');
+for (const r of rows) console.log(`| ${r.slots} | ${r.cacheUpdateMedianMs.toFixed(2)} | ${r.cacheUpdateMs.toFixed(2)} | ${r.newBlocks.toFixed(1)} | ${r.activeBlocks.toFixed(1)} |`);
+if (rows.length > 1) console.log(`ratio largest / smallest: median ${(rows[rows.length - 1].cacheUpdateMedianMs / rows[0].cacheUpdateMedianMs).toFixed(2)}x, mean ${(rows[rows.length - 1].cacheUpdateMs / rows[0].cacheUpdateMs).toFixed(2)}x`);
 if (!process.env.ROOT) writeFileSync(`${root}/benchmarks/results/cache-update.json`, JSON.stringify({ file, isovalues: order, cycles, rows, date: new Date().toISOString() }, null, 2) + '\n');
 stream.destroy();
 gpu.device.destroy();

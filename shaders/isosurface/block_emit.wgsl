@@ -11,6 +11,9 @@
 // central-difference gradient at both ends of the vertex's edge, interpolated
 // at the vertex -- the gradient VTK's ComputeNormals gives. A neighbour voxel
 // outside the volume or in a block not cached gives a one-sided difference.
+// The gradients are taken once per cell at its 8 corners: along each axis one
+// neighbour of a corner is another corner (already read), so a cell reads 24
+// voxels more, whatever its number of vertices.
 // The voxel at global grid point g: (value, 1) when it is readable, (0, 0) otherwise.
 fn grid_voxel(g: vec3i) -> vec2f {
   if (any(g < vec3i(0)) || any(g >= vec3i(volume.dims))) {
@@ -22,29 +25,6 @@ fn grid_voxel(g: vec3i) -> vec2f {
   }
   let v = vec3u(g) & vec3u(3u);
   return vec2f(slot_rows[slot * 16u + v.y + 4u * v.z][v.x], 1.0);
-}
-
-fn partial_derivative(g: vec3i, center: vec2f, axis: vec3i) -> f32 {
-  let p = grid_voxel(g + axis);
-  let m = grid_voxel(g - axis);
-  if (p.y > 0.0 && m.y > 0.0) {
-    return 0.5 * (p.x - m.x);
-  }
-  if (center.y == 0.0) {
-    return 0.0;
-  }
-  if (p.y > 0.0) {
-    return p.x - center.x;
-  }
-  if (m.y > 0.0) {
-    return center.x - m.x;
-  }
-  return 0.0;
-}
-
-fn grid_gradient(g: vec3i) -> vec3f {
-  let c = grid_voxel(g);
-  return vec3f(partial_derivative(g, c, vec3i(1, 0, 0)), partial_derivative(g, c, vec3i(0, 1, 0)), partial_derivative(g, c, vec3i(0, 0, 1)));
 }
 
 @compute @workgroup_size(64)
@@ -78,6 +58,28 @@ fn emit_vertices(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg
   }
   let words = case_words(code);
   let n = 3u * mc_case_triangles(words);
+  // Corner gradients (corner q at global grid point origin + offset(q)).
+  let origin = vec3i(c * 4u + l);
+  var grads: array<vec3f, 8>;
+  for (var q = 0u; q < 8u; q++) {
+    let o = mc_corner_offset(q);
+    let g = origin + vec3i(o);
+    var d = vec3f(0.0);
+    for (var a = 0u; a < 3u; a++) {
+      let inner = values[q ^ (1u << a)];
+      var step = vec3i(0);
+      step[a] = select(-1, 1, o[a] == 1u);
+      let outer = grid_voxel(g + step);
+      // bit 0: inner is at +1, outer at -1; bit 1: the other way round
+      let sign = select(1.0, -1.0, o[a] == 1u);
+      if (outer.y > 0.0) {
+        d[a] = 0.5 * sign * (inner - outer.x);
+      } else {
+        d[a] = sign * (inner - values[q]);
+      }
+    }
+    grads[q] = d;
+  }
   let base = shard[S_BASE];
   let size = arrayLength(&shard_vertices);
   for (var m = 0u; m < n; m++) {
@@ -96,9 +98,6 @@ fn emit_vertices(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg
     p[axis] = p[axis] + t;
     shard_vertices[v - base] = vec2u(encode_vertex_position(p), b);
     // Outward (toward decreasing values): minus the gradient.
-    let g0 = vec3i(c * 4u + l + mc_corner_offset(lower));
-    var step = vec3i(0);
-    step[axis] = 1;
-    shard_normals[v - base] = encode_vertex_normal(-mix(grid_gradient(g0), grid_gradient(g0 + step), t));
+    shard_normals[v - base] = encode_vertex_normal(-mix(grads[lower], grads[mc_edge_upper(e)], t));
   }
 }

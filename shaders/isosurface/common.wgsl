@@ -39,8 +39,8 @@ const C_LOG_TAIL: u32 = 46u;       // next free position of the LRU log
 const C_LOG_BASE: u32 = 47u;       // where this computation appends its active slots (plan_update)
 // Indirect dispatch arguments (x, y, z), written by the plan kernels.
 const A_SLOTS: u32 = 24u;   // rebuild_log after a log compaction: ceil(2 x log size / 64), or 0
-const A_MARK: u32 = 28u;    // mark_cached, classify_blocks: ceil(active gated / 64)
-const A_ASSIGN: u32 = 32u;  // assign_slots: ceil(new / 64)
+const A_MARK: u32 = 28u;    // mark_cached, append_active, classify_blocks: ceil(active gated / 64)
+const A_ASSIGN: u32 = 32u;  // pick_victims_of_new, assign_slots: ceil(new / 64)
 const A_EXPAND: u32 = 36u;  // expand_cells: ceil(active gated / 64), or 0 when the surface does not fit
 const A_GROUP_BLOCKS: u32 = 40u;  // mark_group_blocks, compact_block_ids: ceil(group blocks / 64)
 

@@ -9,10 +9,12 @@
 // slots, least recently used first; `valid[p]` says whether position p is a
 // slot's current entry (each slot has exactly one valid entry; a slot used
 // again gets a new entry at the tail and its old one becomes a hole).
-// `tree` counts valid entries: a complete binary tree over the P = log size
-// positions (node 1 the root, node k's children 2k and 2k + 1, leaf of
-// position p at P + p), so the r-th least recently used slot is found by one
-// descent (log2 P reads) and an entry changes by one path of atomics.
+// `tree` counts valid entries: a 16-ary tree over the P = log size positions
+// (level k >= 1 has max(1, P >> 4k) nodes, node j covering positions
+// [j << 4k, (j + 1) << 4k); the levels stored one after the other, the
+// leaves being `valid` itself), so the r-th least recently used slot is found
+// by one descent (at most 16 reads per level) and an entry changes by one
+// atomic per level (5 levels for a million positions).
 // Per computation: hits invalidate their entry (mark_cached), the i-th new
 // block takes the i-th valid entry's slot (pick_victims, assign_slots, which
 // invalidates it), and every active slot is appended in active-list order
@@ -20,8 +22,17 @@
 // the valid entries, then rebuild_log): amortized over the >= slots
 // computations' worth of appends since the last one.
 
-fn tree_leaf_index(p: u32, log_size: u32) -> u32 {
-  return log_size + p;
+fn tree_level_nodes(log_size: u32, k: u32) -> u32 {
+  return max(1u, log_size >> (4u * k));
+}
+
+// Levels above the leaves: up to the first level with a single node.
+fn tree_levels(log_size: u32) -> u32 {
+  var k = 1u;
+  while (tree_level_nodes(log_size, k) > 1u) {
+    k++;
+  }
+  return k;
 }
 
 // ---- mark_cached: per entry i of the active list, a cached block's log
@@ -46,10 +57,12 @@ fn mark_cached(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: 
   if (slot != NONE) {
     let p = mark_slot_pos[slot];
     mark_valid[p] = 0u;
-    var k = tree_leaf_index(p, mark_counters[C_LOG_SIZE]);
-    while (k >= 1u) {
-      atomicSub(&mark_tree[k], 1u);
-      k = k >> 1u;
+    let log_size = mark_counters[C_LOG_SIZE];
+    let levels = tree_levels(log_size);
+    var at = 0u;
+    for (var k = 1u; k <= levels; k++) {
+      atomicSub(&mark_tree[at + (p >> (4u * k))], 1u);
+      at += tree_level_nodes(log_size, k);
     }
   }
   mark_new_mask[i] = select(0u, 1u, slot == NONE);
@@ -61,6 +74,7 @@ fn mark_cached(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: 
 @group(0) @binding(1) var<storage, read> pick_tree: array<u32>;
 @group(0) @binding(2) var<storage, read> pick_log: array<u32>;
 @group(0) @binding(3) var<storage, read_write> pick_victims: array<u32>;
+@group(0) @binding(4) var<storage, read> pick_valid: array<u32>;
 
 @compute @workgroup_size(64)
 fn pick_victims_of_new(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
@@ -70,18 +84,32 @@ fn pick_victims_of_new(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroup
     return;
   }
   let log_size = pick_counters[C_LOG_SIZE];
+  let levels = tree_levels(log_size);
   var rank = i + 1u;
-  var k = 1u;
-  while (k < log_size) {
-    let left = pick_tree[2u * k];
-    if (rank <= left) {
-      k = 2u * k;
-    } else {
-      rank = rank - left;
-      k = 2u * k + 1u;
+  var j = 0u; // the root: node 0 of the top level
+  for (var k = levels; k >= 1u; k--) {
+    // node j of level k: its children are nodes 16j .. 16j + 15 of level k - 1
+    var below = 0u; // where level k - 1 starts in `tree` (k - 1 >= 1)
+    for (var m = 1u; m + 1u < k; m++) {
+      below += tree_level_nodes(log_size, m);
     }
+    let children = select(tree_level_nodes(log_size, k - 1u), log_size, k == 1u);
+    var chosen = 16u * j;
+    for (var c = 0u; c < 16u; c++) {
+      let child = 16u * j + c;
+      if (child >= children) {
+        break;
+      }
+      let count = select(pick_tree[below + child], pick_valid[child], k == 1u);
+      chosen = child;
+      if (rank <= count) {
+        break;
+      }
+      rank -= count;
+    }
+    j = chosen;
   }
-  pick_victims[i] = pick_log[k - log_size];
+  pick_victims[i] = pick_log[j];
 }
 
 // ---- assign_slots: new block new_ids[i] goes to slot victims[i], evicting
@@ -114,10 +142,12 @@ fn assign_slots(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
   assign_block_to_slot[b] = slot;
   let p = assign_slot_pos[slot];
   assign_valid[p] = 0u;
-  var k = tree_leaf_index(p, assign_counters[C_LOG_SIZE]);
-  while (k >= 1u) {
-    atomicSub(&assign_tree[k], 1u);
-    k = k >> 1u;
+  let log_size = assign_counters[C_LOG_SIZE];
+  let levels = tree_levels(log_size);
+  var at = 0u;
+  for (var k = 1u; k <= levels; k++) {
+    atomicSub(&assign_tree[at + (p >> (4u * k))], 1u);
+    at += tree_level_nodes(log_size, k);
   }
 }
 
@@ -143,10 +173,12 @@ fn append_active(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg
   append_log[p] = slot;
   append_slot_pos[slot] = p;
   append_valid[p] = 1u;
-  var k = tree_leaf_index(p, append_counters[C_LOG_SIZE]);
-  while (k >= 1u) {
-    atomicAdd(&append_tree[k], 1u);
-    k = k >> 1u;
+  let log_size = append_counters[C_LOG_SIZE];
+  let levels = tree_levels(log_size);
+  var at = 0u;
+  for (var k = 1u; k <= levels; k++) {
+    atomicAdd(&append_tree[at + (p >> (4u * k))], 1u);
+    at += tree_level_nodes(log_size, k);
   }
 }
 
@@ -184,14 +216,24 @@ fn rebuild_entry(k: u32, log_size: u32, kept: u32) {
       rebuild_slot_pos[slot] = k;
     }
   }
-  if (k == 0u) {
-    rebuild_tree[0] = 0u; // node 0 is not in the tree
-    return;
+  // Tree node k (flat index): find its level, then its range of positions.
+  var first = 0u;
+  var level = 1u;
+  let levels = tree_levels(log_size);
+  loop {
+    let nodes = tree_level_nodes(log_size, level);
+    if (k < first + nodes) {
+      let lo = (k - first) << (4u * level);
+      let span = min(1u << (4u * level), log_size);
+      rebuild_tree[k] = select(0u, min(entries - lo, span), entries > lo);
+      return;
+    }
+    first += nodes;
+    level++;
+    if (level > levels) {
+      return;
+    }
   }
-  let level = firstLeadingBit(k);
-  let span = log_size >> level;
-  let lo = (k - (1u << level)) * span;
-  rebuild_tree[k] = select(0u, min(entries - lo, span), entries > lo);
 }
 
 // Reset and growth (direct dispatch): also moves the tail.

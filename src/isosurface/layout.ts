@@ -81,7 +81,18 @@ export function logSizeFor(slots: number): number {
   return p;
 }
 
-/** Bytes of the LRU log at `slots` slots: log, valid flags, scan offsets, compaction scratch (4 B per position each) and the count tree (8 B per position). */
+/** Words of the LRU log's 16-ary count tree over `logSize` positions (lru.wgsl: levels of max(1, P >> 4k) nodes up to a single one). */
+export function logTreeWords(logSize: number): number {
+  let words = 0;
+  for (let k = 1; ; k++) {
+    const nodes = Math.max(1, Math.floor(logSize / 16 ** k));
+    words += nodes;
+    if (nodes === 1) return words;
+  }
+}
+
+/** Bytes of the LRU log at `slots` slots: log, valid flags, scan offsets, compaction scratch (4 B per position each) and the count tree. */
 export function logBytesFor(slots: number): number {
-  return logSizeFor(slots) * 24;
+  const p = logSizeFor(slots);
+  return p * 16 + logTreeWords(p) * 4;
 }

@@ -24,7 +24,7 @@ import type { ZfpDecoder } from '../zfp/decoder.ts';
 import type { BlockSource } from '../zfp/gpu-stream.ts';
 import { Counters } from './counters.ts';
 import { bindGroup, bindGroupLayout, computePipeline, storageBuffer } from './gpu-util.ts';
-import { A, logBytesFor, logSizeFor, SLOT_BYTES } from './layout.ts';
+import { A, logBytesFor, logSizeFor, logTreeWords, SLOT_BYTES } from './layout.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
 
 export interface BlockCacheParts {
@@ -129,7 +129,7 @@ export class BlockCache {
 
   static async create(device: GPUDevice, parts: BlockCacheParts, capacity: number): Promise<BlockCache> {
     const markLayout = bindGroupLayout(device, 'Isosurface.markCached.layout', ['read', 'read', 'read', 'read', 'rw', 'rw', 'rw']);
-    const pickLayout = bindGroupLayout(device, 'Isosurface.pickVictims.layout', ['read', 'read', 'read', 'rw']);
+    const pickLayout = bindGroupLayout(device, 'Isosurface.pickVictims.layout', ['read', 'read', 'read', 'rw', 'read']);
     const assignLayout = bindGroupLayout(device, 'Isosurface.assignSlots.layout', ['read', 'read', 'read', 'rw', 'rw', 'read', 'rw', 'rw']);
     const appendLayout = bindGroupLayout(device, 'Isosurface.appendActive.layout', ['read', 'read', 'read', 'rw', 'rw', 'rw', 'rw']);
     const rebuildLayout = bindGroupLayout(device, 'Isosurface.rebuildLog.layout', ['uniform', 'rw', 'read', 'rw', 'rw', 'rw', 'rw']);
@@ -203,7 +203,7 @@ export class BlockCache {
       valid: words('lruValid', logSize, GPUBufferUsage.COPY_SRC),
       logOffsets: words('lruLogOffsets', logSize),
       logScratch: words('lruLogScratch', logSize),
-      tree: words('lruTree', 2 * logSize),
+      tree: words('lruTree', logTreeWords(logSize)),
     };
     if (this.ownBuffers(s).reduce((n, b) => n + b.size, 0) !== capacity * CACHE_BYTES_PER_SLOT + logBytesFor(capacity)) throw new Error('BlockCache: byte accounting out of date');
     return s;
@@ -217,7 +217,7 @@ export class BlockCache {
     const { activeIds } = this.parts;
     return {
       mark: bindGroup(d, 'Isosurface.markCached.bindGroup', p.markLayout, [counters, activeIds, this.blockToSlot, s.slotPos, s.valid, s.tree, s.newMask]),
-      pick: bindGroup(d, 'Isosurface.pickVictims.bindGroup', p.pickLayout, [counters, s.tree, s.log, s.victims]),
+      pick: bindGroup(d, 'Isosurface.pickVictims.bindGroup', p.pickLayout, [counters, s.tree, s.log, s.victims, s.valid]),
       assign: bindGroup(d, 'Isosurface.assignSlots.bindGroup', p.assignLayout, [counters, s.newIds, s.victims, s.slotToBlock, this.blockToSlot, s.slotPos, s.valid, s.tree]),
       append: bindGroup(d, 'Isosurface.appendActive.bindGroup', p.appendLayout, [counters, activeIds, this.blockToSlot, s.log, s.slotPos, s.valid, s.tree]),
       compacted: this.rebuildGroup(s, s.logScratch, 0, this.pipelines.rebuildCompactedLayout),
