@@ -141,6 +141,25 @@ export class ChunkFetcher {
     this.#checkIdle();
   }
 
+  /**
+   * Keeps only the wanted chunks that `keep` accepts (a new isovalue: what it
+   * does not need is aborted now, what it needs keeps its request).
+   */
+  retain(keep: (level: number, chunk: ChunkIndex) => boolean): void {
+    const split = (k: string) => k.split(':').map(Number) as [number, number];
+    for (const [k, ctl] of this.#inFlight) {
+      if (!keep(...split(k))) {
+        ctl.abort(new DOMException('no longer needed', 'AbortError'));
+        this.#inFlight.delete(k);
+        this.#wanted.delete(k);
+        this.#counts.aborted++;
+      }
+    }
+    this.#queue = this.#queue.filter((q) => keep(q.level, q.chunk));
+    this.#pump();
+    this.#checkIdle();
+  }
+
   /** Stops everything wanted (e.g. the store is closed). */
   cancelAll(): void {
     this.want(0, []);
