@@ -1,0 +1,43 @@
+// Wires the store view into the page: a progress line over the view, a
+// "Store" section at the top of the panel, the loader's install path, and
+// window.zfpisoStore for the page tests.
+import type { GpuContext } from '../../gpu/device.ts';
+import type { VolumeLoader } from '../loading/loader.ts';
+import { StoreView, type StorePageState } from './store-view.ts';
+
+export function storeParameter(): string | null {
+  return new URLSearchParams(location.search).get('store');
+}
+
+export function mountStoreView(p: {
+  gpu: GpuContext;
+  loader: VolumeLoader;
+  keepView(): void;
+  currentName(): string | undefined;
+  budgetBytes(): number;
+  onError(m: string): void;
+}): StoreView {
+  const line = document.createElement('div');
+  line.id = 'store-progress';
+  line.setAttribute('role', 'status');
+  line.hidden = true;
+  line.style.cssText = 'position:absolute;left:8px;bottom:8px;padding:2px 8px;background:rgba(0,0,0,.6);color:#fff;font:12px system-ui;border-radius:4px;z-index:5';
+  (document.getElementById('stage') ?? document.body).append(line);
+  const panel = document.createElement('section');
+  panel.id = 'store-section';
+  panel.hidden = true;
+  const aside = document.getElementById('panel');
+  aside?.insertBefore(panel, aside.querySelector('#volume-section'));
+  const w = window as unknown as { zfpisoStore?: StorePageState };
+  return new StoreView({
+    gpu: p.gpu,
+    load: (what, produce) => p.loader.loadProduced(what, produce),
+    keepView: p.keepView,
+    installed: (name) => p.currentName() === name,
+    budgetBytes: p.budgetBytes,
+    onError: p.onError,
+    publish: (s) => { w.zfpisoStore = s; },
+    line,
+    panel,
+  });
+}
