@@ -246,11 +246,12 @@ async function start(): Promise<void> {
   // The first volume: ?store= or ?url= when given (falling back to the built-in one if it fails).
   const url = urlParameter();
   const storeUrl = storeParameter();
+  const storeView = mountStoreView({
+    gpu, loader, budgetBytes: () => budget.bytes, onError: (m) => messages.show(m), currentName: () => session.current?.opened.name,
+    keepView: () => { pendingIso = isoControl.value; session.pendingCamera = viewer.camera.getState(); },
+  });
   if (storeUrl) {
-    await mountStoreView({
-      gpu, loader, budgetBytes: () => budget.bytes, onError: (m) => messages.show(m), currentName: () => session.current?.opened.name,
-      keepView: () => { pendingIso = isoControl.value; session.pendingCamera = viewer.camera.getState(); },
-    }).open(storeUrl);
+    await storeView.open(storeUrl);
   } else if (url) {
     nextUrl = url;
     await loader.loadUrl(url);

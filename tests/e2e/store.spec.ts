@@ -48,3 +48,17 @@ test('an unknown store is a message naming it; the page stays usable', async ({ 
   await openApp(page, '/?store=/stores/none.zarr');
   await expect(page.locator('#messages')).toContainText('/stores/none.zarr: no zarr.json at its root');
 });
+
+test('a picked .zarr folder opens like the served store', async ({ page }) => {
+  test.setTimeout(300_000);
+  const errors = watchErrors(page);
+  await openApp(page, '/#iso=80');
+  await page.locator('input[webkitdirectory]').setInputFiles(store);
+  await page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, { timeout: 240_000 });
+  const st = (await page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore)) as StoreState & { url: string };
+  expect(st.url).toBe('neghip-e2e.zarr');
+  expect(st.shownLevels).toEqual([3, 2, 1, 0]);
+  expect(st.chunkBytesFetched).toBe(st.levels.reduce((a, l) => a + l.storedBytes, 0));
+  await expect(page.locator('#store-progress')).toContainText('neghip-e2e.zarr: level 0 (full resolution)');
+  expect(errors).toEqual([]);
+});

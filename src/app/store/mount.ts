@@ -3,6 +3,7 @@
 // window.zfpisoStore for the page tests.
 import type { GpuContext } from '../../gpu/device.ts';
 import type { VolumeLoader } from '../loading/loader.ts';
+import { droppedFolder, pickDirectory, pickedFolder } from './folder.ts';
 import { StoreView, type StorePageState } from './store-view.ts';
 
 export function storeParameter(): string | null {
@@ -29,7 +30,7 @@ export function mountStoreView(p: {
   const aside = document.getElementById('panel');
   aside?.insertBefore(panel, aside.querySelector('#volume-section'));
   const w = window as unknown as { zfpisoStore?: StorePageState };
-  return new StoreView({
+  const view = new StoreView({
     gpu: p.gpu,
     load: (what, produce) => p.loader.loadProduced(what, produce),
     keepView: p.keepView,
@@ -40,4 +41,34 @@ export function mountStoreView(p: {
     line,
     panel,
   });
+  const openFolder = (f: { name: string; store: Parameters<StoreView['openStore']>[0] } | null) => {
+    if (f) void view.openStore(f.store, f.name);
+  };
+  // A dropped folder is a store (files keep going to the page's usual drop handler).
+  window.addEventListener('drop', (e) => {
+    const folder = droppedFolder(e);
+    if (!folder) return;
+    e.preventDefault();
+    e.stopImmediatePropagation();
+    const overlay = document.getElementById('drop-overlay');
+    if (overlay) overlay.hidden = true;
+    window.dispatchEvent(new Event('dragleave'));
+    folder.then(openFolder, (err: Error) => p.onError(`Could not read the dropped folder: ${err.message}`));
+  }, { capture: true });
+  // "Open a .zarr folder…", next to the file picker
+  const input = document.createElement('input');
+  input.type = 'file';
+  input.hidden = true;
+  input.setAttribute('webkitdirectory', '');
+  input.addEventListener('change', () => { openFolder(pickedFolder([...(input.files ?? [])])); input.value = ''; });
+  const button = document.createElement('button');
+  button.type = 'button';
+  button.id = 'open-store-folder';
+  button.textContent = 'Open a .zarr folder…';
+  button.addEventListener('click', () => {
+    pickDirectory().then((f) => (f ? openFolder(f) : input.click()), (err: Error) => { if (err.name !== 'AbortError') p.onError(err.message); });
+  });
+  const fileInput = document.getElementById('file-input');
+  fileInput?.parentElement?.append(button, input);
+  return view;
 }

@@ -7,6 +7,7 @@
 // no decode), then opened through the page's usual loader; a level whose
 // stream exceeds half the memory budget is not loaded, and the panel says so.
 // Errors keep the current surface (the loader's rule) and name the store.
+import type { AsyncReadable } from '@zarrita/storage';
 import { FetchStore } from 'zarrita';
 import type { GpuContext } from '../../gpu/device.ts';
 import { assembleLevelStream } from '../../store/assemble.ts';
@@ -55,10 +56,15 @@ export class StoreView {
   #gen = 0;
   constructor(private readonly d: StoreViewDeps) {}
 
-  async open(url: string): Promise<void> {
+  /** A store by URL (same origin, or another one with CORS). */
+  open(url: string): Promise<void> {
+    return this.openStore(new FetchStore(new URL(url, location.href).href), url);
+  }
+
+  /** Any store (a dropped or picked folder: zarr/stores.ts); `url` names it in messages. */
+  async openStore(source: AsyncReadable, url: string): Promise<void> {
     const gen = ++this.#gen;
-    const absolute = new URL(url, location.href).href;
-    const metered = new MeteredStore(new FetchStore(absolute));
+    const metered = new MeteredStore(source);
     let store: ZfpStore;
     this.#line(`Opening ${url}…`);
     try {
