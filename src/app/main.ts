@@ -177,6 +177,7 @@ async function start(): Promise<void> {
     },
     onLoaded: (v) => {
       session.install(v);
+      link?.setLevel(undefined); // a store's view sets it again after installing its level
       volumeUrl = nextUrl;
       setUrlParameter(volumeUrl);
     },
@@ -249,6 +250,8 @@ async function start(): Promise<void> {
   const storeView = mountStoreView({
     gpu, loader, budgetBytes: () => budget.bytes, onError: (m) => messages.show(m), currentName: () => session.current?.opened.name,
     keepView: () => { pendingIso = isoControl.value; session.pendingCamera = viewer.camera.getState(); },
+    linkLevel: () => initialView.level,
+    onLevel: (level) => link?.setLevel(level),
   });
   if (storeUrl) {
     await storeView.open(storeUrl);

@@ -62,3 +62,13 @@ test('a picked .zarr folder opens like the served store', async ({ page }) => {
   await expect(page.locator('#store-progress')).toContainText('neghip-e2e.zarr: level 0 (full resolution)');
   expect(errors).toEqual([]);
 });
+
+test('the link keeps the level: #level=1 stops at level 1, and the hash says level=1', async ({ page }) => {
+  test.setTimeout(300_000);
+  await openApp(page, '/?store=/stores/neghip-e2e.zarr#iso=80&level=1');
+  const st = (await page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore)) as StoreState;
+  expect(st.shownLevels).toEqual([3, 2, 1]);
+  expect(st.reason).toBe('the link asks for level 1');
+  await page.waitForFunction(() => /(^|&|#)level=1(&|$)/.test(location.hash) && /iso=80/.test(location.hash), null, { timeout: 10_000 });
+  expect(new URL(page.url()).searchParams.get('store')).toBe('/stores/neghip-e2e.zarr');
+});

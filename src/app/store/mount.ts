@@ -17,6 +17,8 @@ export function mountStoreView(p: {
   currentName(): string | undefined;
   budgetBytes(): number;
   onError(m: string): void;
+  linkLevel(): number | undefined;
+  onLevel(level: number): void;
 }): StoreView {
   const line = document.createElement('div');
   line.id = 'store-progress';
@@ -37,6 +39,8 @@ export function mountStoreView(p: {
     installed: (name) => p.currentName() === name,
     budgetBytes: p.budgetBytes,
     onError: p.onError,
+    linkLevel: p.linkLevel,
+    onLevel: p.onLevel,
     publish: (s) => { w.zfpisoStore = s; },
     line,
     panel,

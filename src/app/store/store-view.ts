@@ -30,7 +30,11 @@ export interface StoreViewDeps {
   installed(name: string): boolean;
   budgetBytes(): number;
   onError(message: string): void;
-  /** Where the page tests read the figures (window.zfpiso.store). */
+  /** The finest level to show (a link's #level=), or undefined for level 0. */
+  linkLevel(): number | undefined;
+  /** The level now shown, for the link. */
+  onLevel(level: number): void;
+  /** Where the page tests read the figures (window.zfpisoStore). */
   publish(state: StorePageState): void;
   line: HTMLElement;
   panel: HTMLElement;
@@ -87,7 +91,9 @@ export class StoreView {
       this.d.publish({ ...st });
     };
     update();
-    for (let L = store.levels.length - 1; L >= 0 && gen === this.#gen; L--) {
+    const finest = Math.min(this.d.linkLevel() ?? 0, store.levels.length - 1);
+    if (finest > 0) st.reason = `the link asks for level ${finest}`;
+    for (let L = store.levels.length - 1; L >= finest && gen === this.#gen; L--) {
       const lv = store.levels[L];
       const streamBytes = lv.storedBytes;
       if (streamBytes > this.d.budgetBytes() / 2) {
@@ -132,6 +138,7 @@ export class StoreView {
       }
       st.shownLevel = L;
       st.shownLevels.push(L);
+      this.d.onLevel(L);
       update();
     }
     st.done = true;
