@@ -6,7 +6,7 @@
 import { existsSync } from 'node:fs';
 import { join } from 'node:path';
 import { loadZfpStream } from '../zfp/gpu-stream.ts';
-import { assembleLevelStream } from './assemble.ts';
+import { assembleLevelStream, assemblyLimit } from './assemble.ts';
 import { ChunkFetcher } from './fetch/chunk-fetcher.ts';
 import type { ChunkIndex } from './types.ts';
 import { StoreError } from './zarr/errors.ts';
@@ -47,6 +47,8 @@ export async function openStoreInput(device: GPUDevice, input: string, level: nu
     throw new StoreError('layout', `${input}: --level ${level} does not exist (levels 0 to ${store.levels.length - 1})`);
   }
   const lv = store.levels[L];
+  const limit = assemblyLimit(lv.layout, 2 ** 31); // the assembled stream is one CPU buffer before upload
+  if (limit) throw new StoreError('layout', `${limit}; pick a coarser --level (the chunk pool, which needs no whole stream, is not merged yet)`);
   const fetcher = new ChunkFetcher(store, { maxInFlight: 8, cacheBytes: lv.storedBytes + 1 });
   const chunks = new Map<ChunkIndex, Uint8Array>();
   let failure: StoreError | null = null;

@@ -1,4 +1,3 @@
-// src/store/types.ts
 /** One level of a chunked zfp store, as the GPU side needs it (facts only, no UI wording). */
 export interface ChunkLevelLayout {
   /** Voxels of this level, x, y, z (x fastest). */

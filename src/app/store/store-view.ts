@@ -10,7 +10,7 @@
 import type { AsyncReadable } from '@zarrita/storage';
 import { FetchStore } from 'zarrita';
 import type { GpuContext } from '../../gpu/device.ts';
-import { assembleLevelStream } from '../../store/assemble.ts';
+import { assembleLevelStream, assemblyLimit } from '../../store/assemble.ts';
 import { ChunkFetcher } from '../../store/fetch/chunk-fetcher.ts';
 import type { ChunkIndex } from '../../store/types.ts';
 import { StoreError } from '../../store/zarr/errors.ts';
@@ -96,6 +96,11 @@ export class StoreView {
     for (let L = store.levels.length - 1; L >= finest && gen === this.#gen; L--) {
       const lv = store.levels[L];
       const streamBytes = lv.storedBytes;
+      const limit = assemblyLimit(lv.layout, 2 ** 31); // one CPU buffer before upload
+      if (limit) {
+        st.reason = `${limit}; level ${L + 1} stays`;
+        break;
+      }
       if (streamBytes > this.d.budgetBytes() / 2) {
         st.reason = `level ${L} (${mib(streamBytes)} of chunks) exceeds half the memory budget (${mib(this.d.budgetBytes())}); level ${L + 1} stays`;
         break;

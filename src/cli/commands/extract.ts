@@ -74,7 +74,7 @@ export async function openInput(device: GPUDevice, path: string, rate: number | 
     try {
       return await openStoreInput(device, path, level, (m) => log(`error: ${m}`));
     } catch (e) {
-      if (e instanceof StoreError) throw new UsageError(e.message);
+      if (e instanceof StoreError || e instanceof ZfpFormatError) throw new UsageError(e.message);
       throw e;
     }
   }

@@ -52,6 +52,11 @@ export interface ZfpStore {
 
 type Json = Record<string, unknown>;
 const isObject = (v: unknown): v is Json => typeof v === 'object' && v !== null && !Array.isArray(v);
+/** Sane limits for sizes read from a store (hostile metadata must not allocate). */
+const MAX_EDGE = 2 ** 31;
+const MAX_CHUNK_EDGE = 1024;
+/** 2^26 chunks: 64^3 chunks of a 2^44-voxel (64 TiB float32) level; the range array is then 512 MiB. */
+const MAX_CHUNKS = 2 ** 26;
 const CONVERT_HINT = 'convert it with `npm run convert -- STORE --out new.zarr` (numcodecs.zfpy fixed rate)';
 
 export function chunkCoords(layout: ChunkLevelLayout, chunk: ChunkIndex): [number, number, number] {
@@ -163,9 +168,12 @@ async function openLevel(mem: MetadataMemo, storeName: string, index: number, pa
   const [cz, cy, cx] = chunks.slice(lead);
   if (cz !== cy || cy !== cx) throw new StoreError('layout', `${name}: chunks [${chunks.join(', ')}] are not cubes; ${CONVERT_HINT}`);
   if (cx % 4 !== 0 || cx <= 0) throw new StoreError('layout', `${name}: chunk edge ${cx} is not a multiple of 4 (zfp's 4^3 blocks would straddle chunks); ${CONVERT_HINT} --chunk 64`);
+  if (![x, y, z].every((n) => Number.isInteger(n) && n >= 1 && n <= MAX_EDGE)) throw new StoreError('layout', `${name}: shape [${shape.join(', ')}] is not a volume this reader takes (1 to ${MAX_EDGE} voxels per axis)`);
+  if (cx > MAX_CHUNK_EDGE) throw new StoreError('layout', `${name}: chunk edge ${cx} is above ${MAX_CHUNK_EDGE}; ${CONVERT_HINT} --chunk 64`);
   const C = cx;
   const chunkGrid: [number, number, number] = [Math.ceil(x / C), Math.ceil(y / C), Math.ceil(z / C)];
   const chunkCount = chunkGrid[0] * chunkGrid[1] * chunkGrid[2];
+  if (chunkCount > MAX_CHUNKS) throw new StoreError('layout', `${name}: ${chunkGrid.join(' x ')} chunks of ${C}^3; this reader takes at most ${MAX_CHUNKS} per level (convert with a larger --chunk)`);
   const chunkBytes = zfpChunkBytes(C, rate);
   return {
     index, path, shardChunks, chunkCount, storedBytes: chunkCount * chunkBytes, rangesPath, leadingAxes: lead,

@@ -79,6 +79,17 @@ print(json.dumps(zarr.open_array(sys.argv[1], mode='r', path='ranges/1')[:].resh
     expect((await refusal(open(f64))).message).toMatch(/f64.zarr level 0: values are float64/);
   });
 
+  it('refuses hostile sizes in the metadata before allocating anything', async () => {
+    const huge = zarrPythonStore(join(work, 'huge.zarr'), [8, 8, 8], 8, 'serializer=ZFPY(mode=2, rate=8), compressors=None');
+    const meta = JSON.parse(readFileSync(join(huge, 'zarr.json'), 'utf8'));
+    meta.shape = [1e9, 1e9, 1e9];
+    writeFileSync(join(huge, 'zarr.json'), JSON.stringify(meta));
+    expect((await refusal(open(huge))).message).toMatch(/huge.zarr level 0: 125000000 x 125000000 x 125000000 chunks of 8\^3; this reader takes at most 67108864 per level/);
+    meta.shape = [8, 8, 2 ** 32];
+    writeFileSync(join(huge, 'zarr.json'), JSON.stringify(meta));
+    expect((await refusal(open(huge))).message).toMatch(/huge.zarr level 0: shape \[8, 8, 4294967296\] is not a volume this reader takes/);
+  });
+
   it('refuses a missing folder, a missing chunk and a corrupt chunk, naming them', async () => {
     expect((await refusal(open(join(work, 'nothing.zarr')))).message).toMatch(/nothing.zarr: no such folder/);
     const s: ZfpStore = await open(plain);
