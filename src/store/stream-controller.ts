@@ -30,6 +30,8 @@ export interface LevelStats {
   triangles: number;
   cacheBytes: number;
   vertexBytes: number;
+  /** Per-volume buffers outside the Isosurface's budget (block and group ranges, maps): counted too. */
+  fixedBytes?: number;
 }
 /** What it needs of an Isosurface over a LevelVolume. */
 export interface LevelSurface<S extends LevelStats = LevelStats> {
@@ -122,7 +124,7 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
     let surfaces = 0;
     for (const [level] of this.#surfaces) {
       const s = this.#lastStats.get(level);
-      if (s) surfaces += s.cacheBytes + s.vertexBytes;
+      if (s) surfaces += s.cacheBytes + s.vertexBytes + (s.fixedBytes ?? 0);
     }
     return { pools, surfaces, total: pools + surfaces };
   }
