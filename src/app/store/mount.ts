@@ -37,6 +37,7 @@ export function mountStoreView(p: {
     load: (what, produce) => p.loader.loadProduced(what, produce),
     keepView: p.keepView,
     installed: (name) => p.currentName() === name,
+    busy: () => p.loader.busy,
     budgetBytes: p.budgetBytes,
     onError: p.onError,
     linkLevel: p.linkLevel,

@@ -26,6 +26,8 @@ export interface StoreViewDeps {
   load(what: string, produce: Produce): Promise<void>;
   /** Before a finer level replaces the shown one: carry the isovalue and the camera over. */
   keepView(): void;
+  /** True while the loader opens something (the user's file): a store level never cancels it. */
+  busy(): boolean;
   /** True when the last load installed its volume. */
   installed(name: string): boolean;
   budgetBytes(): number;
@@ -91,6 +93,7 @@ export class StoreView {
       this.d.publish({ ...st });
     };
     update();
+    let lastName: string | null = null;
     const finest = Math.min(this.d.linkLevel() ?? 0, store.levels.length - 1);
     if (finest > 0) st.reason = `the link asks for level ${finest}`;
     for (let L = store.levels.length - 1; L >= finest && gen === this.#gen; L--) {
@@ -124,6 +127,11 @@ export class StoreView {
         this.d.onError((failure as StoreError).message);
         break;
       }
+      // The user opened another volume meanwhile: this store no longer owns the view.
+      if ((lastName !== null && !this.d.installed(lastName)) || this.d.busy()) {
+        fetcher.cancelAll();
+        return;
+      }
       const bytes = assembleLevelStream(lv.layout, (c) => chunks.get(c)!);
       const name = `${url} level ${L}`;
       if (st.shownLevel !== null) this.d.keepView();
@@ -141,6 +149,7 @@ export class StoreView {
         st.reason = `level ${L} could not be shown (see the message); level ${st.shownLevel ?? 'none'} stays`;
         break;
       }
+      lastName = name;
       st.shownLevel = L;
       st.shownLevels.push(L);
       this.d.onLevel(L);
