@@ -1,7 +1,8 @@
 // One shard of a fixed-rate zfp stream (bind group 0 of every decoder
 // kernel): the 32-bit words holding blocks [shard_first_block,
 // shard_end_block), and where they are. Block b starts at bit
-// (b - shard_first_block) * bits_per_block + shard_bit_base of `stream_words`.
+// (b - shard_first_block) * bits_per_block + shard_bit_base of `stream_words`
+// (block_start in stream_blocks.wgsl; a chunk pool composes its own).
 // Needs u64.wgsl.
 
 struct StreamParams {
@@ -17,19 +18,6 @@ struct StreamParams {
 
 @group(0) @binding(0) var<storage, read> stream_words: array<u32>;
 @group(0) @binding(1) var<uniform> stream: StreamParams;
-
-// (word, bit) where block b (inside this shard) starts.
-fn block_start(b: u32) -> vec2u {
-  let bit = u64_add32(u64_mul(b - stream.shard_first_block, stream.bits_per_block), stream.shard_bit_base);
-  return u64_bit_to_word(bit);
-}
-
-// Block coordinates of raster block index b (x fastest).
-fn block_coords(b: u32) -> vec3u {
-  let bx = stream.blocks.x;
-  let by = stream.blocks.y;
-  return vec3u(b % bx, (b / bx) % by, b / (bx * by));
-}
 
 // ---- LSB-first bit reader over stream_words (per invocation).
 var<private> rd_next: u32;   // index of the next word to load

@@ -14,14 +14,14 @@ import { readF32 } from '../gpu/buffers.ts';
 import type { ExclusiveScan } from '../primitives/scan.ts';
 import type { StreamCompact, StreamCompactIds } from '../primitives/compact.ts';
 import type { ZfpDecoder } from '../zfp/decoder.ts';
-import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
+import { isChunked, type IsosurfaceSource } from './source.ts';
 import { Counters } from './counters.ts';
 import { bindGroup, bindGroupLayout, computePipeline, storageBuffer } from './gpu-util.ts';
 import { A } from './layout.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
 
 export interface ActiveBlocksParts {
-  stream: ZfpGpuStream;
+  stream: IsosurfaceSource;
   decoder: ZfpDecoder;
   /** VolumeParams uniform (common.wgsl). */
   volume: GPUBuffer;
@@ -37,6 +37,18 @@ export interface ActiveBlocksParts {
 /** The group grid of a block grid: ceil(grid / edge) per axis. */
 export function groupGrid(blockGrid: readonly number[], edge: number): [number, number, number] {
   return [Math.ceil(blockGrid[0] / edge), Math.ceil(blockGrid[1] / edge), Math.ceil(blockGrid[2] / edge)];
+}
+
+/** 2 f32 per block, all [FLT_MAX, -FLT_MAX] (no isovalue inside). */
+function emptyRanges(device: GPUDevice, blockCount: number): GPUBuffer {
+  const buffer = device.createBuffer({ label: 'Isosurface.blockRanges', size: Math.max(8, blockCount * 8), usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST, mappedAtCreation: true });
+  const f = new Float32Array(buffer.getMappedRange());
+  for (let i = 0; i < f.length; i += 2) {
+    f[i] = 3.4028234663852886e38;
+    f[i + 1] = -3.4028234663852886e38;
+  }
+  buffer.unmap();
+  return buffer;
 }
 
 export class ActiveBlocks {
@@ -75,7 +87,9 @@ export class ActiveBlocks {
     this.groupCount = grid[0] * grid[1] * grid[2];
     this.groupSize = edge ** 3;
     const entries = this.groupCount * this.groupSize;
-    this.blockRanges = parts.decoder.computeBlockRanges(parts.stream);
+    // A chunked source starts with empty ranges (no block active); its
+    // encodeSync fills those of the resident chunks.
+    this.blockRanges = isChunked(parts.stream) ? emptyRanges(device, blockCount) : parts.decoder.computeBlockRanges(parts.stream);
     this.neighbourhoodRanges = storageBuffer(device, 'Isosurface.neighbourhoodRanges', blockCount * 8);
     this.groupRanges = storageBuffer(device, 'Isosurface.groupRanges', this.groupCount * 8);
     this.groupMask = storageBuffer(device, 'Isosurface.groupMask', this.groupCount * 4);

@@ -18,7 +18,7 @@ import { hitRate, type SurfaceEngine } from '../bench/harness.ts';
 import { StreamCompact, StreamCompactIds } from '../primitives/compact.ts';
 import { ExclusiveScan } from '../primitives/scan.ts';
 import { ZfpDecoder } from '../zfp/decoder.ts';
-import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
+import { isChunked, type ChunkSyncTargets, type IsosurfaceSource } from './source.ts';
 import { ActiveBlocks, groupGrid } from './active-blocks.ts';
 import { BlockMarchingCubes } from './block-mc.ts';
 import { cacheBytesFor, defaultMemoryBudget, formatMB, grownCapacity, vertexBytesFor } from './budget.ts';
@@ -57,6 +57,18 @@ interface Request {
 /** Attempts per isovalue: one, plus a cache growth, plus a vertex growth, plus slack. */
 const MAX_ATTEMPTS = 4;
 
+function syncTargets(active: ActiveBlocks, cache: BlockCache, counters: Counters): ChunkSyncTargets {
+  return {
+    blockRanges: active.blockRanges,
+    neighbourhoodRanges: active.neighbourhoodRanges,
+    groupRanges: active.groupRanges,
+    blockToSlot: cache.blockToSlot,
+    slotToBlock: cache.slotToBlock,
+    slotAge: cache.slotAge,
+    counters: counters.buffer,
+  };
+}
+
 export class Isosurface implements SurfaceEngine {
   readonly info: VolumeInfo;
   readonly drawData: IsosurfaceDrawData;
@@ -73,7 +85,7 @@ export class Isosurface implements SurfaceEngine {
 
   private constructor(
     private readonly gpu: GpuContext,
-    private readonly stream: ZfpGpuStream,
+    private readonly stream: IsosurfaceSource,
     private readonly volume: GPUBuffer,
     private readonly counters: Counters,
     private readonly decoder: ZfpDecoder,
@@ -100,7 +112,8 @@ export class Isosurface implements SurfaceEngine {
    * neighbourhood ranges (one GPU pass at load, read back once for
    * info.valueRange), the cache at its initial capacity and the vertex shards.
    */
-  static async create(gpu: GpuContext, stream: ZfpGpuStream, options: IsosurfaceOptions = {}): Promise<Isosurface> {
+  static async create(gpu: GpuContext, stream: IsosurfaceSource, options: IsosurfaceOptions = {}): Promise<Isosurface> {
+    if (isChunked(stream)) stream.attach();
     const { device } = gpu;
     const limits = device.limits;
     const maxWg = options.maxWorkgroupsPerDimension ?? limits.maxComputeWorkgroupsPerDimension;
@@ -135,7 +148,8 @@ export class Isosurface implements SurfaceEngine {
       vertices = Math.max(1, Math.floor(vertices * lo));
     }
 
-    const groupEdge = options.groupEdgeBlocks ?? DEFAULT_GROUP_EDGE_BLOCKS;
+    // A chunked source's groups are its chunks.
+    const groupEdge = isChunked(stream) ? stream.groupEdgeBlocks : (options.groupEdgeBlocks ?? DEFAULT_GROUP_EDGE_BLOCKS);
     if (!Number.isInteger(groupEdge) || groupEdge < 1 || groupEdge > 64) throw new RangeError(`groupEdgeBlocks must be an integer in 1..64 (got ${groupEdge})`);
     const groupEntries = groupGrid(blockGrid, groupEdge).reduce((a, b) => a * b, 1) * groupEdge ** 3;
     const volume = device.createBuffer({ label: 'Isosurface.volume', size: 32, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
@@ -154,10 +168,14 @@ export class Isosurface implements SurfaceEngine {
     ]);
     counters.set('blocks', blockCount);
     const active = await ActiveBlocks.create(device, { stream, decoder, volume, counters, scan, compact, compactIds, maxWorkgroupsPerDimension: maxWg, groupEdge });
-    const [cache, ranges] = await Promise.all([
-      BlockCache.create(device, { stream, decoder, counters, scan: slotScan, compact, compactIds, activeIds: active.activeIds, maxWorkgroupsPerDimension: maxWg }, slots),
-      active.readBlockRanges(),
-    ]);
+    const cache = await BlockCache.create(device, { stream, decoder, counters, scan: slotScan, compact, compactIds, activeIds: active.activeIds, maxWorkgroupsPerDimension: maxWg }, slots);
+    if (isChunked(stream)) {
+      // The chunks put before now: their ranges (so info.valueRange covers them).
+      const encoder = device.createCommandEncoder({ label: 'Isosurface.chunkSync' });
+      stream.encodeSync(encoder, syncTargets(active, cache, counters));
+      device.queue.submit([encoder.finish()]);
+    }
+    const ranges = await active.readBlockRanges();
     const mc = await BlockMarchingCubes.create(
       device,
       { volume, counters, scan: slotScan, activeIds: active.activeIds, blockToSlot: cache.blockToSlot, maxWorkgroupsPerDimension: maxWg, maxBindingBytes: limits.maxStorageBufferBindingSize },
@@ -262,6 +280,9 @@ export class Isosurface implements SurfaceEngine {
     const s = this.stats;
     s.mark(encoder, 0);
     if (!verticesOnly) {
+      // Chunks put or evicted since the last surface: their ranges, their
+      // neighbours' neighbourhood and group ranges, their cached blocks.
+      if (isChunked(this.stream)) this.stream.encodeSync(encoder, syncTargets(this.active, this.cache, this.counters));
       this.active.encode(encoder);
       const pass = encoder.beginComputePass({ label: 'Isosurface.planCache' });
       this.counters.encodePlanCache(pass);
@@ -355,7 +376,7 @@ export class Isosurface implements SurfaceEngine {
       stages,
       timingSource: raw.source,
       grew: r.grew,
-      fixedBytes: this.stream.byteSize + this.active.byteSize + this.counters.buffer.size + this.volume.size,
+      fixedBytes: (isChunked(this.stream) ? this.stream.poolBytes : this.stream.byteSize) + this.active.byteSize + this.counters.buffer.size + this.volume.size,
     };
   }
 

@@ -21,14 +21,14 @@ import type { StreamCompact, StreamCompactIds } from '../primitives/compact.ts';
 import type { ExclusiveScan } from '../primitives/scan.ts';
 import { RadixSortByKey } from '../primitives/sort.ts';
 import type { ZfpDecoder } from '../zfp/decoder.ts';
-import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
+import { isChunked, type IsosurfaceSource } from './source.ts';
 import { Counters } from './counters.ts';
 import { bindGroup, bindGroupLayout, computePipeline, storageBuffer } from './gpu-util.ts';
 import { A, AGE_KEY_BITS, SLOT_BYTES } from './layout.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
 
 export interface BlockCacheParts {
-  stream: ZfpGpuStream;
+  stream: IsosurfaceSource;
   decoder: ZfpDecoder;
   counters: Counters;
   /** Sized to the slots (grown with the cache; shared with the block MC, whose counts are per active block <= slots). */
@@ -294,7 +294,7 @@ export class BlockCache {
   encodeDecode(encoder: GPUCommandEncoder): void {
     const { decoder, stream, counters } = this.parts;
     decoder.encodeDecodeBlocks(encoder, {
-      stream,
+      stream: isChunked(stream) ? stream.blocks : stream,
       blockIds: this.slots.newIds,
       slotIds: this.slots.availIds,
       count: counters.count('new'),

@@ -31,8 +31,32 @@ import { zfpWgsl } from './wgsl.ts';
 
 export type { ComputeTarget, GpuBufferRef, GpuCount } from './gpu-util.ts';
 
+/**
+ * Blocks stored some other way than one contiguous stream (a pool of chunks,
+ * src/store): its own bind group 0 per shard and its own decode_blocks
+ * pipeline, composed of the same decode core with its own block_start
+ * (zfpDecodeCore in wgsl.ts); group 1 must be `decodeBlocksListLayout`'s.
+ */
+export interface ZfpBlockSource {
+  readonly device: GPUDevice;
+  readonly isDestroyed: boolean;
+  readonly info: { readonly fileName: string };
+  readonly shards: readonly { readonly bindGroup: GPUBindGroup }[];
+  readonly decodeBlocksPipeline: GPUComputePipeline;
+}
+
+/** Group 1 of decode_blocks: block ids, slot ids, dispatch args, slots. */
+export function decodeBlocksListLayout(device: GPUDevice): GPUBindGroupLayout {
+  const entry = (binding: number, readOnly: boolean): GPUBindGroupLayoutEntry => ({
+    binding,
+    visibility: GPUShaderStage.COMPUTE,
+    buffer: { type: readOnly ? 'read-only-storage' : 'storage' },
+  });
+  return device.createBindGroupLayout({ label: 'ZfpDecoder.decodeBlocks.layout', entries: [entry(0, true), entry(1, true), entry(2, true), entry(3, false)] });
+}
+
 export interface DecodeBlocksArgs {
-  stream: ZfpGpuStream;
+  stream: ZfpGpuStream | ZfpBlockSource;
   /** u32 block id (raster block order) per list entry. STORAGE usage. */
   blockIds: GpuBufferRef;
   /** u32 destination slot per list entry. STORAGE usage. */
@@ -94,7 +118,7 @@ export class ZfpDecoder {
     const layout = (label: string, ...entries: GPUBindGroupLayoutEntry[]) => device.createBindGroupLayout({ label, entries });
     const pipelineLayout = (label: string, groups: GPUBindGroupLayout[]) => device.createPipelineLayout({ label, bindGroupLayouts: groups });
 
-    const blocksLayout = layout('ZfpDecoder.decodeBlocks.layout', storage(0, true), storage(1, true), storage(2, true), storage(3, false));
+    const blocksLayout = decodeBlocksListLayout(device);
     const volumeLayout = layout('ZfpDecoder.decodeVolume.layout', uniform(0), storage(1, false));
     const rangesLayout = layout('ZfpDecoder.blockRanges.layout', storage(0, false));
 
@@ -113,7 +137,7 @@ export class ZfpDecoder {
     return new ZfpDecoder(device, blocks, volume, ranges, args, maxWorkgroups);
   }
 
-  private check(stream: ZfpGpuStream): void {
+  private check(stream: ZfpGpuStream | ZfpBlockSource): void {
     if (stream.device !== this.device) throw new Error('ZfpDecoder: the stream belongs to another device');
     if (stream.isDestroyed) throw new Error(`ZfpDecoder: the stream of ${stream.info.fileName} was destroyed`);
   }
@@ -143,7 +167,7 @@ export class ZfpDecoder {
       'ZfpDecoder.decodeBlocks',
       (pass) => {
         this.args.encode(pass, { count: a.count });
-        pass.setPipeline(this.decodeBlocksPipeline);
+        pass.setPipeline('decodeBlocksPipeline' in a.stream ? a.stream.decodeBlocksPipeline : this.decodeBlocksPipeline);
         pass.setBindGroup(1, listGroup);
         for (const shard of a.stream.shards) {
           pass.setBindGroup(0, shard.bindGroup);
