@@ -36,6 +36,8 @@ export interface LevelStats {
 /** What it needs of an Isosurface over a LevelVolume. */
 export interface LevelSurface<S extends LevelStats = LevelStats> {
   compute(iso: number): Promise<S>;
+  /** The cap for cache and vertex buffers (Isosurface.setMemoryBudget). */
+  setMemoryBudget?(bytes: number): void;
   destroy(): void;
 }
 /** The GPU side, injected (the real one: gpu-port.ts; tests: a CPU fake). */
@@ -124,7 +126,8 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
     let surfaces = 0;
     for (const [level] of this.#surfaces) {
       const s = this.#lastStats.get(level);
-      if (s) surfaces += s.cacheBytes + s.vertexBytes + (s.fixedBytes ?? 0);
+      // an Isosurface's fixed bytes include its source's pool, counted above
+      if (s) surfaces += s.cacheBytes + s.vertexBytes + Math.max(0, (s.fixedBytes ?? 0) - (this.levels[level].volume?.poolBytes ?? 0));
     }
     return { pools, surfaces, total: pools + surfaces };
   }
@@ -192,11 +195,28 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
     progress('computing');
     let surface = this.#surfaces.get(L);
     try {
+      // each of the (at most two) live surfaces: fixed buffers + cache + vertices within a quarter
+      const quarter = Math.floor(this.budgetBytes / 4);
       if (!surface) {
-        surface = await this.gpu.createSurface(pool, Math.floor(this.budgetBytes / 4));
+        const fixed = estimateFixedBytes(lv.layout);
+        if (quarter - fixed < MIN_SURFACE_BYTES) {
+          return this.#stop(L, `level ${L}'s surface needs about ${mib(fixed)} MiB of per-block buffers (ranges, maps) besides its cache and vertices; a quarter of the budget of ${mib(this.budgetBytes)} MiB does not hold them`);
+        }
+        surface = await this.gpu.createSurface(pool, quarter - fixed);
         this.#surfaces.set(L, surface);
       }
-      const stats = await surface.compute(iso);
+      let stats = await surface.compute(iso);
+      const actualFixed = Math.max(0, (stats.fixedBytes ?? 0) - pool.poolBytes);
+      if (actualFixed > estimateFixedBytes(lv.layout)) {
+        // the estimate was short: tighten the cap, or give the level up
+        if (quarter - actualFixed < MIN_SURFACE_BYTES || !surface.setMemoryBudget) {
+          surface.destroy();
+          this.#surfaces.delete(L);
+          return this.#stop(L, `level ${L}'s surface holds ${mib(actualFixed)} MiB of per-block buffers; a quarter of the budget of ${mib(this.budgetBytes)} MiB does not hold them with a cache`);
+        }
+        surface.setMemoryBudget(quarter - actualFixed);
+        if (stats.cacheBytes + stats.vertexBytes + actualFixed > quarter) stats = await surface.compute(iso);
+      }
       this.#lastStats.set(L, stats);
       if (gen !== this.#gen || this.#destroyed) return false;
       this.#show({ level: L, iso, volume: pool, surface, stats });
@@ -204,6 +224,8 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
       return true;
     } catch (e) {
       if (isAbort(e) || (e as Error).name === 'IsosurfaceSupersededError') return false;
+      // a surface over its budget is the pipeline's clear refusal: the finer level stops, the coarser stays
+      if ((e as Error).name === 'IsosurfaceBudgetError') return this.#stop(L, (e as Error).message);
       for (const l of this.#errors) l(e as Error);
       return this.#stop(L, (e as Error).message);
     }
@@ -291,6 +313,20 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
     for (const l of this.levels) { l.volume?.destroy(); l.volume = null; }
     this.#shown = null;
   }
+}
+
+/** Below this, a surface's cache and vertex buffers are too small to be worth creating. */
+const MIN_SURFACE_BYTES = 256 << 10;
+
+/**
+ * The Isosurface's per-volume buffers outside its budget (src/isosurface/README.md,
+ * "Buffers": ranges, neighbourhood ranges, masks, lists and maps per block,
+ * about 40 B; per group (= chunk) 20 B; scratch), rounded up.
+ */
+export function estimateFixedBytes(layout: ChunkLevelLayout): number {
+  const blocks = layout.dims.reduce((a, n) => a * Math.ceil(n / 4), 1);
+  const chunks = layout.chunkGrid[0] * layout.chunkGrid[1] * layout.chunkGrid[2];
+  return 48 * blocks + 32 * chunks + (64 << 10);
 }
 
 function allChunks(layout: ChunkLevelLayout): ChunkIndex[] {
