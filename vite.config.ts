@@ -1,9 +1,11 @@
 import { defineConfig } from 'vite';
 import { sharedDataPlugin } from './scripts/vite-shared-data.ts';
+import { storesPlugin } from './scripts/vite-stores.ts';
 
 export default defineConfig({
   // /data/ -> ../shared/data on the dev and preview servers (tests, ?url=); see the plugin.
-  plugins: [sharedDataPlugin()],
+  // /stores/ -> a local folder of Zarr stores, with Range and CORS (scripts/vite-stores.ts).
+  plugins: [sharedDataPlugin(), storesPlugin()],
   build: {
     target: 'es2022',
     sourcemap: true,

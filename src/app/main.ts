@@ -10,6 +10,7 @@ import { copyLink, savePly, savePng } from './exports.ts';
 import { setInfoList } from './info-list.ts';
 import { chooseIsovalue } from './iso-choice.ts';
 import { VolumeLoader } from './loading/loader.ts';
+import { mountStoreView, storeParameter } from './store/mount.ts';
 import { Messages, showFatal } from './messages.ts';
 import { publishPageState, type PageState } from './page-state.ts';
 import { Session } from './session.ts';
@@ -176,6 +177,7 @@ async function start(): Promise<void> {
     },
     onLoaded: (v) => {
       session.install(v);
+      link?.setLevel(undefined); // a store's view sets it again after installing its level
       volumeUrl = nextUrl;
       setUrlParameter(volumeUrl);
     },
@@ -242,9 +244,18 @@ async function start(): Promise<void> {
     },
   });
 
-  // The first volume: ?url= when given (falling back to the built-in one if it fails).
+  // The first volume: ?store= or ?url= when given (falling back to the built-in one if it fails).
   const url = urlParameter();
-  if (url) {
+  const storeUrl = storeParameter();
+  const storeView = mountStoreView({
+    gpu, loader, budgetBytes: () => budget.bytes, onError: (m) => messages.show(m), currentName: () => session.current?.opened.name,
+    keepView: () => { pendingIso = isoControl.value; session.pendingCamera = viewer.camera.getState(); },
+    linkLevel: () => initialView.level,
+    onLevel: (level) => link?.setLevel(level),
+  });
+  if (storeUrl) {
+    await storeView.open(storeUrl);
+  } else if (url) {
     nextUrl = url;
     await loader.loadUrl(url);
   }

@@ -9,6 +9,8 @@ export interface ViewState {
   camera?: CameraState;
   /** Voxel size set by the user (absent: the file's own). */
   spacing?: [number, number, number];
+  /** The level of a store shown (src/app/store/): a link reopens that level. */
+  level?: number;
 }
 
 const round = (x: number) => Number(x.toPrecision(7));
@@ -21,6 +23,7 @@ export function encodeViewState(s: ViewState): string {
     parts.push(`cam=${[...c.rotation, ...c.target, c.distance].map(round).join(',')}`);
   }
   if (s.spacing) parts.push(`vox=${s.spacing.map(round).join(',')}`);
+  if (s.level !== undefined) parts.push(`level=${s.level}`);
   return parts.join('&');
 }
 
@@ -39,6 +42,8 @@ export function decodeViewState(hash: string): ViewState {
   }
   const vox = params.get('vox')?.split(',').map(Number);
   if (vox && vox.length === 3 && vox.every((v) => Number.isFinite(v) && v > 0)) out.spacing = [vox[0], vox[1], vox[2]];
+  const level = Number(params.get('level'));
+  if (params.has('level') && Number.isInteger(level) && level >= 0 && level < 64) out.level = level;
   return out;
 }
 

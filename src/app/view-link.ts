@@ -9,6 +9,7 @@ export class ViewLink {
   private timer: ReturnType<typeof setTimeout> | undefined;
   private iso: number | undefined;
   private spacing: [number, number, number] | undefined;
+  private level: number | undefined;
 
   constructor(private readonly camera: ArcballCamera) {}
 
@@ -28,6 +29,12 @@ export class ViewLink {
     this.schedule();
   }
 
+  /** The store level shown (undefined: not a store). */
+  setLevel(level: number | undefined): void {
+    this.level = level;
+    this.schedule();
+  }
+
   schedule(): void {
     if (this.timer !== undefined) return;
     this.timer = setTimeout(() => {
@@ -41,7 +48,7 @@ export class ViewLink {
   }
 
   state(): ViewState {
-    return { iso: this.iso, camera: this.camera.getState(), spacing: this.spacing };
+    return { iso: this.iso, camera: this.camera.getState(), spacing: this.spacing, level: this.level };
   }
 
   /** The full link to this view. */

@@ -24,8 +24,9 @@ function pad(cells: (string | number)[], widths: number[]): string {
 export const benchCommand: CliCommand = {
   name: 'bench',
   summary: 'isosurface benchmark: random / sweep-up / sweep-down isovalues, GPU ms and hit rates per mode',
-  usage: 'bench IN [--modes random,sweep-up,sweep-down] [--count N] [--seed S] [--range lo,hi] [--rate R] [--cache-budget MB]',
+  usage: 'bench IN [--modes random,sweep-up,sweep-down] [--count N] [--seed S] [--range lo,hi] [--rate R] [--cache-budget MB] [--level L (IN a Zarr store URL or folder)]',
   options: {
+    level: { type: 'string' },
     modes: { type: 'string' },
     count: { type: 'string' },
     seed: { type: 'string' },
@@ -44,7 +45,7 @@ export const benchCommand: CliCommand = {
     if (rangeList && (rangeList.length !== 2 || !(rangeList[0] < rangeList[1]))) throw new UsageError('--range must be lo,hi with lo < hi');
     const budget = budgetOption(args);
     const gpu = await ctx.gpu();
-    const volume = await openInput(gpu.device, input, numberOption(args, 'rate'));
+    const volume = await openInput(gpu.device, input, numberOption(args, 'rate'), numberOption(args, 'level'), (m) => ctx.log(m));
     ctx.log(`${input}: ${volume.how}`);
     const iso = await createInputIsosurface(ctx, gpu, volume, budget);
     try {
@@ -83,6 +84,7 @@ export const benchCommand: CliCommand = {
         options: { ...result.options, rate: volume.rate, memoryBudgetBytes: iso.memoryBudget },
         records: result.records,
         summaries: result.summaries,
+        ...('store' in volume ? { store: volume.store } : {}),
       };
     } finally {
       iso.destroy();

@@ -19,6 +19,8 @@ import { decodeVertices } from '../../isosurface/vertex-format.ts';
 import { checkValueRange, describeOpenedVolume, isDefaultVolume, openDefaultVolume, openVolumeBytes, VolumeFileError } from '../../volume/open-volume.ts';
 import { meshMetrics } from '../../mc/mesh-metrics.ts';
 import { ZfpFormatError } from '../../zfp/format.ts';
+import { isStoreInput, openStoreInput } from '../../store/cli-input.ts';
+import { StoreError } from '../../store/zarr/errors.ts';
 import { CommandFailed, numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
 
 export interface ExtractRecord {
@@ -66,8 +68,17 @@ export function budgetOption(args: Parameters<typeof numberOption>[0]): number |
   return mb * 2 ** 20;
 }
 
-/** Opens IN as a GPU zfp stream (src/volume/open-volume.ts, as the page does), with user mistakes as UsageErrors (shared with `bench`). */
-export async function openInput(device: GPUDevice, path: string, rate: number | undefined) {
+/** Opens IN as a GPU zfp stream (src/volume/open-volume.ts, as the page does), with user mistakes as UsageErrors (shared with `bench`); a Zarr store (URL or folder) at --level L through src/store/. */
+export async function openInput(device: GPUDevice, path: string, rate: number | undefined, level?: number, log: (m: string) => void = () => {}) {
+  if (isStoreInput(path)) {
+    try {
+      return await openStoreInput(device, path, level, (m) => log(`error: ${m}`));
+    } catch (e) {
+      if (e instanceof StoreError || e instanceof ZfpFormatError) throw new UsageError(e.message);
+      throw e;
+    }
+  }
+  if (level !== undefined) throw new UsageError('--level is for a Zarr store (a URL or a folder with zarr.json)');
   if (rate !== undefined && !(rate > 0)) throw new UsageError('--rate must be positive');
   // `default`: the page's built-in volume, same field, same rate, same stream.
   let bytes: Uint8Array | undefined;
@@ -90,8 +101,9 @@ export async function openInput(device: GPUDevice, path: string, rate: number | 
 export const extractCommand: CliCommand = {
   name: 'extract',
   summary: 'isosurfaces on the GPU (block cache kept between isovalues): counts, area, bbox, GPU time; --ply soups',
-  usage: 'extract IN --iso a,b,c [--rate R] [--cache-budget MB] [--ply PREFIX]',
+  usage: 'extract IN --iso a,b,c [--rate R] [--cache-budget MB] [--ply PREFIX] [--level L (IN a Zarr store URL or folder)]',
   options: {
+    level: { type: 'string' },
     iso: { type: 'string' },
     rate: { type: 'string' },
     'cache-budget': { type: 'string' },
@@ -104,7 +116,7 @@ export const extractCommand: CliCommand = {
     const budget = budgetOption(args);
     const plyPrefix = stringOption(args, 'ply');
     const gpu = await ctx.gpu();
-    const volume = await openInput(gpu.device, input, numberOption(args, 'rate'));
+    const volume = await openInput(gpu.device, input, numberOption(args, 'rate'), numberOption(args, 'level'), (m) => ctx.log(m));
     ctx.log(`${input}: ${volume.how}`);
     const iso = await createInputIsosurface(ctx, gpu, volume, budget);
     const records: (ExtractRecord | { iso: number; error: string })[] = [];
@@ -161,6 +173,7 @@ export const extractCommand: CliCommand = {
       adapter: describeAdapter(gpu.adapter),
       memoryBudgetBytes: iso.memoryBudget,
       isosurfaces: records,
+      ...('store' in volume ? { store: volume.store } : {}),
     };
     // Surfaces that did not fit are failures: the JSON still gets every record, then the exit status says so.
     const failed = records.filter((r): r is { iso: number; error: string } => 'error' in r);

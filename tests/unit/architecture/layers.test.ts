@@ -24,6 +24,7 @@ const LAYERS: Record<string, number> = {
   volume: 5,
   isosurface: 6,
   render: 7,
+  store: 7, // streaming Zarr stores: above the pipeline it feeds, beside the renderer
   bench: 8,
   app: 9,
   examples: 10,

@@ -1,0 +1,128 @@
+// `npm run bench:stream [-- --size N --repeats R --iso-fraction F]`: a store
+// served over HTTP on localhost (the dev server's /stores/ middleware) and
+// through a simulated link (100 Mbit/s, 20 ms per request, in the fetch
+// layer), for bonsai and a generated N^3 volume (default 256; the issue's
+// 1024^3 is 4 GiB of input: pass --size 1024 on a machine with the time).
+// Per case: time to the first surface (coarsest level) and to the full
+// resolution one (level 0), bytes fetched / store size; next to the in-core
+// path (level 0 as one zfp stream read from disk). Median of the repeats
+// after a discarded first. With the interim path (src/store/cli-input.ts
+// idea: whole levels assembled), a level is fetched whole; "planned" is what
+// the chunk plan says the surface needs at level 0 (plan.ts), i.e. what the
+// GPU chunk pool will fetch.
+import { existsSync, mkdirSync, readFileSync, writeFileSync } from 'node:fs';
+import { createServer } from 'node:http';
+import { join } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { FetchStore } from 'zarrita';
+import { storesMiddleware } from '../scripts/vite-stores.ts';
+import { describeAdapter, type GpuContext } from '../src/gpu/device.ts';
+import { requestNodeGpu } from '../src/gpu/node-gpu.ts';
+import { Isosurface } from '../src/isosurface/isosurface.ts';
+import { assembleLevelStream } from '../src/store/assemble.ts';
+import { ChunkFetcher } from '../src/store/fetch/chunk-fetcher.ts';
+import { chunksNeeded, neighbourhoodRanges } from '../src/store/plan.ts';
+import type { ChunkIndex } from '../src/store/types.ts';
+import { openZfpStore, type ZfpStore } from '../src/store/zarr/open-store.ts';
+import { MeteredStore, SimulatedLinkStore } from '../src/store/zarr/stores.ts';
+import { loadZfpStream } from '../src/zfp/gpu-stream.ts';
+import { printTable, summarize, writeJson } from './lib/report.ts';
+import { execFileSync } from 'node:child_process';
+
+const root = fileURLToPath(new URL('..', import.meta.url));
+const args = process.argv.slice(2);
+const opt = (name: string, def: string) => { const i = args.indexOf(`--${name}`); return i >= 0 ? args[i + 1] : def; };
+const size = Number(opt('size', '256'));
+const repeats = Number(opt('repeats', '3'));
+const isoFraction = Number(opt('iso-fraction', '0.3'));
+const jsonOut = opt('json', join(root, 'benchmarks/results/stream-swiftshader.json'));
+const folder = join(root, '.cache/bench-stream');
+mkdirSync(folder, { recursive: true });
+
+function convert(input: string, name: string, extra: string[]): void {
+  if (existsSync(join(folder, name, 'zarr.json'))) return;
+  console.log(`converting ${input} -> ${name}`);
+  execFileSync(process.execPath, [join(root, 'scripts/convert.mjs'), input, '--out', join(folder, name), '--quiet', '--chunk', '64', ...extra], { stdio: 'inherit' });
+}
+
+async function levelSurface(gpu: GpuContext, store: ZfpStore, level: number, iso: number) {
+  const lv = store.levels[level];
+  const fetcher = new ChunkFetcher(store, { maxInFlight: 8, cacheBytes: lv.storedBytes + 1 });
+  const chunks = new Map<ChunkIndex, Uint8Array>();
+  fetcher.onChunk((_l, c, b) => chunks.set(c, b));
+  fetcher.onError((_l, _c, e) => { throw e; });
+  fetcher.want(level, Array.from({ length: lv.chunkCount }, (_, i) => i));
+  await fetcher.idle();
+  const stream = loadZfpStream(gpu.device, assembleLevelStream(lv.layout, (c) => chunks.get(c)!), lv.layout.name);
+  const surface = await Isosurface.create(gpu, stream);
+  const stats = await surface.compute(iso);
+  surface.destroy();
+  stream.destroy();
+  return stats.triangles;
+}
+
+async function main() {
+  const gpu = await requestNodeGpu({ label: 'bench.stream' });
+  convert(join(root, '../shared/data/volumes/bonsai_256x256x256_float32.rate4.zfp'), 'bonsai.zarr', ['--rate', '4']);
+  convert(`gen:${size}x${size}x${size}`, `gen${size}.zarr`, ['--rate', '4']);
+  const mw = storesMiddleware(folder);
+  const server = createServer((req, res) => mw(req, res, () => { res.statusCode = 404; res.end(); }));
+  await new Promise<void>((r) => server.listen(0, '127.0.0.1', () => r()));
+  const port = (server.address() as { port: number }).port;
+  const rows: (string | number)[][] = [];
+  const records: Record<string, unknown>[] = [];
+  for (const name of ['bonsai.zarr', `gen${size}.zarr`]) {
+    const url = `http://127.0.0.1:${port}/stores/${name}`;
+    for (const link of ['localhost', '100 Mbit/s + 20 ms'] as const) {
+      const first: number[] = [], full: number[] = [];
+      let bytes = 0, storeBytes = 0, planned = 0, triangles = 0, iso = 0;
+      for (let r = 0; r < repeats; r++) {
+        const inner = new FetchStore(url);
+        const metered = new MeteredStore(link === 'localhost' ? inner : new SimulatedLinkStore(inner, { mbitPerSecond: 100, latencyMs: 20 }));
+        const t0 = performance.now();
+        const store = await openZfpStore(metered, url);
+        const [lo, hi] = store.valueRange ?? [0, 1];
+        iso = lo + isoFraction * (hi - lo);
+        await levelSurface(gpu, store, store.levels.length - 1, iso);
+        const t1 = performance.now();
+        triangles = await levelSurface(gpu, store, 0, iso);
+        const t2 = performance.now();
+        first.push(t1 - t0);
+        full.push(t2 - t0);
+        bytes = metered.meter.bytes;
+        storeBytes = store.levels.reduce((a, l) => a + l.storedBytes, 0);
+        const ranges = await store.readRanges(0);
+        planned = ranges ? chunksNeeded(neighbourhoodRanges(store.levels[0].layout.chunkGrid, ranges), iso).length * store.levels[0].layout.chunkBytes : NaN;
+      }
+      const f = summarize(first.slice(1)), g = summarize(full.slice(1));
+      rows.push([name, link, f.median, g.median, (bytes / storeBytes), planned / storeBytes, triangles]);
+      records.push({ store: name, link, iso, firstSurfaceMs: f, fullSurfaceMs: g, bytesFetched: bytes, storeChunkBytes: storeBytes, plannedLevel0Bytes: planned, triangles });
+    }
+    // in-core: level 0 as one stream, from disk
+    const s = await openZfpStore(new FetchStore(url), url);
+    const lv = s.levels[0];
+    const chunks = await Promise.all(Array.from({ length: lv.chunkCount }, (_, i) => s.readChunk(0, i)));
+    const file = join(folder, `${name}.level0.zfp`);
+    writeFileSync(file, assembleLevelStream(lv.layout, (c) => chunks[c]));
+    const [lo, hi] = s.valueRange ?? [0, 1];
+    const times: number[] = [];
+    for (let r = 0; r < repeats; r++) {
+      const t0 = performance.now();
+      const stream = loadZfpStream(gpu.device, new Uint8Array(readFileSync(file)), file);
+      const surface = await Isosurface.create(gpu, stream);
+      await surface.compute(lo + isoFraction * (hi - lo));
+      surface.destroy();
+      stream.destroy();
+      times.push(performance.now() - t0);
+    }
+    const t = summarize(times.slice(1));
+    rows.push([name, 'in-core (one stream from disk)', NaN, t.median, NaN, NaN, NaN]);
+    records.push({ store: name, link: 'in-core', fullSurfaceMs: t });
+  }
+  server.close();
+  printTable(`bench:stream, ${describeAdapter(gpu.adapter)}, median of ${repeats - 1} after a discarded first; gen size ${size}^3; level fetched whole (interim path)`,
+    ['store', 'link', 'first surface ms', 'full-res ms', 'fetched / store', 'planned L0 / store', 'triangles'], rows);
+  writeJson(jsonOut, { date: new Date().toISOString(), adapter: describeAdapter(gpu.adapter), size, repeats, isoFraction, records });
+  gpu.device.destroy();
+}
+await main();

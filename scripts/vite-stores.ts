@@ -1,0 +1,88 @@
+// The dev and preview servers serve a local folder of Zarr stores at
+// /stores/ (ZFPISO_STORES, default test-results/stores, which the tests
+// fill), the way a static host or object store serves them to the page:
+// HTTP Range requests (206 with Content-Range; zarrita reads shard indexes
+// and inner chunks with them), HEAD, and CORS headers (a page on another
+// origin may read the store, including the Range header and the lengths).
+import { createReadStream, existsSync, statSync } from 'node:fs';
+import type { IncomingMessage, ServerResponse } from 'node:http';
+import { join, normalize, resolve, sep } from 'node:path';
+import type { Plugin } from 'vite';
+
+export const STORES_PREFIX = '/stores/';
+
+export function defaultStoresFolder(): string {
+  return resolve(process.env.ZFPISO_STORES ?? 'test-results/stores');
+}
+
+/** [start, end] inclusive, or null for a malformed / unsatisfiable range. */
+export function parseRange(header: string, size: number): [number, number] | null {
+  const m = /^bytes=(\d*)-(\d*)$/.exec(header.trim());
+  if (!m || (m[1] === '' && m[2] === '')) return null;
+  if (m[1] === '') {
+    const n = Number(m[2]);
+    if (n === 0) return null;
+    return [Math.max(0, size - n), size - 1];
+  }
+  const start = Number(m[1]);
+  const end = m[2] === '' ? size - 1 : Math.min(Number(m[2]), size - 1);
+  if (start >= size || end < start) return null;
+  return [start, end];
+}
+
+export function storesMiddleware(folder = defaultStoresFolder()) {
+  const root = resolve(folder);
+  return (req: IncomingMessage, res: ServerResponse, next: () => void) => {
+    const url = req.url ?? '';
+    if (!url.startsWith(STORES_PREFIX)) return next();
+    res.setHeader('Access-Control-Allow-Origin', '*');
+    res.setHeader('Access-Control-Allow-Headers', 'Range');
+    res.setHeader('Access-Control-Expose-Headers', 'Content-Length, Content-Range, Accept-Ranges');
+    if (req.method === 'OPTIONS') { res.statusCode = 204; res.end(); return; }
+    if (req.method !== 'GET' && req.method !== 'HEAD') { res.statusCode = 405; res.end(); return; }
+    let rel: string;
+    try {
+      rel = decodeURIComponent(url.slice(STORES_PREFIX.length).split('?')[0]);
+    } catch {
+      res.statusCode = 400;
+      res.end();
+      return;
+    }
+    const path = normalize(join(root, rel));
+    if (!path.startsWith(root + sep) || !existsSync(path) || !statSync(path).isFile()) {
+      res.statusCode = 404;
+      res.end('not found');
+      return;
+    }
+    const size = statSync(path).size;
+    res.setHeader('Accept-Ranges', 'bytes');
+    res.setHeader('Content-Type', path.endsWith('.json') ? 'application/json' : 'application/octet-stream');
+    res.setHeader('Cache-Control', 'no-cache');
+    let start = 0;
+    let end = size - 1;
+    const range = req.headers.range;
+    if (range) {
+      const r = parseRange(range, size);
+      if (!r) {
+        res.statusCode = 416;
+        res.setHeader('Content-Range', `bytes */${size}`);
+        res.end();
+        return;
+      }
+      [start, end] = r;
+      res.statusCode = 206;
+      res.setHeader('Content-Range', `bytes ${start}-${end}/${size}`);
+    }
+    res.setHeader('Content-Length', String(end - start + 1));
+    if (req.method === 'HEAD' || size === 0) { res.end(); return; }
+    createReadStream(path, { start, end }).pipe(res);
+  };
+}
+
+export function storesPlugin(folder?: string): Plugin {
+  return {
+    name: 'zfpiso-stores',
+    configureServer(server) { server.middlewares.use(storesMiddleware(folder)); },
+    configurePreviewServer(server) { server.middlewares.use(storesMiddleware(folder)); },
+  };
+}

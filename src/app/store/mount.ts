@@ -1,0 +1,79 @@
+// Wires the store view into the page: a progress line over the view, a
+// "Store" section at the top of the panel, the loader's install path, and
+// window.zfpisoStore for the page tests.
+import type { GpuContext } from '../../gpu/device.ts';
+import type { VolumeLoader } from '../loading/loader.ts';
+import { droppedFolder, pickDirectory, pickedFolder } from './folder.ts';
+import { StoreView, type StorePageState } from './store-view.ts';
+
+export function storeParameter(): string | null {
+  return new URLSearchParams(location.search).get('store');
+}
+
+export function mountStoreView(p: {
+  gpu: GpuContext;
+  loader: VolumeLoader;
+  keepView(): void;
+  currentName(): string | undefined;
+  budgetBytes(): number;
+  onError(m: string): void;
+  linkLevel(): number | undefined;
+  onLevel(level: number): void;
+}): StoreView {
+  const line = document.createElement('div');
+  line.id = 'store-progress';
+  line.setAttribute('role', 'status');
+  line.hidden = true;
+  line.style.cssText = 'position:absolute;left:8px;bottom:8px;padding:2px 8px;background:rgba(0,0,0,.6);color:#fff;font:12px system-ui;border-radius:4px;z-index:5';
+  (document.getElementById('stage') ?? document.body).append(line);
+  const panel = document.createElement('section');
+  panel.id = 'store-section';
+  panel.hidden = true;
+  const aside = document.getElementById('panel');
+  aside?.insertBefore(panel, aside.querySelector('#volume-section'));
+  const w = window as unknown as { zfpisoStore?: StorePageState };
+  const view = new StoreView({
+    gpu: p.gpu,
+    load: (what, produce) => p.loader.loadProduced(what, produce),
+    keepView: p.keepView,
+    installed: (name) => p.currentName() === name,
+    busy: () => p.loader.busy,
+    budgetBytes: p.budgetBytes,
+    onError: p.onError,
+    linkLevel: p.linkLevel,
+    onLevel: p.onLevel,
+    publish: (s) => { w.zfpisoStore = s; },
+    line,
+    panel,
+  });
+  const openFolder = (f: { name: string; store: Parameters<StoreView['openStore']>[0] } | null) => {
+    if (f) void view.openStore(f.store, f.name);
+  };
+  // A dropped folder is a store (files keep going to the page's usual drop handler).
+  window.addEventListener('drop', (e) => {
+    const folder = droppedFolder(e);
+    if (!folder) return;
+    e.preventDefault();
+    e.stopImmediatePropagation();
+    const overlay = document.getElementById('drop-overlay');
+    if (overlay) overlay.hidden = true;
+    window.dispatchEvent(new Event('dragleave'));
+    folder.then(openFolder, (err: Error) => p.onError(`Could not read the dropped folder: ${err.message}`));
+  }, { capture: true });
+  // "Open a .zarr folder…", next to the file picker
+  const input = document.createElement('input');
+  input.type = 'file';
+  input.hidden = true;
+  input.setAttribute('webkitdirectory', '');
+  input.addEventListener('change', () => { openFolder(pickedFolder([...(input.files ?? [])])); input.value = ''; });
+  const button = document.createElement('button');
+  button.type = 'button';
+  button.id = 'open-store-folder';
+  button.textContent = 'Open a .zarr folder…';
+  button.addEventListener('click', () => {
+    pickDirectory().then((f) => (f ? openFolder(f) : input.click()), (err: Error) => { if (err.name !== 'AbortError') p.onError(err.message); });
+  });
+  const fileInput = document.getElementById('file-input');
+  fileInput?.parentElement?.append(button, input);
+  return view;
+}

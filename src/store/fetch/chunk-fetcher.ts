@@ -1,0 +1,233 @@
+// Fetches the chunks a surface needs: a bounded number of requests in
+// flight, in the caller's priority order (nearest first), each cancellable.
+// `want` replaces the wanted list (newest wins): queued chunks no longer
+// wanted are dropped and requests in flight for them are aborted. Failed
+// requests are retried with exponential backoff, then reported. Fetched
+// chunks go into a CPU-side LRU bounded in bytes, so scrubbing back (or a
+// chunk evicted from the GPU pool) does not fetch again.
+import type { GetOptions } from '@zarrita/storage';
+import type { ChunkIndex } from '../types.ts';
+import { isAbort, StoreError } from '../zarr/errors.ts';
+import { ByteLru } from './lru-bytes.ts';
+
+export interface ChunkSource {
+  readChunk(level: number, chunk: ChunkIndex, options?: GetOptions): Promise<Uint8Array>;
+}
+
+export interface FetcherOptions {
+  /** Requests in flight at most (default 8). */
+  maxInFlight?: number;
+  /** Retries after a failure before it is reported (default 3). */
+  retries?: number;
+  /** First backoff delay; doubles per retry (default 250 ms). */
+  backoffMs?: number;
+  /** CPU-side cache of compressed chunks, bytes (default 256 MiB). */
+  cacheBytes?: number;
+  /** Injected in tests: the backoff wait, and the clock for throughput. */
+  sleep?: (ms: number, signal: AbortSignal) => Promise<void>;
+  now?: () => number;
+}
+
+export interface FetchCounters {
+  /** Chunk bytes received (retries and later-aborted requests excluded). */
+  bytesFetched: number;
+  /** Requests started (retries included). */
+  requests: number;
+  inFlight: number;
+  /** Requests aborted because their chunk was no longer wanted. */
+  aborted: number;
+  /** Chunks served from the CPU-side cache. */
+  cacheHits: number;
+  retries: number;
+  /** Chunks reported as failed after their retries. */
+  failed: number;
+  /** bytesFetched / seconds with at least one request in flight. */
+  throughputBytesPerSecond: number;
+  /** CPU-side cache: bytes held and its capacity. */
+  cacheBytes: number;
+  cacheCapacityBytes: number;
+}
+
+export type ChunkListener = (level: number, chunk: ChunkIndex, bytes: Uint8Array, fromCache: boolean) => void;
+export type ChunkErrorListener = (level: number, chunk: ChunkIndex, error: StoreError) => void;
+
+const key = (level: number, chunk: ChunkIndex) => `${level}:${chunk}`;
+
+function defaultSleep(ms: number, signal: AbortSignal): Promise<void> {
+  return new Promise((resolve, reject) => {
+    const t = setTimeout(resolve, ms);
+    signal.addEventListener('abort', () => { clearTimeout(t); reject(signal.reason); }, { once: true });
+  });
+}
+
+export class ChunkFetcher {
+  readonly maxInFlight: number;
+  readonly #retries: number;
+  readonly #backoffMs: number;
+  readonly #sleep: NonNullable<FetcherOptions['sleep']>;
+  readonly #now: () => number;
+  readonly #cache: ByteLru<string>;
+  #queue: Array<{ level: number; chunk: ChunkIndex }> = [];
+  #wanted = new Set<string>();
+  #inFlight = new Map<string, AbortController>();
+  #failed = new Set<string>();
+  #chunkListeners = new Set<ChunkListener>();
+  #errorListeners = new Set<ChunkErrorListener>();
+  #idleWaiters: Array<() => void> = [];
+  #busySince = -1;
+  #busyMs = 0;
+  #counts = { bytesFetched: 0, requests: 0, aborted: 0, cacheHits: 0, retries: 0, failed: 0 };
+
+  constructor(readonly source: ChunkSource, options: FetcherOptions = {}) {
+    this.maxInFlight = Math.max(1, options.maxInFlight ?? 8);
+    this.#retries = options.retries ?? 3;
+    this.#backoffMs = options.backoffMs ?? 250;
+    this.#sleep = options.sleep ?? defaultSleep;
+    this.#now = options.now ?? (() => performance.now());
+    this.#cache = new ByteLru(options.cacheBytes ?? 256 << 20);
+  }
+
+  onChunk(l: ChunkListener): () => void {
+    this.#chunkListeners.add(l);
+    return () => this.#chunkListeners.delete(l);
+  }
+  onError(l: ChunkErrorListener): () => void {
+    this.#errorListeners.add(l);
+    return () => this.#errorListeners.delete(l);
+  }
+
+  get counters(): FetchCounters {
+    const busy = this.#busyMs + (this.#busySince >= 0 ? this.#now() - this.#busySince : 0);
+    return {
+      ...this.#counts,
+      inFlight: this.#inFlight.size,
+      throughputBytesPerSecond: busy > 0 ? (this.#counts.bytesFetched * 1000) / busy : 0,
+      cacheBytes: this.#cache.bytes,
+      cacheCapacityBytes: this.#cache.capacityBytes,
+    };
+  }
+
+  /** The chunk's bytes if the CPU-side cache holds them (counts as a hit). */
+  cached(level: number, chunk: ChunkIndex): Uint8Array | undefined {
+    return this.#cache.get(key(level, chunk));
+  }
+
+  /**
+   * The chunks wanted now, most urgent first; replaces the previous list.
+   * Cached chunks are delivered at once (synchronously), the rest fetched.
+   * Chunks that failed for good are not fetched again until `retryFailed`.
+   */
+  want(level: number, chunks: readonly ChunkIndex[]): void {
+    this.#wanted = new Set(chunks.map((c) => key(level, c)));
+    for (const [k, ctl] of this.#inFlight) {
+      if (!this.#wanted.has(k)) {
+        ctl.abort(new DOMException('no longer needed', 'AbortError'));
+        this.#inFlight.delete(k);
+        this.#counts.aborted++;
+      }
+    }
+    this.#queue = [];
+    for (const chunk of chunks) {
+      const k = key(level, chunk);
+      const hit = this.#cache.get(k);
+      if (hit) {
+        this.#counts.cacheHits++;
+        for (const l of this.#chunkListeners) l(level, chunk, hit, true);
+      } else if (!this.#inFlight.has(k) && !this.#failed.has(k)) {
+        this.#queue.push({ level, chunk });
+      }
+    }
+    this.#pump();
+    this.#checkIdle();
+  }
+
+  /**
+   * Keeps only the wanted chunks that `keep` accepts (a new isovalue: what it
+   * does not need is aborted now, what it needs keeps its request).
+   */
+  retain(keep: (level: number, chunk: ChunkIndex) => boolean): void {
+    const split = (k: string) => k.split(':').map(Number) as [number, number];
+    for (const [k, ctl] of this.#inFlight) {
+      if (!keep(...split(k))) {
+        ctl.abort(new DOMException('no longer needed', 'AbortError'));
+        this.#inFlight.delete(k);
+        this.#wanted.delete(k);
+        this.#counts.aborted++;
+      }
+    }
+    this.#queue = this.#queue.filter((q) => keep(q.level, q.chunk));
+    this.#pump();
+    this.#checkIdle();
+  }
+
+  /** Stops everything wanted (e.g. the store is closed). */
+  cancelAll(): void {
+    this.want(0, []);
+  }
+
+  retryFailed(): void {
+    this.#failed.clear();
+  }
+
+  /** Resolves once nothing is queued or in flight. */
+  idle(): Promise<void> {
+    if (this.#queue.length === 0 && this.#inFlight.size === 0) return Promise.resolve();
+    return new Promise((r) => this.#idleWaiters.push(r));
+  }
+
+  #checkIdle(): void {
+    if (this.#inFlight.size === 0 && this.#busySince >= 0) {
+      this.#busyMs += this.#now() - this.#busySince;
+      this.#busySince = -1;
+    }
+    if (this.#queue.length === 0 && this.#inFlight.size === 0) {
+      const w = this.#idleWaiters;
+      this.#idleWaiters = [];
+      for (const r of w) r();
+    }
+  }
+
+  #pump(): void {
+    while (this.#inFlight.size < this.maxInFlight && this.#queue.length > 0) {
+      const { level, chunk } = this.#queue.shift()!;
+      const k = key(level, chunk);
+      const ctl = new AbortController();
+      this.#inFlight.set(k, ctl);
+      if (this.#busySince < 0) this.#busySince = this.#now();
+      void this.#run(level, chunk, k, ctl);
+    }
+  }
+
+  async #run(level: number, chunk: ChunkIndex, k: string, ctl: AbortController): Promise<void> {
+    let error: StoreError | null = null;
+    let bytes: Uint8Array | null = null;
+    for (let attempt = 0; attempt <= this.#retries && !ctl.signal.aborted; attempt++) {
+      try {
+        if (attempt > 0) {
+          this.#counts.retries++;
+          await this.#sleep(this.#backoffMs * 2 ** (attempt - 1), ctl.signal);
+        }
+        this.#counts.requests++;
+        bytes = await this.source.readChunk(level, chunk, { signal: ctl.signal });
+        break;
+      } catch (e) {
+        if (isAbort(e) || ctl.signal.aborted) break;
+        error = e instanceof StoreError ? e : new StoreError('unreachable', `chunk ${chunk} of level ${level}: ${(e as Error).message}`, { cause: e });
+        if (error.kind === 'missing-chunk' || error.kind === 'codec' || error.kind === 'layout') break; // retrying cannot help
+      }
+    }
+    if (this.#inFlight.get(k) !== ctl) return; // aborted (and counted) by want()
+    this.#inFlight.delete(k);
+    if (bytes && !ctl.signal.aborted) {
+      this.#counts.bytesFetched += bytes.length;
+      this.#cache.set(k, bytes);
+      for (const l of this.#chunkListeners) l(level, chunk, bytes, false);
+    } else if (error) {
+      this.#counts.failed++;
+      this.#failed.add(k);
+      for (const l of this.#errorListeners) l(level, chunk, error);
+    }
+    this.#pump();
+    this.#checkIdle();
+  }
+}

@@ -1,0 +1,290 @@
+// Opens a converter-made (or any zfpy fixed-rate) Zarr v3 store through
+// zarrita: the group's attributes ("ome" multiscales, our "zfpzarr"), each
+// level's array metadata, per-chunk ranges (ranges/<L>, when present), and
+// chunk bytes as stored (zfpy-passthrough.ts). Everything a level needs is
+// checked before any chunk is fetched; each chunk is checked as it arrives
+// (size and zfp header), so the GPU only ever sees well-formed streams.
+import type { AbsolutePath, AsyncReadable, GetOptions } from '@zarrita/storage';
+import * as zarr from 'zarrita';
+import { bitsPerBlockForRate, fixedRateStreamBytes } from '../../zfp/format.ts';
+import { parseZfpHeader, ZFP_LONG_HEADER_BITS, ZFP_SHORT_HEADER_BITS } from '../../zfp/header.ts';
+import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
+import { describeTransportError, StoreError } from './errors.ts';
+import { MeteredStore, type StoreMeter } from './stores.ts';
+import { registerZfpyPassThrough, ZFPY_CODEC, ZFPY_FIXED_RATE_MODE } from './zfpy-passthrough.ts';
+
+export interface StoreLevel {
+  /** 0 = finest. */
+  index: number;
+  /** The array's path in the store ("0", "1", ...; "" for a store that is one array). */
+  path: string;
+  layout: ChunkLevelLayout;
+  /** Inner chunks per shard edge, 1 when unsharded. */
+  shardChunks: number;
+  chunkCount: number;
+  /** chunkCount x chunkBytes: what fetching the whole level costs. */
+  storedBytes: number;
+  /** Path of the per-chunk [min, max] array, or null (ranges come from the GPU as chunks arrive). */
+  rangesPath: string | null;
+  /** Leading axes of length 1 (OME t, c) dropped from the array's shape. */
+  leadingAxes: number;
+}
+
+export interface ZfpStore {
+  name: string;
+  levels: StoreLevel[];
+  /** x, y, z of level 0 (1, 1, 1 when the store does not say). */
+  voxelSize: [number, number, number];
+  unit: string | null;
+  /** Decoded level-0 [min, max] from our attributes, else null. */
+  valueRange: [number, number] | null;
+  /** Things a user should know (an unfinished store, no range arrays). */
+  notes: string[];
+  /** Every byte and request through the store (metadata included). */
+  meter: StoreMeter;
+  /** Bytes read while opening (metadata). */
+  metadataBytes: number;
+  /** The chunk's stored bytes, checked; rejects with StoreError (or an AbortError). */
+  readChunk(level: number, chunk: ChunkIndex, options?: GetOptions): Promise<Uint8Array>;
+  /** [min, max] per chunk (chunk index order), or null when the store has no range arrays. */
+  readRanges(level: number, options?: GetOptions): Promise<Float32Array | null>;
+}
+
+type Json = Record<string, unknown>;
+const isObject = (v: unknown): v is Json => typeof v === 'object' && v !== null && !Array.isArray(v);
+/** Sane limits for sizes read from a store (hostile metadata must not allocate). */
+const MAX_EDGE = 2 ** 31;
+const MAX_CHUNK_EDGE = 1024;
+/** 2^26 chunks: 64^3 chunks of a 2^44-voxel (64 TiB float32) level; the range array is then 512 MiB. */
+const MAX_CHUNKS = 2 ** 26;
+const CONVERT_HINT = 'convert it with `npm run convert -- STORE --out new.zarr` (numcodecs.zfpy fixed rate)';
+
+export function chunkCoords(layout: ChunkLevelLayout, chunk: ChunkIndex): [number, number, number] {
+  const [gx, gy] = layout.chunkGrid;
+  return [chunk % gx, Math.floor(chunk / gx) % gy, Math.floor(chunk / (gx * gy))];
+}
+
+/** Bytes of one C^3 chunk as zfpy writes it at this rate (header + blocks, padded to 64 bits). */
+export function zfpChunkBytes(chunkEdge: number, rate: number): number {
+  const bits = bitsPerBlockForRate(rate);
+  const headerBits = bits > 2048 ? ZFP_LONG_HEADER_BITS : ZFP_SHORT_HEADER_BITS;
+  return fixedRateStreamBytes((chunkEdge / 4) ** 3, bits, headerBits);
+}
+
+function codecOf(name: string, meta: Json): { rate: number; shardChunks: number } {
+  const codecs = meta.codecs as Json[] | undefined;
+  if (!Array.isArray(codecs) || codecs.length === 0) throw new StoreError('codec', `${name}: no codecs (raw float32 chunks); ${CONVERT_HINT}`);
+  let list = codecs;
+  let shardChunks = 1;
+  if (list.length === 1 && list[0]?.name === 'sharding_indexed') {
+    const cfg = list[0].configuration as Json;
+    list = (cfg?.codecs as Json[]) ?? [];
+    const outer = ((meta.chunk_grid as Json)?.configuration as Json)?.chunk_shape as number[];
+    const inner = cfg?.chunk_shape as number[];
+    shardChunks = Math.round(outer[outer.length - 1] / inner[inner.length - 1]);
+  }
+  const names = list.map((c) => String(c?.name));
+  if (list.length !== 1 || names[0] !== ZFPY_CODEC) {
+    throw new StoreError('codec', `${name}: its chunks are encoded with ${names.join(' + ') || 'nothing'}, not numcodecs.zfpy fixed rate; ${CONVERT_HINT}`);
+  }
+  const cfg = (list[0].configuration ?? {}) as Json;
+  if (cfg.mode !== ZFPY_FIXED_RATE_MODE) {
+    const kind = { 3: 'fixed precision', 4: 'fixed accuracy', 5: 'reversible' }[Number(cfg.mode)] ?? `mode ${String(cfg.mode)}`;
+    throw new StoreError('codec', `${name}: numcodecs.zfpy in ${kind} mode; only fixed rate (mode 2) gives chunks of one size that the GPU decodes; ${CONVERT_HINT}`);
+  }
+  const rate = Number(cfg.rate);
+  if (!(rate >= 0.140625 && rate <= 32)) throw new StoreError('codec', `${name}: zfpy rate ${String(cfg.rate)} is outside 0.140625..32`);
+  return { rate, shardChunks };
+}
+
+/** Caches JSON documents (zarr.json) so that zarrita and our checks read each once. */
+class MetadataMemo implements AsyncReadable {
+  #memo = new Map<string, Promise<Uint8Array | undefined>>();
+  constructor(readonly inner: MeteredStore) {}
+  get(key: AbsolutePath, opts?: GetOptions): Promise<Uint8Array | undefined> {
+    if (!key.endsWith('zarr.json')) return this.inner.get(key, opts);
+    let hit = this.#memo.get(key);
+    if (!hit) {
+      hit = this.inner.get(key, opts);
+      hit.catch(() => this.#memo.delete(key));
+      this.#memo.set(key, hit);
+    }
+    return hit;
+  }
+  getRange(...args: Parameters<MeteredStore['getRange']>) {
+    return this.inner.getRange(...args);
+  }
+  async json(key: AbsolutePath): Promise<Json> {
+    const bytes = await this.get(key);
+    if (!bytes) throw new StoreError('not-found', `${key} is missing`);
+    return JSON.parse(new TextDecoder().decode(bytes)) as Json;
+  }
+}
+
+function levelPaths(attrs: Json): string[] | null {
+  const ome = (isObject(attrs.ome) ? attrs.ome : attrs) as Json;
+  const ms = ome.multiscales as Json[] | undefined;
+  const datasets = Array.isArray(ms) && isObject(ms[0]) ? (ms[0].datasets as Json[]) : undefined;
+  if (Array.isArray(datasets) && datasets.length > 0) return datasets.map((d) => String(d.path));
+  const ours = attrs.zfpzarr as Json | undefined;
+  if (isObject(ours) && Array.isArray(ours.levels)) return (ours.levels as Json[]).map((l) => String(l.path));
+  return null;
+}
+
+function voxelSizeOf(attrs: Json): [number, number, number] {
+  const ours = attrs.zfpzarr as Json | undefined;
+  const v = isObject(ours) ? (ours.voxel_size as number[] | undefined) : undefined;
+  if (Array.isArray(v) && v.length === 3 && v.every((x) => Number.isFinite(x) && x > 0)) return [v[0], v[1], v[2]];
+  const ms = ((isObject(attrs.ome) ? attrs.ome : attrs) as Json).multiscales as Json[] | undefined;
+  const t = Array.isArray(ms) ? (((ms[0]?.datasets as Json[])?.[0]?.coordinateTransformations as Json[]) ?? []) : [];
+  const scale = t.find((x) => x.type === 'scale')?.scale as number[] | undefined;
+  if (Array.isArray(scale) && scale.length >= 3) {
+    const [z, y, x] = scale.slice(-3);
+    if ([x, y, z].every((s) => Number.isFinite(s) && s > 0)) return [x, y, z];
+  }
+  return [1, 1, 1];
+}
+
+async function openLevel(mem: MetadataMemo, storeName: string, index: number, path: string, rangesPath: string | null): Promise<StoreLevel> {
+  const name = `${storeName} level ${index}${path === String(index) || path === '' ? '' : ` (${path})`}`;
+  const key = (path ? `/${path}/zarr.json` : '/zarr.json') as AbsolutePath;
+  let meta: Json;
+  try {
+    meta = await mem.json(key);
+  } catch (e) {
+    if (e instanceof StoreError) throw new StoreError('not-found', `${name}: its zarr.json is missing`);
+    throw describeTransportError(e, name);
+  }
+  if (meta.node_type !== 'array') throw new StoreError('not-a-store', `${name}: not an array`);
+  if (meta.data_type !== 'float32') throw new StoreError('codec', `${name}: values are ${String(meta.data_type)}, the GPU decoder reads float32 zfp; ${CONVERT_HINT}`);
+  const { rate, shardChunks } = codecOf(name, meta);
+  const arr = await zarr.open.v3(zarr.root(mem).resolve(path || '/'), { kind: 'array' });
+  const shape = arr.shape;
+  const chunks = arr.chunks;
+  let lead = 0;
+  while (shape.length - lead > 3 && shape[lead] === 1 && chunks[lead] === 1) lead++;
+  if (shape.length - lead !== 3) throw new StoreError('layout', `${name}: shape [${shape.join(', ')}] is not a 3D volume`);
+  const [z, y, x] = shape.slice(lead);
+  const [cz, cy, cx] = chunks.slice(lead);
+  if (cz !== cy || cy !== cx) throw new StoreError('layout', `${name}: chunks [${chunks.join(', ')}] are not cubes; ${CONVERT_HINT}`);
+  if (cx % 4 !== 0 || cx <= 0) throw new StoreError('layout', `${name}: chunk edge ${cx} is not a multiple of 4 (zfp's 4^3 blocks would straddle chunks); ${CONVERT_HINT} --chunk 64`);
+  if (![x, y, z].every((n) => Number.isInteger(n) && n >= 1 && n <= MAX_EDGE)) throw new StoreError('layout', `${name}: shape [${shape.join(', ')}] is not a volume this reader takes (1 to ${MAX_EDGE} voxels per axis)`);
+  if (cx > MAX_CHUNK_EDGE) throw new StoreError('layout', `${name}: chunk edge ${cx} is above ${MAX_CHUNK_EDGE}; ${CONVERT_HINT} --chunk 64`);
+  const C = cx;
+  const chunkGrid: [number, number, number] = [Math.ceil(x / C), Math.ceil(y / C), Math.ceil(z / C)];
+  const chunkCount = chunkGrid[0] * chunkGrid[1] * chunkGrid[2];
+  if (chunkCount > MAX_CHUNKS) throw new StoreError('layout', `${name}: ${chunkGrid.join(' x ')} chunks of ${C}^3; this reader takes at most ${MAX_CHUNKS} per level (convert with a larger --chunk)`);
+  const chunkBytes = zfpChunkBytes(C, rate);
+  return {
+    index, path, shardChunks, chunkCount, storedBytes: chunkCount * chunkBytes, rangesPath, leadingAxes: lead,
+    layout: { dims: [x, y, z], chunkEdge: C, chunkGrid, rate, chunkBytes, name },
+  };
+}
+
+/** Checks a chunk's stored bytes against its level: size, zfp header, dims, fixed rate. */
+export function checkChunk(layout: ChunkLevelLayout, chunk: ChunkIndex, bytes: Uint8Array): void {
+  const [x, y, z] = chunkCoords(layout, chunk);
+  const where = `${layout.name} chunk (${x}, ${y}, ${z})`;
+  if (bytes.length !== layout.chunkBytes) {
+    throw new StoreError('corrupt', `${where}: ${bytes.length} bytes, a zfp fixed-rate ${layout.chunkEdge}^3 chunk at rate ${layout.rate} has ${layout.chunkBytes}`);
+  }
+  let header;
+  try {
+    header = parseZfpHeader(bytes);
+  } catch (e) {
+    throw new StoreError('corrupt', `${where}: not a zfp stream (${(e as Error).message})`);
+  }
+  const C = layout.chunkEdge;
+  const [nx, ny, nz] = header.size;
+  if (header.scalarType !== 'float32' || header.dimensionality !== 3 || nx !== C || ny !== C || nz !== C) {
+    throw new StoreError('corrupt', `${where}: its zfp header says ${header.scalarType} ${header.size.slice(0, header.dimensionality).join('x')}, the level has float32 ${C}^3 chunks`);
+  }
+  if (header.mode.kind !== 'fixed-rate' || header.mode.maxBits !== bitsPerBlockForRate(layout.rate)) {
+    throw new StoreError('corrupt', `${where}: its zfp header says ${header.mode.kind} with ${header.mode.maxBits} bits per block, the level is fixed rate ${layout.rate}`);
+  }
+}
+
+/** Opens the store; `name` is for messages (its URL or folder). Rejects with StoreError. */
+export async function openZfpStore(store: AsyncReadable, name: string, options: GetOptions = {}): Promise<ZfpStore> {
+  registerZfpyPassThrough();
+  const metered = store instanceof MeteredStore ? store : new MeteredStore(store);
+  const mem = new MetadataMemo(metered);
+  let rootJson: Json;
+  try {
+    rootJson = await mem.json('/zarr.json');
+  } catch (e) {
+    if (e instanceof StoreError) throw new StoreError('not-found', `${name}: no zarr.json at its root (HTTP 404 or no such folder): not a Zarr v3 store`);
+    throw describeTransportError(e, name);
+  }
+  if (rootJson.zarr_format !== 3) throw new StoreError('not-a-store', `${name}: zarr_format ${String(rootJson.zarr_format)}; only Zarr v3 stores are read (convert a v2 store with npm run convert -- STORE --out new.zarr)`);
+  const levels: StoreLevel[] = [];
+  const notes: string[] = [];
+  let attrs: Json = {};
+  if (rootJson.node_type === 'array') {
+    levels.push(await openLevel(mem, name, 0, '', null));
+  } else {
+    const group = await zarr.open.v3(zarr.root(mem), { kind: 'group' });
+    attrs = (group.attrs ?? {}) as Json;
+    const paths = levelPaths(attrs);
+    if (!paths) throw new StoreError('not-a-store', `${name}: a Zarr group without OME-Zarr multiscales or zfpzarr levels`);
+    const ours = isObject(attrs.zfpzarr) ? attrs.zfpzarr : null;
+    const ourLevels = (ours?.levels as Json[] | undefined) ?? [];
+    if (ours && ours.complete !== true) notes.push('the store is unfinished (zfpzarr.complete is not true): chunks may be missing');
+    for (let i = 0; i < paths.length; i++) {
+      const rp = ourLevels.find((l) => String(l.path) === paths[i])?.ranges;
+      levels.push(await openLevel(mem, name, i, paths[i], typeof rp === 'string' ? rp : null));
+    }
+  }
+  if (levels.some((l) => !l.rangesPath)) notes.push('no per-chunk range arrays: the first surface of a level fetches every chunk of it (ranges are computed on the GPU as chunks arrive)');
+  const arrays = new Map<number, Promise<zarr.Array<zarr.DataType, MetadataMemo>>>();
+  const arrayOf = (level: number) => {
+    let a = arrays.get(level);
+    if (!a) {
+      a = zarr.open.v3(zarr.root(mem).resolve(levels[level].path || '/'), { kind: 'array' });
+      arrays.set(level, a);
+    }
+    return a;
+  };
+  const ours = isObject(attrs.zfpzarr) ? attrs.zfpzarr : null;
+  const vr = ours?.value_range as number[] | undefined;
+  return {
+    name, levels, notes, meter: metered.meter, metadataBytes: metered.meter.bytes,
+    voxelSize: voxelSizeOf(attrs),
+    unit: typeof ours?.unit === 'string' ? ours.unit : null,
+    valueRange: Array.isArray(vr) && vr.length === 2 ? [Number(vr[0]), Number(vr[1])] : null,
+    async readChunk(level, chunk, opts) {
+      const L = levels[level];
+      const [x, y, z] = chunkCoords(L.layout, chunk);
+      const where = `${L.layout.name} chunk (${x}, ${y}, ${z})`;
+      let got;
+      try {
+        const arr = await arrayOf(level);
+        got = await arr.getChunk([...new Array<number>(L.leadingAxes).fill(0), z, y, x], opts);
+      } catch (e) {
+        if (zarr.isZarritaError(e, 'CodecPipelineError')) throw new StoreError('corrupt', `${where}: ${e.message} (a damaged shard index?)`, { cause: e });
+        throw describeTransportError(e, where);
+      }
+      if (!(got.data instanceof Uint8Array)) throw new StoreError('missing-chunk', `${where}: the chunk is missing (HTTP 404 or no file); a complete store has every chunk`);
+      checkChunk(L.layout, chunk, got.data);
+      return got.data;
+    },
+    async readRanges(level, opts) {
+      const L = levels[level];
+      if (!L.rangesPath) return null;
+      try {
+        const arr = await zarr.open.v3(zarr.root(mem).resolve(L.rangesPath), { kind: 'array' });
+        const [gx, gy, gz] = L.layout.chunkGrid;
+        const s = arr.shape;
+        if (arr.dtype !== 'float32' || s.length !== 4 || s[0] !== gz || s[1] !== gy || s[2] !== gx || s[3] !== 2) {
+          throw new StoreError('corrupt', `${L.layout.name}: its range array ${L.rangesPath} is ${arr.dtype} [${s.join(', ')}], expected float32 [${gz}, ${gy}, ${gx}, 2]`);
+        }
+        const got = await zarr.get(arr, null, { opts });
+        return new Float32Array(got.data as Float32Array);
+      } catch (e) {
+        if (e instanceof StoreError) throw e;
+        if (zarr.isZarritaError(e)) throw new StoreError('corrupt', `${L.layout.name}: its range array ${L.rangesPath}: ${(e as Error).message}`, { cause: e });
+        throw describeTransportError(e, `${L.layout.name} ranges`);
+      }
+    },
+  };
+}

@@ -1,0 +1,74 @@
+// A store served by the preview server (/stores/, scripts/vite-stores.ts):
+// `?store=` shows the coarsest level first, every finer level replaces it
+// until level 0; the panel's figures agree with the CLI's records on the
+// same store (chunk bytes per level, triangles at the same isovalue), and
+// an unknown store is a message naming it while the page stays usable.
+import { execFileSync } from 'node:child_process';
+import { mkdirSync, rmSync } from 'node:fs';
+import { join } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { expect, test } from '@playwright/test';
+import { runCli, SHARED_VOLUMES_DIR } from './cli.ts';
+import { openApp, watchErrors } from './page.ts';
+import { trianglesShown } from './volume-page.ts';
+
+const root = fileURLToPath(new URL('../../', import.meta.url));
+const stores = join(root, 'test-results', 'stores');
+const store = join(stores, 'neghip-e2e.zarr');
+
+interface StoreState { done: boolean; shownLevel: number; shownLevels: number[]; chunkBytesFetched: number; bytesFetched: number; reason: string | null; levels: { storedBytes: number; chunks: number }[] }
+
+test.beforeAll(() => {
+  rmSync(store, { recursive: true, force: true });
+  mkdirSync(stores, { recursive: true });
+  execFileSync(process.execPath, [join(root, 'scripts/convert.mjs'), join(SHARED_VOLUMES_DIR, 'neghip_66x66x66_uint8.raw'), '--out', store, '--chunk', '16', '--rate', '8', '--shard', '2', '--quiet'], { timeout: 600_000 });
+});
+
+test('?store= shows coarse to fine; panel figures equal the CLI records', async ({ page }) => {
+  test.setTimeout(300_000);
+  const errors = watchErrors(page);
+  await openApp(page, '/?store=/stores/neghip-e2e.zarr#iso=80');
+  const st = (await page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore)) as StoreState;
+  expect(st.done).toBe(true);
+  expect(st.reason).toBeNull();
+  expect(st.shownLevels).toEqual([3, 2, 1, 0]);
+  expect(st.chunkBytesFetched).toBe(st.levels.reduce((a, l) => a + l.storedBytes, 0));
+  await expect(page.locator('#store-section table.store-levels tbody tr')).toHaveCount(4);
+  await expect(page.locator('#store-section dd[data-k="chunks"]')).toHaveText(String(st.levels.reduce((a, l) => a + l.chunks, 0)));
+  await expect(page.locator('#store-section dd[data-k="bytes"]')).toHaveText(`${(st.bytesFetched / 2 ** 20).toFixed(2)} MiB`);
+  await expect(page.locator('#store-progress')).toContainText('level 0 (full resolution)');
+  const cli = await runCli<{ store: { chunkBytesFetched: number; chunks: number }; isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', '--iso', '80']);
+  expect(cli.store.chunkBytesFetched).toBe(st.levels[0].storedBytes);
+  expect(cli.store.chunks).toBe(st.levels[0].chunks);
+  expect(await trianglesShown(page)).toBe(cli.isosurfaces[0].triangles);
+  expect(errors).toEqual([]);
+});
+
+test('an unknown store is a message naming it; the page stays usable', async ({ page }) => {
+  await openApp(page, '/?store=/stores/none.zarr');
+  await expect(page.locator('#messages')).toContainText('/stores/none.zarr: no zarr.json at its root');
+});
+
+test('a picked .zarr folder opens like the served store', async ({ page }) => {
+  test.setTimeout(300_000);
+  const errors = watchErrors(page);
+  await openApp(page, '/#iso=80');
+  await page.locator('input[webkitdirectory]').setInputFiles(store);
+  await page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, { timeout: 240_000 });
+  const st = (await page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore)) as StoreState & { url: string };
+  expect(st.url).toBe('neghip-e2e.zarr');
+  expect(st.shownLevels).toEqual([3, 2, 1, 0]);
+  expect(st.chunkBytesFetched).toBe(st.levels.reduce((a, l) => a + l.storedBytes, 0));
+  await expect(page.locator('#store-progress')).toContainText('neghip-e2e.zarr: level 0 (full resolution)');
+  expect(errors).toEqual([]);
+});
+
+test('the link keeps the level: #level=1 stops at level 1, and the hash says level=1', async ({ page }) => {
+  test.setTimeout(300_000);
+  await openApp(page, '/?store=/stores/neghip-e2e.zarr#iso=80&level=1');
+  const st = (await page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore)) as StoreState;
+  expect(st.shownLevels).toEqual([3, 2, 1]);
+  expect(st.reason).toBe('the link asks for level 1');
+  await page.waitForFunction(() => /(^|&|#)level=1(&|$)/.test(location.hash) && /iso=80/.test(location.hash), null, { timeout: 10_000 });
+  expect(new URL(page.url()).searchParams.get('store')).toBe('/stores/neghip-e2e.zarr');
+});

@@ -1,0 +1,66 @@
+// `extract` and `bench` on stores. A bonsai store (from its rate-4 stream,
+// re-encoded at rate 4 by the converter, sharded) opened at level 0 gives
+// exactly the triangles of the in-core pipeline on the same volume
+// compressed by zfpy as one stream at the same rate; the record counts
+// every chunk of the level once, plus metadata and shard indexes; the
+// store's own messages reach the user.
+import { spawnSync } from 'node:child_process';
+import { mkdtempSync, readFileSync, rmSync, truncateSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+import { afterAll, beforeAll, describe, expect, it } from 'vitest';
+import { repoRoot, sharedData } from '../../helpers/python.ts';
+import { convert, converterPython } from './stores.ts';
+
+const work = mkdtempSync(join(tmpdir(), 'store-cli-'));
+const store = join(work, 'bonsai.zarr');
+const oneStream = join(work, 'bonsai_256x256x256_float32.rate4.zfp');
+
+function cli(...args: string[]) {
+  const r = spawnSync(process.execPath, ['--import', join(repoRoot, 'scripts/register-node-loaders.mjs'), join(repoRoot, 'src/cli/main.ts'), ...args], { encoding: 'utf8', timeout: 600_000 });
+  return { status: r.status, stderr: r.stderr, stdout: r.stdout };
+}
+
+beforeAll(() => {
+  convert('volumes/bonsai_256x256x256_float32.rate4.zfp', store, ['--chunk', '64', '--rate', '4', '--shard', '2']);
+  // the converter's input: bonsai decoded by zfpy; the same volume as one stream at rate 4
+  converterPython(`
+import sys, zfpy, numpy as np
+a = zfpy.decompress_numpy(open(sys.argv[1], 'rb').read())
+open(sys.argv[2], 'wb').write(zfpy.compress_numpy(np.ascontiguousarray(a, dtype=np.float32), rate=4, write_header=True))
+`, [join(sharedData, 'volumes/bonsai_256x256x256_float32.rate4.zfp'), oneStream]);
+}, 900_000);
+afterAll(() => rmSync(work, { recursive: true, force: true }));
+
+describe('CLI on stores', () => {
+  it('extract --level 0: the in-core triangles, chunk bytes counted once', () => {
+    const isos = '40.5,90,150';
+    const a = cli('extract', store, '--level', '0', '--iso', isos, '--json', join(work, 'store.json'));
+    expect(a.status, a.stderr).toBe(0);
+    const b = cli('extract', oneStream, '--iso', isos, '--json', join(work, 'incore.json'));
+    expect(b.status, b.stderr).toBe(0);
+    const s = JSON.parse(readFileSync(join(work, 'store.json'), 'utf8'));
+    const c = JSON.parse(readFileSync(join(work, 'incore.json'), 'utf8'));
+    expect(s.dims).toEqual([256, 256, 256]);
+    const tri = (r: { isosurfaces: { triangles: number; surfaceArea: number }[] }) => r.isosurfaces.map((x) => [x.triangles, x.surfaceArea]);
+    expect(tri(s)).toEqual(tri(c));
+    expect(s.isosurfaces[0].triangles).toBeGreaterThan(10_000);
+    const chunkBytes = 12 + 16 ** 3 * 32 + 4;           // 64^3 at rate 4: 4096 blocks of 256 bits, header padded
+    expect(s.store).toMatchObject({ level: 0, chunks: 64, levelChunks: 64, chunkBytesFetched: 64 * chunkBytes });
+    // + metadata (zarr.json of the group and the level) + 8 shard indexes (8 x 16 + 4 bytes each)
+    expect(s.store.bytesFetched).toBe(s.store.chunkBytesFetched + s.store.metadataBytes + 8 * (8 * 16 + 4));
+  });
+
+  it('bench --level 1 runs on the level; a damaged chunk is reported naming it', () => {
+    const r = cli('bench', store, '--level', '1', '--count', '3', '--modes', 'random', '--json', join(work, 'bench.json'));
+    expect(r.status, r.stderr).toBe(0);
+    const b = JSON.parse(readFileSync(join(work, 'bench.json'), 'utf8'));
+    expect(b.volume.dims).toEqual([128, 128, 128]);
+    expect(b.store).toMatchObject({ level: 1, chunks: 8 });
+    expect(cli('extract', store, '--level', '7', '--iso', '1').stderr).toMatch(/--level 7 does not exist \(levels 0 to \d\)/);
+    truncateSync(join(store, '1/c/0/0/0'), 1000);    // the level-1 shard: its index is gone
+    const bad = cli('extract', store, '--level', '1', '--iso', '50');
+    expect(bad.status).not.toBe(0);
+    expect(bad.stderr).toMatch(/bonsai.zarr level 1 chunk \(\d, \d, \d\)/);
+  });
+});

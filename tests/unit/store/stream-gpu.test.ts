@@ -1,0 +1,109 @@
+// The stream controller on the GPU side (ChunkedVolume + the one isosurface
+// pipeline): a hydrogen-atom store refined to level 0 gives exactly the
+// triangles of the in-core pipeline on the level as one stream (assembled,
+// byte-equal to zfpy's), fetching only the chunks the plan needs; fast
+// scrubbing aborts stale requests and ends equal to the in-core surface at
+// the last value; within a budget smaller than the store, 20 isovalues
+// raise no error and the accounted GPU bytes never exceed the budget.
+import { mkdtempSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+import { afterAll, beforeAll, describe, expect } from 'vitest';
+import type { GpuContext } from '../../../src/gpu/device.ts';
+import { Isosurface } from '../../../src/isosurface/isosurface.ts';
+import { assembleLevelStream } from '../../../src/store/assemble.ts';
+import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
+import { chunkedGpu } from '../../../src/store/gpu-port.ts';
+import { chunksNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
+import { StreamController } from '../../../src/store/stream-controller.ts';
+import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
+import { openZfpStore } from '../../../src/store/zarr/open-store.ts';
+import { loadZfpStream } from '../../../src/zfp/gpu-stream.ts';
+import { gpuTest } from '../../helpers/gpu.ts';
+import { convert } from './stores.ts';
+
+const work = mkdtempSync(join(tmpdir(), 'store-stream-gpu-'));
+const path = join(work, 'hydrogen.zarr');
+const big = join(work, 'gen256.zarr');
+beforeAll(() => {
+  convert('volumes/hydrogen_atom_128x128x128_float32.raw', path, ['--chunk', '16', '--rate', '8', '--levels', '3']);
+  convert('gen:256x256x256', big, ['--chunk', '32', '--rate', '8']);
+}, 900_000);
+afterAll(() => rmSync(work, { recursive: true, force: true }));
+
+async function inCore(gpu: GpuContext, isos: number[]): Promise<number[]> {
+  const s = await openZfpStore(storeForLocation(path), path);
+  const L = s.levels[0];
+  const chunks = await Promise.all(Array.from({ length: L.chunkCount }, (_, i) => s.readChunk(0, i)));
+  const stream = loadZfpStream(gpu.device, assembleLevelStream(L.layout, (c) => chunks[c]), 'whole');
+  const iso = await Isosurface.create(gpu, stream);
+  const out: number[] = [];
+  for (const v of isos) out.push((await iso.compute(v)).triangles);
+  iso.destroy();
+  stream.destroy();
+  return out;
+}
+
+async function controller(gpu: GpuContext, budget: number, maxInFlight = 8, at = path) {
+  const store = await openZfpStore(storeForLocation(at), at);
+  const fetcher = new ChunkFetcher(store, { maxInFlight });
+  const c = await StreamController.create(store, fetcher, chunkedGpu(gpu), budget);
+  const errors: string[] = [];
+  c.onError((e) => errors.push(e.message));
+  return { store, fetcher, c, errors };
+}
+
+describe('StreamController on ChunkedVolume', () => {
+  gpuTest('refines to level 0: the in-core triangles, only the needed chunks fetched', async ({ gpu }) => {
+    const [ref] = await inCore(gpu, [200]);
+    const { store, fetcher, c, errors } = await controller(gpu, 256 << 20);
+    const shown: number[] = [];
+    c.onShown((s) => shown.push(s.level));
+    await c.setIsovalue(200);
+    expect(shown).toEqual([2, 1, 0]);
+    expect(c.shown!.stats.triangles).toBe(ref);
+    expect(ref).toBeGreaterThan(0);
+    const needed = await Promise.all(store.levels.map(async (l, i) => chunksNeeded(neighbourhoodRanges(l.layout.chunkGrid, (await store.readRanges(i))!), 200).length * l.layout.chunkBytes));
+    expect(fetcher.counters.bytesFetched).toBe(needed.reduce((a, b) => a + b, 0));
+    expect(fetcher.counters.bytesFetched / store.levels.reduce((a, l) => a + l.storedBytes, 0)).toBeLessThan(0.15);
+    expect(errors).toEqual([]);
+    c.destroy();
+  });
+
+  gpuTest('fast scrubbing aborts stale requests and ends at the in-core surface of the last value', async ({ gpu }) => {
+    const [ref] = await inCore(gpu, [30]);
+    const { fetcher, c, errors } = await controller(gpu, 256 << 20, 2);
+    c.focus = [0, 0, 0];
+    const level0 = new Promise<void>((r) => c.onProgress((p) => { if (p.level === 0 && p.phase === 'fetching') r(); }));
+    const runs = [c.setIsovalue(1)];
+    await level0;
+    runs.push(...[200, 2, 150, 4, 100, 8, 30].map((v) => c.setIsovalue(v)));
+    await Promise.all(runs);
+    expect(fetcher.counters.aborted).toBeGreaterThan(0);
+    expect(c.shown).toMatchObject({ level: 0, iso: 30 });
+    expect(c.shown!.stats.triangles).toBe(ref);
+    expect(errors).toEqual([]);
+    c.destroy();
+  });
+
+  gpuTest('20 isovalues within a budget several times below the store: no error, accounted GPU bytes within it', async ({ gpu }) => {
+    const budget = 6 << 20;
+    const { store, c, errors } = await controller(gpu, budget, 8, big);
+    const storeBytes = store.levels.reduce((a, l) => a + l.storedBytes, 0);
+    expect(storeBytes).toBeGreaterThan(2.5 * budget);
+    const [lo, hi] = store.valueRange!;
+    const stops: string[] = [];
+    c.onProgress((p) => { if (p.phase === 'stopped' && p.reason) stops.push(p.reason); });
+    const levelsShown = new Set<number>();
+    for (let i = 0; i < 20; i++) {
+      await c.setIsovalue(lo + ((i + 0.5) / 20) * (hi - lo));
+      expect(c.shown, stops.join(" | ")).not.toBeNull();
+      levelsShown.add(c.shown!.level);
+      expect(c.gpuBytes.total).toBeLessThanOrEqual(budget);
+    }
+    expect(errors).toEqual([]);
+    expect(stops.length).toBeGreaterThan(0);
+    expect([...levelsShown].length).toBeGreaterThan(0);
+    c.destroy();
+  });
+});
