@@ -36,8 +36,6 @@ for (let i = 0; i < args.length; i++) {
 const LAS_FILES = ['las/lazperf_autzen_trim.laz', 'las/lazperf_autzen_trim.las'];
 const TIFF_FILES = ['tiff/morpholibj_bat-cochlea-volume.tif', 'tiff/imagejs_stack.tif', 'tiff/imagejs_image-lzw.tif'];
 
-type Row = { file: string; reader: string; medianMs?: number; stats?: Stats; note?: string };
-
 async function timeAsync(fn: () => Promise<unknown> | unknown): Promise<Stats> {
   const ms: number[] = [];
   for (let i = 0; i < repeats; i++) {

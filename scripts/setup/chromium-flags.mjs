@@ -107,7 +107,7 @@ probe().then((r) => { window.probeResult = r; }, (e) => { window.probeResult = '
 </script>`;
 
 function servePage() {
-  const server = createServer((req, res) => {
+  const server = createServer((_req, res) => {
     res.writeHead(200, { 'Content-Type': 'text/html; charset=utf-8' }).end(PAGE);
   });
   return new Promise((ok, fail) => {

@@ -2,7 +2,7 @@
 // written by scans (totals), the plan kernels and the LRU kernels, and read by
 // later dispatches (indirect arguments, gated counts) and, asynchronously, by
 // the statistics readback. The host writes only the capacities (words 0-4).
-import { type GpuCount } from '../primitives/count.ts';
+import type { GpuCount } from '../primitives/count.ts';
 import { bindGroup, bindGroupLayout, computePipeline } from './gpu-util.ts';
 import { C, COUNTERS_BYTES } from './layout.ts';
 import { isosurfaceWgsl } from './wgsl.ts';

@@ -89,7 +89,10 @@ interface Pipelines {
 /** A direct dispatch of `workgroups` linear workgroups laid out as dispatch_grid does (1D, 2D, then 3D). */
 function dispatchGrid(pass: GPUComputePassEncoder, workgroups: number, max: number): void {
   if (workgroups <= 0) return;
-  if (workgroups <= max) return pass.dispatchWorkgroups(workgroups);
+  if (workgroups <= max) {
+    pass.dispatchWorkgroups(workgroups);
+    return;
+  }
   const z = Math.ceil(workgroups / (max * max));
   const rest = Math.ceil(workgroups / z);
   const y = Math.ceil(rest / max);

@@ -3,7 +3,7 @@
 // refused by the pipeline with an IsosurfaceBudgetError, shown here and in
 // the messages.
 
-import { IsosurfaceBudgetError } from '../../isosurface/types.ts';
+import type { IsosurfaceBudgetError } from '../../isosurface/types.ts';
 import { formatBytes } from '../format.ts';
 
 const MiB = 2 ** 20;
@@ -18,7 +18,7 @@ export class BudgetControl {
   private used = 0;
 
   constructor(
-    private readonly input: HTMLInputElement,
+    input: HTMLInputElement,
     private readonly meter: HTMLElement,
     private readonly note: HTMLElement,
     initialBytes: number,

@@ -20,7 +20,7 @@ export const infoCommand: CliCommand = {
   summary: 'file kind, dims, dtype; for zfp the mode, rate and header presence',
   usage: 'info FILE [--rate R]',
   options: { rate: { type: 'string' } },
-  async run(ctx, args) {
+  async run(_ctx, args) {
     const path = requiredPositional(args, 0, 'FILE');
     const size = statSync(path).size;
     const description = describeFile(basename(path), size, readHead(path, 4096), { rate: numberOption(args, 'rate') });

@@ -270,7 +270,7 @@ async function start(): Promise<void> {
         const c = reader.read(chunk, { positions: true, rgb: hasRGB, intensity: true, classification: true });
         decodeMs += performance.now() - td;
         if (!c) break;
-        if (rgbShift < 0) rgbShift = c.rgb && c.rgb.some((v) => v > 255) ? 8 : 0;
+        if (rgbShift < 0) rgbShift = c.rgb?.some((v) => v > 255) ? 8 : 0;
         stats.add(c.count, c.positions!, c.intensity, c.classification);
         points.append(c.positions!, packAttributes(c.count, c.rgb, rgbShift, c.intensity, c.classification), c.count, redrawDue());
         state.pointCount = points.pointCount;

@@ -5,7 +5,7 @@
 import { GpuTimer } from '../../gpu/timing.ts';
 import { NaiveMarchingCubes, type NaiveMcResult } from '../../mc/naive-gpu.ts';
 import type { Dims3 } from '../../mc/serial-mc.ts';
-import { ZfpDecoder } from '../../zfp/decoder.ts';
+import type { ZfpDecoder } from '../../zfp/decoder.ts';
 import type { ZfpGpuStream } from '../../zfp/gpu-stream.ts';
 
 export interface GpuDecodeTimes {

@@ -172,7 +172,10 @@ describe('SurfaceLayer', () => {
     // The covered pixels' bounding box, against the CPU projection of the scaled soup's vertices.
     const box = (xs: number[], ys: number[]) => [Math.min(...xs), Math.min(...ys), Math.max(...xs), Math.max(...ys)];
     const xs: number[] = [], ys: number[] = [];
-    for (let y = 0; y < SIZE; y++) for (let x = 0; x < SIZE; x++) if (lum(img, x, y) > 0) (xs.push(x), ys.push(y));
+    for (let y = 0; y < SIZE; y++) for (let x = 0; x < SIZE; x++) if (lum(img, x, y) > 0) {
+      xs.push(x);
+      ys.push(y);
+    }
     const drawn = box(xs, ys);
     const vp = camera.viewProjection(mat4.create());
     const soup = marchingCubes(values, dims, 11.3).positions;
