@@ -1,4 +1,4 @@
-// Active blocks (DESIGN.md step 1), hierarchically: per-block value ranges
+// Active blocks (docs/design.md step 1), hierarchically: per-block value ranges
 // from the decoder at load, widened once to each block's 27-block
 // neighbourhood, and per group of edge^3 blocks the range of its blocks'
 // neighbourhood ranges (shaders/isosurface/active_groups.wgsl). Per isovalue:

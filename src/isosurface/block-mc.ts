@@ -1,4 +1,4 @@
-// Block marching cubes over the cached blocks (DESIGN.md steps 4-6), in work
+// Block marching cubes over the cached blocks (docs/design.md, steps 4-5), in work
 // proportional to the surface (shaders/isosurface/block_*.wgsl):
 //   classify_blocks  one invocation per active block classifies its 64 cells
 //                    once: case codes, vertex count, emitting-cell count

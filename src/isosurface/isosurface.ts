@@ -1,5 +1,5 @@
 // One Isosurface per volume: the GPU-driven pipeline from an isovalue to a
-// drawable triangle soup (DESIGN.md, paper section 4), composed of
+// drawable triangle soup (docs/design.md, paper section 4), composed of
 //   ActiveBlocks (active-blocks.ts)   neighbourhood ranges, active list
 //   BlockCache (lru-cache.ts)         Algorithm 1 and the decode into slots
 //   BlockMarchingCubes (block-mc.ts)  counts, offsets, occupied list, vertices

@@ -1,4 +1,4 @@
-// The GPU-driven LRU block cache (paper Algorithm 1, DESIGN.md steps 2-3):
+// The GPU-driven LRU block cache (paper Algorithm 1, docs/design.md steps 2-3):
 // slot <-> block maps, decoded slot data, the LRU order as a log with a count
 // tree (lru.wgsl), and the per-computation update recorded from GPU counts
 // only, in work proportional to the active and new blocks:
