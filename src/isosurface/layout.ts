@@ -1,5 +1,5 @@
 // Numbers shared with the WGSL kernels (shaders/isosurface/common.wgsl holds
-// the same constants; tests/unit/isosurface/layout.test.ts checks they agree).
+// the same constants; tests/unit/isosurface/vertex-format.test.ts checks they agree).
 
 /** "No slot" in blockToSlot, "no block" in slotToBlock and the LRU log. */
 export const NONE = 0xffffffff;
