@@ -108,6 +108,8 @@ export class ChunkedVolume implements BlockSource {
   private readonly slotOf = new Map<ChunkIndex, number>();
   private readonly freeSlots: number[] = [];
   private readonly changed = new Set<ChunkIndex>();
+  /** A checksum of the bytes each chunk index was first put with (kept after evictions). */
+  private readonly checksums = new Map<ChunkIndex, number>();
   private readonly word = new Uint32Array(1);
   private destroyed = false;
 
@@ -266,6 +268,15 @@ export class ChunkedVolume implements BlockSource {
     if (!info.hasHeader || info.dims.some((n) => n !== edge) || info.bitsPerBlock !== this.info.bitsPerBlock || info.payloadBitOffset !== this.headerBits) {
       throw new ChunkError(`${where}: the chunk's zfp header says ${formatDims(info.dims)} at ${info.mode}; the level's chunks are ${edge}^3 at rate ${this.layout.rate}`, at);
     }
+    // The block cache keeps decoded blocks after their chunk leaves the pool
+    // (a store's chunks never change, so they stay valid); different bytes
+    // under the same index would show stale blocks, so they are refused.
+    const sum = checksum(bytes);
+    const before = this.checksums.get(chunk);
+    if (before !== undefined && before !== sum) {
+      throw new ChunkError(`${where}: its bytes differ from those read before for this chunk; the store changed while it was open: open it again`, at);
+    }
+    this.checksums.set(chunk, sum);
     let slot = this.slotOf.get(chunk);
     if (slot === undefined) {
       slot = this.freeSlots.pop();
@@ -304,4 +315,11 @@ export class ChunkedVolume implements BlockSource {
     this.pageTable.destroy();
     this.params.destroy();
   }
+}
+
+/** FNV-1a over the bytes, 32 bits: tells a chunk's bytes from different ones. */
+function checksum(bytes: Uint8Array): number {
+  let h = 0x811c9dc5;
+  for (let i = 0; i < bytes.length; i++) h = Math.imul(h ^ bytes[i], 0x01000193);
+  return h >>> 0;
 }

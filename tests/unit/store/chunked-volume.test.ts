@@ -206,6 +206,12 @@ describe('a chunked store level through the GPU chunk pool', () => {
     lying[0] = 0x41; // not the zfp magic
     expect(() => pool.put(2, lying)).toThrow(/neghip\.zarr level 0 chunk \(2, 0, 0\)/);
     expect(() => pool.put(999, good)).toThrow(/there is no chunk 999/);
+    // other bytes under an index put before (the store changed while open): refused, even after an eviction
+    pool.put(3, chunkBytes(m, 3));
+    pool.evict(3);
+    expect(() => pool.put(3, chunkBytes(m, 4))).toThrow(/chunk \(0, 1, 0\): its bytes differ from those read before/);
+    pool.put(3, chunkBytes(m, 3));
+    pool.evict(3);
     pool.put(0, good);
     pool.put(1, chunkBytes(m, 1));
     expect(() => pool.put(2, chunkBytes(m, 2))).toThrow(/chunk \(2, 0, 0\): the pool is full \(2 chunks\)/);
