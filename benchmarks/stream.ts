@@ -6,10 +6,11 @@
 // Per case: time to the first surface (coarsest level) and to the full
 // resolution one (level 0), bytes fetched / store size; next to the in-core
 // path (level 0 as one zfp stream read from disk). Median of the repeats
-// after a discarded first. With the interim path (src/store/cli-input.ts
-// idea: whole levels assembled), a level is fetched whole; "planned" is what
-// the chunk plan says the surface needs at level 0 (plan.ts), i.e. what the
-// GPU chunk pool will fetch.
+// after a discarded first. Two store paths: "whole levels" (every chunk of
+// each level, assembled into one stream: the CLI's and the page's path
+// today) and "chunk pool" (the stream controller: only the chunks the plan
+// needs, into ChunkedVolume, coarsest level first). "planned" is the plan's
+// level-0 share.
 import { existsSync, mkdirSync, readFileSync, writeFileSync } from 'node:fs';
 import { createServer } from 'node:http';
 import { join } from 'node:path';
@@ -27,6 +28,8 @@ import { openZfpStore, type ZfpStore } from '../src/store/zarr/open-store.ts';
 import { MeteredStore, SimulatedLinkStore } from '../src/store/zarr/stores.ts';
 import { loadZfpStream } from '../src/zfp/gpu-stream.ts';
 import { printTable, summarize, writeJson } from './lib/report.ts';
+import { chunkedGpu } from '../src/store/gpu-port.ts';
+import { StreamController } from '../src/store/stream-controller.ts';
 import { execFileSync } from 'node:child_process';
 
 const root = fileURLToPath(new URL('..', import.meta.url));
@@ -95,8 +98,36 @@ async function main() {
         planned = ranges ? chunksNeeded(neighbourhoodRanges(store.levels[0].layout.chunkGrid, ranges), iso).length * store.levels[0].layout.chunkBytes : NaN;
       }
       const f = summarize(first.slice(1)), g = summarize(full.slice(1));
-      rows.push([name, link, f.median, g.median, (bytes / storeBytes), planned / storeBytes, triangles]);
+      rows.push([name, `${link}, whole levels`, f.median, g.median, (bytes / storeBytes), planned / storeBytes, triangles]);
       records.push({ store: name, link, iso, firstSurfaceMs: f, fullSurfaceMs: g, bytesFetched: bytes, storeChunkBytes: storeBytes, plannedLevel0Bytes: planned, triangles });
+    }
+    // the chunk pool (ChunkedVolume): only the planned chunks, coarsest level first
+    for (const link of ['localhost', '100 Mbit/s + 20 ms'] as const) {
+      const first: number[] = [], full: number[] = [];
+      let bytes = 0, storeBytes = 0, triangles = 0, iso = 0;
+      for (let r = 0; r < repeats; r++) {
+        const inner = new FetchStore(url);
+        const metered = new MeteredStore(link === 'localhost' ? inner : new SimulatedLinkStore(inner, { mbitPerSecond: 100, latencyMs: 20 }));
+        const t0 = performance.now();
+        const store = await openZfpStore(metered, url);
+        const [lo, hi] = store.valueRange ?? [0, 1];
+        iso = lo + isoFraction * (hi - lo);
+        const c = await StreamController.create(store, new ChunkFetcher(store), chunkedGpu(gpu), 2 ** 30);
+        let t1 = NaN;
+        c.onShown(() => { if (Number.isNaN(t1)) t1 = performance.now(); });
+        await c.setIsovalue(iso);
+        const t2 = performance.now();
+        if (c.shown?.level !== 0) throw new Error(`${name}: refinement stopped at level ${c.shown?.level}`);
+        triangles = c.shown.stats.triangles;
+        first.push(t1 - t0);
+        full.push(t2 - t0);
+        bytes = metered.meter.bytes;
+        storeBytes = store.levels.reduce((a, l) => a + l.storedBytes, 0);
+        c.destroy();
+      }
+      const f = summarize(first.slice(1)), g = summarize(full.slice(1));
+      rows.push([name, `${link}, chunk pool`, f.median, g.median, bytes / storeBytes, NaN, triangles]);
+      records.push({ store: name, link, path: 'chunk pool', iso, firstSurfaceMs: f, fullSurfaceMs: g, bytesFetched: bytes, storeChunkBytes: storeBytes, triangles });
     }
     // in-core: level 0 as one stream, from disk
     const s = await openZfpStore(new FetchStore(url), url);
@@ -120,7 +151,7 @@ async function main() {
     records.push({ store: name, link: 'in-core', fullSurfaceMs: t });
   }
   server.close();
-  printTable(`bench:stream, ${describeAdapter(gpu.adapter)}, median of ${repeats - 1} after a discarded first; gen size ${size}^3; level fetched whole (interim path)`,
+  printTable(`bench:stream, ${describeAdapter(gpu.adapter)}, median of ${repeats - 1} after a discarded first; gen size ${size}^3; whole levels: every chunk of each level assembled; chunk pool: the planned chunks into ChunkedVolume`,
     ['store', 'link', 'first surface ms', 'full-res ms', 'fetched / store', 'planned L0 / store', 'triangles'], rows);
   writeJson(jsonOut, { date: new Date().toISOString(), adapter: describeAdapter(gpu.adapter), size, repeats, isoFraction, records });
   gpu.device.destroy();
