@@ -31,8 +31,8 @@ fn probe(@builtin(global_invocation_id) id: vec3u) {
 describe('64-bit bit offsets', () => {
   gpuTest('block_start and u64_mul match BigInt past 2^32 bits', async ({ gpu }) => {
     const { device } = gpu;
-    // zfpWgsl.decodeBlocks[0..2] = grid, u64, stream
-    const parts = [...zfpWgsl.decodeBlocks.slice(0, 3), probe];
+    // zfpWgsl.decodeBlocks[0..3] = grid, u64, stream, stream_address (block_start)
+    const parts = [...zfpWgsl.decodeBlocks.slice(0, 4), probe];
     const group1 = device.createBindGroupLayout({
       entries: [
         { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
