@@ -4,17 +4,23 @@
 // the most significant down, each plane as "first n bits verbatim" then group
 // tests, until the block's bit budget is spent.
 
-fn decode_block(b: u32, out: ptr<function, array<u32, 64>>) {
+// One 64-entry array per invocation (GPUs keep it in registers or spill it to
+// local memory, so fewer is better): the plane bits are deposited straight
+// into their transform positions (PERM), the negabinary conversion and the
+// inverse transform run in place, and the caller converts each integer to
+// float bits as it stores it.
+// Returns emax; voxel i's float32 bits are int_to_float_bits(q[i], emax)
+// (0 for an empty block, whose q is all 0).
+fn decode_block_ints(b: u32, q: ptr<function, array<i32, 64>>) -> i32 {
+  for (var i = 0u; i < 64u; i++) { (*q)[i] = 0; }
   let start = block_start(b);
   reader_seek(start.x, start.y);
   if (read_bit() == 0u) {
-    for (var i = 0u; i < 64u; i++) { (*out)[i] = 0u; }
-    return;
+    return 0;
   }
   let emax = i32(read_bits(8u)) - 127;
   var bits = stream.bits_per_block - 9u;  // budget for the coefficients
-  // *out first holds the negabinary coefficients (sequency order), then the floats
-  for (var i = 0u; i < 64u; i++) { (*out)[i] = 0u; }
+  // *q first holds the negabinary coefficients (at their PERM positions), then the integers
   var n = 0u;                             // coefficients known to be significant
   var k = 32u;
   loop {
@@ -40,23 +46,31 @@ fn decode_block(b: u32, out: ptr<function, array<u32, 64>>) {
       n += 1u;
     }
     // deposit plane k
-    let bit = 1u << k;
+    let bit = bitcast<i32>(1u << k);
     loop {
       if (lo == 0u) { break; }
-      (*out)[countTrailingZeros(lo)] |= bit;
+      let p = PERM[countTrailingZeros(lo)];
+      (*q)[p] |= bit;
       lo &= lo - 1u;
     }
     loop {
       if (hi == 0u) { break; }
-      (*out)[countTrailingZeros(hi) + 32u] |= bit;
+      let p = PERM[countTrailingZeros(hi) + 32u];
+      (*q)[p] |= bit;
       hi &= hi - 1u;
     }
   }
-  var q: array<i32, 64>;
   for (var i = 0u; i < 64u; i++) {
-    q[PERM[i]] = bitcast<i32>(((*out)[i] ^ NB) - NB);
+    (*q)[i] = bitcast<i32>((bitcast<u32>((*q)[i]) ^ NB) - NB);
   }
-  inv_xform(&q);
+  inv_xform(q);
+  return emax;
+}
+
+// The 64 float32 bit patterns of block b (for callers that need them all at once).
+fn decode_block(b: u32, out: ptr<function, array<u32, 64>>) {
+  var q: array<i32, 64>;
+  let emax = decode_block_ints(b, &q);
   for (var i = 0u; i < 64u; i++) {
     (*out)[i] = int_to_float_bits(q[i], emax);
   }

@@ -16,8 +16,8 @@ fn decode_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg
   if (i >= dispatch_args[3]) { return; }
   let b = block_ids[i];
   if (!block_in_shard(b)) { return; }
-  var v: array<u32, 64>;
-  decode_block(b, &v);
+  var q: array<i32, 64>;
+  let emax = decode_block_ints(b, &q);
   let base = slot_ids[i] * 64u;
-  for (var j = 0u; j < 64u; j++) { slots[base + j] = v[j]; }
+  for (var j = 0u; j < 64u; j++) { slots[base + j] = int_to_float_bits(q[j], emax); }
 }

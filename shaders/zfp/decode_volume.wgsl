@@ -13,8 +13,8 @@ fn decode_volume(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg
                  @builtin(local_invocation_index) lid: u32) {
   let b = vparams.range.x + linear_workgroup_index(wid, nwg) * 64u + lid;
   if (b >= vparams.range.y) { return; }
-  var v: array<u32, 64>;
-  decode_block(b, &v);
+  var q: array<i32, 64>;
+  let emax = decode_block_ints(b, &q);
   let c = block_coords(b) * 4u;
   let d = stream.dims;
   let nx = min(4u, d.x - c.x);
@@ -24,7 +24,7 @@ fn decode_volume(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg
     for (var y = 0u; y < ny; y++) {
       let row = c.x + d.x * (c.y + y + d.y * (c.z + z - vparams.range.z));
       for (var x = 0u; x < nx; x++) {
-        volume_out[row + x] = v[16u * z + 4u * y + x];
+        volume_out[row + x] = int_to_float_bits(q[16u * z + 4u * y + x], emax);
       }
     }
   }
