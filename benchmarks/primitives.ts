@@ -6,7 +6,10 @@
 // bandwidth measured in the same run. Writes
 // benchmarks/results/primitives-<adapter>.json.
 //
-//   node benchmarks/run.mjs benchmarks/primitives.ts [--sizes 16,20,24] [--repeats N]
+//   node benchmarks/run.mjs benchmarks/primitives.ts [--sizes 16,20,24] [--repeats N] [--path auto|emulator|gpu]
+//
+// --path forces the kernel family of scan and compaction (default: the one
+// chosen for the adapter); the JSON name then ends in -<path>.
 import { fileURLToPath } from 'node:url';
 import { describeAdapter } from '../src/gpu/device.ts';
 import { requestNodeGpu } from '../src/gpu/node-gpu.ts';
@@ -23,6 +26,9 @@ function arg(name: string, fallback: string): string {
 
 const sizes = arg('sizes', '16,20,24').split(',').map((e) => 2 ** Number(e));
 const repeatsArg = arg('repeats', '');
+const pathArg = arg('path', 'auto');
+if (pathArg !== 'auto' && pathArg !== 'emulator' && pathArg !== 'gpu') throw new Error(`--path must be auto, emulator or gpu (got ${pathArg})`);
+const path = pathArg;
 /** Fewer repeats for the big sizes: SwiftShader takes seconds there. */
 const repeatsFor = (n: number) => (repeatsArg ? Number(repeatsArg) : n <= 2 ** 16 ? 11 : n <= 2 ** 20 ? 7 : 4);
 
@@ -69,8 +75,8 @@ const bufs = {
   offsets: buffer('bench.offsets', offsets),
 };
 const [scan, compact, sort] = await Promise.all([
-  ExclusiveScan.create(device, { capacity: maxN }),
-  StreamCompact.create(device),
+  ExclusiveScan.create(device, { capacity: maxN, path }),
+  StreamCompact.create(device, { path }),
   RadixSortByKey.create(device, { capacity: maxN }),
 ]);
 
@@ -122,7 +128,7 @@ for (const bench of benches) {
 }
 
 printTable(
-  `GPU primitives on ${adapter} (${timer.source}; median of ${sizes.map(repeatsFor).map((r) => r - 1).join('/')} runs, first discarded)`,
+  `GPU primitives on ${adapter}, scan ${scan.path} path, compaction ${compact.path} path (${timer.source}; median of ${sizes.map(repeatsFor).map((r) => r - 1).join('/')} runs, first discarded)`,
   ['primitive', 'elements', 'median ms', 'elements/s', 'GB/s', 'of copy'],
   rows.map((r) => [r.primitive, `2^${Math.log2(r.elements)}`, r.ms.median, r.elementsPerSecond, r.gbPerSecond, `${(100 * r.fractionOfCopy).toFixed(1)}%`]),
 );
@@ -131,9 +137,10 @@ console.log(`copy bandwidth ${copyGBs.toFixed(2)} GB/s${gpu.adapter.software ? '
 const slug = (gpu.adapter.software ? 'swiftshader' : [gpu.adapter.vendor, gpu.adapter.architecture].filter(Boolean).join('-') || 'gpu')
   .toLowerCase()
   .replace(/[^a-z0-9]+/g, '-');
-writeJson(fileURLToPath(new URL(`./results/primitives-${slug}.json`, import.meta.url)), {
+writeJson(fileURLToPath(new URL(`./results/primitives-${slug}${path === 'auto' ? '' : `-${path}`}.json`, import.meta.url)), {
   date: new Date().toISOString(),
   adapter: gpu.adapter,
+  paths: { scan: scan.path, compaction: compact.path },
   timing: timer.source,
   copy: { bytes: maxN * 4, ms: copyMs, gbPerSecond: copyGBs },
   rows,

@@ -2,20 +2,28 @@
 // StreamCompactIds (indices), from a 0/1 mask and its exclusive scan.
 
 import compactWgsl from '../../shaders/primitives/compact.wgsl?raw';
+import compactTiledWgsl from '../../shaders/primitives/compact_tiled.wgsl?raw';
 import { createComputePipeline } from '../gpu/wgsl.ts';
 import { BindGroupCache } from './bind-group-cache.ts';
 import type { CountLike } from './count.ts';
 import {
   DispatchRecords,
   RECORD_UNIFORM_SIZE,
+  choosePath,
   dispatchSnippet,
+  gpuPathWorkgroupSize,
   maxWorkgroupsPerDimension,
+  tileConstants,
   workgroupSize,
   type PrimitiveOptions,
+  type PrimitivePath,
 } from './dispatch-records.ts';
 
 export interface CompactOptions extends PrimitiveOptions {
-  /** Elements per invocation. Default 16. */
+  /**
+   * Elements per invocation: consecutive ones on the emulator path (default
+   * 16), WG apart in a tile of workgroupSize * chunk on the GPU path (default 4).
+   */
   chunk?: number;
 }
 
@@ -45,25 +53,30 @@ class Compaction {
     private readonly label: string,
     private readonly pipeline: GPUComputePipeline,
     private readonly records: DispatchRecords,
+    readonly path: PrimitivePath,
   ) {}
 
   static async create(device: GPUDevice, label: string, entryPoint: string, options: CompactOptions): Promise<Compaction> {
-    const chunk = options.chunk ?? 16;
+    const path = choosePath(device, options);
+    const gpu = path === 'gpu';
+    const chunk = options.chunk ?? (gpu ? 4 : 16);
     if (!Number.isInteger(chunk) || chunk < 1 || chunk > 4096) throw new RangeError('chunk must be in 1..4096');
-    const wg = workgroupSize(device, options);
+    const wg = gpu ? gpuPathWorkgroupSize(device, options) : workgroupSize(device, options);
+    const parts = gpu
+      ? [tileConstants(wg, chunk), dispatchSnippet, { name: 'shaders/primitives/compact_tiled.wgsl', code: compactTiledWgsl }]
+      : [dispatchSnippet, { name: 'shaders/primitives/compact.wgsl', code: compactWgsl }];
     const [pipeline, records] = await Promise.all([
-      createComputePipeline(device, `${label}.compact`, [dispatchSnippet, { name: 'shaders/primitives/compact.wgsl', code: compactWgsl }], entryPoint, {
-        constants: { WG: wg, CHUNK: chunk },
-      }),
+      createComputePipeline(device, `${label}.compact`, parts, entryPoint, { constants: gpu ? {} : { WG: wg, CHUNK: chunk } }),
+      // GPU path: one unit is a tile, one workgroup.
       DispatchRecords.create(device, label, {
-        chunk,
-        wg,
+        chunk: gpu ? wg * chunk : chunk,
+        wg: gpu ? 1 : wg,
         levels: 1,
         capacity: 0xffffffff,
         maxWorkgroupsPerDimension: maxWorkgroupsPerDimension(device, options),
       }),
     ]);
-    return new Compaction(device, label, pipeline, records);
+    return new Compaction(device, label, pipeline, records, path);
   }
 
   encode(encoder: GPUCommandEncoder, args: StreamCompactIdsArgs, values?: GPUBuffer): void {
@@ -105,6 +118,11 @@ export class StreamCompact {
     return new StreamCompact(await Compaction.create(device, 'StreamCompact', 'compact_values', options));
   }
 
+  /** The kernel family in use (choosePath). */
+  get path(): PrimitivePath {
+    return this.impl.path;
+  }
+
   encode(encoder: GPUCommandEncoder, args: StreamCompactArgs): void {
     this.impl.encode(encoder, args, args.values);
   }
@@ -120,6 +138,11 @@ export class StreamCompactIds {
 
   static async create(device: GPUDevice, options: CompactOptions = {}): Promise<StreamCompactIds> {
     return new StreamCompactIds(await Compaction.create(device, 'StreamCompactIds', 'compact_ids', options));
+  }
+
+  /** The kernel family in use (choosePath). */
+  get path(): PrimitivePath {
+    return this.impl.path;
   }
 
   encode(encoder: GPUCommandEncoder, args: StreamCompactIdsArgs): void {

@@ -6,6 +6,7 @@
 
 import dispatchWgsl from '../../shaders/primitives/dispatch.wgsl?raw';
 import setupWgsl from '../../shaders/primitives/setup.wgsl?raw';
+import { summarizeAdapter } from '../gpu/device.ts';
 import { createComputePipeline, type WgslPart } from '../gpu/wgsl.ts';
 import { encodeCountCopy, type CountLike } from './count.ts';
 
@@ -32,8 +33,45 @@ export function paramsUsage(): GPUBufferUsageFlags {
 export interface PrimitiveOptions {
   /** Grid limit per dimension (default: the device's). Tests lower it to exercise 2D grids. */
   maxWorkgroupsPerDimension?: number;
-  /** Invocations per workgroup (default 64, capped by the device's limits). */
+  /** Invocations per workgroup (default 64 on the emulator path, 256 on the GPU path; capped by the device's limits). */
   workgroupSize?: number;
+  /** Kernel family: 'auto' (default) picks per adapter, see choosePath. */
+  path?: PrimitivePath | 'auto';
+}
+
+/**
+ * 'emulator': one contiguous chunk per invocation, no workgroup memory or
+ * barriers (what runs fast on SwiftShader and other CPU implementations).
+ * 'gpu': tiles of consecutive elements per workgroup, consecutive invocations
+ * on consecutive elements (coalesced), workgroup-shared-memory scans.
+ */
+export type PrimitivePath = 'emulator' | 'gpu';
+
+/**
+ * The path for this device: the option if it names one, else 'emulator' on
+ * CPU implementations (SwiftShader, llvmpipe, lavapipe, WARP: see
+ * summarizeAdapter) and 'gpu' everywhere else (also when the implementation
+ * does not expose device.adapterInfo).
+ */
+export function choosePath(device: GPUDevice, options: PrimitiveOptions): PrimitivePath {
+  const p = options.path ?? 'auto';
+  if (p === 'emulator' || p === 'gpu') return p;
+  if (p !== 'auto') throw new RangeError(`path must be 'auto', 'emulator' or 'gpu' (got ${String(p)})`);
+  const info = (device as GPUDevice & { adapterInfo?: GPUAdapterInfo }).adapterInfo;
+  return summarizeAdapter(info).software ? 'emulator' : 'gpu';
+}
+
+/** Invocations per workgroup of the GPU path (default 256, capped by the limits). */
+export function gpuPathWorkgroupSize(device: GPUDevice, options: PrimitiveOptions): number {
+  return workgroupSize(device, { ...options, workgroupSize: options.workgroupSize ?? 256 });
+}
+
+/**
+ * WGSL constants of a GPU-path kernel: `const`, not `override`, because they
+ * size workgroup arrays (override-sized arrays are not portable to naga).
+ */
+export function tileConstants(wg: number, items: number): WgslPart {
+  return { name: 'tile constants', code: `const WG: u32 = ${wg}u;\nconst ITEMS: u32 = ${items}u;\nconst TILE: u32 = ${wg * items}u;\n` };
 }
 
 export function maxWorkgroupsPerDimension(device: GPUDevice, options: PrimitiveOptions): number {
@@ -43,7 +81,7 @@ export function maxWorkgroupsPerDimension(device: GPUDevice, options: PrimitiveO
   return v;
 }
 
-/** The kernels use no workgroup memory and no barriers: the size only sets the grid's granularity. */
+/** On the emulator path the kernels use no workgroup memory and no barriers: the size only sets the grid's granularity. */
 export function workgroupSize(device: GPUDevice, options: PrimitiveOptions): number {
   const max = Math.min(device.limits.maxComputeInvocationsPerWorkgroup, device.limits.maxComputeWorkgroupSizeX);
   const wg = options.workgroupSize ?? Math.min(64, max);

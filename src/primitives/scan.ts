@@ -4,23 +4,39 @@
 // src/primitives/README.md for why not single-pass.
 
 import scanWgsl from '../../shaders/primitives/scan.wgsl?raw';
+import scanTiledWgsl from '../../shaders/primitives/scan_tiled.wgsl?raw';
 import { createComputePipeline, type WgslPart } from '../gpu/wgsl.ts';
 import type { CountLike, GpuCount } from './count.ts';
 import {
   DispatchRecords,
   RECORD_UNIFORM_SIZE,
+  choosePath,
   dispatchSnippet,
+  gpuPathWorkgroupSize,
   maxWorkgroupsPerDimension,
+  tileConstants,
   workgroupSize,
   type PrimitiveOptions,
+  type PrimitivePath,
 } from './dispatch-records.ts';
 
 const scanSnippet: WgslPart = { name: 'shaders/primitives/scan.wgsl', code: scanWgsl };
+const scanTiledSnippet: WgslPart = { name: 'shaders/primitives/scan_tiled.wgsl', code: scanTiledWgsl };
+
+/** Workgroup-memory words of the GPU path's scan kernel (tile with padding, two Kogge-Stone halves). */
+export function tiledScanWords(wg: number, items: number): number {
+  const t = wg * items;
+  return t + Math.floor(t / 32) + 1 + 2 * wg;
+}
 
 export interface ExclusiveScanOptions extends PrimitiveOptions {
   /** Most elements one encode may scan; grow() raises it. */
   capacity: number;
-  /** Consecutive elements per invocation (and per partial sum). Default 16. */
+  /**
+   * Emulator path: consecutive elements per invocation (and per partial sum),
+   * default 16. GPU path: elements per invocation in a tile of
+   * workgroupSize * chunk (one partial sum per tile), default 4.
+   */
   chunk?: number;
 }
 
@@ -49,7 +65,7 @@ function levelsFor(capacity: number, chunk: number): number {
 }
 
 export class ExclusiveScan {
-  /** Elements per invocation. */
+  /** Elements per partial sum: a chunk (emulator path) or a tile (GPU path). */
   readonly chunk: number;
   private capacityValue = 0;
   private levels = 1;
@@ -70,6 +86,8 @@ export class ExclusiveScan {
     private readonly records: DispatchRecords,
     chunk: number,
     capacity: number,
+    /** The kernel family in use (choosePath). */
+    readonly path: PrimitivePath,
   ) {
     this.chunk = chunk;
     this.zero = device.createBuffer({ label: 'ExclusiveScan.zero', size: 4, usage: GPUBufferUsage.STORAGE });
@@ -78,9 +96,16 @@ export class ExclusiveScan {
   }
 
   static async create(device: GPUDevice, options: ExclusiveScanOptions): Promise<ExclusiveScan> {
-    const chunk = options.chunk ?? 16;
-    if (!Number.isInteger(chunk) || chunk < 2 || chunk > 4096) throw new RangeError('chunk must be in 2..4096');
-    const wg = workgroupSize(device, options);
+    const path = choosePath(device, options);
+    const gpu = path === 'gpu';
+    const items = options.chunk ?? (gpu ? 4 : 16);
+    const wg = gpu ? gpuPathWorkgroupSize(device, options) : workgroupSize(device, options);
+    if (!Number.isInteger(items) || items < (gpu ? 1 : 2) || items > 4096) throw new RangeError(`chunk must be in ${gpu ? 1 : 2}..4096`);
+    if (gpu && (wg * items < 2 || tiledScanWords(wg, items) * 4 > device.limits.maxComputeWorkgroupStorageSize)) {
+      throw new RangeError(`ExclusiveScan: a tile of ${wg} x ${items} elements does not fit the workgroup storage limit (${device.limits.maxComputeWorkgroupStorageSize} B)`);
+    }
+    // Elements per partial sum; on the GPU path one unit (tile) is one workgroup.
+    const chunk = gpu ? wg * items : items;
     const maxPerDim = maxWorkgroupsPerDimension(device, options);
     const layout = device.createBindGroupLayout({
       label: 'ExclusiveScan.layout',
@@ -93,20 +118,20 @@ export class ExclusiveScan {
       ],
     });
     const pipelineLayout = device.createPipelineLayout({ label: 'ExclusiveScan.pipelineLayout', bindGroupLayouts: [layout] });
-    const parts = [dispatchSnippet, scanSnippet];
-    const constants = { WG: wg, CHUNK: chunk };
+    const parts = gpu ? [tileConstants(wg, items), dispatchSnippet, scanTiledSnippet] : [dispatchSnippet, scanSnippet];
+    const constants: Record<string, number> = gpu ? {} : { WG: wg, CHUNK: chunk };
     const [reduce, scan, records] = await Promise.all([
       createComputePipeline(device, 'ExclusiveScan.reduce', parts, 'reduce', { layout: pipelineLayout, constants }),
       createComputePipeline(device, 'ExclusiveScan.scan', parts, 'scan', { layout: pipelineLayout, constants }),
       DispatchRecords.create(device, 'ExclusiveScan', {
         chunk,
-        wg,
+        wg: gpu ? 1 : wg,
         levels: levelsFor(0xffffffff, chunk),
         capacity: options.capacity,
         maxWorkgroupsPerDimension: maxPerDim,
       }),
     ]);
-    return new ExclusiveScan(device, layout, reduce, scan, records, chunk, options.capacity);
+    return new ExclusiveScan(device, layout, reduce, scan, records, chunk, options.capacity, path);
   }
 
   get capacity(): number {
@@ -193,7 +218,7 @@ export class ExclusiveScan {
       }
     }
     pass.setPipeline(this.scanPipeline);
-    // The top level holds at most one chunk: one invocation, even for count 0.
+    // The top level holds at most one chunk or tile: one workgroup, even for count 0.
     pass.setBindGroup(0, top === 0 ? user.scan : this.internalScan[top], [DispatchRecords.recordOffset(top)]);
     pass.dispatchWorkgroups(1);
     for (let l = top - 1; l >= 0; l--) {

@@ -1,10 +1,11 @@
 // StreamCompact and StreamCompactIds against a CPU compaction, with masks of
 // densities 0, 1%, 50% and 100% at every listed size, counts from GPU buffers
-// smaller than the buffers, and poisoned outputs checked past the kept count.
+// smaller than the buffers, and poisoned outputs checked past the kept count;
+// both kernel families (emulator and GPU path).
 import { describe, expect } from 'vitest';
 import { StreamCompact, StreamCompactIds } from '../../../src/primitives/compact.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
-import { LARGE_SIZES, SMALL_SIZES, cpuExclusiveScan, diff, gpuCount, poison, randomMask, randomU32, read, upload } from './helpers.ts';
+import { LARGE_SIZES, PATHS, SMALL_SIZES, cpuExclusiveScan, diff, gpuCount, poison, randomMask, randomU32, read, upload } from './helpers.ts';
 
 const DENSITIES = [0, 0.01, 0.5, 1];
 const EXTRA = 29;
@@ -16,17 +17,18 @@ function cpuCompact(mask: Uint32Array, values: Uint32Array | undefined, n: numbe
   return out.subarray(0, k);
 }
 
-describe('StreamCompact / StreamCompactIds', () => {
+for (const path of PATHS) describe(`StreamCompact / StreamCompactIds, ${path} path`, () => {
   gpuTest('every size and density, GPU count below the buffer length', async ({ gpu }) => {
     const { device } = gpu;
-    const compact = await StreamCompact.create(device);
-    const compactIds = await StreamCompactIds.create(device);
+    const compact = await StreamCompact.create(device, { path });
+    const compactIds = await StreamCompactIds.create(device, { path });
+    expect([compact.path, compactIds.path]).toEqual([path, path]);
     const problems: string[] = [];
     const cases: [number, number][] = [];
     for (const n of SMALL_SIZES) for (const d of DENSITIES) cases.push([n, d]);
     // Large sizes: the four densities spread over the three sizes.
     const [odd, mid, big] = LARGE_SIZES;
-    cases.push([odd, 0.01], [mid, 0], [mid, 1], [big, 0.5]);
+    cases.push([odd, 0.01], [mid, 0], [mid, 1], [big, 0.5], [65535 * 64 + 1, 0.5]);
     for (const [n, density] of cases) {
       const length = n + EXTRA;
       // Elements past the count are set, so reading past it would show.
@@ -57,7 +59,7 @@ describe('StreamCompact / StreamCompactIds', () => {
 
   gpuTest('2D grids, host counts, bind groups reused across calls', async ({ gpu }) => {
     const { device } = gpu;
-    const compactIds = await StreamCompactIds.create(device, { maxWorkgroupsPerDimension: 2, workgroupSize: 8, chunk: 3 });
+    const compactIds = await StreamCompactIds.create(device, { maxWorkgroupsPerDimension: 2, workgroupSize: 8, chunk: 3, path });
     const length = 5000;
     const mask = randomMask(length, 0.5, 5);
     const offsets = cpuExclusiveScan(mask).scan;

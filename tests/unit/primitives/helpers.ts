@@ -6,6 +6,17 @@ import type { GpuCount } from '../../../src/primitives/count.ts';
 
 export const POISON = 0xdeadbeef;
 
+/** Both kernel families (src/primitives/README.md), each forced by the `path` option. */
+export const PATHS = ['emulator', 'gpu'] as const;
+
+/**
+ * Large sizes per path: the GPU path's workgroup-memory kernels are slow on
+ * SwiftShader, so it gets the grid-limit size and 2^20 + 3 (its tile is 1024).
+ */
+export function largeSizes(path: (typeof PATHS)[number]): number[] {
+  return path === 'gpu' ? [65535 * 64 + 1, 2 ** 20 + 3] : LARGE_SIZES;
+}
+
 /** The sizes the issue asks for, small to large. */
 export const SMALL_SIZES = [0, 1, 2, 63, 64, 65, 255, 256, 257, 4095, 65535, 65536];
 export const LARGE_SIZES = [65535 * 256 + 1, 2 ** 20 + 3, 2 ** 24];
