@@ -4,7 +4,7 @@
 // into a slot of a pool; the page table maps chunk -> slot (0xffffffff: not
 // resident). A pool shard holds slots [first_slot, end_slot) back to back,
 // slot_words 32-bit words each. The stream uniform still gives the level's
-// dims, block grid and bits per block; a block's blocks are those of the
+// dims, block grid and bits per block; a chunk's blocks are those of the
 // whole level compressed as one stream (zfp codes each block alone).
 
 struct PoolParams {
@@ -36,7 +36,7 @@ fn block_start(b: u32) -> vec2u {
   let slot = page_table[chunk_of_block(b)];
   let l = block_coords(b) % pool.chunk_blocks;
   let local = l.x + pool.chunk_blocks * (l.y + pool.chunk_blocks * l.z);
-  // < 2^32: a chunk holds at most 16^3 * ... bits; see ChunkedVolume's checks
+  // < 2^32: ChunkedVolume.create checks that a chunk's stream holds fewer bits
   let bit = pool.header_bits + local * stream.bits_per_block;
   return vec2u((slot - pool.first_slot) * pool.slot_words + bit / 32u, bit % 32u);
 }

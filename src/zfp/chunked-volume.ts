@@ -196,6 +196,11 @@ export class ChunkedVolume implements BlockSource {
     if (!Number.isInteger(opts.poolChunks) || opts.poolChunks < 1) fail(`the pool must hold at least one chunk (got ${opts.poolChunks})`);
     const blocks = Math.ceil(dims[0] / 4) * Math.ceil(dims[1] / 4) * Math.ceil(dims[2] / 4);
     if (blocks >= 2 ** 32) fail(`${blocks} blocks do not fit 32-bit block ids`);
+    // the page table is one storage binding; a chunk's bit offsets are 32-bit in WGSL
+    const chunks = chunkGrid[0] * chunkGrid[1] * chunkGrid[2];
+    const binding = Math.min(gpu.device.limits.maxStorageBufferBindingSize, gpu.device.limits.maxBufferSize);
+    if (chunks * 4 > binding) fail(`${chunks} chunks need a ${chunks * 4}-byte page table, more than one storage binding of this device (${binding} bytes)`);
+    if (chunkBytes * 8 >= 2 ** 32) fail(`a chunk of ${chunkBytes} bytes is too large to address in 32-bit bit offsets`);
     return new ChunkedVolume(gpu.device, layout, opts.poolChunks, opts.maxShardBytes ?? maxShardBytesFor(gpu.device));
   }
 

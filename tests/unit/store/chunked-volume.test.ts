@@ -14,6 +14,8 @@ import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect } from 'vitest';
 import { Isosurface } from '../../../src/isosurface/isosurface.ts';
 import { ChunkedVolume, ChunkError, type ChunkLevelLayout } from '../../../src/zfp/chunked-volume.ts';
+
+import { planZfpStream } from '../../../src/zfp/format.ts';
 import { loadZfpStream } from '../../../src/zfp/gpu-stream.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { repoRoot, sharedData } from '../../helpers/python.ts';
@@ -218,6 +220,10 @@ describe('a chunked store level through the GPU chunk pool', () => {
     expect(pool.residentCount).toBe(2);
     expect(() => ChunkedVolume.create(gpu, { ...m.layout, chunkEdge: 30 }, { poolChunks: 1 })).toThrow(/chunk edge 30 is not a multiple of 4/);
     expect(() => ChunkedVolume.create(gpu, { ...m.layout, chunkBytes: 100 }, { poolChunks: 1 })).toThrow(/is \d+ bytes as zfp writes it, not 100/);
+    // a hostile size from store metadata: refused before the page table is allocated
+    const tiny = planZfpStream('4^3 chunk', [4, 4, 4], 4, true).paddedBytes;
+    const huge: ChunkLevelLayout = { ...m.layout, dims: [2 ** 12, 2 ** 12, 2 ** 13], chunkEdge: 4, chunkGrid: [2 ** 10, 2 ** 10, 2 ** 11], chunkBytes: tiny };
+    expect(() => ChunkedVolume.create(gpu, huge, { poolChunks: 1 })).toThrow(/chunks need a \d+-byte page table, more than one storage binding/);
     pool.destroy();
   });
 });
