@@ -1,14 +1,15 @@
 // The CLI's store input (`extract` / `bench` STORE --level L): a store URL
-// or folder, one level fetched through the chunk fetcher (8 requests in
-// flight) and assembled into one zfp stream on the GPU (assemble.ts: block
-// reordering, no decode). Until the GPU chunk pool (ChunkedVolume) is in,
-// this fetches every chunk of the level; the record says how much.
+// or folder, streamed at level L only (pinned-level.ts): each isovalue
+// fetches the chunks its surface needs (8 requests in flight) into the
+// level's GPU pool of compressed chunks; the record says how much came over.
 import { existsSync } from 'node:fs';
 import { join } from 'node:path';
-import { loadZfpStream } from '../zfp/gpu-stream.ts';
-import { assembleLevelStream, assemblyLimit } from './assemble.ts';
+import type { GpuContext } from '../gpu/device.ts';
+import { defaultMemoryBudget } from '../isosurface/budget.ts';
 import { ChunkFetcher } from './fetch/chunk-fetcher.ts';
-import type { ChunkIndex } from './types.ts';
+import { chunkedGpu } from './gpu-port.ts';
+import { PinnedLevelSurface } from './pinned-level.ts';
+import { StreamController } from './stream-controller.ts';
 import { StoreError } from './zarr/errors.ts';
 import { isStoreUrl, storeForLocation } from './zarr/node-store.ts';
 import { openZfpStore } from './zarr/open-store.ts';
@@ -26,20 +27,34 @@ export interface StoreRecord {
   dims: [number, number, number];
   chunkEdge: number;
   rate: number;
-  /** Chunks fetched / chunks of the level. */
+  /** Distinct chunks fetched at the level / chunks of the level. */
   chunks: number;
   levelChunks: number;
-  /** Bytes through the store: chunk bytes, and everything (metadata, shard indexes) at the end. */
+  /** Bytes through the store: chunk bytes, and everything (metadata, range arrays, shard indexes). */
   chunkBytesFetched: number;
   bytesFetched: number;
   metadataBytes: number;
   requests: number;
   /** Every chunk of every level (what a full download would be). */
   storeChunkBytes: number;
-  fetchMs: number;
+  /** GPU memory budget of the stream: pools, caches and vertices. */
+  budgetBytes: number;
+  /** GPU bytes accounted at the end (pools + the surface's buffers). */
+  gpuBytes: number;
 }
 
-export async function openStoreInput(device: GPUDevice, input: string, level: number | undefined, onError: (message: string) => void) {
+export interface StoreInput {
+  surface: PinnedLevelSurface;
+  how: string;
+  rate: number;
+  notes: string[];
+  fileName: string;
+  /** The store's figures so far. */
+  record(): StoreRecord;
+}
+
+/** `budget`: the GPU memory of the whole stream (pools, cache, vertices); by default the pipeline's default budget. */
+export async function openStoreInput(gpu: GpuContext, input: string, level: number | undefined, budget: number | undefined, onError: (message: string) => void): Promise<StoreInput> {
   const metered = new MeteredStore(storeForLocation(input));
   const store = await openZfpStore(metered, input);
   const L = level ?? 0;
@@ -47,27 +62,25 @@ export async function openStoreInput(device: GPUDevice, input: string, level: nu
     throw new StoreError('layout', `${input}: --level ${level} does not exist (levels 0 to ${store.levels.length - 1})`);
   }
   const lv = store.levels[L];
-  const limit = assemblyLimit(lv.layout, 2 ** 31); // the assembled stream is one CPU buffer before upload
-  if (limit) throw new StoreError('layout', `${limit}; pick a coarser --level (the chunk pool, which needs no whole stream, is not merged yet)`);
-  const fetcher = new ChunkFetcher(store, { maxInFlight: 8, cacheBytes: lv.storedBytes + 1 });
-  const chunks = new Map<ChunkIndex, Uint8Array>();
-  let failure: StoreError | null = null;
-  fetcher.onChunk((_l, c, bytes) => chunks.set(c, bytes));
-  fetcher.onError((_l, _c, e) => { failure ??= e; onError(e.message); });
-  const t0 = performance.now();
-  fetcher.want(L, Array.from({ length: lv.chunkCount }, (_, i) => i));
-  await fetcher.idle();
-  const fetchMs = performance.now() - t0;
-  if (failure) throw failure;
-  const bytes = assembleLevelStream(lv.layout, (c) => chunks.get(c)!);
-  const stream = loadZfpStream(device, bytes, `${input} level ${L}`);
-  const record: StoreRecord = {
+  const fetcher = new ChunkFetcher(store, { maxInFlight: 8 });
+  const fetched = new Set<number>();
+  let chunkBytes = 0;
+  fetcher.onChunk((l, c, bytes, fromCache) => {
+    if (l !== L || fromCache || fetched.has(c)) return;
+    fetched.add(c);
+    chunkBytes += bytes.byteLength;
+  });
+  fetcher.onError((_l, _c, e) => onError(e.message));
+  const budgetBytes = budget ?? defaultMemoryBudget(gpu.device.limits);
+  const controller = await StreamController.create(store, fetcher, chunkedGpu(gpu), budgetBytes);
+  const surface = new PinnedLevelSurface(controller, L);
+  const record = (): StoreRecord => ({
     store: input, level: L, levels: store.levels.length, dims: lv.layout.dims, chunkEdge: lv.layout.chunkEdge, rate: lv.layout.rate,
-    chunks: chunks.size, levelChunks: lv.chunkCount, chunkBytesFetched: fetcher.counters.bytesFetched,
+    chunks: fetched.size, levelChunks: lv.chunkCount, chunkBytesFetched: chunkBytes,
     bytesFetched: metered.meter.bytes, metadataBytes: store.metadataBytes, requests: metered.meter.requests,
-    storeChunkBytes: store.levels.reduce((a, l) => a + l.storedBytes, 0), fetchMs,
-  };
+    storeChunkBytes: store.levels.reduce((a, l) => a + l.storedBytes, 0), budgetBytes, gpuBytes: controller.gpuBytes.total,
+  });
   const how = `Zarr store, level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 chunks, rate ${lv.layout.rate}), ` +
-    `${record.chunks} chunks fetched (${record.bytesFetched} bytes with metadata)`;
-  return { stream, how, rate: lv.layout.rate, notes: store.notes, fileName: `${input} level ${L}`, store: record };
+    `streamed: the chunks each surface needs, within ${(budgetBytes / 2 ** 20).toFixed(0)} MiB of GPU memory`;
+  return { surface, how, rate: lv.layout.rate, notes: store.notes, fileName: `${input} level ${L}`, record };
 }

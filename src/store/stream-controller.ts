@@ -22,7 +22,6 @@ export interface LevelVolume {
   has(chunk: ChunkIndex): boolean;
   put(chunk: ChunkIndex, bytes: Uint8Array): void;
   evict(chunk: ChunkIndex): void;
-  readChunkRanges?(): Promise<Float32Array>;
   destroy(): void;
 }
 /** What it needs of the surface statistics. */
@@ -38,12 +37,14 @@ export interface LevelSurface<S extends LevelStats = LevelStats> {
   compute(iso: number): Promise<S>;
   /** The cap for cache and vertex buffers (Isosurface.setMemoryBudget). */
   setMemoryBudget?(bytes: number): void;
+  /** [min, max] per block of the level (raster block order): the ranges of a store without range arrays. */
+  readBlockRanges?(): Promise<Float32Array>;
   destroy(): void;
 }
 /** The GPU side, injected (the real one: gpu-port.ts; tests: a CPU fake). */
-export interface StreamGpu<V extends LevelVolume = LevelVolume, S extends LevelStats = LevelStats> {
+export interface StreamGpu<V extends LevelVolume = LevelVolume, S extends LevelStats = LevelStats, F extends LevelSurface<S> = LevelSurface<S>> {
   createVolume(layout: ChunkLevelLayout, poolChunks: number): V;
-  createSurface(volume: V, memoryBudgetBytes: number): Promise<LevelSurface<S>>;
+  createSurface(volume: V, memoryBudgetBytes: number): Promise<F>;
 }
 
 export interface StreamProgress {
@@ -58,11 +59,11 @@ export interface StreamProgress {
   reason?: string;
 }
 
-export interface ShownSurface<V, S extends LevelStats> {
+export interface ShownSurface<V, S extends LevelStats, F extends LevelSurface<S> = LevelSurface<S>> {
   level: number;
   iso: number;
   volume: V;
-  surface: LevelSurface<S>;
+  surface: F;
   stats: S;
 }
 
@@ -71,6 +72,8 @@ interface Waiting { level: number; iso: number; needed: number; missing: Set<Chu
 interface Level<V> {
   index: number;
   layout: ChunkLevelLayout;
+  /** [min, max] per chunk (the store's range array, or computed once the level was resident whole), or null. */
+  ranges: Float32Array | null;
   /** Neighbourhood ranges per chunk, or null while unknown (every chunk needed). */
   nb: Float32Array | null;
   volume: V | null;
@@ -78,26 +81,32 @@ interface Level<V> {
   lru: Map<ChunkIndex, true>;
 }
 
-export class StreamController<V extends LevelVolume = LevelVolume, S extends LevelStats = LevelStats> {
+export class StreamController<V extends LevelVolume = LevelVolume, S extends LevelStats = LevelStats, F extends LevelSurface<S> = LevelSurface<S>> {
   readonly levels: Level<V>[];
   #gen = 0;
-  #shown: ShownSurface<V, S> | null = null;
-  #next: { level: number; surface: LevelSurface<S> } | null = null;
-  #surfaces = new Map<number, LevelSurface<S>>();
+  #shown: ShownSurface<V, S, F> | null = null;
+  #surfaces = new Map<number, F>();
   #lastStats = new Map<number, S>();
   #waiting: Waiting | null = null;
   #progress = new Set<(p: StreamProgress) => void>();
-  #shownListeners = new Set<(s: ShownSurface<V, S>) => void>();
+  #shownListeners = new Set<(s: ShownSurface<V, S, F>) => void>();
   #errors = new Set<(e: Error) => void>();
   #destroyed = false;
   /** Where "nearest first" measures from, in level-0 voxels (default: the volume's centre). */
   focus: [number, number, number];
+  /**
+   * The levels refinement may use: from `coarsest` down to `finest` (a
+   * link's #level=, the CLI's --level L with both at L). Set before setIsovalue.
+   */
+  finest = 0;
+  coarsest: number;
 
-  private constructor(readonly store: ZfpStore, readonly fetcher: ChunkFetcher, readonly gpu: StreamGpu<V, S>, readonly budgetBytes: number, ranges: (Float32Array | null)[]) {
+  private constructor(readonly store: ZfpStore, readonly fetcher: ChunkFetcher, readonly gpu: StreamGpu<V, S, F>, readonly budgetBytes: number, ranges: (Float32Array | null)[]) {
     this.levels = store.levels.map((l, i) => ({
-      index: i, layout: l.layout, volume: null, lru: new Map(),
+      index: i, layout: l.layout, volume: null, lru: new Map(), ranges: ranges[i],
       nb: ranges[i] ? neighbourhoodRanges(l.layout.chunkGrid, ranges[i]!) : null,
     }));
+    this.coarsest = this.levels.length - 1;
     const d = store.levels[0].layout.dims;
     this.focus = [d[0] / 2, d[1] / 2, d[2] / 2];
     fetcher.onChunk((level, chunk, bytes) => this.#arrived(level, chunk, bytes));
@@ -108,16 +117,36 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
   }
 
   /** Reads the range arrays (metadata), then the controller is ready for setIsovalue. */
-  static async create<V extends LevelVolume, S extends LevelStats>(store: ZfpStore, fetcher: ChunkFetcher, gpu: StreamGpu<V, S>, budgetBytes: number): Promise<StreamController<V, S>> {
+  static async create<V extends LevelVolume, S extends LevelStats, F extends LevelSurface<S>>(store: ZfpStore, fetcher: ChunkFetcher, gpu: StreamGpu<V, S, F>, budgetBytes: number): Promise<StreamController<V, S, F>> {
     const ranges = await Promise.all(store.levels.map((_, i) => store.readRanges(i)));
     return new StreamController(store, fetcher, gpu, budgetBytes, ranges);
   }
 
   onProgress(l: (p: StreamProgress) => void): () => void { this.#progress.add(l); return () => this.#progress.delete(l); }
-  onShown(l: (s: ShownSurface<V, S>) => void): () => void { this.#shownListeners.add(l); return () => this.#shownListeners.delete(l); }
+  onShown(l: (s: ShownSurface<V, S, F>) => void): () => void { this.#shownListeners.add(l); return () => this.#shownListeners.delete(l); }
   onError(l: (e: Error) => void): () => void { this.#errors.add(l); return () => this.#errors.delete(l); }
 
-  get shown(): ShownSurface<V, S> | null { return this.#shown; }
+  get shown(): ShownSurface<V, S, F> | null { return this.#shown; }
+
+  /** [min, max] per chunk of a level, when known (range arrays, or computed once the level was resident whole). */
+  chunkRanges(level: number): Float32Array | null {
+    return this.levels[level]?.ranges ?? null;
+  }
+
+  /** The store's value range: its metadata, else the finest level whose chunk ranges are known; null when none is. */
+  get valueRange(): [number, number] | null {
+    if (this.store.valueRange) return this.store.valueRange;
+    for (const l of this.levels) {
+      if (!l.ranges) continue;
+      let lo = Infinity, hi = -Infinity;
+      for (let i = 0; i < l.ranges.length; i += 2) {
+        if (l.ranges[i] < lo) lo = l.ranges[i];
+        if (l.ranges[i + 1] > hi) hi = l.ranges[i + 1];
+      }
+      if (lo <= hi) return [lo, hi];
+    }
+    return null;
+  }
 
   /** GPU bytes accounted: every pool plus the live surfaces' cache and vertex buffers. */
   get gpuBytes(): { pools: number; surfaces: number; total: number } {
@@ -147,14 +176,15 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
       const set = neededAt.get(level);
       return set === null || set!.has(chunk);
     });
-    const coarsest = this.levels.length - 1;
+    const coarsest = Math.min(this.coarsest, this.levels.length - 1);
+    const finest = Math.max(0, Math.min(this.finest, coarsest));
     // the finest level already able to show this isovalue without fetching
     let start = coarsest;
-    for (let L = 0; L < coarsest; L++) {
+    for (let L = finest; L < coarsest; L++) {
       const lv = this.levels[L];
       if (lv.volume && lv.nb && chunksNeeded(lv.nb, iso).every((c) => lv.volume!.has(c))) { start = L; break; }
     }
-    for (let L = start; L >= 0; L--) {
+    for (let L = start; L >= finest; L--) {
       if (gen !== this.#gen || this.#destroyed) return;
       const ok = await this.#refine(L, iso, gen);
       if (!ok) return;
@@ -189,9 +219,6 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
       if (gen !== this.#gen || this.#destroyed) return false;
       if (missing.size > 0) return false; // stopped by a failed chunk
     }
-    if (!lv.nb && pool.readChunkRanges && pool.residentCount === lv.layout.chunkGrid[0] * lv.layout.chunkGrid[1] * lv.layout.chunkGrid[2]) {
-      lv.nb = neighbourhoodRanges(lv.layout.chunkGrid, await pool.readChunkRanges());
-    }
     progress('computing');
     let surface = this.#surfaces.get(L);
     try {
@@ -218,6 +245,13 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
         if (stats.cacheBytes + stats.vertexBytes + actualFixed > quarter) stats = await surface.compute(iso);
       }
       this.#lastStats.set(L, stats);
+      // A store without range arrays: the level was fetched whole; its chunk
+      // ranges come from the GPU's block ranges, so the next isovalue fetches
+      // only what it needs.
+      if (!lv.nb && surface.readBlockRanges && pool.residentCount === chunkCount(lv.layout)) {
+        lv.ranges = chunkRangesOfBlocks(lv.layout, await surface.readBlockRanges());
+        lv.nb = neighbourhoodRanges(lv.layout.chunkGrid, lv.ranges);
+      }
       if (gen !== this.#gen || this.#destroyed) return false;
       this.#show({ level: L, iso, volume: pool, surface, stats });
       progress('shown');
@@ -231,7 +265,7 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
     }
   }
 
-  #show(s: ShownSurface<V, S>): void {
+  #show(s: ShownSurface<V, S, F>): void {
     const old = this.#shown;
     this.#shown = s;
     for (const l of this.#shownListeners) l(s);
@@ -329,8 +363,30 @@ export function estimateFixedBytes(layout: ChunkLevelLayout): number {
   return 48 * blocks + 32 * chunks + (64 << 10);
 }
 
+const chunkCount = (layout: ChunkLevelLayout) => layout.chunkGrid[0] * layout.chunkGrid[1] * layout.chunkGrid[2];
+
 function allChunks(layout: ChunkLevelLayout): ChunkIndex[] {
-  const n = layout.chunkGrid[0] * layout.chunkGrid[1] * layout.chunkGrid[2];
-  return Array.from({ length: n }, (_, i) => i);
+  return Array.from({ length: chunkCount(layout) }, (_, i) => i);
+}
+
+/** [min, max] per chunk from [min, max] per 4^3 block (raster block order of the level). */
+export function chunkRangesOfBlocks(layout: ChunkLevelLayout, blockRanges: Float32Array): Float32Array {
+  const bg = layout.dims.map((n) => Math.ceil(n / 4));
+  const [gx, gy] = layout.chunkGrid;
+  const per = layout.chunkEdge / 4;
+  const out = new Float32Array(2 * chunkCount(layout));
+  for (let i = 0; i < out.length; i += 2) { out[i] = Infinity; out[i + 1] = -Infinity; }
+  for (let bz = 0; bz < bg[2]; bz++) {
+    for (let by = 0; by < bg[1]; by++) {
+      for (let bx = 0; bx < bg[0]; bx++) {
+        const b = bx + bg[0] * (by + bg[1] * bz);
+        const c = Math.floor(bx / per) + gx * (Math.floor(by / per) + gy * Math.floor(bz / per));
+        const lo = blockRanges[2 * b], hi = blockRanges[2 * b + 1];
+        if (lo < out[2 * c]) out[2 * c] = lo;
+        if (hi > out[2 * c + 1]) out[2 * c + 1] = hi;
+      }
+    }
+  }
+  return out;
 }
 const mib = (b: number) => (b / 2 ** 20).toFixed(1);

@@ -8,7 +8,8 @@ import { describeAdapter } from '../../gpu/device.ts';
 import { runBenchmark } from '../../bench/harness.ts';
 import { BENCH_MODES, isBenchMode, type BenchMode } from '../../bench/sequences.ts';
 import { numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
-import { budgetOption, createInputIsosurface, openInput } from './extract.ts';
+import { openInputSurface } from '../input.ts';
+import { budgetOption } from './extract.ts';
 
 function modesOption(text: string | undefined): BenchMode[] {
   if (text === undefined) return [...BENCH_MODES];
@@ -45,9 +46,9 @@ export const benchCommand: CliCommand = {
     if (rangeList && (rangeList.length !== 2 || !(rangeList[0] < rangeList[1]))) throw new UsageError('--range must be lo,hi with lo < hi');
     const budget = budgetOption(args);
     const gpu = await ctx.gpu();
-    const volume = await openInput(gpu.device, input, numberOption(args, 'rate'), numberOption(args, 'level'), (m) => ctx.log(m));
+    const volume = await openInputSurface(ctx, gpu, input, { rate: numberOption(args, 'rate'), level: numberOption(args, 'level'), budget });
     ctx.log(`${input}: ${volume.how}`);
-    const iso = await createInputIsosurface(ctx, gpu, volume, budget);
+    const { iso } = volume;
     try {
       // Default range: the middle 80% of the values (the paper excludes noise and near-empty surfaces).
       const [lo, hi] = iso.info.valueRange;
@@ -84,11 +85,10 @@ export const benchCommand: CliCommand = {
         options: { ...result.options, rate: volume.rate, memoryBudgetBytes: iso.memoryBudget },
         records: result.records,
         summaries: result.summaries,
-        ...('store' in volume ? { store: volume.store } : {}),
+        ...(volume.store ? { store: volume.store() } : {}),
       };
     } finally {
-      iso.destroy();
-      volume.stream.destroy();
+      volume.destroy();
     }
   },
 };

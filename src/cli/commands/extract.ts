@@ -8,19 +8,16 @@
 // voxel index space (voxel (i, j, k) at (i, j, k), as VTK places them), GPU
 // time; --ply writes each soup. A surface over the memory budget is recorded
 // as {iso, error}, the others are still computed, and the exit status is 1.
-import { readFileSync, writeFileSync } from 'node:fs';
+import { writeFileSync } from 'node:fs';
 import { basename } from 'node:path';
 import { describeAdapter } from '../../gpu/device.ts';
-import { Isosurface } from '../../isosurface/isosurface.ts';
 import { encodePly, weldVertices } from '../../mc/ply.ts';
 import { formatMB } from '../../isosurface/budget.ts';
 import { IsosurfaceBudgetError } from '../../isosurface/types.ts';
 import { decodeVertices } from '../../isosurface/vertex-format.ts';
-import { checkValueRange, describeOpenedVolume, isDefaultVolume, openDefaultVolume, openVolumeBytes, VolumeFileError } from '../../volume/open-volume.ts';
 import { meshMetrics } from '../../mc/mesh-metrics.ts';
-import { ZfpFormatError } from '../../zfp/format.ts';
-import { isStoreInput, openStoreInput } from '../../store/cli-input.ts';
-import { StoreError } from '../../store/zarr/errors.ts';
+import { LevelStoppedError } from '../../store/pinned-level.ts';
+import { openInputSurface } from '../input.ts';
 import { CommandFailed, numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
 
 export interface ExtractRecord {
@@ -40,62 +37,12 @@ export interface ExtractRecord {
   ply?: string;
 }
 
-/**
- * The pipeline for an opened input, refusing (UsageError, exit status 2) a
- * volume without finite values; logs what the user should know (NaN/Inf
- * replaced). Frees the stream on failure (shared with `bench`).
- */
-export async function createInputIsosurface(ctx: { log(m: string): void }, gpu: Parameters<typeof Isosurface.create>[0], volume: Awaited<ReturnType<typeof openInput>>, budget: number | undefined) {
-  for (const note of volume.notes) ctx.log(`note: ${note}`);
-  let iso: Isosurface | undefined;
-  try {
-    iso = await Isosurface.create(gpu, volume.stream, budget === undefined ? {} : { memoryBudgetBytes: budget });
-    checkValueRange(volume.fileName, iso.info.valueRange);
-    return iso;
-  } catch (e) {
-    iso?.destroy();
-    volume.stream.destroy();
-    if (e instanceof VolumeFileError) throw new UsageError(e.message);
-    throw e;
-  }
-}
-
 /** --cache-budget MB -> bytes (shared with `bench`). */
 export function budgetOption(args: Parameters<typeof numberOption>[0]): number | undefined {
   const mb = numberOption(args, 'cache-budget');
   if (mb === undefined) return undefined;
   if (!(mb > 0)) throw new UsageError('--cache-budget must be a positive number of MB');
   return mb * 2 ** 20;
-}
-
-/** Opens IN as a GPU zfp stream (src/volume/open-volume.ts, as the page does), with user mistakes as UsageErrors (shared with `bench`); a Zarr store (URL or folder) at --level L through src/store/. */
-export async function openInput(device: GPUDevice, path: string, rate: number | undefined, level?: number, log: (m: string) => void = () => {}) {
-  if (isStoreInput(path)) {
-    try {
-      return await openStoreInput(device, path, level, (m) => log(`error: ${m}`));
-    } catch (e) {
-      if (e instanceof StoreError || e instanceof ZfpFormatError) throw new UsageError(e.message);
-      throw e;
-    }
-  }
-  if (level !== undefined) throw new UsageError('--level is for a Zarr store (a URL or a folder with zarr.json)');
-  if (rate !== undefined && !(rate > 0)) throw new UsageError('--rate must be positive');
-  // `default`: the page's built-in volume, same field, same rate, same stream.
-  let bytes: Uint8Array | undefined;
-  if (!isDefaultVolume(path)) {
-    try {
-      bytes = new Uint8Array(readFileSync(path));
-    } catch (e) {
-      throw new UsageError(`cannot read ${path}: ${(e as Error).message}`);
-    }
-  }
-  try {
-    const v = bytes ? await openVolumeBytes(device, bytes, basename(path), { rate, reader: 'command' }) : await openDefaultVolume(device, rate === undefined ? {} : { rate });
-    return { stream: v.stream, how: describeOpenedVolume(v), rate: v.rate, notes: v.notes, fileName: v.fileName };
-  } catch (e) {
-    if (e instanceof VolumeFileError || e instanceof ZfpFormatError) throw new UsageError(e.message);
-    throw e;
-  }
 }
 
 export const extractCommand: CliCommand = {
@@ -116,9 +63,9 @@ export const extractCommand: CliCommand = {
     const budget = budgetOption(args);
     const plyPrefix = stringOption(args, 'ply');
     const gpu = await ctx.gpu();
-    const volume = await openInput(gpu.device, input, numberOption(args, 'rate'), numberOption(args, 'level'), (m) => ctx.log(m));
+    const volume = await openInputSurface(ctx, gpu, input, { rate: numberOption(args, 'rate'), level: numberOption(args, 'level'), budget });
     ctx.log(`${input}: ${volume.how}`);
-    const iso = await createInputIsosurface(ctx, gpu, volume, budget);
+    const { iso } = volume;
     const records: (ExtractRecord | { iso: number; error: string })[] = [];
     try {
       for (const value of isovalues) {
@@ -126,7 +73,7 @@ export const extractCommand: CliCommand = {
         try {
           stats = await iso.compute(value);
         } catch (e) {
-          if (!(e instanceof IsosurfaceBudgetError)) throw e;
+          if (!(e instanceof IsosurfaceBudgetError) && !(e instanceof LevelStoppedError)) throw e;
           ctx.log(`error: ${e.message}`);
           records.push({ iso: Math.fround(value), error: e.message });
           continue;
@@ -160,8 +107,7 @@ export const extractCommand: CliCommand = {
         );
       }
     } finally {
-      iso.destroy();
-      volume.stream.destroy();
+      volume.destroy();
     }
     const result = {
       input,
@@ -173,7 +119,7 @@ export const extractCommand: CliCommand = {
       adapter: describeAdapter(gpu.adapter),
       memoryBudgetBytes: iso.memoryBudget,
       isosurfaces: records,
-      ...('store' in volume ? { store: volume.store } : {}),
+      ...(volume.store ? { store: volume.store() } : {}),
     };
     // Surfaces that did not fit are failures: the JSON still gets every record, then the exit status says so.
     const failed = records.filter((r): r is { iso: number; error: string } => 'error' in r);

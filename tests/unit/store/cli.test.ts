@@ -1,11 +1,12 @@
 // `extract` and `bench` on stores. A bonsai store (from its rate-4 stream,
 // re-encoded at rate 4 by the converter, sharded) opened at level 0 gives
 // exactly the triangles of the in-core pipeline on the same volume
-// compressed by zfpy as one stream at the same rate; the record counts
-// every chunk of the level once, plus metadata and shard indexes; the
-// store's own messages reach the user.
+// compressed by zfpy as one stream at the same rate, while fetching only
+// the chunks the surfaces need: the chunks whose 27-chunk neighbourhood
+// range (computed here with NumPy from zarr-python's decode) holds one of
+// the isovalues, each once; the store's own messages reach the user.
 import { spawnSync } from 'node:child_process';
-import { mkdtempSync, readFileSync, rmSync, truncateSync } from 'node:fs';
+import { mkdtempSync, readdirSync, readFileSync, rmSync, statSync, truncateSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
@@ -16,13 +17,26 @@ const work = mkdtempSync(join(tmpdir(), 'store-cli-'));
 const store = join(work, 'bonsai.zarr');
 const oneStream = join(work, 'bonsai_256x256x256_float32.rate4.zfp');
 
+/** Bytes of every file of the range arrays (metadata and chunks). */
+function rangeBytes(root: string): number {
+  let total = 0;
+  const walk = (dir: string) => {
+    for (const e of readdirSync(dir, { withFileTypes: true })) {
+      if (e.isDirectory()) walk(join(dir, e.name));
+      else total += statSync(join(dir, e.name)).size;
+    }
+  };
+  walk(join(root, 'ranges'));
+  return total;
+}
+
 function cli(...args: string[]) {
   const r = spawnSync(process.execPath, ['--import', join(repoRoot, 'scripts/register-node-loaders.mjs'), join(repoRoot, 'src/cli/main.ts'), ...args], { encoding: 'utf8', timeout: 600_000 });
   return { status: r.status, stderr: r.stderr, stdout: r.stdout };
 }
 
 beforeAll(() => {
-  convert('volumes/bonsai_256x256x256_float32.rate4.zfp', store, ['--chunk', '64', '--rate', '4', '--shard', '2']);
+  convert('volumes/bonsai_256x256x256_float32.rate4.zfp', store, ['--chunk', '32', '--rate', '4', '--shard', '2']);
   // the converter's input: bonsai decoded by zfpy; the same volume as one stream at rate 4
   converterPython(`
 import sys, zfpy, numpy as np
@@ -42,13 +56,39 @@ describe('CLI on stores', () => {
     const s = JSON.parse(readFileSync(join(work, 'store.json'), 'utf8'));
     const c = JSON.parse(readFileSync(join(work, 'incore.json'), 'utf8'));
     expect(s.dims).toEqual([256, 256, 256]);
-    const tri = (r: { isosurfaces: { triangles: number; surfaceArea: number }[] }) => r.isosurfaces.map((x) => [x.triangles, x.surfaceArea]);
+    const tri = (r: { isosurfaces: { triangles: number }[] }) => r.isosurfaces.map((x) => x.triangles);
     expect(tri(s)).toEqual(tri(c));
+    // the same triangles, summed in another order (only the chunks fetched are in the pool)
+    s.isosurfaces.forEach((x: { surfaceArea: number }, i: number) => expect(Math.abs(x.surfaceArea / c.isosurfaces[i].surfaceArea - 1)).toBeLessThan(1e-12));
     expect(s.isosurfaces[0].triangles).toBeGreaterThan(10_000);
-    const chunkBytes = 12 + 16 ** 3 * 32 + 4;           // 64^3 at rate 4: 4096 blocks of 256 bits, header padded
-    expect(s.store).toMatchObject({ level: 0, chunks: 64, levelChunks: 64, chunkBytesFetched: 64 * chunkBytes });
-    // + metadata (zarr.json of the group and the level) + 8 shard indexes (8 x 16 + 4 bytes each)
-    expect(s.store.bytesFetched).toBe(s.store.chunkBytesFetched + s.store.metadataBytes + 8 * (8 * 16 + 4));
+    const chunkBytes = 12 + 8 ** 3 * 32 + 4;            // 32^3 at rate 4: 512 blocks of 256 bits, header padded
+    const needed = Number(converterPython(`
+import sys, zarr, numpy as np
+v = zarr.open_array(sys.argv[1] + '/0', mode='r')[:]     # z, y, x
+c = 32
+g = [n // c for n in v.shape]
+blocks = v.reshape(g[0], c, g[1], c, g[2], c)
+lo, hi = blocks.min(axis=(1, 3, 5)), blocks.max(axis=(1, 3, 5))
+def nb(a, f, fill):
+    p = np.pad(a, 1, constant_values=fill)
+    out = a.copy()
+    for dz in range(3):
+        for dy in range(3):
+            for dx in range(3):
+                out = f(out, p[dz:dz + g[0], dy:dy + g[1], dx:dx + g[2]])
+    return out
+nlo, nhi = nb(lo, np.minimum, np.inf), nb(hi, np.maximum, -np.inf)
+need = np.zeros(lo.shape, bool)
+for iso in [np.float32(x) for x in sys.argv[2].split(',')]:
+    need |= (nlo < iso) & (iso <= nhi)
+print(int(need.sum()))
+`, [store, isos]));
+    expect(needed).toBeGreaterThan(0);
+    expect(needed).toBeLessThan(512);
+    expect(s.store).toMatchObject({ level: 0, chunks: needed, levelChunks: 512, chunkBytesFetched: needed * chunkBytes });
+    // + metadata (zarr.json of the group, the levels, the range arrays), the range arrays' chunks and at most 64 shard indexes (8 x 16 + 4 bytes each)
+    expect(s.store.bytesFetched).toBeGreaterThan(s.store.chunkBytesFetched + s.store.metadataBytes);
+    expect(s.store.bytesFetched).toBeLessThanOrEqual(s.store.chunkBytesFetched + s.store.metadataBytes + rangeBytes(store) + 64 * (8 * 16 + 4));
   });
 
   it('bench --level 1 runs on the level; a damaged chunk is reported naming it', () => {
@@ -56,7 +96,9 @@ describe('CLI on stores', () => {
     expect(r.status, r.stderr).toBe(0);
     const b = JSON.parse(readFileSync(join(work, 'bench.json'), 'utf8'));
     expect(b.volume.dims).toEqual([128, 128, 128]);
-    expect(b.store).toMatchObject({ level: 1, chunks: 8 });
+    expect(b.store.level).toBe(1);
+    expect(b.store.chunks).toBeGreaterThan(0);
+    expect(b.store.chunks).toBeLessThanOrEqual(64);
     expect(cli('extract', store, '--level', '7', '--iso', '1').stderr).toMatch(/--level 7 does not exist \(levels 0 to \d\)/);
     truncateSync(join(store, '1/c/0/0/0'), 1000);    // the level-1 shard: its index is gone
     const bad = cli('extract', store, '--level', '1', '--iso', '50');

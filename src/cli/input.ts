@@ -1,0 +1,75 @@
+// The input of `extract` and `bench` as one surface: a volume file (zfp,
+// raw, NRRD, TIFF stack, or `default`) opened as the page opens it
+// (src/volume/open-volume.ts) with the isosurface pipeline over its stream,
+// or a Zarr store (URL or folder) streamed at --level L (src/store/): each
+// isovalue fetches only the chunks its surface needs. User mistakes become
+// UsageErrors (exit status 2); everything made is freed on failure.
+import { readFileSync } from 'node:fs';
+import { basename } from 'node:path';
+import type { GpuContext } from '../gpu/device.ts';
+import { Isosurface } from '../isosurface/isosurface.ts';
+import { isStoreInput, openStoreInput, type StoreRecord } from '../store/cli-input.ts';
+import { StoreError } from '../store/zarr/errors.ts';
+import { checkValueRange, describeOpenedVolume, isDefaultVolume, openDefaultVolume, openVolumeBytes, VolumeFileError } from '../volume/open-volume.ts';
+import { ZfpFormatError } from '../zfp/format.ts';
+import { UsageError } from './command.ts';
+
+/** What `extract` and `bench` use of a surface: an Isosurface, or a store level (PinnedLevelSurface). */
+export type InputSurface = Pick<Isosurface, 'info' | 'compute' | 'readVertices' | 'resetCache' | 'memoryBudget' | 'destroy'>;
+
+export interface OpenedInput {
+  iso: InputSurface;
+  how: string;
+  rate: number;
+  notes: string[];
+  /** A store's figures (bytes fetched, chunks), for the JSON record. */
+  store?: () => StoreRecord;
+  destroy(): void;
+}
+
+/** --level is for stores; `budget`: the pipeline's memory budget (for a store: pools, cache and vertices together). */
+export async function openInputSurface(ctx: { log(m: string): void }, gpu: GpuContext, path: string, opts: { rate?: number; level?: number; budget?: number }): Promise<OpenedInput> {
+  if (isStoreInput(path)) {
+    try {
+      const s = await openStoreInput(gpu, path, opts.level, opts.budget, (m) => ctx.log(`error: ${m}`));
+      for (const note of s.notes) ctx.log(`note: ${note}`);
+      return { iso: s.surface, how: s.how, rate: s.rate, notes: s.notes, store: s.record, destroy: () => s.surface.destroy() };
+    } catch (e) {
+      if (e instanceof StoreError || e instanceof ZfpFormatError) throw new UsageError(e.message);
+      throw e;
+    }
+  }
+  if (opts.level !== undefined) throw new UsageError('--level is for a Zarr store (a URL or a folder with zarr.json)');
+  const { rate } = opts;
+  if (rate !== undefined && !(rate > 0)) throw new UsageError('--rate must be positive');
+  // `default`: the page's built-in volume, same field, same rate, same stream.
+  let bytes: Uint8Array | undefined;
+  if (!isDefaultVolume(path)) {
+    try {
+      bytes = new Uint8Array(readFileSync(path));
+    } catch (e) {
+      throw new UsageError(`cannot read ${path}: ${(e as Error).message}`);
+    }
+  }
+  let v;
+  try {
+    v = bytes ? await openVolumeBytes(gpu.device, bytes, basename(path), { rate, reader: 'command' }) : await openDefaultVolume(gpu.device, rate === undefined ? {} : { rate });
+  } catch (e) {
+    if (e instanceof VolumeFileError || e instanceof ZfpFormatError) throw new UsageError(e.message);
+    throw e;
+  }
+  for (const note of v.notes) ctx.log(`note: ${note}`);
+  let iso: Isosurface | undefined;
+  try {
+    iso = await Isosurface.create(gpu, v.stream, opts.budget === undefined ? {} : { memoryBudgetBytes: opts.budget });
+    checkValueRange(v.fileName, iso.info.valueRange);
+  } catch (e) {
+    iso?.destroy();
+    v.stream.destroy();
+    if (e instanceof VolumeFileError) throw new UsageError(e.message);
+    throw e;
+  }
+  const stream = v.stream;
+  const made = iso;
+  return { iso: made, how: describeOpenedVolume(v), rate: v.rate, notes: v.notes, destroy: () => { made.destroy(); stream.destroy(); } };
+}

@@ -1,0 +1,78 @@
+// One level of a store as one surface for the CLI (`extract` / `bench`
+// STORE --level L): the stream controller pinned to level L, so each
+// isovalue fetches only the chunks its surface needs at that level (plan.ts)
+// into the level's pool of compressed chunks, then computes the surface with
+// the one isosurface pipeline over that pool. What `extract` and `bench`
+// read of an Isosurface (info, compute, readVertices, resetCache,
+// memoryBudget), with the store's figures for their records.
+import type { Isosurface } from '../isosurface/isosurface.ts';
+import type { IsosurfaceStats, VolumeInfo } from '../isosurface/types.ts';
+import type { ChunkedVolume } from '../zfp/chunked-volume.ts';
+import type { StreamController } from './stream-controller.ts';
+
+/** The level could not show a surface at this isovalue (over the budget, a failed chunk): the controller's reason. */
+export class LevelStoppedError extends Error {
+  constructor(message: string) {
+    super(message);
+    this.name = 'LevelStoppedError';
+  }
+}
+
+export type ChunkStreamController = StreamController<ChunkedVolume, IsosurfaceStats, Isosurface>;
+
+export class PinnedLevelSurface {
+  readonly info: VolumeInfo;
+  #reason: string | null = null;
+  #errors: string[] = [];
+
+  constructor(
+    readonly controller: ChunkStreamController,
+    readonly level: number,
+  ) {
+    controller.finest = level;
+    controller.coarsest = level;
+    const { dims } = controller.levels[level].layout;
+    const blockGrid = dims.map((n) => Math.ceil(n / 4)) as [number, number, number];
+    this.info = { dims: [...dims], blockGrid, blockCount: blockGrid[0] * blockGrid[1] * blockGrid[2], valueRange: controller.valueRange ?? [0, 0] };
+    controller.onProgress((p) => {
+      if (p.phase === 'stopped') this.#reason = p.reason ?? `level ${level} stopped`;
+    });
+    controller.onError((e) => this.#errors.push(e.message));
+  }
+
+  /** Messages of chunks that failed (after their retries), in order. */
+  get errors(): readonly string[] {
+    return this.#errors;
+  }
+
+  get memoryBudget(): number {
+    return this.controller.budgetBytes;
+  }
+
+  /** Fetches what the surface at `iso` needs at this level, then computes it. */
+  async compute(iso: number): Promise<IsosurfaceStats> {
+    this.#reason = null;
+    await this.controller.setIsovalue(iso);
+    const shown = this.controller.shown;
+    if (!shown || shown.level !== this.level || shown.iso !== iso) {
+      throw new LevelStoppedError(this.#reason ?? `level ${this.level}: no surface at isovalue ${iso}`);
+    }
+    // a store without range arrays: its value range is known once a level was resident whole
+    if (this.info.valueRange[0] === this.info.valueRange[1]) this.info.valueRange = this.controller.valueRange ?? this.info.valueRange;
+    return shown.stats;
+  }
+
+  readVertices(): Promise<Uint32Array> {
+    const shown = this.controller.shown;
+    return shown ? shown.surface.readVertices() : Promise.resolve(new Uint32Array(0));
+  }
+
+  /** Empties the block cache (the pool of compressed chunks stays: that is the network's cache). */
+  resetCache(): void {
+    this.controller.shown?.surface.resetCache();
+  }
+
+  destroy(): void {
+    this.controller.destroy();
+  }
+}
