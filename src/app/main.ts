@@ -11,6 +11,7 @@ import { setInfoList } from './info-list.ts';
 import { chooseIsovalue } from './iso-choice.ts';
 import { VolumeLoader } from './loading/loader.ts';
 import { mountStoreView, storeParameter } from './store/mount.ts';
+import type { StoreView } from './store/store-view.ts';
 import { Messages, showFatal } from './messages.ts';
 import { publishPageState, type PageState } from './page-state.ts';
 import { Session } from './session.ts';
@@ -89,6 +90,7 @@ async function start(): Promise<void> {
 
   const initialView = ViewLink.initial();
   let pendingIso = initialView.iso;
+  let storeView: StoreView | undefined;
   let volumeUrl: string | undefined;
 
   const isoControl = new IsoControl(
@@ -196,6 +198,7 @@ async function start(): Promise<void> {
       messages.show('A benchmark is running: cancel it before opening another volume.', 'info', 4000);
       return;
     }
+    storeView?.close(); // a store being streamed stops; its level stays until the new volume replaces it
     nextUrl = undefined;
     void load();
   };
@@ -247,11 +250,20 @@ async function start(): Promise<void> {
   // The first volume: ?store= or ?url= when given (falling back to the built-in one if it fails).
   const url = urlParameter();
   const storeUrl = storeParameter();
-  const storeView = mountStoreView({
-    gpu, loader, budgetBytes: () => budget.bytes, onError: (m) => messages.show(m), currentName: () => session.current?.opened.name,
-    keepView: () => { pendingIso = isoControl.value; session.pendingCamera = viewer.camera.getState(); },
+  storeView = mountStoreView({
+    gpu, budgetBytes: () => budget.bytes, onError: (m) => messages.show(m),
+    // each level the store's controller shows becomes the volume on screen; a finer or coarser one keeps the camera
+    install: (v, level, first) => {
+      if (!first) session.pendingCamera = viewer.camera.getState();
+      session.install(v);
+      link?.setLevel(level);
+    },
+    linkIso: ([lo, hi]) => {
+      const wanted = pendingIso;
+      pendingIso = undefined;
+      return wanted !== undefined && wanted >= lo && wanted <= hi ? wanted : undefined;
+    },
     linkLevel: () => initialView.level,
-    onLevel: (level) => link?.setLevel(level),
   });
   if (storeUrl) {
     await storeView.open(storeUrl);

@@ -114,6 +114,7 @@ export class ActiveBlocks {
       const groupParams = uniform('Isosurface.changedChunks.groupParams', 16);
       this.chunkUpdate = {
         pool,
+        changes: pool.changeLog(),
         list,
         decodeParams,
         regionParams,
@@ -140,7 +141,7 @@ export class ActiveBlocks {
   encodeChunkUpdates(encoder: GPUCommandEncoder): number {
     const u = this.chunkUpdate;
     if (!u) return 0;
-    const changed = u.pool.takeChangedChunks();
+    const changed = u.changes.take();
     if (changed.length === 0) return 0;
     const { device } = this;
     const count = changed.length;
@@ -259,6 +260,7 @@ export class ActiveBlocks {
   }
 
   destroy(): void {
+    this.chunkUpdate?.changes.close();
     for (const b of this.buffers()) b.destroy();
   }
 }
@@ -275,6 +277,8 @@ interface ActiveLayouts {
 
 interface ChunkUpdate {
   pool: ChunkedVolume;
+  /** This surface's log of chunks put or evicted (ChunkedVolume.changeLog). */
+  changes: ReturnType<ChunkedVolume['changeLog']>;
   list: GPUBuffer;
   decodeParams: GPUBuffer;
   regionParams: GPUBuffer;

@@ -16,7 +16,7 @@
 // chunk and its page-table entry with queue.writeBuffer (ordered after work
 // already submitted) and note the chunk as changed; the isosurface pipeline
 // takes the changed chunks before its next surface and recomputes the block
-// ranges of just those chunks on the GPU (takeChangedChunks).
+// ranges of just those chunks on the GPU (changeLog: one per surface, so a surface made later starts from every resident chunk).
 
 import { formatDims } from '../core/naming.ts';
 import { openZfpStream, planZfpStream } from './format.ts';
@@ -107,7 +107,8 @@ export class ChunkedVolume implements BlockSource {
   private readonly params: GPUBuffer;
   private readonly slotOf = new Map<ChunkIndex, number>();
   private readonly freeSlots: number[] = [];
-  private readonly changed = new Set<ChunkIndex>();
+  /** One change log per reader (each Isosurface over this pool), so a surface created later still sees every resident chunk. */
+  private readonly changeLogs = new Set<Set<ChunkIndex>>();
   /** A checksum of the bytes each chunk index was first put with (kept after evictions). */
   private readonly checksums = new Map<ChunkIndex, number>();
   private readonly word = new Uint32Array(1);
@@ -292,7 +293,7 @@ export class ChunkedVolume implements BlockSource {
     this.device.queue.writeBuffer(shard.buffer, (slot - shard.firstSlot) * this.layout.chunkBytes, bytes.buffer, bytes.byteOffset, bytes.byteLength);
     this.word[0] = slot;
     this.device.queue.writeBuffer(this.pageTable, chunk * 4, this.word);
-    this.changed.add(chunk);
+    for (const log of this.changeLogs) log.add(chunk);
   }
 
   /** Frees the chunk's slot; its blocks become inactive from the next surface on. */
@@ -303,14 +304,26 @@ export class ChunkedVolume implements BlockSource {
     this.freeSlots.push(slot);
     this.word[0] = NONE;
     this.device.queue.writeBuffer(this.pageTable, chunk * 4, this.word);
-    this.changed.add(chunk);
+    for (const log of this.changeLogs) log.add(chunk);
   }
 
-  /** The chunks put or evicted since the last call (the pipeline recomputes their ranges). */
-  takeChangedChunks(): ChunkIndex[] {
-    const out = [...this.changed];
-    this.changed.clear();
-    return out;
+  /**
+   * A reader's view of the changes: `take()` gives the chunks put or evicted
+   * since its last call (the pipeline recomputes their ranges); the first
+   * call gives every chunk resident when the reader was made. `close()` when
+   * the reader goes.
+   */
+  changeLog(): { take(): ChunkIndex[]; close(): void } {
+    const log = new Set<ChunkIndex>(this.slotOf.keys());
+    this.changeLogs.add(log);
+    return {
+      take: () => {
+        const out = [...log];
+        log.clear();
+        return out;
+      },
+      close: () => { this.changeLogs.delete(log); },
+    };
   }
 
   destroy(): void {

@@ -1,8 +1,10 @@
 // A store served by the preview server (/stores/, scripts/vite-stores.ts):
 // `?store=` shows the coarsest level first, every finer level replaces it
-// until level 0; the panel's figures agree with the CLI's records on the
-// same store (chunk bytes per level, triangles at the same isovalue), and
-// an unknown store is a message naming it while the page stays usable.
+// until level 0, fetching only the chunks the surface needs; the panel's
+// figures agree with the CLI's records on the same store (chunks and chunk
+// bytes fetched at level 0, triangles at the same isovalue); scrubbing goes
+// through the stream; an unknown store is a message naming it while the
+// page stays usable.
 import { execFileSync } from 'node:child_process';
 import { mkdirSync, rmSync } from 'node:fs';
 import { join } from 'node:path';
@@ -16,7 +18,12 @@ const root = fileURLToPath(new URL('../../', import.meta.url));
 const stores = join(root, 'test-results', 'stores');
 const store = join(stores, 'neghip-e2e.zarr');
 
-interface StoreState { done: boolean; shownLevel: number; shownLevels: number[]; chunkBytesFetched: number; bytesFetched: number; reason: string | null; levels: { storedBytes: number; chunks: number }[] }
+interface StoreState {
+  done: boolean; shownLevel: number; shownLevels: number[]; chunkBytesFetched: number; bytesFetched: number; chunksFetched: number; reason: string | null;
+  levels: { storedBytes: number; chunks: number; chunkBytes: number; chunksFetched: number; chunkBytesFetched: number }[];
+  gpu: { total: number; budget: number };
+}
+const storeState = (page: import('@playwright/test').Page) => page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore) as Promise<StoreState>;
 
 test.beforeAll(() => {
   rmSync(store, { recursive: true, force: true });
@@ -28,19 +35,34 @@ test('?store= shows coarse to fine; panel figures equal the CLI records', async 
   test.setTimeout(300_000);
   const errors = watchErrors(page);
   await openApp(page, '/?store=/stores/neghip-e2e.zarr#iso=80');
-  const st = (await page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore)) as StoreState;
-  expect(st.done).toBe(true);
+  await page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, { timeout: 240_000 });
+  const st = await storeState(page);
   expect(st.reason).toBeNull();
   expect(st.shownLevels).toEqual([3, 2, 1, 0]);
-  expect(st.chunkBytesFetched).toBe(st.levels.reduce((a, l) => a + l.storedBytes, 0));
+  // only what the surface needs: at most every chunk of every level, each once; within the budget
+  expect(st.chunkBytesFetched).toBe(st.levels.reduce((a, l) => a + l.chunksFetched * l.chunkBytes, 0));
+  expect(st.levels[0].chunksFetched).toBeGreaterThan(0);
+  expect(st.levels[0].chunksFetched).toBeLessThan(st.levels[0].chunks);
+  expect(st.gpu.total).toBeLessThanOrEqual(st.gpu.budget);
   await expect(page.locator('#store-section table.store-levels tbody tr')).toHaveCount(4);
-  await expect(page.locator('#store-section dd[data-k="chunks"]')).toHaveText(String(st.levels.reduce((a, l) => a + l.chunks, 0)));
+  await expect(page.locator('#store-section dd[data-k="chunks"]')).toHaveText(String(st.chunksFetched));
   await expect(page.locator('#store-section dd[data-k="bytes"]')).toHaveText(`${(st.bytesFetched / 2 ** 20).toFixed(2)} MiB`);
   await expect(page.locator('#store-progress')).toContainText('level 0 (full resolution)');
   const cli = await runCli<{ store: { chunkBytesFetched: number; chunks: number }; isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', '--iso', '80']);
-  expect(cli.store.chunkBytesFetched).toBe(st.levels[0].storedBytes);
-  expect(cli.store.chunks).toBe(st.levels[0].chunks);
+  expect(cli.store.chunks).toBe(st.levels[0].chunksFetched);
+  expect(cli.store.chunkBytesFetched).toBe(st.levels[0].chunkBytesFetched);
   expect(await trianglesShown(page)).toBe(cli.isosurfaces[0].triangles);
+
+  // scrubbing streams: a new isovalue ends at level 0 with the CLI's triangles there
+  await page.locator('#iso-value').fill('40');
+  await page.locator('#iso-value').press('Enter');
+  await page.waitForFunction(() => {
+    const s = (window as unknown as { zfpisoStore?: { done: boolean; shownLevel: number } }).zfpisoStore;
+    const p = (window as unknown as { zfpiso?: { stats?: { isovalue: number } } }).zfpiso;
+    return s?.done === true && s.shownLevel === 0 && p?.stats?.isovalue === 40;
+  }, null, { timeout: 240_000 });
+  const cli40 = await runCli<{ isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', '--iso', '40']);
+  expect(await trianglesShown(page)).toBe(cli40.isosurfaces[0].triangles);
   expect(errors).toEqual([]);
 });
 
@@ -55,10 +77,10 @@ test('a picked .zarr folder opens like the served store', async ({ page }) => {
   await openApp(page, '/#iso=80');
   await page.locator('input[webkitdirectory]').setInputFiles(store);
   await page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, { timeout: 240_000 });
-  const st = (await page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore)) as StoreState & { url: string };
+  const st = (await storeState(page)) as StoreState & { url: string };
   expect(st.url).toBe('neghip-e2e.zarr');
   expect(st.shownLevels).toEqual([3, 2, 1, 0]);
-  expect(st.chunkBytesFetched).toBe(st.levels.reduce((a, l) => a + l.storedBytes, 0));
+  expect(st.chunkBytesFetched).toBe(st.levels.reduce((a, l) => a + l.chunksFetched * l.chunkBytes, 0));
   await expect(page.locator('#store-progress')).toContainText('neghip-e2e.zarr: level 0 (full resolution)');
   expect(errors).toEqual([]);
 });
@@ -66,7 +88,9 @@ test('a picked .zarr folder opens like the served store', async ({ page }) => {
 test('the link keeps the level: #level=1 stops at level 1, and the hash says level=1', async ({ page }) => {
   test.setTimeout(300_000);
   await openApp(page, '/?store=/stores/neghip-e2e.zarr#iso=80&level=1');
-  const st = (await page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore)) as StoreState;
+  await page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, { timeout: 240_000 });
+  const st = await storeState(page);
+  expect(st.levels[0].chunksFetched).toBe(0);
   expect(st.shownLevels).toEqual([3, 2, 1]);
   expect(st.reason).toBe('the link asks for level 1');
   await page.waitForFunction(() => /(^|&|#)level=1(&|$)/.test(location.hash) && /iso=80/.test(location.hash), null, { timeout: 10_000 });

@@ -10,8 +10,11 @@ import { checkValueRange, type OpenedVolume } from '../../volume/open-volume.ts'
 import { createIsosurface, type PageIsosurface } from '../engine.ts';
 import { LoadCancelled } from './read.ts';
 
+/** An opened volume as the page keeps it: the stream is only freed through it (a store level's belongs to the store). */
+export type PageVolume = Omit<OpenedVolume, 'stream'> & { stream: { destroy(): void } };
+
 export interface SurfaceVolume {
-  opened: OpenedVolume;
+  opened: PageVolume;
   iso: PageIsosurface;
   /** [min, max] per block (block profile, isovalue choice). */
   ranges: Float32Array;

@@ -103,11 +103,6 @@ export class VolumeLoader {
     });
   }
 
-  /** A volume produced elsewhere (a store's level, src/app/store/), through the same install path. */
-  loadProduced(what: string, produce: (signal: AbortSignal, progress: (text: string, f?: number) => void) => Promise<OpenedVolume | undefined>): Promise<void> {
-    return this.run(what, produce);
-  }
-
   private async open(fileName: string, bytes: Uint8Array, signal: AbortSignal, progress: (text: string, f?: number) => void): Promise<OpenedVolume | undefined> {
     progress('Checking the file…', 0.3);
     const facts: VolumeFileFacts = await inspectVolumeFile(fileName, bytes);

@@ -2,7 +2,7 @@
 // "Store" section at the top of the panel, the loader's install path, and
 // window.zfpisoStore for the page tests.
 import type { GpuContext } from '../../gpu/device.ts';
-import type { VolumeLoader } from '../loading/loader.ts';
+import type { LoadedVolume } from '../loading/loader.ts';
 import { droppedFolder, pickDirectory, pickedFolder } from './folder.ts';
 import { StoreView, type StorePageState } from './store-view.ts';
 
@@ -12,13 +12,11 @@ export function storeParameter(): string | null {
 
 export function mountStoreView(p: {
   gpu: GpuContext;
-  loader: VolumeLoader;
-  keepView(): void;
-  currentName(): string | undefined;
+  install(volume: LoadedVolume, level: number, first: boolean): void;
+  linkIso(valueRange: [number, number]): number | undefined;
   budgetBytes(): number;
   onError(m: string): void;
   linkLevel(): number | undefined;
-  onLevel(level: number): void;
 }): StoreView {
   const line = document.createElement('div');
   line.id = 'store-progress';
@@ -34,14 +32,11 @@ export function mountStoreView(p: {
   const w = window as unknown as { zfpisoStore?: StorePageState };
   const view = new StoreView({
     gpu: p.gpu,
-    load: (what, produce) => p.loader.loadProduced(what, produce),
-    keepView: p.keepView,
-    installed: (name) => p.currentName() === name,
-    busy: () => p.loader.busy,
+    install: p.install,
+    linkIso: p.linkIso,
     budgetBytes: p.budgetBytes,
     onError: p.onError,
     linkLevel: p.linkLevel,
-    onLevel: p.onLevel,
     publish: (s) => { w.zfpisoStore = s; },
     line,
     panel,

@@ -1,65 +1,69 @@
-// The page's store view (`?store=URL`): opens a Zarr store of zfp chunks
-// (src/store/), then shows its levels coarsest first, each one replacing
-// the coarser surface once it is on the GPU, with a progress line (level,
-// chunks done / needed, bytes) and a panel (levels, network, memory).
-// Interim: until the GPU chunk pool (ChunkedVolume) is merged, a level is
-// fetched whole and assembled into one zfp stream (src/store/assemble.ts,
-// no decode), then opened through the page's usual loader; a level whose
-// stream exceeds half the memory budget is not loaded, and the panel says so.
-// Errors keep the current surface (the loader's rule) and name the store.
+// The page's store view (`?store=URL`, a dropped or picked `.zarr` folder):
+// opens a Zarr store of zfp chunks (src/store/) and hands it to the stream
+// controller, which fetches only the chunks the surface needs into GPU pools
+// of compressed chunks: the coarsest level first, then refinement level by
+// level, each finer level replacing the coarser surface once every chunk it
+// needs is resident. Each level the controller shows is installed in the
+// session as the volume on screen (store-surface.ts), so the isovalue
+// slider, the statistics and the exports work as for any volume, and
+// scrubbing goes through the controller (newest wins, stale requests
+// aborted). A progress line (level, chunks done / needed, bytes) and a panel
+// (levels, network, memory). Errors name the store; the current surface stays.
 import type { AsyncReadable } from '@zarrita/storage';
 import { FetchStore } from 'zarrita';
 import type { GpuContext } from '../../gpu/device.ts';
-import { assembleLevelStream, assemblyLimit } from '../../store/assemble.ts';
 import { ChunkFetcher } from '../../store/fetch/chunk-fetcher.ts';
-import type { ChunkIndex } from '../../store/types.ts';
+import { chunkedGpu } from '../../store/gpu-port.ts';
+import type { ChunkStreamController } from '../../store/pinned-level.ts';
+import { StreamController, type StreamProgress } from '../../store/stream-controller.ts';
 import { StoreError } from '../../store/zarr/errors.ts';
 import { openZfpStore, type ZfpStore } from '../../store/zarr/open-store.ts';
 import { MeteredStore } from '../../store/zarr/stores.ts';
-import { inspectVolumeFile, openVolumeFile, type OpenedVolume } from '../../volume/open-volume.ts';
+import { chooseIsovalue } from '../iso-choice.ts';
+import type { LoadedVolume } from '../loading/loader.ts';
+import { renderStorePanel, type StorePageState } from './store-panel.ts';
+import { type ShownLevel, StoreLevelIsosurface } from './store-surface.ts';
 
-type Produce = (signal: AbortSignal, progress: (text: string, f?: number) => void) => Promise<OpenedVolume | undefined>;
+export type { StorePageState };
 
 export interface StoreViewDeps {
   gpu: GpuContext;
-  /** The loader's install path (VolumeLoader.loadProduced). */
-  load(what: string, produce: Produce): Promise<void>;
-  /** Before a finer level replaces the shown one: carry the isovalue and the camera over. */
-  keepView(): void;
-  /** True while the loader opens something (the user's file): a store level never cancels it. */
-  busy(): boolean;
-  /** True when the last load installed its volume. */
-  installed(name: string): boolean;
+  /** Puts a level on screen as the current volume (Session.install); `first` for the store's first level. */
+  install(volume: LoadedVolume, level: number, first: boolean): void;
+  /** The isovalue to open at when the page's link gives one inside the value range. */
+  linkIso(valueRange: [number, number]): number | undefined;
   budgetBytes(): number;
   onError(message: string): void;
   /** The finest level to show (a link's #level=), or undefined for level 0. */
   linkLevel(): number | undefined;
-  /** The level now shown, for the link. */
-  onLevel(level: number): void;
   /** Where the page tests read the figures (window.zfpisoStore). */
   publish(state: StorePageState): void;
   line: HTMLElement;
   panel: HTMLElement;
 }
 
-export interface StorePageState {
-  url: string;
-  levels: { level: number; dims: number[]; chunks: number; chunkBytes: number; storedBytes: number }[];
-  shownLevel: number | null;
-  /** Levels in the order they replaced each other on screen. */
-  shownLevels: number[];
-  done: boolean;
-  bytesFetched: number;
-  chunkBytesFetched: number;
-  requests: number;
-  chunksFetched: number;
-  reason: string | null;
-}
-
 const mib = (b: number) => `${(b / 2 ** 20).toFixed(2)} MiB`;
+
+interface OpenStore {
+  url: string;
+  store: ZfpStore;
+  metered: MeteredStore;
+  fetcher: ChunkFetcher;
+  controller: ChunkStreamController;
+  valueRange: [number, number];
+  state: StorePageState;
+  current: StoreLevelIsosurface | null;
+  /** Refinements started and not yet ended (the isovalue changed meanwhile). */
+  running: number;
+  lastProgress: StreamProgress | null;
+}
 
 export class StoreView {
   #gen = 0;
+  #open: OpenStore | null = null;
+  /** True while this view installs another level of its store (the session then lets the previous one go). */
+  #replacing = false;
+
   constructor(private readonly d: StoreViewDeps) {}
 
   /** A store by URL (same origin, or another one with CORS). */
@@ -67,119 +71,164 @@ export class StoreView {
     return this.openStore(new FetchStore(new URL(url, location.href).href), url);
   }
 
-  /** Any store (a dropped or picked folder: zarr/stores.ts); `url` names it in messages. */
+  /** Stops streaming the open store (another volume is being opened); its level on screen stays until replaced. */
+  close(): void {
+    this.#gen++;
+    const o = this.#open;
+    if (!o) return;
+    this.#open = null;
+    o.controller.destroy();
+    if (o.current) this.#line('');
+  }
+
+  /** Any store (a dropped or picked folder: zarr/stores.ts); `url` names it in messages. Resolves when the first isovalue's refinement ends. */
   async openStore(source: AsyncReadable, url: string): Promise<void> {
     const gen = ++this.#gen;
     const metered = new MeteredStore(source);
     let store: ZfpStore;
+    let controller: ChunkStreamController;
     this.#line(`Opening ${url}…`);
+    const fetcher = (s: ZfpStore) => new ChunkFetcher(s, { maxInFlight: 8 });
+    let f: ChunkFetcher;
     try {
       store = await openZfpStore(metered, url);
+      f = fetcher(store);
+      controller = await StreamController.create(store, f, chunkedGpu(this.d.gpu), this.d.budgetBytes());
     } catch (e) {
-      this.#line('');
+      if (gen === this.#gen) this.#line('');
       this.d.onError(e instanceof StoreError ? e.message : `${url}: ${(e as Error).message}`);
       return;
     }
-    const st: StorePageState = {
-      url, shownLevel: null, shownLevels: [], done: false, bytesFetched: 0, chunkBytesFetched: 0, requests: 0, chunksFetched: 0, reason: null,
-      levels: store.levels.map((l) => ({ level: l.index, dims: l.layout.dims, chunks: l.chunkCount, chunkBytes: l.layout.chunkBytes, storedBytes: l.storedBytes })),
-    };
-    for (const note of store.notes) this.d.onError(`${url}: ${note}`);
-    const fetcher = new ChunkFetcher(store, { maxInFlight: 8 });
-    const update = () => {
-      const c = fetcher.counters;
-      Object.assign(st, { bytesFetched: metered.meter.bytes, chunkBytesFetched: c.bytesFetched, requests: metered.meter.requests });
-      this.#panel(store, st, fetcher);
-      this.d.publish({ ...st });
-    };
-    update();
-    let lastName: string | null = null;
+    if (gen !== this.#gen) { controller.destroy(); return; }
+    // the previous store (if any) stops here; its level stays on screen until this one's first level replaces it
+    const previous = this.#open;
+    if (previous) previous.controller.destroy();
     const finest = Math.min(this.d.linkLevel() ?? 0, store.levels.length - 1);
-    if (finest > 0) st.reason = `the link asks for level ${finest}`;
-    for (let L = store.levels.length - 1; L >= finest && gen === this.#gen; L--) {
-      const lv = store.levels[L];
-      const streamBytes = lv.storedBytes;
-      const limit = assemblyLimit(lv.layout, 2 ** 31); // one CPU buffer before upload
-      if (limit) {
-        st.reason = `${limit}; level ${L + 1} stays`;
-        break;
+    controller.finest = finest;
+    const state: StorePageState = {
+      url, shownLevel: null, shownLevels: [], done: false, bytesFetched: 0, chunkBytesFetched: 0, requests: 0, chunksFetched: 0,
+      reason: finest > 0 ? `the link asks for level ${finest}` : null,
+      levels: store.levels.map((l) => ({ level: l.index, dims: l.layout.dims, chunks: l.chunkCount, chunkBytes: l.layout.chunkBytes, storedBytes: l.storedBytes, chunksFetched: 0, chunkBytesFetched: 0 })),
+      gpu: { pools: 0, surfaces: 0, total: 0, budget: controller.budgetBytes },
+    };
+    const o: OpenStore = { url, store, metered, fetcher: f, controller, valueRange: controller.valueRange ?? [0, 0], state, current: null, running: 0, lastProgress: null };
+    this.#open = o;
+    for (const note of store.notes) this.d.onError(`${url}: ${note}`);
+    const fetchedOnce = new Set<string>();
+    f.onChunk((level, chunk, bytes, fromCache) => {
+      if (fromCache || fetchedOnce.has(`${level}:${chunk}`)) return;
+      fetchedOnce.add(`${level}:${chunk}`);
+      state.chunksFetched++;
+      state.levels[level].chunksFetched++;
+      state.levels[level].chunkBytesFetched += bytes.byteLength;
+    });
+    controller.onProgress((p) => this.#progress(o, p));
+    controller.onShown((s) => this.#shown(o, s));
+    controller.onError((e) => this.d.onError(e.message));
+    this.#publish(o);
+
+    // The isovalue: the link's, else Otsu over the finest known chunk ranges. A
+    // store without range arrays shows its coarsest level (fetched whole) first,
+    // whose block ranges then give the value range and the choice.
+    let iso = this.d.linkIso(o.valueRange);
+    if (iso === undefined) {
+      let ranges: Float32Array | null = null;
+      for (let L = finest; L < store.levels.length && !ranges; L++) ranges = controller.chunkRanges(L);
+      if (!ranges) {
+        controller.finest = controller.coarsest;
+        await this.#refine(o, 0);
+        if (gen !== this.#gen) return;
+        controller.finest = finest;
+        ranges = controller.chunkRanges(controller.coarsest);
+        o.valueRange = controller.valueRange ?? o.valueRange;
+        if (o.current) (o.current.info as { valueRange: [number, number] }).valueRange = o.valueRange;
       }
-      if (streamBytes > this.d.budgetBytes() / 2) {
-        st.reason = `level ${L} (${mib(streamBytes)} of chunks) exceeds half the memory budget (${mib(this.d.budgetBytes())}); level ${L + 1} stays`;
-        break;
-      }
-      const chunks = new Map<ChunkIndex, Uint8Array>();
-      let failure: StoreError | null = null;
-      const offChunk = fetcher.onChunk((_l, c, b) => {
-        chunks.set(c, b);
-        st.chunksFetched++;
-        this.#line(`${url}: level ${L}, ${chunks.size} / ${lv.chunkCount} chunks, ${mib(metered.meter.bytes)}`);
-        update();
-      });
-      const offError = fetcher.onError((_l, _c, e) => { failure ??= e; });
-      fetcher.want(L, Array.from({ length: lv.chunkCount }, (_, i) => i));
-      await fetcher.idle();
-      offChunk();
-      offError();
-      if (gen !== this.#gen) return;
-      if (failure) {
-        st.reason = (failure as StoreError).message;
-        this.d.onError((failure as StoreError).message);
-        break;
-      }
-      // The user opened another volume meanwhile: this store no longer owns the view.
-      if ((lastName !== null && !this.d.installed(lastName)) || this.d.busy()) {
-        fetcher.cancelAll();
-        return;
-      }
-      const bytes = assembleLevelStream(lv.layout, (c) => chunks.get(c)!);
-      const name = `${url} level ${L}`;
-      if (st.shownLevel !== null) this.d.keepView();
-      await this.d.load(name, async () => {
-        const facts = await inspectVolumeFile(`${lv.layout.dims.join('x')}.zfp`, bytes);
-        const opened = await openVolumeFile(this.d.gpu.device, facts, bytes);
-        const s = 2 ** L;
-        opened.name = name;
-        opened.fileName = name;
-        opened.spacing = [store.voxelSize[0] * s, store.voxelSize[1] * s, store.voxelSize[2] * s];
-        return opened;
-      });
-      if (gen !== this.#gen) return;
-      if (!this.d.installed(name)) {
-        st.reason = `level ${L} could not be shown (see the message); level ${st.shownLevel ?? 'none'} stays`;
-        break;
-      }
-      lastName = name;
-      st.shownLevel = L;
-      st.shownLevels.push(L);
-      this.d.onLevel(L);
-      update();
+      iso = ranges ? chooseIsovalue(ranges, o.valueRange) : (o.valueRange[0] + o.valueRange[1]) / 2;
     }
-    st.done = true;
-    this.#line(st.reason ? `${url}: level ${st.shownLevel} shown; ${st.reason}` : `${url}: level ${st.shownLevel} (full resolution), ${mib(metered.meter.bytes)} fetched`);
-    update();
+    await this.#refine(o, iso);
+  }
+
+  /** One isovalue's refinement, with `done` and the line kept current. */
+  async #refine(o: OpenStore, iso: number): Promise<void> {
+    o.running++;
+    o.state.done = false;
+    this.#publish(o);
+    try {
+      await o.controller.setIsovalue(iso);
+    } finally {
+      o.running--;
+    }
+    if (this.#open !== o || o.running > 0) return;
+    o.state.done = true;
+    const shown = o.state.shownLevel;
+    const p = o.lastProgress;
+    if (p?.phase === 'stopped' && p.reason) o.state.reason = p.reason;
+    if (shown === null) this.#line(`${o.url}: nothing shown${o.state.reason ? `; ${o.state.reason}` : ''}`);
+    else if (shown === 0) this.#line(`${o.url}: level 0 (full resolution), ${mib(o.metered.meter.bytes)} fetched`);
+    else this.#line(`${o.url}: level ${shown} shown${o.state.reason ? `; ${o.state.reason}` : ''}`);
+    this.#publish(o);
+  }
+
+  #progress(o: OpenStore, p: StreamProgress): void {
+    if (this.#open !== o) return;
+    o.lastProgress = p;
+    if (p.phase === 'fetching') this.#line(`${o.url}: level ${p.level}, ${p.chunksDone} / ${p.chunksNeeded} chunks, ${mib(o.metered.meter.bytes)}`);
+    else if (p.phase === 'computing') this.#line(`${o.url}: level ${p.level}, computing the surface…`);
+    this.#publish(o);
+  }
+
+  /** The controller shows a level: the same level again updates the panel; another one is installed as the volume on screen. */
+  #shown(o: OpenStore, s: ShownLevel): void {
+    if (this.#open !== o) return;
+    if (o.state.reason && o.state.reason !== `the link asks for level ${o.controller.finest}`) o.state.reason = null;
+    if (o.current && o.current.level === s.level) {
+      o.current.showAgain(s);
+    } else {
+      const first = o.current === null;
+      const iso = new StoreLevelIsosurface(o.controller, s, o.valueRange, (value) => this.#refine(o, value), () => {
+        if (!this.#replacing && this.#open === o) this.close();
+      });
+      const lv = o.store.levels[s.level];
+      const k = 2 ** s.level;
+      const name = `${o.url} level ${s.level}`;
+      const volume: LoadedVolume = {
+        opened: {
+          stream: { destroy() {} }, // the controller owns the pools
+          name, fileName: name, kind: 'zfp', dims: [...lv.layout.dims], sourceDtype: 'float32',
+          sourceBytes: lv.storedBytes, compressedBytes: lv.storedBytes, rate: lv.layout.rate, compressedHere: false,
+          spacing: [o.store.voxelSize[0] * k, o.store.voxelSize[1] * k, o.store.voxelSize[2] * k], notes: [],
+        },
+        iso,
+        ranges: o.controller.chunkRanges(s.level) ?? new Float32Array(0),
+        initialIso: s.iso,
+        firstStats: s.stats,
+        loadMs: 0,
+      };
+      // installed at once: the controller frees the coarser surface right after this returns
+      this.#replacing = !first;
+      try {
+        this.d.install(volume, s.level, first);
+      } finally {
+        this.#replacing = false;
+      }
+      o.current = iso;
+      o.state.shownLevels.push(s.level);
+    }
+    o.state.shownLevel = s.level;
+    this.#publish(o);
+  }
+
+  #publish(o: OpenStore): void {
+    const st = o.state;
+    const g = o.controller.gpuBytes;
+    Object.assign(st, { bytesFetched: o.metered.meter.bytes, chunkBytesFetched: o.fetcher.counters.bytesFetched, requests: o.metered.meter.requests });
+    st.gpu = { ...g, budget: o.controller.budgetBytes };
+    renderStorePanel(this.d.panel, o.store, st, o.fetcher.counters);
+    this.d.publish({ ...st, levels: st.levels.map((l) => ({ ...l })), shownLevels: [...st.shownLevels] });
   }
 
   #line(text: string): void {
     this.d.line.hidden = text === '';
     this.d.line.textContent = text;
-  }
-
-  #panel(store: ZfpStore, st: StorePageState, fetcher: ChunkFetcher): void {
-    const c = fetcher.counters;
-    const rows = store.levels.map((l) => `<tr${st.shownLevel === l.index ? ' class="shown"' : ''}><td>${l.index}</td><td>${l.layout.dims.join('×')}</td><td>${l.chunkCount}</td><td>${mib(l.storedBytes)}</td></tr>`).join('');
-    this.d.panel.hidden = false;
-    this.d.panel.innerHTML =
-      `<h2>Store</h2><table class="store-levels"><thead><tr><th>level</th><th>dims</th><th>chunks</th><th>bytes</th></tr></thead><tbody>${rows}</tbody></table>` +
-      `<dl class="store-network">` +
-      `<dt>fetched</dt><dd data-k="bytes">${mib(st.bytesFetched)}</dd>` +
-      `<dt>requests</dt><dd data-k="requests">${st.requests}</dd>` +
-      `<dt>chunks</dt><dd data-k="chunks">${st.chunksFetched}</dd>` +
-      `<dt>in flight</dt><dd>${c.inFlight}</dd><dt>aborted</dt><dd>${c.aborted}</dd><dt>cache hits</dt><dd>${c.cacheHits}</dd>` +
-      `<dt>throughput</dt><dd>${mib(c.throughputBytesPerSecond)}/s</dd>` +
-      `<dt>CPU cache</dt><dd>${mib(c.cacheBytes)} of ${mib(c.cacheCapacityBytes)}</dd>` +
-      `<dt>budget</dt><dd>${mib(this.d.budgetBytes())}</dd>` +
-      (st.reason ? `<dt>note</dt><dd data-k="reason">${st.reason.replace(/</g, '&lt;')}</dd>` : '') +
-      `</dl>`;
   }
 }

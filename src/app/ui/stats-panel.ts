@@ -9,7 +9,7 @@ import { setInfoList } from '../info-list.ts';
 import { formatBytes, formatCount, formatMs, formatPercent } from '../format.ts';
 import { el } from '../dom.ts';
 
-export function volumeRows(v: OpenedVolume, blockCount: number, valueRange: [number, number]): [string, string][] {
+export function volumeRows(v: Omit<OpenedVolume, 'stream'>, blockCount: number, valueRange: [number, number]): [string, string][] {
   const [nx, ny, nz] = v.dims;
   const decoded = nx * ny * nz * 4;
   const source =

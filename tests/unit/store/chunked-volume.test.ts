@@ -142,7 +142,11 @@ describe('a chunked store level through the GPU chunk pool', () => {
         expect(vb.length).toBe(va.length);
         expect(Buffer.from(vb.buffer).equals(Buffer.from(va.buffer)), `iso ${iso}: vertices`).toBe(true);
       }
+      // A second surface over the same pool (the stream controller makes one each time a level is shown again): it starts from every resident chunk.
       chunked.destroy();
+      const again = await Isosurface.create(gpu, pool);
+      expect((await again.compute(c.isovalues[0])).triangles).toBe((await inCore.compute(c.isovalues[0])).triangles);
+      again.destroy();
       pool.destroy();
 
       // Only the chunks the surface needs: the same surface from fewer chunks.
