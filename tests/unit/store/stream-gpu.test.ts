@@ -20,7 +20,7 @@ import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
 import { openZfpStore } from '../../../src/store/zarr/open-store.ts';
 import { loadZfpStream } from '../../../src/zfp/gpu-stream.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
-import { convert } from './stores.ts';
+import { convert, converterPython, zarrPythonStore } from './stores.ts';
 
 const work = mkdtempSync(join(tmpdir(), 'store-stream-gpu-'));
 const path = join(work, 'hydrogen.zarr');
@@ -54,6 +54,40 @@ async function controller(gpu: GpuContext, budget: number, maxInFlight = 8, at =
 }
 
 describe('StreamController on ChunkedVolume', () => {
+  gpuTest('a store without range arrays: its first surface fetches the level whole, then its chunk ranges (from the GPU) equal NumPy\'s over zarr-python\'s decode and plan the next surface', async ({ gpu }) => {
+    const other = zarrPythonStore(join(work, 'other.zarr'), [20, 24, 36], 8, 'serializer=ZFPY(mode=2, rate=8), compressors=None');
+    const { store, fetcher, c, errors } = await controller(gpu, 256 << 20, 8, other);
+    expect(c.chunkRanges(0)).toBeNull();
+    expect(c.valueRange).toBeNull();
+    await c.setIsovalue(1);
+    expect(c.shown?.level).toBe(0);
+    expect(c.shown!.stats.triangles).toBeGreaterThan(0);
+    const lv = store.levels[0];
+    expect(fetcher.counters.bytesFetched).toBe(lv.chunkCount * lv.layout.chunkBytes);
+    const ref = JSON.parse(converterPython(`
+import sys, json, zarr
+a = zarr.open_array(sys.argv[1], mode='r')[:]
+out = []
+for cz in range(3):
+    for cy in range(3):
+        for cx in range(5):
+            s = a[cz * 8:(cz + 1) * 8, cy * 8:(cy + 1) * 8, cx * 8:(cx + 1) * 8]
+            out += [float(s.min()), float(s.max())]
+print(json.dumps(out))
+`, [other])) as number[];
+    expect(Array.from(c.chunkRanges(0)!)).toEqual(ref);
+    expect(c.valueRange).toEqual([Math.min(...ref), Math.max(...ref)]);
+    // planned from those ranges now: a surface near the top of the range needs only some chunks
+    const iso = 2.6;
+    const need = chunksNeeded(neighbourhoodRanges(lv.layout.chunkGrid, c.chunkRanges(0)!), iso);
+    expect(need.length).toBeGreaterThan(0);
+    expect(need.length).toBeLessThan(lv.chunkCount);
+    await c.setIsovalue(iso);
+    expect(c.shown?.iso).toBe(iso);
+    expect(errors).toEqual([]);
+    c.destroy();
+  });
+
   gpuTest('refines to level 0: the in-core triangles, only the needed chunks fetched', async ({ gpu }) => {
     const [ref] = await inCore(gpu, [200]);
     const { store, fetcher, c, errors } = await controller(gpu, 256 << 20);
