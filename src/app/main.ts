@@ -251,7 +251,7 @@ async function start(): Promise<void> {
   const url = urlParameter();
   const storeUrl = storeParameter();
   storeView = mountStoreView({
-    gpu, budgetBytes: () => budget.bytes, onError: (m) => messages.show(m),
+    gpu, budgetBytes: () => budget.bytes, onError: (m) => messages.show(m), onNotice: (m) => messages.show(m, 'info', 8000),
     // each level the store's controller shows becomes the volume on screen; a finer or coarser one keeps the camera
     install: (v, level, first) => {
       if (!first) session.pendingCamera = viewer.camera.getState();

@@ -16,6 +16,7 @@ export function mountStoreView(p: {
   linkIso(valueRange: [number, number]): number | undefined;
   budgetBytes(): number;
   onError(m: string): void;
+  onNotice(m: string): void;
   linkLevel(): number | undefined;
 }): StoreView {
   const line = document.createElement('div');
@@ -36,6 +37,7 @@ export function mountStoreView(p: {
     linkIso: p.linkIso,
     budgetBytes: p.budgetBytes,
     onError: p.onError,
+    onNotice: p.onNotice,
     linkLevel: p.linkLevel,
     publish: (s) => { w.zfpisoStore = s; },
     line,

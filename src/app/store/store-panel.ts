@@ -25,7 +25,7 @@ export interface StorePageState {
 }
 
 const mib = (b: number) => `${(b / 2 ** 20).toFixed(2)} MiB`;
-const escape = (s: string) => s.replace(/&/g, '&amp;').replace(/</g, '&lt;');
+const escapeHtml = (s: string) => s.replace(/&/g, '&amp;').replace(/</g, '&lt;');
 
 export function renderStorePanel(panel: HTMLElement, store: ZfpStore, st: StorePageState, c: FetchCounters): void {
   const rows = st.levels
@@ -33,7 +33,7 @@ export function renderStorePanel(panel: HTMLElement, store: ZfpStore, st: StoreP
     .join('');
   panel.hidden = false;
   panel.innerHTML =
-    `<h2>Store</h2><p class="store-name">${escape(store.name)}</p>` +
+    `<h2>Store</h2><p class="store-name">${escapeHtml(store.name)}</p>` +
     `<table class="store-levels"><thead><tr><th>level</th><th>dims</th><th>chunks fetched</th><th>stored</th></tr></thead><tbody>${rows}</tbody></table>` +
     `<dl class="store-network">` +
     `<dt>fetched</dt><dd data-k="bytes">${mib(st.bytesFetched)}</dd>` +
@@ -45,6 +45,6 @@ export function renderStorePanel(panel: HTMLElement, store: ZfpStore, st: StoreP
     `<dt>GPU pools</dt><dd data-k="pools">${mib(st.gpu.pools)}</dd>` +
     `<dt>GPU surfaces</dt><dd data-k="surfaces">${mib(st.gpu.surfaces)}</dd>` +
     `<dt>GPU total</dt><dd data-k="gpu">${mib(st.gpu.total)} of ${mib(st.gpu.budget)}</dd>` +
-    (st.reason ? `<dt>note</dt><dd data-k="reason">${escape(st.reason)}</dd>` : '') +
+    (st.reason ? `<dt>note</dt><dd data-k="reason">${escapeHtml(st.reason)}</dd>` : '') +
     `</dl>`;
 }

@@ -28,6 +28,7 @@ export class StoreLevelIsosurface implements PageIsosurface {
     private readonly request: (iso: number) => Promise<void>,
     /** Called once, when the session lets this level go. */
     private readonly onRelease: () => void,
+    private readonly onBudget: (bytes: number) => void = () => {},
   ) {
     this.info = { ...shown.surface.info, valueRange };
     this.#detach.push(
@@ -71,8 +72,10 @@ export class StoreLevelIsosurface implements PageIsosurface {
     this.shown.surface.resetCache();
   }
 
-  /** The store's budget is fixed when it opens (pools, caches and vertices are shared out then): reopen to change it. */
-  setMemoryBudget(_bytes: number): void {}
+  /** The store's budget is fixed when it opens (pools, caches and vertices are shared out then): the store view says to reopen it. */
+  setMemoryBudget(bytes: number): void {
+    this.onBudget(bytes);
+  }
 
   readVertices(): Promise<Uint32Array> {
     return this.shown.surface.readVertices();

@@ -34,6 +34,7 @@ export interface StoreViewDeps {
   linkIso(valueRange: [number, number]): number | undefined;
   budgetBytes(): number;
   onError(message: string): void;
+  onNotice(message: string): void;
   /** The finest level to show (a link's #level=), or undefined for level 0. */
   linkLevel(): number | undefined;
   /** Where the page tests read the figures (window.zfpisoStore). */
@@ -187,6 +188,8 @@ export class StoreView {
       const first = o.current === null;
       const iso = new StoreLevelIsosurface(o.controller, s, o.valueRange, (value) => this.#refine(o, value), () => {
         if (!this.#replacing && this.#open === o) this.close();
+      }, (bytes) => {
+        if (bytes !== o.controller.budgetBytes) this.d.onNotice(`${o.url}: the new memory budget (${mib(bytes)}) applies when the store is opened again; it streams within ${mib(o.controller.budgetBytes)} now.`);
       });
       const lv = o.store.levels[s.level];
       const k = 2 ** s.level;
