@@ -77,10 +77,12 @@ async function main() {
         fetcher.onChunk((level, _c, _b, fromCache) => { if (level === 0 && !fromCache) chunks0++; });
         const c = await StreamController.create(store, fetcher, chunkedGpu(gpu), budgetBytes);
         let t1 = NaN;
+        let stopped = '';
         c.onShown(() => { if (Number.isNaN(t1)) t1 = performance.now(); });
+        c.onProgress((p) => { if (p.phase === 'stopped') stopped = p.reason ?? ''; });
         await c.setIsovalue(iso);
         const t2 = performance.now();
-        if (c.shown?.level !== 0) throw new Error(`${name}: refinement stopped at level ${c.shown?.level}`);
+        if (c.shown?.level !== 0) throw new Error(`${name}: refinement stopped at level ${c.shown?.level}: ${stopped} (raise --budget-mb)`);
         triangles = c.shown.stats.triangles;
         first.push(t1 - t0);
         full.push(t2 - t0);

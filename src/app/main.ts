@@ -1,6 +1,6 @@
 // Page entry: the WebGPU device, the viewer and its layers, the panel, and
 // the first volume (?url=… from this origin, else the built-in one).
-import { BROWSER_HELP, describeAdapter, requestGpu, WebGpuUnavailableError, type GpuContext } from '../gpu/device.ts';
+import { describeAdapter } from '../gpu/device.ts';
 import { BoxLayer } from '../render/box-layer.ts';
 import { SurfaceLayer } from '../render/surface-layer.ts';
 import { Viewer } from '../render/viewer.ts';
@@ -13,8 +13,9 @@ import { VolumeLoader } from './loading/loader.ts';
 import { mountStoreView, storeParameter } from './store/mount.ts';
 import type { StoreView } from './store/store-view.ts';
 import { Messages, showFatal } from './messages.ts';
-import { publishPageState, type PageState } from './page-state.ts';
+import { publishPageState } from './page-state.ts';
 import { Session } from './session.ts';
+import { startGpu } from './start-gpu.ts';
 import { BenchPanel } from './ui/bench-panel.ts';
 import { BudgetControl, defaultBudgetBytes } from './ui/budget-control.ts';
 import { Hud } from './ui/hud.ts';
@@ -24,24 +25,6 @@ import { SpacingControl } from './ui/spacing-control.ts';
 import { StatsPanel } from './ui/stats-panel.ts';
 import { VolumeForm } from './ui/volume-form.ts';
 import { ViewLink } from './view-link.ts';
-
-async function startGpu(stage: HTMLElement, messages: Messages, state: PageState): Promise<GpuContext | undefined> {
-  try {
-    return await requestGpu(navigator.gpu, {
-      label: 'page.device',
-      onFailure: (f) => {
-        if (f.kind === 'device-lost') {
-          state.status = 'error';
-          showFatal(stage, f.message);
-        } else messages.show(`WebGPU ${f.kind} error: ${f.message}`);
-      },
-    });
-  } catch (e) {
-    state.status = 'error';
-    showFatal(stage, e instanceof WebGpuUnavailableError ? e.message : `Could not start WebGPU: ${(e as Error).message}. ${BROWSER_HELP}`);
-    return undefined;
-  }
-}
 
 /** ?url= of this page, if any. */
 function urlParameter(): string | undefined {
@@ -67,7 +50,7 @@ async function start(): Promise<void> {
     return show(text, kind, timeoutMs);
   };
 
-  const gpu = await startGpu(stage, messages, state);
+  const gpu = await startGpu(stage, messages, 'page.device', () => { state.status = 'error'; });
   if (!gpu) return;
   state.adapter = gpu.adapter;
   setInfoList(byId('gpu-info'), [

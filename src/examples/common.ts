@@ -1,17 +1,19 @@
 // Pieces shared by the example pages (LIDAR, neuron): WebGPU start-up with
-// errors shown to the user, file drops, the load progress bar, the view
-// state in the URL hash (the same #cam=... as the main page) and formatting.
+// errors shown to the user, file drops, the load progress bar and the view
+// state in the URL hash (the same #cam=... as the main page). The element
+// lookup, the number formats and the device start-up are the main page's
+// (src/app/dom.ts, format.ts, start-gpu.ts), re-exported here.
+import { byId } from '../app/dom.ts';
+import { formatBytes } from '../app/format.ts';
 import { setInfoList } from '../app/info-list.ts';
 import { Messages, showFatal } from '../app/messages.ts';
+import { startGpu as startPageGpu } from '../app/start-gpu.ts';
 import { decodeViewState, encodeViewState } from '../app/url-state.ts';
-import { BROWSER_HELP, describeAdapter, requestGpu, WebGpuUnavailableError, type GpuContext } from '../gpu/device.ts';
+import { describeAdapter, type GpuContext } from '../gpu/device.ts';
 import { Viewer } from '../render/viewer.ts';
 
-export function byId<T extends HTMLElement>(id: string): T {
-  const el = document.getElementById(id);
-  if (!el) throw new Error(`page is missing #${id}`);
-  return el as T;
-}
+export { byId };
+export { formatBytes, formatCount, formatMs } from '../app/format.ts';
 
 /** State the page tests read (and the shape the shared test helpers expect). */
 export interface ExamplePageState {
@@ -26,26 +28,16 @@ export function publishState<T extends ExamplePageState>(state: T): T {
   return state;
 }
 
-/** Requests the device; on failure shows the reason over the view and returns undefined. */
+/** Requests the device (app/start-gpu.ts) and lists the adapter; on failure the page says why and this returns undefined. */
 export async function startGpu(stage: HTMLElement, messages: Messages, label: string): Promise<GpuContext | undefined> {
-  try {
-    const gpu = await requestGpu(navigator.gpu, {
-      label,
-      onFailure: (f) => {
-        if (f.kind === 'device-lost') showFatal(stage, f.message);
-        else messages.show(`WebGPU ${f.kind} error: ${f.message}`);
-      },
-    });
+  const gpu = await startPageGpu(stage, messages, label, () => { document.body.dataset.status = 'error'; });
+  if (gpu) {
     setInfoList(byId('gpu-info'), [
       ['adapter', describeAdapter(gpu.adapter)],
       ['max buffer', formatBytes(gpu.limits.maxBufferSize)],
     ]);
-    return gpu;
-  } catch (e) {
-    showFatal(stage, e instanceof WebGpuUnavailableError ? e.message : `Could not start WebGPU: ${(e as Error).message}. ${BROWSER_HELP}`);
-    document.body.dataset.status = 'error';
-    return undefined;
   }
+  return gpu;
 }
 
 /** Files dropped on `target` (or chosen with `input`) go to `onFiles`. */
@@ -125,21 +117,6 @@ export function syncCameraWithUrl(viewer: Viewer): { restore(): boolean; write()
       }, 250);
     },
   };
-}
-
-export function formatCount(n: number): string {
-  return Math.round(n).toLocaleString('en-US');
-}
-
-export function formatBytes(n: number): string {
-  if (n < 1024) return `${n} B`;
-  if (n < 1024 ** 2) return `${(n / 1024).toFixed(1)} KiB`;
-  if (n < 1024 ** 3) return `${(n / 1024 ** 2).toFixed(1)} MiB`;
-  return `${(n / 1024 ** 3).toFixed(2)} GiB`;
-}
-
-export function formatMs(ms: number): string {
-  return ms < 1000 ? `${ms.toFixed(0)} ms` : `${(ms / 1000).toFixed(2)} s`;
 }
 
 export function formatLength(x: number, unit = 'm'): string {
