@@ -96,3 +96,9 @@ export function logBytesFor(slots: number): number {
   const p = logSizeFor(slots);
   return p * 16 + logTreeWords(p) * 4;
 }
+
+/**
+ * The uniform VolumeParams (common.wgsl): dims (3 u32), block count, block
+ * grid (3 u32), the isovalue (f32, rewritten before each surface).
+ */
+export const VOLUME_PARAMS = { bytes: 32, isoOffset: 28 } as const;

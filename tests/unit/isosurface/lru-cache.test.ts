@@ -14,6 +14,7 @@ import type { Dims } from '../../../src/core/naming.ts';
 import { blockRanges } from '../../../src/zfp/cpu/codec.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { compressVolume, decodeVolume, makeField } from './helpers.ts';
+import { readCacheState } from '../../helpers/isosurface-readback.ts';
 
 describe('LRU block cache', () => {
   gpuTest('evicts, grows and resets exactly as the CPU model of Algorithm 1', async ({ gpu }) => {
@@ -70,7 +71,7 @@ describe('LRU block cache', () => {
       expect(stats.newBlocks, what).toBe(update.newBlocks.length);
       expect(stats.cacheSlots, what).toBe(model.capacity);
       expect(stats.cacheSlotsUsed, what).toBe(model.slotsUsed);
-      const state = await iso.readCacheState();
+      const state = await readCacheState(iso);
       expect([...state.slotToBlock], what).toEqual([...model.slotToBlock]);
       expect([...state.blockToSlot], what).toEqual([...model.blockToSlot]);
       expect([...state.lruOrder], what).toEqual(model.order);

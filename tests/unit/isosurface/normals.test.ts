@@ -12,6 +12,7 @@ import { soupNormals } from '../../../src/render/testing/cpu-surface.ts';
 import type { Dims } from '../../../src/core/naming.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { compressVolume, decodeVolume, makeField } from './helpers.ts';
+import { readCacheState, readNormals } from '../../helpers/isosurface-readback.ts';
 
 /** vertex_format.wgsl decode_vertex_normal, in TS (unit vector, or zero for 0). */
 function decodeNormal(packed: number): [number, number, number] {
@@ -37,10 +38,10 @@ describe('vertex normals', () => {
         const t = Math.fround(lo + f * (hi - lo));
         const stats = await iso.compute(t);
         const packed = await iso.readVertices();
-        const normals = await iso.readNormals();
+        const normals = await readNormals(iso);
         expect(normals.length).toBe(stats.vertices);
         const positions = decodeVertices(packed, normals.length, iso.info);
-        const { blockToSlot } = await iso.readCacheState();
+        const { blockToSlot } = await readCacheState(iso);
         const readable = (b: number) => blockToSlot[b] !== NONE;
         const want = soupNormals(decoded, d, positions, readable);
         // The GPU interpolates at the exact edge parameter, the CPU at the
