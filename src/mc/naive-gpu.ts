@@ -18,8 +18,9 @@
 //   const r = await mc.extract(volumeBuffer, iso);     // counts, GPU ms; grows the soup if needed
 //   const soup = await mc.readPositions(r.vertices);   // xyz per vertex, 3 vertices per triangle
 import naiveMcWgsl from '../../shaders/mc/naive_mc.wgsl?raw';
-import { createComputePipeline } from '../gpu/wgsl.ts';
-import { ExclusiveScan, IndirectArgs, StreamCompactIds, dispatchSnippet } from '../primitives/index.ts';
+import { dispatchWorkgroups, gridSnippet } from '../gpu/dispatch.ts';
+import { createComputePipeline } from '../gpu/pipeline-cache.ts';
+import { ExclusiveScan, IndirectArgs, StreamCompactIds } from '../primitives/index.ts';
 import { createCaseTableBuffer, mcCaseTableSnippet } from './case-table-wgsl.ts';
 import type { Dims3 } from './serial-mc.ts';
 
@@ -112,7 +113,7 @@ export class NaiveMarchingCubes {
       );
     }
     const maxPerDim = options.maxWorkgroupsPerDimension ?? limits.maxComputeWorkgroupsPerDimension;
-    const parts = [dispatchSnippet, mcCaseTableSnippet, { name: 'shaders/mc/naive_mc.wgsl', code: naiveMcWgsl }];
+    const parts = [gridSnippet, mcCaseTableSnippet, { name: 'shaders/mc/naive_mc.wgsl', code: naiveMcWgsl }];
     const constants = { WG, MAX_WG_PER_DIM: maxPerDim };
     const [mark, count, emit, scan, compact, indirect] = await Promise.all([
       createComputePipeline(device, 'NaiveMc.markActive', parts, 'mark_active', { constants }),
@@ -187,8 +188,7 @@ export class NaiveMarchingCubes {
       pass.setPipeline(this.pipelines.mark);
       pass.setBindGroup(0, groups.mark);
       pass.setBindGroup(1, groups.markOut);
-      const [x, y, z] = dispatchGrid(Math.ceil(cells / WG), this.maxPerDim);
-      if (x > 0) pass.dispatchWorkgroups(x, y, z);
+      dispatchWorkgroups(pass, Math.ceil(cells / WG), this.maxPerDim);
       pass.end();
     }
     this.marker(encoder, 1);
@@ -391,16 +391,6 @@ interface VolumeGroups {
   markOut: GPUBindGroup;
   count: GPUBindGroup;
   emit: GPUBindGroup;
-}
-
-/** The grid of shaders/primitives/dispatch.wgsl's dispatch_grid: 1D, then 2D, 3D past limit^2. */
-export function dispatchGrid(workgroups: number, max: number): [number, number, number] {
-  if (workgroups <= 0) return [0, 1, 1];
-  if (workgroups <= max) return [workgroups, 1, 1];
-  const z = Math.ceil(workgroups / (max * max));
-  const rest = Math.ceil(workgroups / z);
-  const y = Math.ceil(rest / max);
-  return [Math.ceil(rest / y), y, z];
 }
 
 function cellsOf(dims: Dims3): number {
