@@ -18,6 +18,7 @@
 //   const r = await mc.extract(volumeBuffer, iso);     // counts, GPU ms; grows the soup if needed
 //   const soup = await mc.readPositions(r.vertices);   // xyz per vertex, 3 vertices per triangle
 import naiveMcWgsl from '../../shaders/mc/naive_mc.wgsl?raw';
+import { KeyedCache } from '../gpu/bind-group-cache.ts';
 import { dispatchWorkgroups, gridSnippet } from '../gpu/dispatch.ts';
 import { createComputePipeline } from '../gpu/pipeline-cache.ts';
 import { ExclusiveScan, IndirectArgs, StreamCompactIds } from '../primitives/index.ts';
@@ -63,7 +64,7 @@ export class NaiveMarchingCubes {
   private vertexCapacity: number;
   private positionsBuffer: GPUBuffer;
   private emitGroup!: GPUBindGroup;
-  private readonly volumeGroups = new WeakMap<GPUBuffer, VolumeGroups>();
+  private readonly volumeGroups = new KeyedCache<VolumeGroups>();
   private readonly querySet?: GPUQuerySet;
   private readonly resolveBuffer?: GPUBuffer;
   private readonly staging: GPUBuffer;
@@ -358,8 +359,7 @@ export class NaiveMarchingCubes {
     const [nx, ny, nz] = this.dims;
     const bytes = nx * ny * nz * 4;
     if (volume.size < bytes) throw new RangeError(`volume buffer has ${volume.size} bytes, ${this.dims.join('x')} float32 needs ${bytes}`);
-    let g = this.volumeGroups.get(volume);
-    if (!g) {
+    return this.volumeGroups.key(volume).get(() => {
       const group0 = (p: GPUComputePipeline, label: string) =>
         this.device.createBindGroup({
           label: `NaiveMc.${label}.volume`,
@@ -370,7 +370,7 @@ export class NaiveMarchingCubes {
             { binding: 2, resource: { buffer: this.table } },
           ],
         });
-      g = {
+      return {
         mark: group0(this.pipelines.mark, 'mark'),
         markOut: this.device.createBindGroup({
           label: 'NaiveMc.markGroup',
@@ -380,9 +380,7 @@ export class NaiveMarchingCubes {
         count: group0(this.pipelines.count, 'count'),
         emit: group0(this.pipelines.emit, 'emit'),
       };
-      this.volumeGroups.set(volume, g);
-    }
-    return g;
+    });
   }
 }
 
