@@ -1,4 +1,4 @@
-// expand_cells: see block_mc_common.wgsl. Needs common.wgsl, dispatch.wgsl,
+// expand_cells: see block_mc_common.wgsl. Needs common.wgsl, shaders/common/grid.wgsl,
 // shaders/mc/case_table.wgsl (its own bindings: no cache buffers).
 
 // ---- expand_cells (its own bind group: no cache bindings)

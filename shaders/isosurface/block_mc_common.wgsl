@@ -24,7 +24,7 @@
 // This file: the bindings and helpers classify_blocks (block_classify.wgsl)
 // and emit_vertices (block_emit.wgsl) share. Each kernel is its own module, so
 // no two resource variables of a module share a binding.
-// Needs common.wgsl, dispatch.wgsl, shaders/mc/case_table.wgsl.
+// Needs common.wgsl, shaders/common/grid.wgsl, shaders/mc/case_table.wgsl.
 
 // ---- group 0 of classify and emit: the volume and the cache
 @group(0) @binding(0) var<uniform> volume: VolumeParams;

@@ -1,7 +1,7 @@
 // Shared by the isosurface kernels: the volume parameters (a uniform) and the
 // layout of the counters buffer (u32 words written and read on the GPU only;
 // src/isosurface/layout.ts mirrors these numbers and a test checks them).
-// Needs shaders/primitives/dispatch.wgsl (grid helpers).
+// Needs shaders/common/grid.wgsl (dispatch grids).
 
 // "No slot" / "no block" in blockToSlot, slotToBlock and the LRU log.
 const NONE: u32 = 0xffffffffu;

@@ -4,7 +4,7 @@
 // one invocation per active cell counts its vertices, and after a scan of the
 // counts, one invocation per active cell writes its triangles. Same case
 // table, corner/edge numbering and interpolation as every MC of the project
-// (src/mc/README.md). Composed after dispatch.wgsl and case_table.wgsl.
+// (src/mc/README.md). Composed after shaders/common/grid.wgsl and case_table.wgsl.
 
 struct Params {
   // Grid points per axis (x fastest in `volume`).

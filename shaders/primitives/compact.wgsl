@@ -6,7 +6,7 @@
 // elements go to consecutive slots (offsets is the scan of the 0/1 mask).
 // Measured 1.8x faster on SwiftShader than one offsets read per kept
 // element with adjacent invocations on adjacent elements. n comes from a
-// dispatch record (dispatch.wgsl); the grid is sized from it on the GPU.
+// dispatch record (setup.wgsl); the grid is sized from it on the GPU.
 
 override WG: u32 = 64u;
 override CHUNK: u32 = 16u;

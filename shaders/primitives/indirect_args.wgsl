@@ -2,7 +2,7 @@
 // invocation (an argument kernel) reads the count (word `count_ref.word` of
 // the bound storage range, so it may sit at any 4-byte offset of the
 // caller's buffer) and writes [x, y, z, count] with dispatch_grid
-// (dispatch.wgsl): ceil(count / ITEMS) workgroups, 1D, 2D past
+// (shaders/common/grid.wgsl): ceil(count / ITEMS) workgroups, 1D, 2D past
 // MAX_WG_PER_DIM, 3D past its square. Kernels dispatched with them rebuild
 // the linear workgroup index as x + nx * (y + ny * z) (grid_workgroup_index)
 // and may read the count at word 3.

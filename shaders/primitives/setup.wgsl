@@ -1,5 +1,14 @@
-// One-thread kernel that fills LEVELS dispatch records (see dispatch.wgsl),
-// 64 words (256 bytes, the uniform offset alignment) apart. Record 0 takes
+// Indirect dispatch arguments from GPU-side counts. A "dispatch record" is 8
+// u32 words in a params buffer: [n, units, capacity, count_in, x, y, z, extra].
+// The host copies the count into count_in; `setup_dispatch` clamps it to
+// capacity, counts units of work (chunks of elements, one per invocation)
+// and writes the grid (x, y, z; dispatch_grid of shaders/common/grid.wgsl)
+// that dispatchWorkgroupsIndirect reads at byte 16 of the record. Kernels
+// read n and units as a uniform and skip invocations past `units` (the 2D
+// grid can overshoot by less than a row).
+//
+// One-thread kernel that fills LEVELS dispatch records, 64 words (256
+// bytes, the uniform offset alignment) apart. Record 0 takes
 // the copied-in count. Each level's n elements form `units` chunks of CHUNK
 // elements (one per invocation), dispatched as ceil(units / WG) workgroups;
 // record l+1 has n = units of record l, which is what a multi-level scan

@@ -7,7 +7,7 @@
 @compute @workgroup_size(64)
 fn block_ranges(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
                 @builtin(local_invocation_index) lid: u32) {
-  let b = stream.shard_first_block + linear_workgroup_index(wid, nwg) * 64u + lid;
+  let b = stream.shard_first_block + grid_invocation_index(wid, nwg, lid, 64u);
   if (b >= stream.shard_end_block) { return; }
   let r = block_value_range(b);
   ranges[2u * b] = r.x;

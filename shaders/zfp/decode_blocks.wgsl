@@ -12,7 +12,7 @@
 @compute @workgroup_size(64)
 fn decode_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
                  @builtin(local_invocation_index) lid: u32) {
-  let i = (wid.x + nwg.x * (wid.y + nwg.y * wid.z)) * 64u + lid;
+  let i = grid_invocation_index(wid, nwg, lid, 64u);
   if (i >= dispatch_args[3]) { return; }
   let b = block_ids[i];
   if (!block_in_shard(b)) { return; }

@@ -11,7 +11,7 @@ struct VolumeParams {
 @compute @workgroup_size(64)
 fn decode_volume(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
                  @builtin(local_invocation_index) lid: u32) {
-  let b = vparams.range.x + linear_workgroup_index(wid, nwg) * 64u + lid;
+  let b = vparams.range.x + grid_invocation_index(wid, nwg, lid, 64u);
   if (b >= vparams.range.y) { return; }
   var q: array<i32, 64>;
   let emax = decode_block_ints(b, &q);

@@ -4,7 +4,7 @@
 // bits_per_block bits at the block's place in the output shard (atomicOr into
 // a zeroed buffer: neighbouring blocks share boundary words). Invocation 0 also
 // writes the zfp header words when the shard starts the stream.
-// Needs u64.wgsl, codec.wgsl, f64.wgsl and grid.wgsl.
+// Needs u64.wgsl, codec.wgsl, f64.wgsl and shaders/common/grid.wgsl.
 
 // Input type, fixed per pipeline: 0 uint8, 1 int8, 2 uint16, 3 int16, 4 float32, 5 float64.
 override DTYPE: u32 = 4u;
@@ -116,7 +116,7 @@ fn transpose32(p: ptr<function, array<u32, 64>>, o: u32) {
 @compute @workgroup_size(64)
 fn encode_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
                  @builtin(local_invocation_index) lid: u32) {
-  let g = linear_workgroup_index(wid, nwg) * 64u + lid;
+  let g = grid_invocation_index(wid, nwg, lid, 64u);
   if (g == 0u) {
     for (var h = 0u; h < eparams.header_count; h++) {
       atomicOr(&out_words[h], eparams.header[h >> 2u][h & 3u]);

@@ -18,7 +18,7 @@ struct ChunkListParams {
 @compute @workgroup_size(64)
 fn chunk_block_ranges(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
                       @builtin(local_invocation_index) lid: u32) {
-  let i = linear_workgroup_index(wid, nwg) * 64u + lid;
+  let i = grid_invocation_index(wid, nwg, lid, 64u);
   if (i >= chunk_params.count * chunk_params.blocks_per_chunk) { return; }
   let chunk = chunk_list[i / chunk_params.blocks_per_chunk];
   let local = i % chunk_params.blocks_per_chunk;

@@ -33,10 +33,11 @@ export class WgslCompileError extends Error {
 
 /**
  * Creates a shader module and rejects with the compiler's messages (mapped to
- * the snippet files) if it has errors, instead of leaving a silent invalid module.
+ * the snippet files) if it has errors, instead of leaving a silent invalid
+ * module. Compute pipelines come from pipeline-cache.ts (per device, shared).
  */
-export async function createShaderModule(device: GPUDevice, label: string, parts: WgslPart[]): Promise<GPUShaderModule> {
-  const module = device.createShaderModule({ label, code: composeWgsl(...parts) });
+export async function createShaderModule(device: GPUDevice, label: string, parts: WgslPart[], code = composeWgsl(...parts)): Promise<GPUShaderModule> {
+  const module = device.createShaderModule({ label, code });
   const info = await module.getCompilationInfo();
   const errors = info.messages.filter((m) => m.type === 'error');
   if (errors.length > 0) {
@@ -49,20 +50,4 @@ export async function createShaderModule(device: GPUDevice, label: string, parts
     throw new WgslCompileError(label, details);
   }
   return module;
-}
-
-/** One compute pipeline from composed WGSL, with errors surfaced as exceptions. */
-export async function createComputePipeline(
-  device: GPUDevice,
-  label: string,
-  parts: WgslPart[],
-  entryPoint: string,
-  options: { layout?: GPUPipelineLayout | 'auto'; constants?: Record<string, number> } = {},
-): Promise<GPUComputePipeline> {
-  const module = await createShaderModule(device, label, parts);
-  return device.createComputePipelineAsync({
-    label,
-    layout: options.layout ?? 'auto',
-    compute: { module, entryPoint, constants: options.constants },
-  });
 }

@@ -9,7 +9,7 @@
 // So only the groups scale with the volume; a surface costs the same in a
 // small volume and in a large mostly-empty one. The active list is
 // group-major (lru-model.ts activeBlocks gives the same order).
-import { dispatchLinear } from '../gpu/dispatch.ts';
+import { dispatchWorkgroups } from '../gpu/dispatch.ts';
 import { readF32 } from '../gpu/buffers.ts';
 import type { ExclusiveScan } from '../primitives/scan.ts';
 import type { StreamCompact, StreamCompactIds } from '../primitives/compact.ts';
@@ -17,7 +17,8 @@ import type { ChunkedVolume } from '../zfp/chunked-volume.ts';
 import type { ZfpDecoder } from '../zfp/decoder.ts';
 import type { BlockSource, ZfpGpuStream } from '../zfp/gpu-stream.ts';
 import { Counters } from './counters.ts';
-import { bindGroup, bindGroupLayout, computePipeline, storageBuffer } from './gpu-util.ts';
+import { bindGroup, bufferLayout, storageBuffer } from '../gpu/bindings.ts';
+import { createComputePipeline } from '../gpu/pipeline-cache.ts';
 import { A } from './layout.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
 
@@ -158,12 +159,12 @@ export class ActiveBlocks {
     pass.setPipeline(u.neighbourhood);
     pass.setBindGroup(0, u.neighbourhoodGroup);
     pass.setBindGroup(1, u.regionGroup);
-    dispatchLinear(pass, Math.ceil((count * (cb + 2) ** 3) / 64), this.parts.maxWorkgroupsPerDimension);
+    dispatchWorkgroups(pass, Math.ceil((count * (cb + 2) ** 3) / 64), this.parts.maxWorkgroupsPerDimension);
     pass.setPipeline(u.groups);
     pass.setBindGroup(0, this.common);
     pass.setBindGroup(1, u.loadGroup);
     pass.setBindGroup(2, u.changedGroup);
-    dispatchLinear(pass, Math.ceil((count * 27) / 64), this.parts.maxWorkgroupsPerDimension);
+    dispatchWorkgroups(pass, Math.ceil((count * 27) / 64), this.parts.maxWorkgroupsPerDimension);
     pass.end();
     return count;
   }
@@ -171,25 +172,25 @@ export class ActiveBlocks {
   /** Computes the block ranges, their neighbourhood ranges and the group ranges (one submission). */
   static async create(device: GPUDevice, parts: ActiveBlocksParts): Promise<ActiveBlocks> {
     const layouts: ActiveLayouts = {
-      neighbourhood: bindGroupLayout(device, 'Isosurface.neighbourhoodRange.layout', ['uniform', 'read', 'rw']),
-      region: bindGroupLayout(device, 'Isosurface.neighbourhoodRangeChunks.layout', ['read', 'uniform']),
-      common: bindGroupLayout(device, 'Isosurface.activeGroups.layout', ['uniform', 'uniform']),
-      load: bindGroupLayout(device, 'Isosurface.groupRange.layout', ['read', 'rw']),
-      markGroups: bindGroupLayout(device, 'Isosurface.markActiveGroups.layout', ['read', 'rw'], 2),
-      markBlocks: bindGroupLayout(device, 'Isosurface.markGroupBlocks.layout', ['read', 'read', 'read', 'rw', 'rw'], 4),
-      changed: bindGroupLayout(device, 'Isosurface.groupRangeChunks.layout', ['read', 'uniform']),
+      neighbourhood: bufferLayout(device, 'Isosurface.neighbourhoodRange.layout', ['uniform', 'read', 'rw']),
+      region: bufferLayout(device, 'Isosurface.neighbourhoodRangeChunks.layout', ['read', 'uniform']),
+      common: bufferLayout(device, 'Isosurface.activeGroups.layout', ['uniform', 'uniform']),
+      load: bufferLayout(device, 'Isosurface.groupRange.layout', ['read', 'rw']),
+      markGroups: bufferLayout(device, 'Isosurface.markActiveGroups.layout', ['read', 'rw'], 2),
+      markBlocks: bufferLayout(device, 'Isosurface.markGroupBlocks.layout', ['read', 'read', 'read', 'rw', 'rw'], 4),
+      changed: bufferLayout(device, 'Isosurface.groupRangeChunks.layout', ['read', 'uniform']),
     };
     const neighbourhoodLayout = layouts.neighbourhood;
     const constants = { MAX_WG_PER_DIM: parts.maxWorkgroupsPerDimension };
     const groups = isosurfaceWgsl.activeGroups;
     const pooled = parts.stream.addressing === 'pool';
     const [neighbourhood, groupRange, markGroups, markBlocks, chunkNeighbourhood, chunkGroups] = await Promise.all([
-      computePipeline(device, 'Isosurface.neighbourhoodRange', isosurfaceWgsl.activeBlocks, 'neighbourhood_range', [neighbourhoodLayout], constants),
-      computePipeline(device, 'Isosurface.groupRange', groups, 'group_range', [layouts.common, layouts.load], constants),
-      computePipeline(device, 'Isosurface.markActiveGroups', groups, 'mark_active_groups', [layouts.common, layouts.markGroups], constants),
-      computePipeline(device, 'Isosurface.markGroupBlocks', groups, 'mark_group_blocks', [layouts.common, layouts.markBlocks], constants),
-      pooled ? computePipeline(device, 'Isosurface.neighbourhoodRangeChunks', isosurfaceWgsl.activeBlocks, 'neighbourhood_range_chunks', [neighbourhoodLayout, layouts.region], constants) : undefined,
-      pooled ? computePipeline(device, 'Isosurface.groupRangeChunks', groups, 'group_range_chunks', [layouts.common, layouts.load, layouts.changed], constants) : undefined,
+      createComputePipeline(device, 'Isosurface.neighbourhoodRange', isosurfaceWgsl.activeBlocks, 'neighbourhood_range', { layout: [neighbourhoodLayout], constants }),
+      createComputePipeline(device, 'Isosurface.groupRange', groups, 'group_range', { layout: [layouts.common, layouts.load], constants }),
+      createComputePipeline(device, 'Isosurface.markActiveGroups', groups, 'mark_active_groups', { layout: [layouts.common, layouts.markGroups], constants }),
+      createComputePipeline(device, 'Isosurface.markGroupBlocks', groups, 'mark_group_blocks', { layout: [layouts.common, layouts.markBlocks], constants }),
+      pooled ? createComputePipeline(device, 'Isosurface.neighbourhoodRangeChunks', isosurfaceWgsl.activeBlocks, 'neighbourhood_range_chunks', { layout: [neighbourhoodLayout, layouts.region], constants }) : undefined,
+      pooled ? createComputePipeline(device, 'Isosurface.groupRangeChunks', groups, 'group_range_chunks', { layout: [layouts.common, layouts.load, layouts.changed], constants }) : undefined,
     ]);
     const chunkPipelines = chunkNeighbourhood && chunkGroups ? { neighbourhood: chunkNeighbourhood, groups: chunkGroups } : undefined;
     const active = new ActiveBlocks(device, parts, markGroups, markBlocks, layouts, chunkPipelines);
@@ -197,11 +198,11 @@ export class ActiveBlocks {
     const pass = encoder.beginComputePass({ label: 'Isosurface.neighbourhoodRanges' });
     pass.setPipeline(neighbourhood);
     pass.setBindGroup(0, bindGroup(device, 'Isosurface.neighbourhoodRange.bindGroup', neighbourhoodLayout, [parts.volume, active.blockRanges, active.neighbourhoodRanges]));
-    dispatchLinear(pass, Math.ceil(parts.stream.info.blockCount / 64), parts.maxWorkgroupsPerDimension);
+    dispatchWorkgroups(pass, Math.ceil(parts.stream.info.blockCount / 64), parts.maxWorkgroupsPerDimension);
     pass.setPipeline(groupRange);
     pass.setBindGroup(0, active.common);
     pass.setBindGroup(1, bindGroup(device, 'Isosurface.groupRange.bindGroup', layouts.load, [active.neighbourhoodRanges, active.groupRanges]));
-    dispatchLinear(pass, Math.ceil(active.groupCount / 64), parts.maxWorkgroupsPerDimension);
+    dispatchWorkgroups(pass, Math.ceil(active.groupCount / 64), parts.maxWorkgroupsPerDimension);
     pass.end();
     device.queue.submit([encoder.finish()]);
     return active;
@@ -223,7 +224,7 @@ export class ActiveBlocks {
     pass.setPipeline(this.markGroups);
     pass.setBindGroup(0, this.common);
     pass.setBindGroup(1, this.markGroupsGroup);
-    dispatchLinear(pass, Math.ceil(this.groupCount / 64), maxWorkgroupsPerDimension);
+    dispatchWorkgroups(pass, Math.ceil(this.groupCount / 64), maxWorkgroupsPerDimension);
     pass.end();
     const groups = counters.count('groups');
     scan.encode(encoder, { input: this.groupMask, output: this.groupOffsets, count: groups, totalOut: counters.count('activeGroups') });

@@ -12,7 +12,8 @@
 import { createCaseTableBuffer } from '../mc/case-table-wgsl.ts';
 import type { ExclusiveScan } from '../primitives/scan.ts';
 import { Counters } from './counters.ts';
-import { bindGroup, bindGroupLayout, computePipeline, storageBuffer } from './gpu-util.ts';
+import { bindGroup, bufferLayout, storageBuffer } from '../gpu/bindings.ts';
+import { createComputePipeline } from '../gpu/pipeline-cache.ts';
 import { A, C, CELL_RECORD_BYTES } from './layout.ts';
 import { VertexShards } from './vertex-output.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
@@ -103,19 +104,19 @@ export class BlockMarchingCubes {
 
   static async create(device: GPUDevice, parts: BlockMcParts, capacity: number, vertexCapacity: number): Promise<BlockMarchingCubes> {
     const layouts: Layouts = {
-      common: bindGroupLayout(device, 'Isosurface.blockMc.layout', ['uniform', 'uniform', 'read', 'read', 'read']),
-      classify: bindGroupLayout(device, 'Isosurface.classifyBlocks.layout', ['read', 'rw', 'rw', 'rw', 'rw']),
-      expand: bindGroupLayout(device, 'Isosurface.expandCells.layout', ['uniform', 'read', 'read', 'read', 'read', 'read', 'rw', 'rw']),
-      cells: bindGroupLayout(device, 'Isosurface.emitVertices.layout', ['read', 'read']),
-      shard: bindGroupLayout(device, 'Isosurface.shard.layout', ['read', 'rw', 'rw']),
-      plan: bindGroupLayout(device, 'Isosurface.planVertices.layout', ['rw', 'read', 'read', 'read', 'read', 'rw', 'rw']),
+      common: bufferLayout(device, 'Isosurface.blockMc.layout', ['uniform', 'uniform', 'read', 'read', 'read']),
+      classify: bufferLayout(device, 'Isosurface.classifyBlocks.layout', ['read', 'rw', 'rw', 'rw', 'rw']),
+      expand: bufferLayout(device, 'Isosurface.expandCells.layout', ['uniform', 'read', 'read', 'read', 'read', 'read', 'rw', 'rw']),
+      cells: bufferLayout(device, 'Isosurface.emitVertices.layout', ['read', 'read']),
+      shard: bufferLayout(device, 'Isosurface.shard.layout', ['read', 'rw', 'rw']),
+      plan: bufferLayout(device, 'Isosurface.planVertices.layout', ['rw', 'read', 'read', 'read', 'read', 'rw', 'rw']),
     };
     const constants = { MAX_WG_PER_DIM: parts.maxWorkgroupsPerDimension };
     const [classify, expand, emit, plan] = await Promise.all([
-      computePipeline(device, 'Isosurface.classifyBlocks', isosurfaceWgsl.blockClassify, 'classify_blocks', [layouts.common, layouts.classify], constants),
-      computePipeline(device, 'Isosurface.expandCells', isosurfaceWgsl.blockExpand, 'expand_cells', [layouts.expand], constants),
-      computePipeline(device, 'Isosurface.emitVertices', isosurfaceWgsl.blockEmit, 'emit_vertices', [layouts.common, layouts.cells, layouts.shard], constants),
-      computePipeline(device, 'Isosurface.planVertices', isosurfaceWgsl.plan, 'plan_vertices', [layouts.plan], constants),
+      createComputePipeline(device, 'Isosurface.classifyBlocks', isosurfaceWgsl.blockClassify, 'classify_blocks', { layout: [layouts.common, layouts.classify], constants }),
+      createComputePipeline(device, 'Isosurface.expandCells', isosurfaceWgsl.blockExpand, 'expand_cells', { layout: [layouts.expand], constants }),
+      createComputePipeline(device, 'Isosurface.emitVertices', isosurfaceWgsl.blockEmit, 'emit_vertices', { layout: [layouts.common, layouts.cells, layouts.shard], constants }),
+      createComputePipeline(device, 'Isosurface.planVertices', isosurfaceWgsl.plan, 'plan_vertices', { layout: [layouts.plan], constants }),
     ]);
     return new BlockMarchingCubes(device, parts, layouts, classify, expand, emit, plan, capacity, vertexCapacity);
   }

@@ -2,8 +2,9 @@
 // written by scans (totals), the plan kernels and the LRU kernels, and read by
 // later dispatches (indirect arguments, gated counts) and, asynchronously, by
 // the statistics readback. The host writes only the capacities (words 0-4).
-import type { GpuCount } from '../primitives/count.ts';
-import { bindGroup, bindGroupLayout, computePipeline } from './gpu-util.ts';
+import type { GpuCount } from '../gpu/buffer-ref.ts';
+import { bindGroup, bufferLayout } from '../gpu/bindings.ts';
+import { createComputePipeline } from '../gpu/pipeline-cache.ts';
 import { C, COUNTERS_BYTES } from './layout.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
 
@@ -30,12 +31,12 @@ export class Counters {
   }
 
   static async create(device: GPUDevice, maxWorkgroupsPerDimension: number): Promise<Counters> {
-    const layout = bindGroupLayout(device, 'Isosurface.plan.layout', ['rw']);
+    const layout = bufferLayout(device, 'Isosurface.plan.layout', ['rw']);
     const constants = { MAX_WG_PER_DIM: maxWorkgroupsPerDimension };
     const [cache, update, groups] = await Promise.all([
-      computePipeline(device, 'Isosurface.planCache', isosurfaceWgsl.plan, 'plan_cache', [layout], constants),
-      computePipeline(device, 'Isosurface.planUpdate', isosurfaceWgsl.plan, 'plan_update', [layout], constants),
-      computePipeline(device, 'Isosurface.planGroups', isosurfaceWgsl.plan, 'plan_groups', [layout], constants),
+      createComputePipeline(device, 'Isosurface.planCache', isosurfaceWgsl.plan, 'plan_cache', { layout: [layout], constants }),
+      createComputePipeline(device, 'Isosurface.planUpdate', isosurfaceWgsl.plan, 'plan_update', { layout: [layout], constants }),
+      createComputePipeline(device, 'Isosurface.planGroups', isosurfaceWgsl.plan, 'plan_groups', { layout: [layout], constants }),
     ]);
     return new Counters(device, cache, update, groups, layout);
   }

@@ -23,7 +23,10 @@ import { ExclusiveScan } from '../primitives/scan.ts';
 import type { ZfpDecoder } from '../zfp/decoder.ts';
 import type { BlockSource } from '../zfp/gpu-stream.ts';
 import { Counters } from './counters.ts';
-import { bindGroup, bindGroupLayout, computePipeline, storageBuffer } from './gpu-util.ts';
+import { bindGroup, bufferLayout, storageBuffer } from '../gpu/bindings.ts';
+import { BindGroupCache } from '../gpu/bind-group-cache.ts';
+import { dispatchWorkgroups } from '../gpu/dispatch.ts';
+import { bindGroupLayout, createComputePipeline } from '../gpu/pipeline-cache.ts';
 import { A, logBytesFor, logSizeFor, logTreeWords, SLOT_BYTES } from './layout.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
 
@@ -86,19 +89,6 @@ interface Pipelines {
   fillLayout: GPUBindGroupLayout;
 }
 
-/** A direct dispatch of `workgroups` linear workgroups laid out as dispatch_grid does (1D, 2D, then 3D). */
-function dispatchGrid(pass: GPUComputePassEncoder, workgroups: number, max: number): void {
-  if (workgroups <= 0) return;
-  if (workgroups <= max) {
-    pass.dispatchWorkgroups(workgroups);
-    return;
-  }
-  const z = Math.ceil(workgroups / (max * max));
-  const rest = Math.ceil(workgroups / z);
-  const y = Math.ceil(rest / max);
-  pass.dispatchWorkgroups(Math.ceil(rest / y), y, z);
-}
-
 const FILL_SLOTS = 8;
 const FILL_STRIDE = 256;
 
@@ -111,6 +101,7 @@ export class BlockCache {
   /** rebuild_log parameters: [0] for a compaction (constant), [1] written by reset and growth. */
   private readonly rebuildParams: GPUBuffer;
   private fillsRecorded = 0;
+  private readonly fillGroups = new BindGroupCache();
 
   private constructor(
     private readonly device: GPUDevice,
@@ -131,29 +122,26 @@ export class BlockCache {
   }
 
   static async create(device: GPUDevice, parts: BlockCacheParts, capacity: number): Promise<BlockCache> {
-    const markLayout = bindGroupLayout(device, 'Isosurface.markCached.layout', ['read', 'read', 'read', 'read', 'rw', 'rw', 'rw']);
-    const pickLayout = bindGroupLayout(device, 'Isosurface.pickVictims.layout', ['read', 'read', 'read', 'rw', 'read']);
-    const assignLayout = bindGroupLayout(device, 'Isosurface.assignSlots.layout', ['read', 'read', 'read', 'rw', 'rw', 'read', 'rw', 'rw']);
-    const appendLayout = bindGroupLayout(device, 'Isosurface.appendActive.layout', ['read', 'read', 'read', 'rw', 'rw', 'rw', 'rw']);
-    const rebuildLayout = bindGroupLayout(device, 'Isosurface.rebuildLog.layout', ['uniform', 'rw', 'read', 'rw', 'rw', 'rw', 'rw']);
-    const rebuildCompactedLayout = bindGroupLayout(device, 'Isosurface.rebuildLogCompacted.layout', ['uniform', 'read', 'read', 'rw', 'rw', 'rw', 'rw']);
-    const fillLayout = device.createBindGroupLayout({
-      label: 'Isosurface.fillNone.layout',
-      entries: [
-        { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform', hasDynamicOffset: true, minBindingSize: 8 } },
-        { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
-      ],
-    });
+    const markLayout = bufferLayout(device, 'Isosurface.markCached.layout', ['read', 'read', 'read', 'read', 'rw', 'rw', 'rw']);
+    const pickLayout = bufferLayout(device, 'Isosurface.pickVictims.layout', ['read', 'read', 'read', 'rw', 'read']);
+    const assignLayout = bufferLayout(device, 'Isosurface.assignSlots.layout', ['read', 'read', 'read', 'rw', 'rw', 'read', 'rw', 'rw']);
+    const appendLayout = bufferLayout(device, 'Isosurface.appendActive.layout', ['read', 'read', 'read', 'rw', 'rw', 'rw', 'rw']);
+    const rebuildLayout = bufferLayout(device, 'Isosurface.rebuildLog.layout', ['uniform', 'rw', 'read', 'rw', 'rw', 'rw', 'rw']);
+    const rebuildCompactedLayout = bufferLayout(device, 'Isosurface.rebuildLogCompacted.layout', ['uniform', 'read', 'read', 'rw', 'rw', 'rw', 'rw']);
+    const fillLayout = bindGroupLayout(device, 'Isosurface.fillNone.layout', [
+      { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform', hasDynamicOffset: true, minBindingSize: 8 } },
+      { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
+    ]);
     const constants = { MAX_WG_PER_DIM: parts.maxWorkgroupsPerDimension };
     const wgsl = isosurfaceWgsl.lru;
     const [mark, pick, assign, append, rebuild, rebuildCompacted, fill, logScan] = await Promise.all([
-      computePipeline(device, 'Isosurface.markCached', wgsl, 'mark_cached', [markLayout], constants),
-      computePipeline(device, 'Isosurface.pickVictims', wgsl, 'pick_victims_of_new', [pickLayout], constants),
-      computePipeline(device, 'Isosurface.assignSlots', wgsl, 'assign_slots', [assignLayout], constants),
-      computePipeline(device, 'Isosurface.appendActive', wgsl, 'append_active', [appendLayout], constants),
-      computePipeline(device, 'Isosurface.rebuildLog', wgsl, 'rebuild_log', [rebuildLayout], constants),
-      computePipeline(device, 'Isosurface.rebuildLogCompacted', wgsl, 'rebuild_log_compacted', [rebuildCompactedLayout], constants),
-      computePipeline(device, 'Isosurface.fillNone', wgsl, 'fill_none', [fillLayout], constants),
+      createComputePipeline(device, 'Isosurface.markCached', wgsl, 'mark_cached', { layout: [markLayout], constants }),
+      createComputePipeline(device, 'Isosurface.pickVictims', wgsl, 'pick_victims_of_new', { layout: [pickLayout], constants }),
+      createComputePipeline(device, 'Isosurface.assignSlots', wgsl, 'assign_slots', { layout: [assignLayout], constants }),
+      createComputePipeline(device, 'Isosurface.appendActive', wgsl, 'append_active', { layout: [appendLayout], constants }),
+      createComputePipeline(device, 'Isosurface.rebuildLog', wgsl, 'rebuild_log', { layout: [rebuildLayout], constants }),
+      createComputePipeline(device, 'Isosurface.rebuildLogCompacted', wgsl, 'rebuild_log_compacted', { layout: [rebuildCompactedLayout], constants }),
+      createComputePipeline(device, 'Isosurface.fillNone', wgsl, 'fill_none', { layout: [fillLayout], constants }),
       ExclusiveScan.create(device, { capacity: logSizeFor(capacity), maxWorkgroupsPerDimension: parts.maxWorkgroupsPerDimension }),
     ]);
     const pipelines = { mark, pick, assign, append, rebuild, rebuildCompacted, fill, markLayout, pickLayout, assignLayout, appendLayout, rebuildLayout, rebuildCompactedLayout, fillLayout };
@@ -251,15 +239,18 @@ export class BlockCache {
     this.device.queue.writeBuffer(this.fillParams, offset, new Uint32Array([begin, end]));
     const pass = encoder.beginComputePass({ label: 'Isosurface.fillNone' });
     pass.setPipeline(this.pipelines.fill);
-    pass.setBindGroup(0, this.device.createBindGroup({
-      label: 'Isosurface.fillNone.bindGroup',
-      layout: this.pipelines.fillLayout,
-      entries: [
-        { binding: 0, resource: { buffer: this.fillParams, size: 8 } },
-        { binding: 1, resource: { buffer: target } },
-      ],
-    }), [offset]);
-    dispatchGrid(pass, Math.ceil((end - begin) / 64), this.parts.maxWorkgroupsPerDimension);
+    const group = this.fillGroups.key(target).get(() =>
+      this.device.createBindGroup({
+        label: 'Isosurface.fillNone.bindGroup',
+        layout: this.pipelines.fillLayout,
+        entries: [
+          { binding: 0, resource: { buffer: this.fillParams, size: 8 } },
+          { binding: 1, resource: { buffer: target } },
+        ],
+      }),
+    );
+    pass.setBindGroup(0, group, [offset]);
+    dispatchWorkgroups(pass, Math.ceil((end - begin) / 64), this.parts.maxWorkgroupsPerDimension);
     pass.end();
   }
 
@@ -275,7 +266,7 @@ export class BlockCache {
     const pass = encoder.beginComputePass({ label: 'Isosurface.rebuildLog' });
     pass.setPipeline(this.pipelines.rebuild);
     pass.setBindGroup(0, this.rebuildGroup(s, scratch, 1));
-    dispatchGrid(pass, Math.ceil((2 * s.logSize) / 64), this.parts.maxWorkgroupsPerDimension);
+    dispatchWorkgroups(pass, Math.ceil((2 * s.logSize) / 64), this.parts.maxWorkgroupsPerDimension);
     pass.end();
   }
 

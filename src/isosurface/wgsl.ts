@@ -12,7 +12,7 @@ import blockEmitWgsl from '../../shaders/isosurface/block_emit.wgsl?raw';
 import vertexFormatWgsl from '../../shaders/isosurface/vertex_format.wgsl?raw';
 import type { WgslPart } from '../gpu/wgsl.ts';
 import { mcCaseTableSnippet } from '../mc/case-table-wgsl.ts';
-import { dispatchSnippet } from '../primitives/dispatch-records.ts';
+import { gridSnippet } from '../gpu/dispatch.ts';
 
 const part = (name: string, code: string): WgslPart => ({ name: `shaders/isosurface/${name}.wgsl`, code });
 
@@ -24,7 +24,7 @@ const part = (name: string, code: string): WgslPart => ({ name: `shaders/isosurf
 export const vertexFormatSnippet = part('vertex_format', vertexFormatWgsl);
 export const isosurfaceCommonSnippet = part('common', commonWgsl);
 
-const base = [dispatchSnippet, isosurfaceCommonSnippet];
+const base = [gridSnippet, isosurfaceCommonSnippet];
 
 export const isosurfaceWgsl = {
   activeBlocks: [...base, part('active_blocks', activeBlocksWgsl)],

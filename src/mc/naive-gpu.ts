@@ -18,8 +18,10 @@
 //   const r = await mc.extract(volumeBuffer, iso);     // counts, GPU ms; grows the soup if needed
 //   const soup = await mc.readPositions(r.vertices);   // xyz per vertex, 3 vertices per triangle
 import naiveMcWgsl from '../../shaders/mc/naive_mc.wgsl?raw';
-import { createComputePipeline } from '../gpu/wgsl.ts';
-import { ExclusiveScan, IndirectArgs, StreamCompactIds, dispatchSnippet } from '../primitives/index.ts';
+import { KeyedCache } from '../gpu/bind-group-cache.ts';
+import { dispatchWorkgroups, gridSnippet } from '../gpu/dispatch.ts';
+import { createComputePipeline } from '../gpu/pipeline-cache.ts';
+import { ExclusiveScan, IndirectArgs, StreamCompactIds } from '../primitives/index.ts';
 import { createCaseTableBuffer, mcCaseTableSnippet } from './case-table-wgsl.ts';
 import type { Dims3 } from './serial-mc.ts';
 
@@ -62,7 +64,7 @@ export class NaiveMarchingCubes {
   private vertexCapacity: number;
   private positionsBuffer: GPUBuffer;
   private emitGroup!: GPUBindGroup;
-  private readonly volumeGroups = new WeakMap<GPUBuffer, VolumeGroups>();
+  private readonly volumeGroups = new KeyedCache<VolumeGroups>();
   private readonly querySet?: GPUQuerySet;
   private readonly resolveBuffer?: GPUBuffer;
   private readonly staging: GPUBuffer;
@@ -112,7 +114,7 @@ export class NaiveMarchingCubes {
       );
     }
     const maxPerDim = options.maxWorkgroupsPerDimension ?? limits.maxComputeWorkgroupsPerDimension;
-    const parts = [dispatchSnippet, mcCaseTableSnippet, { name: 'shaders/mc/naive_mc.wgsl', code: naiveMcWgsl }];
+    const parts = [gridSnippet, mcCaseTableSnippet, { name: 'shaders/mc/naive_mc.wgsl', code: naiveMcWgsl }];
     const constants = { WG, MAX_WG_PER_DIM: maxPerDim };
     const [mark, count, emit, scan, compact, indirect] = await Promise.all([
       createComputePipeline(device, 'NaiveMc.markActive', parts, 'mark_active', { constants }),
@@ -187,8 +189,7 @@ export class NaiveMarchingCubes {
       pass.setPipeline(this.pipelines.mark);
       pass.setBindGroup(0, groups.mark);
       pass.setBindGroup(1, groups.markOut);
-      const [x, y, z] = dispatchGrid(Math.ceil(cells / WG), this.maxPerDim);
-      if (x > 0) pass.dispatchWorkgroups(x, y, z);
+      dispatchWorkgroups(pass, Math.ceil(cells / WG), this.maxPerDim);
       pass.end();
     }
     this.marker(encoder, 1);
@@ -358,8 +359,7 @@ export class NaiveMarchingCubes {
     const [nx, ny, nz] = this.dims;
     const bytes = nx * ny * nz * 4;
     if (volume.size < bytes) throw new RangeError(`volume buffer has ${volume.size} bytes, ${this.dims.join('x')} float32 needs ${bytes}`);
-    let g = this.volumeGroups.get(volume);
-    if (!g) {
+    return this.volumeGroups.key(volume).get(() => {
       const group0 = (p: GPUComputePipeline, label: string) =>
         this.device.createBindGroup({
           label: `NaiveMc.${label}.volume`,
@@ -370,7 +370,7 @@ export class NaiveMarchingCubes {
             { binding: 2, resource: { buffer: this.table } },
           ],
         });
-      g = {
+      return {
         mark: group0(this.pipelines.mark, 'mark'),
         markOut: this.device.createBindGroup({
           label: 'NaiveMc.markGroup',
@@ -380,9 +380,7 @@ export class NaiveMarchingCubes {
         count: group0(this.pipelines.count, 'count'),
         emit: group0(this.pipelines.emit, 'emit'),
       };
-      this.volumeGroups.set(volume, g);
-    }
-    return g;
+    });
   }
 }
 
@@ -391,16 +389,6 @@ interface VolumeGroups {
   markOut: GPUBindGroup;
   count: GPUBindGroup;
   emit: GPUBindGroup;
-}
-
-/** The grid of shaders/primitives/dispatch.wgsl's dispatch_grid: 1D, then 2D, 3D past limit^2. */
-export function dispatchGrid(workgroups: number, max: number): [number, number, number] {
-  if (workgroups <= 0) return [0, 1, 1];
-  if (workgroups <= max) return [workgroups, 1, 1];
-  const z = Math.ceil(workgroups / (max * max));
-  const rest = Math.ceil(workgroups / z);
-  const y = Math.ceil(rest / max);
-  return [Math.ceil(rest / y), y, z];
 }
 
 function cellsOf(dims: Dims3): number {

@@ -3,14 +3,14 @@
 
 import compactWgsl from '../../shaders/primitives/compact.wgsl?raw';
 import compactTiledWgsl from '../../shaders/primitives/compact_tiled.wgsl?raw';
-import { createComputePipeline } from '../gpu/wgsl.ts';
-import { BindGroupCache } from './bind-group-cache.ts';
+import { BindGroupCache } from '../gpu/bind-group-cache.ts';
+import { gridSnippet } from '../gpu/dispatch.ts';
+import { createComputePipeline } from '../gpu/pipeline-cache.ts';
 import type { CountLike } from './count.ts';
 import {
   DispatchRecords,
   RECORD_UNIFORM_SIZE,
   choosePath,
-  dispatchSnippet,
   gpuPathWorkgroupSize,
   maxWorkgroupsPerDimension,
   tileConstants,
@@ -63,8 +63,8 @@ class Compaction {
     if (!Number.isInteger(chunk) || chunk < 1 || chunk > 4096) throw new RangeError('chunk must be in 1..4096');
     const wg = gpu ? gpuPathWorkgroupSize(device, options) : workgroupSize(device, options);
     const parts = gpu
-      ? [tileConstants(wg, chunk), dispatchSnippet, { name: 'shaders/primitives/compact_tiled.wgsl', code: compactTiledWgsl }]
-      : [dispatchSnippet, { name: 'shaders/primitives/compact.wgsl', code: compactWgsl }];
+      ? [tileConstants(wg, chunk), gridSnippet, { name: 'shaders/primitives/compact_tiled.wgsl', code: compactTiledWgsl }]
+      : [gridSnippet, { name: 'shaders/primitives/compact.wgsl', code: compactWgsl }];
     const [pipeline, records] = await Promise.all([
       createComputePipeline(device, `${label}.compact`, parts, entryPoint, { constants: gpu ? {} : { WG: wg, CHUNK: chunk } }),
       // GPU path: one unit is a tile, one workgroup.
@@ -82,8 +82,8 @@ class Compaction {
   encode(encoder: GPUCommandEncoder, args: StreamCompactIdsArgs, values?: GPUBuffer): void {
     const { mask, offsets, output } = args;
     if (output === mask || output === offsets || output === values) throw new Error(`${this.label}: output must not alias an input`);
-    const buffers = values ? [mask, offsets, values, output] : [mask, offsets, output];
-    const bindGroup = this.bindGroups.get(buffers, () =>
+    // Keyed by (mask, offsets, output, values or mask): no array per call.
+    const bindGroup = this.bindGroups.key(mask).key(offsets).key(output).key(values ?? mask).get(() =>
       this.device.createBindGroup({
         label: `${this.label}.bindGroup`,
         layout: this.pipeline.getBindGroupLayout(0),

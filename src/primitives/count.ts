@@ -7,11 +7,7 @@
 // earlier in the same encoder may write them) and the caller's count buffer
 // needs only COPY_SRC usage.
 
-/** A u32 element count in a GPU buffer at byte `offset` (a multiple of 4). */
-export interface GpuCount {
-  buffer: GPUBuffer;
-  offset: number;
-}
+import type { GpuCount } from '../gpu/buffer-ref.ts';
 
 /** A count on the GPU, or a host number (written to a small ring of slots). */
 export type CountLike = GpuCount | number;

@@ -4,13 +4,12 @@
 // offset and read by dispatchWorkgroupsIndirect at byte 16. The count is
 // copied in (encoder-ordered); a one-thread setup kernel fills the rest.
 
-import dispatchWgsl from '../../shaders/primitives/dispatch.wgsl?raw';
 import setupWgsl from '../../shaders/primitives/setup.wgsl?raw';
 import { summarizeAdapter } from '../gpu/device.ts';
-import { createComputePipeline, type WgslPart } from '../gpu/wgsl.ts';
+import { gridSnippet } from '../gpu/dispatch.ts';
+import { createComputePipeline } from '../gpu/pipeline-cache.ts';
+import type { WgslPart } from '../gpu/wgsl.ts';
 import { encodeCountCopy, type CountLike } from './count.ts';
-
-export const dispatchSnippet: WgslPart = { name: 'shaders/primitives/dispatch.wgsl', code: dispatchWgsl };
 
 /** Bytes between records (a multiple of every minUniformBufferOffsetAlignment). */
 export const RECORD_STRIDE = 256;
@@ -124,7 +123,7 @@ export class DispatchRecords {
     const pipeline = await createComputePipeline(
       device,
       `${label}.setup`,
-      [dispatchSnippet, { name: 'shaders/primitives/setup.wgsl', code: setupWgsl }],
+      [gridSnippet, { name: 'shaders/primitives/setup.wgsl', code: setupWgsl }],
       'setup_dispatch',
       {
         constants: {

@@ -6,14 +6,16 @@
 // a pass of its own, and writes [x, y, z, count] into its own 16-byte buffer
 // (INDIRECT | STORAGE | COPY_SRC; kernels may read the count at word 3).
 // Kernels dispatched with it rebuild the linear workgroup index with
-// `grid_workgroup_index` from dispatchSnippet (shaders/primitives/dispatch.wgsl),
-// which equals `linear_workgroup_index` of shaders/common/grid.wgsl whenever
-// z = 1 (below limit^2 workgroups), and skip indices past the count.
+// `grid_workgroup_index` / `grid_invocation_index` of shaders/common/grid.wgsl
+// (the grid is its `dispatch_grid`) and skip indices past the count.
 
 import indirectWgsl from '../../shaders/primitives/indirect_args.wgsl?raw';
-import { createComputePipeline } from '../gpu/wgsl.ts';
-import { toGpuCount, type CountLike, type GpuCount } from './count.ts';
-import { dispatchSnippet, maxWorkgroupsPerDimension, type PrimitiveOptions } from './dispatch-records.ts';
+import { BindGroupCache } from '../gpu/bind-group-cache.ts';
+import { isCommandEncoder, type ComputeTarget, type GpuCount } from '../gpu/buffer-ref.ts';
+import { gridSnippet } from '../gpu/dispatch.ts';
+import { bindGroupLayout, createComputePipeline } from '../gpu/pipeline-cache.ts';
+import { toGpuCount, type CountLike } from './count.ts';
+import { maxWorkgroupsPerDimension, type PrimitiveOptions } from './dispatch-records.ts';
 
 export interface IndirectArgsOptions extends Pick<PrimitiveOptions, 'maxWorkgroupsPerDimension'> {
   /** Elements one workgroup of the target kernel handles. */
@@ -40,7 +42,9 @@ export class IndirectArgs {
   readonly buffer: GPUBuffer;
   private readonly wordIndex: GPUBuffer;
   private readonly layout: GPUBindGroupLayout;
-  private groups = new WeakMap<GPUBuffer, Map<number, GPUBindGroup>>();
+  /** setBindGroup's dynamic offset, reused (nothing allocated per encode). */
+  private readonly dynamicOffset = new Uint32Array(1);
+  private readonly groups = new BindGroupCache();
 
   private constructor(
     private readonly device: GPUDevice,
@@ -60,44 +64,34 @@ export class IndirectArgs {
     const items = options.itemsPerWorkgroup;
     if (!Number.isInteger(items) || items < 1) throw new RangeError('itemsPerWorkgroup must be a positive integer');
     const label = options.label ?? 'IndirectArgs';
-    const layout = device.createBindGroupLayout({
-      label: `${label}.layout`,
-      entries: [
-        { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
-        { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform', hasDynamicOffset: true, minBindingSize: 16 } },
-        { binding: 2, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
-      ],
-    });
-    const pipeline = await createComputePipeline(device, label, [dispatchSnippet, { name: 'shaders/primitives/indirect_args.wgsl', code: indirectWgsl }], 'indirect_args', {
-      layout: device.createPipelineLayout({ label, bindGroupLayouts: [layout] }),
+    const layout = bindGroupLayout(device, 'IndirectArgs.layout', [
+      { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
+      { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform', hasDynamicOffset: true, minBindingSize: 16 } },
+      { binding: 2, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
+    ]);
+    const pipeline = await createComputePipeline(device, label, [gridSnippet, { name: 'shaders/primitives/indirect_args.wgsl', code: indirectWgsl }], 'indirect_args', {
+      layout: [layout],
       constants: { ITEMS: items, MAX_WG_PER_DIM: maxWorkgroupsPerDimension(device, options) },
     });
     return new IndirectArgs(device, pipeline, label);
   }
 
-  /** The bind group reading the count at `offset` of `buffer`, and its dynamic offset. */
-  private bind(count: GpuCount): [GPUBindGroup, number] {
-    const base = Math.floor(count.offset / (WORDS_PER_BINDING * 4)) * WORDS_PER_BINDING * 4;
-    const word = (count.offset - base) / 4;
-    let byBase = this.groups.get(count.buffer);
-    if (!byBase) {
-      byBase = new Map();
-      this.groups.set(count.buffer, byBase);
-    }
-    let group = byBase.get(base);
-    if (!group) {
-      group = this.device.createBindGroup({
-        label: `${this.label}.bindGroup`,
-        layout: this.layout,
-        entries: [
-          { binding: 0, resource: { buffer: count.buffer, offset: base, size: Math.min(count.buffer.size - base, WORDS_PER_BINDING * 4) } },
-          { binding: 1, resource: { buffer: this.wordIndex, size: 16 } },
-          { binding: 2, resource: { buffer: this.buffer } },
-        ],
-      });
-      byBase.set(base, group);
-    }
-    return [group, word * SLOT_STRIDE];
+  /** The bind group reading the counts of the 256-byte block at `base` of `buffer`. */
+  private bind(buffer: GPUBuffer, base: number): GPUBindGroup {
+    return this.groups
+      .key(buffer)
+      .key(base)
+      .get(() =>
+        this.device.createBindGroup({
+          label: `${this.label}.bindGroup`,
+          layout: this.layout,
+          entries: [
+            { binding: 0, resource: { buffer, offset: base, size: Math.min(buffer.size - base, WORDS_PER_BINDING * 4) } },
+            { binding: 1, resource: { buffer: this.wordIndex, size: 16 } },
+            { binding: 2, resource: { buffer: this.buffer } },
+          ],
+        }),
+      );
   }
 
   /**
@@ -105,26 +99,28 @@ export class IndirectArgs {
    * (one dispatch; the pipeline and bind group 0 are left changed), else in a
    * pass of its own, then the copy to `out` if given.
    */
-  encode(target: GPUCommandEncoder | GPUComputePassEncoder, args: IndirectArgsEncodeArgs): void {
+  encode(target: ComputeTarget, args: IndirectArgsEncodeArgs): void {
     const count = toGpuCount(this.device, args.count);
     if (count.offset % 4 !== 0) throw new RangeError('count.offset must be a multiple of 4');
     if (args.out && args.out.offset % 4 !== 0) throw new RangeError('out.offset must be a multiple of 4');
-    const [group, dynamicOffset] = this.bind(count);
-    const isEncoder = typeof (target as GPUCommandEncoder).beginComputePass === 'function';
+    const base = Math.floor(count.offset / (WORDS_PER_BINDING * 4)) * WORDS_PER_BINDING * 4;
+    const group = this.bind(count.buffer, base);
+    this.dynamicOffset[0] = ((count.offset - base) / 4) * SLOT_STRIDE;
+    const isEncoder = isCommandEncoder(target);
     if (!isEncoder && args.out) throw new Error('IndirectArgs: `out` needs a command encoder (it is a buffer copy)');
-    const pass = isEncoder ? (target as GPUCommandEncoder).beginComputePass({ label: this.label }) : (target as GPUComputePassEncoder);
+    const pass = isEncoder ? target.beginComputePass({ label: this.label }) : target;
     pass.setPipeline(this.pipeline);
-    pass.setBindGroup(0, group, [dynamicOffset]);
+    pass.setBindGroup(0, group, this.dynamicOffset, 0, 1);
     pass.dispatchWorkgroups(1);
     if (isEncoder) {
       pass.end();
-      if (args.out) (target as GPUCommandEncoder).copyBufferToBuffer(this.buffer, 0, args.out.buffer, args.out.offset, 12);
+      if (args.out) target.copyBufferToBuffer(this.buffer, 0, args.out.buffer, args.out.offset, 12);
     }
   }
 
   destroy(): void {
     this.buffer.destroy();
     this.wordIndex.destroy();
-    this.groups = new WeakMap();
+    this.groups.clear();
   }
 }

@@ -5,13 +5,16 @@
 
 import scanWgsl from '../../shaders/primitives/scan.wgsl?raw';
 import scanTiledWgsl from '../../shaders/primitives/scan_tiled.wgsl?raw';
-import { createComputePipeline, type WgslPart } from '../gpu/wgsl.ts';
-import type { CountLike, GpuCount } from './count.ts';
+import { KeyedCache } from '../gpu/bind-group-cache.ts';
+import type { GpuCount } from '../gpu/buffer-ref.ts';
+import { gridSnippet } from '../gpu/dispatch.ts';
+import { bindGroupLayout, createComputePipeline } from '../gpu/pipeline-cache.ts';
+import type { WgslPart } from '../gpu/wgsl.ts';
+import type { CountLike } from './count.ts';
 import {
   DispatchRecords,
   RECORD_UNIFORM_SIZE,
   choosePath,
-  dispatchSnippet,
   gpuPathWorkgroupSize,
   maxWorkgroupsPerDimension,
   tileConstants,
@@ -74,8 +77,10 @@ export class ExclusiveScan {
   private scans: GPUBuffer[] = [];
   private internalReduce: GPUBindGroup[] = [];
   private internalScan: GPUBindGroup[] = [];
-  private userBindGroups = new WeakMap<GPUBuffer, WeakMap<GPUBuffer, UserBindGroups>>();
+  private readonly userBindGroups = new KeyedCache<UserBindGroups>();
   private readonly zero: GPUBuffer;
+  /** Each level's record offset (its dynamic uniform offset), so encode allocates nothing. */
+  private readonly recordOffsets: Uint32Array<ArrayBuffer>;
   private readonly total: GPUBuffer;
 
   private constructor(
@@ -90,6 +95,7 @@ export class ExclusiveScan {
     readonly path: PrimitivePath,
   ) {
     this.chunk = chunk;
+    this.recordOffsets = Uint32Array.from({ length: records.levels }, (_, l) => DispatchRecords.recordOffset(l));
     this.zero = device.createBuffer({ label: 'ExclusiveScan.zero', size: 4, usage: GPUBufferUsage.STORAGE });
     this.total = device.createBuffer({ label: 'ExclusiveScan.total', size: 4, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC });
     this.allocate(capacity);
@@ -107,22 +113,18 @@ export class ExclusiveScan {
     // Elements per partial sum; on the GPU path one unit (tile) is one workgroup.
     const chunk = gpu ? wg * items : items;
     const maxPerDim = maxWorkgroupsPerDimension(device, options);
-    const layout = device.createBindGroupLayout({
-      label: 'ExclusiveScan.layout',
-      entries: [
-        { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform', hasDynamicOffset: true, minBindingSize: RECORD_UNIFORM_SIZE } },
-        { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
-        { binding: 2, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
-        { binding: 3, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
-        { binding: 4, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
-      ],
-    });
-    const pipelineLayout = device.createPipelineLayout({ label: 'ExclusiveScan.pipelineLayout', bindGroupLayouts: [layout] });
-    const parts = gpu ? [tileConstants(wg, items), dispatchSnippet, scanTiledSnippet] : [dispatchSnippet, scanSnippet];
+    const layout = bindGroupLayout(device, 'ExclusiveScan.layout', [
+      { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform', hasDynamicOffset: true, minBindingSize: RECORD_UNIFORM_SIZE } },
+      { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
+      { binding: 2, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
+      { binding: 3, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
+      { binding: 4, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
+    ]);
+    const parts = gpu ? [tileConstants(wg, items), gridSnippet, scanTiledSnippet] : [gridSnippet, scanSnippet];
     const constants: Record<string, number> = gpu ? {} : { WG: wg, CHUNK: chunk };
     const [reduce, scan, records] = await Promise.all([
-      createComputePipeline(device, 'ExclusiveScan.reduce', parts, 'reduce', { layout: pipelineLayout, constants }),
-      createComputePipeline(device, 'ExclusiveScan.scan', parts, 'scan', { layout: pipelineLayout, constants }),
+      createComputePipeline(device, 'ExclusiveScan.reduce', parts, 'reduce', { layout: [layout], constants }),
+      createComputePipeline(device, 'ExclusiveScan.scan', parts, 'scan', { layout: [layout], constants }),
       DispatchRecords.create(device, 'ExclusiveScan', {
         chunk,
         wg: gpu ? 1 : wg,
@@ -165,7 +167,7 @@ export class ExclusiveScan {
       if (!top) this.internalReduce[l] = this.bindGroup(`reduce${l}`, this.sums[l], this.sums[l + 1], this.zero);
       this.internalScan[l] = this.bindGroup(`scan${l}`, this.sums[l], this.scans[l], top ? this.zero : this.scans[l + 1]);
     }
-    this.userBindGroups = new WeakMap();
+    this.userBindGroups.clear();
     this.records.setCapacity(capacity);
   }
 
@@ -184,21 +186,16 @@ export class ExclusiveScan {
   }
 
   private userGroups(input: GPUBuffer, output: GPUBuffer): UserBindGroups {
-    let byOutput = this.userBindGroups.get(input);
-    if (!byOutput) {
-      byOutput = new WeakMap();
-      this.userBindGroups.set(input, byOutput);
-    }
-    let groups = byOutput.get(output);
-    if (!groups) {
-      const single = this.levels === 1;
-      groups = {
-        reduce: single ? undefined : this.bindGroup('reduce0', input, this.sums[1], this.zero),
-        scan: this.bindGroup('scan0', input, output, single ? this.zero : this.scans[1]),
-      };
-      byOutput.set(output, groups);
-    }
-    return groups;
+    return this.userBindGroups
+      .key(input)
+      .key(output)
+      .get(() => {
+        const single = this.levels === 1;
+        return {
+          reduce: single ? undefined : this.bindGroup('reduce0', input, this.sums[1], this.zero),
+          scan: this.bindGroup('scan0', input, output, single ? this.zero : this.scans[1]),
+        };
+      });
   }
 
   /** Records the scan: a count copy, one compute pass, and the total copy if asked. */
@@ -213,16 +210,16 @@ export class ExclusiveScan {
     if (top > 0) {
       pass.setPipeline(this.reducePipeline);
       for (let l = 0; l < top; l++) {
-        pass.setBindGroup(0, l === 0 ? user.reduce! : this.internalReduce[l], [DispatchRecords.recordOffset(l)]);
+        pass.setBindGroup(0, l === 0 ? user.reduce! : this.internalReduce[l], this.recordOffsets, l, 1);
         pass.dispatchWorkgroupsIndirect(params, DispatchRecords.argsOffset(l));
       }
     }
     pass.setPipeline(this.scanPipeline);
     // The top level holds at most one chunk or tile: one workgroup, even for count 0.
-    pass.setBindGroup(0, top === 0 ? user.scan : this.internalScan[top], [DispatchRecords.recordOffset(top)]);
+    pass.setBindGroup(0, top === 0 ? user.scan : this.internalScan[top], this.recordOffsets, top, 1);
     pass.dispatchWorkgroups(1);
     for (let l = top - 1; l >= 0; l--) {
-      pass.setBindGroup(0, l === 0 ? user.scan : this.internalScan[l], [DispatchRecords.recordOffset(l)]);
+      pass.setBindGroup(0, l === 0 ? user.scan : this.internalScan[l], this.recordOffsets, l, 1);
       pass.dispatchWorkgroupsIndirect(params, DispatchRecords.argsOffset(l));
     }
     pass.end();

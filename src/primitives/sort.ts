@@ -4,14 +4,14 @@
 // scatter, all sized on the GPU (shaders/primitives/radix_sort.wgsl).
 
 import sortWgsl from '../../shaders/primitives/radix_sort.wgsl?raw';
-import { createComputePipeline } from '../gpu/wgsl.ts';
-import { BindGroupCache } from './bind-group-cache.ts';
+import { BindGroupCache } from '../gpu/bind-group-cache.ts';
+import { gridSnippet } from '../gpu/dispatch.ts';
+import { bindGroupLayout, createComputePipeline } from '../gpu/pipeline-cache.ts';
 import type { CountLike } from './count.ts';
 import {
   DispatchRecords,
   RECORD_TABLE_COUNT,
   RECORD_UNIFORM_SIZE,
-  dispatchSnippet,
   maxWorkgroupsPerDimension,
   workgroupSize,
   type PrimitiveOptions,
@@ -100,29 +100,27 @@ export class RadixSortByKey {
       visibility: GPUShaderStage.COMPUTE,
       buffer,
     });
-    const histogramLayout = device.createBindGroupLayout({
-      label: 'RadixSortByKey.histogramLayout',
-      entries: [entry(0, uniform(false)), entry(1, uniform(true)), entry(2, { type: 'read-only-storage' }), entry(4, { type: 'storage' })],
-    });
-    const scatterLayout = device.createBindGroupLayout({
-      label: 'RadixSortByKey.scatterLayout',
-      entries: [
-        entry(0, uniform(false)),
-        entry(1, uniform(true)),
-        entry(2, { type: 'read-only-storage' }),
-        entry(3, { type: 'read-only-storage' }),
-        entry(5, { type: 'read-only-storage' }),
-        entry(6, { type: 'storage' }),
-        entry(7, { type: 'storage' }),
-      ],
-    });
-    const parts = [dispatchSnippet, { name: 'shaders/primitives/radix_sort.wgsl', code: sortWgsl }];
+    const histogramLayout = bindGroupLayout(device, 'RadixSortByKey.histogramLayout', [
+      entry(0, uniform(false)),
+      entry(1, uniform(true)),
+      entry(2, { type: 'read-only-storage' }),
+      entry(4, { type: 'storage' }),
+    ]);
+    const scatterLayout = bindGroupLayout(device, 'RadixSortByKey.scatterLayout', [
+      entry(0, uniform(false)),
+      entry(1, uniform(true)),
+      entry(2, { type: 'read-only-storage' }),
+      entry(3, { type: 'read-only-storage' }),
+      entry(5, { type: 'read-only-storage' }),
+      entry(6, { type: 'storage' }),
+      entry(7, { type: 'storage' }),
+    ]);
+    const parts = [gridSnippet, { name: 'shaders/primitives/radix_sort.wgsl', code: sortWgsl }];
     const constants = { WG: wg, CHUNK: chunk };
-    const layoutOf = (l: GPUBindGroupLayout) => device.createPipelineLayout({ label: 'RadixSortByKey.pipelineLayout', bindGroupLayouts: [l] });
     const [histogram, scatter, copy, records, scan] = await Promise.all([
-      createComputePipeline(device, 'RadixSortByKey.histogram', parts, 'histogram', { layout: layoutOf(histogramLayout), constants }),
-      createComputePipeline(device, 'RadixSortByKey.scatter', parts, 'scatter', { layout: layoutOf(scatterLayout), constants }),
-      createComputePipeline(device, 'RadixSortByKey.copyBack', parts, 'copy_back', { layout: layoutOf(scatterLayout), constants }),
+      createComputePipeline(device, 'RadixSortByKey.histogram', parts, 'histogram', { layout: [histogramLayout], constants }),
+      createComputePipeline(device, 'RadixSortByKey.scatter', parts, 'scatter', { layout: [scatterLayout], constants }),
+      createComputePipeline(device, 'RadixSortByKey.copyBack', parts, 'copy_back', { layout: [scatterLayout], constants }),
       DispatchRecords.create(device, 'RadixSortByKey', {
         chunk,
         wg,
@@ -189,7 +187,7 @@ export class RadixSortByKey {
   }
 
   private histogramGroup(src: Pair): GPUBindGroup {
-    return this.histogramGroups.get([src.keys], () =>
+    return this.histogramGroups.key(src.keys).get(() =>
       this.device.createBindGroup({
         label: 'RadixSortByKey.histogramBindGroup',
         layout: this.histogramLayout,
@@ -204,7 +202,7 @@ export class RadixSortByKey {
   }
 
   private scatterGroup(src: Pair, dst: Pair): GPUBindGroup {
-    return this.scatterGroups.get([src.keys, src.values, dst.keys, dst.values], () =>
+    return this.scatterGroups.key(src.keys).key(src.values).key(dst.keys).key(dst.values).get(() =>
       this.device.createBindGroup({
         label: 'RadixSortByKey.scatterBindGroup',
         layout: this.scatterLayout,

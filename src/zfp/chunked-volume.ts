@@ -19,6 +19,7 @@
 // ranges of just those chunks on the GPU (changeLog: one per surface, so a surface made later starts from every resident chunk).
 
 import { formatDims } from '../core/naming.ts';
+import { bufferLayout } from '../gpu/bindings.ts';
 import { openZfpStream, planZfpStream } from './format.ts';
 import { maxShardBytesFor, type BlockSource } from './gpu-stream.ts';
 
@@ -57,25 +58,9 @@ const STREAM_PARAMS_BYTES = 48;
 const POOL_PARAMS_BYTES = 32;
 const PARAMS_STRIDE = 256;
 
-const layouts = new WeakMap<GPUDevice, GPUBindGroupLayout>();
-
-/** Bind group layout 0 of the decoder kernels over a pool (pool_address.wgsl), cached per device. */
+/** Bind group layout 0 of the decoder kernels over a pool (pool_address.wgsl; the device's, from the pipeline cache). */
 export function poolBindGroupLayout(device: GPUDevice): GPUBindGroupLayout {
-  let layout = layouts.get(device);
-  if (!layout) {
-    const visibility = GPUShaderStage.COMPUTE;
-    layout = device.createBindGroupLayout({
-      label: 'ChunkedVolume.layout',
-      entries: [
-        { binding: 0, visibility, buffer: { type: 'read-only-storage' } },
-        { binding: 1, visibility, buffer: { type: 'uniform' } },
-        { binding: 2, visibility, buffer: { type: 'read-only-storage' } },
-        { binding: 3, visibility, buffer: { type: 'uniform' } },
-      ],
-    });
-    layouts.set(device, layout);
-  }
-  return layout;
+  return bufferLayout(device, 'ChunkedVolume.layout', ['read', 'uniform', 'read', 'uniform']);
 }
 
 interface PoolShard {

@@ -12,25 +12,15 @@
 // (src/primitives/indirect.ts) turns the count into dispatch arguments in its
 // own 16-byte buffer, inside the decode pass.
 
-import { dispatchLinear } from '../gpu/dispatch.ts';
-import { createComputePipeline } from '../gpu/wgsl.ts';
+import { BindGroupCache } from '../gpu/bind-group-cache.ts';
+import { binding, inPass, refSize, type ComputeTarget, type GpuBufferRef, type GpuCount } from '../gpu/buffer-ref.ts';
+import { dispatchWorkgroups } from '../gpu/dispatch.ts';
+import { bindGroupLayout, createComputePipeline } from '../gpu/pipeline-cache.ts';
+import { UniformSlots } from '../gpu/uniform-slots.ts';
+import { IndirectArgs } from '../primitives/indirect.ts';
 import { poolBindGroupLayout, type ChunkedVolume } from './chunked-volume.ts';
 import { maxShardBytesFor, streamBindGroupLayout, type BlockSource, type ZfpGpuStream } from './gpu-stream.ts';
-import {
-  BindGroupCache,
-  binding,
-  inPass,
-  refKey,
-  refSize,
-  UniformSlots,
-  type ComputeTarget,
-  type GpuBufferRef,
-  type GpuCount,
-} from './gpu-util.ts';
-import { IndirectArgs } from '../primitives/indirect.ts';
 import { zfpWgsl } from './wgsl.ts';
-
-export type { ComputeTarget, GpuBufferRef, GpuCount } from './gpu-util.ts';
 
 export interface DecodeBlocksArgs {
   /** A whole stream, or chunks in a pool (ChunkedVolume). */
@@ -77,8 +67,12 @@ export interface DecodeVolumeArgs {
 }
 
 export class ZfpDecoder {
-  private readonly groups = new BindGroupCache();
+  private readonly blockGroups = new BindGroupCache();
+  private readonly poolRangeGroups = new BindGroupCache();
+  private readonly rangeGroups = new BindGroupCache();
+  private readonly volumeGroups = new BindGroupCache();
   private readonly uniforms: UniformSlots;
+  private readonly volumeWords = new Uint32Array(4);
 
   private constructor(
     readonly device: GPUDevice,
@@ -107,8 +101,7 @@ export class ZfpDecoder {
       buffer: { type: readOnly ? 'read-only-storage' : 'storage' },
     });
     const uniform = (binding: number): GPUBindGroupLayoutEntry => ({ binding, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform' } });
-    const layout = (label: string, ...entries: GPUBindGroupLayoutEntry[]) => device.createBindGroupLayout({ label, entries });
-    const pipelineLayout = (label: string, groups: GPUBindGroupLayout[]) => device.createPipelineLayout({ label, bindGroupLayouts: groups });
+    const layout = (label: string, ...entries: GPUBindGroupLayoutEntry[]) => bindGroupLayout(device, label, entries);
 
     const blocksLayout = layout('ZfpDecoder.decodeBlocks.layout', storage(0, true), storage(1, true), storage(2, true), storage(3, false));
     const volumeLayout = layout('ZfpDecoder.decodeVolume.layout', uniform(0), storage(1, false));
@@ -118,19 +111,19 @@ export class ZfpDecoder {
 
     const [blocks, volume, ranges, poolBlocks, poolRanges, args] = await Promise.all([
       createComputePipeline(device, 'ZfpDecoder.decodeBlocks', zfpWgsl.decodeBlocks, 'decode_blocks', {
-        layout: pipelineLayout('ZfpDecoder.decodeBlocks', [stream, blocksLayout]),
+        layout: [stream, blocksLayout],
       }),
       createComputePipeline(device, 'ZfpDecoder.decodeVolume', zfpWgsl.decodeVolume, 'decode_volume', {
-        layout: pipelineLayout('ZfpDecoder.decodeVolume', [stream, volumeLayout]),
+        layout: [stream, volumeLayout],
       }),
       createComputePipeline(device, 'ZfpDecoder.blockRanges', zfpWgsl.blockRanges, 'block_ranges', {
-        layout: pipelineLayout('ZfpDecoder.blockRanges', [stream, rangesLayout]),
+        layout: [stream, rangesLayout],
       }),
       createComputePipeline(device, 'ZfpDecoder.decodePoolBlocks', zfpWgsl.decodePoolBlocks, 'decode_blocks', {
-        layout: pipelineLayout('ZfpDecoder.decodePoolBlocks', [pool, blocksLayout]),
+        layout: [pool, blocksLayout],
       }),
       createComputePipeline(device, 'ZfpDecoder.chunkBlockRanges', zfpWgsl.poolRanges, 'chunk_block_ranges', {
-        layout: pipelineLayout('ZfpDecoder.chunkBlockRanges', [pool, poolRangesLayout]),
+        layout: [pool, poolRangesLayout],
       }),
       IndirectArgs.create(device, { itemsPerWorkgroup: 64, maxWorkgroupsPerDimension: maxWorkgroups, label: 'ZfpDecoder.indirectArgs' }),
     ]);
@@ -150,7 +143,7 @@ export class ZfpDecoder {
   encodeDecodeBlocks(target: ComputeTarget, a: DecodeBlocksArgs): void {
     this.check(a.stream);
     const { device } = this;
-    const listGroup = this.groups.get(`blocks|${refKey(a.blockIds)}|${refKey(a.slotIds)}|${refKey(a.slots)}`, () =>
+    const listGroup = this.blockGroups.ref(a.blockIds).ref(a.slotIds).ref(a.slots).get(() =>
       device.createBindGroup({
         label: 'ZfpDecoder.decodeBlocks.bindGroup',
         layout: this.decodeBlocksPipeline.getBindGroupLayout(1),
@@ -186,7 +179,7 @@ export class ZfpDecoder {
   encodeChunkBlockRanges(target: ComputeTarget, a: ChunkBlockRangesArgs): void {
     this.check(a.pool);
     if (a.count === 0) return;
-    const group = this.groups.get(`poolRanges|${refKey(a.chunkList)}|${refKey(a.params)}|${refKey(a.ranges)}`, () =>
+    const group = this.poolRangeGroups.ref(a.chunkList).ref(a.params).ref(a.ranges).get(() =>
       this.device.createBindGroup({
         label: 'ZfpDecoder.chunkBlockRanges.bindGroup',
         layout: this.poolRangesPipeline.getBindGroupLayout(1),
@@ -202,7 +195,7 @@ export class ZfpDecoder {
       pass.setBindGroup(1, group);
       for (const shard of a.pool.shards) {
         pass.setBindGroup(0, shard.bindGroup);
-        dispatchLinear(pass, Math.ceil((a.count * a.pool.chunkBlocks ** 3) / 64), this.maxWorkgroups);
+        dispatchWorkgroups(pass, Math.ceil((a.count * a.pool.chunkBlocks ** 3) / 64), this.maxWorkgroups);
       }
     });
   }
@@ -217,7 +210,7 @@ export class ZfpDecoder {
     this.check(a.stream);
     const need = ZfpDecoder.rangesBytes(a.stream);
     if (refSize(a.ranges) < need) throw new Error(`ZfpDecoder: the ranges buffer has ${refSize(a.ranges)} bytes, ${need} are needed`);
-    const group = this.groups.get(`ranges|${refKey(a.ranges)}`, () =>
+    const group = this.rangeGroups.ref(a.ranges).get(() =>
       this.device.createBindGroup({
         label: 'ZfpDecoder.blockRanges.bindGroup',
         layout: this.rangesPipeline.getBindGroupLayout(1),
@@ -232,7 +225,7 @@ export class ZfpDecoder {
         pass.setBindGroup(1, group);
         for (const shard of a.stream.shards) {
           pass.setBindGroup(0, shard.bindGroup);
-          dispatchLinear(pass, Math.ceil((shard.endBlock - shard.firstBlock) / 64), this.maxWorkgroups);
+          dispatchWorkgroups(pass, Math.ceil((shard.endBlock - shard.firstBlock) / 64), this.maxWorkgroups);
         }
       },
       a.timestampWrites,
@@ -264,8 +257,9 @@ export class ZfpDecoder {
       const lo = Math.max(first, shard.firstBlock);
       const hi = Math.min(end, shard.endBlock);
       if (lo >= hi) return;
-      const params = this.uniforms.get(`volume|${lo}|${hi}|${4 * z0}`, new Uint32Array([lo, hi, 4 * z0, 0]));
-      const group = this.groups.get(`volume|${refKey(a.output)}|${lo}|${hi}|${4 * z0}`, () =>
+      this.volumeWords.set([lo, hi, 4 * z0, 0]);
+      const params = this.uniforms.get(this.volumeWords);
+      const group = this.volumeGroups.ref(a.output).key(params.buffer).key(params.offset!).get(() =>
         this.device.createBindGroup({
           label: 'ZfpDecoder.decodeVolume.bindGroup',
           layout: this.decodeVolumePipeline.getBindGroupLayout(1),
@@ -285,7 +279,7 @@ export class ZfpDecoder {
         for (const w of work) {
           pass.setBindGroup(0, a.stream.shards[w.shard].bindGroup);
           pass.setBindGroup(1, w.group);
-          dispatchLinear(pass, Math.ceil(w.count / 64), this.maxWorkgroups);
+          dispatchWorkgroups(pass, Math.ceil(w.count / 64), this.maxWorkgroups);
         }
       },
       a.timestampWrites,
@@ -369,6 +363,6 @@ export class ZfpDecoder {
   destroy(): void {
     this.args.destroy();
     this.uniforms.destroy();
-    this.groups.clear();
+    for (const g of [this.blockGroups, this.poolRangeGroups, this.rangeGroups, this.volumeGroups]) g.clear();
   }
 }

@@ -14,11 +14,13 @@
 import type { DType } from '../core/dtype.ts';
 import { DTYPE_BYTES } from '../core/dtype.ts';
 import { formatDims, type Dims } from '../core/naming.ts';
-import { dispatchLinear } from '../gpu/dispatch.ts';
-import { createComputePipeline } from '../gpu/wgsl.ts';
+import { BindGroupCache } from '../gpu/bind-group-cache.ts';
+import { binding, refSize, type GpuBufferRef } from '../gpu/buffer-ref.ts';
+import { dispatchWorkgroups } from '../gpu/dispatch.ts';
+import { bindGroupLayout, createComputePipeline } from '../gpu/pipeline-cache.ts';
+import { UniformSlots } from '../gpu/uniform-slots.ts';
 import { planZfpStream, ZfpFormatError, type ZfpStreamInfo } from './format.ts';
 import { maxShardBytesFor, planShards, ZfpGpuStream } from './gpu-stream.ts';
-import { BindGroupCache, binding, refKey, refSize, UniformSlots, type GpuBufferRef } from './gpu-util.ts';
 import { writeZfpHeader } from './header.ts';
 import { zfpWgsl } from './wgsl.ts';
 
@@ -48,29 +50,25 @@ export interface CompressOptions {
 export class ZfpEncoder {
   private readonly groups = new BindGroupCache();
   private readonly uniforms: UniformSlots;
-  /** One pipeline per input type (the type is an override constant: no per-value switch). */
+  /** One pipeline per input type (the type is an override constant: no per-value switch); compiled once per device. */
   private readonly pipelines = new Map<DType, Promise<GPUComputePipeline>>();
   private readonly ready = new Map<DType, GPUComputePipeline>();
 
   private constructor(
     readonly device: GPUDevice,
     private readonly groupLayout: GPUBindGroupLayout,
-    private readonly layout: GPUPipelineLayout,
   ) {
     this.uniforms = new UniformSlots(device, 'ZfpEncoder');
   }
 
   /** Compiles the pipelines for `dtypes` now (others are compiled on first use by compress*(), or by prepare()). */
   static async create(device: GPUDevice, dtypes: readonly DType[] = ['float32']): Promise<ZfpEncoder> {
-    const group = device.createBindGroupLayout({
-      label: 'ZfpEncoder.layout',
-      entries: [
-        { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
-        { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
-        { binding: 2, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform' } },
-      ],
-    });
-    const encoder = new ZfpEncoder(device, group, device.createPipelineLayout({ label: 'ZfpEncoder', bindGroupLayouts: [group] }));
+    const group = bindGroupLayout(device, 'ZfpEncoder.layout', [
+      { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
+      { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
+      { binding: 2, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform' } },
+    ]);
+    const encoder = new ZfpEncoder(device, group);
     await Promise.all(dtypes.map((t) => encoder.prepare(t)));
     return encoder;
   }
@@ -80,7 +78,7 @@ export class ZfpEncoder {
     let p = this.pipelines.get(dtype);
     if (!p) {
       p = createComputePipeline(this.device, `ZfpEncoder.encode.${dtype}`, zfpWgsl.encode, 'encode_blocks', {
-        layout: this.layout,
+        layout: [this.groupLayout],
         constants: { DTYPE: DTYPE_CODE[dtype] },
       }).then((pipeline) => {
         this.ready.set(dtype, pipeline);
@@ -148,8 +146,8 @@ export class ZfpEncoder {
       headerWords, 0, 0, 0,
       ...header,
     ]);
-    const params = this.uniforms.get(`enc|${record.join(',')}`, record);
-    const group = this.groups.get(`enc|${refKey(a.input)}|${refKey(shard.buffer)}|${params.offset}|${refKey(params.buffer)}`, () =>
+    const params = this.uniforms.get(record);
+    const group = this.groups.ref(a.input).key(shard.buffer).key(params.buffer).key(params.offset!).get(() =>
       this.device.createBindGroup({
         label: 'ZfpEncoder.bindGroup',
         layout: this.groupLayout,
@@ -166,7 +164,7 @@ export class ZfpEncoder {
     const pass = encoder.beginComputePass(desc);
     pass.setPipeline(pipeline);
     pass.setBindGroup(0, group);
-    dispatchLinear(pass, Math.ceil((shard.endBlock - shard.firstBlock) / 64));
+    dispatchWorkgroups(pass, Math.ceil((shard.endBlock - shard.firstBlock) / 64));
     pass.end();
   }
 

@@ -16,6 +16,7 @@
 // the stream is needed and the file's bytes go to the GPU as they are.
 
 import { formatDims } from '../core/naming.ts';
+import { bufferLayout } from '../gpu/bindings.ts';
 import { openZfpStream, type OpenZfpOptions, type ZfpStreamInfo } from './format.ts';
 
 export interface ZfpShard {
@@ -44,22 +45,9 @@ export interface ShardPlan {
 const PARAMS_BYTES = 48;
 const PARAMS_STRIDE = 256;
 
-const layouts = new WeakMap<GPUDevice, GPUBindGroupLayout>();
-
-/** Bind group layout 0 of the decoder kernels (cached per device). */
+/** Bind group layout 0 of the decoder kernels (the device's, from the pipeline cache). */
 export function streamBindGroupLayout(device: GPUDevice): GPUBindGroupLayout {
-  let layout = layouts.get(device);
-  if (!layout) {
-    layout = device.createBindGroupLayout({
-      label: 'ZfpGpuStream.layout',
-      entries: [
-        { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
-        { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform' } },
-      ],
-    });
-    layouts.set(device, layout);
-  }
-  return layout;
+  return bufferLayout(device, 'ZfpGpuStream.layout', ['read', 'uniform']);
 }
 
 /**

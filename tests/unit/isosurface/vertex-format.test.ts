@@ -4,7 +4,7 @@
 import { readFileSync } from 'node:fs';
 import { describe, expect, test } from 'vitest';
 import { readF32, readU32 } from '../../../src/gpu/buffers.ts';
-import { createComputePipeline } from '../../../src/gpu/wgsl.ts';
+import { createComputePipeline } from '../../../src/gpu/pipeline-cache.ts';
 import { A, C, NONE, S, SHARD_RECORD_BYTES, STATUS_CACHE_SHORTFALL, STATUS_VERTEX_OVERFLOW } from '../../../src/isosurface/layout.ts';
 import { decodeVertices, encodeVertexPosition, VERTEX_QUANTUM } from '../../../src/isosurface/vertex-format.ts';
 import { vertexFormatSnippet } from '../../../src/isosurface/wgsl.ts';

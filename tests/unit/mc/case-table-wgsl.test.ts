@@ -3,7 +3,7 @@
 // documented float32 vertex formula.
 import { expect } from 'vitest';
 import { readF32, readU32 } from '../../../src/gpu/buffers.ts';
-import { createComputePipeline } from '../../../src/gpu/wgsl.ts';
+import { createComputePipeline } from '../../../src/gpu/pipeline-cache.ts';
 import { CASE_TRIANGLE_EDGES, CASE_VERTEX_COUNT, EDGE_CORNERS } from '../../../src/mc/case-table.ts';
 import { createCaseTableBuffer, mcCaseTableSnippet } from '../../../src/mc/case-table-wgsl.ts';
 import { gpuTest } from '../../helpers/gpu.ts';

@@ -2,7 +2,7 @@
 // the host, poisoned outputs, GPU-side counts, and typed-array comparison
 // that reports the first mismatches instead of one expect per element.
 import { readU32 } from '../../../src/gpu/buffers.ts';
-import type { GpuCount } from '../../../src/primitives/count.ts';
+import type { GpuCount } from '../../../src/gpu/buffer-ref.ts';
 
 export const POISON = 0xdeadbeef;
 

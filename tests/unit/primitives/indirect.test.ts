@@ -2,19 +2,16 @@
 // limit, checked against the host grid and by a real indirect dispatch that
 // must mark each index below the count exactly once.
 import { describe, expect } from 'vitest';
-import { grid2d, gridSnippet } from '../../../src/gpu/dispatch.ts';
-import { createComputePipeline } from '../../../src/gpu/wgsl.ts';
+import { dispatchGrid, gridSnippet } from '../../../src/gpu/dispatch.ts';
+import { createComputePipeline } from '../../../src/gpu/pipeline-cache.ts';
 import { IndirectArgs } from '../../../src/primitives/indirect.ts';
 import { ExclusiveScan } from '../../../src/primitives/scan.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { POISON, gpuCount, randomMask, read, upload } from './helpers.ts';
 
+// The host twin of dispatch_grid (shaders/common/grid.wgsl): 3D past maxPerDim^2 workgroups.
 function expectedArgs(count: number, items: number, maxPerDim: number): number[] {
-  const workgroups = Math.ceil(count / items);
-  if (workgroups === 0) return [0, 1, 1];
-  // 3D past maxPerDim^2 workgroups: z planes of at most maxPerDim^2.
-  const z = Math.ceil(workgroups / (maxPerDim * maxPerDim));
-  return [...grid2d(Math.ceil(workgroups / z), maxPerDim), z];
+  return dispatchGrid(Math.ceil(count / items), maxPerDim);
 }
 
 describe('IndirectArgs', () => {
@@ -69,7 +66,7 @@ describe('IndirectArgs', () => {
 @group(0) @binding(1) var<storage, read> state: array<u32>;
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u, @builtin(local_invocation_index) lid: u32) {
-  let i = linear_workgroup_index(wid, nwg) * 64u + lid;
+  let i = grid_invocation_index(wid, nwg, lid, 64u);
   if (i < state[0]) { atomicAdd(&hits[i], 1u); }
 }`,
     }], 'main');
@@ -87,7 +84,7 @@ fn main(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u, 
     pass.end();
     device.queue.submit([encoder.finish()]);
     const s = await read(device, state);
-    expect([...s.subarray(0, 4)]).toEqual([ones, ...grid2d(Math.ceil(ones / 64)), 1]);
+    expect([...s.subarray(0, 4)]).toEqual([ones, ...dispatchGrid(Math.ceil(ones / 64))]);
     expect(s[2]).toBeGreaterThan(1);
     const h = await read(device, hits);
     let wrong = 0;

@@ -4,7 +4,7 @@
 // (no allocation) against BigInt arithmetic.
 import { describe, expect, it } from 'vitest';
 import { readU32 } from '../../../src/gpu/buffers.ts';
-import { createComputePipeline } from '../../../src/gpu/wgsl.ts';
+import { createComputePipeline } from '../../../src/gpu/pipeline-cache.ts';
 import { planShards, streamBindGroupLayout } from '../../../src/zfp/gpu-stream.ts';
 import { zfpWgsl } from '../../../src/zfp/wgsl.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
