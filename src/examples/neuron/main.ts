@@ -11,7 +11,7 @@
 // implementing DepthDrawer and RenderLayer and registering it like the
 // SwcLayer below.
 import { setInfoList } from '../../app/info-list.ts';
-import { parseSwc, swcTypeColor, swcTypeName, SwcError } from '../../loaders/swc.ts';
+import { parseSwc, SwcError } from '../../loaders/swc.ts';
 import { loadTiffStack, TiffError, type TiffVolume } from '../../loaders/tiff.ts';
 import { BoxLayer } from '../../render/box-layer.ts';
 import type { Bounds } from '../../render/camera.ts';
@@ -34,6 +34,7 @@ import { DepthPrepass } from './depth-prepass.ts';
 import { NeuronIsosurface, type SurfaceState } from './isosurface.ts';
 import { FILE_COLORS, SwcLayer, type Trace, type TraceColoring, type TraceStyle } from './swc-layer.ts';
 import { COLORMAP_NAMES, drawTransferFunction, type ColormapName, type TransferFunction } from './transfer-function.ts';
+import { renderTraceLegend, renderTraceList } from './trace-panel.ts';
 import { VolumeLayer, type RenderMode, type VolumeSummary } from './volume-layer.ts';
 
 type Vec3 = [number, number, number];
@@ -148,69 +149,9 @@ async function start(): Promise<void> {
     traces.coordinateScale = units.value === 'voxel' ? spacing : [1, 1, 1];
     traces.setTraces(loaded);
     state.traces = loaded.map((t) => ({ name: t.name, samples: t.tree.count, visible: t.visible }));
-    const list = byId('trace-list');
-    list.replaceChildren(
-      ...loaded.map((t, i) => {
-        const li = document.createElement('li');
-        const label = document.createElement('label');
-        const check = document.createElement('input');
-        check.type = 'checkbox';
-        check.checked = t.visible;
-        check.addEventListener('change', () => {
-          t.visible = check.checked;
-          renderTraces();
-        });
-        const swatch = document.createElement('span');
-        swatch.className = 'swatch';
-        swatch.style.cssText = `display:inline-block;width:9px;height:9px;border-radius:2px;margin:0 5px;background:rgb(${t.color.map((c) => Math.round(c * 255)).join(',')})`;
-        const name = document.createElement('span');
-        name.textContent = t.name;
-        label.append(check, swatch, name);
-        const meta = document.createElement('span');
-        meta.textContent = `${formatCount(t.tree.count)} samples `;
-        const remove = document.createElement('button');
-        remove.type = 'button';
-        remove.textContent = '×';
-        remove.title = 'Remove this trace';
-        remove.style.cssText = 'padding:0 5px;margin-left:4px';
-        remove.addEventListener('click', () => {
-          loaded.splice(i, 1);
-          renderTraces();
-        });
-        meta.append(remove);
-        li.append(label, meta);
-        return li;
-      }),
-    );
-    if (loaded.length === 0) {
-      const li = document.createElement('li');
-      li.textContent = 'No traces: drop .swc files.';
-      list.append(li);
-    }
-    renderTraceLegend();
+    renderTraceList(byId('trace-list'), loaded, renderTraces);
+    renderTraceLegend(byId('trace-legend'), loaded, traces.coloring === 'type');
     updateHud();
-  };
-
-  const renderTraceLegend = () => {
-    const legend = byId('trace-legend');
-    legend.replaceChildren();
-    if (traces.coloring !== 'type' || loaded.length === 0) return;
-    const counts = new Map<number, number>();
-    for (const t of loaded) if (t.visible) for (const type of t.tree.types) counts.set(type, (counts.get(type) ?? 0) + 1);
-    const grid = document.createElement('div');
-    grid.className = 'legend';
-    for (const [type, n] of [...counts].sort((a, b) => a[0] - b[0])) {
-      const sw = document.createElement('span');
-      sw.className = 'swatch';
-      sw.style.background = `rgb(${swcTypeColor(type).map((c) => Math.round(c * 255)).join(',')})`;
-      const name = document.createElement('span');
-      name.textContent = `${type} ${swcTypeName(type)}`;
-      const count = document.createElement('span');
-      count.className = 'count';
-      count.textContent = formatCount(n);
-      grid.append(sw, name, count);
-    }
-    legend.append(grid);
   };
 
   for (const radio of document.querySelectorAll<HTMLInputElement>('input[name="trace-style"]')) {
