@@ -41,7 +41,7 @@ describe('LRU block cache', () => {
     // a computation's appends would not fit, `slots` after a reset or growth.
     let tail = initialSlots;
     let compactions = 0;
-    const counters = (iso as unknown as { counters: { buffer: GPUBuffer } }).counters.buffer;
+    const counters = iso.pipeline.parts.counters.buffer;
     for (const step of script) {
       if (step === 'reset') {
         await iso.resetCache();

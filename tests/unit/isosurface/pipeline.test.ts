@@ -117,7 +117,7 @@ describe('pipelined scrubbing', () => {
     iso.onError((e) => errors.push(e));
     iso.onStats((s) => stats.push(s));
     // A buffer every computation binds (the cache's slot -> block map), destroyed: the submission is invalid.
-    (iso as unknown as { cache: { slotToBlock: GPUBuffer } }).cache.slotToBlock.destroy();
+    iso.pipeline.parts.cache.slotToBlock.destroy();
     const failed = await iso.compute(Math.fround(lo + 0.6 * (hi - lo))).catch((e: unknown) => e);
     expect(failed).toBeInstanceOf(IsosurfaceGpuError);
     expect((failed as Error).message).toMatch(/failed on the GPU \(validation error: .+\); the previous surface is kept/);
