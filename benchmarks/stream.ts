@@ -113,7 +113,7 @@ async function main() {
     for (let r = 0; r < repeats; r++) {
       const t0 = performance.now();
       const stream = loadZfpStream(gpu.device, new Uint8Array(readFileSync(file)), file);
-      const surface = await Isosurface.create(gpu, stream);
+      const surface = await Isosurface.create(gpu, stream, { memoryBudgetBytes: Math.floor(budgetBytes / 4) }); // what a streamed surface gets
       await surface.compute(lo + isoFraction * (hi - lo));
       surface.destroy();
       stream.destroy();
