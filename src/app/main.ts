@@ -162,6 +162,7 @@ async function start(): Promise<void> {
     },
     onLoaded: (v) => {
       session.install(v);
+      storeView?.close(); // a store still streaming stops (its level on screen, if any, was just let go)
       link?.setLevel(undefined); // a store's view sets it again after installing its level
       volumeUrl = nextUrl;
       setUrlParameter(volumeUrl);
@@ -181,7 +182,6 @@ async function start(): Promise<void> {
       messages.show('A benchmark is running: cancel it before opening another volume.', 'info', 4000);
       return;
     }
-    storeView?.close(); // a store being streamed stops; its level stays until the new volume replaces it
     nextUrl = undefined;
     void load();
   };

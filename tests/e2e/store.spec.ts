@@ -96,3 +96,22 @@ test('the link keeps the level: #level=1 stops at level 1, and the hash says lev
   await page.waitForFunction(() => /(^|&|#)level=1(&|$)/.test(location.hash) && /iso=80/.test(location.hash), null, { timeout: 10_000 });
   expect(new URL(page.url()).searchParams.get('store')).toBe('/stores/neghip-e2e.zarr');
 });
+
+test('another volume replaces the store: its GPU side goes, no WebGPU error, and the store stops publishing', async ({ page }) => {
+  test.setTimeout(300_000);
+  const errors = watchErrors(page);
+  await openApp(page, '/?store=/stores/neghip-e2e.zarr#iso=80&level=2');
+  await page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, { timeout: 240_000 });
+  await page.locator('#load-default').click();
+  await page.waitForFunction(() => (window as unknown as { zfpiso: { volume?: { kind: string } } }).zfpiso.volume?.kind === 'default', null, { timeout: 120_000 });
+  // frames keep being drawn from the new volume's buffers (a freed store buffer would be a validation error)
+  const frames = () => page.evaluate(() => (window as unknown as { zfpiso: { framesDrawn(): number } }).zfpiso.framesDrawn());
+  const before = await frames();
+  await page.keyboard.press(']');
+  await page.waitForFunction((n) => (window as unknown as { zfpiso: { framesDrawn(): number } }).zfpiso.framesDrawn() > n, before, { timeout: 60_000 });
+  await page.waitForTimeout(500);
+  await expect(page.locator('#messages')).not.toContainText(/WebGPU|validation|destroyed/i);
+  await expect(page.locator('#store-progress')).toBeHidden();
+  await expect(page.locator('#store-section')).toBeHidden();
+  expect(errors).toEqual([]);
+});

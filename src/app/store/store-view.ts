@@ -72,14 +72,25 @@ export class StoreView {
     return this.openStore(new FetchStore(new URL(url, location.href).href), url);
   }
 
-  /** Stops streaming the open store (another volume is being opened); its level on screen stays until replaced. */
+  /**
+   * Another volume is on screen now: the open store stops streaming. Its GPU
+   * side is freed here if none of its levels is on screen, else when the
+   * session lets that level go (the level's draw data stays valid until then).
+   */
   close(): void {
     this.#gen++;
     const o = this.#open;
-    if (!o) return;
     this.#open = null;
-    o.controller.destroy();
-    if (o.current) this.#line('');
+    if (!o) return;
+    this.#stop(o);
+    this.#line('');
+    this.d.panel.hidden = true;
+  }
+
+  /** Stops a store: no more requests; its controller is destroyed unless one of its levels is still on screen. */
+  #stop(o: OpenStore): void {
+    o.fetcher.cancelAll();
+    if (!o.current) o.controller.destroy();
   }
 
   /** Any store (a dropped or picked folder: zarr/stores.ts); `url` names it in messages. Resolves when the first isovalue's refinement ends. */
@@ -103,7 +114,7 @@ export class StoreView {
     if (gen !== this.#gen) { controller.destroy(); return; }
     // the previous store (if any) stops here; its level stays on screen until this one's first level replaces it
     const previous = this.#open;
-    if (previous) previous.controller.destroy();
+    if (previous) this.#stop(previous);
     const finest = Math.min(this.d.linkLevel() ?? 0, store.levels.length - 1);
     controller.finest = finest;
     const state: StorePageState = {
@@ -151,6 +162,7 @@ export class StoreView {
 
   /** One isovalue's refinement, with `done` and the line kept current. */
   async #refine(o: OpenStore, iso: number): Promise<void> {
+    if (this.#open !== o) return; // stopped: its level on screen only waits to be replaced
     o.running++;
     o.state.done = false;
     this.#publish(o);
@@ -187,7 +199,10 @@ export class StoreView {
     } else {
       const first = o.current === null;
       const iso = new StoreLevelIsosurface(o.controller, s, o.valueRange, (value) => this.#refine(o, value), () => {
-        if (!this.#replacing && this.#open === o) this.close();
+        // the session let this level go: another level of the store replaces it, or the store is done
+        if (this.#replacing && this.#open === o) return;
+        if (this.#open === o) this.close();
+        o.controller.destroy();
       }, (bytes) => {
         if (bytes !== o.controller.budgetBytes) this.d.onNotice(`${o.url}: the new memory budget (${mib(bytes)}) applies when the store is opened again; it streams within ${mib(o.controller.budgetBytes)} now.`);
       });
