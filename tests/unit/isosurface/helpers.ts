@@ -62,9 +62,10 @@ export async function compressVolume(device: GPUDevice, values: Float32Array, di
 
 /**
  * The zfp block-list decode path the surface tests force (ZFPISO_DECODER_PATH=emulator|gpu;
- * unset: the adapter's choice), so the VTK and cache tests run on both kernel families.
+ * unset: the adapter's choice), so the VTK and cache tests run on both kernel families. Read through
+ * globalThis: the wgpu suite bundles these helpers for Deno.
  */
-export const testDecoderPath = decoderPathFromEnv(process.env.ZFPISO_DECODER_PATH);
+export const testDecoderPath = decoderPathFromEnv((globalThis as { process?: { env: Record<string, string | undefined> } }).process?.env.ZFPISO_DECODER_PATH);
 
 function decoderPathFromEnv(v: string | undefined): 'auto' | 'emulator' | 'gpu' {
   if (v === undefined || v === '' || v === 'auto') return 'auto';
