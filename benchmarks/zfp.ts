@@ -2,9 +2,11 @@
 // zfp codec (GB/s of float32 data; GPU time of the kernel pass from timestamp
 // queries, or queue wall time where there are none), median of 10 runs after
 // a discarded first, next to zfpy's serial C codec (zfp 1.0.1) on the same
-// file in the same run, as a ratio.
+// file in the same run, as a ratio. Also the block-list decode (the cache
+// fill: every block of the file into its own slot, dispatched indirectly) on
+// each kernel family of ZfpDecoder (emulator path, GPU path), both forced.
 //
-//   node benchmarks/run.mjs benchmarks/zfp.ts [--repeats N] [FILE.zfp ...]
+//   node benchmarks/run.mjs benchmarks/zfp.ts [--repeats N] [--paths emulator,gpu] [FILE.zfp ...]
 import { execFileSync } from 'node:child_process';
 import { readFileSync } from 'node:fs';
 import { basename, join } from 'node:path';
@@ -12,6 +14,7 @@ import { fileURLToPath } from 'node:url';
 import { describeAdapter } from '../src/gpu/device.ts';
 import { requestNodeGpu } from '../src/gpu/node-gpu.ts';
 import { GpuTimer } from '../src/gpu/timing.ts';
+import type { PrimitivePath } from '../src/primitives/dispatch-records.ts';
 import { ZfpDecoder } from '../src/zfp/decoder.ts';
 import { ZfpEncoder } from '../src/zfp/encoder.ts';
 import { openZfpStream, planZfpStream } from '../src/zfp/format.ts';
@@ -26,8 +29,10 @@ const DEFAULT_FILES = [join(volumes, 'bonsai_256x256x256_float32.rate4.zfp'), jo
 const args = process.argv.slice(2);
 let repeats = 11; // 10 measured after the discarded first
 const files: string[] = [];
+let paths: PrimitivePath[] = ['emulator', 'gpu'];
 for (let i = 0; i < args.length; i++) {
   if (args[i] === '--repeats') repeats = Number(args[++i]) + 1;
+  else if (args[i] === '--paths') paths = args[++i].split(',').filter((p): p is PrimitivePath => p === 'emulator' || p === 'gpu');
   else files.push(args[i]);
 }
 if (files.length === 0) files.push(...DEFAULT_FILES);
@@ -66,6 +71,7 @@ async function main(): Promise<void> {
   console.log(`adapter: ${adapter}`);
   const decoder = await ZfpDecoder.create(device);
   const encoder = await ZfpEncoder.create(device);
+  const listDecoders = await Promise.all(paths.map((path) => ZfpDecoder.create(device, { path })));
   const timer = new GpuTimer(device, 16);
   const rows: (string | number)[][] = [];
   const results: unknown[] = [];
@@ -99,6 +105,30 @@ async function main(): Promise<void> {
       }, 'encode'),
     );
 
+    // The block list: blocks [0, n) into slots [0, n), n as many as one binding of slots holds.
+    const listBlocks = Math.min(info.blockCount, Math.floor(device.limits.maxStorageBufferBindingSize / 256));
+    const usage = GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST;
+    const ids = device.createBuffer({ label: 'bench.blockIds', size: listBlocks * 4, usage });
+    device.queue.writeBuffer(ids, 0, Uint32Array.from({ length: listBlocks }, (_, i) => i));
+    const count = device.createBuffer({ label: 'bench.count', size: 4, usage });
+    device.queue.writeBuffer(count, 0, new Uint32Array([listBlocks]));
+    const slots = device.createBuffer({ label: 'bench.slots', size: listBlocks * 256, usage: GPUBufferUsage.STORAGE });
+    const blockList: Record<string, unknown> = {};
+    const listRows: (string | number)[][] = [];
+    for (const d of listDecoders) {
+      const t = await repeat(repeats, () =>
+        timeOne(
+          (enc, frame) =>
+            d.encodeDecodeBlocks(enc, { stream, blockIds: ids, slotIds: ids, count: { buffer: count, offset: 0 }, slots, timestampWrites: frame.pass('decodeBlocks') }),
+          `decodeBlocks.${d.path}`,
+        ),
+      );
+      const listBytes = listBlocks * 256;
+      listRows.push([`decode blocks (${d.path} path)`, listBytes / t.median / 1e9, t.median * 1000]);
+      blockList[d.path] = { blocks: listBlocks, gbPerSecond: listBytes / t.median / 1e9, seconds: t };
+    }
+    for (const b of [ids, count, slots]) b.destroy();
+
     const zfpy = JSON.parse(execFileSync(python(), ['-c', ZFPY, path, String(repeats)], { encoding: 'utf8', maxBuffer: 1 << 26 })) as { decode_s: number[]; encode_s: number[] };
     const zdec = summarizeSeconds(zfpy.decode_s);
     const zenc = summarizeSeconds(zfpy.encode_s);
@@ -106,6 +136,8 @@ async function main(): Promise<void> {
     const name = `${basename(path)} (${formatDims(info.dims)}, rate ${info.rate})`;
     rows.push([name, 'decode', gbs(decode.median), gbs(zdec.median), gbs(decode.median) / gbs(zdec.median), decode.median * 1000]);
     rows.push([name, 'encode', gbs(encode.median), gbs(zenc.median), gbs(encode.median) / gbs(zenc.median), encode.median * 1000]);
+    // GB/s of slot data (256 bytes per block, partial blocks included); zfpy has no counterpart.
+    for (const [op, gb, ms] of listRows) rows.push([name, op, gb, '', '', ms]);
     results.push({
       file: path,
       dims: info.dims,
@@ -119,6 +151,7 @@ async function main(): Promise<void> {
         decode: { gbPerSecond: gbs(zdec.median), seconds: zdec },
         encode: { gbPerSecond: gbs(zenc.median), seconds: zenc },
       },
+      blockList,
       ratio: { decode: gbs(decode.median) / gbs(zdec.median), encode: gbs(encode.median) / gbs(zenc.median) },
     });
     volume.destroy();
@@ -145,6 +178,7 @@ async function main(): Promise<void> {
   });
   timer.destroy();
   decoder.destroy();
+  for (const d of listDecoders) d.destroy();
   encoder.destroy();
   device.destroy();
 }

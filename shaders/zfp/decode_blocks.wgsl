@@ -3,6 +3,8 @@
 // indirectly (IndirectArgs, shaders/primitives/indirect_args.wgsl: a 1D, 2D
 // or 3D grid, count in dispatch_args[3]) once per stream (or pool) shard;
 // entries whose block is in another shard, or in no resident chunk, are skipped.
+// The emulator path (each lane stores its own block); decode_blocks_tiled.wgsl
+// is the GPU path (coalesced stores through workgroup memory).
 
 @group(1) @binding(0) var<storage, read> block_ids: array<u32>;
 @group(1) @binding(1) var<storage, read> slot_ids: array<u32>;

@@ -136,7 +136,7 @@ export class IsosurfacePipeline {
     // their levels (dispatches) follow the cache, not the volume.
     const [counters, decoder, scan, slotScan, compact, compactIds] = await Promise.all([
       Counters.create(device, maxWg),
-      ZfpDecoder.create(device, primitiveOptions),
+      ZfpDecoder.create(device, { ...primitiveOptions, path: options.zfpDecoderPath }),
       ExclusiveScan.create(device, { capacity: groupEntries, ...primitiveOptions }),
       ExclusiveScan.create(device, { capacity: slots, ...primitiveOptions }),
       StreamCompact.create(device, primitiveOptions),

@@ -43,6 +43,12 @@ export interface IsosurfaceOptions {
    * previous statistics). Default 2.
    */
   maxSurfacesInFlight?: number;
+  /**
+   * Kernel family of the zfp block-list decode (the cache fill): 'auto'
+   * (default) picks per adapter like the primitives (choosePath); tests force
+   * 'emulator' or 'gpu'.
+   */
+  zfpDecoderPath?: 'auto' | 'emulator' | 'gpu';
 }
 
 export interface VolumeInfo {

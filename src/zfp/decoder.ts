@@ -5,7 +5,11 @@
 //   decoder.encodeBlockRanges(encoderOrPass, { stream, ranges });
 //   decoder.encodeDecodeVolume(encoderOrPass, { stream, output });
 //
-// One invocation decodes one block (workgroups of 64). Every kernel runs once
+// One invocation decodes one block (workgroups of 64). The block-list decode
+// has two kernel families, chosen per adapter like the primitives'
+// (choosePath): the emulator path (decode_blocks.wgsl, each lane stores its
+// own block) and the GPU path (decode_blocks_tiled.wgsl, blocks staged in
+// workgroup memory and stored by the workgroup, coalesced). Every kernel runs once
 // per stream shard (bind group 0 = the shard), so streams larger than one
 // storage binding work unchanged. The block-list decode is dispatched
 // indirectly from a GPU count (no readback): the project's IndirectArgs
@@ -17,6 +21,7 @@ import { binding, inPass, refSize, type ComputeTarget, type GpuBufferRef, type G
 import { dispatchWorkgroups } from '../gpu/dispatch.ts';
 import { bindGroupLayout, createComputePipeline } from '../gpu/pipeline-cache.ts';
 import { UniformSlots } from '../gpu/uniform-slots.ts';
+import { choosePath, type PrimitivePath } from '../primitives/dispatch-records.ts';
 import { IndirectArgs } from '../primitives/indirect.ts';
 import { poolBindGroupLayout, type ChunkedVolume } from './chunked-volume.ts';
 import { maxShardBytesFor, streamBindGroupLayout, type BlockSource, type ZfpGpuStream } from './gpu-stream.ts';
@@ -66,6 +71,16 @@ export interface DecodeVolumeArgs {
   timestampWrites?: GPUComputePassTimestampWrites;
 }
 
+export interface ZfpDecoderOptions {
+  /** Grid limit (default: the device's); tests lower it so small jobs use 2D grids. */
+  maxWorkgroupsPerDimension?: number;
+  /** Kernel family of the block-list decode: 'auto' (default) picks per adapter (choosePath). */
+  path?: PrimitivePath | 'auto';
+}
+
+/** Invocations per workgroup of the GPU-path block-list decode (workgroup memory: 65 + 1 words each). */
+export const TILED_DECODE_WG = 32;
+
 export class ZfpDecoder {
   private readonly blockGroups = new BindGroupCache();
   private readonly poolRangeGroups = new BindGroupCache();
@@ -84,16 +99,20 @@ export class ZfpDecoder {
     /** [x, y, z, count] of the indirect block-list dispatch. */
     private readonly args: IndirectArgs,
     private readonly maxWorkgroups: number,
+    /** Kernel family of the block-list decode (choosePath). */
+    readonly path: PrimitivePath,
   ) {
     this.uniforms = new UniformSlots(device, 'ZfpDecoder');
   }
 
-  /**
-   * @param opts.maxWorkgroupsPerDimension grid limit (default: the device's);
-   *   tests lower it so small jobs use 2D grids.
-   */
-  static async create(device: GPUDevice, opts: { maxWorkgroupsPerDimension?: number } = {}): Promise<ZfpDecoder> {
+  static async create(device: GPUDevice, opts: ZfpDecoderOptions = {}): Promise<ZfpDecoder> {
     const maxWorkgroups = opts.maxWorkgroupsPerDimension ?? device.limits.maxComputeWorkgroupsPerDimension;
+    const path = choosePath(device, opts);
+    const gpuPath = path === 'gpu';
+    const listWg = gpuPath ? TILED_DECODE_WG : 64;
+    const wgConst = { name: 'decode_blocks_tiled constants', code: `const WG: u32 = ${listWg}u;\n` };
+    const blocksParts = gpuPath ? [wgConst, ...zfpWgsl.decodeBlocksTiled] : zfpWgsl.decodeBlocks;
+    const poolBlocksParts = gpuPath ? [wgConst, ...zfpWgsl.decodePoolBlocksTiled] : zfpWgsl.decodePoolBlocks;
     const stream = streamBindGroupLayout(device);
     const storage = (binding: number, readOnly: boolean): GPUBindGroupLayoutEntry => ({
       binding,
@@ -110,7 +129,7 @@ export class ZfpDecoder {
     const poolRangesLayout = layout('ZfpDecoder.chunkBlockRanges.layout', storage(0, false), storage(1, true), uniform(2));
 
     const [blocks, volume, ranges, poolBlocks, poolRanges, args] = await Promise.all([
-      createComputePipeline(device, 'ZfpDecoder.decodeBlocks', zfpWgsl.decodeBlocks, 'decode_blocks', {
+      createComputePipeline(device, 'ZfpDecoder.decodeBlocks', blocksParts, 'decode_blocks', {
         layout: [stream, blocksLayout],
       }),
       createComputePipeline(device, 'ZfpDecoder.decodeVolume', zfpWgsl.decodeVolume, 'decode_volume', {
@@ -119,15 +138,15 @@ export class ZfpDecoder {
       createComputePipeline(device, 'ZfpDecoder.blockRanges', zfpWgsl.blockRanges, 'block_ranges', {
         layout: [stream, rangesLayout],
       }),
-      createComputePipeline(device, 'ZfpDecoder.decodePoolBlocks', zfpWgsl.decodePoolBlocks, 'decode_blocks', {
+      createComputePipeline(device, 'ZfpDecoder.decodePoolBlocks', poolBlocksParts, 'decode_blocks', {
         layout: [pool, blocksLayout],
       }),
       createComputePipeline(device, 'ZfpDecoder.chunkBlockRanges', zfpWgsl.poolRanges, 'chunk_block_ranges', {
         layout: [pool, poolRangesLayout],
       }),
-      IndirectArgs.create(device, { itemsPerWorkgroup: 64, maxWorkgroupsPerDimension: maxWorkgroups, label: 'ZfpDecoder.indirectArgs' }),
+      IndirectArgs.create(device, { itemsPerWorkgroup: listWg, maxWorkgroupsPerDimension: maxWorkgroups, label: 'ZfpDecoder.indirectArgs' }),
     ]);
-    return new ZfpDecoder(device, blocks, volume, ranges, poolBlocks, poolRanges, args, maxWorkgroups);
+    return new ZfpDecoder(device, blocks, volume, ranges, poolBlocks, poolRanges, args, maxWorkgroups, path);
   }
 
   private check(stream: BlockSource): void {

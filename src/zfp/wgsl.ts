@@ -9,6 +9,7 @@ import codec from '../../shaders/zfp/codec.wgsl?raw';
 import f64 from '../../shaders/zfp/f64.wgsl?raw';
 import decodeBlock from '../../shaders/zfp/decode_block.wgsl?raw';
 import decodeBlocks from '../../shaders/zfp/decode_blocks.wgsl?raw';
+import decodeBlocksTiled from '../../shaders/zfp/decode_blocks_tiled.wgsl?raw';
 import decodeVolume from '../../shaders/zfp/decode_volume.wgsl?raw';
 import blockRanges from '../../shaders/zfp/block_ranges.wgsl?raw';
 import poolRanges from '../../shaders/zfp/pool_ranges.wgsl?raw';
@@ -23,6 +24,9 @@ const poolDecoderBase = [gridSnippet, part('u64', u64), part('stream', stream), 
 export const zfpWgsl = {
   decodeBlocks: [...decoderBase, part('decode_blocks', decodeBlocks)],
   decodePoolBlocks: [...poolDecoderBase, part('decode_blocks', decodeBlocks)],
+  // GPU path (coalesced slot writes); needs the host's `const WG` in front (ZfpDecoder.create).
+  decodeBlocksTiled: [...decoderBase, part('decode_blocks_tiled', decodeBlocksTiled)],
+  decodePoolBlocksTiled: [...poolDecoderBase, part('decode_blocks_tiled', decodeBlocksTiled)],
   poolRanges: [...poolDecoderBase, part('block_ranges', blockRanges), part('pool_ranges', poolRanges)],
   decodeVolume: [...decoderBase, part('decode_volume', decodeVolume)],
   blockRanges: [...decoderBase, part('block_ranges', blockRanges)],

@@ -60,6 +60,19 @@ export async function compressVolume(device: GPUDevice, values: Float32Array, di
   }
 }
 
+/**
+ * The zfp block-list decode path the surface tests force (ZFPISO_DECODER_PATH=emulator|gpu;
+ * unset: the adapter's choice), so the VTK and cache tests run on both kernel families. Read through
+ * globalThis: the wgpu suite bundles these helpers for Deno.
+ */
+export const testDecoderPath = decoderPathFromEnv((globalThis as { process?: { env: Record<string, string | undefined> } }).process?.env.ZFPISO_DECODER_PATH);
+
+function decoderPathFromEnv(v: string | undefined): 'auto' | 'emulator' | 'gpu' {
+  if (v === undefined || v === '' || v === 'auto') return 'auto';
+  if (v === 'emulator' || v === 'gpu') return v;
+  throw new Error(`ZFPISO_DECODER_PATH must be 'emulator', 'gpu' or 'auto' (got ${v})`);
+}
+
 /** The decoded volume of a stream (what every surface is computed from). */
 export async function decodeVolume(device: GPUDevice, stream: ZfpGpuStream): Promise<Float32Array> {
   const decoder = await ZfpDecoder.create(device);

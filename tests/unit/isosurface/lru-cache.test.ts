@@ -13,7 +13,7 @@ import { readU32 } from '../../../src/gpu/buffers.ts';
 import type { Dims } from '../../../src/core/naming.ts';
 import { blockRanges } from '../../../src/zfp/cpu/codec.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
-import { compressVolume, decodeVolume, makeField } from './helpers.ts';
+import { compressVolume, decodeVolume, makeField, testDecoderPath } from './helpers.ts';
 import { readCacheState } from '../../helpers/isosurface-readback.ts';
 
 describe('LRU block cache', () => {
@@ -25,7 +25,8 @@ describe('LRU block cache', () => {
     const decoded = await decodeVolume(device, stream);
     const ranges = blockRanges(decoded, dims);
     const initialSlots = 12;
-    const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: initialSlots, initialVertexCapacity: 1 << 16 });
+    const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: initialSlots, initialVertexCapacity: 1 << 16, zfpDecoderPath: testDecoderPath });
+    if (testDecoderPath !== 'auto') expect(iso.pipeline.parts.decoder.path, 'ZFPISO_DECODER_PATH').toBe(testDecoderPath);
     expect([...(await iso.readBlockRanges())]).toEqual([...ranges]);
     const grid = iso.info.blockGrid;
     const model = new LruCacheModel(iso.info.blockCount, initialSlots);

@@ -18,6 +18,9 @@ import { gpuTest } from '../../helpers/gpu.ts';
 import { runPython } from '../../helpers/python.ts';
 import { firstDifference, readVector, rng, vectors } from './vectors.ts';
 
+// Both kernel families of the block-list decode, whatever the adapter ('auto' picks one).
+const DECODER_PATHS = ['emulator', 'gpu'] as const;
+
 describe('ZfpDecoder', () => {
   gpuTest('decodes every vector bit for bit, in one shard and in many; block ranges match', async ({ gpu }) => {
     const { device } = gpu;
@@ -46,68 +49,116 @@ describe('ZfpDecoder', () => {
     decoder.destroy();
   });
 
-  gpuTest('decodes a GPU list of blocks into slots, dispatched from a GPU count', async ({ gpu }) => {
-    const { device } = gpu;
-    // a 2D grid from 3 workgroups on: exercises the indirect 2D layout with small lists
-    const decoder = await ZfpDecoder.create(device, { maxWorkgroupsPerDimension: 3 });
-    const random = rng(11);
-    for (const file of ['neghip_slc_66x66x66_float32.rate4.hdr.zfp', 'ironProt_68x68x68_float32.rate2.zfp']) {
+  for (const path of DECODER_PATHS) {
+    gpuTest(`decodes a GPU list of blocks into slots, dispatched from a GPU count (${path} path)`, async ({ gpu }) => {
+      const { device } = gpu;
+      // a 2D grid from 3 workgroups on: exercises the indirect 2D layout with small lists
+      const decoder = await ZfpDecoder.create(device, { maxWorkgroupsPerDimension: 3, path });
+      expect(decoder.path).toBe(path);
+      const random = rng(11);
+      for (const file of ['neghip_slc_66x66x66_float32.rate4.hdr.zfp', 'ironProt_68x68x68_float32.rate2.zfp']) {
+        const bytes = readVector(file);
+        const info = openZfpStream(bytes, file);
+        const stream = loadZfpStream(device, bytes, file, { maxShardBytes: 20000 });
+        expect(stream.shards.length).toBeGreaterThan(3);
+        const entries = 700;
+        const slotCount = 800;
+        const blockIds = Uint32Array.from({ length: entries }, () => Math.floor(random() * info.blockCount));
+        // the last blocks (partial ones in neghip) are always in the list
+        blockIds[0] = info.blockCount - 1;
+        blockIds[1] = info.blockCount - 2;
+        const slotIds = Uint32Array.from({ length: slotCount }, (_, i) => i);
+        for (let i = slotCount - 1; i > 0; i--) {
+          const j = Math.floor(random() * (i + 1));
+          [slotIds[i], slotIds[j]] = [slotIds[j], slotIds[i]];
+        }
+        const usage = GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST;
+        const ids = device.createBuffer({ size: entries * 4, usage });
+        const slotsOf = device.createBuffer({ size: slotCount * 4, usage });
+        device.queue.writeBuffer(ids, 0, blockIds);
+        device.queue.writeBuffer(slotsOf, 0, slotIds);
+        const slots = device.createBuffer({ size: slotCount * 256, usage: usage | GPUBufferUsage.COPY_SRC });
+        device.queue.writeBuffer(slots, 0, new Uint32Array(slotCount * 64).fill(0xdeadbeef));
+        // counts at unaligned offsets; the first list decodes entries [0, first), the second [448, entries)
+        const first = 450;
+        const counts = device.createBuffer({ size: 1024, usage });
+        device.queue.writeBuffer(counts, 260, new Uint32Array([first]));
+        device.queue.writeBuffer(counts, 516, new Uint32Array([entries - 448]));
+        const encoder = device.createCommandEncoder();
+        decoder.encodeDecodeBlocks(encoder, { stream, blockIds: ids, slotIds: slotsOf, count: { buffer: counts, offset: 260 }, slots });
+        const pass = encoder.beginComputePass();
+        decoder.encodeDecodeBlocks(pass, {
+          stream,
+          blockIds: { buffer: ids, offset: 1792 }, // entries 448.. : overlaps the first list by 2 entries
+          slotIds: { buffer: slotsOf, offset: 1792 },
+          count: { buffer: counts, offset: 516 },
+          slots,
+        });
+        pass.end();
+        device.queue.submit([encoder.finish()]);
+        const got = await readU32(device, slots);
+
+        const words = toWords(bytes);
+        const expected = new Uint32Array(slotCount * 64).fill(0xdeadbeef);
+        const block = new Uint32Array(64);
+        const decodeTo = (entry: number) => {
+          decodeBlock(new BitReader(words, info.payloadBitOffset + blockIds[entry] * info.bitsPerBlock), info.bitsPerBlock, block);
+          expected.set(block, slotIds[entry] * 64);
+        };
+        for (let i = 0; i < first; i++) decodeTo(i);
+        for (let i = 448; i < entries; i++) decodeTo(i);
+        expect(firstDifference(new Uint8Array(got.buffer), new Uint8Array(expected.buffer)), file).toBe('identical');
+        for (const b of [ids, slotsOf, slots, counts]) b.destroy();
+        stream.destroy();
+      }
+      decoder.destroy();
+    });
+
+    gpuTest(`decodes block lists of awkward lengths into slots like the CPU decoder (${path} path)`, async ({ gpu }) => {
+      const { device } = gpu;
+      const decoder = await ZfpDecoder.create(device, { path });
+      const random = rng(23);
+      const file = 'neghip_slc_66x66x66_float32.rate4.hdr.zfp'; // partial blocks at the far faces
       const bytes = readVector(file);
       const info = openZfpStream(bytes, file);
-      const stream = loadZfpStream(device, bytes, file, { maxShardBytes: 20000 });
-      expect(stream.shards.length).toBeGreaterThan(3);
-      const entries = 700;
-      const slotCount = 800;
-      const blockIds = Uint32Array.from({ length: entries }, () => Math.floor(random() * info.blockCount));
-      // the last blocks (partial ones in neghip) are always in the list
-      blockIds[0] = info.blockCount - 1;
-      blockIds[1] = info.blockCount - 2;
-      const slotIds = Uint32Array.from({ length: slotCount }, (_, i) => i);
-      for (let i = slotCount - 1; i > 0; i--) {
-        const j = Math.floor(random() * (i + 1));
-        [slotIds[i], slotIds[j]] = [slotIds[j], slotIds[i]];
-      }
-      const usage = GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST;
-      const ids = device.createBuffer({ size: entries * 4, usage });
-      const slotsOf = device.createBuffer({ size: slotCount * 4, usage });
-      device.queue.writeBuffer(ids, 0, blockIds);
-      device.queue.writeBuffer(slotsOf, 0, slotIds);
-      const slots = device.createBuffer({ size: slotCount * 256, usage: usage | GPUBufferUsage.COPY_SRC });
-      device.queue.writeBuffer(slots, 0, new Uint32Array(slotCount * 64).fill(0xdeadbeef));
-      // counts at unaligned offsets; the first list decodes entries [0, first), the second [448, entries)
-      const first = 450;
-      const counts = device.createBuffer({ size: 1024, usage });
-      device.queue.writeBuffer(counts, 260, new Uint32Array([first]));
-      device.queue.writeBuffer(counts, 516, new Uint32Array([entries - 448]));
-      const encoder = device.createCommandEncoder();
-      decoder.encodeDecodeBlocks(encoder, { stream, blockIds: ids, slotIds: slotsOf, count: { buffer: counts, offset: 260 }, slots });
-      const pass = encoder.beginComputePass();
-      decoder.encodeDecodeBlocks(pass, {
-        stream,
-        blockIds: { buffer: ids, offset: 1792 }, // entries 448.. : overlaps the first list by 2 entries
-        slotIds: { buffer: slotsOf, offset: 1792 },
-        count: { buffer: counts, offset: 516 },
-        slots,
-      });
-      pass.end();
-      device.queue.submit([encoder.finish()]);
-      const got = await readU32(device, slots);
-
       const words = toWords(bytes);
-      const expected = new Uint32Array(slotCount * 64).fill(0xdeadbeef);
+      const stream = loadZfpStream(device, bytes, file, { maxShardBytes: 6000 }); // entries in other shards are skipped per shard
+      const lengths = [0, 1, 31, 32, 33, 63, 64, 65, 100, 129, info.blockCount + 7];
+      const capacity = Math.max(...lengths);
+      const usage = GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST;
+      const ids = device.createBuffer({ size: capacity * 4, usage });
+      const slotsOf = device.createBuffer({ size: capacity * 4, usage });
+      const count = device.createBuffer({ size: 4, usage });
+      const slots = device.createBuffer({ size: (capacity + 5) * 256, usage: usage | GPUBufferUsage.COPY_SRC });
       const block = new Uint32Array(64);
-      const decodeTo = (entry: number) => {
-        decodeBlock(new BitReader(words, info.payloadBitOffset + blockIds[entry] * info.bitsPerBlock), info.bitsPerBlock, block);
-        expected.set(block, slotIds[entry] * 64);
-      };
-      for (let i = 0; i < first; i++) decodeTo(i);
-      for (let i = 448; i < entries; i++) decodeTo(i);
-      expect(firstDifference(new Uint8Array(got.buffer), new Uint8Array(expected.buffer)), file).toBe('identical');
-      for (const b of [ids, slotsOf, slots, counts]) b.destroy();
+      for (const n of lengths) {
+        // blocks in any order, repeats allowed; slots a random permutation (some slots stay untouched)
+        const blockIds = Uint32Array.from({ length: capacity }, () => Math.floor(random() * info.blockCount));
+        const slotIds = Uint32Array.from({ length: capacity + 5 }, (_, i) => i);
+        for (let i = slotIds.length - 1; i > 0; i--) {
+          const j = Math.floor(random() * (i + 1));
+          [slotIds[i], slotIds[j]] = [slotIds[j], slotIds[i]];
+        }
+        device.queue.writeBuffer(ids, 0, blockIds);
+        device.queue.writeBuffer(slotsOf, 0, slotIds, 0, capacity);
+        device.queue.writeBuffer(count, 0, new Uint32Array([n]));
+        device.queue.writeBuffer(slots, 0, new Uint32Array((capacity + 5) * 64).fill(0xdeadbeef));
+        const encoder = device.createCommandEncoder();
+        decoder.encodeDecodeBlocks(encoder, { stream, blockIds: ids, slotIds: slotsOf, count: { buffer: count, offset: 0 }, slots });
+        device.queue.submit([encoder.finish()]);
+        const got = await readU32(device, slots);
+        const expected = new Uint32Array((capacity + 5) * 64).fill(0xdeadbeef);
+        for (let i = 0; i < n; i++) {
+          decodeBlock(new BitReader(words, info.payloadBitOffset + blockIds[i] * info.bitsPerBlock), info.bitsPerBlock, block);
+          expected.set(block, slotIds[i] * 64);
+        }
+        expect(firstDifference(new Uint8Array(got.buffer), new Uint8Array(expected.buffer)), `${n} entries`).toBe('identical');
+      }
+      for (const b of [ids, slotsOf, slots, count]) b.destroy();
       stream.destroy();
-    }
-    decoder.destroy();
-  });
+      decoder.destroy();
+    });
+  }
 
   gpuTest('turns GPU counts into dispatch grids that cover them', async ({ gpu }) => {
     const { device } = gpu;
