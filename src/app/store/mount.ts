@@ -1,24 +1,15 @@
 // Wires the store view into the page: a progress line over the view, a
 // "Store" section at the top of the panel, the loader's install path, and
 // window.zfpisoStore for the page tests.
-import type { GpuContext } from '../../gpu/device.ts';
-import type { LoadedVolume } from '../loading/loader.ts';
 import { droppedFolder, pickDirectory, pickedFolder } from './folder.ts';
-import { StoreView, type StorePageState } from './store-view.ts';
+import { StoreView, type StorePageState, type StoreViewDeps } from './store-view.ts';
 
 export function storeParameter(): string | null {
   return new URLSearchParams(location.search).get('store');
 }
 
-export function mountStoreView(p: {
-  gpu: GpuContext;
-  install(volume: LoadedVolume, level: number, first: boolean): void;
-  linkIso(valueRange: [number, number]): number | undefined;
-  budgetBytes(): number;
-  onError(m: string): void;
-  onNotice(m: string): void;
-  linkLevel(): number | undefined;
-}): StoreView {
+/** The page's side of the store view; mount adds the progress line, the panel and window.zfpisoStore. */
+export function mountStoreView(p: Omit<StoreViewDeps, 'publish' | 'line' | 'panel'>): StoreView {
   const line = document.createElement('div');
   line.id = 'store-progress';
   line.setAttribute('role', 'status');
@@ -32,13 +23,7 @@ export function mountStoreView(p: {
   aside?.insertBefore(panel, aside.querySelector('#volume-section'));
   const w = window as unknown as { zfpisoStore?: StorePageState };
   const view = new StoreView({
-    gpu: p.gpu,
-    install: p.install,
-    linkIso: p.linkIso,
-    budgetBytes: p.budgetBytes,
-    onError: p.onError,
-    onNotice: p.onNotice,
-    linkLevel: p.linkLevel,
+    ...p,
     publish: (s) => { w.zfpisoStore = s; },
     line,
     panel,

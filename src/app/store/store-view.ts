@@ -100,11 +100,10 @@ export class StoreView {
     let store: ZfpStore;
     let controller: ChunkStreamController;
     this.#line(`Opening ${url}…`);
-    const fetcher = (s: ZfpStore) => new ChunkFetcher(s, { maxInFlight: 8 });
     let f: ChunkFetcher;
     try {
       store = await openZfpStore(metered, url);
-      f = fetcher(store);
+      f = new ChunkFetcher(store, { maxInFlight: 8 });
       controller = await StreamController.create(store, f, chunkedGpu(this.d.gpu), this.d.budgetBytes());
     } catch (e) {
       if (gen === this.#gen) this.#line('');
