@@ -14,10 +14,12 @@ fn block_ranges(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
   ranges[2u * b + 1u] = r.y;
 }
 
-// [min, max] of block b's finite decoded values inside the volume.
+// [min, max] of block b's finite decoded values inside the volume. Converts
+// each integer to float bits as it reads it: one 64-entry private array per
+// invocation (decode_block_ints), not a second one of float bits.
 fn block_value_range(b: u32) -> vec2f {
-  var v: array<u32, 64>;
-  decode_block(b, &v);
+  var q: array<i32, 64>;
+  let emax = decode_block_ints(b, &q);
   let c = block_coords(b) * 4u;
   let d = stream.dims;
   let nx = min(4u, d.x - c.x);
@@ -32,7 +34,7 @@ fn block_value_range(b: u32) -> vec2f {
   for (var z = 0u; z < nz; z++) {
     for (var y = 0u; y < ny; y++) {
       for (var x = 0u; x < nx; x++) {
-        let bits = v[16u * z + 4u * y + x];
+        let bits = int_to_float_bits(q[16u * z + 4u * y + x], emax);
         if ((bits & 0x7f800000u) == 0x7f800000u) { continue; }
         let f = bitcast<f32>(bits);
         lo = min(lo, f);

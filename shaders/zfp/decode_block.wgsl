@@ -66,12 +66,3 @@ fn decode_block_ints(b: u32, q: ptr<function, array<i32, 64>>) -> i32 {
   inv_xform(q);
   return emax;
 }
-
-// The 64 float32 bit patterns of block b (for callers that need them all at once).
-fn decode_block(b: u32, out: ptr<function, array<u32, 64>>) {
-  var q: array<i32, 64>;
-  let emax = decode_block_ints(b, &q);
-  for (var i = 0u; i < 64u; i++) {
-    (*out)[i] = int_to_float_bits(q[i], emax);
-  }
-}

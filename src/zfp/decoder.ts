@@ -5,11 +5,12 @@
 //   decoder.encodeBlockRanges(encoderOrPass, { stream, ranges });
 //   decoder.encodeDecodeVolume(encoderOrPass, { stream, output });
 //
-// One invocation decodes one block (workgroups of 64). The block-list decode
-// has two kernel families, chosen per adapter like the primitives'
-// (choosePath): the emulator path (decode_blocks.wgsl, each lane stores its
-// own block) and the GPU path (decode_blocks_tiled.wgsl, blocks staged in
-// workgroup memory and stored by the workgroup, coalesced). Every kernel runs once
+// One invocation decodes one block. The block-list and whole-volume decodes
+// have two kernel families each, chosen per adapter like the primitives'
+// (choosePath): the emulator path (decode_blocks.wgsl, decode_volume.wgsl:
+// each lane stores its own block) and the GPU path (decode_blocks_tiled.wgsl,
+// decode_volume_tiled.wgsl via volume-decode.ts: blocks staged in workgroup
+// memory and stored by the workgroup, coalesced). Every kernel runs once
 // per stream shard (bind group 0 = the shard), so streams larger than one
 // storage binding work unchanged. The block-list decode is dispatched
 // indirectly from a GPU count (no readback): the project's IndirectArgs
@@ -25,7 +26,10 @@ import { choosePath, type PrimitivePath } from '../primitives/dispatch-records.t
 import { IndirectArgs } from '../primitives/indirect.ts';
 import { poolBindGroupLayout, type ChunkedVolume } from './chunked-volume.ts';
 import { maxShardBytesFor, streamBindGroupLayout, type BlockSource, type ZfpGpuStream } from './gpu-stream.ts';
+import { volumeBytes, VolumeDecodeKernel, volumeSlabs, type DecodeVolumeArgs } from './volume-decode.ts';
 import { zfpWgsl } from './wgsl.ts';
+
+export type { DecodeVolumeArgs } from './volume-decode.ts';
 
 export interface DecodeBlocksArgs {
   /** A whole stream, or chunks in a pool (ChunkedVolume). */
@@ -61,20 +65,10 @@ export interface ChunkBlockRangesArgs {
   ranges: GpuBufferRef;
 }
 
-export interface DecodeVolumeArgs {
-  stream: ZfpGpuStream;
-  /** f32 voxels x fastest; holds z planes [4 * zBlockBegin, min(4 * zBlockEnd, nz)). STORAGE usage. */
-  output: GpuBufferRef;
-  /** Block rows (z) to decode; default: all. */
-  zBlockBegin?: number;
-  zBlockEnd?: number;
-  timestampWrites?: GPUComputePassTimestampWrites;
-}
-
 export interface ZfpDecoderOptions {
   /** Grid limit (default: the device's); tests lower it so small jobs use 2D grids. */
   maxWorkgroupsPerDimension?: number;
-  /** Kernel family of the block-list decode: 'auto' (default) picks per adapter (choosePath). */
+  /** Kernel family of the block-list and whole-volume decodes: 'auto' (default) picks per adapter (choosePath). */
   path?: PrimitivePath | 'auto';
 }
 
@@ -85,25 +79,21 @@ export class ZfpDecoder {
   private readonly blockGroups = new BindGroupCache();
   private readonly poolRangeGroups = new BindGroupCache();
   private readonly rangeGroups = new BindGroupCache();
-  private readonly volumeGroups = new BindGroupCache();
-  private readonly uniforms: UniformSlots;
-  private readonly volumeWords = new Uint32Array(4);
 
   private constructor(
     readonly device: GPUDevice,
+    private readonly uniforms: UniformSlots,
     private readonly decodeBlocksPipeline: GPUComputePipeline,
-    private readonly decodeVolumePipeline: GPUComputePipeline,
+    private readonly volumeKernel: VolumeDecodeKernel,
     private readonly rangesPipeline: GPUComputePipeline,
     private readonly decodePoolBlocksPipeline: GPUComputePipeline,
     private readonly poolRangesPipeline: GPUComputePipeline,
     /** [x, y, z, count] of the indirect block-list dispatch. */
     private readonly args: IndirectArgs,
     private readonly maxWorkgroups: number,
-    /** Kernel family of the block-list decode (choosePath). */
+    /** Kernel family of the block-list and whole-volume decodes (choosePath). */
     readonly path: PrimitivePath,
-  ) {
-    this.uniforms = new UniformSlots(device, 'ZfpDecoder');
-  }
+  ) {}
 
   static async create(device: GPUDevice, opts: ZfpDecoderOptions = {}): Promise<ZfpDecoder> {
     const maxWorkgroups = opts.maxWorkgroupsPerDimension ?? device.limits.maxComputeWorkgroupsPerDimension;
@@ -123,18 +113,16 @@ export class ZfpDecoder {
     const layout = (label: string, ...entries: GPUBindGroupLayoutEntry[]) => bindGroupLayout(device, label, entries);
 
     const blocksLayout = layout('ZfpDecoder.decodeBlocks.layout', storage(0, true), storage(1, true), storage(2, true), storage(3, false));
-    const volumeLayout = layout('ZfpDecoder.decodeVolume.layout', uniform(0), storage(1, false));
     const rangesLayout = layout('ZfpDecoder.blockRanges.layout', storage(0, false));
     const pool = poolBindGroupLayout(device);
     const poolRangesLayout = layout('ZfpDecoder.chunkBlockRanges.layout', storage(0, false), storage(1, true), uniform(2));
 
+    const uniforms = new UniformSlots(device, 'ZfpDecoder');
     const [blocks, volume, ranges, poolBlocks, poolRanges, args] = await Promise.all([
       createComputePipeline(device, 'ZfpDecoder.decodeBlocks', blocksParts, 'decode_blocks', {
         layout: [stream, blocksLayout],
       }),
-      createComputePipeline(device, 'ZfpDecoder.decodeVolume', zfpWgsl.decodeVolume, 'decode_volume', {
-        layout: [stream, volumeLayout],
-      }),
+      VolumeDecodeKernel.create(device, path, stream, uniforms, maxWorkgroups),
       createComputePipeline(device, 'ZfpDecoder.blockRanges', zfpWgsl.blockRanges, 'block_ranges', {
         layout: [stream, rangesLayout],
       }),
@@ -146,7 +134,7 @@ export class ZfpDecoder {
       }),
       IndirectArgs.create(device, { itemsPerWorkgroup: listWg, maxWorkgroupsPerDimension: maxWorkgroups, label: 'ZfpDecoder.indirectArgs' }),
     ]);
-    return new ZfpDecoder(device, blocks, volume, ranges, poolBlocks, poolRanges, args, maxWorkgroups, path);
+    return new ZfpDecoder(device, uniforms, blocks, volume, ranges, poolBlocks, poolRanges, args, maxWorkgroups, path);
   }
 
   private check(stream: BlockSource): void {
@@ -253,68 +241,18 @@ export class ZfpDecoder {
 
   /** Bytes of z block rows [zBlockBegin, zBlockEnd) decoded as float32. */
   static volumeBytes(stream: ZfpGpuStream, zBlockBegin = 0, zBlockEnd = stream.info.blockGrid[2]): number {
-    const [nx, ny, nz] = stream.info.dims;
-    return nx * ny * (Math.min(4 * zBlockEnd, nz) - 4 * zBlockBegin) * 4;
+    return volumeBytes(stream, zBlockBegin, zBlockEnd);
   }
 
   /** Records the decode of z block rows [zBlockBegin, zBlockEnd) into a float32 volume (x fastest). */
   encodeDecodeVolume(target: ComputeTarget, a: DecodeVolumeArgs): void {
     this.check(a.stream);
-    const { info } = a.stream;
-    const [bx, by, bz] = info.blockGrid;
-    const z0 = a.zBlockBegin ?? 0;
-    const z1 = a.zBlockEnd ?? bz;
-    if (!(Number.isInteger(z0) && Number.isInteger(z1) && z0 >= 0 && z0 < z1 && z1 <= bz)) {
-      throw new Error(`ZfpDecoder: block rows [${z0}, ${z1}) are not inside [0, ${bz})`);
-    }
-    const need = ZfpDecoder.volumeBytes(a.stream, z0, z1);
-    if (refSize(a.output) < need) throw new Error(`ZfpDecoder: the output has ${refSize(a.output)} bytes, ${need} are needed`);
-    const first = z0 * bx * by;
-    const end = z1 * bx * by;
-    const work: { shard: number; group: GPUBindGroup; count: number }[] = [];
-    a.stream.shards.forEach((shard, s) => {
-      const lo = Math.max(first, shard.firstBlock);
-      const hi = Math.min(end, shard.endBlock);
-      if (lo >= hi) return;
-      this.volumeWords.set([lo, hi, 4 * z0, 0]);
-      const params = this.uniforms.get(this.volumeWords);
-      const group = this.volumeGroups.ref(a.output).key(params.buffer).key(params.offset!).get(() =>
-        this.device.createBindGroup({
-          label: 'ZfpDecoder.decodeVolume.bindGroup',
-          layout: this.decodeVolumePipeline.getBindGroupLayout(1),
-          entries: [
-            { binding: 0, resource: params },
-            { binding: 1, resource: binding(a.output) },
-          ],
-        }),
-      );
-      work.push({ shard: s, group, count: hi - lo });
-    });
-    inPass(
-      target,
-      'ZfpDecoder.decodeVolume',
-      (pass) => {
-        pass.setPipeline(this.decodeVolumePipeline);
-        for (const w of work) {
-          pass.setBindGroup(0, a.stream.shards[w.shard].bindGroup);
-          pass.setBindGroup(1, w.group);
-          dispatchWorkgroups(pass, Math.ceil(w.count / 64), this.maxWorkgroups);
-        }
-      },
-      a.timestampWrites,
-    );
+    this.volumeKernel.encode(target, a);
   }
 
   /** Block-row slabs [z0, z1) whose float32 output fits one storage binding of `maxBytes`. */
   static volumeSlabs(stream: ZfpGpuStream, maxBytes = maxShardBytesFor(stream.device)): [number, number][] {
-    const [nx, ny] = stream.info.dims;
-    const bz = stream.info.blockGrid[2];
-    const rowBytes = nx * ny * 4 * 4;
-    const rows = Math.floor(maxBytes / rowBytes);
-    if (rows < 1) throw new Error(`${stream.info.fileName}: one row of blocks (${rowBytes} bytes as float32) does not fit one storage binding of ${maxBytes} bytes`);
-    const slabs: [number, number][] = [];
-    for (let z = 0; z < bz; z += rows) slabs.push([z, Math.min(bz, z + rows)]);
-    return slabs;
+    return volumeSlabs(stream, maxBytes);
   }
 
   /** Decodes the whole volume into a new GPU buffer (STORAGE | COPY_SRC; the caller owns it). Must fit one binding. */
@@ -382,6 +320,7 @@ export class ZfpDecoder {
   destroy(): void {
     this.args.destroy();
     this.uniforms.destroy();
-    for (const g of [this.blockGroups, this.poolRangeGroups, this.rangeGroups, this.volumeGroups]) g.clear();
+    for (const g of [this.blockGroups, this.poolRangeGroups, this.rangeGroups]) g.clear();
+    this.volumeKernel.destroy();
   }
 }

@@ -11,6 +11,7 @@ import decodeBlock from '../../shaders/zfp/decode_block.wgsl?raw';
 import decodeBlocks from '../../shaders/zfp/decode_blocks.wgsl?raw';
 import decodeBlocksTiled from '../../shaders/zfp/decode_blocks_tiled.wgsl?raw';
 import decodeVolume from '../../shaders/zfp/decode_volume.wgsl?raw';
+import decodeVolumeTiled from '../../shaders/zfp/decode_volume_tiled.wgsl?raw';
 import blockRanges from '../../shaders/zfp/block_ranges.wgsl?raw';
 import poolRanges from '../../shaders/zfp/pool_ranges.wgsl?raw';
 import encode from '../../shaders/zfp/encode.wgsl?raw';
@@ -29,6 +30,8 @@ export const zfpWgsl = {
   decodePoolBlocksTiled: [...poolDecoderBase, part('decode_blocks_tiled', decodeBlocksTiled)],
   poolRanges: [...poolDecoderBase, part('block_ranges', blockRanges), part('pool_ranges', poolRanges)],
   decodeVolume: [...decoderBase, part('decode_volume', decodeVolume)],
+  // GPU path of decodeVolume (tiles of 32 blocks along x, coalesced voxel stores)
+  decodeVolumeTiled: [...decoderBase, part('decode_volume_tiled', decodeVolumeTiled)],
   blockRanges: [...decoderBase, part('block_ranges', blockRanges)],
   encode: [gridSnippet, part('u64', u64), part('codec', codec), part('f64', f64), part('encode', encode)],
 } satisfies Record<string, WgslPart[]>;

@@ -61,7 +61,7 @@ export async function compressVolume(device: GPUDevice, values: Float32Array, di
 }
 
 /**
- * The zfp block-list decode path the surface tests force (ZFPISO_DECODER_PATH=emulator|gpu;
+ * The zfp decode path (block list and whole volume) the surface tests force (ZFPISO_DECODER_PATH=emulator|gpu;
  * unset: the adapter's choice), so the VTK and cache tests run on both kernel families. Read through
  * globalThis: the wgpu suite bundles these helpers for Deno.
  */
@@ -73,9 +73,9 @@ function decoderPathFromEnv(v: string | undefined): 'auto' | 'emulator' | 'gpu' 
   throw new Error(`ZFPISO_DECODER_PATH must be 'emulator', 'gpu' or 'auto' (got ${v})`);
 }
 
-/** The decoded volume of a stream (what every surface is computed from). */
+/** The decoded volume of a stream (what every surface is computed from), on the forced decoder path. */
 export async function decodeVolume(device: GPUDevice, stream: ZfpGpuStream): Promise<Float32Array> {
-  const decoder = await ZfpDecoder.create(device);
+  const decoder = await ZfpDecoder.create(device, { path: testDecoderPath });
   try {
     return (await decoder.readVolume(stream))!;
   } finally {

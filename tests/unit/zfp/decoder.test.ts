@@ -22,9 +22,10 @@ import { firstDifference, readVector, rng, vectors } from './vectors.ts';
 const DECODER_PATHS = ['emulator', 'gpu'] as const;
 
 describe('ZfpDecoder', () => {
-  gpuTest('decodes every vector bit for bit, in one shard and in many; block ranges match', async ({ gpu }) => {
+  gpuTest('decodes every vector bit for bit, in one shard and in many, on both paths; block ranges match', async ({ gpu }) => {
     const { device } = gpu;
-    const decoder = await ZfpDecoder.create(device);
+    const decoders = await Promise.all(DECODER_PATHS.map((path) => ZfpDecoder.create(device, { path })));
+    const decoder = decoders[0];
     for (const v of vectors) {
       const reference = readVector(v.decoded);
       const ranges = blockRanges(new Float32Array(reference.buffer), v.dims_xyz);
@@ -36,8 +37,10 @@ describe('ZfpDecoder', () => {
           if (maxShardBytes) expect(stream.shards.length).toBeGreaterThan(10);
           // small slabs for the many-shard case: 2 block rows per slab
           const slab = maxShardBytes ? v.dims_xyz[0] * v.dims_xyz[1] * 4 * 4 * 2 : undefined;
-          const volume = (await decoder.readVolume(stream, { maxSlabBytes: slab }))!;
-          expect(firstDifference(new Uint8Array(volume.buffer), reference), what).toBe('identical');
+          for (const d of decoders) {
+            const volume = (await d.readVolume(stream, { maxSlabBytes: slab }))!;
+            expect(firstDifference(new Uint8Array(volume.buffer), reference), `${what}, ${d.path} path`).toBe('identical');
+          }
           const rangeBuffer = decoder.computeBlockRanges(stream);
           const got = await readF32(device, rangeBuffer);
           expect(firstDifference(new Uint8Array(got.buffer), new Uint8Array(ranges.buffer)), `ranges of ${what}`).toBe('identical');
@@ -46,7 +49,7 @@ describe('ZfpDecoder', () => {
         }
       }
     }
-    decoder.destroy();
+    for (const d of decoders) d.destroy();
   });
 
   for (const path of DECODER_PATHS) {
