@@ -2,9 +2,12 @@
 // zfp codec (GB/s of float32 data; GPU time of the kernel pass from timestamp
 // queries, or queue wall time where there are none), median of 10 runs after
 // a discarded first, next to zfpy's serial C codec (zfp 1.0.1) on the same
-// file in the same run, as a ratio. Also the block-list decode (the cache
-// fill: every block of the file into its own slot, dispatched indirectly) on
-// each kernel family of ZfpDecoder (emulator path, GPU path), both forced.
+// file in the same run, as a ratio. The whole-volume decode and the
+// block-list decode (the cache fill: every block of the file into its own
+// slot, dispatched indirectly) run on each kernel family of ZfpDecoder
+// (emulator path, GPU path), both forced, their repeats interleaved (path A,
+// path B, path A, ...) so that load on a shared machine hits both alike. Also
+// the block-range pass (one kernel for both paths).
 //
 //   node benchmarks/run.mjs benchmarks/zfp.ts [--repeats N] [--paths emulator,gpu] [FILE.zfp ...]
 import { execFileSync } from 'node:child_process';
@@ -20,7 +23,7 @@ import { ZfpEncoder } from '../src/zfp/encoder.ts';
 import { openZfpStream, planZfpStream } from '../src/zfp/format.ts';
 import { ZfpGpuStream } from '../src/zfp/gpu-stream.ts';
 import { formatDims } from '../src/core/naming.ts';
-import { printTable, repeat, writeJson, type Stats } from './lib/report.ts';
+import { printTable, repeat, summarize, writeJson, type Stats } from './lib/report.ts';
 
 const root = fileURLToPath(new URL('..', import.meta.url));
 const volumes = join(root, '..', 'shared', 'data', 'volumes');
@@ -64,6 +67,13 @@ function summarizeSeconds(all: number[]): Stats {
   return { samples: all.slice(1), median, mean: sorted.reduce((s, x) => s + x, 0) / sorted.length, min: sorted[0], max: sorted[sorted.length - 1] };
 }
 
+/** Runs each of `measures` once per round, `repeats` rounds; the stats of each. */
+async function repeatInterleaved(repeats: number, measures: (() => Promise<number>)[]): Promise<Stats[]> {
+  const all = measures.map(() => [] as number[]);
+  for (let i = 0; i < repeats; i++) for (let m = 0; m < measures.length; m++) all[m].push(await measures[m]());
+  return all.map((a) => summarize(a));
+}
+
 async function main(): Promise<void> {
   const gpu = await requestNodeGpu({ label: 'bench.zfp', onFailure: (f) => console.error(`WebGPU ${f.kind}: ${f.message}`) });
   const { device } = gpu;
@@ -93,9 +103,17 @@ async function main(): Promise<void> {
       frame.submitted();
       return (await frame.read()).totalMs / 1000;
     };
-    const decode = await repeat(repeats, () =>
-      timeOne((enc, frame) => decoder.encodeDecodeVolume(enc, { stream, output: volume, timestampWrites: frame.pass('decode') }), 'decode'),
+    const volumeDecodes = await repeatInterleaved(
+      repeats,
+      listDecoders.map((d) => () =>
+        timeOne((enc, frame) => d.encodeDecodeVolume(enc, { stream, output: volume, timestampWrites: frame.pass('decode') }), `decode.${d.path}`),
+      ),
     );
+    const ranges = device.createBuffer({ label: 'bench.ranges', size: Math.max(8, ZfpDecoder.rangesBytes(stream)), usage: GPUBufferUsage.STORAGE });
+    const rangePass = await repeat(repeats, () =>
+      timeOne((enc, frame) => decoder.encodeBlockRanges(enc, { stream, ranges, timestampWrites: frame.pass('ranges') }), 'ranges'),
+    );
+    ranges.destroy();
     const encode = await repeat(repeats, () =>
       timeOne((enc, frame) => {
         for (let s = 0; s < target.shards.length; s++) {
@@ -115,14 +133,18 @@ async function main(): Promise<void> {
     const slots = device.createBuffer({ label: 'bench.slots', size: listBlocks * 256, usage: GPUBufferUsage.STORAGE });
     const blockList: Record<string, unknown> = {};
     const listRows: (string | number)[][] = [];
-    for (const d of listDecoders) {
-      const t = await repeat(repeats, () =>
+    const listTimes = await repeatInterleaved(
+      repeats,
+      listDecoders.map((d) => () =>
         timeOne(
           (enc, frame) =>
             d.encodeDecodeBlocks(enc, { stream, blockIds: ids, slotIds: ids, count: { buffer: count, offset: 0 }, slots, timestampWrites: frame.pass('decodeBlocks') }),
           `decodeBlocks.${d.path}`,
         ),
-      );
+      ),
+    );
+    for (const [k, d] of listDecoders.entries()) {
+      const t = listTimes[k];
       const listBytes = listBlocks * 256;
       listRows.push([`decode blocks (${d.path} path)`, listBytes / t.median / 1e9, t.median * 1000]);
       blockList[d.path] = { blocks: listBlocks, gbPerSecond: listBytes / t.median / 1e9, seconds: t };
@@ -134,10 +156,19 @@ async function main(): Promise<void> {
     const zenc = summarizeSeconds(zfpy.encode_s);
     const gbs = (s: number) => floatBytes / s / 1e9;
     const name = `${basename(path)} (${formatDims(info.dims)}, rate ${info.rate})`;
-    rows.push([name, 'decode', gbs(decode.median), gbs(zdec.median), gbs(decode.median) / gbs(zdec.median), decode.median * 1000]);
+    const decode: Record<string, unknown> = {};
+    const decodeRatio: Record<string, number> = {};
+    for (const [k, d] of listDecoders.entries()) {
+      const t = volumeDecodes[k];
+      rows.push([name, `decode volume (${d.path} path)`, gbs(t.median), gbs(zdec.median), gbs(t.median) / gbs(zdec.median), t.median * 1000]);
+      decode[d.path] = { gbPerSecond: gbs(t.median), seconds: t };
+      decodeRatio[d.path] = gbs(t.median) / gbs(zdec.median);
+    }
     rows.push([name, 'encode', gbs(encode.median), gbs(zenc.median), gbs(encode.median) / gbs(zenc.median), encode.median * 1000]);
     // GB/s of slot data (256 bytes per block, partial blocks included); zfpy has no counterpart.
     for (const [op, gb, ms] of listRows) rows.push([name, op, gb, '', '', ms]);
+    // GB/s of float32 data the ranges cover
+    rows.push([name, 'block ranges', gbs(rangePass.median), '', '', rangePass.median * 1000]);
     results.push({
       file: path,
       dims: info.dims,
@@ -145,14 +176,15 @@ async function main(): Promise<void> {
       bitsPerBlock: info.bitsPerBlock,
       compressedBytes: bytes.byteLength,
       float32Bytes: floatBytes,
-      decode: { gbPerSecond: gbs(decode.median), seconds: decode },
+      decode,
+      blockRanges: { gbPerSecond: gbs(rangePass.median), seconds: rangePass },
       encode: { gbPerSecond: gbs(encode.median), seconds: encode },
       zfpySerial: {
         decode: { gbPerSecond: gbs(zdec.median), seconds: zdec },
         encode: { gbPerSecond: gbs(zenc.median), seconds: zenc },
       },
       blockList,
-      ratio: { decode: gbs(decode.median) / gbs(zdec.median), encode: gbs(encode.median) / gbs(zenc.median) },
+      ratio: { decode: decodeRatio, encode: gbs(encode.median) / gbs(zenc.median) },
     });
     volume.destroy();
     target.destroy();
