@@ -21,6 +21,7 @@ const denoDir = join(root, '.cache', 'deno');
 /** The GPU unit tests that run on wgpu too (CLI tests spawn Node and stay on Dawn). */
 export const WGPU_TESTS = [
   'tests/unit/zfp/decoder.test.ts',
+  'tests/unit/zfp/decode-volume.test.ts',
   'tests/unit/zfp/encoder.test.ts',
   'tests/unit/zfp/offsets.test.ts',
   'tests/unit/primitives/scan.test.ts',

@@ -46,6 +46,11 @@ export function volumeSlabs(stream: ZfpGpuStream, maxBytes = maxShardBytesFor(st
   return slabs;
 }
 
+/** The GPU path's tile (workgroup) of block b: its block row, then its 32-block run along x. */
+function tileOf(b: number, bx: number, tilesX: number): number {
+  return Math.floor(b / bx) * tilesX + Math.floor((b % bx) / VOLUME_TILE_BLOCKS);
+}
+
 interface ShardWork {
   shard: number;
   group: GPUBindGroup;
@@ -57,6 +62,7 @@ export class VolumeDecodeKernel {
   private readonly words = new Uint32Array(4);
   // reused by every encode (no allocation per call once the shards have been seen)
   private readonly work: ShardWork[] = [];
+  private workCount = 0;
 
   private constructor(
     private readonly device: GPUDevice,
@@ -90,15 +96,14 @@ export class VolumeDecodeKernel {
     const first = z0 * bx * by;
     const end = z1 * bx * by;
     const tilesX = Math.ceil(bx / VOLUME_TILE_BLOCKS);
-    // the GPU path's tile (workgroup) of block b: its block row, then its 32-block run along x
-    const tileOf = (b: number) => Math.floor(b / bx) * tilesX + Math.floor((b % bx) / VOLUME_TILE_BLOCKS);
-    this.work.length = 0;
-    a.stream.shards.forEach((shard, s) => {
+    const tiled = this.path === 'gpu';
+    let n = 0;
+    for (let s = 0; s < a.stream.shards.length; s++) {
+      const shard = a.stream.shards[s];
       const lo = Math.max(first, shard.firstBlock);
       const hi = Math.min(end, shard.endBlock);
-      if (lo >= hi) return;
-      const tiled = this.path === 'gpu';
-      const firstTile = tiled ? tileOf(lo) : 0;
+      if (lo >= hi) continue;
+      const firstTile = tiled ? tileOf(lo, bx, tilesX) : 0;
       this.words.set([lo, hi, 4 * z0, firstTile]);
       const params = this.uniforms.get(this.words);
       const group = this.groups.ref(a.output).key(params.buffer).key(params.offset!).get(() =>
@@ -111,15 +116,20 @@ export class VolumeDecodeKernel {
           ],
         }),
       );
-      const workgroups = tiled ? tileOf(hi - 1) - firstTile + 1 : Math.ceil((hi - lo) / 64);
-      this.work.push({ shard: s, group, workgroups });
-    });
+      if (n === this.work.length) this.work.push({ shard: 0, group, workgroups: 0 });
+      const w = this.work[n++];
+      w.shard = s;
+      w.group = group;
+      w.workgroups = tiled ? tileOf(hi - 1, bx, tilesX) - firstTile + 1 : Math.ceil((hi - lo) / 64);
+    }
+    this.workCount = n;
     inPass(
       target,
       'ZfpDecoder.decodeVolume',
       (pass) => {
         pass.setPipeline(this.pipeline);
-        for (const w of this.work) {
+        for (let i = 0; i < this.workCount; i++) {
+          const w = this.work[i];
           pass.setBindGroup(0, a.stream.shards[w.shard].bindGroup);
           pass.setBindGroup(1, w.group);
           dispatchWorkgroups(pass, w.workgroups, this.maxWorkgroups);
