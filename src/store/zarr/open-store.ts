@@ -205,7 +205,7 @@ export function checkChunk(layout: ChunkLevelLayout, chunk: ChunkIndex, bytes: U
 }
 
 /** Opens the store; `name` is for messages (its URL or folder). Rejects with StoreError. */
-export async function openZfpStore(store: AsyncReadable, name: string, options: GetOptions = {}): Promise<ZfpStore> {
+export async function openZfpStore(store: AsyncReadable, name: string): Promise<ZfpStore> {
   registerZfpyPassThrough();
   const metered = store instanceof MeteredStore ? store : new MeteredStore(store);
   const mem = new MetadataMemo(metered);
