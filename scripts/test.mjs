@@ -2,13 +2,15 @@
 // `npm test`: installs what the tests need (npm packages, Debian's Chromium,
 // the Python reference tools, the converter's environment, Deno), then runs
 // every suite: type check, unit tests (vitest on Dawn), `limits` (the zfp and
-// isosurface GPU tests again on a device with WebGPU's default limits), `wgpu`
+// isosurface GPU tests again on a device with WebGPU's default limits),
+// `gpukernels` (the surface tests again with the GPU-shaped scans, compactions
+// and zfp decode forced, the kernels a real GPU gets), `wgpu`
 // (the GPU unit tests on wgpu in Deno: scripts/test-wgpu.mjs), `converter`
 // (the Python converter's pytest suite), and page tests (Playwright in headless
 // Chromium, with the flag set probed by scripts/setup/chromium-flags.mjs).
 // The last line is `N passed, N failed` over all suites.
 //
-// `npm test -- unit` / `-- limits` / `-- wgpu` / `-- converter` / `-- e2e` / `-- typecheck` runs only
+// `npm test -- unit` / `-- limits` / `-- gpukernels` / `-- wgpu` / `-- converter` / `-- e2e` / `-- typecheck` runs only
 // that suite; other arguments after a suite name go to its runner (e.g. `npm test -- unit tests/unit/zfp`).
 import { spawnSync } from 'node:child_process';
 import { existsSync, mkdirSync, readFileSync, rmSync } from 'node:fs';
@@ -24,11 +26,24 @@ import { runWgpuTests } from './test-wgpu.mjs';
 
 const root = fileURLToPath(new URL('..', import.meta.url));
 const results = join(root, 'test-results');
-const SUITES = ['typecheck', 'unit', 'limits', 'wgpu', 'converter', 'e2e'];
+const SUITES = ['typecheck', 'unit', 'limits', 'gpukernels', 'wgpu', 'converter', 'e2e'];
 // The `limits` suite: the GPU tests of these folders again on a device with
 // WebGPU's default limits (tests/helpers/gpu.ts), so sharding and fallbacks run.
 const LIMITS_TESTS = ['tests/unit/zfp/decoder.test.ts', 'tests/unit/zfp/decode-volume.test.ts', 'tests/unit/zfp/encoder.test.ts', 'tests/unit/zfp/offsets.test.ts', 'tests/unit/isosurface/', 'tests/unit/store/chunked-volume.test.ts'];
 const LIMITS_EXCLUDE = ['tests/unit/isosurface/cli.test.ts'];
+// The `gpukernels` suite: on SwiftShader every kernel family is chosen as the
+// emulator path (src/primitives/README.md), so these surface tests run again
+// with the GPU path forced (ZFPISO_KERNEL_PATH=gpu: workgroup-memory and
+// subgroup scans, tiled compaction, tiled zfp decode) against VTK and the CPU
+// models. The unit tests of the primitives and the decoder cover both paths
+// on their own.
+const GPU_KERNEL_TESTS = [
+  'tests/unit/isosurface/vtk.test.ts',
+  'tests/unit/isosurface/vtk-bonsai.test.ts',
+  'tests/unit/isosurface/block-mc.test.ts',
+  'tests/unit/isosurface/lru-cache.test.ts',
+  'tests/unit/isosurface/pipeline.test.ts',
+];
 
 function run(cmd, args, env = {}) {
   console.log(`\n$ ${cmd} ${args.join(' ')}`);
@@ -65,6 +80,10 @@ function unit(extra, { reportName = 'vitest.json', env = {} } = {}) {
 function limits(extra) {
   const files = extra.length > 0 ? extra : [...LIMITS_TESTS, ...LIMITS_EXCLUDE.map((f) => `--exclude=${f}`)];
   return unit(files, { reportName: 'vitest-default-limits.json', env: { ZFPISO_TEST_LIMITS: 'default' } });
+}
+
+function gpuKernels(extra) {
+  return unit(extra.length > 0 ? extra : GPU_KERNEL_TESTS, { reportName: 'vitest-gpu-kernels.json', env: { ZFPISO_KERNEL_PATH: 'gpu' } });
 }
 
 async function wgpu(extra) {
@@ -124,6 +143,7 @@ async function main() {
       suite === 'typecheck' ? typecheck()
       : suite === 'unit' ? unit(extra)
       : suite === 'limits' ? limits(extra)
+      : suite === 'gpukernels' ? gpuKernels(extra)
       : suite === 'wgpu' ? await wgpu(extra)
       : suite === 'converter' ? runConverterTests(root, results, extra)
       : await e2e(extra);

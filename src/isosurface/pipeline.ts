@@ -130,13 +130,13 @@ export class IsosurfacePipeline {
     }
     const volume = device.createBuffer({ label: 'Isosurface.volume', size: VOLUME_PARAMS.bytes, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
     device.queue.writeBuffer(volume, 0, new Uint32Array([...dims, blockCount, ...blockGrid, 0]));
-    const primitiveOptions = { maxWorkgroupsPerDimension: maxWg };
+    const primitiveOptions = { maxWorkgroupsPerDimension: maxWg, path: options.primitivePath };
     // Two scans: one over the groups and the blocks of active groups, one
     // sized to the cache slots for the cache update and the block counts, so
     // their levels (dispatches) follow the cache, not the volume.
     const [counters, decoder, scan, slotScan, compact, compactIds] = await Promise.all([
       Counters.create(device, maxWg),
-      ZfpDecoder.create(device, { ...primitiveOptions, path: options.zfpDecoderPath }),
+      ZfpDecoder.create(device, { ...primitiveOptions, path: options.zfpDecoderPath ?? options.primitivePath }),
       ExclusiveScan.create(device, { capacity: groupEntries, ...primitiveOptions }),
       ExclusiveScan.create(device, { capacity: slots, ...primitiveOptions }),
       StreamCompact.create(device, primitiveOptions),

@@ -49,6 +49,13 @@ export interface IsosurfaceOptions {
    * 'emulator' or 'gpu'.
    */
   zfpDecoderPath?: 'auto' | 'emulator' | 'gpu';
+  /**
+   * Kernel family of the scans and compactions (src/primitives/README.md), and
+   * of the zfp decode unless zfpDecoderPath says otherwise: 'auto' (default)
+   * picks per adapter; tests force 'gpu' to run the GPU-shaped kernels through
+   * the whole pipeline on SwiftShader.
+   */
+  primitivePath?: 'auto' | 'emulator' | 'gpu';
 }
 
 export interface VolumeInfo {

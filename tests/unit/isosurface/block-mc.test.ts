@@ -16,7 +16,7 @@ import { marchingCubes } from '../../../src/mc/serial-mc.ts';
 import type { Dims } from '../../../src/core/naming.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { rng } from '../mc/reference.ts';
-import { compressVolume, decodeVolume, drawnSoup, makeField, testDecoderPath, VERTEX_TOLERANCE, type FieldKind } from './helpers.ts';
+import { compressVolume, decodeVolume, drawnSoup, makeField, testKernelOptions, VERTEX_TOLERANCE, type FieldKind } from './helpers.ts';
 import { compareBlockSoups, cpuTriangles, gpuTriangles } from './soup-compare.ts';
 
 interface Case {
@@ -82,7 +82,7 @@ describe('block marching cubes = serial marching cubes', () => {
       const decoded = await decodeVolume(device, stream);
       // groups of 1 block, of 3 (partial groups at the edges), the default
       for (const groupEdgeBlocks of [1, 3, undefined]) {
-        const iso = await Isosurface.create(gpu, stream, { ...c.options, groupEdgeBlocks, zfpDecoderPath: testDecoderPath });
+        const iso = await Isosurface.create(gpu, stream, { ...c.options, groupEdgeBlocks, ...testKernelOptions });
         await checkSurfaces(iso, decoded, c, `groups of ${groupEdgeBlocks ?? 'default'} blocks`);
         iso.destroy();
       }

@@ -61,16 +61,21 @@ export async function compressVolume(device: GPUDevice, values: Float32Array, di
 }
 
 /**
- * The zfp decode path (block list and whole volume) the surface tests force (ZFPISO_DECODER_PATH=emulator|gpu;
- * unset: the adapter's choice), so the VTK and cache tests run on both kernel families. Read through
- * globalThis: the wgpu suite bundles these helpers for Deno.
+ * The kernel families the surface tests force, so the VTK and cache tests run on both (unset: the
+ * adapter's choice): ZFPISO_KERNEL_PATH=emulator|gpu forces the scans, the compactions and the zfp
+ * decode (block list and whole volume); ZFPISO_DECODER_PATH=emulator|gpu forces the decode alone
+ * and wins over it. Read through globalThis: the wgpu suite bundles these helpers for Deno.
  */
-export const testDecoderPath = decoderPathFromEnv((globalThis as { process?: { env: Record<string, string | undefined> } }).process?.env.ZFPISO_DECODER_PATH);
+const testEnv = (globalThis as { process?: { env: Record<string, string | undefined> } }).process?.env ?? {};
+export const testPrimitivePath = pathFromEnv('ZFPISO_KERNEL_PATH', testEnv.ZFPISO_KERNEL_PATH);
+export const testDecoderPath = testEnv.ZFPISO_DECODER_PATH ? pathFromEnv('ZFPISO_DECODER_PATH', testEnv.ZFPISO_DECODER_PATH) : testPrimitivePath;
+/** Isosurface options that apply the forced kernel families. */
+export const testKernelOptions = { zfpDecoderPath: testDecoderPath, primitivePath: testPrimitivePath } as const;
 
-function decoderPathFromEnv(v: string | undefined): 'auto' | 'emulator' | 'gpu' {
+function pathFromEnv(name: string, v: string | undefined): 'auto' | 'emulator' | 'gpu' {
   if (v === undefined || v === '' || v === 'auto') return 'auto';
   if (v === 'emulator' || v === 'gpu') return v;
-  throw new Error(`ZFPISO_DECODER_PATH must be 'emulator', 'gpu' or 'auto' (got ${v})`);
+  throw new Error(`${name} must be 'emulator', 'gpu' or 'auto' (got ${v})`);
 }
 
 /** The decoded volume of a stream (what every surface is computed from), on the forced decoder path. */

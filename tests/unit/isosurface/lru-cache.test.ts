@@ -13,7 +13,7 @@ import { readU32 } from '../../../src/gpu/buffers.ts';
 import type { Dims } from '../../../src/core/naming.ts';
 import { blockRanges } from '../../../src/zfp/cpu/codec.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
-import { compressVolume, decodeVolume, makeField, testDecoderPath } from './helpers.ts';
+import { compressVolume, decodeVolume, makeField, testDecoderPath, testKernelOptions, testPrimitivePath } from './helpers.ts';
 import { readCacheState } from '../../helpers/isosurface-readback.ts';
 
 describe('LRU block cache', () => {
@@ -25,8 +25,12 @@ describe('LRU block cache', () => {
     const decoded = await decodeVolume(device, stream);
     const ranges = blockRanges(decoded, dims);
     const initialSlots = 12;
-    const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: initialSlots, initialVertexCapacity: 1 << 16, zfpDecoderPath: testDecoderPath });
-    if (testDecoderPath !== 'auto') expect(iso.pipeline.parts.decoder.path, 'ZFPISO_DECODER_PATH').toBe(testDecoderPath);
+    const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: initialSlots, initialVertexCapacity: 1 << 16, ...testKernelOptions });
+    if (testDecoderPath !== 'auto') expect(iso.pipeline.parts.decoder.path, 'forced decoder path').toBe(testDecoderPath);
+    if (testPrimitivePath !== 'auto') {
+      const { scan, slotScan, compact, compactIds } = iso.pipeline.parts;
+      expect([scan.path, slotScan.path, compact.path, compactIds.path], 'ZFPISO_KERNEL_PATH').toEqual(Array(4).fill(testPrimitivePath));
+    }
     expect([...(await iso.readBlockRanges())]).toEqual([...ranges]);
     const grid = iso.info.blockGrid;
     const model = new LruCacheModel(iso.info.blockCount, initialSlots);

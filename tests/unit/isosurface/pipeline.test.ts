@@ -11,7 +11,7 @@ import { IsosurfaceGpuError, IsosurfaceSupersededError, type IsosurfaceStats } f
 import { marchingCubes } from '../../../src/mc/serial-mc.ts';
 import type { Dims } from '../../../src/core/naming.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
-import { compressVolume, decodeVolume, makeField, testDecoderPath } from './helpers.ts';
+import { compressVolume, decodeVolume, makeField, testKernelOptions } from './helpers.ts';
 
 const dims: Dims = [33, 29, 26];
 
@@ -50,7 +50,7 @@ function instrument(device: GPUDevice) {
 describe('pipelined scrubbing', () => {
   gpuTest('back-to-back surfaces are submitted without waiting for maps; each statistic is its own surface', async ({ gpu }) => {
     const { stream, decoded } = await setup(gpu.device);
-    const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: 1 << 16, initialVertexCapacity: 1 << 20, maxSurfacesInFlight: 3, zfpDecoderPath: testDecoderPath });
+    const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: 1 << 16, initialVertexCapacity: 1 << 20, maxSurfacesInFlight: 3, ...testKernelOptions });
     const [lo, hi] = iso.info.valueRange;
     const values = [0.2, 0.55, 0.3, 0.7, 0.45].map((f) => Math.fround(lo + f * (hi - lo)));
     await iso.compute(values[0]); // pipelines warm
@@ -107,7 +107,7 @@ describe('pipelined scrubbing', () => {
 
   gpuTest('a submission that fails on the GPU rejects with a clear error; the previous surface stays', async ({ gpu }) => {
     const { stream } = await setup(gpu.device);
-    const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: 1 << 16, initialVertexCapacity: 1 << 20, zfpDecoderPath: testDecoderPath });
+    const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: 1 << 16, initialVertexCapacity: 1 << 20, ...testKernelOptions });
     const [lo, hi] = iso.info.valueRange;
     const kept = await iso.compute(Math.fround(lo + 0.4 * (hi - lo)));
     expect(kept.triangles).toBeGreaterThan(0);

@@ -17,7 +17,7 @@ import { Isosurface } from '../../../src/isosurface/isosurface.ts';
 import { meshMetrics } from '../../../src/mc/mesh-metrics.ts';
 import { loadZfpStream, type ZfpGpuStream } from '../../../src/zfp/gpu-stream.ts';
 import { loadMcVolume, sha256, SHARED_DATA, type McVolume } from '../mc/reference.ts';
-import { compressVolume, decodeVolume, drawnSoup, testDecoderPath } from './helpers.ts';
+import { compressVolume, decodeVolume, drawnSoup, testKernelOptions } from './helpers.ts';
 
 export interface PreparedVolume {
   stream: ZfpGpuStream;
@@ -53,7 +53,7 @@ export async function checkAgainstVtk(gpu: GpuContext, entries: McVolume[], cach
   // bonsai's densest surface (2.4 M triangles: 152 MB with 4-byte normals per vertex), which the page
   // would refuse there with the budget error; this test is about the triangles, not the budget.
   const budget = Math.max(256 * 2 ** 20, Math.min(gpu.device.limits.maxBufferSize / 2, 2 ** 31));
-  const iso = await Isosurface.create(gpu, prepared.stream, { memoryBudgetBytes: budget, zfpDecoderPath: testDecoderPath });
+  const iso = await Isosurface.create(gpu, prepared.stream, { memoryBudgetBytes: budget, ...testKernelOptions });
   try {
     for (const s of entries[0].isosurfaces) {
       const stats = await iso.compute(s.iso);
