@@ -7,7 +7,10 @@
 // each tile of a level in workgroup memory from its carry (the scanned sum
 // of all earlier tiles, from the level above). WG, ITEMS and TILE are consts
 // prepended by the host (tileConstants); level sizes come from dispatch
-// records (setup.wgsl, with one unit = one tile = one workgroup).
+// records (setup.wgsl, with one unit = one tile = one workgroup). The
+// workgroup-wide scan of the invocations' sums (workgroup_exclusive_scan and
+// the Lane builtins) comes from workgroup_scan.wgsl or, on devices
+// with subgroups, workgroup_scan_subgroups.wgsl.
 // Barriers are only reached in uniform control flow: the early return
 // depends on the workgroup index and a uniform, both uniform across a
 // workgroup.
@@ -28,34 +31,14 @@ struct Level {
 // The tile, one padding word per 32 so that invocation lid reading its ITEMS
 // consecutive words (stride ITEMS across lanes) avoids bank conflicts.
 var<workgroup> tile: array<u32, TILE + TILE / 32u + 1u>;
-// Kogge-Stone ping-pong halves: one barrier per step.
-var<workgroup> partial: array<u32, 2u * WG>;
 
 fn padded(i: u32) -> u32 {
   return i + (i >> 5u);
 }
 
-/** Exclusive scan of x over the workgroup; every invocation must call it. */
-fn workgroup_exclusive_scan(lid: u32, x: u32) -> u32 {
-  var v = x;
-  var rd = 0u;
-  partial[lid] = v;
-  workgroupBarrier();
-  for (var d = 1u; d < WG; d <<= 1u) {
-    if (lid >= d) {
-      v += partial[rd + lid - d];
-    }
-    let wr = WG - rd;
-    partial[wr + lid] = v;
-    rd = wr;
-    workgroupBarrier();
-  }
-  return v - x;
-}
-
 @compute @workgroup_size(WG)
-fn reduce(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
-          @builtin(local_invocation_index) lid: u32) {
+fn reduce(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u, inv: Lane) {
+  let lid = inv.lid;
   let t = grid_workgroup_index(wid, nwg);
   if (t >= level.units) {
     return;
@@ -68,15 +51,15 @@ fn reduce(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u
       sum += src[i];
     }
   }
-  let before = workgroup_exclusive_scan(lid, sum);
+  let before = workgroup_exclusive_scan(inv, sum);
   if (lid == WG - 1u) {
     dst[t] = before + sum;
   }
 }
 
 @compute @workgroup_size(WG)
-fn scan(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
-        @builtin(local_invocation_index) lid: u32) {
+fn scan(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u, inv: Lane) {
+  let lid = inv.lid;
   let t = grid_workgroup_index(wid, nwg);
   // The top level is dispatched directly, also for n = 0, so that the total
   // (0) is still written.
@@ -105,7 +88,7 @@ fn scan(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
   }
   // ...then the invocations' sums are scanned across the workgroup.
   let tile_carry = carry[t];
-  let before = workgroup_exclusive_scan(lid, run) + tile_carry;
+  let before = workgroup_exclusive_scan(inv, run) + tile_carry;
   for (var k = 0u; k < ITEMS; k++) {
     tile[padded(first + k)] += before;
   }
