@@ -115,7 +115,8 @@ console.log(`copyBufferToBuffer ${maxN * 4} bytes: ${copyMs.median.toFixed(3)} m
 
 // Sort: per 4-bit pass, histogram reads keys (4), scatter reads keys and
 // values (8) and writes them (8), plus the digit table (16 counts per
-// 128-element chunk: written, scanned, read: about 2.5 bytes).
+// 128-element chunk: written, scanned, read: about 2.5 bytes; far less per
+// 2048-element tile on the GPU path).
 const sortBytes = 8 * (4 + 16 + 2.5);
 const rows: Row[] = [];
 for (const variant of variants) {
