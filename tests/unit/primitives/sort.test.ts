@@ -146,7 +146,9 @@ for (const variant of SCAN_VARIANTS) describe(`RadixSortByKey, ${variant.name} p
     const opts = variantOptions(device, variant);
     if (!opts) return;
     const problems: string[] = [];
-    for (const options of [{}, { chunk: 3, maxWorkgroupsPerDimension: 2, workgroupSize: 8 }]) {
+    // Workgroups of 8 (fewer invocations than digits) and 40 (a partial second
+    // word in the GPU path's per-digit bitmaps).
+    for (const options of [{}, { chunk: 3, maxWorkgroupsPerDimension: 2, workgroupSize: 8 }, { chunk: 5, workgroupSize: 40 }]) {
       const sort = await RadixSortByKey.create(device, { capacity: 10, ...options, ...opts });
       sort.grow(70000);
       expect(sort.capacity).toBe(70000);
