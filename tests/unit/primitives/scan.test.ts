@@ -4,8 +4,9 @@
 // past the count must stay poisoned), totals written to a GPU buffer. Every
 // test runs on both kernel families (emulator and GPU path), the GPU path
 // without and with subgroups.
-import { describe, expect } from 'vitest';
+import { describe, expect, test } from 'vitest';
 import { ExclusiveScan } from '../../../src/primitives/scan.ts';
+import { chooseSubgroups } from '../../../src/primitives/dispatch-records.ts';
 import type { CountLike } from '../../../src/primitives/count.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { readU32 } from '../../../src/gpu/buffers.ts';
@@ -194,4 +195,14 @@ for (const variant of SCAN_VARIANTS) describe(`ExclusiveScan, ${variant.name} pa
     for (const b of [input, output, totals]) b.destroy();
     scan.destroy();
   });
+});
+
+test('chooseSubgroups: GPU path only, on by default where the feature is, forced off or demanded by the option', () => {
+  const withFeature = { features: new Set(['subgroups']) } as unknown as GPUDevice;
+  const without = { features: new Set<string>() } as unknown as GPUDevice;
+  expect(chooseSubgroups(withFeature, {}, 'gpu')).toBe(true);
+  expect(chooseSubgroups(withFeature, { subgroups: false }, 'gpu')).toBe(false);
+  expect(chooseSubgroups(withFeature, { subgroups: true }, 'emulator')).toBe(false);
+  expect(chooseSubgroups(without, {}, 'gpu')).toBe(false);
+  expect(() => chooseSubgroups(without, { subgroups: true }, 'gpu')).toThrow(/subgroups/);
 });
