@@ -1,16 +1,17 @@
 // Multi-level exclusive scan of u32, GPU path (src/primitives/README.md).
 // One workgroup of WG invocations owns a tile of TILE = WG * ITEMS
-// consecutive elements; invocation `lid` loads and stores elements
-// tile_base + k * WG + lid (consecutive invocations on consecutive words:
-// coalesced). `reduce` writes each tile's sum to the next level; the top
+// consecutive elements; the invocation at place `lid` in the workgroup's
+// order (lane_order: its local index, or with subgroups a place handed out
+// per subgroup) loads and stores elements tile_base + k * WG + lid
+// (consecutive invocations on consecutive words: coalesced). `reduce` writes each tile's sum to the next level; the top
 // level (at most one tile) is scanned by one workgroup; `scan` then scans
 // each tile of a level in workgroup memory from its carry (the scanned sum
 // of all earlier tiles, from the level above). WG, ITEMS and TILE are consts
 // prepended by the host (tileConstants); level sizes come from dispatch
 // records (setup.wgsl, with one unit = one tile = one workgroup). The
 // workgroup-wide scan of the invocations' sums (workgroup_exclusive_scan and
-// the Lane builtins) comes from workgroup_scan.wgsl or, on devices
-// with subgroups, workgroup_scan_subgroups.wgsl.
+// lane_order) comes from workgroup_scan.wgsl or, on devices with subgroups,
+// workgroup_scan_subgroups.wgsl.
 // Barriers are only reached in uniform control flow: the early return
 // depends on the workgroup index and a uniform, both uniform across a
 // workgroup.
@@ -37,12 +38,13 @@ fn padded(i: u32) -> u32 {
 }
 
 @compute @workgroup_size(WG)
-fn reduce(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u, inv: Lane) {
-  let lid = inv.lid;
+fn reduce(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+          @builtin(local_invocation_index) local_index: u32) {
   let t = grid_workgroup_index(wid, nwg);
   if (t >= level.units) {
     return;
   }
+  let lid = lane_order(local_index);
   let base = t * TILE;
   var sum = 0u;
   for (var k = 0u; k < ITEMS; k++) {
@@ -51,15 +53,15 @@ fn reduce(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u
       sum += src[i];
     }
   }
-  let before = workgroup_exclusive_scan(inv, sum);
+  let before = workgroup_exclusive_scan(lid, sum);
   if (lid == WG - 1u) {
     dst[t] = before + sum;
   }
 }
 
 @compute @workgroup_size(WG)
-fn scan(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u, inv: Lane) {
-  let lid = inv.lid;
+fn scan(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+        @builtin(local_invocation_index) local_index: u32) {
   let t = grid_workgroup_index(wid, nwg);
   // The top level is dispatched directly, also for n = 0, so that the total
   // (0) is still written.
@@ -67,6 +69,7 @@ fn scan(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u, 
   if (t >= units) {
     return;
   }
+  let lid = lane_order(local_index);
   let base = t * TILE;
   for (var k = 0u; k < ITEMS; k++) {
     let j = k * WG + lid;
@@ -88,7 +91,7 @@ fn scan(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u, 
   }
   // ...then the invocations' sums are scanned across the workgroup.
   let tile_carry = carry[t];
-  let before = workgroup_exclusive_scan(inv, run) + tile_carry;
+  let before = workgroup_exclusive_scan(lid, run) + tile_carry;
   for (var k = 0u; k < ITEMS; k++) {
     tile[padded(first + k)] += before;
   }

@@ -5,34 +5,33 @@
 // has subgroups. WG is a const prepended by the host (tileConstants).
 
 /**
- * The invocation's own builtins, one parameter of a tile kernel (the subgroup
- * twin adds the subgroup ones). Workgroup ids stay separate parameters: a
- * struct holding any non-uniform builtin is non-uniform as a whole.
+ * The invocation's place in the workgroup's order (which column of the tile
+ * it owns, where its sum goes in the scan): here its local index. Every
+ * invocation must call it, in uniform control flow.
  */
-struct Lane {
-  @builtin(local_invocation_index) lid: u32,
+fn lane_order(lid: u32) -> u32 {
+  return lid;
 }
 
 // Ping-pong halves: one barrier per step.
 var<workgroup> partial: array<u32, 2u * WG>;
 
 /**
- * Exclusive scan of x over the workgroup, in local_invocation_index order.
- * Every invocation must call it, in uniform control flow; it leaves
- * `partial` in use, so a kernel calls it once.
+ * Exclusive scan of x over the workgroup in lane_order. Every invocation
+ * must call it, in uniform control flow; it leaves `partial` in use, so a
+ * kernel calls it once.
  */
-fn workgroup_exclusive_scan(inv: Lane, x: u32) -> u32 {
-  let lid = inv.lid;
+fn workgroup_exclusive_scan(order: u32, x: u32) -> u32 {
   var v = x;
   var rd = 0u;
-  partial[lid] = v;
+  partial[order] = v;
   workgroupBarrier();
   for (var d = 1u; d < WG; d <<= 1u) {
-    if (lid >= d) {
-      v += partial[rd + lid - d];
+    if (order >= d) {
+      v += partial[rd + order - d];
     }
     let wr = WG - rd;
-    partial[wr + lid] = v;
+    partial[wr + order] = v;
     rd = wr;
     workgroupBarrier();
   }

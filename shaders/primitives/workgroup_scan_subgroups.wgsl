@@ -3,46 +3,61 @@ enable subgroups;
 // Workgroup-wide exclusive scan of one u32 per invocation with subgroup
 // operations: the twin of workgroup_scan.wgsl (same names), composed first
 // (it carries the `enable` directive) only on devices with the 'subgroups'
-// feature. Each subgroup scans its invocations with subgroupInclusiveAdd;
-// the last invocation of each subgroup stores the subgroup's total; after
-// one barrier each subgroup adds up the totals of the subgroups before it,
-// subgroup_size of them per step (a single step unless
-// subgroup_size^2 < WG), and subgroupAdd combines the steps. One barrier
-// instead of log2(WG).
-//
-// The subgroup size is read from the builtin, never assumed: any size from
-// 4 to 128 works (SwiftShader's is 4). Subgroups are assumed to be
-// consecutive runs of local_invocation_index (subgroup q holds
-// q * subgroup_size + subgroup_invocation_id), which is what Dawn, wgpu and
-// the drivers do for one-dimensional workgroups though WGSL does not promise
-// it; the tests compare against a CPU scan on every size.
+// feature. Nothing is assumed about the subgroup size (any, read from the
+// subgroup operations themselves) or about which invocations form a
+// subgroup (WGSL does not tie subgroups to local_invocation_index): each
+// subgroup takes a run of consecutive places in the workgroup's order from
+// a workgroup atomic, its invocations in subgroup order, so a subgroup scan
+// is a piece of the workgroup scan. The scan: subgroupInclusiveAdd within
+// each subgroup; one invocation per subgroup stores the subgroup's first
+// place and total; after one barrier each subgroup adds up the totals of
+// the subgroups placed before it, as many per step as it has invocations,
+// combined with subgroupAdd. One barrier instead of log2(WG).
 
-struct Lane {
-  @builtin(local_invocation_index) lid: u32,
-  @builtin(subgroup_size) sg_size: u32,
-  @builtin(subgroup_invocation_id) sg_lane: u32,
-}
-
-// One total per subgroup; a subgroup has at least 4 invocations.
+var<workgroup> places_taken: atomic<u32>;
+var<workgroup> subgroups_seen: atomic<u32>;
+// Per subgroup (a subgroup has at least 4 invocations, only the last one
+// placed may be partial): its first place and its total.
+var<workgroup> subgroup_first: array<u32, (WG + 3u) / 4u>;
 var<workgroup> subgroup_totals: array<u32, (WG + 3u) / 4u>;
 
 /**
- * Exclusive scan of x over the workgroup, in local_invocation_index order.
- * Every invocation must call it, in uniform control flow; it leaves
- * `subgroup_totals` in use, so a kernel calls it once.
+ * The invocation's place in the workgroup's order (which column of the tile
+ * it owns, where its sum goes in the scan). Every invocation must call it,
+ * once, in uniform control flow.
  */
-fn workgroup_exclusive_scan(inv: Lane, x: u32) -> u32 {
+fn lane_order(lid: u32) -> u32 {
+  let size = subgroupAdd(1u);
+  var first = 0u;
+  if (subgroupElect()) {
+    first = atomicAdd(&places_taken, size);
+  }
+  return subgroupBroadcastFirst(first) + subgroupExclusiveAdd(1u);
+}
+
+/**
+ * Exclusive scan of x over the workgroup in lane_order. Every invocation
+ * must call it, in uniform control flow; it leaves the subgroup tables in
+ * use, so a kernel calls it once.
+ */
+fn workgroup_exclusive_scan(order: u32, x: u32) -> u32 {
+  let rank = subgroupExclusiveAdd(1u);
+  let size = subgroupAdd(1u);
+  let first = order - rank;
   let inclusive = subgroupInclusiveAdd(x);
-  let sg = inv.lid / inv.sg_size;
-  // The last invocation of a subgroup holds the subgroup's total. Only the
-  // workgroup's last subgroup can be partial, and nobody reads its total.
-  if (inv.sg_lane == inv.sg_size - 1u) {
-    subgroup_totals[sg] = inclusive;
+  let total = subgroupAdd(x);
+  if (subgroupElect()) {
+    let s = atomicAdd(&subgroups_seen, 1u);
+    subgroup_first[s] = first;
+    subgroup_totals[s] = total;
   }
   workgroupBarrier();
+  let seen = atomicLoad(&subgroups_seen);
   var before = 0u;
-  for (var k = inv.sg_lane; k < sg; k += inv.sg_size) {
-    before += subgroup_totals[k];
+  for (var k = rank; k < seen; k += size) {
+    if (subgroup_first[k] < first) {
+      before += subgroup_totals[k];
+    }
   }
   return subgroupAdd(before) + inclusive - x;
 }

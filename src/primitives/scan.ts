@@ -33,12 +33,12 @@ const workgroupScanSubgroupsSnippet: WgslPart = { name: 'shaders/primitives/work
 
 /**
  * Workgroup-memory words of the GPU path's scan kernel: the tile with
- * padding, plus two Kogge-Stone halves or (with subgroups) one total per
- * subgroup of at least 4.
+ * padding, plus two Kogge-Stone halves or (with subgroups) two counters and
+ * a first place and a total per subgroup of at least 4.
  */
 export function tiledScanWords(wg: number, items: number, subgroups = false): number {
   const t = wg * items;
-  return t + Math.floor(t / 32) + 1 + (subgroups ? Math.ceil(wg / 4) : 2 * wg);
+  return t + Math.floor(t / 32) + 1 + (subgroups ? 2 + 2 * Math.ceil(wg / 4) : 2 * wg);
 }
 
 export interface ExclusiveScanOptions extends PrimitiveOptions {
