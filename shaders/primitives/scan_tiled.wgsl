@@ -1,13 +1,17 @@
 // Multi-level exclusive scan of u32, GPU path (src/primitives/README.md).
 // One workgroup of WG invocations owns a tile of TILE = WG * ITEMS
-// consecutive elements; invocation `lid` loads and stores elements
-// tile_base + k * WG + lid (consecutive invocations on consecutive words:
-// coalesced). `reduce` writes each tile's sum to the next level; the top
+// consecutive elements; the invocation at place `lid` in the workgroup's
+// order (lane_order: its local index, or with subgroups a place handed out
+// per subgroup) loads and stores elements tile_base + k * WG + lid
+// (consecutive invocations on consecutive words: coalesced). `reduce` writes each tile's sum to the next level; the top
 // level (at most one tile) is scanned by one workgroup; `scan` then scans
 // each tile of a level in workgroup memory from its carry (the scanned sum
 // of all earlier tiles, from the level above). WG, ITEMS and TILE are consts
 // prepended by the host (tileConstants); level sizes come from dispatch
-// records (setup.wgsl, with one unit = one tile = one workgroup).
+// records (setup.wgsl, with one unit = one tile = one workgroup). The
+// workgroup-wide scan of the invocations' sums (workgroup_exclusive_scan and
+// lane_order) comes from workgroup_scan.wgsl or, on devices with subgroups,
+// workgroup_scan_subgroups.wgsl.
 // Barriers are only reached in uniform control flow: the early return
 // depends on the workgroup index and a uniform, both uniform across a
 // workgroup.
@@ -28,38 +32,19 @@ struct Level {
 // The tile, one padding word per 32 so that invocation lid reading its ITEMS
 // consecutive words (stride ITEMS across lanes) avoids bank conflicts.
 var<workgroup> tile: array<u32, TILE + TILE / 32u + 1u>;
-// Kogge-Stone ping-pong halves: one barrier per step.
-var<workgroup> partial: array<u32, 2u * WG>;
 
 fn padded(i: u32) -> u32 {
   return i + (i >> 5u);
 }
 
-/** Exclusive scan of x over the workgroup; every invocation must call it. */
-fn workgroup_exclusive_scan(lid: u32, x: u32) -> u32 {
-  var v = x;
-  var rd = 0u;
-  partial[lid] = v;
-  workgroupBarrier();
-  for (var d = 1u; d < WG; d <<= 1u) {
-    if (lid >= d) {
-      v += partial[rd + lid - d];
-    }
-    let wr = WG - rd;
-    partial[wr + lid] = v;
-    rd = wr;
-    workgroupBarrier();
-  }
-  return v - x;
-}
-
 @compute @workgroup_size(WG)
 fn reduce(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
-          @builtin(local_invocation_index) lid: u32) {
+          @builtin(local_invocation_index) local_index: u32) {
   let t = grid_workgroup_index(wid, nwg);
   if (t >= level.units) {
     return;
   }
+  let lid = lane_order(local_index);
   let base = t * TILE;
   var sum = 0u;
   for (var k = 0u; k < ITEMS; k++) {
@@ -76,7 +61,7 @@ fn reduce(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u
 
 @compute @workgroup_size(WG)
 fn scan(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
-        @builtin(local_invocation_index) lid: u32) {
+        @builtin(local_invocation_index) local_index: u32) {
   let t = grid_workgroup_index(wid, nwg);
   // The top level is dispatched directly, also for n = 0, so that the total
   // (0) is still written.
@@ -84,6 +69,7 @@ fn scan(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
   if (t >= units) {
     return;
   }
+  let lid = lane_order(local_index);
   let base = t * TILE;
   for (var k = 0u; k < ITEMS; k++) {
     let j = k * WG + lid;

@@ -36,6 +36,12 @@ export interface PrimitiveOptions {
   workgroupSize?: number;
   /** Kernel family: 'auto' (default) picks per adapter, see choosePath. */
   path?: PrimitivePath | 'auto';
+  /**
+   * GPU path only: workgroup scans with subgroup operations. Default: where
+   * the device has the 'subgroups' feature; false forces the workgroup-memory
+   * scan; true requires the feature.
+   */
+  subgroups?: boolean;
 }
 
 /**
@@ -58,6 +64,16 @@ export function choosePath(device: GPUDevice, options: PrimitiveOptions): Primit
   if (p !== 'auto') throw new RangeError(`path must be 'auto', 'emulator' or 'gpu' (got ${String(p)})`);
   const info = (device as GPUDevice & { adapterInfo?: GPUAdapterInfo }).adapterInfo;
   return summarizeAdapter(info).software ? 'emulator' : 'gpu';
+}
+
+/**
+ * Whether a GPU-path kernel uses subgroup operations (see
+ * PrimitiveOptions.subgroups); never on the emulator path.
+ */
+export function chooseSubgroups(device: GPUDevice, options: PrimitiveOptions, path: PrimitivePath): boolean {
+  const has = device.features.has('subgroups' as GPUFeatureName);
+  if (options.subgroups === true && !has) throw new RangeError("subgroups: true needs a device with the 'subgroups' feature");
+  return path === 'gpu' && has && options.subgroups !== false;
 }
 
 /** Invocations per workgroup of the GPU path (default 256, capped by the limits). */

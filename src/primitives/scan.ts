@@ -5,6 +5,8 @@
 
 import scanWgsl from '../../shaders/primitives/scan.wgsl?raw';
 import scanTiledWgsl from '../../shaders/primitives/scan_tiled.wgsl?raw';
+import workgroupScanWgsl from '../../shaders/primitives/workgroup_scan.wgsl?raw';
+import workgroupScanSubgroupsWgsl from '../../shaders/primitives/workgroup_scan_subgroups.wgsl?raw';
 import { KeyedCache } from '../gpu/bind-group-cache.ts';
 import type { GpuCount } from '../gpu/buffer-ref.ts';
 import { gridSnippet } from '../gpu/dispatch.ts';
@@ -15,6 +17,7 @@ import {
   DispatchRecords,
   RECORD_UNIFORM_SIZE,
   choosePath,
+  chooseSubgroups,
   gpuPathWorkgroupSize,
   maxWorkgroupsPerDimension,
   tileConstants,
@@ -25,11 +28,17 @@ import {
 
 const scanSnippet: WgslPart = { name: 'shaders/primitives/scan.wgsl', code: scanWgsl };
 const scanTiledSnippet: WgslPart = { name: 'shaders/primitives/scan_tiled.wgsl', code: scanTiledWgsl };
+const workgroupScanSnippet: WgslPart = { name: 'shaders/primitives/workgroup_scan.wgsl', code: workgroupScanWgsl };
+const workgroupScanSubgroupsSnippet: WgslPart = { name: 'shaders/primitives/workgroup_scan_subgroups.wgsl', code: workgroupScanSubgroupsWgsl };
 
-/** Workgroup-memory words of the GPU path's scan kernel (tile with padding, two Kogge-Stone halves). */
-export function tiledScanWords(wg: number, items: number): number {
+/**
+ * Workgroup-memory words of the GPU path's scan kernel: the tile with
+ * padding, plus two Kogge-Stone halves or (with subgroups) two counters and
+ * a first place and a total per subgroup of at least 4.
+ */
+export function tiledScanWords(wg: number, items: number, subgroups = false): number {
   const t = wg * items;
-  return t + Math.floor(t / 32) + 1 + 2 * wg;
+  return t + Math.floor(t / 32) + 1 + (subgroups ? 2 + 2 * Math.ceil(wg / 4) : 2 * wg);
 }
 
 export interface ExclusiveScanOptions extends PrimitiveOptions {
@@ -93,6 +102,8 @@ export class ExclusiveScan {
     capacity: number,
     /** The kernel family in use (choosePath). */
     readonly path: PrimitivePath,
+    /** GPU path: whether the workgroup scans use subgroup operations (chooseSubgroups). */
+    readonly subgroups: boolean,
   ) {
     this.chunk = chunk;
     this.recordOffsets = Uint32Array.from({ length: records.levels }, (_, l) => DispatchRecords.recordOffset(l));
@@ -104,10 +115,11 @@ export class ExclusiveScan {
   static async create(device: GPUDevice, options: ExclusiveScanOptions): Promise<ExclusiveScan> {
     const path = choosePath(device, options);
     const gpu = path === 'gpu';
+    const subgroups = chooseSubgroups(device, options, path);
     const items = options.chunk ?? (gpu ? 4 : 16);
     const wg = gpu ? gpuPathWorkgroupSize(device, options) : workgroupSize(device, options);
     if (!Number.isInteger(items) || items < (gpu ? 1 : 2) || items > 4096) throw new RangeError(`chunk must be in ${gpu ? 1 : 2}..4096`);
-    if (gpu && (wg * items < 2 || tiledScanWords(wg, items) * 4 > device.limits.maxComputeWorkgroupStorageSize)) {
+    if (gpu && (wg * items < 2 || tiledScanWords(wg, items, subgroups) * 4 > device.limits.maxComputeWorkgroupStorageSize)) {
       throw new RangeError(`ExclusiveScan: a tile of ${wg} x ${items} elements does not fit the workgroup storage limit (${device.limits.maxComputeWorkgroupStorageSize} B)`);
     }
     // Elements per partial sum; on the GPU path one unit (tile) is one workgroup.
@@ -120,7 +132,12 @@ export class ExclusiveScan {
       { binding: 3, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
       { binding: 4, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
     ]);
-    const parts = gpu ? [tileConstants(wg, items), gridSnippet, scanTiledSnippet] : [gridSnippet, scanSnippet];
+    // The subgroup twin goes first: it carries the `enable subgroups;` directive.
+    const parts = !gpu
+      ? [gridSnippet, scanSnippet]
+      : subgroups
+        ? [workgroupScanSubgroupsSnippet, tileConstants(wg, items), gridSnippet, scanTiledSnippet]
+        : [tileConstants(wg, items), gridSnippet, workgroupScanSnippet, scanTiledSnippet];
     const constants: Record<string, number> = gpu ? {} : { WG: wg, CHUNK: chunk };
     const [reduce, scan, records] = await Promise.all([
       createComputePipeline(device, 'ExclusiveScan.reduce', parts, 'reduce', { layout: [layout], constants }),
@@ -133,7 +150,7 @@ export class ExclusiveScan {
         maxWorkgroupsPerDimension: maxPerDim,
       }),
     ]);
-    return new ExclusiveScan(device, layout, reduce, scan, records, chunk, options.capacity, path);
+    return new ExclusiveScan(device, layout, reduce, scan, records, chunk, options.capacity, path, subgroups);
   }
 
   get capacity(): number {

@@ -1,9 +1,13 @@
 // Stable radix sort by u32 key with u32 values, ascending or descending, the
 // count from a GPU buffer. 4 bits per pass (keyBits / 4 passes, 8 for full
 // keys); each pass is histogram -> ExclusiveScan of the digit table ->
-// scatter, all sized on the GPU (shaders/primitives/radix_sort.wgsl).
+// scatter, all sized on the GPU. Two kernel families with the same bindings
+// (choosePath): per-invocation chunks (shaders/primitives/radix_sort.wgsl,
+// emulator path) or per-workgroup tiles with workgroup histograms and
+// workgroup-local stable ranking (radix_sort_tiled.wgsl, GPU path).
 
 import sortWgsl from '../../shaders/primitives/radix_sort.wgsl?raw';
+import sortTiledWgsl from '../../shaders/primitives/radix_sort_tiled.wgsl?raw';
 import { BindGroupCache } from '../gpu/bind-group-cache.ts';
 import { gridSnippet } from '../gpu/dispatch.ts';
 import { bindGroupLayout, createComputePipeline } from '../gpu/pipeline-cache.ts';
@@ -12,9 +16,13 @@ import {
   DispatchRecords,
   RECORD_TABLE_COUNT,
   RECORD_UNIFORM_SIZE,
+  choosePath,
+  gpuPathWorkgroupSize,
   maxWorkgroupsPerDimension,
+  tileConstants,
   workgroupSize,
   type PrimitiveOptions,
+  type PrimitivePath,
 } from './dispatch-records.ts';
 import { ExclusiveScan } from './scan.ts';
 
@@ -33,7 +41,11 @@ function passRecord(descending: boolean, pass: number, bits: number): number {
 export interface RadixSortOptions extends PrimitiveOptions {
   /** Most elements one encode may sort; grow() raises it. */
   capacity: number;
-  /** Consecutive elements per invocation, 1..255 (table size 16 * count / chunk). Default 128. */
+  /**
+   * Emulator path: consecutive elements per invocation, 1..255 (default 128).
+   * GPU path: elements per invocation in a tile of workgroupSize * chunk,
+   * 1..4096 (default 8). The digit table has 16 entries per chunk or tile.
+   */
   chunk?: number;
 }
 
@@ -59,6 +71,7 @@ interface Pair {
 }
 
 export class RadixSortByKey {
+  /** Elements per digit-table column: a chunk (emulator path) or a tile (GPU path). */
   readonly chunk: number;
   private capacityValue = 0;
   private keysTmp!: GPUBuffer;
@@ -80,15 +93,27 @@ export class RadixSortByKey {
     private readonly passParams: GPUBuffer,
     chunk: number,
     capacity: number,
+    /** The kernel family in use (choosePath); the digit-table scan follows the same options. */
+    readonly path: PrimitivePath,
   ) {
     this.chunk = chunk;
     this.allocate(capacity);
   }
 
+  /** Whether the digit-table scan uses subgroup operations. */
+  get subgroups(): boolean {
+    return this.scan.subgroups;
+  }
+
   static async create(device: GPUDevice, options: RadixSortOptions): Promise<RadixSortByKey> {
-    const chunk = options.chunk ?? 128;
-    if (!Number.isInteger(chunk) || chunk < 1 || chunk > 255) throw new RangeError('chunk must be in 1..255');
-    const wg = workgroupSize(device, options);
+    const path = choosePath(device, options);
+    const gpu = path === 'gpu';
+    const items = options.chunk ?? (gpu ? 8 : 128);
+    const maxItems = gpu ? 4096 : 255;
+    if (!Number.isInteger(items) || items < 1 || items > maxItems) throw new RangeError(`chunk must be in 1..${maxItems}`);
+    const wg = gpu ? gpuPathWorkgroupSize(device, options) : workgroupSize(device, options);
+    // Elements per table column; on the GPU path one unit (tile) is one workgroup.
+    const chunk = gpu ? wg * items : items;
     const maxPerDim = maxWorkgroupsPerDimension(device, options);
     const uniform = (dynamic: boolean): GPUBindGroupLayoutEntry['buffer'] => ({
       type: 'uniform',
@@ -115,15 +140,17 @@ export class RadixSortByKey {
       entry(6, { type: 'storage' }),
       entry(7, { type: 'storage' }),
     ]);
-    const parts = [gridSnippet, { name: 'shaders/primitives/radix_sort.wgsl', code: sortWgsl }];
-    const constants = { WG: wg, CHUNK: chunk };
+    const parts = gpu
+      ? [tileConstants(wg, items), gridSnippet, { name: 'shaders/primitives/radix_sort_tiled.wgsl', code: sortTiledWgsl }]
+      : [gridSnippet, { name: 'shaders/primitives/radix_sort.wgsl', code: sortWgsl }];
+    const constants: Record<string, number> = gpu ? {} : { WG: wg, CHUNK: chunk };
     const [histogram, scatter, copy, records, scan] = await Promise.all([
       createComputePipeline(device, 'RadixSortByKey.histogram', parts, 'histogram', { layout: [histogramLayout], constants }),
       createComputePipeline(device, 'RadixSortByKey.scatter', parts, 'scatter', { layout: [scatterLayout], constants }),
       createComputePipeline(device, 'RadixSortByKey.copyBack', parts, 'copy_back', { layout: [scatterLayout], constants }),
       DispatchRecords.create(device, 'RadixSortByKey', {
         chunk,
-        wg,
+        wg: gpu ? 1 : wg,
         levels: 1,
         capacity: options.capacity,
         maxWorkgroupsPerDimension: maxPerDim,
@@ -133,6 +160,8 @@ export class RadixSortByKey {
         capacity: RadixSortByKey.tableSize(options.capacity, chunk),
         maxWorkgroupsPerDimension: options.maxWorkgroupsPerDimension,
         workgroupSize: options.workgroupSize,
+        path,
+        subgroups: options.subgroups,
       }),
     ]);
     // Per-pass uniforms, written once; an encode picks them by dynamic offset.
@@ -152,7 +181,7 @@ export class RadixSortByKey {
       }
     }
     device.queue.writeBuffer(passParams, 0, words);
-    return new RadixSortByKey(device, histogramLayout, scatterLayout, histogram, scatter, copy, records, scan, passParams, chunk, options.capacity);
+    return new RadixSortByKey(device, histogramLayout, scatterLayout, histogram, scatter, copy, records, scan, passParams, chunk, options.capacity, path);
   }
 
   private static tableSize(capacity: number, chunk: number): number {

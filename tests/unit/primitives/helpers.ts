@@ -10,6 +10,26 @@ export const POISON = 0xdeadbeef;
 export const PATHS = ['emulator', 'gpu'] as const;
 
 /**
+ * The variants of a primitive with a workgroup scan: both paths, the GPU path
+ * without and with subgroups (the latter only where the device has them).
+ */
+export const SCAN_VARIANTS = [
+  { name: 'emulator', path: 'emulator', subgroups: false },
+  { name: 'gpu', path: 'gpu', subgroups: false },
+  { name: 'gpu+subgroups', path: 'gpu', subgroups: true },
+] as const;
+export type ScanVariant = (typeof SCAN_VARIANTS)[number];
+
+/** The options forcing a variant, or undefined where the device lacks its feature (the test then has nothing to run). */
+export function variantOptions(device: GPUDevice, v: ScanVariant): { path: ScanVariant['path']; subgroups: boolean } | undefined {
+  if (v.subgroups && !device.features.has('subgroups' as GPUFeatureName)) {
+    console.warn(`${v.name}: the device has no 'subgroups' feature; variant not run`);
+    return undefined;
+  }
+  return { path: v.path, subgroups: v.subgroups };
+}
+
+/**
  * Large sizes per path: the GPU path's workgroup-memory kernels are slow on
  * SwiftShader, so it gets the grid-limit size and 2^20 + 3 (its tile is 1024).
  */

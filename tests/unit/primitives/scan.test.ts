@@ -2,14 +2,16 @@
 // random u32 (so sums wrap) and 0/1 masks, counts from GPU buffers smaller
 // than the buffers, poisoned outputs checked element by element (the tail
 // past the count must stay poisoned), totals written to a GPU buffer. Every
-// test runs on both kernel families (emulator and GPU path).
-import { describe, expect } from 'vitest';
+// test runs on both kernel families (emulator and GPU path), the GPU path
+// without and with subgroups.
+import { describe, expect, test } from 'vitest';
 import { ExclusiveScan } from '../../../src/primitives/scan.ts';
+import { chooseSubgroups } from '../../../src/primitives/dispatch-records.ts';
 import type { CountLike } from '../../../src/primitives/count.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { readU32 } from '../../../src/gpu/buffers.ts';
 import { summarizeAdapter } from '../../../src/gpu/device.ts';
-import { PATHS, POISON, SMALL_SIZES, largeSizes, cpuExclusiveScan, diff, gpuCount, poison, randomMask, randomU32, read, upload } from './helpers.ts';
+import { SCAN_VARIANTS, POISON, SMALL_SIZES, largeSizes, cpuExclusiveScan, diff, gpuCount, poison, randomMask, randomU32, read, upload, variantOptions } from './helpers.ts';
 
 const EXTRA = 37; // buffer elements past the count
 
@@ -33,11 +35,15 @@ async function check(device: GPUDevice, scan: ExclusiveScan, data: Uint32Array, 
   return problems;
 }
 
-for (const path of PATHS) describe(`ExclusiveScan, ${path} path`, () => {
+for (const variant of SCAN_VARIANTS) describe(`ExclusiveScan, ${variant.name} path`, () => {
+  const path = variant.path;
   gpuTest('every size, random u32, GPU count below the buffer length, total to a GPU buffer', async ({ gpu }) => {
     const { device } = gpu;
-    const scan = await ExclusiveScan.create(device, { capacity: 2 ** 24 + EXTRA, path });
+    const opts = variantOptions(device, variant);
+    if (!opts) return;
+    const scan = await ExclusiveScan.create(device, { capacity: 2 ** 24 + EXTRA, ...opts });
     expect(scan.path).toBe(path);
+    expect(scan.subgroups).toBe(variant.subgroups);
     const problems: string[] = [];
     for (const n of [...SMALL_SIZES, ...largeSizes(path)]) {
       problems.push(...(await check(device, scan, randomU32(n + EXTRA, n + 1), n)));
@@ -48,7 +54,9 @@ for (const path of PATHS) describe(`ExclusiveScan, ${path} path`, () => {
 
   gpuTest('0/1 masks of every density, host-number counts', async ({ gpu }) => {
     const { device } = gpu;
-    const scan = await ExclusiveScan.create(device, { capacity: 2 ** 20 + 3, path });
+    const opts = variantOptions(device, variant);
+    if (!opts) return;
+    const scan = await ExclusiveScan.create(device, { capacity: 2 ** 20 + 3, ...opts });
     const problems: string[] = [];
     for (const n of [0, 1, 255, 4095, 65536, 2 ** 20 + 3]) {
       for (const density of [0, 0.01, 0.5, 1]) {
@@ -61,15 +69,19 @@ for (const path of PATHS) describe(`ExclusiveScan, ${path} path`, () => {
 
   gpuTest('many levels (tiny chunks), 2D grids, one object reused across sizes', async ({ gpu }) => {
     const { device } = gpu;
+    const opts = variantOptions(device, variant);
+    if (!opts) return;
     const problems: string[] = [];
     // chunk 2 over 65537 elements gives 18 levels; a grid limit of 3
     // workgroups per dimension forces 2D grids at every level.
-    for (const [chunk, maxPerDim] of [
-      [2, 3],
-      [3, 65535],
-      [7, 2],
+    // Workgroups of 16, 6 (a partial last subgroup where subgroups hold 4 or
+    // more) and 1 invocation.
+    for (const [chunk, maxPerDim, workgroupSize] of [
+      [2, 3, 16],
+      [3, 65535, 6],
+      [7, 2, 1],
     ]) {
-      const scan = await ExclusiveScan.create(device, { capacity: 65537, chunk, maxWorkgroupsPerDimension: maxPerDim, workgroupSize: 16, path });
+      const scan = await ExclusiveScan.create(device, { capacity: 65537, chunk, maxWorkgroupsPerDimension: maxPerDim, workgroupSize, ...opts });
       for (const n of [0, 1, 2, 3, 4, 63, 64, 65, 257, 4095, 65537]) {
         problems.push(...(await check(device, scan, randomU32(n + EXTRA, n * chunk + 5), n)).map((p) => `chunk ${chunk}: ${p}`));
       }
@@ -80,7 +92,9 @@ for (const path of PATHS) describe(`ExclusiveScan, ${path} path`, () => {
 
   gpuTest('grow raises the capacity; counts above it are clamped', async ({ gpu }) => {
     const { device } = gpu;
-    const scan = await ExclusiveScan.create(device, { capacity: 100, path });
+    const opts = variantOptions(device, variant);
+    if (!opts) return;
+    const scan = await ExclusiveScan.create(device, { capacity: 100, ...opts });
     expect(scan.capacity).toBe(100);
     const data = randomU32(70000 + EXTRA, 11);
     // Above the capacity: only the first 100 elements are scanned.
@@ -109,7 +123,9 @@ for (const path of PATHS) describe(`ExclusiveScan, ${path} path`, () => {
 
   gpuTest('two scans in one encoder share the object; the second count comes from the first total', async ({ gpu }) => {
     const { device } = gpu;
-    const scan = await ExclusiveScan.create(device, { capacity: 5000, path });
+    const opts = variantOptions(device, variant);
+    if (!opts) return;
+    const scan = await ExclusiveScan.create(device, { capacity: 5000, ...opts });
     const a = randomMask(5000, 0.3, 21);
     const b = randomU32(5000, 22);
     const inA = upload(device, 'a', a);
@@ -132,6 +148,8 @@ for (const path of PATHS) describe(`ExclusiveScan, ${path} path`, () => {
 
   gpuTest('2^27 elements (or the binding limit), the issue\'s upper bound (pattern computed on the fly, checked in slices)', async ({ gpu }) => {
     const { device } = gpu;
+    const opts = variantOptions(device, variant);
+    if (!opts) return;
     // The GPU path at 2^27 takes minutes on SwiftShader; its multi-level
     // structure is exercised by the tiny-tile and grid-limit cases above.
     // (Also where the implementation does not say what it is, e.g. wgpu in Deno.)
@@ -151,7 +169,7 @@ for (const path of PATHS) describe(`ExclusiveScan, ${path} path`, () => {
     new Uint32Array(output.getMappedRange()).fill(POISON);
     output.unmap();
     const totals = upload(device, 'test.totals', new Uint32Array(0), 1);
-    const scan = await ExclusiveScan.create(device, { capacity: length, path });
+    const scan = await ExclusiveScan.create(device, { capacity: length, ...opts });
     const encoder = device.createCommandEncoder();
     scan.encode(encoder, { input, output, count: gpuCount(device, n), totalOut: { buffer: totals, offset: 0 } });
     device.queue.submit([encoder.finish()]);
@@ -177,4 +195,14 @@ for (const path of PATHS) describe(`ExclusiveScan, ${path} path`, () => {
     for (const b of [input, output, totals]) b.destroy();
     scan.destroy();
   });
+});
+
+test('chooseSubgroups: GPU path only, on by default where the feature is, forced off or demanded by the option', () => {
+  const withFeature = { features: new Set(['subgroups']) } as unknown as GPUDevice;
+  const without = { features: new Set<string>() } as unknown as GPUDevice;
+  expect(chooseSubgroups(withFeature, {}, 'gpu')).toBe(true);
+  expect(chooseSubgroups(withFeature, { subgroups: false }, 'gpu')).toBe(false);
+  expect(chooseSubgroups(withFeature, { subgroups: true }, 'emulator')).toBe(false);
+  expect(chooseSubgroups(without, {}, 'gpu')).toBe(false);
+  expect(() => chooseSubgroups(without, { subgroups: true }, 'gpu')).toThrow(/subgroups/);
 });

@@ -2,12 +2,14 @@
 // distinct values (stability shows in the values), already sorted and
 // reverse sorted; ascending and descending; every listed size; counts from
 // GPU buffers smaller than the buffers; poisoned outputs checked in full.
+// Every test runs on both kernel families (emulator and GPU path), the GPU
+// path's digit-table scan without and with subgroups.
 import { describe, expect } from 'vitest';
 import { ExclusiveScan } from '../../../src/primitives/scan.ts';
 import { StreamCompact, StreamCompactIds } from '../../../src/primitives/compact.ts';
 import { RadixSortByKey } from '../../../src/primitives/sort.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
-import { LARGE_SIZES, SMALL_SIZES, cpuSortPermutation, diff, gpuCount, poison, randomMask, randomU32, read, rng, upload } from './helpers.ts';
+import { LARGE_SIZES, SCAN_VARIANTS, largeSizes, SMALL_SIZES, cpuSortPermutation, diff, gpuCount, poison, randomMask, randomU32, read, rng, upload, variantOptions } from './helpers.ts';
 
 type Pattern = 'random' | 'few' | 'sorted' | 'reverse';
 const PATTERNS: Pattern[] = ['random', 'few', 'sorted', 'reverse'];
@@ -98,10 +100,14 @@ async function runAll(h: Harness, cases: Case[]): Promise<string[]> {
   return problems;
 }
 
-describe('RadixSortByKey', () => {
+for (const variant of SCAN_VARIANTS) describe(`RadixSortByKey, ${variant.name} path`, () => {
   gpuTest('small sizes: every pattern, ascending and descending', async ({ gpu }) => {
     const { device } = gpu;
-    const sort = await RadixSortByKey.create(device, { capacity: 65536 + EXTRA });
+    const opts = variantOptions(device, variant);
+    if (!opts) return;
+    const sort = await RadixSortByKey.create(device, { capacity: 65536 + EXTRA, ...opts });
+    expect(sort.path).toBe(variant.path);
+    expect(sort.subgroups).toBe(variant.subgroups);
     const h = new Harness(device, sort, 65536 + EXTRA);
     const cases: Case[] = [];
     for (const n of SMALL_SIZES) for (const pattern of PATTERNS) for (const descending of [false, true]) cases.push({ n, pattern, descending });
@@ -112,12 +118,24 @@ describe('RadixSortByKey', () => {
 
   gpuTest('large sizes', async ({ gpu }) => {
     const { device } = gpu;
-    const [odd, mid, big] = LARGE_SIZES;
-    const sort = await RadixSortByKey.create(device, { capacity: big + EXTRA });
-    const h = new Harness(device, sort, big + EXTRA);
+    const opts = variantOptions(device, variant);
+    if (!opts) return;
+    // The GPU path is slow on SwiftShader: its large sizes (largeSizes) and
+    // every pattern once, alternating directions.
+    const gpuPath = variant.path === 'gpu';
+    const [odd, mid, big] = gpuPath ? [...largeSizes('gpu'), 0] : LARGE_SIZES;
+    const sort = await RadixSortByKey.create(device, { capacity: Math.max(odd, big) + EXTRA, ...opts });
+    const h = new Harness(device, sort, Math.max(odd, big) + EXTRA);
     const cases: Case[] = [];
-    for (const pattern of PATTERNS) for (const descending of [false, true]) cases.push({ n: mid, pattern, descending });
-    cases.push({ n: odd, pattern: 'random', descending: true }, { n: big, pattern: 'few', descending: false });
+    for (const pattern of PATTERNS) {
+      for (const descending of [false, true]) {
+        if (!gpuPath || descending === (pattern.length % 2 === 0)) cases.push({ n: mid, pattern, descending });
+      }
+    }
+    // The subgroup variant changes only the digit-table scan (tested on
+    // every size by scan.test.ts): one size here.
+    if (!variant.subgroups) cases.push({ n: odd, pattern: 'random', descending: true });
+    if (!gpuPath) cases.push({ n: big, pattern: 'few', descending: false });
     expect(await runAll(h, cases)).toEqual([]);
     h.destroy();
     sort.destroy();
@@ -125,9 +143,13 @@ describe('RadixSortByKey', () => {
 
   gpuTest('in place (even and odd pass counts), fewer key bits, 2D grids, tiny chunks, grow', async ({ gpu }) => {
     const { device } = gpu;
+    const opts = variantOptions(device, variant);
+    if (!opts) return;
     const problems: string[] = [];
-    for (const options of [{}, { chunk: 3, maxWorkgroupsPerDimension: 2, workgroupSize: 8 }]) {
-      const sort = await RadixSortByKey.create(device, { capacity: 10, ...options });
+    // Workgroups of 8 (fewer invocations than digits) and 40 (a partial second
+    // word in the GPU path's per-digit bitmaps).
+    for (const options of [{}, { chunk: 3, maxWorkgroupsPerDimension: 2, workgroupSize: 8 }, { chunk: 5, workgroupSize: 40 }]) {
+      const sort = await RadixSortByKey.create(device, { capacity: 10, ...options, ...opts });
       sort.grow(70000);
       expect(sort.capacity).toBe(70000);
       const h = new Harness(device, sort, 70000);
@@ -151,16 +173,18 @@ describe('RadixSortByKey', () => {
 
   gpuTest('the cache update chain, on the GPU only: scan, compact IDs and ages, sort by age oldest first', async ({ gpu }) => {
     const { device } = gpu;
+    const opts = variantOptions(device, variant);
+    if (!opts) return;
     // Slots with ages; a mask of available slots; their ids sorted by age,
     // descending, with the count known only to the GPU (the scan's total).
     const slots = 300007;
     const ages = randomU32(slots, 77).map((a) => a % 1000);
     const avail = randomMask(slots, 0.4, 78);
     const [scan, compactIds, compact, sort] = await Promise.all([
-      ExclusiveScan.create(device, { capacity: slots }),
-      StreamCompactIds.create(device),
-      StreamCompact.create(device),
-      RadixSortByKey.create(device, { capacity: slots }),
+      ExclusiveScan.create(device, { capacity: slots, ...opts }),
+      StreamCompactIds.create(device, opts),
+      StreamCompact.create(device, opts),
+      RadixSortByKey.create(device, { capacity: slots, ...opts }),
     ]);
     const agesBuf = upload(device, 'ages', ages);
     const availBuf = upload(device, 'avail', avail);
