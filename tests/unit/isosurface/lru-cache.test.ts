@@ -30,6 +30,9 @@ describe('LRU block cache', () => {
     if (testPrimitivePath !== 'auto') {
       const { scan, slotScan, compact, compactIds } = iso.pipeline.parts;
       expect([scan.path, slotScan.path, compact.path, compactIds.path], 'ZFPISO_KERNEL_PATH').toEqual(Array(4).fill(testPrimitivePath));
+      // the GPU path's scans use subgroups wherever the device has them (Dawn on SwiftShader does)
+      const subgroups = device.features.has('subgroups');
+      if (testPrimitivePath === 'gpu') expect([scan.subgroups, slotScan.subgroups]).toEqual([subgroups, subgroups]);
     }
     expect([...(await iso.readBlockRanges())]).toEqual([...ranges]);
     const grid = iso.info.blockGrid;
