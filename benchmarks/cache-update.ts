@@ -28,7 +28,14 @@ probe.destroy();
 // alternate between far-apart surfaces, so every surface brings new blocks into a small cache
 const order = picked.flatMap((_, i) => (i % 2 ? [picked[picked.length - 1 - (i >> 1)]] : [picked[i >> 1]]));
 const cycles = Number(process.env.CYCLES ?? 4);
-const rows: { slots: number; cacheUpdateMs: number; cacheUpdateMedianMs: number; newBlocks: number; activeBlocks: number; surfaces: number }[] = [];
+const rows: {
+  slots: number;
+  cacheUpdateMs: number;
+  cacheUpdateMedianMs: number;
+  newBlocks: number;
+  activeBlocks: number;
+  surfaces: number;
+}[] = [];
 for (const slots of (process.env.SLOTS ?? '512,32768').split(',').map(Number)) {
   const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: slots, initialVertexCapacity: 1 << 20 });
   let ms = 0;
@@ -52,14 +59,33 @@ for (const slots of (process.env.SLOTS ?? '512,32768').split(',').map(Number)) {
     }
   }
   samples.sort((a, b) => a - b);
-  rows.push({ slots, cacheUpdateMs: ms / n, cacheUpdateMedianMs: samples[(samples.length - 1) >> 1], newBlocks: fresh / n, activeBlocks: active / n, surfaces: n });
+  rows.push({
+    slots,
+    cacheUpdateMs: ms / n,
+    cacheUpdateMedianMs: samples[(samples.length - 1) >> 1],
+    newBlocks: fresh / n,
+    activeBlocks: active / n,
+    surfaces: n,
+  });
   iso.destroy();
 }
-console.log(`${file}: ${order.length} surfaces x ${cycles - 1} cycles (first cycle discarded), timing ${gpu.device.features.has('timestamp-query') ? 'timestamp-query' : 'none'}`);
+console.log(
+  `${file}: ${order.length} surfaces x ${cycles - 1} cycles (first cycle discarded), timing ${gpu.device.features.has('timestamp-query') ? 'timestamp-query' : 'none'}`,
+);
 console.log('| slots | cache update ms (median) | (mean) | new blocks / surface | active blocks / surface |');
 console.log('|---:|---:|---:|---:|---:|');
-for (const r of rows) console.log(`| ${r.slots} | ${r.cacheUpdateMedianMs.toFixed(2)} | ${r.cacheUpdateMs.toFixed(2)} | ${r.newBlocks.toFixed(1)} | ${r.activeBlocks.toFixed(1)} |`);
-if (rows.length > 1) console.log(`ratio largest / smallest: median ${(rows[rows.length - 1].cacheUpdateMedianMs / rows[0].cacheUpdateMedianMs).toFixed(2)}x, mean ${(rows[rows.length - 1].cacheUpdateMs / rows[0].cacheUpdateMs).toFixed(2)}x`);
-if (!process.env.ROOT) writeFileSync(`${root}/benchmarks/results/cache-update.json`, JSON.stringify({ file, isovalues: order, cycles, rows, date: new Date().toISOString() }, null, 2) + '\n');
+for (const r of rows)
+  console.log(
+    `| ${r.slots} | ${r.cacheUpdateMedianMs.toFixed(2)} | ${r.cacheUpdateMs.toFixed(2)} | ${r.newBlocks.toFixed(1)} | ${r.activeBlocks.toFixed(1)} |`,
+  );
+if (rows.length > 1)
+  console.log(
+    `ratio largest / smallest: median ${(rows[rows.length - 1].cacheUpdateMedianMs / rows[0].cacheUpdateMedianMs).toFixed(2)}x, mean ${(rows[rows.length - 1].cacheUpdateMs / rows[0].cacheUpdateMs).toFixed(2)}x`,
+  );
+if (!process.env.ROOT)
+  writeFileSync(
+    `${root}/benchmarks/results/cache-update.json`,
+    JSON.stringify({ file, isovalues: order, cycles, rows, date: new Date().toISOString() }, null, 2) + '\n',
+  );
 stream.destroy();
 gpu.device.destroy();

@@ -46,7 +46,18 @@ for (let i = 0; i <= repeats; i++) {
 }
 console.log(`${file} (${root})`);
 console.table(rows);
-const later = rows.slice(1).map((r) => r.ms).sort((a, b) => a - b);
-console.log(JSON.stringify({ file, firstMs: rows[0].ms, laterMedianMs: later[Math.floor(later.length / 2)], firstPipelines: rows[0].pipelines, laterPipelines: rows.slice(1).map((r) => r.pipelines) }));
+const later = rows
+  .slice(1)
+  .map((r) => r.ms)
+  .sort((a, b) => a - b);
+console.log(
+  JSON.stringify({
+    file,
+    firstMs: rows[0].ms,
+    laterMedianMs: later[Math.floor(later.length / 2)],
+    firstPipelines: rows[0].pipelines,
+    laterPipelines: rows.slice(1).map((r) => r.pipelines),
+  }),
+);
 stream.destroy();
 device.destroy();

@@ -16,7 +16,13 @@ await iso.compute(isos[0]);
 await iso.compute(isos[0]);
 const byLabel = new Map<string, number>();
 let label = '';
-let passes = 0, empty = 0, dispatches = 0, indirect = 0, copies = 0, clears = 0, current = 0;
+let passes = 0,
+  empty = 0,
+  dispatches = 0,
+  indirect = 0,
+  copies = 0,
+  clears = 0,
+  current = 0;
 const device = gpu.device;
 const orig = device.createCommandEncoder.bind(device);
 let patched = false;
@@ -28,23 +34,69 @@ device.createCommandEncoder = (d?: GPUCommandEncoderDescriptor) => {
     const bcp = ep.beginComputePass;
     ep.beginComputePass = function (this: GPUCommandEncoder, pd?: GPUComputePassDescriptor) {
       const pass = bcp.call(this, pd);
-      passes++; current = 0; label = pd?.label ?? '?';
+      passes++;
+      current = 0;
+      label = pd?.label ?? '?';
       const pp = Object.getPrototypeOf(pass);
       if (!pp.__patched) {
         pp.__patched = true;
-        const dw = pp.dispatchWorkgroups, di = pp.dispatchWorkgroupsIndirect, end = pp.end;
-        pp.dispatchWorkgroups = function (...a: unknown[]) { dispatches++; current++; return dw.apply(this, a); };
-        pp.dispatchWorkgroupsIndirect = function (...a: unknown[]) { dispatches++; indirect++; current++; return di.apply(this, a); };
-        pp.end = function () { if (current === 0) empty++; else byLabel.set(label, (byLabel.get(label) ?? 0) + current); return end.call(this); };
+        const dw = pp.dispatchWorkgroups,
+          di = pp.dispatchWorkgroupsIndirect,
+          end = pp.end;
+        pp.dispatchWorkgroups = function (...a: unknown[]) {
+          dispatches++;
+          current++;
+          return dw.apply(this, a);
+        };
+        pp.dispatchWorkgroupsIndirect = function (...a: unknown[]) {
+          dispatches++;
+          indirect++;
+          current++;
+          return di.apply(this, a);
+        };
+        pp.end = function () {
+          if (current === 0) empty++;
+          else byLabel.set(label, (byLabel.get(label) ?? 0) + current);
+          return end.call(this);
+        };
       }
       return pass;
     };
-    const cb = ep.copyBufferToBuffer; ep.copyBufferToBuffer = function (...a: unknown[]) { copies++; return cb.apply(this, a); };
-    const cl = ep.clearBuffer; ep.clearBuffer = function (...a: unknown[]) { clears++; return cl.apply(this, a); };
+    const cb = ep.copyBufferToBuffer;
+    ep.copyBufferToBuffer = function (...a: unknown[]) {
+      copies++;
+      return cb.apply(this, a);
+    };
+    const cl = ep.clearBuffer;
+    ep.clearBuffer = function (...a: unknown[]) {
+      clears++;
+      return cl.apply(this, a);
+    };
   }
   return enc;
 };
 const s = await iso.compute(isos[1]);
-console.log(JSON.stringify({ root, file, iso: isos[1], computePasses: passes, passesWithDispatches: passes - empty, timestampMarkerPasses: empty, dispatches, indirectDispatches: indirect, copies, clears, active: s.activeBlocks, newBlocks: s.newBlocks, triangles: s.triangles, dispatchesByPass: Object.fromEntries(byLabel) }, null, 1));
+console.log(
+  JSON.stringify(
+    {
+      root,
+      file,
+      iso: isos[1],
+      computePasses: passes,
+      passesWithDispatches: passes - empty,
+      timestampMarkerPasses: empty,
+      dispatches,
+      indirectDispatches: indirect,
+      copies,
+      clears,
+      active: s.activeBlocks,
+      newBlocks: s.newBlocks,
+      triangles: s.triangles,
+      dispatchesByPass: Object.fromEntries(byLabel),
+    },
+    null,
+    1,
+  ),
+);
 iso.destroy();
 gpu.device.destroy();

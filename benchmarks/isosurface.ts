@@ -73,7 +73,17 @@ async function vtkTimes(stream: ZfpGpuStream, isovalues: number[], name: string)
   const [x, y, z] = stream.info.dims;
   const out = execFileSync(
     join(root, '.venv', 'bin', 'python'),
-    [join(root, 'tools', 'isosurface', 'vtk_flying_edges.py'), raw, `${x}`, `${y}`, `${z}`, '--repeats', `${repeats}`, '--iso', ...isovalues.map(String)],
+    [
+      join(root, 'tools', 'isosurface', 'vtk_flying_edges.py'),
+      raw,
+      `${x}`,
+      `${y}`,
+      `${z}`,
+      '--repeats',
+      `${repeats}`,
+      '--iso',
+      ...isovalues.map(String),
+    ],
     { encoding: 'utf8', maxBuffer: 1 << 26 },
   );
   rmSync(raw);
@@ -136,13 +146,36 @@ for (const name of volumeNames) {
       stagesMeanMs: stageMeans(kept),
     };
   });
-  volumeResults.push({ volume: spec.file, dims: stream.info.dims, blocks: stream.info.blockCount, range: spec.range, vtk: { filter: vtk.filter, backend: vtk.backend, threads: vtk.threads, version: vtk.vtk }, modes, records: bench.records });
+  volumeResults.push({
+    volume: spec.file,
+    dims: stream.info.dims,
+    blocks: stream.info.blockCount,
+    range: spec.range,
+    vtk: { filter: vtk.filter, backend: vtk.backend, threads: vtk.threads, version: vtk.vtk },
+    modes,
+    records: bench.records,
+  });
   printTable(
     `${spec.file} (${adapter}; VTK ${vtk.filter}, ${vtk.backend} ${vtk.threads} threads)`,
     ['mode', 'surfaces', 'GPU ms mean', 'median', 'hit rate %', 'active', 'new', 'triangles', 'VTK ms', 'ours / VTK'],
-    modes.map((m) => [m.mode, m.surfaces, m.meanGpuMs, m.medianGpuMs, m.hitRate * 100, Math.round(m.meanActiveBlocks), Math.round(m.meanNewBlocks), Math.round(m.meanTriangles), m.vtkMeanMs, m.ratio]),
+    modes.map((m) => [
+      m.mode,
+      m.surfaces,
+      m.meanGpuMs,
+      m.medianGpuMs,
+      m.hitRate * 100,
+      Math.round(m.meanActiveBlocks),
+      Math.round(m.meanNewBlocks),
+      Math.round(m.meanTriangles),
+      m.vtkMeanMs,
+      m.ratio,
+    ]),
   );
-  printTable(`${spec.file}: mean GPU ms per stage`, ['mode', ...Object.keys(modes[0].stagesMeanMs)], modes.map((m) => [m.mode, ...Object.values(m.stagesMeanMs)]));
+  printTable(
+    `${spec.file}: mean GPU ms per stage`,
+    ['mode', ...Object.keys(modes[0].stagesMeanMs)],
+    modes.map((m) => [m.mode, ...Object.values(m.stagesMeanMs)]),
+  );
   stream.destroy();
 }
 
@@ -195,12 +228,31 @@ if (embed) {
     });
     stream.destroy();
   }
-  if (runs[0].triangles.join() !== runs[1].triangles.join()) throw new Error(`the embedded surfaces differ: ${runs[0].triangles} vs ${runs[1].triangles}`);
+  if (runs[0].triangles.join() !== runs[1].triangles.join())
+    throw new Error(`the embedded surfaces differ: ${runs[0].triangles} vs ${runs[1].triangles}`);
   embedding = { isovalues, offset, outside, rate: 8, runs };
   printTable(
     'the same sphere surfaces in 64^3 and in 512^3 (constant elsewhere), warm cache',
-    ['volume', 'blocks', 'active (mean)', 'triangles (mean)', 'GPU ms warm', 'GPU ms cold', ...Object.keys(runs[0].warmStagesMeanMs), 'VTK ms'],
-    runs.map((r) => [r.label, r.blocks, mean(r.activeBlocks), mean(r.triangles), r.warmMeanGpuMs, r.coldMeanGpuMs, ...Object.values(r.warmStagesMeanMs), r.vtkMeanMs]),
+    [
+      'volume',
+      'blocks',
+      'active (mean)',
+      'triangles (mean)',
+      'GPU ms warm',
+      'GPU ms cold',
+      ...Object.keys(runs[0].warmStagesMeanMs),
+      'VTK ms',
+    ],
+    runs.map((r) => [
+      r.label,
+      r.blocks,
+      mean(r.activeBlocks),
+      mean(r.triangles),
+      r.warmMeanGpuMs,
+      r.coldMeanGpuMs,
+      ...Object.values(r.warmStagesMeanMs),
+      r.vtkMeanMs,
+    ]),
   );
 }
 

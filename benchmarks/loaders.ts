@@ -196,7 +196,15 @@ async function main(): Promise<void> {
       }
       const ms = e.stats.median;
       lasRows.push([name, e.reader, ms, points / ms / 1e3, oursMs / ms, '']);
-      results.las.push({ file: name, points, reader: e.reader, medianMs: ms, mPointsPerS: points / ms / 1e3, oursOverThis: oursMs / ms, samples: e.stats.samples });
+      results.las.push({
+        file: name,
+        points,
+        reader: e.reader,
+        medianMs: ms,
+        mPointsPerS: points / ms / 1e3,
+        oursOverThis: oursMs / ms,
+        samples: e.stats.samples,
+      });
     }
   }
   printTable(
@@ -232,7 +240,16 @@ async function main(): Promise<void> {
       }
       const ms = e.stats.median;
       tiffRows.push([name, e.reader, ms, mb / (ms / 1e3), oursMs / ms, '']);
-      results.tiff.push({ file: name, decodedMB: mb, pages: v.pages.length, reader: e.reader, medianMs: ms, MBperS: mb / (ms / 1e3), oursOverThis: oursMs / ms, samples: e.stats.samples });
+      results.tiff.push({
+        file: name,
+        decodedMB: mb,
+        pages: v.pages.length,
+        reader: e.reader,
+        medianMs: ms,
+        MBperS: mb / (ms / 1e3),
+        oursOverThis: oursMs / ms,
+        samples: e.stats.samples,
+      });
     }
   }
   printTable(

@@ -14,7 +14,11 @@ export class BracketTimer {
     this.source = device.features.has('timestamp-query') ? 'timestamp-query' : 'queue-wall-time';
     if (this.source === 'timestamp-query') {
       this.querySet = device.createQuerySet({ label: 'bench.querySet', type: 'timestamp', count: 2 });
-      this.resolve = device.createBuffer({ label: 'bench.resolve', size: 16, usage: GPUBufferUsage.QUERY_RESOLVE | GPUBufferUsage.COPY_SRC });
+      this.resolve = device.createBuffer({
+        label: 'bench.resolve',
+        size: 16,
+        usage: GPUBufferUsage.QUERY_RESOLVE | GPUBufferUsage.COPY_SRC,
+      });
       this.readback = device.createBuffer({ label: 'bench.readback', size: 16, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
     }
   }

@@ -29,7 +29,9 @@ function arg(name: string, fallback: string): string {
   return i >= 0 && process.argv[i + 1] ? process.argv[i + 1] : fallback;
 }
 
-const sizes = arg('sizes', '16,20,24').split(',').map((e) => 2 ** Number(e));
+const sizes = arg('sizes', '16,20,24')
+  .split(',')
+  .map((e) => 2 ** Number(e));
 const repeatsArg = arg('repeats', '');
 const VARIANTS: Record<string, { path: PrimitivePath; subgroups: boolean }> = {
   emulator: { path: 'emulator', subgroups: false },
@@ -46,16 +48,14 @@ const adapter = describeAdapter(gpu.adapter);
 const timer = new BracketTimer(device);
 const maxN = Math.max(...sizes);
 console.log(`adapter: ${adapter}\ntiming: ${timer.source}`);
-const variants = (pathsArg || Object.keys(VARIANTS).join(','))
-  .split(',')
-  .filter((v) => {
-    if (!(v in VARIANTS)) throw new Error(`--paths: unknown variant ${v} (emulator, gpu, gpu+subgroups)`);
-    if (VARIANTS[v].subgroups && !gpu.features.subgroups) {
-      console.log(`${v}: the device has no 'subgroups' feature; skipped`);
-      return false;
-    }
-    return true;
-  });
+const variants = (pathsArg || Object.keys(VARIANTS).join(',')).split(',').filter((v) => {
+  if (!(v in VARIANTS)) throw new Error(`--paths: unknown variant ${v} (emulator, gpu, gpu+subgroups)`);
+  if (VARIANTS[v].subgroups && !gpu.features.subgroups) {
+    console.log(`${v}: the device has no 'subgroups' feature; skipped`);
+    return false;
+  }
+  return true;
+});
 // What path: 'auto' picks here (subgroups are then used wherever the device has them).
 const autoVariant = choosePath(device, {}) === 'emulator' ? 'emulator' : gpu.features.subgroups ? 'gpu+subgroups' : 'gpu';
 
@@ -73,7 +73,11 @@ function random(n: number, seed: number, modulo = 0): Uint32Array<ArrayBuffer> {
 
 function buffer(label: string, data: Uint32Array<ArrayBuffer> | number): GPUBuffer {
   const size = typeof data === 'number' ? data * 4 : data.byteLength;
-  const b = device.createBuffer({ label, size: Math.max(4, size), usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST });
+  const b = device.createBuffer({
+    label,
+    size: Math.max(4, size),
+    usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST,
+  });
   if (typeof data !== 'number') device.queue.writeBuffer(b, 0, data);
   return b;
 }
@@ -148,7 +152,16 @@ for (const variant of variants) {
       const ms = await repeat(repeatsFor(n), () => timer.time((e) => bench.record(e, n)));
       const eps = n / (ms.median / 1e3);
       const gbs = (eps * bench.bytes) / 1e9;
-      rows.push({ primitive: bench.name, variant, elements: n, bytesPerElement: bench.bytes, ms, elementsPerSecond: eps, gbPerSecond: gbs, fractionOfCopy: gbs / copyGBs });
+      rows.push({
+        primitive: bench.name,
+        variant,
+        elements: n,
+        bytesPerElement: bench.bytes,
+        ms,
+        elementsPerSecond: eps,
+        gbPerSecond: gbs,
+        fractionOfCopy: gbs / copyGBs,
+      });
       console.log(`  ${bench.name}, ${variant} 2^${Math.log2(n)}: ${ms.median.toFixed(2)} ms`);
     }
   }
@@ -159,9 +172,20 @@ for (const variant of variants) {
 rows.sort((a, b) => a.primitive.localeCompare(b.primitive) || a.elements - b.elements);
 
 printTable(
-  `GPU primitives on ${adapter} (${timer.source}; median of ${sizes.map(repeatsFor).map((r) => r - 1).join('/')} runs, first discarded; * = what path 'auto' picks here)`,
+  `GPU primitives on ${adapter} (${timer.source}; median of ${sizes
+    .map(repeatsFor)
+    .map((r) => r - 1)
+    .join('/')} runs, first discarded; * = what path 'auto' picks here)`,
   ['primitive', 'path', 'elements', 'median ms', 'elements/s', 'GB/s', 'of copy'],
-  rows.map((r) => [r.primitive, `${r.variant}${r.variant === autoVariant ? ' *' : ''}`, `2^${Math.log2(r.elements)}`, r.ms.median, r.elementsPerSecond, r.gbPerSecond, `${(100 * r.fractionOfCopy).toFixed(1)}%`]),
+  rows.map((r) => [
+    r.primitive,
+    `${r.variant}${r.variant === autoVariant ? ' *' : ''}`,
+    `2^${Math.log2(r.elements)}`,
+    r.ms.median,
+    r.elementsPerSecond,
+    r.gbPerSecond,
+    `${(100 * r.fractionOfCopy).toFixed(1)}%`,
+  ]),
 );
 console.log(`copy bandwidth ${copyGBs.toFixed(2)} GB/s${gpu.adapter.software ? ' (SwiftShader: CPU memory, not a GPU figure)' : ''}`);
 

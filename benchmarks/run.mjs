@@ -25,8 +25,12 @@ try {
   console.error(`[setup] ${e.message}`);
   process.exit(1);
 }
-const r = spawnSync(process.execPath, ['--import', new URL('../scripts/register-node-loaders.mjs', import.meta.url).href, resolve(root, script), ...args], {
-  cwd: process.env.INIT_CWD ?? process.cwd(),
-  stdio: 'inherit',
-});
+const r = spawnSync(
+  process.execPath,
+  ['--import', new URL('../scripts/register-node-loaders.mjs', import.meta.url).href, resolve(root, script), ...args],
+  {
+    cwd: process.env.INIT_CWD ?? process.cwd(),
+    stdio: 'inherit',
+  },
+);
 process.exit(r.status ?? 1);

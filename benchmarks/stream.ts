@@ -33,12 +33,15 @@ import { execFileSync } from 'node:child_process';
 
 const root = fileURLToPath(new URL('..', import.meta.url));
 const args = process.argv.slice(2);
-const opt = (name: string, def: string) => { const i = args.indexOf(`--${name}`); return i >= 0 ? args[i + 1] : def; };
+const opt = (name: string, def: string) => {
+  const i = args.indexOf(`--${name}`);
+  return i >= 0 ? args[i + 1] : def;
+};
 const size = Number(opt('size', '256'));
 const repeats = Number(opt('repeats', '3'));
 const isoFraction = Number(opt('iso-fraction', '0.3'));
 // the GPU memory of the stream (pools, caches, vertices, per-block buffers): a quarter must hold a level's per-block buffers (~48 B per block)
-const budgetBytes = Number(opt('budget-mb', String(Math.max(1024, Math.ceil((size ** 3 / 64) * 48 * 4.5 / 2 ** 20))))) * 2 ** 20;
+const budgetBytes = Number(opt('budget-mb', String(Math.max(1024, Math.ceil(((size ** 3 / 64) * 48 * 4.5) / 2 ** 20))))) * 2 ** 20;
 const only = opt('only', '');
 const jsonOut = opt('json', join(root, 'benchmarks/results/stream-swiftshader.json'));
 const folder = join(root, '.cache/bench-stream');
@@ -47,7 +50,11 @@ mkdirSync(folder, { recursive: true });
 function convert(input: string, name: string, extra: string[]): void {
   if (existsSync(join(folder, name, 'zarr.json'))) return;
   console.log(`converting ${input} -> ${name}`);
-  execFileSync(process.execPath, [join(root, 'scripts/convert.mjs'), input, '--out', join(folder, name), '--quiet', '--chunk', '64', ...extra], { stdio: 'inherit' });
+  execFileSync(
+    process.execPath,
+    [join(root, 'scripts/convert.mjs'), input, '--out', join(folder, name), '--quiet', '--chunk', '64', ...extra],
+    { stdio: 'inherit' },
+  );
 }
 
 async function main() {
@@ -55,7 +62,12 @@ async function main() {
   convert(join(root, '../shared/data/volumes/bonsai_256x256x256_float32.rate4.zfp'), 'bonsai.zarr', ['--rate', '4']);
   convert(`gen:${size}x${size}x${size}`, `gen${size}.zarr`, ['--rate', '4']);
   const mw = storesMiddleware(folder);
-  const server = createServer((req, res) => mw(req, res, () => { res.statusCode = 404; res.end(); }));
+  const server = createServer((req, res) =>
+    mw(req, res, () => {
+      res.statusCode = 404;
+      res.end();
+    }),
+  );
   await new Promise<void>((r) => server.listen(0, '127.0.0.1', () => r()));
   const port = (server.address() as { port: number }).port;
   const rows: (string | number)[][] = [];
@@ -64,23 +76,38 @@ async function main() {
     const url = `http://127.0.0.1:${port}/stores/${name}`;
     // the chunk pool (ChunkedVolume): only the planned chunks, coarsest level first
     for (const link of ['localhost', '100 Mbit/s + 20 ms'] as const) {
-      const first: number[] = [], full: number[] = [];
-      let bytes = 0, storeBytes = 0, triangles = 0, iso = 0, planned = NaN, level0Chunks = 0, gpuBytes = 0;
+      const first: number[] = [],
+        full: number[] = [];
+      let bytes = 0,
+        storeBytes = 0,
+        triangles = 0,
+        iso = 0,
+        planned = NaN,
+        level0Chunks = 0,
+        gpuBytes = 0;
       for (let r = 0; r < repeats; r++) {
         const inner = new FetchStore(url);
-        const metered = new MeteredStore(link === 'localhost' ? inner : new SimulatedLinkStore(inner, { mbitPerSecond: 100, latencyMs: 20 }));
+        const metered = new MeteredStore(
+          link === 'localhost' ? inner : new SimulatedLinkStore(inner, { mbitPerSecond: 100, latencyMs: 20 }),
+        );
         const t0 = performance.now();
         const store = await openZfpStore(metered, url);
         const [lo, hi] = store.valueRange ?? [0, 1];
         iso = lo + isoFraction * (hi - lo);
         const fetcher = new ChunkFetcher(store);
         let chunks0 = 0;
-        fetcher.onChunk((level, _c, _b, fromCache) => { if (level === 0 && !fromCache) chunks0++; });
+        fetcher.onChunk((level, _c, _b, fromCache) => {
+          if (level === 0 && !fromCache) chunks0++;
+        });
         const c = await StreamController.create(store, fetcher, chunkedGpu(gpu), budgetBytes);
         let t1 = NaN;
         let stopped = '';
-        c.onShown(() => { if (Number.isNaN(t1)) t1 = performance.now(); });
-        c.onProgress((p) => { if (p.phase === 'stopped') stopped = p.reason ?? ''; });
+        c.onShown(() => {
+          if (Number.isNaN(t1)) t1 = performance.now();
+        });
+        c.onProgress((p) => {
+          if (p.phase === 'stopped') stopped = p.reason ?? '';
+        });
         await c.setIsovalue(iso);
         const t2 = performance.now();
         if (c.shown?.level !== 0) throw new Error(`${name}: refinement stopped at level ${c.shown?.level}: ${stopped} (raise --budget-mb)`);
@@ -95,10 +122,36 @@ async function main() {
         planned = ranges ? chunksNeeded(neighbourhoodRanges(store.levels[0].layout.chunkGrid, ranges), iso).length : NaN;
         c.destroy();
       }
-      const f = summarize(first.slice(1)), g = summarize(full.slice(1));
-      rows.push([name, link, f.median, g.median, bytes / storeBytes, `${level0Chunks} / ${planned}`, (gpuBytes / 2 ** 20).toFixed(0), triangles]);
-      console.log(`${name}, ${link}: first surface ${f.median.toFixed(0)} ms, full resolution ${g.median.toFixed(0)} ms, fetched ${(bytes / storeBytes).toFixed(3)} of the store, level-0 chunks ${level0Chunks} / ${planned} planned, ${triangles} triangles`);
-      records.push({ store: name, link, path: 'chunk pool', iso, firstSurfaceMs: f, fullSurfaceMs: g, bytesFetched: bytes, storeChunkBytes: storeBytes, level0ChunksFetched: level0Chunks, level0ChunksPlanned: planned, gpuBytes, budgetBytes, triangles });
+      const f = summarize(first.slice(1)),
+        g = summarize(full.slice(1));
+      rows.push([
+        name,
+        link,
+        f.median,
+        g.median,
+        bytes / storeBytes,
+        `${level0Chunks} / ${planned}`,
+        (gpuBytes / 2 ** 20).toFixed(0),
+        triangles,
+      ]);
+      console.log(
+        `${name}, ${link}: first surface ${f.median.toFixed(0)} ms, full resolution ${g.median.toFixed(0)} ms, fetched ${(bytes / storeBytes).toFixed(3)} of the store, level-0 chunks ${level0Chunks} / ${planned} planned, ${triangles} triangles`,
+      );
+      records.push({
+        store: name,
+        link,
+        path: 'chunk pool',
+        iso,
+        firstSurfaceMs: f,
+        fullSurfaceMs: g,
+        bytesFetched: bytes,
+        storeChunkBytes: storeBytes,
+        level0ChunksFetched: level0Chunks,
+        level0ChunksPlanned: planned,
+        gpuBytes,
+        budgetBytes,
+        triangles,
+      });
     }
     // in-core: level 0 as one stream, from disk
     // read from the folder, not 4096 requests at once through the little server
@@ -107,7 +160,10 @@ async function main() {
     const chunks: Uint8Array[] = [];
     for (let i = 0; i < lv.chunkCount; i++) chunks.push(await s.readChunk(0, i));
     const file = join(folder, `${name}.level0.zfp`);
-    writeFileSync(file, assembleLevelStream(lv.layout, (c) => chunks[c]));
+    writeFileSync(
+      file,
+      assembleLevelStream(lv.layout, (c) => chunks[c]),
+    );
     const [lo, hi] = s.valueRange ?? [0, 1];
     const times: number[] = [];
     for (let r = 0; r < repeats; r++) {
@@ -124,9 +180,20 @@ async function main() {
     records.push({ store: name, link: 'in-core', fullSurfaceMs: t });
   }
   server.close();
-  printTable(`bench:stream, ${describeAdapter(gpu.adapter)}, median of ${repeats - 1} after a discarded first; gen size ${size}^3; the stream controller (the page's and the CLI's path): the planned chunks into ChunkedVolume pools, coarsest level first; budget ${budgetBytes / 2 ** 20} MiB`,
-    ['store', 'link', 'first surface ms', 'full-res ms', 'fetched / store', 'L0 chunks fetched / planned', 'GPU MiB', 'triangles'], rows);
-  writeJson(jsonOut, { date: new Date().toISOString(), adapter: describeAdapter(gpu.adapter), size, repeats, isoFraction, budgetBytes, records });
+  printTable(
+    `bench:stream, ${describeAdapter(gpu.adapter)}, median of ${repeats - 1} after a discarded first; gen size ${size}^3; the stream controller (the page's and the CLI's path): the planned chunks into ChunkedVolume pools, coarsest level first; budget ${budgetBytes / 2 ** 20} MiB`,
+    ['store', 'link', 'first surface ms', 'full-res ms', 'fetched / store', 'L0 chunks fetched / planned', 'GPU MiB', 'triangles'],
+    rows,
+  );
+  writeJson(jsonOut, {
+    date: new Date().toISOString(),
+    adapter: describeAdapter(gpu.adapter),
+    size,
+    repeats,
+    isoFraction,
+    budgetBytes,
+    records,
+  });
   gpu.device.destroy();
 }
 await main();

@@ -64,7 +64,13 @@ function summarizeSeconds(all: number[]): Stats {
   const sorted = all.slice(1).sort((a, b) => a - b);
   const mid = sorted.length >> 1;
   const median = sorted.length % 2 ? sorted[mid] : (sorted[mid - 1] + sorted[mid]) / 2;
-  return { samples: all.slice(1), median, mean: sorted.reduce((s, x) => s + x, 0) / sorted.length, min: sorted[0], max: sorted[sorted.length - 1] };
+  return {
+    samples: all.slice(1),
+    median,
+    mean: sorted.reduce((s, x) => s + x, 0) / sorted.length,
+    min: sorted[0],
+    max: sorted[sorted.length - 1],
+  };
 }
 
 /** Runs each of `measures` once per round, `repeats` rounds; the stats of each. */
@@ -105,11 +111,19 @@ async function main(): Promise<void> {
     };
     const volumeDecodes = await repeatInterleaved(
       repeats,
-      listDecoders.map((d) => () =>
-        timeOne((enc, frame) => d.encodeDecodeVolume(enc, { stream, output: volume, timestampWrites: frame.pass('decode') }), `decode.${d.path}`),
+      listDecoders.map(
+        (d) => () =>
+          timeOne(
+            (enc, frame) => d.encodeDecodeVolume(enc, { stream, output: volume, timestampWrites: frame.pass('decode') }),
+            `decode.${d.path}`,
+          ),
       ),
     );
-    const ranges = device.createBuffer({ label: 'bench.ranges', size: Math.max(8, ZfpDecoder.rangesBytes(stream)), usage: GPUBufferUsage.STORAGE });
+    const ranges = device.createBuffer({
+      label: 'bench.ranges',
+      size: Math.max(8, ZfpDecoder.rangesBytes(stream)),
+      usage: GPUBufferUsage.STORAGE,
+    });
     const rangePass = await repeat(repeats, () =>
       timeOne((enc, frame) => decoder.encodeBlockRanges(enc, { stream, ranges, timestampWrites: frame.pass('ranges') }), 'ranges'),
     );
@@ -118,7 +132,14 @@ async function main(): Promise<void> {
       timeOne((enc, frame) => {
         for (let s = 0; s < target.shards.length; s++) {
           const inputZPlane = 0; // the whole decoded volume is the input
-          encoder.encode(enc, { input: volume, dtype: 'float32', inputZPlane, stream: target, shard: s, timestampWrites: frame.pass(`encode${s}`) });
+          encoder.encode(enc, {
+            input: volume,
+            dtype: 'float32',
+            inputZPlane,
+            stream: target,
+            shard: s,
+            timestampWrites: frame.pass(`encode${s}`),
+          });
         }
       }, 'encode'),
     );
@@ -127,7 +148,11 @@ async function main(): Promise<void> {
     const listBlocks = Math.min(info.blockCount, Math.floor(device.limits.maxStorageBufferBindingSize / 256));
     const usage = GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST;
     const ids = device.createBuffer({ label: 'bench.blockIds', size: listBlocks * 4, usage });
-    device.queue.writeBuffer(ids, 0, Uint32Array.from({ length: listBlocks }, (_, i) => i));
+    device.queue.writeBuffer(
+      ids,
+      0,
+      Uint32Array.from({ length: listBlocks }, (_, i) => i),
+    );
     const count = device.createBuffer({ label: 'bench.count', size: 4, usage });
     device.queue.writeBuffer(count, 0, new Uint32Array([listBlocks]));
     const slots = device.createBuffer({ label: 'bench.slots', size: listBlocks * 256, usage: GPUBufferUsage.STORAGE });
@@ -135,12 +160,20 @@ async function main(): Promise<void> {
     const listRows: (string | number)[][] = [];
     const listTimes = await repeatInterleaved(
       repeats,
-      listDecoders.map((d) => () =>
-        timeOne(
-          (enc, frame) =>
-            d.encodeDecodeBlocks(enc, { stream, blockIds: ids, slotIds: ids, count: { buffer: count, offset: 0 }, slots, timestampWrites: frame.pass('decodeBlocks') }),
-          `decodeBlocks.${d.path}`,
-        ),
+      listDecoders.map(
+        (d) => () =>
+          timeOne(
+            (enc, frame) =>
+              d.encodeDecodeBlocks(enc, {
+                stream,
+                blockIds: ids,
+                slotIds: ids,
+                count: { buffer: count, offset: 0 },
+                slots,
+                timestampWrites: frame.pass('decodeBlocks'),
+              }),
+            `decodeBlocks.${d.path}`,
+          ),
       ),
     );
     for (const [k, d] of listDecoders.entries()) {
@@ -151,7 +184,10 @@ async function main(): Promise<void> {
     }
     for (const b of [ids, count, slots]) b.destroy();
 
-    const zfpy = JSON.parse(execFileSync(python(), ['-c', ZFPY, path, String(repeats)], { encoding: 'utf8', maxBuffer: 1 << 26 })) as { decode_s: number[]; encode_s: number[] };
+    const zfpy = JSON.parse(execFileSync(python(), ['-c', ZFPY, path, String(repeats)], { encoding: 'utf8', maxBuffer: 1 << 26 })) as {
+      decode_s: number[];
+      encode_s: number[];
+    };
     const zdec = summarizeSeconds(zfpy.decode_s);
     const zenc = summarizeSeconds(zfpy.encode_s);
     const gbs = (s: number) => floatBytes / s / 1e9;
@@ -160,7 +196,14 @@ async function main(): Promise<void> {
     const decodeRatio: Record<string, number> = {};
     for (const [k, d] of listDecoders.entries()) {
       const t = volumeDecodes[k];
-      rows.push([name, `decode volume (${d.path} path)`, gbs(t.median), gbs(zdec.median), gbs(t.median) / gbs(zdec.median), t.median * 1000]);
+      rows.push([
+        name,
+        `decode volume (${d.path} path)`,
+        gbs(t.median),
+        gbs(zdec.median),
+        gbs(t.median) / gbs(zdec.median),
+        t.median * 1000,
+      ]);
       decode[d.path] = { gbPerSecond: gbs(t.median), seconds: t };
       decodeRatio[d.path] = gbs(t.median) / gbs(zdec.median);
     }
@@ -196,8 +239,12 @@ async function main(): Promise<void> {
     ['file', 'op', 'WebGPU GB/s', 'zfpy serial GB/s', 'ratio', 'WebGPU ms'],
     rows,
   );
-  if (gpu.adapter.software) console.log('\nnote: the adapter is a software rasterizer (SwiftShader on the CPU): these are not GPU figures.');
-  const slug = (gpu.adapter.architecture || gpu.adapter.vendor || 'unknown').toLowerCase().replace(/[^a-z0-9]+/g, '-').replace(/^-|-$/g, '');
+  if (gpu.adapter.software)
+    console.log('\nnote: the adapter is a software rasterizer (SwiftShader on the CPU): these are not GPU figures.');
+  const slug = (gpu.adapter.architecture || gpu.adapter.vendor || 'unknown')
+    .toLowerCase()
+    .replace(/[^a-z0-9]+/g, '-')
+    .replace(/^-|-$/g, '');
   writeJson(join(root, 'benchmarks', 'results', `zfp-${slug}.json`), {
     benchmark: 'zfp',
     date: new Date().toISOString(),

@@ -20,7 +20,8 @@ try {
 const result = spawnSync(
   process.execPath,
   [
-    '--import', new URL('./register-node-loaders.mjs', import.meta.url).href,
+    '--import',
+    new URL('./register-node-loaders.mjs', import.meta.url).href,
     fileURLToPath(new URL('../src/cli/main.ts', import.meta.url)),
     ...process.argv.slice(2),
   ],

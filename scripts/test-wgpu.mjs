@@ -66,9 +66,14 @@ export function ensureDeno() {
   console.error(`[setup] installing Deno ${DENO_VERSION} (npm package "deno") into .cache/deno for the wgpu tests...`);
   mkdirSync(denoDir, { recursive: true });
   writeFileSync(join(denoDir, 'package.json'), JSON.stringify({ private: true, description: 'Deno for scripts/test-wgpu.mjs' }) + '\n');
-  const r = spawnSync('npm', ['install', '--no-audit', '--no-fund', '--no-save', '--prefix', denoDir, `deno@${DENO_VERSION}`], { stdio: 'inherit' });
+  const r = spawnSync('npm', ['install', '--no-audit', '--no-fund', '--no-save', '--prefix', denoDir, `deno@${DENO_VERSION}`], {
+    stdio: 'inherit',
+  });
   exe = findDeno();
-  if (r.status !== 0 || !exe) throw new Error(`could not install Deno ${DENO_VERSION} from npm (npm install deno@${DENO_VERSION} into ${denoDir} exited with ${r.status})`);
+  if (r.status !== 0 || !exe)
+    throw new Error(
+      `could not install Deno ${DENO_VERSION} from npm (npm install deno@${DENO_VERSION} into ${denoDir} exited with ${r.status})`,
+    );
   return exe;
 }
 
@@ -138,11 +143,19 @@ export async function runWgpuTests(files = WGPU_TESTS) {
   mkdirSync(outDir, { recursive: true });
   const bundles = await bundle(files, outDir);
   const env = { ...process.env, ...vulkanEnv(), DENO_NO_UPDATE_CHECK: '1', DENO_DIR: join(denoDir, 'dir'), NO_COLOR: '1' };
-  console.log(`wgpu: ${spawnSync(deno, ['--version'], { encoding: 'utf8' }).stdout.split('\n')[0]}, VK_ICD_FILENAMES=${env.VK_ICD_FILENAMES ?? '(system drivers)'}`);
+  console.log(
+    `wgpu: ${spawnSync(deno, ['--version'], { encoding: 'utf8' }).stdout.split('\n')[0]}, VK_ICD_FILENAMES=${env.VK_ICD_FILENAMES ?? '(system drivers)'}`,
+  );
   let passed = 0;
   let failed = 0;
   for (const { file, bundle: b } of bundles) {
-    const r = spawnSync(deno, ['run', '--allow-all', '--no-config', '--unstable-webgpu', b], { cwd: root, env, encoding: 'utf8', maxBuffer: 1 << 28, timeout: 1_200_000 });
+    const r = spawnSync(deno, ['run', '--allow-all', '--no-config', '--unstable-webgpu', b], {
+      cwd: root,
+      env,
+      encoding: 'utf8',
+      maxBuffer: 1 << 28,
+      timeout: 1_200_000,
+    });
     const output = `${r.stdout ?? ''}${r.stderr ?? ''}`;
     const m = /WGPU-RESULT (\{.*\})/.exec(r.stdout ?? '');
     process.stdout.write((r.stdout ?? '').replace(/WGPU-RESULT .*\n?/, ''));
@@ -151,7 +164,14 @@ export async function runWgpuTests(files = WGPU_TESTS) {
       console.log(`  ✗ ${file}: Deno exited with ${r.status ?? r.signal} before the end\n${output.split('\n').slice(-30).join('\n')}`);
       continue;
     }
-    if (r.stderr?.trim()) process.stdout.write(r.stderr.split('\n').slice(-20).map((l) => `      ${l}`).join('\n') + '\n');
+    if (r.stderr?.trim())
+      process.stdout.write(
+        r.stderr
+          .split('\n')
+          .slice(-20)
+          .map((l) => `      ${l}`)
+          .join('\n') + '\n',
+      );
     const counts = JSON.parse(m[1]);
     passed += counts.passed;
     failed += counts.failed;

@@ -29,7 +29,14 @@ const results = join(root, 'test-results');
 const SUITES = ['typecheck', 'unit', 'limits', 'gpukernels', 'wgpu', 'converter', 'e2e'];
 // The `limits` suite: the GPU tests of these folders again on a device with
 // WebGPU's default limits (tests/helpers/gpu.ts), so sharding and fallbacks run.
-const LIMITS_TESTS = ['tests/unit/zfp/decoder.test.ts', 'tests/unit/zfp/decode-volume.test.ts', 'tests/unit/zfp/encoder.test.ts', 'tests/unit/zfp/offsets.test.ts', 'tests/unit/isosurface/', 'tests/unit/store/chunked-volume.test.ts'];
+const LIMITS_TESTS = [
+  'tests/unit/zfp/decoder.test.ts',
+  'tests/unit/zfp/decode-volume.test.ts',
+  'tests/unit/zfp/encoder.test.ts',
+  'tests/unit/zfp/offsets.test.ts',
+  'tests/unit/isosurface/',
+  'tests/unit/store/chunked-volume.test.ts',
+];
 const LIMITS_EXCLUDE = ['tests/unit/isosurface/cli.test.ts'];
 // The `gpukernels` suite: on SwiftShader every kernel family is chosen as the
 // emulator path (src/primitives/README.md), so these surface tests run again
@@ -99,7 +106,11 @@ async function e2e(extra) {
   // The flag set that draws a WebGPU canvas here (probed once, then cached).
   try {
     const launch = await chromiumWebGpuLaunch();
-    console.log(`\nChromium flags: ${launch.name} (${launch.chromium}): ${launch.args.join(' ')}${Object.entries(launch.env).map(([k, v]) => ` ${k}=${v}`).join('')}`);
+    console.log(
+      `\nChromium flags: ${launch.name} (${launch.chromium}): ${launch.args.join(' ')}${Object.entries(launch.env)
+        .map(([k, v]) => ` ${k}=${v}`)
+        .join('')}`,
+    );
   } catch (e) {
     console.error(`\n[setup] ${e.message}`);
     return { passed: 0, failed: 1, note: 'no Chromium flag set draws a WebGPU canvas' };
@@ -140,13 +151,19 @@ async function main() {
   for (const suite of chosen) {
     const started = Date.now();
     const r =
-      suite === 'typecheck' ? typecheck()
-      : suite === 'unit' ? unit(extra)
-      : suite === 'limits' ? limits(extra)
-      : suite === 'gpukernels' ? gpuKernels(extra)
-      : suite === 'wgpu' ? await wgpu(extra)
-      : suite === 'converter' ? runConverterTests(root, results, extra)
-      : await e2e(extra);
+      suite === 'typecheck'
+        ? typecheck()
+        : suite === 'unit'
+          ? unit(extra)
+          : suite === 'limits'
+            ? limits(extra)
+            : suite === 'gpukernels'
+              ? gpuKernels(extra)
+              : suite === 'wgpu'
+                ? await wgpu(extra)
+                : suite === 'converter'
+                  ? runConverterTests(root, results, extra)
+                  : await e2e(extra);
     totals.passed += r.passed;
     totals.failed += r.failed;
     const minutes = ((Date.now() - started) / 60_000).toFixed(1);

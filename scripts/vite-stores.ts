@@ -38,8 +38,16 @@ export function storesMiddleware(folder = defaultStoresFolder()) {
     res.setHeader('Access-Control-Allow-Origin', '*');
     res.setHeader('Access-Control-Allow-Headers', 'Range');
     res.setHeader('Access-Control-Expose-Headers', 'Content-Length, Content-Range, Accept-Ranges');
-    if (req.method === 'OPTIONS') { res.statusCode = 204; res.end(); return; }
-    if (req.method !== 'GET' && req.method !== 'HEAD') { res.statusCode = 405; res.end(); return; }
+    if (req.method === 'OPTIONS') {
+      res.statusCode = 204;
+      res.end();
+      return;
+    }
+    if (req.method !== 'GET' && req.method !== 'HEAD') {
+      res.statusCode = 405;
+      res.end();
+      return;
+    }
     let rel: string;
     try {
       rel = decodeURIComponent(url.slice(STORES_PREFIX.length).split('?')[0]);
@@ -74,7 +82,10 @@ export function storesMiddleware(folder = defaultStoresFolder()) {
       res.setHeader('Content-Range', `bytes ${start}-${end}/${size}`);
     }
     res.setHeader('Content-Length', String(end - start + 1));
-    if (req.method === 'HEAD' || size === 0) { res.end(); return; }
+    if (req.method === 'HEAD' || size === 0) {
+      res.end();
+      return;
+    }
     createReadStream(path, { start, end }).pipe(res);
   };
 }
@@ -82,7 +93,11 @@ export function storesMiddleware(folder = defaultStoresFolder()) {
 export function storesPlugin(folder?: string): Plugin {
   return {
     name: 'zfpiso-stores',
-    configureServer(server) { server.middlewares.use(storesMiddleware(folder)); },
-    configurePreviewServer(server) { server.middlewares.use(storesMiddleware(folder)); },
+    configureServer(server) {
+      server.middlewares.use(storesMiddleware(folder));
+    },
+    configurePreviewServer(server) {
+      server.middlewares.use(storesMiddleware(folder));
+    },
   };
 }

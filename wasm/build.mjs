@@ -194,7 +194,21 @@ function fetchSources() {
       const python = which('python3') ?? which('python');
       if (!python) throw new BuildError('python3 with pip is needed to fetch the LASzip sdist from PyPI');
       // pipNoBinary: build an sdist's metadata with its build dependencies as wheels (--no-binary :all: would build them from source).
-      run(python, ['-m', 'pip', 'download', '-q', '--disable-pip-version-check', '--no-deps', '--no-binary', pkg.pipNoBinary ?? ':all:', '--require-hashes', '-r', req, '-d', downloads]);
+      run(python, [
+        '-m',
+        'pip',
+        'download',
+        '-q',
+        '--disable-pip-version-check',
+        '--no-deps',
+        '--no-binary',
+        pkg.pipNoBinary ?? ':all:',
+        '--require-hashes',
+        '-r',
+        req,
+        '-d',
+        downloads,
+      ]);
       checkHashes({ [pkg.file]: pkg.sha256 });
     }
     const dir = join(srcRoot, `${pkg.package}-${pkg.version}`);
@@ -228,27 +242,71 @@ const OPT = ['-O3', '-DNDEBUG'];
 const prefixMap = () => [`-ffile-prefix-map=${work}=/build`, `-ffile-prefix-map=${here}=/wasm`];
 
 const LASZIP_SOURCES = [
-  'mydefs.cpp', 'lasmessage.cpp', 'arithmeticdecoder.cpp', 'arithmeticencoder.cpp', 'arithmeticmodel.cpp', 'integercompressor.cpp',
-  'lasindex.cpp', 'lasinterval.cpp', 'lasquadtree.cpp', 'lasreaditemcompressed_v1.cpp', 'lasreaditemcompressed_v2.cpp',
-  'lasreaditemcompressed_v3.cpp', 'lasreaditemcompressed_v4.cpp', 'lasreadpoint.cpp', 'laswriteitemcompressed_v1.cpp',
-  'laswriteitemcompressed_v2.cpp', 'laswriteitemcompressed_v3.cpp', 'laswriteitemcompressed_v4.cpp', 'laswritepoint.cpp', 'laszip.cpp',
+  'mydefs.cpp',
+  'lasmessage.cpp',
+  'arithmeticdecoder.cpp',
+  'arithmeticencoder.cpp',
+  'arithmeticmodel.cpp',
+  'integercompressor.cpp',
+  'lasindex.cpp',
+  'lasinterval.cpp',
+  'lasquadtree.cpp',
+  'lasreaditemcompressed_v1.cpp',
+  'lasreaditemcompressed_v2.cpp',
+  'lasreaditemcompressed_v3.cpp',
+  'lasreaditemcompressed_v4.cpp',
+  'lasreadpoint.cpp',
+  'laswriteitemcompressed_v1.cpp',
+  'laswriteitemcompressed_v2.cpp',
+  'laswriteitemcompressed_v3.cpp',
+  'laswriteitemcompressed_v4.cpp',
+  'laswritepoint.cpp',
+  'laszip.cpp',
   'laszip_dll.cpp',
 ];
 // zfp 1.0.1's library (src/CMakeLists.txt of zfp: every codec, bitstream, zfp.c).
 const ZFP_SOURCES = [
-  'bitstream.c', 'zfp.c',
+  'bitstream.c',
+  'zfp.c',
   ...['1', '2', '3', '4'].flatMap((d) => ['f', 'd', 'i', 'l'].flatMap((t) => [`decode${d}${t}.c`, `encode${d}${t}.c`])),
 ];
 // The zfp 1.0.1 release as hdf5plugin's sdist vendors it (zfpy's sdist lacks include/zfp/bitstream.inl).
 const zfpDir = () => join(srcRoot, `hdf5plugin-${pypiSource('hdf5plugin').version}`, 'lib', 'zfp');
-const ZLIB_SOURCES = ['adler32.c', 'compress.c', 'crc32.c', 'deflate.c', 'infback.c', 'inffast.c', 'inflate.c', 'inftrees.c', 'trees.c', 'uncompr.c', 'zutil.c'];
+const ZLIB_SOURCES = [
+  'adler32.c',
+  'compress.c',
+  'crc32.c',
+  'deflate.c',
+  'infback.c',
+  'inffast.c',
+  'inflate.c',
+  'inftrees.c',
+  'trees.c',
+  'uncompr.c',
+  'zutil.c',
+];
 
 // CMake's check_type_size misreads sizes under Debian's Emscripten toolchain
 // file (it reported sizeof(size_t) = 9): give wasm32's sizes outright.
 const WASM32_TYPE_SIZES = [
-  ['SIZE_T', 4], ['UNSIGNED_LONG', 4], ['LONG', 4], ['UNSIGNED_LONG_LONG', 8], ['LONG_LONG', 8], ['UNSIGNED_INT', 4], ['INT', 4],
-  ['SIGNED_LONG', 4], ['SIGNED_LONG_LONG', 8], ['UNSIGNED_CHAR_P', 4], ['SIGNED_INT', 4], ['SIGNED_SHORT', 2], ['UNSIGNED_SHORT', 2],
-  ['UNSIGNED_CHAR', 1], ['SIGNED_CHAR', 1], ['SHORT', 2], ['VOID_P', 4], ['PTRDIFF_T', 4],
+  ['SIZE_T', 4],
+  ['UNSIGNED_LONG', 4],
+  ['LONG', 4],
+  ['UNSIGNED_LONG_LONG', 8],
+  ['LONG_LONG', 8],
+  ['UNSIGNED_INT', 4],
+  ['INT', 4],
+  ['SIGNED_LONG', 4],
+  ['SIGNED_LONG_LONG', 8],
+  ['UNSIGNED_CHAR_P', 4],
+  ['SIGNED_INT', 4],
+  ['SIGNED_SHORT', 2],
+  ['UNSIGNED_SHORT', 2],
+  ['UNSIGNED_CHAR', 1],
+  ['SIGNED_CHAR', 1],
+  ['SHORT', 2],
+  ['VOID_P', 4],
+  ['PTRDIFF_T', 4],
 ].flatMap(([t, n]) => [`-DSIZEOF_${t}=${n}`, `-DHAVE_SIZEOF_${t}=TRUE`]);
 // libjpeg-turbo names its check_type_size results without the SIZEOF_ prefix.
 const WASM32_JPEG_TYPE_SIZES = ['-DSIZE_T=4', '-DHAVE_SIZE_T=TRUE', '-DUNSIGNED_LONG=4', '-DHAVE_UNSIGNED_LONG=TRUE'];
@@ -322,7 +380,8 @@ function cmakeBuild(tc, name, srcDir, cmakeArgs, target) {
   mkdirSync(buildDir, { recursive: true });
   const [cmd, argv] = tc.cmake([
     srcDir,
-    '-G', 'Unix Makefiles',
+    '-G',
+    'Unix Makefiles',
     '-DCMAKE_BUILD_TYPE=Release',
     `-DCMAKE_C_FLAGS=${tc.cflags.join(' ')}`,
     `-DCMAKE_C_FLAGS_RELEASE=`,
@@ -338,7 +397,21 @@ function cmakeBuild(tc, name, srcDir, cmakeArgs, target) {
 
 function buildJpeg(tc) {
   const dir = join(srcRoot, sources.debian.find((p) => p.package === 'libjpeg-turbo').dir);
-  const b = cmakeBuild(tc, 'jpeg', dir, ['-DENABLE_SHARED=OFF', '-DENABLE_STATIC=ON', '-DWITH_SIMD=OFF', '-DWITH_TURBOJPEG=OFF', '-DWITH_JAVA=OFF', '-DWITH_12BIT=OFF', ...(tc.kind === 'wasm' ? WASM32_JPEG_TYPE_SIZES : [])], 'jpeg-static');
+  const b = cmakeBuild(
+    tc,
+    'jpeg',
+    dir,
+    [
+      '-DENABLE_SHARED=OFF',
+      '-DENABLE_STATIC=ON',
+      '-DWITH_SIMD=OFF',
+      '-DWITH_TURBOJPEG=OFF',
+      '-DWITH_JAVA=OFF',
+      '-DWITH_12BIT=OFF',
+      ...(tc.kind === 'wasm' ? WASM32_JPEG_TYPE_SIZES : []),
+    ],
+    'jpeg-static',
+  );
   mkdirSync(join(tc.prefix, 'lib'), { recursive: true });
   copyFileSync(join(b, 'libjpeg.a'), join(tc.prefix, 'lib', 'libjpeg.a'));
   for (const h of ['jpeglib.h', 'jmorecfg.h', 'jerror.h']) copyFileSync(join(dir, h), join(tc.prefix, 'include', h));
@@ -354,11 +427,31 @@ function buildTiff(tc) {
     'tiff',
     dir,
     [
-      '-Dtiff-tools=OFF', '-Dtiff-tests=OFF', '-Dtiff-contrib=OFF', '-Dtiff-docs=OFF', '-Dtiff-deprecated=OFF', '-Dtiff-install=OFF',
-      '-Dcxx=OFF', '-Dld-version-script=OFF', '-Dtiff-opengl=OFF', ...(tc.kind === 'wasm' ? WASM32_TYPE_SIZES : []),
-      '-Dzlib=ON', `-DZLIB_INCLUDE_DIR=${inc}`, `-DZLIB_LIBRARY=${join(lib, 'libz.a')}`,
-      '-Djpeg=ON', '-Dold-jpeg=ON', '-Djpeg12=OFF', `-DJPEG_INCLUDE_DIR=${inc}`, `-DJPEG_LIBRARY=${join(lib, 'libjpeg.a')}`,
-      '-Dpixarlog=ON', '-Dlzma=OFF', '-Dzstd=OFF', '-Dwebp=OFF', '-Djbig=OFF', '-Dlerc=OFF', '-Dlibdeflate=OFF',
+      '-Dtiff-tools=OFF',
+      '-Dtiff-tests=OFF',
+      '-Dtiff-contrib=OFF',
+      '-Dtiff-docs=OFF',
+      '-Dtiff-deprecated=OFF',
+      '-Dtiff-install=OFF',
+      '-Dcxx=OFF',
+      '-Dld-version-script=OFF',
+      '-Dtiff-opengl=OFF',
+      ...(tc.kind === 'wasm' ? WASM32_TYPE_SIZES : []),
+      '-Dzlib=ON',
+      `-DZLIB_INCLUDE_DIR=${inc}`,
+      `-DZLIB_LIBRARY=${join(lib, 'libz.a')}`,
+      '-Djpeg=ON',
+      '-Dold-jpeg=ON',
+      '-Djpeg12=OFF',
+      `-DJPEG_INCLUDE_DIR=${inc}`,
+      `-DJPEG_LIBRARY=${join(lib, 'libjpeg.a')}`,
+      '-Dpixarlog=ON',
+      '-Dlzma=OFF',
+      '-Dzstd=OFF',
+      '-Dwebp=OFF',
+      '-Djbig=OFF',
+      '-Dlerc=OFF',
+      '-Dlibdeflate=OFF',
     ],
     'tiff',
   );
@@ -374,7 +467,17 @@ async function buildLaszip(tc) {
     'laszip',
     join(dir, 'src'),
     LASZIP_SOURCES,
-    [...tc.cxxflags, '-std=c++17', '-DLASZIPDLL_EXPORTS', '-DUNORDERED', '-DHAVE_UNORDERED_MAP=1', '-Wno-format-security', `-I${join(dir, 'include', 'laszip')}`, `-I${join(dir, 'include')}`, `-I${join(dir, 'src')}`],
+    [
+      ...tc.cxxflags,
+      '-std=c++17',
+      '-DLASZIPDLL_EXPORTS',
+      '-DUNORDERED',
+      '-DHAVE_UNORDERED_MAP=1',
+      '-Wno-format-security',
+      `-I${join(dir, 'include', 'laszip')}`,
+      `-I${join(dir, 'include')}`,
+      `-I${join(dir, 'src')}`,
+    ],
     true,
   );
 }
@@ -386,7 +489,17 @@ async function buildZfp(tc) {
 
 function libraryStamp(tc) {
   const h = createHash('sha256');
-  h.update(JSON.stringify({ sources, tc: { ...tc, env: undefined, cmake: undefined }, LASZIP_SOURCES, ZLIB_SOURCES, ZFP_SOURCES, WASM32_TYPE_SIZES, WASM32_JPEG_TYPE_SIZES }));
+  h.update(
+    JSON.stringify({
+      sources,
+      tc: { ...tc, env: undefined, cmake: undefined },
+      LASZIP_SOURCES,
+      ZLIB_SOURCES,
+      ZFP_SOURCES,
+      WASM32_TYPE_SIZES,
+      WASM32_JPEG_TYPE_SIZES,
+    }),
+  );
   // The library recipes themselves (editing the rest of this script keeps the cache).
   for (const fn of [compileArchive, cmakeBuild, buildZlib, buildJpeg, buildTiff, buildLaszip, buildZfp]) h.update(fn.toString());
   if (tc.kind === 'wasm') h.update(emccVersion());
@@ -402,7 +515,13 @@ async function buildLibraries(tc) {
   }
   rmSync(tc.prefix, { recursive: true, force: true });
   mkdirSync(join(tc.prefix, 'include'), { recursive: true });
-  for (const [name, fn] of [['zlib', buildZlib], ['libjpeg-turbo', buildJpeg], ['libtiff', buildTiff], ['LASzip', buildLaszip], ['zfp', buildZfp]]) {
+  for (const [name, fn] of [
+    ['zlib', buildZlib],
+    ['libjpeg-turbo', buildJpeg],
+    ['libtiff', buildTiff],
+    ['LASzip', buildLaszip],
+    ['zfp', buildZfp],
+  ]) {
     log(`building ${name} (${tc.kind})...`);
     await fn(tc);
   }
@@ -411,9 +530,30 @@ async function buildLibraries(tc) {
 
 // ---------------------------------------------------------------- modules
 
-const LAS_EXPORTS = ['_malloc', '_free', '_las_open', '_las_error', '_las_info', '_las_header_string', '_las_read', '_las_outside', '_las_close'];
+const LAS_EXPORTS = [
+  '_malloc',
+  '_free',
+  '_las_open',
+  '_las_error',
+  '_las_info',
+  '_las_header_string',
+  '_las_read',
+  '_las_outside',
+  '_las_close',
+];
 const ZFP_EXPORTS = ['_malloc', '_free', '_zfp_api_info', '_zfp_api_decode', '_zfp_api_decode_raw', '_zfp_api_error'];
-const TIFF_EXPORTS = ['_malloc', '_free', '_tiff_open', '_tiff_error', '_tiff_page_count', '_tiff_page_info', '_tiff_page_description', '_tiff_page_bytes', '_tiff_read_page', '_tiff_close'];
+const TIFF_EXPORTS = [
+  '_malloc',
+  '_free',
+  '_tiff_open',
+  '_tiff_error',
+  '_tiff_page_count',
+  '_tiff_page_info',
+  '_tiff_page_description',
+  '_tiff_page_bytes',
+  '_tiff_read_page',
+  '_tiff_close',
+];
 
 function moduleFlags(exportName, exportsList) {
   return [
@@ -445,9 +585,16 @@ function linkModules(tc, outDir) {
   run(
     'em++',
     [
-      ...tc.cxxflags, '-std=c++17', `-I${join(lz, 'dll')}`, `-I${join(lz, 'include')}`, `-I${join(lz, 'include', 'laszip')}`,
-      join(here, 'las', 'las_api.cpp'), join(lib, 'liblaszip.a'),
-      ...moduleFlags('createLasModule', LAS_EXPORTS), '-o', join(outDir, 'las.js'),
+      ...tc.cxxflags,
+      '-std=c++17',
+      `-I${join(lz, 'dll')}`,
+      `-I${join(lz, 'include')}`,
+      `-I${join(lz, 'include', 'laszip')}`,
+      join(here, 'las', 'las_api.cpp'),
+      join(lib, 'liblaszip.a'),
+      ...moduleFlags('createLasModule', LAS_EXPORTS),
+      '-o',
+      join(outDir, 'las.js'),
     ],
     { env: tc.env, cwd: here },
   );
@@ -455,8 +602,15 @@ function linkModules(tc, outDir) {
   run(
     'emcc',
     [
-      ...tc.cflags, `-I${inc}`, join(here, 'tiff', 'tiff_api.c'), join(lib, 'libtiff.a'), join(lib, 'libjpeg.a'), join(lib, 'libz.a'),
-      ...moduleFlags('createTiffModule', TIFF_EXPORTS), '-o', join(outDir, 'tiff.js'),
+      ...tc.cflags,
+      `-I${inc}`,
+      join(here, 'tiff', 'tiff_api.c'),
+      join(lib, 'libtiff.a'),
+      join(lib, 'libjpeg.a'),
+      join(lib, 'libz.a'),
+      ...moduleFlags('createTiffModule', TIFF_EXPORTS),
+      '-o',
+      join(outDir, 'tiff.js'),
     ],
     { env: tc.env, cwd: here },
   );
@@ -464,8 +618,14 @@ function linkModules(tc, outDir) {
   run(
     'emcc',
     [
-      ...tc.cflags, '-std=c11', `-I${join(zfpDir(), 'include')}`, join(here, 'zfp', 'zfp_api.c'), join(lib, 'libzfp.a'),
-      ...moduleFlags('createZfpModule', ZFP_EXPORTS), '-o', join(outDir, 'zfp.js'),
+      ...tc.cflags,
+      '-std=c11',
+      `-I${join(zfpDir(), 'include')}`,
+      join(here, 'zfp', 'zfp_api.c'),
+      join(lib, 'libzfp.a'),
+      ...moduleFlags('createZfpModule', ZFP_EXPORTS),
+      '-o',
+      join(outDir, 'zfp.js'),
     ],
     { env: tc.env, cwd: here },
   );
@@ -480,7 +640,13 @@ function linkModules(tc, outDir) {
       libjpeg: `Debian libjpeg-turbo ${sources.debian.find((p) => p.package === 'libjpeg-turbo').version}`,
       zfp: `zfp ${zfpVersion()} (lib/zfp of the PyPI hdf5plugin==${pypiSource('hdf5plugin').version} sdist)`,
     },
-    flags: { c: tc.cflags.filter((f) => !f.startsWith('-ffile-prefix-map')), cxx: tc.cxxflags.filter((f) => !f.startsWith('-ffile-prefix-map')), las: moduleFlags('createLasModule', LAS_EXPORTS), tiff: moduleFlags('createTiffModule', TIFF_EXPORTS), zfp: moduleFlags('createZfpModule', ZFP_EXPORTS) },
+    flags: {
+      c: tc.cflags.filter((f) => !f.startsWith('-ffile-prefix-map')),
+      cxx: tc.cxxflags.filter((f) => !f.startsWith('-ffile-prefix-map')),
+      las: moduleFlags('createLasModule', LAS_EXPORTS),
+      tiff: moduleFlags('createTiffModule', TIFF_EXPORTS),
+      zfp: moduleFlags('createZfpModule', ZFP_EXPORTS),
+    },
     files: Object.fromEntries(outputs.map((f) => [f, { bytes: statSync(join(outDir, f)).size, sha256: sha256File(join(outDir, f)) }])),
   };
   writeFileSync(join(outDir, 'build-info.json'), JSON.stringify(info, null, 2) + '\n');
@@ -509,11 +675,41 @@ async function buildNative() {
   const out = join(work, 'native');
   mkdirSync(out, { recursive: true });
   log('linking native las_bench and tiff_bench...');
-  run('g++', [...tc.cxxflags, '-std=c++17', `-I${join(lz, 'dll')}`, `-I${join(lz, 'include')}`, `-I${join(lz, 'include', 'laszip')}`, `-I${join(here, 'las')}`,
-    join(here, 'las', 'las_api.cpp'), join(here, 'native', 'las_bench.cpp'), join(tc.prefix, 'lib', 'liblaszip.a'), '-o', join(out, 'las_bench')], { env: tc.env });
+  run(
+    'g++',
+    [
+      ...tc.cxxflags,
+      '-std=c++17',
+      `-I${join(lz, 'dll')}`,
+      `-I${join(lz, 'include')}`,
+      `-I${join(lz, 'include', 'laszip')}`,
+      `-I${join(here, 'las')}`,
+      join(here, 'las', 'las_api.cpp'),
+      join(here, 'native', 'las_bench.cpp'),
+      join(tc.prefix, 'lib', 'liblaszip.a'),
+      '-o',
+      join(out, 'las_bench'),
+    ],
+    { env: tc.env },
+  );
   const inc = join(tc.prefix, 'include');
   const lib = join(tc.prefix, 'lib');
-  run('gcc', [...tc.cflags, `-I${inc}`, join(here, 'tiff', 'tiff_api.c'), join(here, 'native', 'tiff_bench.c'), join(lib, 'libtiff.a'), join(lib, 'libjpeg.a'), join(lib, 'libz.a'), '-lm', '-o', join(out, 'tiff_bench')], { env: tc.env });
+  run(
+    'gcc',
+    [
+      ...tc.cflags,
+      `-I${inc}`,
+      join(here, 'tiff', 'tiff_api.c'),
+      join(here, 'native', 'tiff_bench.c'),
+      join(lib, 'libtiff.a'),
+      join(lib, 'libjpeg.a'),
+      join(lib, 'libz.a'),
+      '-lm',
+      '-o',
+      join(out, 'tiff_bench'),
+    ],
+    { env: tc.env },
+  );
   log(`native baseline in ${relative(process.cwd(), out)}`);
 }
 
@@ -522,7 +718,8 @@ async function buildNative() {
 async function main() {
   if (NATIVE_ONLY) {
     const missing = ['cmake', 'make', 'dpkg-source', 'gcc', 'g++'].filter((t) => !which(t));
-    if (missing.length > 0) aptInstall(missing.map((t) => ({ 'dpkg-source': 'dpkg-dev', gcc: 'build-essential', 'g++': 'build-essential' })[t] ?? t));
+    if (missing.length > 0)
+      aptInstall(missing.map((t) => ({ 'dpkg-source': 'dpkg-dev', gcc: 'build-essential', 'g++': 'build-essential' })[t] ?? t));
     mkdirSync(work, { recursive: true });
     fetchSources();
     await buildNative();

@@ -8,5 +8,8 @@ import { converterEnv, ensureConverterEnv } from '../../scripts/setup/converter-
 
 const root = fileURLToPath(new URL('../..', import.meta.url));
 const python = ensureConverterEnv(root);
-const r = spawnSync(python, [join(root, 'benchmarks/convert/bench.py'), ...process.argv.slice(2)], { stdio: 'inherit', env: converterEnv(root) });
+const r = spawnSync(python, [join(root, 'benchmarks/convert/bench.py'), ...process.argv.slice(2)], {
+  stdio: 'inherit',
+  env: converterEnv(root),
+});
 process.exit(r.status ?? 1);

@@ -22,9 +22,20 @@ export function printTable(title: string, header: string[], rows: Cell[][]): voi
   const line = (cells: string[], numeric: boolean[]) =>
     cells.map((c, i) => (numeric[i] ? c.padStart(widths[i]) : c.padEnd(widths[i]))).join('  ');
   console.log(`\n${title}`);
-  console.log(line(header, header.map(() => false)));
+  console.log(
+    line(
+      header,
+      header.map(() => false),
+    ),
+  );
   console.log(widths.map((w) => '-'.repeat(w)).join('  '));
-  for (let r = 0; r < rows.length; r++) console.log(line(text[r], rows[r].map((c) => typeof c === 'number')));
+  for (let r = 0; r < rows.length; r++)
+    console.log(
+      line(
+        text[r],
+        rows[r].map((c) => typeof c === 'number'),
+      ),
+    );
 }
 
 export function formatNumber(x: number): string {

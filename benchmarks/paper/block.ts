@@ -72,7 +72,12 @@ export async function runBlock(
       });
       one.records.forEach((r, i) => (r.wallMs -= spent[i] ?? 0));
       result.records.push(...one.records);
-      result.summaries.push(...one.summaries.map((sum) => ({ ...sum, meanWallMs: sum.meanWallMs - (spent.slice(1).reduce((a, b) => a + b, 0) / Math.max(1, spent.length - 1)) })));
+      result.summaries.push(
+        ...one.summaries.map((sum) => ({
+          ...sum,
+          meanWallMs: sum.meanWallMs - spent.slice(1).reduce((a, b) => a + b, 0) / Math.max(1, spent.length - 1),
+        })),
+      );
     }
     const stages: Record<string, Record<string, number>> = {};
     let cacheBytesMax = 0;
@@ -103,7 +108,17 @@ export async function runBlock(
         discarded: r.discarded,
       };
     });
-    return { volume: v.key, count, seed, range: v.range, summaries: result.summaries, records, stages, blockCount: iso.info.blockCount, memory: { fixedBytes, cacheBytesMax, vertexBytesMax } };
+    return {
+      volume: v.key,
+      count,
+      seed,
+      range: v.range,
+      summaries: result.summaries,
+      records,
+      stages,
+      blockCount: iso.info.blockCount,
+      memory: { fixedBytes, cacheBytesMax, vertexBytesMax },
+    };
   } finally {
     iso.destroy();
   }

@@ -31,7 +31,11 @@ function serveFolders(folders: Record<string, string>): Promise<Server> {
       if (!url.startsWith(prefix)) continue;
       const path = normalize(join(root, url.slice(prefix.length) || 'index.html'));
       if ((path === root || path.startsWith(root + sep)) && existsSync(path) && statSync(path).isFile()) {
-        res.writeHead(200, { 'Content-Type': TYPES[extname(path)] ?? 'application/octet-stream', 'Content-Length': statSync(path).size, 'Cache-Control': 'no-store' });
+        res.writeHead(200, {
+          'Content-Type': TYPES[extname(path)] ?? 'application/octet-stream',
+          'Content-Length': statSync(path).size,
+          'Cache-Control': 'no-store',
+        });
         createReadStream(path).pipe(res);
         return;
       }
@@ -75,7 +79,8 @@ export class BrowserBench {
    */
   static async start(root: string, dataDir: string, software: boolean, log: (s: string) => void): Promise<BrowserBench> {
     const executable = chromiumPath();
-    if (!existsSync(executable)) throw new Error(`Chromium not found at ${executable}: install Debian's chromium (npm test's set-up does) or set CHROMIUM_PATH`);
+    if (!existsSync(executable))
+      throw new Error(`Chromium not found at ${executable}: install Debian's chromium (npm test's set-up does) or set CHROMIUM_PATH`);
     const buildDir = mkdtempSync(join(tmpdir(), 'paper-bench-page-'));
     let server: Server | undefined;
     let browser: Browser | undefined;
@@ -86,16 +91,36 @@ export class BrowserBench {
         root,
         configFile: false,
         logLevel: 'warn',
-        build: { outDir: buildDir, emptyOutDir: true, target: 'es2022', sourcemap: false, rolldownOptions: { input: { paperBench: join(root, 'paper-bench.html') } } },
+        build: {
+          outDir: buildDir,
+          emptyOutDir: true,
+          target: 'es2022',
+          sourcemap: false,
+          rolldownOptions: { input: { paperBench: join(root, 'paper-bench.html') } },
+        },
       });
       server = await serveFolders({ '/bench-data/': dataDir, '/': buildDir });
       const baseUrl = `http://127.0.0.1:${(server.address() as AddressInfo).port}`;
       // No GPU: the flag set probed to draw on SwiftShader on this machine.
       const probed = software ? chromiumLaunchOptions() : undefined;
       if (probed) log(`Chromium flags: ${probed.args.join(' ')}`);
-      const flags = probed?.args ?? ['--no-sandbox', '--enable-unsafe-webgpu', '--enable-features=Vulkan', '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run'];
+      const flags = probed?.args ?? [
+        '--no-sandbox',
+        '--enable-unsafe-webgpu',
+        '--enable-features=Vulkan',
+        '--disable-background-networking',
+        '--disable-component-update',
+        '--disable-sync',
+        '--no-first-run',
+      ];
       const { chromium } = await import('@playwright/test');
-      browser = await chromium.launch({ executablePath: probed?.executablePath ?? executable, args: flags, env: probed?.env, headless: true, timeout: 120_000 });
+      browser = await chromium.launch({
+        executablePath: probed?.executablePath ?? executable,
+        args: flags,
+        env: probed?.env,
+        headless: true,
+        timeout: 120_000,
+      });
       const page = await browser.newPage();
       const pageErrors: string[] = [];
       page.on('pageerror', (e) => pageErrors.push(e.message));
@@ -124,7 +149,10 @@ export class BrowserBench {
       return (await withTimeout(
         `paperBench.${method}`,
         timeoutMs,
-        this.page.evaluate(({ m, a }) => (window.paperBench as unknown as Record<string, (x: unknown) => Promise<unknown>>)[m](a), { m: method as string, a: arg as unknown }),
+        this.page.evaluate(({ m, a }) => (window.paperBench as unknown as Record<string, (x: unknown) => Promise<unknown>>)[m](a), {
+          m: method as string,
+          a: arg as unknown,
+        }),
       )) as Awaited<ReturnType<PaperBenchApi[K]>>;
     } catch (e) {
       const extra = this.pageErrors.slice(before);

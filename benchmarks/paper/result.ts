@@ -43,22 +43,63 @@ export interface PaperBenchResult {
   command: string;
   limits: { seconds: number };
   durations: { totalSeconds: number; sections: Record<string, number> };
-  machine: { cpu: string; cores: number; memoryGiB: number; node: string; dawn: string; platform: string; loadAverage: { start: number[]; end: number[] } };
+  machine: {
+    cpu: string;
+    cores: number;
+    memoryGiB: number;
+    node: string;
+    dawn: string;
+    platform: string;
+    loadAverage: { start: number[]; end: number[] };
+  };
   adapter: AdapterSummary;
   adapterDescription: string;
   adapterSlug: string;
   gpuTiming: string;
   chromium: { version?: string; userAgent?: string; flags: string[]; hardwareConcurrency?: number; error?: string };
   serialNative: { compiler?: string; error?: string };
-  settings: { seed: number; serialCounts: number; naiveCounts: Record<string, number>; blockCounts: Record<string, number>; zfpRuns: number; zfpRates: number[]; plan: Record<string, unknown> };
-  volumes: { key: string; label: string; file: string; how: string; dims: readonly number[]; rate: number; range: [number, number]; rangeSource: string; dataRange: [number, number] }[];
+  settings: {
+    seed: number;
+    serialCounts: number;
+    naiveCounts: Record<string, number>;
+    blockCounts: Record<string, number>;
+    zfpRuns: number;
+    zfpRates: number[];
+    plan: Record<string, unknown>;
+  };
+  volumes: {
+    key: string;
+    label: string;
+    file: string;
+    how: string;
+    dims: readonly number[];
+    rate: number;
+    range: [number, number];
+    rangeSource: string;
+    dataRange: [number, number];
+  }[];
   serial: SerialEntry[];
   naive: (NaiveEntry & { paperName?: string })[];
   zfp: ZfpRateResult[];
   block: (BlockResult & { trianglesMatchSerial?: boolean; cappedModes: string[] })[];
   headline: {
-    serial: { wasmNodeVsNative?: number; jsNodeVsNative?: number; wasmChromiumVsNative?: number; jsChromiumVsNative?: number; jsNodeVsWasmNode?: number; jsChromiumVsWasmChromium?: number };
-    naiveVsBlock: { volume: string; label: string; surfaces: number; naiveMs: number; blockMs: number; ratio: number; blockRandomAllMs: number }[];
+    serial: {
+      wasmNodeVsNative?: number;
+      jsNodeVsNative?: number;
+      wasmChromiumVsNative?: number;
+      jsChromiumVsNative?: number;
+      jsNodeVsWasmNode?: number;
+      jsChromiumVsWasmChromium?: number;
+    };
+    naiveVsBlock: {
+      volume: string;
+      label: string;
+      surfaces: number;
+      naiveMs: number;
+      blockMs: number;
+      ratio: number;
+      blockRandomAllMs: number;
+    }[];
     zfp: { rate: number; webgpuVsSerial: number; wasmNodeVsSerial: number; wasmChromiumVsSerial?: number }[];
   };
   notes: string[];

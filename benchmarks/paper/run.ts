@@ -148,7 +148,8 @@ function parseArgs(argv: string[]): Args {
   }
   if (a.count !== undefined && a.count < 2) throw new UsageError('--count must be at least 2 (the first surface is discarded)');
   if (a.rate !== undefined && !(a.rate > 0)) throw new UsageError('--rate must be positive');
-  for (const s of a.shared ?? []) if (!['fuel', 'hydrogen', 'bonsai'].includes(s)) throw new UsageError(`--volumes: unknown shared volume ${s} (fuel, hydrogen, bonsai)`);
+  for (const s of a.shared ?? [])
+    if (!['fuel', 'hydrogen', 'bonsai'].includes(s)) throw new UsageError(`--volumes: unknown shared volume ${s} (fuel, hydrogen, bonsai)`);
   return a;
 }
 
@@ -228,7 +229,9 @@ async function main(): Promise<void> {
   };
 
   if (!existsSync(join(ROOT, '.venv', 'bin', 'python'))) {
-    throw new Error(`${join(ROOT, '.venv', 'bin', 'python')} is missing: run \`npm test\` once (it installs tests/python-requirements.txt into .venv, with zfpy)`);
+    throw new Error(
+      `${join(ROOT, '.venv', 'bin', 'python')} is missing: run \`npm test\` once (it installs tests/python-requirements.txt into .venv, with zfpy)`,
+    );
   }
   const specs: VolumeSpec[] = [];
   if (existsSync(SHARED_DATA)) {
@@ -247,7 +250,10 @@ async function main(): Promise<void> {
   log(`${mode} run: ${specs.map((s) => s.key).join(', ')}; limit ${plan.limitSeconds / 60} min`);
   const gpu = await requestNodeGpu({ label: 'benchPaper.device', onFailure: (f) => log(`WebGPU ${f.kind}: ${f.message}`) });
   const adapterDescription = describeAdapter(gpu.adapter);
-  const adapterSlug = (gpu.adapter.architecture || gpu.adapter.vendor || 'unknown').toLowerCase().replace(/[^a-z0-9]+/g, '-').replace(/^-|-$/g, '');
+  const adapterSlug = (gpu.adapter.architecture || gpu.adapter.vendor || 'unknown')
+    .toLowerCase()
+    .replace(/[^a-z0-9]+/g, '-')
+    .replace(/^-|-$/g, '');
   log(`adapter: ${adapterDescription}`);
   const decoder = await ZfpDecoder.create(gpu.device);
   const dir = mkdtempSync(join(tmpdir(), 'bench-paper-'));
@@ -294,7 +300,11 @@ async function main(): Promise<void> {
             native: r.native,
             wasmNode: r.wasm,
             jsNode: r.js,
-            means: { native: r.native ? meanAfterFirst(r.native.ms) : undefined, wasmNode: meanAfterFirst(r.wasm.ms), jsNode: meanAfterFirst(r.js.ms) },
+            means: {
+              native: r.native ? meanAfterFirst(r.native.ms) : undefined,
+              wasmNode: meanAfterFirst(r.wasm.ms),
+              jsNode: meanAfterFirst(r.js.ms),
+            },
           });
         });
       }
@@ -315,7 +325,12 @@ async function main(): Promise<void> {
       await section('Chromium', async () => {
         await attempt('Chromium', undefined, async () => {
           browser = await BrowserBench.start(ROOT, dir, gpu.adapter.software, log);
-          Object.assign(chromium, { version: browser.info.chromium, userAgent: browser.info.userAgent, flags: browser.info.flags, hardwareConcurrency: browser.info.hardwareConcurrency });
+          Object.assign(chromium, {
+            version: browser.info.chromium,
+            userAgent: browser.info.userAgent,
+            flags: browser.info.flags,
+            hardwareConcurrency: browser.info.hardwareConcurrency,
+          });
           log(`Chromium ${browser.info.chromium} ready`);
         });
         if (!browser) {
@@ -327,9 +342,15 @@ async function main(): Promise<void> {
           const v = volumes.find((x) => x.key === s.volume)!;
           await attempt('serial MC (Chromium)', v.key, async () => {
             log(`serial MC in Chromium: ${v.label}, ${s.isovalues.length} isovalues (Wasm, JS)...`);
-            const t = await browser!.serialMc({ url: browser!.dataUrl(v.rawPath.split('/').pop()!), dims: v.dims, isovalues: s.isovalues, methods: ['js', 'wasm'] }, timeout);
+            const t = await browser!.serialMc(
+              { url: browser!.dataUrl(v.rawPath.split('/').pop()!), dims: v.dims, isovalues: s.isovalues, methods: ['js', 'wasm'] },
+              timeout,
+            );
             const bad = t.js!.triangles.findIndex((n, i) => n !== s.jsNode.triangles[i]);
-            if (bad >= 0) throw new Error(`Chromium gave ${t.js!.triangles[bad]} triangles at iso ${s.isovalues[bad]}, Node ${s.jsNode.triangles[bad]}`);
+            if (bad >= 0)
+              throw new Error(
+                `Chromium gave ${t.js!.triangles[bad]} triangles at iso ${s.isovalues[bad]}, Node ${s.jsNode.triangles[bad]}`,
+              );
             s.jsChromium = t.js;
             s.wasmChromium = t.wasm;
             s.means.jsChromium = meanAfterFirst(t.js!.ms);
@@ -363,13 +384,18 @@ async function main(): Promise<void> {
           const isovalues = isovaluesOf(v, naiveCount);
           const s = serial.find((x) => x.volume === v.key);
           const volumeBuffer = decoder.decodeVolume(v.stream);
-          const mc = await NaiveMarchingCubes.create(gpu.device, { dims: v.dims, initialVertexCapacity: s ? 3 * Math.max(...s.jsNode.triangles) : undefined });
+          const mc = await NaiveMarchingCubes.create(gpu.device, {
+            dims: v.dims,
+            initialVertexCapacity: s ? 3 * Math.max(...s.jsNode.triangles) : undefined,
+          });
           const res: NaiveMcResult[] = [];
           let naiveStart = 0;
           let naiveSpent = 0;
           let b: BlockResult;
           try {
-            log(`naive GPU MC (${naiveCount} isovalues, paired with the random mode) and block-compressed (${blockCount} isovalues per mode): ${v.label}...`);
+            log(
+              `naive GPU MC (${naiveCount} isovalues, paired with the random mode) and block-compressed (${blockCount} isovalues per mode): ${v.label}...`,
+            );
             b = await runBlock(gpu, v, MODES, blockCount, args.seed, {
               capSecondsPerMode: plan.blockCapSecondsPerMode,
               onProgress: (m, d, n) => {
@@ -377,7 +403,8 @@ async function main(): Promise<void> {
               },
               pairRandom: async (iso, index) => {
                 if (index >= naiveCount || naiveSpent > plan.naiveCapSeconds * 1000) return undefined;
-                if (iso !== isovalues[index]) throw new Error(`the random mode's isovalue ${index} is ${iso}, the naive MC's ${isovalues[index]}`);
+                if (iso !== isovalues[index])
+                  throw new Error(`the random mode's isovalue ${index} is ${iso}, the naive MC's ${isovalues[index]}`);
                 naiveStart = performance.now();
                 res.push(await mc.extract(volumeBuffer, iso));
                 const ms = performance.now() - naiveStart;
@@ -391,10 +418,14 @@ async function main(): Promise<void> {
           }
           const done = res.length;
           const stages: Record<string, number> = {};
-          for (const r of res.slice(1)) for (const st of r.stages) stages[st.label] = (stages[st.label] ?? 0) + st.ms / Math.max(1, done - 1);
+          for (const r of res.slice(1))
+            for (const st of r.stages) stages[st.label] = (stages[st.label] ?? 0) + st.ms / Math.max(1, done - 1);
           const matches = s ? res.every((r, i) => i >= s.jsNode.triangles.length || r.triangles === s.jsNode.triangles[i]) : true;
           if (!matches) errors.push({ section: 'naive GPU MC', volume: v.key, message: 'triangle counts differ from the serial MC' });
-          if (done < naiveCount) notes.push(`Naive GPU MC on ${v.label} stopped after ${done} of ${naiveCount} surfaces (${plan.naiveCapSeconds} s cap, or the random mode's).`);
+          if (done < naiveCount)
+            notes.push(
+              `Naive GPU MC on ${v.label} stopped after ${done} of ${naiveCount} surfaces (${plan.naiveCapSeconds} s cap, or the random mode's).`,
+            );
           naive.push({
             volume: v.key,
             label: v.label,
@@ -411,10 +442,16 @@ async function main(): Promise<void> {
             cappedAt: done < naiveCount ? done : undefined,
           });
           const random = b.records.filter((r) => r.mode === 'random');
-          const trianglesMatchSerial = s ? random.every((r) => r.index >= s.jsNode.triangles.length || r.triangles === s.jsNode.triangles[r.index]) : undefined;
-          if (trianglesMatchSerial === false) errors.push({ section: 'block-compressed', volume: v.key, message: 'random-mode triangle counts differ from the serial MC' });
+          const trianglesMatchSerial = s
+            ? random.every((r) => r.index >= s.jsNode.triangles.length || r.triangles === s.jsNode.triangles[r.index])
+            : undefined;
+          if (trianglesMatchSerial === false)
+            errors.push({ section: 'block-compressed', volume: v.key, message: 'random-mode triangle counts differ from the serial MC' });
           const cappedModes = MODES.filter((m) => b.records.filter((r) => r.mode === m).length < blockCount);
-          for (const m of cappedModes) notes.push(`Block-compressed ${m} on ${v.label} stopped after ${b.records.filter((r) => r.mode === m).length} of ${blockCount} surfaces (${plan.blockCapSecondsPerMode} s cap per mode).`);
+          for (const m of cappedModes)
+            notes.push(
+              `Block-compressed ${m} on ${v.label} stopped after ${b.records.filter((r) => r.mode === m).length} of ${blockCount} surfaces (${plan.blockCapSecondsPerMode} s cap per mode).`,
+            );
           block.push({ ...b, trianglesMatchSerial, cappedModes });
         });
       }
@@ -434,9 +471,19 @@ async function main(): Promise<void> {
           await attempt('naive GPU MC (Chromium)', v.key, async () => {
             log(`naive MC in Chromium's WebGPU: ${v.label}, ${entry.isovalues.length} isovalues...`);
             const s = serial.find((x) => x.volume === v.key);
-            const c = await b.naiveMc({ url: b.dataUrl(v.zfpPath!.split('/').pop()!), isovalues: entry.isovalues, vertexCapacity: s ? 3 * Math.max(...s.jsNode.triangles) : undefined }, timeout);
+            const c = await b.naiveMc(
+              {
+                url: b.dataUrl(v.zfpPath!.split('/').pop()!),
+                isovalues: entry.isovalues,
+                vertexCapacity: s ? 3 * Math.max(...s.jsNode.triangles) : undefined,
+              },
+              timeout,
+            );
             const bad = c.triangles.findIndex((n, i) => n !== entry.triangles[i]);
-            if (bad >= 0) throw new Error(`naive MC in Chromium gave ${c.triangles[bad]} triangles at iso ${entry.isovalues[bad]}, in Node ${entry.triangles[bad]}`);
+            if (bad >= 0)
+              throw new Error(
+                `naive MC in Chromium gave ${c.triangles[bad]} triangles at iso ${entry.isovalues[bad]}, in Node ${entry.triangles[bad]}`,
+              );
             entry.chromiumMs = c.ms;
           });
         }
@@ -450,7 +497,6 @@ async function main(): Promise<void> {
         }
       });
     }
-
   } finally {
     if (browser) await browser.close();
     for (const v of volumes) v.stream.destroy();
@@ -472,7 +518,15 @@ async function main(): Promise<void> {
     if (!same.length) continue;
     const blockMs = mean(same.map((r) => r.gpuMs));
     const naiveMs = mean(n.ms.slice(1, 1 + same.length));
-    naiveVsBlock.push({ volume: n.volume, label: n.label, surfaces: same.length, naiveMs, blockMs, ratio: naiveMs / blockMs, blockRandomAllMs: mean(random.map((r) => r.gpuMs)) });
+    naiveVsBlock.push({
+      volume: n.volume,
+      label: n.label,
+      surfaces: same.length,
+      naiveMs,
+      blockMs,
+      ratio: naiveMs / blockMs,
+      blockRandomAllMs: mean(random.map((r) => r.gpuMs)),
+    });
   }
   const rates = [...new Set(zfp.map((z) => z.rate))];
   const zfpHeadline = rates.map((rate) => {
@@ -487,10 +541,16 @@ async function main(): Promise<void> {
   });
 
   notes.push(
-    'Isovalues: `isovalueSequence` of src/bench/sequences.ts (seeded mulberry32, float32), the same generator as the block benchmark\'s random mode, so every method computes the same surfaces; a method run on fewer isovalues takes a prefix of the same sequence.',
-    'Means: every method\'s first surface (or decode) is discarded as a warm-up, as in the paper; the JSON keeps every sample, and medians can be computed from it.',
-    `Counts: serial MC ${serialCount} isovalues per volume; naive GPU MC ${Object.entries(naiveCounts).map(([k, c]) => `${k} ${c}`).join(', ')}; each block-compressed mode ${Object.entries(blockCounts).map(([k, c]) => `${k} ${c}`).join(', ')} (${mode === 'full' ? 'the paper\'s 100, except the naive MC on volumes above 128³: on SwiftShader it needs seconds per surface (all 16.6 M cells of the bonsai), so 50 on a 256³ volume, and both GPU methods scale down with the volume beyond 256³, to fit the 30-minute budget' : 'quick run'}); zfp ${plan.zfpRuns} decodes per rate after a discarded first. Time caps per loop (naive ${plan.naiveCapSeconds} s per volume, block ${plan.blockCapSecondsPerMode} s per mode) stop a loop early on a slow or busy machine, and are reported.`,
-    'Fuel is a float32 raw file: compressed on the GPU at rate 8 for the GPU pipelines, which is lossless for this data (its values are zfp\'s precision-8 decode), so all methods contour the raw values. Hydrogen (rate 8) and bonsai (rate 4) are used as compressed; serial and naive MC contour their zfp decode.',
+    "Isovalues: `isovalueSequence` of src/bench/sequences.ts (seeded mulberry32, float32), the same generator as the block benchmark's random mode, so every method computes the same surfaces; a method run on fewer isovalues takes a prefix of the same sequence.",
+    "Means: every method's first surface (or decode) is discarded as a warm-up, as in the paper; the JSON keeps every sample, and medians can be computed from it.",
+    `Counts: serial MC ${serialCount} isovalues per volume; naive GPU MC ${Object.entries(naiveCounts)
+      .map(([k, c]) => `${k} ${c}`)
+      .join(', ')}; each block-compressed mode ${Object.entries(blockCounts)
+      .map(([k, c]) => `${k} ${c}`)
+      .join(
+        ', ',
+      )} (${mode === 'full' ? "the paper's 100, except the naive MC on volumes above 128³: on SwiftShader it needs seconds per surface (all 16.6 M cells of the bonsai), so 50 on a 256³ volume, and both GPU methods scale down with the volume beyond 256³, to fit the 30-minute budget" : 'quick run'}); zfp ${plan.zfpRuns} decodes per rate after a discarded first. Time caps per loop (naive ${plan.naiveCapSeconds} s per volume, block ${plan.blockCapSecondsPerMode} s per mode) stop a loop early on a slow or busy machine, and are reported.`,
+    "Fuel is a float32 raw file: compressed on the GPU at rate 8 for the GPU pipelines, which is lossless for this data (its values are zfp's precision-8 decode), so all methods contour the raw values. Hydrogen (rate 8) and bonsai (rate 4) are used as compressed; serial and naive MC contour their zfp decode.",
     "Serial MC in Chromium runs in the page's main thread (paper-bench.html, built by Vite into a temporary folder and served locally); Wasm and JS take turns per isovalue, as in Node.",
     'zfp in the paper was 0.5.5-rc1 (serial CPU decoder, and their WebGPU/Vulkan ports of its CUDA decoder); here zfp 1.0.1 (zfpy for the native serial decoder, the same C in Wasm) and our own WebGPU decoder, bit-identical to zfp.',
   );
@@ -505,7 +565,15 @@ async function main(): Promise<void> {
     command,
     limits: { seconds: plan.limitSeconds },
     durations: { totalSeconds: total, sections },
-    machine: { cpu: cpuModel(), cores: cpus().length, memoryGiB: Math.round(totalmem() / 2 ** 30), node: process.version, dawn: dawnVersion(), platform: `${process.platform} ${process.arch}`, loadAverage: { start: loadStart, end: loadEnd } },
+    machine: {
+      cpu: cpuModel(),
+      cores: cpus().length,
+      memoryGiB: Math.round(totalmem() / 2 ** 30),
+      node: process.version,
+      dawn: dawnVersion(),
+      platform: `${process.platform} ${process.arch}`,
+      loadAverage: { start: loadStart, end: loadEnd },
+    },
     adapter: gpu.adapter,
     adapterDescription,
     adapterSlug,
@@ -519,21 +587,54 @@ async function main(): Promise<void> {
       blockCounts,
       zfpRuns: plan.zfpRuns,
       zfpRates: plan.zfpRates,
-      plan: { limitSeconds: plan.limitSeconds, naiveCapSeconds: plan.naiveCapSeconds, blockCapSecondsPerMode: plan.blockCapSecondsPerMode, browserCallTimeoutSeconds: plan.browserCallTimeoutSeconds },
+      plan: {
+        limitSeconds: plan.limitSeconds,
+        naiveCapSeconds: plan.naiveCapSeconds,
+        blockCapSecondsPerMode: plan.blockCapSecondsPerMode,
+        browserCallTimeoutSeconds: plan.browserCallTimeoutSeconds,
+      },
     },
-    volumes: volumes.map((v) => ({ key: v.key, label: v.label, file: v.path.replace(join(ROOT, '..') + '/', '../'), how: v.how, dims: v.dims, rate: v.rate, range: v.range, rangeSource: v.rangeSource, dataRange: v.dataRange })),
+    volumes: volumes.map((v) => ({
+      key: v.key,
+      label: v.label,
+      file: v.path.replace(join(ROOT, '..') + '/', '../'),
+      how: v.how,
+      dims: v.dims,
+      rate: v.rate,
+      range: v.range,
+      rangeSource: v.rangeSource,
+      dataRange: v.dataRange,
+    })),
     serial,
     naive,
     zfp,
     block,
     headline: {
       serial: {
-        wasmNodeVsNative: serialRatio((s) => s.means.wasmNode, (s) => s.means.native),
-        jsNodeVsNative: serialRatio((s) => s.means.jsNode, (s) => s.means.native),
-        wasmChromiumVsNative: serialRatio((s) => s.means.wasmChromium, (s) => s.means.native),
-        jsChromiumVsNative: serialRatio((s) => s.means.jsChromium, (s) => s.means.native),
-        jsNodeVsWasmNode: serialRatio((s) => s.means.jsNode, (s) => s.means.wasmNode),
-        jsChromiumVsWasmChromium: serialRatio((s) => s.means.jsChromium, (s) => s.means.wasmChromium),
+        wasmNodeVsNative: serialRatio(
+          (s) => s.means.wasmNode,
+          (s) => s.means.native,
+        ),
+        jsNodeVsNative: serialRatio(
+          (s) => s.means.jsNode,
+          (s) => s.means.native,
+        ),
+        wasmChromiumVsNative: serialRatio(
+          (s) => s.means.wasmChromium,
+          (s) => s.means.native,
+        ),
+        jsChromiumVsNative: serialRatio(
+          (s) => s.means.jsChromium,
+          (s) => s.means.native,
+        ),
+        jsNodeVsWasmNode: serialRatio(
+          (s) => s.means.jsNode,
+          (s) => s.means.wasmNode,
+        ),
+        jsChromiumVsWasmChromium: serialRatio(
+          (s) => s.means.jsChromium,
+          (s) => s.means.wasmChromium,
+        ),
       },
       naiveVsBlock,
       zfp: zfpHeadline,
@@ -545,13 +646,18 @@ async function main(): Promise<void> {
   Object.assign(result, full);
   const base = join(args.out, `${localDate(new Date())}-${adapterSlug}${mode === 'quick' ? '-quick' : ''}`);
   // Arrays of numbers on one line: the samples stay readable and the file small.
-  const json = JSON.stringify(full, null, 2).replace(/\[\s+(-?[\d.eE+-]+(?:,\s+-?[\d.eE+-]+)*)\s+\]/g, (_, inner: string) => `[${inner.split(/,\s+/).join(', ')}]`);
+  const json = JSON.stringify(full, null, 2).replace(
+    /\[\s+(-?[\d.eE+-]+(?:,\s+-?[\d.eE+-]+)*)\s+\]/g,
+    (_, inner: string) => `[${inner.split(/,\s+/).join(', ')}]`,
+  );
   mkdirSync(args.out, { recursive: true });
   writeFileSync(`${base}.json`, json + '\n');
   console.log(`wrote ${base}.json`);
   writeFileSync(`${base}.md`, writeReport(full));
   console.log(`wrote ${base}.md`);
-  console.log(`\n${mode} run: ${(total / 60).toFixed(1)} min (limit ${plan.limitSeconds / 60} min)${errors.length ? `; ${errors.length} error(s), see the report` : ''}`);
+  console.log(
+    `\n${mode} run: ${(total / 60).toFixed(1)} min (limit ${plan.limitSeconds / 60} min)${errors.length ? `; ${errors.length} error(s), see the report` : ''}`,
+  );
   gpu.device.destroy();
   if (errors.length) process.exitCode = 1;
 }

@@ -17,7 +17,10 @@ export interface SerialNodeResult {
 /** Builds the native binary if needed (g++), or says why it cannot. */
 export function nativeBinary(root: string): { path?: string; error?: string; compiler?: string } {
   try {
-    const out = execFileSync(process.execPath, [join(root, 'benchmarks', 'serial-mc', 'build.mjs'), 'native', '--if-stale'], { encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
+    const out = execFileSync(process.execPath, [join(root, 'benchmarks', 'serial-mc', 'build.mjs'), 'native', '--if-stale'], {
+      encoding: 'utf8',
+      stdio: ['ignore', 'pipe', 'pipe'],
+    });
     let compiler = '';
     try {
       compiler = execFileSync(process.env.CXX || 'g++', ['--version'], { encoding: 'utf8' }).split('\n')[0];
@@ -32,12 +35,20 @@ export function nativeBinary(root: string): { path?: string; error?: string; com
 }
 
 export function runNative(binary: string, v: PreparedVolume, isovalues: number[]): SerialTimes {
-  const out = execFileSync(binary, [v.rawPath, ...v.dims.map(String), isovalues.map(String).join(','), '--repeat', '1'], { encoding: 'utf8', maxBuffer: 1 << 26 });
+  const out = execFileSync(binary, [v.rawPath, ...v.dims.map(String), isovalues.map(String).join(','), '--repeat', '1'], {
+    encoding: 'utf8',
+    maxBuffer: 1 << 26,
+  });
   const answer = JSON.parse(out) as { results: { iso: number; triangles: number; ms: number[] }[] };
   return { ms: answer.results.map((r) => r.ms[0]), triangles: answer.results.map((r) => r.triangles) };
 }
 
-export async function runSerialNode(v: PreparedVolume, isovalues: number[], binary: string | undefined, nativeError: string | undefined): Promise<SerialNodeResult> {
+export async function runSerialNode(
+  v: PreparedVolume,
+  isovalues: number[],
+  binary: string | undefined,
+  nativeError: string | undefined,
+): Promise<SerialNodeResult> {
   let native: SerialTimes | undefined;
   let error = nativeError;
   if (binary) {
@@ -50,7 +61,8 @@ export async function runSerialNode(v: PreparedVolume, isovalues: number[], bina
   const t = await timeSerialMc(v.values, v.dims, isovalues, ['js', 'wasm']);
   if (native) {
     const bad = native.triangles.findIndex((n, i) => n !== t.js!.triangles[i]);
-    if (bad >= 0) throw new Error(`${v.label}: native MC gave ${native.triangles[bad]} triangles at iso ${isovalues[bad]}, TS ${t.js!.triangles[bad]}`);
+    if (bad >= 0)
+      throw new Error(`${v.label}: native MC gave ${native.triangles[bad]} triangles at iso ${isovalues[bad]}, TS ${t.js!.triangles[bad]}`);
   }
   return { isovalues, native, nativeError: error, wasm: t.wasm!, js: t.js! };
 }

@@ -48,7 +48,9 @@ export interface PreparedVolume extends VolumeSpec {
  * the top), like the paper's ranges.
  */
 export function sharedVolumes(sharedData: string): VolumeSpec[] {
-  const spec = JSON.parse(readFileSync(join(sharedData, 'reference', 'mc_spec.json'), 'utf8')) as { volumes: { file: string; isovalues: number[] }[] };
+  const spec = JSON.parse(readFileSync(join(sharedData, 'reference', 'mc_spec.json'), 'utf8')) as {
+    volumes: { file: string; isovalues: number[] }[];
+  };
   const span = (file: string): [number, number] => {
     const v = spec.volumes.find((x) => x.file === file);
     if (!v) throw new Error(`mc_spec.json has no ${file}`);
@@ -90,13 +92,28 @@ export function userVolume(arg: string): VolumeSpec {
   const range: [number, number] | undefined = m ? [Number(m[2]), Number(m[3])] : undefined;
   if (range && !(range[0] < range[1])) throw new Error(`--volume ${arg}: the range must be lo,hi with lo < hi`);
   const name = basename(path);
-  return { key: name.replace(/[^A-Za-z0-9]+/g, '-').toLowerCase(), label: name, path, range, rangeSource: range ? 'given with --volume' : undefined };
+  return {
+    key: name.replace(/[^A-Za-z0-9]+/g, '-').toLowerCase(),
+    label: name,
+    path,
+    range,
+    rangeSource: range ? 'given with --volume' : undefined,
+  };
 }
 
 /** Opens a volume on the GPU, decodes it once, and writes the decoded field to `dir`. */
-export async function prepareVolume(gpu: GpuContext, decoder: ZfpDecoder, spec: VolumeSpec, dir: string, rate?: number): Promise<PreparedVolume> {
+export async function prepareVolume(
+  gpu: GpuContext,
+  decoder: ZfpDecoder,
+  spec: VolumeSpec,
+  dir: string,
+  rate?: number,
+): Promise<PreparedVolume> {
   const bytes = new Uint8Array(readFileSync(spec.path));
-  const input = await openVolumeBytes(gpu.device, bytes, basename(spec.path), { reader: 'command', ...(rate === undefined ? {} : { rate }) });
+  const input = await openVolumeBytes(gpu.device, bytes, basename(spec.path), {
+    reader: 'command',
+    ...(rate === undefined ? {} : { rate }),
+  });
   const dims = [...input.stream.info.dims] as Dims3;
   const values = (await decoder.readVolume(input.stream))!;
   const dataRange = interestingRange(values, dims);

@@ -66,14 +66,24 @@ export interface ZfpRateResult {
   wasmChromiumError?: string;
   /** zfpy, our WebGPU decoder and the Wasm decoder gave the same bits. */
   bitIdentical: boolean;
-  mbps: { webgpu: number; webgpuChromium?: number; zfpySerial: number; zfpyDecompressNumpy: number; wasmNode: number; wasmChromium?: number };
+  mbps: {
+    webgpu: number;
+    webgpuChromium?: number;
+    zfpySerial: number;
+    zfpyDecompressNumpy: number;
+    wasmNode: number;
+    wasmChromium?: number;
+  };
 }
 
 export function mbPerSecond(floatBytes: number, ms: number[]): number {
   return floatBytes / 1e6 / (meanAfterFirst(ms) / 1000);
 }
 
-const sha = (a: Float32Array) => createHash('sha256').update(new Uint8Array(a.buffer, a.byteOffset, a.byteLength)).digest('hex');
+const sha = (a: Float32Array) =>
+  createHash('sha256')
+    .update(new Uint8Array(a.buffer, a.byteOffset, a.byteLength))
+    .digest('hex');
 
 /** zfpy compresses and times; then our decoders run on zfpy's files. */
 export async function runZfpVolume(
@@ -86,11 +96,25 @@ export async function runZfpVolume(
   runs: number,
 ): Promise<ZfpRateResult[]> {
   const python = join(root, '.venv', 'bin', 'python');
-  const out = execFileSync(python, ['-c', ZFPY, v.rawPath, ...v.dims.map(String), join(dataDir, `${v.key}-zfp`), String(runs + 1), rates.join(',')], {
-    encoding: 'utf8',
-    maxBuffer: 1 << 26,
-  });
-  const answer = JSON.parse(out) as { rates: { rate: number; file: string; bytes: number; seconds: number[]; decompressNumpySeconds: number[]; sha256: string; sameBothWays: boolean }[] };
+  const out = execFileSync(
+    python,
+    ['-c', ZFPY, v.rawPath, ...v.dims.map(String), join(dataDir, `${v.key}-zfp`), String(runs + 1), rates.join(',')],
+    {
+      encoding: 'utf8',
+      maxBuffer: 1 << 26,
+    },
+  );
+  const answer = JSON.parse(out) as {
+    rates: {
+      rate: number;
+      file: string;
+      bytes: number;
+      seconds: number[];
+      decompressNumpySeconds: number[];
+      sha256: string;
+      sameBothWays: boolean;
+    }[];
+  };
   const results: ZfpRateResult[] = [];
   for (const r of answer.rates) {
     const bytes = new Uint8Array(readFileSync(r.file));
@@ -117,7 +141,10 @@ export async function runZfpVolume(
         mbps: {
           webgpu: mbPerSecond(floatBytes, g.ms),
           zfpySerial: mbPerSecond(floatBytes, zfpyMs),
-          zfpyDecompressNumpy: mbPerSecond(floatBytes, r.decompressNumpySeconds.map((s) => s * 1000)),
+          zfpyDecompressNumpy: mbPerSecond(
+            floatBytes,
+            r.decompressNumpySeconds.map((s) => s * 1000),
+          ),
           wasmNode: mbPerSecond(floatBytes, w.ms),
         },
       });

@@ -25,8 +25,12 @@ const randomCount = arg('random') ? Number(arg('random')) : 0;
 const only = arg('volumes')?.split(',');
 const DEFAULT = ['fuel_64x64x64_float32.raw', 'hydrogen_atom_128x128x128_float32.raw', 'bonsai_256x256x256_float32.rate4.zfp'];
 
-const volumes = loadMcReference().volumes.filter((v) => (only ? only.some((o) => v.file.includes(o)) : DEFAULT.some((d) => v.file.endsWith(d))));
-const binary = execFileSync(process.execPath, [join(ROOT, 'benchmarks', 'serial-mc', 'build.mjs'), 'native', '--if-stale'], { encoding: 'utf8' })
+const volumes = loadMcReference().volumes.filter((v) =>
+  only ? only.some((o) => v.file.includes(o)) : DEFAULT.some((d) => v.file.endsWith(d)),
+);
+const binary = execFileSync(process.execPath, [join(ROOT, 'benchmarks', 'serial-mc', 'build.mjs'), 'native', '--if-stale'], {
+  encoding: 'utf8',
+})
   .trim()
   .split('\n')
   .pop()!;
@@ -46,7 +50,10 @@ try {
     const raw = join(dir, 'volume.f32');
     writeFileSync(raw, values);
     const native = JSON.parse(
-      execFileSync(binary, [raw, ...dims.map(String), isos.map(String).join(','), '--repeat', String(repeat)], { encoding: 'utf8', maxBuffer: 1 << 26 }),
+      execFileSync(binary, [raw, ...dims.map(String), isos.map(String).join(','), '--repeat', String(repeat)], {
+        encoding: 'utf8',
+        maxBuffer: 1 << 26,
+      }),
     ) as { results: { triangles: number; ms: number[] }[] };
     wasm.setVolume(values, dims);
     const perIso = isos.map((iso, q) => {
@@ -74,7 +81,16 @@ try {
     const mean = (k: 'tsMs' | 'wasmMs' | 'nativeMs') => perIso.reduce((s, p) => s + p[k], 0) / perIso.length;
     const name = v.file.replace('volumes/', '');
     const tri = perIso.reduce((s, p) => s + p.triangles, 0) / perIso.length;
-    rows.push([name, isos.length, Math.round(tri), mean('nativeMs'), mean('wasmMs'), mean('tsMs'), mean('wasmMs') / mean('nativeMs'), mean('tsMs') / mean('nativeMs')]);
+    rows.push([
+      name,
+      isos.length,
+      Math.round(tri),
+      mean('nativeMs'),
+      mean('wasmMs'),
+      mean('tsMs'),
+      mean('wasmMs') / mean('nativeMs'),
+      mean('tsMs') / mean('nativeMs'),
+    ]);
     results.push({ volume: v.file, dims, repeat, perIso });
   }
 } finally {

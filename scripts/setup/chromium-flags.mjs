@@ -24,7 +24,13 @@ const CACHE = join(root, '.cache', 'chromium-flags.json');
 export const SWIFTSHADER_ICD = '/usr/lib/chromium/vk_swiftshader_icd.json';
 
 const QUIET = ['--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run', '--disable-quic'];
-const SOFTWARE_WEBGPU = ['--no-sandbox', '--enable-unsafe-webgpu', '--use-webgpu-adapter=swiftshader', '--enable-features=Vulkan', '--use-vulkan=swiftshader'];
+const SOFTWARE_WEBGPU = [
+  '--no-sandbox',
+  '--enable-unsafe-webgpu',
+  '--use-webgpu-adapter=swiftshader',
+  '--enable-features=Vulkan',
+  '--use-vulkan=swiftshader',
+];
 
 /** Tried in this order; the first that presents a frame is used. */
 export const CANDIDATES = [
@@ -120,9 +126,17 @@ async function tryCandidate(chromium, exe, url, candidate) {
   let browser;
   const logs = [];
   try {
-    browser = await chromium.launch({ executablePath: exe, args: candidate.args, env: { ...process.env, ...candidate.env }, headless: true, timeout: 60_000 });
+    browser = await chromium.launch({
+      executablePath: exe,
+      args: candidate.args,
+      env: { ...process.env, ...candidate.env },
+      headless: true,
+      timeout: 60_000,
+    });
     const page = await browser.newPage();
-    page.on('console', (m) => { if (m.type() === 'error') logs.push(m.text()); });
+    page.on('console', (m) => {
+      if (m.type() === 'error') logs.push(m.text());
+    });
     page.on('pageerror', (e) => logs.push(e.message));
     await page.goto(url, { timeout: 60_000 });
     await page.waitForFunction(() => window.probeResult !== undefined, undefined, { timeout: 60_000 });
@@ -136,14 +150,18 @@ async function tryCandidate(chromium, exe, url, candidate) {
 }
 
 function cacheKey(exe, version) {
-  return createHash('sha256').update(JSON.stringify({ exe, version, CANDIDATES, drivers: vulkanDrivers() })).digest('hex');
+  return createHash('sha256')
+    .update(JSON.stringify({ exe, version, CANDIDATES, drivers: vulkanDrivers() }))
+    .digest('hex');
 }
 
 /** The flag set to launch Chromium with: from the cache, else probed now. Throws if none draws. */
 export async function chromiumWebGpuLaunch({ fresh = false, all = false, log = (s) => console.error(s) } = {}) {
   const exe = chromiumPath();
   if (!existsSync(exe)) {
-    throw new Error(`Chromium not found at ${exe}: install Debian's chromium (apt-get install chromium; npm test does it when run as root) or set CHROMIUM_PATH.`);
+    throw new Error(
+      `Chromium not found at ${exe}: install Debian's chromium (apt-get install chromium; npm test does it when run as root) or set CHROMIUM_PATH.`,
+    );
   }
   const version = chromiumVersion(exe);
   if (!version) throw new Error(`${exe} --version failed: is Chromium installed correctly?`);
@@ -171,7 +189,9 @@ export async function chromiumWebGpuLaunch({ fresh = false, all = false, log = (
         writeFileSync(CACHE, JSON.stringify({ key, launch }, null, 2) + '\n');
         return launch;
       }
-      tried.push(`  ${candidate.name} (${[...candidate.args.filter((a) => !QUIET.includes(a)), ...Object.entries(candidate.env).map(([k, v]) => `${k}=${v}`)].join(' ')}): ${outcome === 'ok' ? 'draws' : outcome.slice(0, 300)}`);
+      tried.push(
+        `  ${candidate.name} (${[...candidate.args.filter((a) => !QUIET.includes(a)), ...Object.entries(candidate.env).map(([k, v]) => `${k}=${v}`)].join(' ')}): ${outcome === 'ok' ? 'draws' : outcome.slice(0, 300)}`,
+      );
     }
   } finally {
     server.close();
@@ -193,7 +213,10 @@ if (import.meta.url === pathToFileURL(process.argv[1] ?? '').href) {
       process.exit(0);
     }
     if (json) console.log(JSON.stringify(launch));
-    else console.log(`Chromium flags: ${launch.name} (${launch.chromium})\n  ${launch.args.join(' ')}${Object.keys(launch.env).length ? `\n  env: ${JSON.stringify(launch.env)}` : ''}`);
+    else
+      console.log(
+        `Chromium flags: ${launch.name} (${launch.chromium})\n  ${launch.args.join(' ')}${Object.keys(launch.env).length ? `\n  env: ${JSON.stringify(launch.env)}` : ''}`,
+      );
   } catch (e) {
     console.error(`[setup] ${e.message}`);
     process.exit(1);

@@ -31,5 +31,9 @@ export function ensureNodeModules(root, { quiet = false } = {}) {
 }
 
 export function isFile(p) {
-  try { return statSync(p).isFile(); } catch { return false; }
+  try {
+    return statSync(p).isFile();
+  } catch {
+    return false;
+  }
 }

@@ -29,7 +29,10 @@ export function ensurePythonEnv(root) {
     execSync(`${python} -m venv .venv`, { cwd: root, stdio: 'inherit' });
   }
   console.error('[setup] installing reference tools into .venv (pip)...');
-  execSync(`${venvPython(root)} -m pip install -q --disable-pip-version-check -r tests/python-requirements.txt`, { cwd: root, stdio: 'inherit' });
+  execSync(`${venvPython(root)} -m pip install -q --disable-pip-version-check -r tests/python-requirements.txt`, {
+    cwd: root,
+    stdio: 'inherit',
+  });
   writeFileSync(stamp, want);
   return venvPython(root);
 }

@@ -11,7 +11,9 @@ function hasVulkanLoader() {
   const r = spawnSync('ldconfig', ['-p'], { encoding: 'utf8' });
   // The cache can list a library that was removed since: check the file.
   if (r.status === 0) return [...r.stdout.matchAll(/libvulkan\.so\.1 .*=> (\S+)/g)].some((m) => existsSync(m[1]));
-  return ['/usr/lib/x86_64-linux-gnu/libvulkan.so.1', '/usr/lib/aarch64-linux-gnu/libvulkan.so.1', '/usr/lib64/libvulkan.so.1'].some((p) => existsSync(p));
+  return ['/usr/lib/x86_64-linux-gnu/libvulkan.so.1', '/usr/lib/aarch64-linux-gnu/libvulkan.so.1', '/usr/lib64/libvulkan.so.1'].some((p) =>
+    existsSync(p),
+  );
 }
 
 /** A GPU device node (NVIDIA, or a DRM render node): Dawn can use its driver, no SwiftShader needed. */
@@ -44,7 +46,7 @@ export function ensureSystemPackages({ chromium = true, purpose = 'the tests', q
     throw new Error(
       `Missing system packages for ${purpose}: ${missing.join(' ')}.\n` +
         `Install them with: sudo apt-get install -y ${missing.join(' ')}\n` +
-        '(libvulkan1 is the Vulkan loader Dawn needs; Debian\'s chromium ships SwiftShader, the Vulkan driver used where there is no GPU.)',
+        "(libvulkan1 is the Vulkan loader Dawn needs; Debian's chromium ships SwiftShader, the Vulkan driver used where there is no GPU.)",
     );
   }
   console.error(`[setup] installing Debian packages for ${purpose}: ${missing.join(' ')} (apt-get)...`);

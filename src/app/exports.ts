@@ -59,7 +59,11 @@ export async function savePly(session: Session, messages: Messages): Promise<voi
       'made by zfp-isosurface-webgpu (marching cubes on the GPU, zfp fixed-rate blocks)',
     ]);
     download(new Blob([ply as BlobPart], { type: 'application/octet-stream' }), `${baseName(session)}${isoTag(session)}.ply`);
-    messages.show(`Exported ${(count / 3).toLocaleString('en-US')} triangles, ${(mesh.positions.length / 3).toLocaleString('en-US')} vertices (${formatBytes(ply.byteLength)}).`, 'info', 4000);
+    messages.show(
+      `Exported ${(count / 3).toLocaleString('en-US')} triangles, ${(mesh.positions.length / 3).toLocaleString('en-US')} vertices (${formatBytes(ply.byteLength)}).`,
+      'info',
+      4000,
+    );
   } catch (e) {
     messages.show(`PLY export: ${(e as Error).message}`);
   }

@@ -18,7 +18,9 @@ export function otsuThreshold(values: ArrayLike<number>, lo: number, hi: number,
   let sumAll = 0;
   for (let b = 0; b < bins; b++) sumAll += b * hist[b];
   const between = new Float64Array(bins);
-  let w0 = 0, sum0 = 0, best = -1;
+  let w0 = 0,
+    sum0 = 0,
+    best = -1;
   for (let b = 0; b < bins - 1; b++) {
     w0 += hist[b];
     sum0 += b * hist[b];
@@ -31,7 +33,8 @@ export function otsuThreshold(values: ArrayLike<number>, lo: number, hi: number,
   }
   if (best <= 0) return (lo + hi) / 2;
   // Splits in an empty gap between the classes score the same: take the gap's middle.
-  let first = -1, last = -1;
+  let first = -1,
+    last = -1;
   for (let b = 0; b < bins - 1; b++) {
     if (between[b] >= best * (1 - 1e-9)) {
       if (first < 0) first = b;
@@ -39,7 +42,7 @@ export function otsuThreshold(values: ArrayLike<number>, lo: number, hi: number,
     }
   }
   // The boundary after bin `first` .. after bin `last`.
-  return lo + ((first + last) / 2 + 1) / bins * (hi - lo);
+  return lo + (((first + last) / 2 + 1) / bins) * (hi - lo);
 }
 
 /** Midpoints (min + max) / 2 of the blocks that are not constant, from [min, max] pairs. */

@@ -50,7 +50,9 @@ async function start(): Promise<void> {
     return show(text, kind, timeoutMs);
   };
 
-  const gpu = await startGpu(stage, messages, 'page.device', () => { state.status = 'error'; });
+  const gpu = await startGpu(stage, messages, 'page.device', () => {
+    state.status = 'error';
+  });
   if (!gpu) return;
   state.adapter = gpu.adapter;
   setInfoList(byId('gpu-info'), [
@@ -87,10 +89,8 @@ async function start(): Promise<void> {
     },
     (iso) => session.setIsovalue(iso),
   );
-  const spacing = new SpacingControl(
-    [byId('spacing-x'), byId('spacing-y'), byId('spacing-z')],
-    byId('spacing-note'),
-    (s) => session.setSpacing(s),
+  const spacing = new SpacingControl([byId('spacing-x'), byId('spacing-y'), byId('spacing-z')], byId('spacing-note'), (s) =>
+    session.setSpacing(s),
   );
   const budget = new BudgetControl(byId('budget-mb'), byId('budget-bar'), byId('budget-note'), defaultBudgetBytes(gpu.limits), (bytes) =>
     session.current?.iso.setMemoryBudget(bytes),
@@ -187,7 +187,8 @@ async function start(): Promise<void> {
   };
   const openFiles = (files: File[]): void => {
     const stack = files.length > 1 && files.every((f) => /\.tiff?$/i.test(f.name));
-    if (files.length > 1 && !stack) messages.show(`Opening ${files[0].name} (one volume at a time; ${files.length - 1} other file(s) ignored).`, 'info', 4000);
+    if (files.length > 1 && !stack)
+      messages.show(`Opening ${files[0].name} (one volume at a time; ${files.length - 1} other file(s) ignored).`, 'info', 4000);
     open(() => loader.loadFiles(files));
   };
   acceptDrops(byId('drop-overlay'), openFiles);
@@ -203,7 +204,11 @@ async function start(): Promise<void> {
     savePly: () => void savePly(session, messages),
     copyLink: () => {
       if (session.current && session.current.opened.kind !== 'default' && !volumeUrl) {
-        messages.show('The link keeps the view and isovalue; the volume came from a local file, so open it again after following the link.', 'info', 6000);
+        messages.show(
+          'The link keeps the view and isovalue; the volume came from a local file, so open it again after following the link.',
+          'info',
+          6000,
+        );
       }
       void copyLink(link!, messages);
     },
@@ -234,7 +239,10 @@ async function start(): Promise<void> {
   const url = urlParameter();
   const storeUrl = storeParameter();
   storeView = mountStoreView({
-    gpu, budgetBytes: () => budget.bytes, onError: (m) => messages.show(m), onNotice: (m) => messages.show(m, 'info', 8000),
+    gpu,
+    budgetBytes: () => budget.bytes,
+    onError: (m) => messages.show(m),
+    onNotice: (m) => messages.show(m, 'info', 8000),
     // each level the store's controller shows becomes the volume on screen; a finer or coarser one keeps the camera
     install: (v, level, first) => {
       if (!first) session.pendingCamera = viewer.camera.getState();

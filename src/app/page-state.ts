@@ -46,7 +46,15 @@ declare global {
 }
 
 export function publishPageState(): PageState {
-  const state: PageState = { status: 'loading', framesDrawn: () => 0, statsCount: 0, loads: 0, loading: false, messages: [], benchRunning: false };
+  const state: PageState = {
+    status: 'loading',
+    framesDrawn: () => 0,
+    statsCount: 0,
+    loads: 0,
+    loading: false,
+    messages: [],
+    benchRunning: false,
+  };
   window.zfpiso = state;
   return state;
 }

@@ -5,7 +5,12 @@ import { BROWSER_HELP, requestGpu, WebGpuUnavailableError, type GpuContext } fro
 import { type Messages, showFatal } from './messages.ts';
 
 /** Requests the device; on failure shows the reason over `stage`, calls `onFatal` and returns undefined. */
-export async function startGpu(stage: HTMLElement, messages: Messages, label: string, onFatal: () => void = () => {}): Promise<GpuContext | undefined> {
+export async function startGpu(
+  stage: HTMLElement,
+  messages: Messages,
+  label: string,
+  onFatal: () => void = () => {},
+): Promise<GpuContext | undefined> {
   try {
     return await requestGpu(navigator.gpu, {
       label,

@@ -67,7 +67,10 @@ export interface BenchResult {
 export function summarizeMode(mode: BenchMode, records: BenchRecord[]): BenchSummary {
   const kept = records.filter((r) => r.mode === mode && !r.discarded);
   const mean = (f: (r: BenchRecord) => number) => kept.reduce((s, r) => s + f(r), 0) / Math.max(1, kept.length);
-  const gpu = summarize(kept.map((r) => r.gpuMs), false);
+  const gpu = summarize(
+    kept.map((r) => r.gpuMs),
+    false,
+  );
   return {
     mode,
     count: kept.length,
@@ -111,7 +114,17 @@ export async function runBenchmark(engine: SurfaceEngine, options: BenchOptions)
 }
 
 const CSV_COLUMNS: (keyof BenchRecord)[] = [
-  'mode', 'index', 'iso', 'gpuMs', 'wallMs', 'hitRate', 'activeBlocks', 'newBlocks', 'occupiedBlocks', 'triangles', 'discarded',
+  'mode',
+  'index',
+  'iso',
+  'gpuMs',
+  'wallMs',
+  'hitRate',
+  'activeBlocks',
+  'newBlocks',
+  'occupiedBlocks',
+  'triangles',
+  'discarded',
 ];
 
 export function recordsToCsv(records: BenchRecord[]): string {

@@ -10,7 +10,14 @@ import type { GpuContext } from '../gpu/device.ts';
 import { Isosurface } from '../isosurface/isosurface.ts';
 import { isStoreInput, openStoreInput, type StoreRecord } from '../store/cli-input.ts';
 import { StoreError } from '../store/zarr/errors.ts';
-import { checkValueRange, describeOpenedVolume, isDefaultVolume, openDefaultVolume, openVolumeBytes, VolumeFileError } from '../volume/open-volume.ts';
+import {
+  checkValueRange,
+  describeOpenedVolume,
+  isDefaultVolume,
+  openDefaultVolume,
+  openVolumeBytes,
+  VolumeFileError,
+} from '../volume/open-volume.ts';
 import { ZfpFormatError } from '../zfp/format.ts';
 import { UsageError } from './command.ts';
 
@@ -28,7 +35,12 @@ export interface OpenedInput {
 }
 
 /** --level is for stores; `budget`: the pipeline's memory budget (for a store: pools, cache and vertices together). */
-export async function openInputSurface(ctx: { log(m: string): void }, gpu: GpuContext, path: string, opts: { rate?: number; level?: number; budget?: number }): Promise<OpenedInput> {
+export async function openInputSurface(
+  ctx: { log(m: string): void },
+  gpu: GpuContext,
+  path: string,
+  opts: { rate?: number; level?: number; budget?: number },
+): Promise<OpenedInput> {
   if (isStoreInput(path)) {
     try {
       const s = await openStoreInput(gpu, path, opts.level, opts.budget, (m) => ctx.log(`error: ${m}`));
@@ -53,7 +65,9 @@ export async function openInputSurface(ctx: { log(m: string): void }, gpu: GpuCo
   }
   let v;
   try {
-    v = bytes ? await openVolumeBytes(gpu.device, bytes, basename(path), { rate, reader: 'command' }) : await openDefaultVolume(gpu.device, rate === undefined ? {} : { rate });
+    v = bytes
+      ? await openVolumeBytes(gpu.device, bytes, basename(path), { rate, reader: 'command' })
+      : await openDefaultVolume(gpu.device, rate === undefined ? {} : { rate });
   } catch (e) {
     if (e instanceof VolumeFileError || e instanceof ZfpFormatError) throw new UsageError(e.message);
     throw e;
@@ -71,5 +85,14 @@ export async function openInputSurface(ctx: { log(m: string): void }, gpu: GpuCo
   }
   const stream = v.stream;
   const made = iso;
-  return { iso: made, how: describeOpenedVolume(v), rate: v.rate, notes: v.notes, destroy: () => { made.destroy(); stream.destroy(); } };
+  return {
+    iso: made,
+    how: describeOpenedVolume(v),
+    rate: v.rate,
+    notes: v.notes,
+    destroy: () => {
+      made.destroy();
+      stream.destroy();
+    },
+  };
 }

@@ -30,7 +30,9 @@ export function publishState<T extends ExamplePageState>(state: T): T {
 
 /** Requests the device (app/start-gpu.ts) and lists the adapter; on failure the page says why and this returns undefined. */
 export async function startGpu(stage: HTMLElement, messages: Messages, label: string): Promise<GpuContext | undefined> {
-  const gpu = await startPageGpu(stage, messages, label, () => { document.body.dataset.status = 'error'; });
+  const gpu = await startPageGpu(stage, messages, label, () => {
+    document.body.dataset.status = 'error';
+  });
   if (gpu) {
     setInfoList(byId('gpu-info'), [
       ['adapter', describeAdapter(gpu.adapter)],
@@ -144,7 +146,11 @@ export interface ExampleViewer {
  * over the view), a Viewer whose camera is kept in the URL hash, and the test
  * state wired to it. Undefined when WebGPU is unavailable (the page says why).
  */
-export async function startExampleViewer(state: ExamplePageState, deviceLabel: string, clearColor: GPUColor): Promise<ExampleViewer | undefined> {
+export async function startExampleViewer(
+  state: ExamplePageState,
+  deviceLabel: string,
+  clearColor: GPUColor,
+): Promise<ExampleViewer | undefined> {
   const stage = byId('stage');
   const messages = new Messages(byId('messages'));
   const gpu = await startGpu(stage, messages, deviceLabel);

@@ -33,8 +33,10 @@ export function detectFile(fileName: string, head: Uint8Array): DetectedFile {
   const name = parseVolumeName(fileName);
   if (hasZfpMagic(head)) return { kind: 'zfp', name, why: 'starts with the zfp magic "zfp"' };
   if (ascii(head, 0, 4) === 'NRRD') return { kind: 'nrrd', name, why: 'starts with "NRRD"' };
-  if ((head[0] === 0x49 && head[1] === 0x49 && (head[2] === 42 || head[2] === 43) && head[3] === 0) ||
-      (head[0] === 0x4d && head[1] === 0x4d && head[2] === 0 && (head[3] === 42 || head[3] === 43))) {
+  if (
+    (head[0] === 0x49 && head[1] === 0x49 && (head[2] === 42 || head[2] === 43) && head[3] === 0) ||
+    (head[0] === 0x4d && head[1] === 0x4d && head[2] === 0 && (head[3] === 42 || head[3] === 43))
+  ) {
     return { kind: 'tiff', name, why: 'TIFF byte-order mark' };
   }
   if (ascii(head, 0, 4) === 'LASF') {

@@ -22,7 +22,13 @@ export function bufferLayout(device: GPUDevice, label: string, kinds: readonly B
 export type Resource = GPUBuffer | GPUBufferBinding;
 
 /** A bind group of buffers (or buffer bindings) at bindings firstBinding, firstBinding + 1, ... */
-export function bindGroup(device: GPUDevice, label: string, layout: GPUBindGroupLayout, resources: readonly Resource[], firstBinding = 0): GPUBindGroup {
+export function bindGroup(
+  device: GPUDevice,
+  label: string,
+  layout: GPUBindGroupLayout,
+  resources: readonly Resource[],
+  firstBinding = 0,
+): GPUBindGroup {
   return device.createBindGroup({
     label,
     layout,

@@ -50,7 +50,12 @@ export function isCommandEncoder(t: ComputeTarget): t is GPUCommandEncoder {
 }
 
 /** Runs `record` in `target` if it is a pass, else in a new pass of the command encoder. */
-export function inPass(target: ComputeTarget, label: string, record: (pass: GPUComputePassEncoder) => void, timestampWrites?: GPUComputePassTimestampWrites): void {
+export function inPass(
+  target: ComputeTarget,
+  label: string,
+  record: (pass: GPUComputePassEncoder) => void,
+  timestampWrites?: GPUComputePassTimestampWrites,
+): void {
   if (!isCommandEncoder(target)) {
     record(target);
     return;

@@ -21,7 +21,11 @@ export function createBuffer(
 /** Copies `size` bytes at `offset` of `source` to the CPU (waits for the GPU). */
 export async function readBuffer(device: GPUDevice, source: GPUBuffer, offset = 0, size = source.size - offset): Promise<ArrayBuffer> {
   const aligned = Math.ceil(size / 4) * 4;
-  const staging = device.createBuffer({ label: 'readBuffer.staging', size: Math.max(4, aligned), usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+  const staging = device.createBuffer({
+    label: 'readBuffer.staging',
+    size: Math.max(4, aligned),
+    usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST,
+  });
   try {
     const encoder = device.createCommandEncoder({ label: 'readBuffer' });
     if (aligned > 0) encoder.copyBufferToBuffer(source, offset, staging, 0, aligned);

@@ -21,12 +21,7 @@ const RAISED_LIMITS = [
 ] as const;
 
 /** Features used when present; nothing requires them. */
-const WANTED_FEATURES: GPUFeatureName[] = [
-  'timestamp-query',
-  'subgroups' as GPUFeatureName,
-  'indirect-first-instance',
-  'shader-f16',
-];
+const WANTED_FEATURES: GPUFeatureName[] = ['timestamp-query', 'subgroups' as GPUFeatureName, 'indirect-first-instance', 'shader-f16'];
 
 export interface AdapterSummary {
   vendor: string;

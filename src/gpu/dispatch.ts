@@ -29,7 +29,11 @@ export function dispatchGrid(workgroups: number, maxPerDimension = DEFAULT_MAX_W
 }
 
 /** Records a direct dispatch of `workgroups` linear workgroups (nothing for 0). */
-export function dispatchWorkgroups(pass: GPUComputePassEncoder, workgroups: number, maxPerDimension = DEFAULT_MAX_WORKGROUPS_PER_DIMENSION): void {
+export function dispatchWorkgroups(
+  pass: GPUComputePassEncoder,
+  workgroups: number,
+  maxPerDimension = DEFAULT_MAX_WORKGROUPS_PER_DIMENSION,
+): void {
   if (workgroups <= 0) return;
   if (workgroups <= maxPerDimension) {
     pass.dispatchWorkgroups(workgroups);

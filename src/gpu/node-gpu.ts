@@ -68,7 +68,9 @@ function hasVulkanLoader(): boolean {
   const r = spawnSync('ldconfig', ['-p'], { encoding: 'utf8' });
   // The cache can list a library that was removed since: check the file.
   if (r.status === 0) return [...r.stdout.matchAll(/libvulkan\.so\.1 .*=> (\S+)/g)].some((m) => existsSync(m[1]));
-  return ['/usr/lib/x86_64-linux-gnu/libvulkan.so.1', '/usr/lib/aarch64-linux-gnu/libvulkan.so.1', '/usr/lib64/libvulkan.so.1'].some((p) => existsSync(p));
+  return ['/usr/lib/x86_64-linux-gnu/libvulkan.so.1', '/usr/lib/aarch64-linux-gnu/libvulkan.so.1', '/usr/lib64/libvulkan.so.1'].some((p) =>
+    existsSync(p),
+  );
 }
 
 /** Why Dawn found no adapter, and what to install: advice for a command line, not a browser. */
@@ -91,7 +93,8 @@ export async function requestNodeGpu(options: RequestGpuOptions = {}, choice = a
     return await requestNodeGpuOrFail(options, choice);
   } catch (e) {
     // requestGpu's message is the browser's advice; say what Node needs.
-    if (e instanceof WebGpuUnavailableError && /no GPU adapter|navigator\.gpu/.test(e.message)) throw new WebGpuUnavailableError(nodeGpuHelp());
+    if (e instanceof WebGpuUnavailableError && /no GPU adapter|navigator\.gpu/.test(e.message))
+      throw new WebGpuUnavailableError(nodeGpuHelp());
     throw e;
   }
 }

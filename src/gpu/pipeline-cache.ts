@@ -95,7 +95,12 @@ function pipelineLayout(device: GPUDevice, cache: DeviceCache, label: string, gr
   return layout;
 }
 
-function shaderModule(device: GPUDevice, cache: DeviceCache, label: string, parts: WgslPart[]): { id: number; module: Promise<GPUShaderModule> } {
+function shaderModule(
+  device: GPUDevice,
+  cache: DeviceCache,
+  label: string,
+  parts: WgslPart[],
+): { id: number; module: Promise<GPUShaderModule> } {
   const code = composeWgsl(...parts);
   let entry = cache.modules.get(code);
   if (!entry) {
@@ -112,7 +117,13 @@ function shaderModule(device: GPUDevice, cache: DeviceCache, label: string, part
  * these constants and layout: compiled once per device, then shared.
  * Rejects with WgslCompileError (messages mapped to the snippet files).
  */
-export function createComputePipeline(device: GPUDevice, label: string, parts: WgslPart[], entryPoint: string, options: ComputePipelineOptions = {}): Promise<GPUComputePipeline> {
+export function createComputePipeline(
+  device: GPUDevice,
+  label: string,
+  parts: WgslPart[],
+  entryPoint: string,
+  options: ComputePipelineOptions = {},
+): Promise<GPUComputePipeline> {
   const cache = cacheOf(device);
   const { id, module } = shaderModule(device, cache, label, parts);
   const spec = options.layout ?? 'auto';

@@ -28,7 +28,13 @@ export class UniformSlots {
   private allocate(data: Uint32Array<ArrayBuffer>): GPUBufferBinding {
     const page = Math.floor(this.used / PER_PAGE);
     if (page === this.pages.length) {
-      this.pages.push(this.device.createBuffer({ label: `${this.label}.uniforms${page}`, size: SLOT * PER_PAGE, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST }));
+      this.pages.push(
+        this.device.createBuffer({
+          label: `${this.label}.uniforms${page}`,
+          size: SLOT * PER_PAGE,
+          usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
+        }),
+      );
     }
     const offset = (this.used % PER_PAGE) * SLOT;
     this.used++;

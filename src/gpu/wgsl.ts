@@ -36,7 +36,12 @@ export class WgslCompileError extends Error {
  * the snippet files) if it has errors, instead of leaving a silent invalid
  * module. Compute pipelines come from pipeline-cache.ts (per device, shared).
  */
-export async function createShaderModule(device: GPUDevice, label: string, parts: WgslPart[], code = composeWgsl(...parts)): Promise<GPUShaderModule> {
+export async function createShaderModule(
+  device: GPUDevice,
+  label: string,
+  parts: WgslPart[],
+  code = composeWgsl(...parts),
+): Promise<GPUShaderModule> {
   const module = device.createShaderModule({ label, code });
   const info = await module.getCompilationInfo();
   const errors = info.messages.filter((m) => m.type === 'error');

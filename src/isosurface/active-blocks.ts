@@ -93,12 +93,22 @@ export class ActiveBlocks {
     this.blockOffsets = storageBuffer(device, 'Isosurface.groupBlockOffsets', entries * 4);
     this.blockIds = storageBuffer(device, 'Isosurface.groupBlockIds', entries * 4);
     this.activeIds = storageBuffer(device, 'Isosurface.activeIds', blockCount * 4);
-    this.groupParams = device.createBuffer({ label: 'Isosurface.groupParams', size: 32, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
+    this.groupParams = device.createBuffer({
+      label: 'Isosurface.groupParams',
+      size: 32,
+      usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
+    });
     device.queue.writeBuffer(this.groupParams, 0, new Uint32Array([...grid, edge, this.groupCount, this.groupSize, 0, 0]));
     parts.counters.set('groups', this.groupCount);
     parts.counters.set('groupSize', this.groupSize);
     this.common = bindGroup(device, 'Isosurface.activeGroups.bindGroup', layouts.common, [parts.volume, this.groupParams]);
-    this.markGroupsGroup = bindGroup(device, 'Isosurface.markActiveGroups.bindGroup', layouts.markGroups, [this.groupRanges, this.groupMask], 2);
+    this.markGroupsGroup = bindGroup(
+      device,
+      'Isosurface.markActiveGroups.bindGroup',
+      layouts.markGroups,
+      [this.groupRanges, this.groupMask],
+      2,
+    );
     this.markBlocksGroup = bindGroup(
       device,
       'Isosurface.markGroupBlocks.bindGroup',
@@ -107,9 +117,17 @@ export class ActiveBlocks {
       4,
     );
     if (pool && chunkPipelines) {
-      if (pool.chunkBlocks !== edge) throw new RangeError(`${pool.info.fileName}: the groups must be the chunks (groupEdgeBlocks ${edge}, chunk edge ${pool.chunkBlocks} blocks)`);
-      const list = device.createBuffer({ label: 'Isosurface.changedChunks', size: Math.max(4, pool.chunkCount * 4), usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST });
-      const uniform = (label: string, size: number) => device.createBuffer({ label, size, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
+      if (pool.chunkBlocks !== edge)
+        throw new RangeError(
+          `${pool.info.fileName}: the groups must be the chunks (groupEdgeBlocks ${edge}, chunk edge ${pool.chunkBlocks} blocks)`,
+        );
+      const list = device.createBuffer({
+        label: 'Isosurface.changedChunks',
+        size: Math.max(4, pool.chunkCount * 4),
+        usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
+      });
+      const uniform = (label: string, size: number) =>
+        device.createBuffer({ label, size, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
       const decodeParams = uniform('Isosurface.changedChunks.decodeParams', 16);
       const regionParams = uniform('Isosurface.changedChunks.regionParams', 32);
       const groupParams = uniform('Isosurface.changedChunks.groupParams', 16);
@@ -122,7 +140,11 @@ export class ActiveBlocks {
         groupParams,
         neighbourhood: chunkPipelines.neighbourhood,
         groups: chunkPipelines.groups,
-        neighbourhoodGroup: bindGroup(device, 'Isosurface.neighbourhoodRange.bindGroup', layouts.neighbourhood, [parts.volume, this.blockRanges, this.neighbourhoodRanges]),
+        neighbourhoodGroup: bindGroup(device, 'Isosurface.neighbourhoodRange.bindGroup', layouts.neighbourhood, [
+          parts.volume,
+          this.blockRanges,
+          this.neighbourhoodRanges,
+        ]),
         regionGroup: bindGroup(device, 'Isosurface.neighbourhoodRangeChunks.bindGroup', layouts.region, [list, regionParams]),
         loadGroup: bindGroup(device, 'Isosurface.groupRange.bindGroup', layouts.load, [this.neighbourhoodRanges, this.groupRanges]),
         changedGroup: bindGroup(device, 'Isosurface.groupRangeChunks.bindGroup', layouts.changed, [list, groupParams]),
@@ -155,7 +177,13 @@ export class ActiveBlocks {
     u.words.set([count, 0, 0, 0]);
     device.queue.writeBuffer(u.groupParams, 0, u.words, 0, 4);
     const pass = encoder.beginComputePass({ label: 'Isosurface.chunkUpdates' });
-    this.parts.decoder.encodeChunkBlockRanges(pass, { pool: u.pool, chunkList: u.list, params: u.decodeParams, count, ranges: this.blockRanges });
+    this.parts.decoder.encodeChunkBlockRanges(pass, {
+      pool: u.pool,
+      chunkList: u.list,
+      params: u.decodeParams,
+      count,
+      ranges: this.blockRanges,
+    });
     pass.setPipeline(u.neighbourhood);
     pass.setBindGroup(0, u.neighbourhoodGroup);
     pass.setBindGroup(1, u.regionGroup);
@@ -185,23 +213,52 @@ export class ActiveBlocks {
     const groups = isosurfaceWgsl.activeGroups;
     const pooled = parts.stream.addressing === 'pool';
     const [neighbourhood, groupRange, markGroups, markBlocks, chunkNeighbourhood, chunkGroups] = await Promise.all([
-      createComputePipeline(device, 'Isosurface.neighbourhoodRange', isosurfaceWgsl.activeBlocks, 'neighbourhood_range', { layout: [neighbourhoodLayout], constants }),
+      createComputePipeline(device, 'Isosurface.neighbourhoodRange', isosurfaceWgsl.activeBlocks, 'neighbourhood_range', {
+        layout: [neighbourhoodLayout],
+        constants,
+      }),
       createComputePipeline(device, 'Isosurface.groupRange', groups, 'group_range', { layout: [layouts.common, layouts.load], constants }),
-      createComputePipeline(device, 'Isosurface.markActiveGroups', groups, 'mark_active_groups', { layout: [layouts.common, layouts.markGroups], constants }),
-      createComputePipeline(device, 'Isosurface.markGroupBlocks', groups, 'mark_group_blocks', { layout: [layouts.common, layouts.markBlocks], constants }),
-      pooled ? createComputePipeline(device, 'Isosurface.neighbourhoodRangeChunks', isosurfaceWgsl.activeBlocks, 'neighbourhood_range_chunks', { layout: [neighbourhoodLayout, layouts.region], constants }) : undefined,
-      pooled ? createComputePipeline(device, 'Isosurface.groupRangeChunks', groups, 'group_range_chunks', { layout: [layouts.common, layouts.load, layouts.changed], constants }) : undefined,
+      createComputePipeline(device, 'Isosurface.markActiveGroups', groups, 'mark_active_groups', {
+        layout: [layouts.common, layouts.markGroups],
+        constants,
+      }),
+      createComputePipeline(device, 'Isosurface.markGroupBlocks', groups, 'mark_group_blocks', {
+        layout: [layouts.common, layouts.markBlocks],
+        constants,
+      }),
+      pooled
+        ? createComputePipeline(device, 'Isosurface.neighbourhoodRangeChunks', isosurfaceWgsl.activeBlocks, 'neighbourhood_range_chunks', {
+            layout: [neighbourhoodLayout, layouts.region],
+            constants,
+          })
+        : undefined,
+      pooled
+        ? createComputePipeline(device, 'Isosurface.groupRangeChunks', groups, 'group_range_chunks', {
+            layout: [layouts.common, layouts.load, layouts.changed],
+            constants,
+          })
+        : undefined,
     ]);
     const chunkPipelines = chunkNeighbourhood && chunkGroups ? { neighbourhood: chunkNeighbourhood, groups: chunkGroups } : undefined;
     const active = new ActiveBlocks(device, parts, markGroups, markBlocks, layouts, chunkPipelines);
     const encoder = device.createCommandEncoder({ label: 'Isosurface.neighbourhoodRanges' });
     const pass = encoder.beginComputePass({ label: 'Isosurface.neighbourhoodRanges' });
     pass.setPipeline(neighbourhood);
-    pass.setBindGroup(0, bindGroup(device, 'Isosurface.neighbourhoodRange.bindGroup', neighbourhoodLayout, [parts.volume, active.blockRanges, active.neighbourhoodRanges]));
+    pass.setBindGroup(
+      0,
+      bindGroup(device, 'Isosurface.neighbourhoodRange.bindGroup', neighbourhoodLayout, [
+        parts.volume,
+        active.blockRanges,
+        active.neighbourhoodRanges,
+      ]),
+    );
     dispatchWorkgroups(pass, Math.ceil(parts.stream.info.blockCount / 64), parts.maxWorkgroupsPerDimension);
     pass.setPipeline(groupRange);
     pass.setBindGroup(0, active.common);
-    pass.setBindGroup(1, bindGroup(device, 'Isosurface.groupRange.bindGroup', layouts.load, [active.neighbourhoodRanges, active.groupRanges]));
+    pass.setBindGroup(
+      1,
+      bindGroup(device, 'Isosurface.groupRange.bindGroup', layouts.load, [active.neighbourhoodRanges, active.groupRanges]),
+    );
     dispatchWorkgroups(pass, Math.ceil(active.groupCount / 64), parts.maxWorkgroupsPerDimension);
     pass.end();
     device.queue.submit([encoder.finish()]);
@@ -238,7 +295,13 @@ export class ActiveBlocks {
     pass.end();
     const entries = counters.count('groupBlocks');
     scan.encode(encoder, { input: this.blockMask, output: this.blockOffsets, count: entries, totalOut: counters.count('active') });
-    compact.encode(encoder, { mask: this.blockMask, offsets: this.blockOffsets, values: this.blockIds, output: this.activeIds, count: entries });
+    compact.encode(encoder, {
+      mask: this.blockMask,
+      offsets: this.blockOffsets,
+      values: this.blockIds,
+      output: this.activeIds,
+      count: entries,
+    });
   }
 
   /** The per-block (min, max) ranges, 2 f32 per block in raster block order (waits for the GPU). */
@@ -254,8 +317,17 @@ export class ActiveBlocks {
   private buffers(): GPUBuffer[] {
     const u = this.chunkUpdate;
     return [
-      this.blockRanges, this.neighbourhoodRanges, this.groupRanges, this.groupMask, this.groupOffsets, this.activeGroupIds,
-      this.blockMask, this.blockOffsets, this.blockIds, this.activeIds, this.groupParams,
+      this.blockRanges,
+      this.neighbourhoodRanges,
+      this.groupRanges,
+      this.groupMask,
+      this.groupOffsets,
+      this.activeGroupIds,
+      this.blockMask,
+      this.blockOffsets,
+      this.blockIds,
+      this.activeIds,
+      this.groupParams,
       ...(u ? [u.list, u.decodeParams, u.regionParams, u.groupParams] : []),
     ];
   }
@@ -295,7 +367,12 @@ interface ChunkUpdate {
 
 /** 2 f32 per block, all [FLT_MAX, -FLT_MAX]: no isovalue falls in them. */
 function emptyRanges(device: GPUDevice, blocks: number): GPUBuffer {
-  const buffer = device.createBuffer({ label: 'Isosurface.blockRanges', size: Math.max(8, blocks * 8), usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST, mappedAtCreation: true });
+  const buffer = device.createBuffer({
+    label: 'Isosurface.blockRanges',
+    size: Math.max(8, blocks * 8),
+    usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST,
+    mappedAtCreation: true,
+  });
   const f = new Float32Array(buffer.getMappedRange());
   for (let i = 0; i < f.length; i += 2) {
     f[i] = 3.4028234663852886e38;

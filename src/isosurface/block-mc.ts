@@ -113,9 +113,18 @@ export class BlockMarchingCubes {
     };
     const constants = { MAX_WG_PER_DIM: parts.maxWorkgroupsPerDimension };
     const [classify, expand, emit, plan] = await Promise.all([
-      createComputePipeline(device, 'Isosurface.classifyBlocks', isosurfaceWgsl.blockClassify, 'classify_blocks', { layout: [layouts.common, layouts.classify], constants }),
-      createComputePipeline(device, 'Isosurface.expandCells', isosurfaceWgsl.blockExpand, 'expand_cells', { layout: [layouts.expand], constants }),
-      createComputePipeline(device, 'Isosurface.emitVertices', isosurfaceWgsl.blockEmit, 'emit_vertices', { layout: [layouts.common, layouts.cells, layouts.shard], constants }),
+      createComputePipeline(device, 'Isosurface.classifyBlocks', isosurfaceWgsl.blockClassify, 'classify_blocks', {
+        layout: [layouts.common, layouts.classify],
+        constants,
+      }),
+      createComputePipeline(device, 'Isosurface.expandCells', isosurfaceWgsl.blockExpand, 'expand_cells', {
+        layout: [layouts.expand],
+        constants,
+      }),
+      createComputePipeline(device, 'Isosurface.emitVertices', isosurfaceWgsl.blockEmit, 'emit_vertices', {
+        layout: [layouts.common, layouts.cells, layouts.shard],
+        constants,
+      }),
       createComputePipeline(device, 'Isosurface.planVertices', isosurfaceWgsl.plan, 'plan_vertices', { layout: [layouts.plan], constants }),
     ]);
     return new BlockMarchingCubes(device, parts, layouts, classify, expand, emit, plan, capacity, vertexCapacity);
@@ -189,11 +198,36 @@ export class BlockMarchingCubes {
       slotData,
       shards: shards.shards,
       common: bindGroup(d, 'Isosurface.blockMc.bindGroup', L.common, [p.volume, this.caseTable, slotData, p.blockToSlot, p.activeIds]),
-      classify: bindGroup(d, 'Isosurface.classifyBlocks.bindGroup', L.classify, [counters, e.cases, e.vertexCounts, e.cellCounts, this.occupied]),
-      expand: bindGroup(d, 'Isosurface.expandCells.bindGroup', L.expand, [this.caseTable, counters, e.cases, e.cellCounts, e.cellOffsets, e.vertexOffsets, c.records, c.first]),
+      classify: bindGroup(d, 'Isosurface.classifyBlocks.bindGroup', L.classify, [
+        counters,
+        e.cases,
+        e.vertexCounts,
+        e.cellCounts,
+        this.occupied,
+      ]),
+      expand: bindGroup(d, 'Isosurface.expandCells.bindGroup', L.expand, [
+        this.caseTable,
+        counters,
+        e.cases,
+        e.cellCounts,
+        e.cellOffsets,
+        e.vertexOffsets,
+        c.records,
+        c.first,
+      ]),
       cells: bindGroup(d, 'Isosurface.emitVertices.bindGroup', L.cells, [c.records, c.first]),
-      plan: bindGroup(d, 'Isosurface.planVertices.bindGroup', L.plan, [counters, e.vertexOffsets, e.vertexCounts, e.cellOffsets, e.cellCounts, shards.shardInfo, shards.drawArgs]),
-      shardGroups: shards.shards.map((s, k) => bindGroup(d, `Isosurface.shard${k}.bindGroup`, L.shard, [shards.shardRecord(k), s.vertices, s.normals])),
+      plan: bindGroup(d, 'Isosurface.planVertices.bindGroup', L.plan, [
+        counters,
+        e.vertexOffsets,
+        e.vertexCounts,
+        e.cellOffsets,
+        e.cellCounts,
+        shards.shardInfo,
+        shards.drawArgs,
+      ]),
+      shardGroups: shards.shards.map((s, k) =>
+        bindGroup(d, `Isosurface.shard${k}.bindGroup`, L.shard, [shards.shardRecord(k), s.vertices, s.normals]),
+      ),
     };
     return this.groups;
   }

@@ -52,7 +52,22 @@ export class Counters {
   }
 
   /** Host-written words (capacities); queue-ordered, so call between submissions. */
-  set(name: 'blocks' | 'slots' | 'vertexCapacity' | 'cellCapacity' | 'groups' | 'groupSize' | 'shards' | 'perShard' | 'slotsUsed' | 'status' | 'request' | 'logSize', value: number): void {
+  set(
+    name:
+      | 'blocks'
+      | 'slots'
+      | 'vertexCapacity'
+      | 'cellCapacity'
+      | 'groups'
+      | 'groupSize'
+      | 'shards'
+      | 'perShard'
+      | 'slotsUsed'
+      | 'status'
+      | 'request'
+      | 'logSize',
+    value: number,
+  ): void {
     this.word[0] = value;
     this.device.queue.writeBuffer(this.buffer, C[name] * 4, this.word);
   }

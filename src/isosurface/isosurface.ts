@@ -100,7 +100,8 @@ export class Isosurface {
    */
   static async create(gpu: GpuContext, stream: BlockSource, options: IsosurfaceOptions = {}): Promise<Isosurface> {
     const maxInFlight = options.maxSurfacesInFlight ?? DEFAULT_SURFACES_IN_FLIGHT;
-    if (!Number.isInteger(maxInFlight) || maxInFlight < 1) throw new RangeError(`maxSurfacesInFlight must be a positive integer (got ${maxInFlight})`);
+    if (!Number.isInteger(maxInFlight) || maxInFlight < 1)
+      throw new RangeError(`maxSurfacesInFlight must be a positive integer (got ${maxInFlight})`);
     const budget = options.memoryBudgetBytes ?? defaultMemoryBudget(gpu.device.limits);
     const pipeline = await IsosurfacePipeline.create(gpu, stream, options, budget);
     return new Isosurface(gpu, pipeline, new StatsReadback(gpu.device, options.timing ?? true), budget, maxInFlight);
@@ -166,7 +167,15 @@ export class Isosurface {
     const f = Math.fround(iso);
     const replaced = this.pending;
     if (replaced) for (const w of replaced.waiters) w.reject(new IsosurfaceSupersededError(replaced.iso, f));
-    this.pending = { iso: f, waiters: waiter ? [waiter] : [], grew: false, attempts: 0, earlierMs: 0, earlierNew: 0, cacheEpoch: this.cacheEpoch };
+    this.pending = {
+      iso: f,
+      waiters: waiter ? [waiter] : [],
+      grew: false,
+      attempts: 0,
+      earlierMs: 0,
+      earlierNew: 0,
+      cacheEpoch: this.cacheEpoch,
+    };
     this.pump();
   }
 
@@ -222,8 +231,17 @@ export class Isosurface {
   }
 
   /** Waits for the attempt's error scopes and statistics (off the critical path) and acts on them. */
-  private async settle(a: Attempt, staging: GPUBuffer | undefined, thrown: Error | undefined, validation: Promise<GPUError | null>, oom: Promise<GPUError | null>, submittedAt: number): Promise<void> {
-    const raw = staging ? this.stats.read(staging, submittedAt).catch((e: unknown) => (e instanceof Error ? e : new Error(String(e)))) : undefined;
+  private async settle(
+    a: Attempt,
+    staging: GPUBuffer | undefined,
+    thrown: Error | undefined,
+    validation: Promise<GPUError | null>,
+    oom: Promise<GPUError | null>,
+    submittedAt: number,
+  ): Promise<void> {
+    const raw = staging
+      ? this.stats.read(staging, submittedAt).catch((e: unknown) => (e instanceof Error ? e : new Error(String(e))))
+      : undefined;
     let v: GPUError | null;
     let m: GPUError | null;
     try {
@@ -237,12 +255,24 @@ export class Isosurface {
     const gpuError = v ?? m;
     if (gpuError) {
       const kind = v ? 'validation error' : 'out of memory';
-      return this.fail(a, new IsosurfaceGpuError(`the computation of the surface at iso ${a.r.iso} failed on the GPU (${kind}: ${gpuError.message.replace(/\s+/g, ' ').trim()}); the previous surface is kept`, a.r.iso));
+      return this.fail(
+        a,
+        new IsosurfaceGpuError(
+          `the computation of the surface at iso ${a.r.iso} failed on the GPU (${kind}: ${gpuError.message.replace(/\s+/g, ' ').trim()}); the previous surface is kept`,
+          a.r.iso,
+        ),
+      );
     }
     if (!stats || stats instanceof Error) return this.fail(a, stats ?? new Error('Isosurface: no statistics'));
     // The staging buffer holds this submission's counters, or it is a failure (never another surface's).
     if (stats.counters[C.request] !== a.id) {
-      return this.fail(a, new IsosurfaceGpuError(`the statistics of the surface at iso ${a.r.iso} are not its own (request ${stats.counters[C.request]}, expected ${a.id}): the computation did not run`, a.r.iso));
+      return this.fail(
+        a,
+        new IsosurfaceGpuError(
+          `the statistics of the surface at iso ${a.r.iso} are not its own (request ${stats.counters[C.request]}, expected ${a.id}): the computation did not run`,
+          a.r.iso,
+        ),
+      );
     }
     this.finish(a, stats);
   }
@@ -274,7 +304,7 @@ export class Isosurface {
       r.earlierMs += raw.gpuMs;
       // A vertices-only retry reads these counters again; a full one does not.
       // (Only if nothing was submitted since and the cache was not reset.)
-      const verticesOnly = status === STATUS_VERTEX_OVERFLOW && r.cacheEpoch === this.cacheEpoch && a.id === ((this.nextId - 1) >>> 0);
+      const verticesOnly = status === STATUS_VERTEX_OVERFLOW && r.cacheEpoch === this.cacheEpoch && a.id === (this.nextId - 1) >>> 0;
       if (!verticesOnly) r.earlierNew += raw.counters[C.new];
       const newer = this.pending ?? this.inFlight[this.inFlight.length - 1]?.r;
       if (newer) {
@@ -353,7 +383,10 @@ export class Isosurface {
     void Promise.all([validation, oom]).then(([v, m]) => {
       const e = v ?? m;
       if (!e || this.destroyed) return;
-      const error = new IsosurfaceGpuError(`emptying the block cache failed on the GPU (${v ? 'validation error' : 'out of memory'}: ${e.message.replace(/\s+/g, ' ').trim()})`, NaN);
+      const error = new IsosurfaceGpuError(
+        `emptying the block cache failed on the GPU (${v ? 'validation error' : 'out of memory'}: ${e.message.replace(/\s+/g, ' ').trim()})`,
+        NaN,
+      );
       for (const l of this.errorListeners) l(error);
     });
   }

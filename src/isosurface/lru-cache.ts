@@ -113,8 +113,16 @@ export class BlockCache {
   ) {
     const blocks = parts.stream.info.blockCount;
     this.blockToSlot = storageBuffer(device, 'Isosurface.blockToSlot', blocks * 4, GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST);
-    this.fillParams = device.createBuffer({ label: 'Isosurface.fillParams', size: FILL_SLOTS * FILL_STRIDE, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
-    this.rebuildParams = device.createBuffer({ label: 'Isosurface.rebuildParams', size: 2 * FILL_STRIDE, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
+    this.fillParams = device.createBuffer({
+      label: 'Isosurface.fillParams',
+      size: FILL_SLOTS * FILL_STRIDE,
+      usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
+    });
+    this.rebuildParams = device.createBuffer({
+      label: 'Isosurface.rebuildParams',
+      size: 2 * FILL_STRIDE,
+      usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
+    });
     device.queue.writeBuffer(this.rebuildParams, 0, new Uint32Array([0, 0, 1, 0]));
     this.slots = this.allocate(capacity);
     this.groups = this.makeGroups();
@@ -127,7 +135,15 @@ export class BlockCache {
     const assignLayout = bufferLayout(device, 'Isosurface.assignSlots.layout', ['read', 'read', 'read', 'rw', 'rw', 'read', 'rw', 'rw']);
     const appendLayout = bufferLayout(device, 'Isosurface.appendActive.layout', ['read', 'read', 'read', 'rw', 'rw', 'rw', 'rw']);
     const rebuildLayout = bufferLayout(device, 'Isosurface.rebuildLog.layout', ['uniform', 'rw', 'read', 'rw', 'rw', 'rw', 'rw']);
-    const rebuildCompactedLayout = bufferLayout(device, 'Isosurface.rebuildLogCompacted.layout', ['uniform', 'read', 'read', 'rw', 'rw', 'rw', 'rw']);
+    const rebuildCompactedLayout = bufferLayout(device, 'Isosurface.rebuildLogCompacted.layout', [
+      'uniform',
+      'read',
+      'read',
+      'rw',
+      'rw',
+      'rw',
+      'rw',
+    ]);
     const fillLayout = bindGroupLayout(device, 'Isosurface.fillNone.layout', [
       { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform', hasDynamicOffset: true, minBindingSize: 8 } },
       { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
@@ -140,11 +156,29 @@ export class BlockCache {
       createComputePipeline(device, 'Isosurface.assignSlots', wgsl, 'assign_slots', { layout: [assignLayout], constants }),
       createComputePipeline(device, 'Isosurface.appendActive', wgsl, 'append_active', { layout: [appendLayout], constants }),
       createComputePipeline(device, 'Isosurface.rebuildLog', wgsl, 'rebuild_log', { layout: [rebuildLayout], constants }),
-      createComputePipeline(device, 'Isosurface.rebuildLogCompacted', wgsl, 'rebuild_log_compacted', { layout: [rebuildCompactedLayout], constants }),
+      createComputePipeline(device, 'Isosurface.rebuildLogCompacted', wgsl, 'rebuild_log_compacted', {
+        layout: [rebuildCompactedLayout],
+        constants,
+      }),
       createComputePipeline(device, 'Isosurface.fillNone', wgsl, 'fill_none', { layout: [fillLayout], constants }),
       ExclusiveScan.create(device, { capacity: logSizeFor(capacity), maxWorkgroupsPerDimension: parts.maxWorkgroupsPerDimension }),
     ]);
-    const pipelines = { mark, pick, assign, append, rebuild, rebuildCompacted, fill, markLayout, pickLayout, assignLayout, appendLayout, rebuildLayout, rebuildCompactedLayout, fillLayout };
+    const pipelines = {
+      mark,
+      pick,
+      assign,
+      append,
+      rebuild,
+      rebuildCompacted,
+      fill,
+      markLayout,
+      pickLayout,
+      assignLayout,
+      appendLayout,
+      rebuildLayout,
+      rebuildCompactedLayout,
+      fillLayout,
+    };
     return new BlockCache(device, parts, pipelines, logScan, capacity);
   }
 
@@ -172,7 +206,20 @@ export class BlockCache {
   }
 
   private ownBuffers(s: SlotBuffers): GPUBuffer[] {
-    return [s.slotData, s.slotToBlock, s.slotPos, s.victims, s.newMask, s.newOffsets, s.newIds, s.log, s.valid, s.logOffsets, s.logScratch, s.tree];
+    return [
+      s.slotData,
+      s.slotToBlock,
+      s.slotPos,
+      s.victims,
+      s.newMask,
+      s.newOffsets,
+      s.newIds,
+      s.log,
+      s.valid,
+      s.logOffsets,
+      s.logScratch,
+      s.tree,
+    ];
   }
 
   private allocate(capacity: number): SlotBuffers {
@@ -196,7 +243,8 @@ export class BlockCache {
       logScratch: words('lruLogScratch', logSize),
       tree: words('lruTree', logTreeWords(logSize)),
     };
-    if (this.ownBuffers(s).reduce((n, b) => n + b.size, 0) !== capacity * CACHE_BYTES_PER_SLOT + logBytesFor(capacity)) throw new Error('BlockCache: byte accounting out of date');
+    if (this.ownBuffers(s).reduce((n, b) => n + b.size, 0) !== capacity * CACHE_BYTES_PER_SLOT + logBytesFor(capacity))
+      throw new Error('BlockCache: byte accounting out of date');
     return s;
   }
 
@@ -207,10 +255,35 @@ export class BlockCache {
     const counters = this.parts.counters.buffer;
     const { activeIds } = this.parts;
     return {
-      mark: bindGroup(d, 'Isosurface.markCached.bindGroup', p.markLayout, [counters, activeIds, this.blockToSlot, s.slotPos, s.valid, s.tree, s.newMask]),
+      mark: bindGroup(d, 'Isosurface.markCached.bindGroup', p.markLayout, [
+        counters,
+        activeIds,
+        this.blockToSlot,
+        s.slotPos,
+        s.valid,
+        s.tree,
+        s.newMask,
+      ]),
       pick: bindGroup(d, 'Isosurface.pickVictims.bindGroup', p.pickLayout, [counters, s.tree, s.log, s.victims, s.valid]),
-      assign: bindGroup(d, 'Isosurface.assignSlots.bindGroup', p.assignLayout, [counters, s.newIds, s.victims, s.slotToBlock, this.blockToSlot, s.slotPos, s.valid, s.tree]),
-      append: bindGroup(d, 'Isosurface.appendActive.bindGroup', p.appendLayout, [counters, activeIds, this.blockToSlot, s.log, s.slotPos, s.valid, s.tree]),
+      assign: bindGroup(d, 'Isosurface.assignSlots.bindGroup', p.assignLayout, [
+        counters,
+        s.newIds,
+        s.victims,
+        s.slotToBlock,
+        this.blockToSlot,
+        s.slotPos,
+        s.valid,
+        s.tree,
+      ]),
+      append: bindGroup(d, 'Isosurface.appendActive.bindGroup', p.appendLayout, [
+        counters,
+        activeIds,
+        this.blockToSlot,
+        s.log,
+        s.slotPos,
+        s.valid,
+        s.tree,
+      ]),
       compacted: this.rebuildGroup(s, s.logScratch, 0, this.pipelines.rebuildCompactedLayout),
     };
   }
@@ -260,7 +333,14 @@ export class BlockCache {
   }
 
   /** Records rebuild_log over the log of `s` with host parameters (fresh slots first_fresh.., then the kept entries of `scratch` if useKept). */
-  private encodeRebuild(encoder: GPUCommandEncoder, s: SlotBuffers, scratch: GPUBuffer, fresh: number, firstFresh: number, useKept: boolean): void {
+  private encodeRebuild(
+    encoder: GPUCommandEncoder,
+    s: SlotBuffers,
+    scratch: GPUBuffer,
+    fresh: number,
+    firstFresh: number,
+    useKept: boolean,
+  ): void {
     this.device.queue.writeBuffer(this.rebuildParams, FILL_STRIDE, new Uint32Array([fresh, firstFresh, useKept ? 1 : 0, 0]));
     this.parts.counters.set('logSize', s.logSize);
     const pass = encoder.beginComputePass({ label: 'Isosurface.rebuildLog' });
@@ -316,8 +396,19 @@ export class BlockCache {
     encoder.copyBufferToBuffer(old.slotToBlock, 0, next.slotToBlock, 0, old.capacity * 4);
     this.encodeFill(encoder, next.slotToBlock, old.capacity, capacity);
     // The old log's valid entries, in order, into the new scratch (count: the old tail).
-    this.logScan.encode(encoder, { input: old.valid, output: next.logOffsets, count: counters.count('logTail'), totalOut: counters.count('logValid') });
-    compact.encode(encoder, { mask: old.valid, offsets: next.logOffsets, values: old.log, output: next.logScratch, count: counters.count('logTail') });
+    this.logScan.encode(encoder, {
+      input: old.valid,
+      output: next.logOffsets,
+      count: counters.count('logTail'),
+      totalOut: counters.count('logValid'),
+    });
+    compact.encode(encoder, {
+      mask: old.valid,
+      offsets: next.logOffsets,
+      values: old.log,
+      output: next.logScratch,
+      count: counters.count('logTail'),
+    });
     this.encodeRebuild(encoder, next, next.logScratch, capacity - old.capacity, old.capacity, true);
     this.submitFills(encoder);
     this.slots = next;
@@ -334,8 +425,19 @@ export class BlockCache {
     const args = counters.buffer;
     const g = this.groups;
     // A full log is compacted first (all counts 0 otherwise).
-    this.logScan.encode(encoder, { input: s.valid, output: s.logOffsets, count: counters.count('logCompact'), totalOut: counters.count('logValid') });
-    compact.encode(encoder, { mask: s.valid, offsets: s.logOffsets, values: s.log, output: s.logScratch, count: counters.count('logCompact') });
+    this.logScan.encode(encoder, {
+      input: s.valid,
+      output: s.logOffsets,
+      count: counters.count('logCompact'),
+      totalOut: counters.count('logValid'),
+    });
+    compact.encode(encoder, {
+      mask: s.valid,
+      offsets: s.logOffsets,
+      values: s.log,
+      output: s.logScratch,
+      count: counters.count('logCompact'),
+    });
     let pass = encoder.beginComputePass({ label: 'Isosurface.markCached' });
     pass.setPipeline(this.pipelines.rebuildCompacted);
     pass.setBindGroup(0, g.compacted);
@@ -348,7 +450,13 @@ export class BlockCache {
     pass = encoder.beginComputePass({ label: 'Isosurface.planUpdate' });
     counters.encodePlanUpdate(pass);
     pass.end();
-    compact.encode(encoder, { mask: s.newMask, offsets: s.newOffsets, values: activeIds, output: s.newIds, count: counters.count('compactNew') });
+    compact.encode(encoder, {
+      mask: s.newMask,
+      offsets: s.newOffsets,
+      values: activeIds,
+      output: s.newIds,
+      count: counters.count('compactNew'),
+    });
     pass = encoder.beginComputePass({ label: 'Isosurface.assignSlots' });
     pass.setPipeline(this.pipelines.pick);
     pass.setBindGroup(0, g.pick);

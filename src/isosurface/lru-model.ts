@@ -61,7 +61,10 @@ export class LruCacheModel {
   readonly blockToSlot: Uint32Array;
   slotsUsed = 0;
 
-  constructor(readonly blockCount: number, capacity: number) {
+  constructor(
+    readonly blockCount: number,
+    capacity: number,
+  ) {
     this.blockToSlot = new Uint32Array(blockCount);
     this.reset(capacity);
   }

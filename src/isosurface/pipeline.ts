@@ -19,7 +19,16 @@ import { ActiveBlocks, groupGrid } from './active-blocks.ts';
 import { BlockMarchingCubes } from './block-mc.ts';
 import { cacheBytesFor, formatMB, grownCapacity, maxCacheSlots, vertexBytesFor } from './budget.ts';
 import { Counters } from './counters.ts';
-import { C, DEFAULT_GROUP_EDGE_BLOCKS, DRAW_ARGS_BYTES, SLOT_BYTES, STATUS_CACHE_SHORTFALL, STATUS_VERTEX_OVERFLOW, VERTEX_BYTES, VOLUME_PARAMS } from './layout.ts';
+import {
+  C,
+  DEFAULT_GROUP_EDGE_BLOCKS,
+  DRAW_ARGS_BYTES,
+  SLOT_BYTES,
+  STATUS_CACHE_SHORTFALL,
+  STATUS_VERTEX_OVERFLOW,
+  VERTEX_BYTES,
+  VOLUME_PARAMS,
+} from './layout.ts';
 import { BlockCache } from './lru-cache.ts';
 import type { StatsReadback } from './stats-readback.ts';
 import { IsosurfaceBudgetError, type IsosurfaceDrawData, type IsosurfaceOptions, type VolumeInfo } from './types.ts';
@@ -68,7 +77,13 @@ export class IsosurfacePipeline {
     /** Slots whose data fits one storage binding (the cache never grows beyond). */
     readonly maxSlots: number,
   ) {
-    this.drawData = { shards: parts.shards.drawShards, info, slotData: parts.cache.slotData, blockToSlot: parts.cache.blockToSlot, version: 0 };
+    this.drawData = {
+      shards: parts.shards.drawShards,
+      info,
+      slotData: parts.cache.slotData,
+      blockToSlot: parts.cache.blockToSlot,
+      version: 0,
+    };
   }
 
   /**
@@ -117,7 +132,8 @@ export class IsosurfacePipeline {
 
     const pool = stream.addressing === 'pool' ? (stream as ChunkedVolume) : undefined;
     const groupEdge = pool ? pool.chunkBlocks : (options.groupEdgeBlocks ?? DEFAULT_GROUP_EDGE_BLOCKS);
-    if (!Number.isInteger(groupEdge) || groupEdge < 1 || groupEdge > 64) throw new RangeError(`groupEdgeBlocks must be an integer in 1..64 (got ${groupEdge})`);
+    if (!Number.isInteger(groupEdge) || groupEdge < 1 || groupEdge > 64)
+      throw new RangeError(`groupEdgeBlocks must be an integer in 1..64 (got ${groupEdge})`);
     const groupEntries = groupGrid(blockGrid, groupEdge).reduce((a, b) => a * b, 1) * groupEdge ** 3;
     // Per-block buffers are bound whole too: neighbourhood ranges (8 B per block), the group-grid lists (4 B per entry).
     const perBlockBinding = Math.max(blockCount * 8, groupEntries * 4);
@@ -128,7 +144,11 @@ export class IsosurfacePipeline {
           `this device binds at most ${formatMB(storageBinding)} (maxStorageBufferBindingSize)`,
       );
     }
-    const volume = device.createBuffer({ label: 'Isosurface.volume', size: VOLUME_PARAMS.bytes, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
+    const volume = device.createBuffer({
+      label: 'Isosurface.volume',
+      size: VOLUME_PARAMS.bytes,
+      usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
+    });
     device.queue.writeBuffer(volume, 0, new Uint32Array([...dims, blockCount, ...blockGrid, 0]));
     const primitiveOptions = { maxWorkgroupsPerDimension: maxWg, path: options.primitivePath };
     // Two scans: one over the groups and the blocks of active groups, one
@@ -143,15 +163,37 @@ export class IsosurfacePipeline {
       StreamCompactIds.create(device, primitiveOptions),
     ]);
     counters.set('blocks', blockCount);
-    const active = await ActiveBlocks.create(device, { stream, decoder, volume, counters, scan, compact, compactIds, maxWorkgroupsPerDimension: maxWg, groupEdge });
+    const active = await ActiveBlocks.create(device, {
+      stream,
+      decoder,
+      volume,
+      counters,
+      scan,
+      compact,
+      compactIds,
+      maxWorkgroupsPerDimension: maxWg,
+      groupEdge,
+    });
     // A pool starts empty: its value range is the store's (the caller knows it), not the blocks'.
     const [cache, ranges] = await Promise.all([
-      BlockCache.create(device, { stream, decoder, counters, scan: slotScan, compact, compactIds, activeIds: active.activeIds, maxWorkgroupsPerDimension: maxWg }, slots),
+      BlockCache.create(
+        device,
+        { stream, decoder, counters, scan: slotScan, compact, compactIds, activeIds: active.activeIds, maxWorkgroupsPerDimension: maxWg },
+        slots,
+      ),
       pool ? new Float32Array(0) : active.readBlockRanges(),
     ]);
     const mc = await BlockMarchingCubes.create(
       device,
-      { volume, counters, scan: slotScan, activeIds: active.activeIds, blockToSlot: cache.blockToSlot, maxWorkgroupsPerDimension: maxWg, maxBindingBytes: limits.maxStorageBufferBindingSize },
+      {
+        volume,
+        counters,
+        scan: slotScan,
+        activeIds: active.activeIds,
+        blockToSlot: cache.blockToSlot,
+        maxWorkgroupsPerDimension: maxWg,
+        maxBindingBytes: limits.maxStorageBufferBindingSize,
+      },
       slots,
       vertices,
     );
@@ -164,11 +206,16 @@ export class IsosurfacePipeline {
     }
     if (pool) [lo, hi] = [0, 0];
     const info: VolumeInfo = { dims: [...dims], blockGrid: [...blockGrid], blockCount, valueRange: [lo, hi] };
-    const pipeline = new IsosurfacePipeline(gpu, { stream, volume, counters, decoder, scan, slotScan, compact, compactIds, active, cache, mc, shards }, info, slots, maxSlots);
+    const pipeline = new IsosurfacePipeline(
+      gpu,
+      { stream, volume, counters, decoder, scan, slotScan, compact, compactIds, active, cache, mc, shards },
+      info,
+      slots,
+      maxSlots,
+    );
     pipeline.writeShardCounters();
     return pipeline;
   }
-
 
   private get device(): GPUDevice {
     return this.gpu.device;
@@ -289,7 +336,10 @@ export class IsosurfacePipeline {
   refreshDrawData(): void {
     const d = this.drawData;
     const shards = this.parts.shards.drawShards;
-    const changed = d.slotData !== this.parts.cache.slotData || d.shards.length !== shards.length || d.shards.some((s, k) => s.vertices !== shards[k].vertices || s.drawArgs !== shards[k].drawArgs);
+    const changed =
+      d.slotData !== this.parts.cache.slotData ||
+      d.shards.length !== shards.length ||
+      d.shards.some((s, k) => s.vertices !== shards[k].vertices || s.drawArgs !== shards[k].drawArgs);
     if (!changed) return;
     d.shards = shards;
     d.slotData = this.parts.cache.slotData;

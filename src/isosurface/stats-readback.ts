@@ -32,18 +32,29 @@ export class StatsReadback {
   private readonly stagingBytes: number;
   private destroyed = false;
 
-  constructor(private readonly device: GPUDevice, timing: boolean) {
+  constructor(
+    private readonly device: GPUDevice,
+    timing: boolean,
+  ) {
     this.source = timing && device.features.has('timestamp-query') ? 'timestamp-query' : 'queue-wall-time';
     if (this.source === 'timestamp-query') {
       this.querySet = device.createQuerySet({ label: 'Isosurface.stageTimes', type: 'timestamp', count: MARKERS });
-      this.resolveBuffer = device.createBuffer({ label: 'Isosurface.stageTimes.resolve', size: MARKERS * 8, usage: GPUBufferUsage.QUERY_RESOLVE | GPUBufferUsage.COPY_SRC });
+      this.resolveBuffer = device.createBuffer({
+        label: 'Isosurface.stageTimes.resolve',
+        size: MARKERS * 8,
+        usage: GPUBufferUsage.QUERY_RESOLVE | GPUBufferUsage.COPY_SRC,
+      });
     }
     this.stagingBytes = COUNTERS_BYTES + MARKERS * 8;
     for (let i = 0; i < 3; i++) this.free.push(this.createStaging());
   }
 
   private createStaging(): GPUBuffer {
-    const b = this.device.createBuffer({ label: `Isosurface.stats${this.all.length}`, size: this.stagingBytes, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+    const b = this.device.createBuffer({
+      label: `Isosurface.stats${this.all.length}`,
+      size: this.stagingBytes,
+      usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST,
+    });
     this.all.push(b);
     return b;
   }
@@ -51,7 +62,12 @@ export class StatsReadback {
   /** Records marker `index` (0 = start, k + 1 = end of stage k). */
   mark(encoder: GPUCommandEncoder, index: number): void {
     if (!this.querySet) return;
-    encoder.beginComputePass({ label: `Isosurface.marker${index}`, timestampWrites: { querySet: this.querySet, beginningOfPassWriteIndex: index } }).end();
+    encoder
+      .beginComputePass({
+        label: `Isosurface.marker${index}`,
+        timestampWrites: { querySet: this.querySet, beginningOfPassWriteIndex: index },
+      })
+      .end();
   }
 
   /** Records the copies of counters and timestamps; returns the staging buffer to read after submit. */

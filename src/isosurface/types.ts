@@ -150,7 +150,10 @@ export class IsosurfaceBudgetError extends Error {
  * isovalue replaced `iso` before it was computed (newest wins).
  */
 export class IsosurfaceSupersededError extends Error {
-  constructor(readonly isovalue: number, readonly replacedBy: number) {
+  constructor(
+    readonly isovalue: number,
+    readonly replacedBy: number,
+  ) {
     super(`the surface at iso ${isovalue} was not computed: iso ${replacedBy} replaced it`);
     this.name = 'IsosurfaceSupersededError';
   }
@@ -162,7 +165,10 @@ export class IsosurfaceSupersededError extends Error {
  * surface stays drawn.
  */
 export class IsosurfaceGpuError extends Error {
-  constructor(message: string, readonly isovalue: number) {
+  constructor(
+    message: string,
+    readonly isovalue: number,
+  ) {
     super(`Isosurface: ${message}`);
     this.name = 'IsosurfaceGpuError';
   }

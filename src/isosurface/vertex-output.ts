@@ -63,7 +63,12 @@ export class VertexShards {
 
   /** What the renderer binds (types.ts VertexShard). */
   get drawShards(): VertexShard[] {
-    return this.list.map((s, k) => ({ vertices: s.vertices, normals: s.normals, drawArgs: this.drawArgsBuffer, drawArgsOffset: k * DRAW_ARGS_BYTES }));
+    return this.list.map((s, k) => ({
+      vertices: s.vertices,
+      normals: s.normals,
+      drawArgs: this.drawArgsBuffer,
+      drawArgsOffset: k * DRAW_ARGS_BYTES,
+    }));
   }
 
   get byteSize(): number {

@@ -33,5 +33,11 @@ export const isosurfaceWgsl = {
   plan: [...base, part('plan', planWgsl)],
   blockClassify: [...base, mcCaseTableSnippet, part('block_mc_common', blockMcCommonWgsl), part('block_classify', blockClassifyWgsl)],
   blockExpand: [...base, mcCaseTableSnippet, part('block_expand', blockExpandWgsl)],
-  blockEmit: [...base, mcCaseTableSnippet, vertexFormatSnippet, part('block_mc_common', blockMcCommonWgsl), part('block_emit', blockEmitWgsl)],
+  blockEmit: [
+    ...base,
+    mcCaseTableSnippet,
+    vertexFormatSnippet,
+    part('block_mc_common', blockMcCommonWgsl),
+    part('block_emit', blockEmitWgsl),
+  ],
 } satisfies Record<string, WgslPart[]>;

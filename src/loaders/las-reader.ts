@@ -117,9 +117,11 @@ function readHeader(m: LasWasm, handle: number): LasHeader {
 
 /** The C API checks these already; a second look costs nothing and guards the TS side on its own. */
 function checkHeader(h: LasHeader, fileName: string): void {
-  if (!Number.isSafeInteger(h.pointCount) || h.pointCount < 0) throw new LasError(fileName, `corrupt header: impossible point count ${h.pointCount}`);
+  if (!Number.isSafeInteger(h.pointCount) || h.pointCount < 0)
+    throw new LasError(fileName, `corrupt header: impossible point count ${h.pointCount}`);
   for (const [a, v] of h.scale.entries()) {
-    if (!Number.isFinite(v) || v === 0) throw new LasError(fileName, `corrupt header: the ${'xyz'[a]} scale factor is ${v} (it must be a finite, non-zero number)`);
+    if (!Number.isFinite(v) || v === 0)
+      throw new LasError(fileName, `corrupt header: the ${'xyz'[a]} scale factor is ${v} (it must be a finite, non-zero number)`);
   }
   if (!(h.pointRecordLength > 0)) throw new LasError(fileName, 'corrupt header: the point record length is 0');
 }
@@ -196,7 +198,11 @@ export class LasReader {
   get warnings(): string[] {
     const h = this.header;
     if (this.outside < 0) {
-      return h.pointCount > 0 ? [`${this.fileName}: the header's bounds are not valid (not finite, or min above max: ${JSON.stringify(h.bounds)}); the points are shown around the header's offsets`] : [];
+      return h.pointCount > 0
+        ? [
+            `${this.fileName}: the header's bounds are not valid (not finite, or min above max: ${JSON.stringify(h.bounds)}); the points are shown around the header's offsets`,
+          ]
+        : [];
     }
     if (this.outside === 0) return [];
     return [
@@ -209,7 +215,11 @@ export class LasReader {
    * Decodes up to `maxPoints` points (default 65536) into new arrays, or into
    * `into` at `into.offset` (points) when given. Returns undefined at the end.
    */
-  read(maxPoints = DEFAULT_CHUNK, fields: LasFields = { positions: true }, into?: Partial<LasChunk> & { offset: number }): LasChunk | undefined {
+  read(
+    maxPoints = DEFAULT_CHUNK,
+    fields: LasFields = { positions: true },
+    into?: Partial<LasChunk> & { offset: number },
+  ): LasChunk | undefined {
     if (this.handle === 0) throw new LasError(this.fileName, 'the reader is closed');
     const wanted = Math.min(maxPoints, this.header.pointCount - this.nextPoint);
     if (wanted <= 0) return undefined;

@@ -52,7 +52,10 @@ export async function loadPointCloud(bytes: Uint8Array, fileName: string, option
     const { header } = reader;
     const n = header.pointCount;
     if (n > MAX_CLOUD_POINTS) {
-      throw new LasError(fileName, `the file has ${n.toLocaleString('en-US')} points (${formatBytes(n * 21)} in memory), more than this reader loads at once (${MAX_CLOUD_POINTS.toLocaleString('en-US')})`);
+      throw new LasError(
+        fileName,
+        `the file has ${n.toLocaleString('en-US')} points (${formatBytes(n * 21)} in memory), more than this reader loads at once (${MAX_CLOUD_POINTS.toLocaleString('en-US')})`,
+      );
     }
     const out = {
       positions: new Float32Array(n * 3),

@@ -220,13 +220,29 @@ export function checkSwcTree(t: SwcTree): SwcCheck {
   let drawn = 0;
   for (let i = 0; i < n; i++) if (parent[i] >= 0) drawn++;
   const problems: string[] = [];
-  if (self.length) problems.push(`${self.length} sample${self.length > 1 ? 's are their' : ' is its'} own parent (id ${firstIds(self)}); not linked`);
+  if (self.length)
+    problems.push(`${self.length} sample${self.length > 1 ? 's are their' : ' is its'} own parent (id ${firstIds(self)}); not linked`);
   if (cycles) {
-    problems.push(`${cycles} parent cycle${cycles > 1 ? 's' : ''} (${onCycle.length} samples, id ${firstIds(onCycle.map((k) => t.ids[k]))}); their links are not drawn`);
+    problems.push(
+      `${cycles} parent cycle${cycles > 1 ? 's' : ''} (${onCycle.length} samples, id ${firstIds(onCycle.map((k) => t.ids[k]))}); their links are not drawn`,
+    );
   }
-  if (dangling.length) problems.push(`${dangling.length} sample${dangling.length > 1 ? 's name' : ' names'} a parent that is not in the file (id ${firstIds(dangling)}); drawn unlinked`);
+  if (dangling.length)
+    problems.push(
+      `${dangling.length} sample${dangling.length > 1 ? 's name' : ' names'} a parent that is not in the file (id ${firstIds(dangling)}); drawn unlinked`,
+    );
   if (roots === 0) problems.push('no root (no sample has parent -1)');
-  return { selfParents: self.length, cycleSamples: onCycle.length, cycles, danglingParents: dangling.length, roots, duplicateIds: n - index.size, parentIndex: parent, drawnSegments: drawn, problems };
+  return {
+    selfParents: self.length,
+    cycleSamples: onCycle.length,
+    cycles,
+    danglingParents: dangling.length,
+    roots,
+    duplicateIds: n - index.size,
+    parentIndex: parent,
+    drawnSegments: drawn,
+    problems,
+  };
 }
 
 export interface SwcStats {

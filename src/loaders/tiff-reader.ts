@@ -10,13 +10,46 @@ export type SampleArray = Uint8Array | Int8Array | Uint16Array | Int16Array | Ui
 export type Vec3 = [number, number, number];
 
 export const COMPRESSION_NAMES: Record<number, string> = {
-  1: 'NONE', 2: 'CCITTRLE', 3: 'CCITT_T4', 4: 'CCITT_T6', 5: 'LZW', 6: 'OJPEG', 7: 'JPEG', 8: 'ADOBE_DEFLATE', 32771: 'CCITTRLEW',
-  32773: 'PACKBITS', 32809: 'THUNDERSCAN', 32946: 'DEFLATE', 34676: 'SGILOG', 34677: 'SGILOG24', 34712: 'JPEG2000', 34887: 'LERC',
-  34925: 'LZMA', 50000: 'ZSTD', 50001: 'WEBP', 50002: 'JPEGXL',
+  1: 'NONE',
+  2: 'CCITTRLE',
+  3: 'CCITT_T4',
+  4: 'CCITT_T6',
+  5: 'LZW',
+  6: 'OJPEG',
+  7: 'JPEG',
+  8: 'ADOBE_DEFLATE',
+  32771: 'CCITTRLEW',
+  32773: 'PACKBITS',
+  32809: 'THUNDERSCAN',
+  32946: 'DEFLATE',
+  34676: 'SGILOG',
+  34677: 'SGILOG24',
+  34712: 'JPEG2000',
+  34887: 'LERC',
+  34925: 'LZMA',
+  50000: 'ZSTD',
+  50001: 'WEBP',
+  50002: 'JPEGXL',
 };
-export const SAMPLE_FORMAT_NAMES: Record<number, string> = { 1: 'UINT', 2: 'INT', 3: 'IEEEFP', 4: 'VOID', 5: 'COMPLEXINT', 6: 'COMPLEXIEEEFP' };
+export const SAMPLE_FORMAT_NAMES: Record<number, string> = {
+  1: 'UINT',
+  2: 'INT',
+  3: 'IEEEFP',
+  4: 'VOID',
+  5: 'COMPLEXINT',
+  6: 'COMPLEXIEEEFP',
+};
 export const PHOTOMETRIC_NAMES: Record<number, string> = {
-  0: 'MINISWHITE', 1: 'MINISBLACK', 2: 'RGB', 3: 'PALETTE', 4: 'MASK', 5: 'SEPARATED', 6: 'YCBCR', 8: 'CIELAB', 32844: 'LOGL', 32845: 'LOGLUV',
+  0: 'MINISWHITE',
+  1: 'MINISBLACK',
+  2: 'RGB',
+  3: 'PALETTE',
+  4: 'MASK',
+  5: 'SEPARATED',
+  6: 'YCBCR',
+  8: 'CIELAB',
+  32844: 'LOGL',
+  32845: 'LOGLUV',
 };
 
 export interface TiffPage {
@@ -202,12 +235,16 @@ export class TiffReader {
 
   private readPageInfo(index: number): TiffPage {
     if (this.handle === 0) throw new TiffError(this.fileName, 'the reader is closed');
-    if (!(index >= 0 && index < this.pageCount)) throw new TiffError(this.fileName, `page ${index} does not exist (the file has ${this.pageCount})`);
+    if (!(index >= 0 && index < this.pageCount))
+      throw new TiffError(this.fileName, `page ${index} does not exist (the file has ${this.pageCount})`);
     const m = this.m;
     if (this.infoPtr === 0) this.infoPtr = ptr(m._malloc(PAGE_FIELDS * 8));
     if (this.infoPtr === 0) throw new TiffError(this.fileName, 'out of WebAssembly memory');
     if (m._tiff_page_info(this.handle, index, this.infoPtr) !== 0) {
-      throw new TiffError(this.fileName, `page ${index}: ${m.UTF8ToString(ptr(m._tiff_error(this.handle))) || 'cannot read its directory'}`);
+      throw new TiffError(
+        this.fileName,
+        `page ${index}: ${m.UTF8ToString(ptr(m._tiff_error(this.handle))) || 'cannot read its directory'}`,
+      );
     }
     const v = new Float64Array(m.HEAPU8.buffer, this.infoPtr, PAGE_FIELDS).slice();
     const page: TiffPage = {
@@ -269,7 +306,11 @@ export class TiffReader {
       throw new TiffError(this.fileName, `page ${index}: ${reason || 'cannot be decoded'}`);
     }
     // The C API refuses larger pages; never hand _malloc (32-bit sizes) more than it can give.
-    if (bytes > MAX_TIFF_PAGE_BYTES) throw new TiffError(this.fileName, `page ${index} is ${formatBytes(bytes)}, more than the largest page this reader decodes (${formatBytes(MAX_TIFF_PAGE_BYTES)})`);
+    if (bytes > MAX_TIFF_PAGE_BYTES)
+      throw new TiffError(
+        this.fileName,
+        `page ${index} is ${formatBytes(bytes)}, more than the largest page this reader decodes (${formatBytes(MAX_TIFF_PAGE_BYTES)})`,
+      );
     const out = ptr(m._malloc(bytes));
     if (out === 0) throw new TiffError(this.fileName, `out of WebAssembly memory for a ${formatBytes(bytes)} page`);
     try {
@@ -279,7 +320,8 @@ export class TiffReader {
       }
       const dest = into ?? allocateSamples(page.dtype, bytes / (page.bitsPerSample / 8));
       const bpe = dest.BYTES_PER_ELEMENT;
-      if ((offset + bytes / bpe) * bpe > dest.byteLength) throw new TiffError(this.fileName, `page ${index} does not fit the destination array`);
+      if ((offset + bytes / bpe) * bpe > dest.byteLength)
+        throw new TiffError(this.fileName, `page ${index} does not fit the destination array`);
       // The heap may have grown during the call: take a fresh view.
       new Uint8Array(dest.buffer, dest.byteOffset + offset * bpe, bytes).set(m.HEAPU8.subarray(out, out + bytes));
       return dest;

@@ -7,10 +7,33 @@
 // heap; each page is decoded there and copied straight into its place in the
 // volume; the file's Wasm memory is freed before the next file is opened.
 // One file's reader is tiff-reader.ts (re-exported here).
-import { TiffReader, TiffError, allocateSamples, MAX_TIFF_PAGE_BYTES, MAX_TIFF_VOLUME_BYTES, FIRST_ALLOCATION_BYTES, MAX_EXPANSION, type SampleType, type SampleArray, type Vec3, type TiffPage } from './tiff-reader.ts';
+import {
+  TiffReader,
+  TiffError,
+  allocateSamples,
+  MAX_TIFF_PAGE_BYTES,
+  MAX_TIFF_VOLUME_BYTES,
+  FIRST_ALLOCATION_BYTES,
+  MAX_EXPANSION,
+  type SampleType,
+  type SampleArray,
+  type Vec3,
+  type TiffPage,
+} from './tiff-reader.ts';
 import { formatBytes } from './wasm-module.ts';
 
-export { COMPRESSION_NAMES, PHOTOMETRIC_NAMES, SAMPLE_FORMAT_NAMES, MAX_TIFF_PAGE_BYTES, MAX_TIFF_VOLUME_BYTES, allocateSamples, loadTiffWasm, sampleType, TiffError, TiffReader } from './tiff-reader.ts';
+export {
+  COMPRESSION_NAMES,
+  PHOTOMETRIC_NAMES,
+  SAMPLE_FORMAT_NAMES,
+  MAX_TIFF_PAGE_BYTES,
+  MAX_TIFF_VOLUME_BYTES,
+  allocateSamples,
+  loadTiffWasm,
+  sampleType,
+  TiffError,
+  TiffReader,
+} from './tiff-reader.ts';
 export type { SampleArray, SampleType, TiffPage, Vec3 } from './tiff-reader.ts';
 export interface ImageJInfo {
   /** key=value lines of the ImageJ ImageDescription. */
@@ -36,7 +59,15 @@ export function parseImageJ(description: string): ImageJInfo | undefined {
     return fields[k] !== undefined && Number.isFinite(v) ? v : undefined;
   };
   const unit = fields.unit?.replace(/\\u00B5/gi, 'µ');
-  return { fields, images: num('images'), slices: num('slices'), channels: num('channels'), frames: num('frames'), spacing: num('spacing'), unit };
+  return {
+    fields,
+    images: num('images'),
+    slices: num('slices'),
+    channels: num('channels'),
+    frames: num('frames'),
+    spacing: num('spacing'),
+    unit,
+  };
 }
 
 export interface TiffVolume {
@@ -110,7 +141,10 @@ export async function loadTiffStack(sources: TiffSource | TiffSource[], options:
         if (first.width * first.height === 0) throw new TiffError(name, 'the image is empty (0 pixels)');
         const bytes = pageBytes(first);
         if (bytes > MAX_TIFF_PAGE_BYTES) {
-          throw new TiffError(name, `the pages are ${describeShape(first)} (${formatBytes(bytes)} each), more than the largest page this reader decodes (${formatBytes(MAX_TIFF_PAGE_BYTES)})`);
+          throw new TiffError(
+            name,
+            `the pages are ${describeShape(first)} (${formatBytes(bytes)} each), more than the largest page this reader decodes (${formatBytes(MAX_TIFF_PAGE_BYTES)})`,
+          );
         }
       }
       const perPage = first.width * first.height * first.samplesPerPixel;
@@ -148,7 +182,10 @@ export async function loadTiffStack(sources: TiffSource | TiffSource[], options:
           }
           // Before any page has decoded, trust the directories for at most 64 MiB; after, grow to
           // the estimate (at least doubling, so a stack of many files is copied O(log n) times).
-          const want = filled === 0 ? Math.min(estimatedTotal, Math.floor(FIRST_ALLOCATION_BYTES / pageBytes(first))) : Math.max(estimatedTotal, 2 * capacityPages);
+          const want =
+            filled === 0
+              ? Math.min(estimatedTotal, Math.floor(FIRST_ALLOCATION_BYTES / pageBytes(first)))
+              : Math.max(estimatedTotal, 2 * capacityPages);
           capacityPages = Math.min(maxPages, plausible, Math.max(filled + 1, want));
           const grown = allocateSamples(first.dtype!, perPage * capacityPages);
           if (data) grown.set(data.subarray(0, filled * perPage) as never);
@@ -213,7 +250,9 @@ function pageBytes(p: TiffPage): number {
 }
 
 function sameShape(p: TiffPage, q: TiffPage): boolean {
-  return p.width === q.width && p.height === q.height && p.samplesPerPixel === q.samplesPerPixel && p.dtype === q.dtype && p.dtype !== undefined;
+  return (
+    p.width === q.width && p.height === q.height && p.samplesPerPixel === q.samplesPerPixel && p.dtype === q.dtype && p.dtype !== undefined
+  );
 }
 
 /** min, max and mean over all samples (float64 accumulation). */

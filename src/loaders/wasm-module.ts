@@ -29,7 +29,9 @@ export async function instantiateWasm<T>(factory: Factory<T>, wasmUrl: URL, what
     }
     return await factory({ locateFile: () => wasmUrl.href, printErr: () => undefined });
   } catch (e) {
-    throw new Error(`Could not start the ${what} WebAssembly module (${wasmUrl.pathname.split('/').pop()}): ${(e as Error).message ?? String(e)}`);
+    throw new Error(
+      `Could not start the ${what} WebAssembly module (${wasmUrl.pathname.split('/').pop()}): ${(e as Error).message ?? String(e)}`,
+    );
   }
 }
 
@@ -94,7 +96,10 @@ export const MAX_HEAP_BLOCK = 3 * 2 ** 30;
  */
 export function copyIntoHeap(module: EmscriptenBase, bytes: Uint8Array, what: string): number {
   // _malloc takes a 32-bit size: a larger one would wrap to a small block.
-  if (bytes.byteLength > MAX_HEAP_BLOCK) throw new Error(`${what}: ${formatBytes(bytes.byteLength)} does not fit in WebAssembly memory (at most ${formatBytes(MAX_HEAP_BLOCK)})`);
+  if (bytes.byteLength > MAX_HEAP_BLOCK)
+    throw new Error(
+      `${what}: ${formatBytes(bytes.byteLength)} does not fit in WebAssembly memory (at most ${formatBytes(MAX_HEAP_BLOCK)})`,
+    );
   const p = ptr(module._malloc(Math.max(1, bytes.byteLength)));
   if (p === 0) throw new Error(`${what}: out of WebAssembly memory for ${formatBytes(bytes.byteLength)}`);
   module.HEAPU8.set(bytes, p);
@@ -113,7 +118,8 @@ export async function streamIntoHeap(
   onProgress?: (done: number, total: number) => void,
 ): Promise<number> {
   const size = blob.size;
-  if (size > MAX_HEAP_BLOCK) throw new Error(`${what}: ${formatBytes(size)} does not fit in WebAssembly memory (at most ${formatBytes(MAX_HEAP_BLOCK)})`);
+  if (size > MAX_HEAP_BLOCK)
+    throw new Error(`${what}: ${formatBytes(size)} does not fit in WebAssembly memory (at most ${formatBytes(MAX_HEAP_BLOCK)})`);
   const p = ptr(module._malloc(Math.max(1, size)));
   if (p === 0) throw new Error(`${what}: out of WebAssembly memory for ${formatBytes(size)}`);
   try {

@@ -67,7 +67,14 @@ export class ZfpWasmStream {
       const status = m._zfp_api_info(inPtr, bytes.byteLength, infoPtr);
       if (status !== 0) throw new ZfpWasmError(`${name}: ${m.UTF8ToString(m._zfp_api_error())}`);
       const w = m.HEAPU32.subarray(infoPtr >>> 2, (infoPtr >>> 2) + 8);
-      const info: ZfpWasmInfo = { dims: [w[0], w[1], w[2]], type: w[3], dimensionality: w[4], mode: w[5], bitsPerBlock: w[6], headerBits: w[7] };
+      const info: ZfpWasmInfo = {
+        dims: [w[0], w[1], w[2]],
+        type: w[3],
+        dimensionality: w[4],
+        mode: w[5],
+        bitsPerBlock: w[6],
+        headerBits: w[7],
+      };
       return new ZfpWasmStream(m, bytes.byteLength, info, inPtr);
     } catch (e) {
       m._free(inPtr);

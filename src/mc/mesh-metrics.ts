@@ -29,10 +29,16 @@ export function meshMetrics(positions: Float32Array, vertexCount = Math.floor(po
   const triangles = vertexCount / 3;
   let area = 0;
   let degenerate = 0;
-  let x0 = Infinity, y0 = Infinity, z0 = Infinity;
-  let x1 = -Infinity, y1 = -Infinity, z1 = -Infinity;
+  let x0 = Infinity,
+    y0 = Infinity,
+    z0 = Infinity;
+  let x1 = -Infinity,
+    y1 = -Infinity,
+    z1 = -Infinity;
   for (let v = 0; v < vertexCount * 3; v += 3) {
-    const x = positions[v], y = positions[v + 1], z = positions[v + 2];
+    const x = positions[v],
+      y = positions[v + 1],
+      z = positions[v + 2];
     if (x < x0) x0 = x;
     if (x > x1) x1 = x;
     if (y < y0) y0 = y;
@@ -41,9 +47,15 @@ export function meshMetrics(positions: Float32Array, vertexCount = Math.floor(po
     if (z > z1) z1 = z;
   }
   for (let p = 0; p < vertexCount * 3; p += 9) {
-    const ax = positions[p + 3] - positions[p], ay = positions[p + 4] - positions[p + 1], az = positions[p + 5] - positions[p + 2];
-    const bx = positions[p + 6] - positions[p], by = positions[p + 7] - positions[p + 1], bz = positions[p + 8] - positions[p + 2];
-    const cx = ay * bz - az * by, cy = az * bx - ax * bz, cz = ax * by - ay * bx;
+    const ax = positions[p + 3] - positions[p],
+      ay = positions[p + 4] - positions[p + 1],
+      az = positions[p + 5] - positions[p + 2];
+    const bx = positions[p + 6] - positions[p],
+      by = positions[p + 7] - positions[p + 1],
+      bz = positions[p + 8] - positions[p + 2];
+    const cx = ay * bz - az * by,
+      cy = az * bx - ax * bz,
+      cz = ax * by - ay * bx;
     const a = 0.5 * Math.sqrt(cx * cx + cy * cy + cz * cz);
     if (a === 0) degenerate++;
     area += a;
@@ -134,7 +146,9 @@ export function compareTriangleSoups(a: Float32Array, b: Float32Array, options: 
   const usedB = new Set<number>();
   const stillA: number[] = [];
   for (const t of leftA) {
-    const gx = centroidCell(ca, t, 0), gy = centroidCell(ca, t, 1), gz = centroidCell(ca, t, 2);
+    const gx = centroidCell(ca, t, 0),
+      gy = centroidCell(ca, t, 1),
+      gz = centroidCell(ca, t, 2);
     let found = -1;
     let foundDiff = Infinity;
     search: for (let dz = -1; dz <= 1; dz++) {

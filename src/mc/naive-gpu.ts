@@ -94,9 +94,17 @@ export class NaiveMarchingCubes {
     this.positionsBuffer = this.createPositions(this.vertexCapacity);
     if (timingSource === 'timestamp-query') {
       this.querySet = device.createQuerySet({ label: 'NaiveMc.stageTimes', type: 'timestamp', count: MARKERS });
-      this.resolveBuffer = device.createBuffer({ label: 'NaiveMc.stageTimes.resolve', size: MARKERS * 8, usage: GPUBufferUsage.QUERY_RESOLVE | GPUBufferUsage.COPY_SRC });
+      this.resolveBuffer = device.createBuffer({
+        label: 'NaiveMc.stageTimes.resolve',
+        size: MARKERS * 8,
+        usage: GPUBufferUsage.QUERY_RESOLVE | GPUBufferUsage.COPY_SRC,
+      });
     }
-    this.staging = device.createBuffer({ label: 'NaiveMc.staging', size: COUNTER_BYTES + MARKERS * 8, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+    this.staging = device.createBuffer({
+      label: 'NaiveMc.staging',
+      size: COUNTER_BYTES + MARKERS * 8,
+      usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST,
+    });
     this.bindEmit();
   }
 
@@ -125,7 +133,11 @@ export class NaiveMarchingCubes {
       IndirectArgs.create(device, { itemsPerWorkgroup: WG, label: 'NaiveMc.activeArgs', maxWorkgroupsPerDimension: maxPerDim }),
     ]);
     const perCell = (label: string) =>
-      device.createBuffer({ label: `NaiveMc.${label}`, size: Math.max(4, cells * 4), usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC });
+      device.createBuffer({
+        label: `NaiveMc.${label}`,
+        size: Math.max(4, cells * 4),
+        usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC,
+      });
     const timing = options.timing !== false && device.features.has('timestamp-query') ? 'timestamp-query' : 'queue-wall-time';
     return new NaiveMarchingCubes(
       device,
@@ -139,7 +151,11 @@ export class NaiveMarchingCubes {
       perCell('mask'),
       perCell('offsets'),
       perCell('activeIds'),
-      device.createBuffer({ label: 'NaiveMc.counters', size: COUNTER_BYTES, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST }),
+      device.createBuffer({
+        label: 'NaiveMc.counters',
+        size: COUNTER_BYTES,
+        usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST,
+      }),
       device.createBuffer({ label: 'NaiveMc.params', size: PARAMS_BYTES, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST }),
       createCaseTableBuffer(device),
     );
@@ -164,7 +180,9 @@ export class NaiveMarchingCubes {
     if (vertices <= this.vertexCapacity) return;
     const binding = Math.min(this.device.limits.maxStorageBufferBindingSize, this.device.limits.maxBufferSize);
     if (vertices * 12 > binding) {
-      throw new RangeError(`the surface has ${vertices} vertices (${mb(vertices * 12)}), more than one storage binding holds (${mb(binding)})`);
+      throw new RangeError(
+        `the surface has ${vertices} vertices (${mb(vertices * 12)}), more than one storage binding holds (${mb(binding)})`,
+      );
     }
     this.positionsBuffer.destroy();
     this.vertexCapacity = vertices;
@@ -235,10 +253,18 @@ export class NaiveMarchingCubes {
       this.device.queue.submit([again.finish()]);
       const second = await this.readStaging();
       // Stage times: the first attempt's, with the emit pass of the second.
-      read = { counters: second.counters, ticks: read.ticks && second.ticks ? [...read.ticks.slice(0, 4), read.ticks[4], read.ticks[4] + (second.ticks[5] - second.ticks[4])] : undefined };
+      read = {
+        counters: second.counters,
+        ticks:
+          read.ticks && second.ticks
+            ? [...read.ticks.slice(0, 4), read.ticks[4], read.ticks[4] + (second.ticks[5] - second.ticks[4])]
+            : undefined,
+      };
     }
     const wallMs = performance.now() - start;
-    const stages = read.ticks ? STAGES.map((label, k) => ({ label, ms: Math.max(0, Number(read.ticks![k + 1] - read.ticks![k])) / 1e6 })) : [];
+    const stages = read.ticks
+      ? STAGES.map((label, k) => ({ label, ms: Math.max(0, Number(read.ticks![k + 1] - read.ticks![k])) / 1e6 }))
+      : [];
     const gpuMs = read.ticks ? stages.reduce((s, x) => s + x.ms, 0) : wallMs;
     return {
       iso: Math.fround(iso),
@@ -257,7 +283,11 @@ export class NaiveMarchingCubes {
   async readPositions(vertices: number): Promise<Float32Array> {
     const n = Math.min(vertices, this.vertexCapacity) * 3;
     if (n === 0) return new Float32Array(0);
-    const staging = this.device.createBuffer({ label: 'NaiveMc.readPositions', size: n * 4, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+    const staging = this.device.createBuffer({
+      label: 'NaiveMc.readPositions',
+      size: n * 4,
+      usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST,
+    });
     try {
       const encoder = this.device.createCommandEncoder({ label: 'NaiveMc.readPositions' });
       encoder.copyBufferToBuffer(this.positionsBuffer, 0, staging, 0, n * 4);
@@ -270,7 +300,18 @@ export class NaiveMarchingCubes {
   }
 
   destroy(): void {
-    for (const b of [this.mask, this.offsets, this.activeIds, this.counters, this.params, this.table, this.positionsBuffer, this.staging, this.resolveBuffer]) b?.destroy();
+    for (const b of [
+      this.mask,
+      this.offsets,
+      this.activeIds,
+      this.counters,
+      this.params,
+      this.table,
+      this.positionsBuffer,
+      this.staging,
+      this.resolveBuffer,
+    ])
+      b?.destroy();
     this.querySet?.destroy();
     this.scan.destroy();
     this.compact.destroy();
@@ -280,7 +321,11 @@ export class NaiveMarchingCubes {
   // ---------------------------------------------------------------- internals
 
   private createPositions(vertices: number): GPUBuffer {
-    return this.device.createBuffer({ label: 'NaiveMc.positions', size: Math.max(16, vertices * 12), usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.VERTEX });
+    return this.device.createBuffer({
+      label: 'NaiveMc.positions',
+      size: Math.max(16, vertices * 12),
+      usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.VERTEX,
+    });
   }
 
   private writeParams(iso: number): void {
@@ -295,7 +340,9 @@ export class NaiveMarchingCubes {
 
   private marker(encoder: GPUCommandEncoder, index: number): void {
     if (!this.querySet) return;
-    encoder.beginComputePass({ label: `NaiveMc.marker${index}`, timestampWrites: { querySet: this.querySet, beginningOfPassWriteIndex: index } }).end();
+    encoder
+      .beginComputePass({ label: `NaiveMc.marker${index}`, timestampWrites: { querySet: this.querySet, beginningOfPassWriteIndex: index } })
+      .end();
   }
 
   private encodeReadback(encoder: GPUCommandEncoder): void {

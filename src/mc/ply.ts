@@ -24,7 +24,9 @@ export function weldVertices(soup: Float32Array): WeldedMesh {
   const indices = new Uint32Array(n);
   let count = 0;
   for (let v = 0; v < n; v++) {
-    const x = bits[3 * v], y = bits[3 * v + 1], z = bits[3 * v + 2];
+    const x = bits[3 * v],
+      y = bits[3 * v + 1],
+      z = bits[3 * v + 2];
     let h = (Math.imul(x, 0x9e3779b1) ^ Math.imul(y, 0x85ebca77) ^ Math.imul(z, 0xc2b2ae3d)) >>> 0;
     h = (h ^ (h >>> 15)) & mask;
     for (;;) {

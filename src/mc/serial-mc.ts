@@ -64,8 +64,7 @@ function classifyCells(values: Float32Array, nx: number, ny: number, nz: number,
       const r10 = r00 + sx;
       const r01 = r00 + sxy;
       const r11 = r01 + sx;
-      let prev =
-        (values[r00] >= t ? 1 : 0) | (values[r10] >= t ? 4 : 0) | (values[r01] >= t ? 16 : 0) | (values[r11] >= t ? 64 : 0);
+      let prev = (values[r00] >= t ? 1 : 0) | (values[r10] >= t ? 4 : 0) | (values[r01] >= t ? 16 : 0) | (values[r11] >= t ? 64 : 0);
       for (let i = 1; i < nx; i++) {
         const next =
           (values[r00 + i] >= t ? 1 : 0) |

@@ -83,19 +83,24 @@ class Compaction {
     const { mask, offsets, output } = args;
     if (output === mask || output === offsets || output === values) throw new Error(`${this.label}: output must not alias an input`);
     // Keyed by (mask, offsets, output, values or mask): no array per call.
-    const bindGroup = this.bindGroups.key(mask).key(offsets).key(output).key(values ?? mask).get(() =>
-      this.device.createBindGroup({
-        label: `${this.label}.bindGroup`,
-        layout: this.pipeline.getBindGroupLayout(0),
-        entries: [
-          { binding: 0, resource: { buffer: this.records.params, size: RECORD_UNIFORM_SIZE } },
-          { binding: 1, resource: { buffer: mask } },
-          { binding: 2, resource: { buffer: offsets } },
-          ...(values ? [{ binding: 3, resource: { buffer: values } }] : []),
-          { binding: 4, resource: { buffer: output } },
-        ],
-      }),
-    );
+    const bindGroup = this.bindGroups
+      .key(mask)
+      .key(offsets)
+      .key(output)
+      .key(values ?? mask)
+      .get(() =>
+        this.device.createBindGroup({
+          label: `${this.label}.bindGroup`,
+          layout: this.pipeline.getBindGroupLayout(0),
+          entries: [
+            { binding: 0, resource: { buffer: this.records.params, size: RECORD_UNIFORM_SIZE } },
+            { binding: 1, resource: { buffer: mask } },
+            { binding: 2, resource: { buffer: offsets } },
+            ...(values ? [{ binding: 3, resource: { buffer: values } }] : []),
+            { binding: 4, resource: { buffer: output } },
+          ],
+        }),
+      );
     this.records.encodeCount(encoder, args.count);
     const pass = encoder.beginComputePass({ label: this.label, timestampWrites: args.timestampWrites });
     this.records.dispatchSetup(pass);

@@ -52,9 +52,18 @@ export class IndirectArgs {
     private readonly label: string,
   ) {
     this.layout = pipeline.getBindGroupLayout(0);
-    this.buffer = device.createBuffer({ label: `${label}.args`, size: 16, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.INDIRECT | GPUBufferUsage.COPY_SRC });
+    this.buffer = device.createBuffer({
+      label: `${label}.args`,
+      size: 16,
+      usage: GPUBufferUsage.STORAGE | GPUBufferUsage.INDIRECT | GPUBufferUsage.COPY_SRC,
+    });
     // The word index of each slot, written once: bound with a dynamic offset.
-    this.wordIndex = device.createBuffer({ label: `${label}.wordIndex`, size: WORDS_PER_BINDING * SLOT_STRIDE, usage: GPUBufferUsage.UNIFORM, mappedAtCreation: true });
+    this.wordIndex = device.createBuffer({
+      label: `${label}.wordIndex`,
+      size: WORDS_PER_BINDING * SLOT_STRIDE,
+      usage: GPUBufferUsage.UNIFORM,
+      mappedAtCreation: true,
+    });
     const words = new Uint32Array(this.wordIndex.getMappedRange());
     for (let k = 0; k < WORDS_PER_BINDING; k++) words[(k * SLOT_STRIDE) / 4] = k;
     this.wordIndex.unmap();
@@ -69,10 +78,16 @@ export class IndirectArgs {
       { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform', hasDynamicOffset: true, minBindingSize: 16 } },
       { binding: 2, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
     ]);
-    const pipeline = await createComputePipeline(device, label, [gridSnippet, { name: 'shaders/primitives/indirect_args.wgsl', code: indirectWgsl }], 'indirect_args', {
-      layout: [layout],
-      constants: { ITEMS: items, MAX_WG_PER_DIM: maxWorkgroupsPerDimension(device, options) },
-    });
+    const pipeline = await createComputePipeline(
+      device,
+      label,
+      [gridSnippet, { name: 'shaders/primitives/indirect_args.wgsl', code: indirectWgsl }],
+      'indirect_args',
+      {
+        layout: [layout],
+        constants: { ITEMS: items, MAX_WG_PER_DIM: maxWorkgroupsPerDimension(device, options) },
+      },
+    );
     return new IndirectArgs(device, pipeline, label);
   }
 

@@ -29,7 +29,10 @@ import {
 const scanSnippet: WgslPart = { name: 'shaders/primitives/scan.wgsl', code: scanWgsl };
 const scanTiledSnippet: WgslPart = { name: 'shaders/primitives/scan_tiled.wgsl', code: scanTiledWgsl };
 const workgroupScanSnippet: WgslPart = { name: 'shaders/primitives/workgroup_scan.wgsl', code: workgroupScanWgsl };
-const workgroupScanSubgroupsSnippet: WgslPart = { name: 'shaders/primitives/workgroup_scan_subgroups.wgsl', code: workgroupScanSubgroupsWgsl };
+const workgroupScanSubgroupsSnippet: WgslPart = {
+  name: 'shaders/primitives/workgroup_scan_subgroups.wgsl',
+  code: workgroupScanSubgroupsWgsl,
+};
 
 /**
  * Workgroup-memory words of the GPU path's scan kernel: the tile with
@@ -120,13 +123,19 @@ export class ExclusiveScan {
     const wg = gpu ? gpuPathWorkgroupSize(device, options) : workgroupSize(device, options);
     if (!Number.isInteger(items) || items < (gpu ? 1 : 2) || items > 4096) throw new RangeError(`chunk must be in ${gpu ? 1 : 2}..4096`);
     if (gpu && (wg * items < 2 || tiledScanWords(wg, items, subgroups) * 4 > device.limits.maxComputeWorkgroupStorageSize)) {
-      throw new RangeError(`ExclusiveScan: a tile of ${wg} x ${items} elements does not fit the workgroup storage limit (${device.limits.maxComputeWorkgroupStorageSize} B)`);
+      throw new RangeError(
+        `ExclusiveScan: a tile of ${wg} x ${items} elements does not fit the workgroup storage limit (${device.limits.maxComputeWorkgroupStorageSize} B)`,
+      );
     }
     // Elements per partial sum; on the GPU path one unit (tile) is one workgroup.
     const chunk = gpu ? wg * items : items;
     const maxPerDim = maxWorkgroupsPerDimension(device, options);
     const layout = bindGroupLayout(device, 'ExclusiveScan.layout', [
-      { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform', hasDynamicOffset: true, minBindingSize: RECORD_UNIFORM_SIZE } },
+      {
+        binding: 0,
+        visibility: GPUShaderStage.COMPUTE,
+        buffer: { type: 'uniform', hasDynamicOffset: true, minBindingSize: RECORD_UNIFORM_SIZE },
+      },
       { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },
       { binding: 2, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
       { binding: 3, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'read-only-storage' } },

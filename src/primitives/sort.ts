@@ -181,7 +181,20 @@ export class RadixSortByKey {
       }
     }
     device.queue.writeBuffer(passParams, 0, words);
-    return new RadixSortByKey(device, histogramLayout, scatterLayout, histogram, scatter, copy, records, scan, passParams, chunk, options.capacity, path);
+    return new RadixSortByKey(
+      device,
+      histogramLayout,
+      scatterLayout,
+      histogram,
+      scatter,
+      copy,
+      records,
+      scan,
+      passParams,
+      chunk,
+      options.capacity,
+      path,
+    );
   }
 
   private static tableSize(capacity: number, chunk: number): number {
@@ -231,33 +244,42 @@ export class RadixSortByKey {
   }
 
   private scatterGroup(src: Pair, dst: Pair): GPUBindGroup {
-    return this.scatterGroups.key(src.keys).key(src.values).key(dst.keys).key(dst.values).get(() =>
-      this.device.createBindGroup({
-        label: 'RadixSortByKey.scatterBindGroup',
-        layout: this.scatterLayout,
-        entries: [
-          { binding: 0, resource: { buffer: this.records.params, size: RECORD_UNIFORM_SIZE } },
-          { binding: 1, resource: { buffer: this.passParams, size: RECORD_UNIFORM_SIZE } },
-          { binding: 2, resource: { buffer: src.keys } },
-          { binding: 3, resource: { buffer: src.values } },
-          { binding: 5, resource: { buffer: this.offsets } },
-          { binding: 6, resource: { buffer: dst.keys } },
-          { binding: 7, resource: { buffer: dst.values } },
-        ],
-      }),
-    );
+    return this.scatterGroups
+      .key(src.keys)
+      .key(src.values)
+      .key(dst.keys)
+      .key(dst.values)
+      .get(() =>
+        this.device.createBindGroup({
+          label: 'RadixSortByKey.scatterBindGroup',
+          layout: this.scatterLayout,
+          entries: [
+            { binding: 0, resource: { buffer: this.records.params, size: RECORD_UNIFORM_SIZE } },
+            { binding: 1, resource: { buffer: this.passParams, size: RECORD_UNIFORM_SIZE } },
+            { binding: 2, resource: { buffer: src.keys } },
+            { binding: 3, resource: { buffer: src.values } },
+            { binding: 5, resource: { buffer: this.offsets } },
+            { binding: 6, resource: { buffer: dst.keys } },
+            { binding: 7, resource: { buffer: dst.values } },
+          ],
+        }),
+      );
   }
 
   /** Records the sort: about 3 compute passes per 4 key bits, no readback. */
   encode(encoder: GPUCommandEncoder, args: RadixSortArgs): void {
     const keyBits = args.keyBits ?? 32;
     if (!Number.isInteger(keyBits) || keyBits < 1 || keyBits > 32) throw new RangeError('keyBits must be in 1..32');
-    if ((args.keysOut === undefined) !== (args.valuesOut === undefined)) throw new Error('RadixSortByKey: give both keysOut and valuesOut, or neither');
+    if ((args.keysOut === undefined) !== (args.valuesOut === undefined))
+      throw new Error('RadixSortByKey: give both keysOut and valuesOut, or neither');
     if (args.keys === args.values) throw new Error('RadixSortByKey: keys and values must be different buffers');
     const input: Pair = { keys: args.keys, values: args.values };
     const output: Pair = args.keysOut && args.valuesOut ? { keys: args.keysOut, values: args.valuesOut } : input;
     const inPlace = output.keys === input.keys && output.values === input.values;
-    if (!inPlace && (output.keys === input.keys || output.values === input.values || output.keys === input.values || output.values === input.keys)) {
+    if (
+      !inPlace &&
+      (output.keys === input.keys || output.values === input.values || output.keys === input.values || output.values === input.keys)
+    ) {
       throw new Error('RadixSortByKey: outputs must be the inputs (in place) or distinct from them');
     }
     const scratch: Pair = { keys: this.keysTmp, values: this.valuesTmp };

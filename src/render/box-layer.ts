@@ -15,7 +15,11 @@ export class BoxLayer implements RenderLayer {
     layout: GPUBindGroupLayout,
   ) {
     this.uniforms = device.createBuffer({ label: 'BoxLayer.uniforms', size: 48, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
-    this.bindGroup = device.createBindGroup({ label: 'BoxLayer.bindGroup', layout, entries: [{ binding: 0, resource: { buffer: this.uniforms } }] });
+    this.bindGroup = device.createBindGroup({
+      label: 'BoxLayer.bindGroup',
+      layout,
+      entries: [{ binding: 0, resource: { buffer: this.uniforms } }],
+    });
   }
 
   static async create(viewer: Viewer): Promise<BoxLayer> {

@@ -12,7 +12,6 @@ export interface CameraState {
   distance: number;
 }
 
-
 /** The world axis shown pointing up by fit() and reset: LIDAR and terrain use z, CT and ParaView's default y. */
 export type UpAxis = 'x' | 'y' | 'z';
 
@@ -54,13 +53,16 @@ export class ArcballCamera {
     } else {
       // Y up: from the front (+z), right (+x) and a little above, like ParaView's
       // default view turned to three-quarters; X up: the same with axes cycled.
-      const dir = up === 'y' ? vec3.fromValues(...DEFAULT_VIEW_DIRECTION) : vec3.fromValues(DEFAULT_VIEW_DIRECTION[2], DEFAULT_VIEW_DIRECTION[0], DEFAULT_VIEW_DIRECTION[1]);
+      const dir =
+        up === 'y'
+          ? vec3.fromValues(...DEFAULT_VIEW_DIRECTION)
+          : vec3.fromValues(DEFAULT_VIEW_DIRECTION[2], DEFAULT_VIEW_DIRECTION[0], DEFAULT_VIEW_DIRECTION[1]);
       const upVec = up === 'y' ? vec3.fromValues(0, 1, 0) : vec3.fromValues(1, 0, 0);
       const look = mat4.lookAt(mat4.create(), vec3.normalize(dir, dir), [0, 0, 0], upVec);
       quat.fromMat3(this.rotation, mat3.fromMat4(mat3.create(), look));
       quat.normalize(this.rotation, this.rotation);
     }
-    this.distance = this.sceneRadius / Math.sin(this.fovY / 2) * 1.05;
+    this.distance = (this.sceneRadius / Math.sin(this.fovY / 2)) * 1.05;
     this.home = this.getState();
   }
 
@@ -68,12 +70,7 @@ export class ArcballCamera {
   frameBounds(bounds: Bounds): void {
     const r = 0.5 * vec3.distance(vec3.fromValues(...bounds.min), vec3.fromValues(...bounds.max));
     this.sceneRadius = Math.max(r, 1e-6);
-    vec3.set(
-      this.target,
-      (bounds.min[0] + bounds.max[0]) / 2,
-      (bounds.min[1] + bounds.max[1]) / 2,
-      (bounds.min[2] + bounds.max[2]) / 2,
-    );
+    vec3.set(this.target, (bounds.min[0] + bounds.max[0]) / 2, (bounds.min[1] + bounds.max[1]) / 2, (bounds.min[2] + bounds.max[2]) / 2);
     this.distance = (this.sceneRadius / Math.sin(this.fovY / 2)) * 1.05;
   }
 

@@ -91,13 +91,19 @@ export class SurfaceLayer implements RenderLayer {
     ]);
     const layout = device.createBindGroupLayout({
       label: 'SurfaceLayer.layout',
-      entries: [
-        { binding: 0, visibility: GPUShaderStage.VERTEX | GPUShaderStage.FRAGMENT, buffer: { type: 'uniform' } },
-      ],
+      entries: [{ binding: 0, visibility: GPUShaderStage.VERTEX | GPUShaderStage.FRAGMENT, buffer: { type: 'uniform' } }],
     });
     const pipelineLayout = device.createPipelineLayout({ label: 'SurfaceLayer', bindGroupLayouts: [target.frameBindGroupLayout, layout] });
-    const positions: GPUVertexBufferLayout = { arrayStride: 8, stepMode: 'vertex', attributes: [{ shaderLocation: 0, offset: 0, format: 'uint32x2' }] };
-    const normals: GPUVertexBufferLayout = { arrayStride: 4, stepMode: 'vertex', attributes: [{ shaderLocation: 1, offset: 0, format: 'uint32' }] };
+    const positions: GPUVertexBufferLayout = {
+      arrayStride: 8,
+      stepMode: 'vertex',
+      attributes: [{ shaderLocation: 0, offset: 0, format: 'uint32x2' }],
+    };
+    const normals: GPUVertexBufferLayout = {
+      arrayStride: 4,
+      stepMode: 'vertex',
+      attributes: [{ shaderLocation: 1, offset: 0, format: 'uint32' }],
+    };
     // Two-sided: no culling; the fragment shader tells the sides apart.
     const primitive: GPUPrimitiveState = { topology: 'triangle-list', cullMode: 'none' };
     const depthStencil: GPUDepthStencilState = { format: DEPTH_FORMAT, depthWriteEnabled: true, depthCompare: 'less' };
@@ -141,9 +147,7 @@ export class SurfaceLayer implements RenderLayer {
       this.bindGroup = this.target.device.createBindGroup({
         label: 'SurfaceLayer.bindGroup',
         layout: this.layout,
-        entries: [
-          { binding: 0, resource: { buffer: this.uniforms } },
-        ],
+        entries: [{ binding: 0, resource: { buffer: this.uniforms } }],
       });
       this.boundVersion = data.version;
     }

@@ -24,7 +24,12 @@ export function createFrameBindGroupLayout(device: GPUDevice, label = 'Viewer.fr
 const frameScratch = { viewProj: mat4.create(), view: mat4.create(), eye: vec3.create(), toLight: vec3.create() };
 
 /** The frame uniforms for `camera` on a width x height target (camera.aspect is set from them). Allocates nothing given `out`. */
-export function frameUniformData(camera: ArcballCamera, width: number, height: number, out = new Float32Array(FRAME_UNIFORM_BYTES / 4)): Float32Array {
+export function frameUniformData(
+  camera: ArcballCamera,
+  width: number,
+  height: number,
+  out = new Float32Array(FRAME_UNIFORM_BYTES / 4),
+): Float32Array {
   const t = frameScratch;
   camera.aspect = width / height;
   out.set(camera.viewProjection(t.viewProj) as Float32Array, 0);
@@ -103,7 +108,12 @@ export class Viewer {
     context.configure({ device, format: this.format, alphaMode: 'opaque' });
     this.clearColor = options.clearColor ?? { r: 0.09, g: 0.1, b: 0.12, a: 1 };
     this.colorAttachment = { view: undefined as unknown as GPUTextureView, clearValue: this.clearColor, loadOp: 'clear', storeOp: 'store' };
-    this.depthAttachment = { view: undefined as unknown as GPUTextureView, depthClearValue: 1, depthLoadOp: 'clear', depthStoreOp: 'store' };
+    this.depthAttachment = {
+      view: undefined as unknown as GPUTextureView,
+      depthClearValue: 1,
+      depthLoadOp: 'clear',
+      depthStoreOp: 'store',
+    };
     this.passDescriptor = { label: 'Viewer.pass', colorAttachments: [this.colorAttachment], depthStencilAttachment: this.depthAttachment };
 
     this.frameUniforms = device.createBuffer({

@@ -23,7 +23,8 @@ function copyBits(src: Uint8Array, srcBit: number, dst: Uint8Array, dstBit: numb
 /** The level's stream (header + blocks in raster order), from every chunk's stored bytes. */
 /** Why a level cannot be one zfp stream (a zfp header holds 65536 voxels per axis; one GPU buffer), or null. */
 export function assemblyLimit(layout: ChunkLevelLayout, maxBytes: number): string | null {
-  if (layout.dims.some((n) => n > 0x10000)) return `${layout.name} is ${layout.dims.join('x')}: one zfp stream holds at most 65536 voxels per axis`;
+  if (layout.dims.some((n) => n > 0x10000))
+    return `${layout.name} is ${layout.dims.join('x')}: one zfp stream holds at most 65536 voxels per axis`;
   const [bx, by, bz] = blockGridOf(layout.dims);
   const bytes = fixedRateStreamBytes(bx * by * bz, bitsPerBlockForRate(layout.rate), 96);
   if (bytes > maxBytes) return `${layout.name} as one stream is ${bytes} bytes, above ${maxBytes}`;

@@ -54,7 +54,13 @@ export interface StoreInput {
 }
 
 /** `budget`: the GPU memory of the whole stream (pools, cache, vertices); by default the pipeline's default budget. */
-export async function openStoreInput(gpu: GpuContext, input: string, level: number | undefined, budget: number | undefined, onError: (message: string) => void): Promise<StoreInput> {
+export async function openStoreInput(
+  gpu: GpuContext,
+  input: string,
+  level: number | undefined,
+  budget: number | undefined,
+  onError: (message: string) => void,
+): Promise<StoreInput> {
   const metered = new MeteredStore(storeForLocation(input));
   const store = await openZfpStore(metered, input);
   const L = level ?? 0;
@@ -75,12 +81,24 @@ export async function openStoreInput(gpu: GpuContext, input: string, level: numb
   const controller = await StreamController.create(store, fetcher, chunkedGpu(gpu), budgetBytes);
   const surface = new PinnedLevelSurface(controller, L);
   const record = (): StoreRecord => ({
-    store: input, level: L, levels: store.levels.length, dims: lv.layout.dims, chunkEdge: lv.layout.chunkEdge, rate: lv.layout.rate,
-    chunks: fetched.size, levelChunks: lv.chunkCount, chunkBytesFetched: chunkBytes,
-    bytesFetched: metered.meter.bytes, metadataBytes: store.metadataBytes, requests: metered.meter.requests,
-    storeChunkBytes: store.levels.reduce((a, l) => a + l.storedBytes, 0), budgetBytes, gpuBytes: controller.gpuBytes.total,
+    store: input,
+    level: L,
+    levels: store.levels.length,
+    dims: lv.layout.dims,
+    chunkEdge: lv.layout.chunkEdge,
+    rate: lv.layout.rate,
+    chunks: fetched.size,
+    levelChunks: lv.chunkCount,
+    chunkBytesFetched: chunkBytes,
+    bytesFetched: metered.meter.bytes,
+    metadataBytes: store.metadataBytes,
+    requests: metered.meter.requests,
+    storeChunkBytes: store.levels.reduce((a, l) => a + l.storedBytes, 0),
+    budgetBytes,
+    gpuBytes: controller.gpuBytes.total,
   });
-  const how = `Zarr store, level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 chunks, rate ${lv.layout.rate}), ` +
+  const how =
+    `Zarr store, level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 chunks, rate ${lv.layout.rate}), ` +
     `streamed: the chunks each surface needs, within ${(budgetBytes / 2 ** 20).toFixed(0)} MiB of GPU memory`;
   return { surface, how, rate: lv.layout.rate, notes: store.notes, fileName: `${input} level ${L}`, record };
 }

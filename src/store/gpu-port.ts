@@ -8,7 +8,8 @@ import type { StreamGpu } from './stream-controller.ts';
 
 export function chunkedGpu(gpu: GpuContext): StreamGpu<ChunkedVolume, IsosurfaceStats, Isosurface> {
   return {
-    createVolume: (layout, poolChunks) => ChunkedVolume.create(gpu, layout, { poolChunks: Math.min(poolChunks, ChunkedVolume.maxPoolChunks(gpu, layout)) }),
+    createVolume: (layout, poolChunks) =>
+      ChunkedVolume.create(gpu, layout, { poolChunks: Math.min(poolChunks, ChunkedVolume.maxPoolChunks(gpu, layout)) }),
     createSurface: (volume, memoryBudgetBytes) => Isosurface.create(gpu, volume, { memoryBudgetBytes }),
   };
 }

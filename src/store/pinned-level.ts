@@ -33,7 +33,12 @@ export class PinnedLevelSurface {
     controller.coarsest = level;
     const { dims } = controller.levels[level].layout;
     const blockGrid = dims.map((n) => Math.ceil(n / 4)) as [number, number, number];
-    this.info = { dims: [...dims], blockGrid, blockCount: blockGrid[0] * blockGrid[1] * blockGrid[2], valueRange: controller.valueRange ?? [0, 0] };
+    this.info = {
+      dims: [...dims],
+      blockGrid,
+      blockCount: blockGrid[0] * blockGrid[1] * blockGrid[2],
+      valueRange: controller.valueRange ?? [0, 0],
+    };
     controller.onProgress((p) => {
       if (p.phase === 'stopped') this.#reason = p.reason ?? `level ${level} stopped`;
     });

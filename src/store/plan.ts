@@ -23,7 +23,8 @@ export function neighbourhoodRanges(grid: Grid, ranges: Float32Array): Float32Ar
   let lo = new Float64Array(n);
   let hi = new Float64Array(n);
   for (let i = 0; i < n; i++) {
-    const a = ranges[2 * i], b = ranges[2 * i + 1];
+    const a = ranges[2 * i],
+      b = ranges[2 * i + 1];
     lo[i] = Number.isNaN(a) ? -Infinity : a;
     hi[i] = Number.isNaN(b) ? Infinity : b;
   }
@@ -35,9 +36,16 @@ export function neighbourhoodRanges(grid: Grid, ranges: Float32Array): Float32Ar
     const hi2 = new Float64Array(n);
     for (let i = 0; i < n; i++) {
       const c = Math.floor(i / s) % len;
-      let l = lo[i], h = hi[i];
-      if (c > 0) { l = Math.min(l, lo[i - s]); h = Math.max(h, hi[i - s]); }
-      if (c + 1 < len) { l = Math.min(l, lo[i + s]); h = Math.max(h, hi[i + s]); }
+      let l = lo[i],
+        h = hi[i];
+      if (c > 0) {
+        l = Math.min(l, lo[i - s]);
+        h = Math.max(h, hi[i - s]);
+      }
+      if (c + 1 < len) {
+        l = Math.min(l, lo[i + s]);
+        h = Math.max(h, hi[i + s]);
+      }
       lo2[i] = l;
       hi2[i] = h;
     }
@@ -74,7 +82,11 @@ export function chunkCentre(layout: ChunkLevelLayout, chunk: ChunkIndex): [numbe
  * camera's position mapped into the volume); ties by index, so the order is
  * deterministic.
  */
-export function nearestFirst(layout: ChunkLevelLayout, chunks: readonly ChunkIndex[], point: readonly [number, number, number]): ChunkIndex[] {
+export function nearestFirst(
+  layout: ChunkLevelLayout,
+  chunks: readonly ChunkIndex[],
+  point: readonly [number, number, number],
+): ChunkIndex[] {
   const d = new Map<ChunkIndex, number>();
   for (const c of chunks) {
     const m = chunkCentre(layout, c);

@@ -42,7 +42,11 @@ export interface LevelSurface<S extends LevelStats = LevelStats> {
   destroy(): void;
 }
 /** The GPU side, injected (the real one: gpu-port.ts; tests: a CPU fake). */
-export interface StreamGpu<V extends LevelVolume = LevelVolume, S extends LevelStats = LevelStats, F extends LevelSurface<S> = LevelSurface<S>> {
+export interface StreamGpu<
+  V extends LevelVolume = LevelVolume,
+  S extends LevelStats = LevelStats,
+  F extends LevelSurface<S> = LevelSurface<S>,
+> {
   createVolume(layout: ChunkLevelLayout, poolChunks: number): V;
   createSurface(volume: V, memoryBudgetBytes: number): Promise<F>;
 }
@@ -67,7 +71,13 @@ export interface ShownSurface<V, S extends LevelStats, F extends LevelSurface<S>
   stats: S;
 }
 
-interface Waiting { level: number; iso: number; needed: number; missing: Set<ChunkIndex>; done: () => void }
+interface Waiting {
+  level: number;
+  iso: number;
+  needed: number;
+  missing: Set<ChunkIndex>;
+  done: () => void;
+}
 
 interface Level<V> {
   index: number;
@@ -81,7 +91,11 @@ interface Level<V> {
   lru: Map<ChunkIndex, true>;
 }
 
-export class StreamController<V extends LevelVolume = LevelVolume, S extends LevelStats = LevelStats, F extends LevelSurface<S> = LevelSurface<S>> {
+export class StreamController<
+  V extends LevelVolume = LevelVolume,
+  S extends LevelStats = LevelStats,
+  F extends LevelSurface<S> = LevelSurface<S>,
+> {
   readonly levels: Level<V>[];
   #gen = 0;
   #shown: ShownSurface<V, S, F> | null = null;
@@ -101,9 +115,19 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
   finest = 0;
   coarsest: number;
 
-  private constructor(readonly store: ZfpStore, readonly fetcher: ChunkFetcher, readonly gpu: StreamGpu<V, S, F>, readonly budgetBytes: number, ranges: (Float32Array | null)[]) {
+  private constructor(
+    readonly store: ZfpStore,
+    readonly fetcher: ChunkFetcher,
+    readonly gpu: StreamGpu<V, S, F>,
+    readonly budgetBytes: number,
+    ranges: (Float32Array | null)[],
+  ) {
     this.levels = store.levels.map((l, i) => ({
-      index: i, layout: l.layout, volume: null, lru: new Map(), ranges: ranges[i],
+      index: i,
+      layout: l.layout,
+      volume: null,
+      lru: new Map(),
+      ranges: ranges[i],
       nb: ranges[i] ? neighbourhoodRanges(l.layout.chunkGrid, ranges[i]!) : null,
     }));
     this.coarsest = this.levels.length - 1;
@@ -117,16 +141,32 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
   }
 
   /** Reads the range arrays (metadata), then the controller is ready for setIsovalue. */
-  static async create<V extends LevelVolume, S extends LevelStats, F extends LevelSurface<S>>(store: ZfpStore, fetcher: ChunkFetcher, gpu: StreamGpu<V, S, F>, budgetBytes: number): Promise<StreamController<V, S, F>> {
+  static async create<V extends LevelVolume, S extends LevelStats, F extends LevelSurface<S>>(
+    store: ZfpStore,
+    fetcher: ChunkFetcher,
+    gpu: StreamGpu<V, S, F>,
+    budgetBytes: number,
+  ): Promise<StreamController<V, S, F>> {
     const ranges = await Promise.all(store.levels.map((_, i) => store.readRanges(i)));
     return new StreamController(store, fetcher, gpu, budgetBytes, ranges);
   }
 
-  onProgress(l: (p: StreamProgress) => void): () => void { this.#progress.add(l); return () => this.#progress.delete(l); }
-  onShown(l: (s: ShownSurface<V, S, F>) => void): () => void { this.#shownListeners.add(l); return () => this.#shownListeners.delete(l); }
-  onError(l: (e: Error) => void): () => void { this.#errors.add(l); return () => this.#errors.delete(l); }
+  onProgress(l: (p: StreamProgress) => void): () => void {
+    this.#progress.add(l);
+    return () => this.#progress.delete(l);
+  }
+  onShown(l: (s: ShownSurface<V, S, F>) => void): () => void {
+    this.#shownListeners.add(l);
+    return () => this.#shownListeners.delete(l);
+  }
+  onError(l: (e: Error) => void): () => void {
+    this.#errors.add(l);
+    return () => this.#errors.delete(l);
+  }
 
-  get shown(): ShownSurface<V, S, F> | null { return this.#shown; }
+  get shown(): ShownSurface<V, S, F> | null {
+    return this.#shown;
+  }
 
   /** [min, max] per chunk of a level, when known (range arrays, or computed once the level was resident whole). */
   chunkRanges(level: number): Float32Array | null {
@@ -138,7 +178,8 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
     if (this.store.valueRange) return this.store.valueRange;
     for (const l of this.levels) {
       if (!l.ranges) continue;
-      let lo = Infinity, hi = -Infinity;
+      let lo = Infinity,
+        hi = -Infinity;
       for (let i = 0; i < l.ranges.length; i += 2) {
         if (l.ranges[i] < lo) lo = l.ranges[i];
         if (l.ranges[i + 1] > hi) hi = l.ranges[i + 1];
@@ -182,7 +223,10 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
     let start = coarsest;
     for (let L = finest; L < coarsest; L++) {
       const lv = this.levels[L];
-      if (lv.volume && lv.nb && chunksNeeded(lv.nb, iso).every((c) => lv.volume!.has(c))) { start = L; break; }
+      if (lv.volume && lv.nb && chunksNeeded(lv.nb, iso).every((c) => lv.volume!.has(c))) {
+        start = L;
+        break;
+      }
     }
     for (let L = start; L >= finest; L--) {
       if (gen !== this.#gen || this.#destroyed) return;
@@ -194,23 +238,45 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
   async #refine(L: number, iso: number, gen: number): Promise<boolean> {
     const lv = this.levels[L];
     const pool = this.#ensureVolume(lv);
-    if (!pool) return this.#stop(L, `level ${L} does not fit: its pool of compressed chunks (${lv.layout.chunkBytes} bytes each) gets no room in the budget of ${mib(this.budgetBytes)} MiB`);
+    if (!pool)
+      return this.#stop(
+        L,
+        `level ${L} does not fit: its pool of compressed chunks (${lv.layout.chunkBytes} bytes each) gets no room in the budget of ${mib(this.budgetBytes)} MiB`,
+      );
     let needed = lv.nb ? chunksNeeded(lv.nb, iso) : allChunks(lv.layout);
     if (needed.length > pool.poolChunks) {
-      return this.#stop(L, `level ${L} needs ${needed.length} chunks (${mib(needed.length * lv.layout.chunkBytes)} MiB) at iso ${iso}${lv.nb ? '' : ' (no range arrays: every chunk)'}, its pool holds ${pool.poolChunks} within the budget of ${mib(this.budgetBytes)} MiB`);
+      return this.#stop(
+        L,
+        `level ${L} needs ${needed.length} chunks (${mib(needed.length * lv.layout.chunkBytes)} MiB) at iso ${iso}${lv.nb ? '' : ' (no range arrays: every chunk)'}, its pool holds ${pool.poolChunks} within the budget of ${mib(this.budgetBytes)} MiB`,
+      );
     }
     const s = 1 / 2 ** L;
     needed = nearestFirst(lv.layout, needed, [this.focus[0] * s, this.focus[1] * s, this.focus[2] * s]);
-    for (const c of needed) if (lv.lru.has(c)) { lv.lru.delete(c); lv.lru.set(c, true); }
+    for (const c of needed)
+      if (lv.lru.has(c)) {
+        lv.lru.delete(c);
+        lv.lru.set(c, true);
+      }
     const missing = new Set(needed.filter((c) => !pool.has(c)));
-    const progress = (phase: StreamProgress['phase']) => this.#emit({ iso, level: L, chunksDone: needed.length - missing.size, chunksNeeded: needed.length, bytesFetched: this.fetcher.counters.bytesFetched, phase });
+    const progress = (phase: StreamProgress['phase']) =>
+      this.#emit({
+        iso,
+        level: L,
+        chunksDone: needed.length - missing.size,
+        chunksNeeded: needed.length,
+        bytesFetched: this.fetcher.counters.bytesFetched,
+        phase,
+      });
     if (missing.size > 0) {
       const wanted = new Set(needed);
       let mine: Waiting | null = null;
       await new Promise<void>((resolve) => {
         mine = this.#waiting = { level: L, iso, needed: needed.length, missing, done: resolve };
         // evict chunks this surface does not need first, so arrivals find room
-        this.fetcher.want(L, needed.filter((c) => missing.has(c)));
+        this.fetcher.want(
+          L,
+          needed.filter((c) => missing.has(c)),
+        );
         this.#makeRoom(lv, missing.size, wanted);
         progress('fetching');
         if (missing.size === 0) resolve();
@@ -227,7 +293,10 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
       if (!surface) {
         const fixed = estimateFixedBytes(lv.layout);
         if (quarter - fixed < MIN_SURFACE_BYTES) {
-          return this.#stop(L, `level ${L}'s surface needs about ${mib(fixed)} MiB of per-block buffers (ranges, maps) besides its cache and vertices; a quarter of the budget of ${mib(this.budgetBytes)} MiB does not hold them`);
+          return this.#stop(
+            L,
+            `level ${L}'s surface needs about ${mib(fixed)} MiB of per-block buffers (ranges, maps) besides its cache and vertices; a quarter of the budget of ${mib(this.budgetBytes)} MiB does not hold them`,
+          );
         }
         surface = await this.gpu.createSurface(pool, quarter - fixed);
         this.#surfaces.set(L, surface);
@@ -239,7 +308,10 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
         if (quarter - actualFixed < MIN_SURFACE_BYTES || !surface.setMemoryBudget) {
           surface.destroy();
           this.#surfaces.delete(L);
-          return this.#stop(L, `level ${L}'s surface holds ${mib(actualFixed)} MiB of per-block buffers; a quarter of the budget of ${mib(this.budgetBytes)} MiB does not hold them with a cache`);
+          return this.#stop(
+            L,
+            `level ${L}'s surface holds ${mib(actualFixed)} MiB of per-block buffers; a quarter of the budget of ${mib(this.budgetBytes)} MiB does not hold them with a cache`,
+          );
         }
         surface.setMemoryBudget(quarter - actualFixed);
         if (stats.cacheBytes + stats.vertexBytes + actualFixed > quarter) stats = await surface.compute(iso);
@@ -271,7 +343,11 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
     for (const l of this.#shownListeners) l(s);
     // keep two surfaces at most: the one shown and (if different) none other
     for (const [level, surf] of this.#surfaces) {
-      if (level !== s.level && level !== old?.level) { surf.destroy(); this.#surfaces.delete(level); this.#lastStats.delete(level); }
+      if (level !== s.level && level !== old?.level) {
+        surf.destroy();
+        this.#surfaces.delete(level);
+        this.#lastStats.delete(level);
+      }
     }
     if (old && old.level !== s.level) {
       old.surface.destroy();
@@ -283,8 +359,19 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
   #stop(level: number, reason: string): false {
     const w = this.#waiting;
     this.#waiting = null;
-    if (w) { this.fetcher.want(level, []); w.done(); }
-    this.#emit({ iso: this.#shown?.iso ?? NaN, level, chunksDone: 0, chunksNeeded: 0, bytesFetched: this.fetcher.counters.bytesFetched, phase: 'stopped', reason });
+    if (w) {
+      this.fetcher.want(level, []);
+      w.done();
+    }
+    this.#emit({
+      iso: this.#shown?.iso ?? NaN,
+      level,
+      chunksDone: 0,
+      chunksNeeded: 0,
+      bytesFetched: this.fetcher.counters.bytesFetched,
+      phase: 'stopped',
+      reason,
+    });
     return false;
   }
 
@@ -333,7 +420,14 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
     }
     lv.lru.set(chunk, true);
     w.missing.delete(chunk);
-    this.#emit({ iso: w.iso, level, chunksDone: w.needed - w.missing.size, chunksNeeded: w.needed, bytesFetched: this.fetcher.counters.bytesFetched, phase: 'fetching' });
+    this.#emit({
+      iso: w.iso,
+      level,
+      chunksDone: w.needed - w.missing.size,
+      chunksNeeded: w.needed,
+      bytesFetched: this.fetcher.counters.bytesFetched,
+      phase: 'fetching',
+    });
     if (w.missing.size === 0) w.done();
   }
 
@@ -344,7 +438,10 @@ export class StreamController<V extends LevelVolume = LevelVolume, S extends Lev
     this.#waiting?.done();
     for (const s of this.#surfaces.values()) s.destroy();
     this.#surfaces.clear();
-    for (const l of this.levels) { l.volume?.destroy(); l.volume = null; }
+    for (const l of this.levels) {
+      l.volume?.destroy();
+      l.volume = null;
+    }
     this.#shown = null;
   }
 }
@@ -375,13 +472,17 @@ export function chunkRangesOfBlocks(layout: ChunkLevelLayout, blockRanges: Float
   const [gx, gy] = layout.chunkGrid;
   const per = layout.chunkEdge / 4;
   const out = new Float32Array(2 * chunkCount(layout));
-  for (let i = 0; i < out.length; i += 2) { out[i] = Infinity; out[i + 1] = -Infinity; }
+  for (let i = 0; i < out.length; i += 2) {
+    out[i] = Infinity;
+    out[i + 1] = -Infinity;
+  }
   for (let bz = 0; bz < bg[2]; bz++) {
     for (let by = 0; by < bg[1]; by++) {
       for (let bx = 0; bx < bg[0]; bx++) {
         const b = bx + bg[0] * (by + bg[1] * bz);
         const c = Math.floor(bx / per) + gx * (Math.floor(by / per) + gy * Math.floor(bz / per));
-        const lo = blockRanges[2 * b], hi = blockRanges[2 * b + 1];
+        const lo = blockRanges[2 * b],
+          hi = blockRanges[2 * b + 1];
         if (lo < out[2 * c]) out[2 * c] = lo;
         if (hi > out[2 * c + 1]) out[2 * c + 1] = hi;
       }

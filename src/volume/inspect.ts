@@ -10,7 +10,6 @@ import { formatDims, type Dims } from '../core/naming.ts';
 import { NrrdError, parseNrrd, type NrrdVolume } from './nrrd.ts';
 import type { TiffVolume } from '../loaders/tiff.ts';
 
-
 /** Rate (bits per value) raw volumes are compressed at unless the user picks another. */
 export const DEFAULT_RAW_RATE = 8;
 /** Rate of the built-in default volume (page and `cli ... default`). */
@@ -82,7 +81,9 @@ export function sizeOf(dims: Dims, dtype: DType): number {
 /** Dimensions from a name or a form: whole numbers from 1 up, or a VolumeFileError naming the file. */
 export function checkNamedDims(fileName: string, dims: Dims, where: string): void {
   if (dims.some((n) => !Number.isSafeInteger(n) || n < 1)) {
-    throw new VolumeFileError(`${fileName}: the shape ${formatDims(dims)} ${where} is impossible: every dimension must be a whole number from 1 up`);
+    throw new VolumeFileError(
+      `${fileName}: the shape ${formatDims(dims)} ${where} is impossible: every dimension must be a whole number from 1 up`,
+    );
   }
 }
 
@@ -95,7 +96,9 @@ export function checkNamedDims(fileName: string, dims: Dims, where: string): voi
 export function checkValueRange(fileName: string, range: readonly [number, number]): [number, number] {
   const [lo, hi] = range;
   if (!(Number.isFinite(lo) && Number.isFinite(hi) && lo <= hi && Math.abs(lo) < 3.4e38 && Math.abs(hi) < 3.4e38)) {
-    throw new VolumeFileError(`${fileName}: the volume has no finite values (every decoded value is NaN or infinite): there is no surface to draw`);
+    throw new VolumeFileError(
+      `${fileName}: the volume has no finite values (every decoded value is NaN or infinite): there is no surface to draw`,
+    );
   }
   return [lo, hi];
 }
@@ -115,7 +118,15 @@ export async function inspectVolumeFile(fileName: string, bytes: Uint8Array, opt
       if (name.dtype && name.dtype !== 'float32') {
         throw new VolumeFileError(`${fileName}: the name says ${name.dtype}; only float32 zfp streams are supported`);
       }
-      const facts: VolumeFileFacts = { ...base, kind: 'zfp-headerless', dtype: 'float32', dims: name.dims, rate: name.rate, missing: [], compresses: false };
+      const facts: VolumeFileFacts = {
+        ...base,
+        kind: 'zfp-headerless',
+        dtype: 'float32',
+        dims: name.dims,
+        rate: name.rate,
+        missing: [],
+        compresses: false,
+      };
       if (name.dims) checkNamedDims(fileName, name.dims, 'in the name');
       if (!name.dims) facts.missing.push('dims');
       if (name.rate === undefined) {
@@ -138,7 +149,7 @@ export async function inspectVolumeFile(fileName: string, bytes: Uint8Array, opt
       if (name.dims && name.dtype && sizeOf(name.dims, name.dtype) !== bytes.byteLength) {
         throw new VolumeFileError(
           `${fileName}: ${formatDims(name.dims)} ${name.dtype} is ${sizeOf(name.dims, name.dtype)} bytes, the file has ${bytes.byteLength}; ` +
-            'the name must give the volume\'s shape and type (name_XxYxZ_dtype.raw)',
+            "the name must give the volume's shape and type (name_XxYxZ_dtype.raw)",
         );
       }
       return facts;
@@ -163,7 +174,9 @@ export async function inspectVolumeFile(fileName: string, bytes: Uint8Array, opt
           : `${fileName}: this is a ${detected.kind.toUpperCase()} point cloud, not a volume this command reads (\`cli las\` describes it)`,
       );
     case 'swc':
-      throw new VolumeFileError(`${fileName}: this is an SWC neuron tracing, not a volume${reader === 'page' ? '; open it in the neuron example page' : ''}`);
+      throw new VolumeFileError(
+        `${fileName}: this is an SWC neuron tracing, not a volume${reader === 'page' ? '; open it in the neuron example page' : ''}`,
+      );
     default:
       throw new VolumeFileError(
         `${fileName}: not a volume this ${reader} reads (${detected.why}). Supported: .zfp (with header, or named name_XxYxZ_float32.raw.crateR.zfp), ` +
@@ -213,7 +226,9 @@ export function tiffVolumeFacts(fileName: string, v: TiffVolume, bytes: number, 
   let data: ArrayBufferView;
   if (channels !== 1) {
     if (opts.channels !== 'mean') {
-      throw new VolumeFileError(`${fileName}: ${channels} samples per pixel (colour); an isosurface needs one value per voxel (save a single channel)`);
+      throw new VolumeFileError(
+        `${fileName}: ${channels} samples per pixel (colour); an isosurface needs one value per voxel (save a single channel)`,
+      );
     }
     const n = v.data.length / channels;
     const mean = new Float32Array(n);
@@ -237,6 +252,7 @@ export function tiffVolumeFacts(fileName: string, v: TiffVolume, bytes: number, 
 
 /** The rate `rate` is a usable zfp rate (checked before compressing). */
 export function checkRate(fileName: string, rate: number | undefined): number {
-  if (rate === undefined || !Number.isFinite(rate) || rate <= 0) throw new VolumeFileError(`${fileName}: give a positive rate (bits per value), e.g. ${DEFAULT_RAW_RATE}`);
+  if (rate === undefined || !Number.isFinite(rate) || rate <= 0)
+    throw new VolumeFileError(`${fileName}: give a positive rate (bits per value), e.g. ${DEFAULT_RAW_RATE}`);
   return rate;
 }

@@ -28,15 +28,20 @@ function floatView(data: Uint8Array, dtype: 'float32' | 'float64'): Float32Array
   const width = dtype === 'float32' ? 4 : 8;
   const aligned = data.byteOffset % width === 0 ? data : data.slice();
   const n = Math.floor(aligned.byteLength / width);
-  return dtype === 'float32' ? new Float32Array(aligned.buffer, aligned.byteOffset, n) : new Float64Array(aligned.buffer, aligned.byteOffset, n);
+  return dtype === 'float32'
+    ? new Float32Array(aligned.buffer, aligned.byteOffset, n)
+    : new Float64Array(aligned.buffer, aligned.byteOffset, n);
 }
 
 /** Counts NaN and infinite samples; undefined for integer types (always finite). */
 export function countNonFinite(data: Uint8Array, dtype: DType): NonFiniteCount | undefined {
   if (dtype !== 'float32' && dtype !== 'float64') return undefined;
   const v = floatView(data, dtype);
-  let nan = 0, posInf = 0, negInf = 0;
-  let lo = Infinity, hi = -Infinity;
+  let nan = 0,
+    posInf = 0,
+    negInf = 0;
+  let lo = Infinity,
+    hi = -Infinity;
   for (let i = 0; i < v.length; i++) {
     const x = v[i];
     if (x !== x) nan++;
@@ -77,7 +82,10 @@ function parts(c: NonFiniteCount): string {
 /** The notice shown by the page and printed by the CLI. */
 export function nonFiniteNotice(c: NonFiniteCount): string {
   const became: string[] = [];
-  if (c.nan || c.negInf) became.push(`${[c.nan ? 'NaN' : '', c.negInf ? '-Inf' : ''].filter(Boolean).join(' and ')} became the smallest finite value (${c.finiteMin}, outside every surface)`);
+  if (c.nan || c.negInf)
+    became.push(
+      `${[c.nan ? 'NaN' : '', c.negInf ? '-Inf' : ''].filter(Boolean).join(' and ')} became the smallest finite value (${c.finiteMin}, outside every surface)`,
+    );
   if (c.posInf) became.push(`+Inf became the largest (${c.finiteMax})`);
   return `${nonFiniteTotal(c)} of ${c.values} values are not finite (${parts(c)}); zfp cannot store NaN or Inf, so before compressing ${became.join(' and ')}`;
 }

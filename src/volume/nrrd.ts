@@ -24,10 +24,24 @@ export interface NrrdVolume {
 }
 
 const TYPE_NAMES: Record<string, DType> = {
-  'signed char': 'int8', int8: 'int8', int8_t: 'int8',
-  uchar: 'uint8', 'unsigned char': 'uint8', uint8: 'uint8', uint8_t: 'uint8',
-  short: 'int16', 'short int': 'int16', 'signed short': 'int16', 'signed short int': 'int16', int16: 'int16', int16_t: 'int16',
-  ushort: 'uint16', 'unsigned short': 'uint16', 'unsigned short int': 'uint16', uint16: 'uint16', uint16_t: 'uint16',
+  'signed char': 'int8',
+  int8: 'int8',
+  int8_t: 'int8',
+  uchar: 'uint8',
+  'unsigned char': 'uint8',
+  uint8: 'uint8',
+  uint8_t: 'uint8',
+  short: 'int16',
+  'short int': 'int16',
+  'signed short': 'int16',
+  'signed short int': 'int16',
+  int16: 'int16',
+  int16_t: 'int16',
+  ushort: 'uint16',
+  'unsigned short': 'uint16',
+  'unsigned short int': 'uint16',
+  uint16: 'uint16',
+  uint16_t: 'uint16',
   float: 'float32',
   double: 'float64',
 };
@@ -121,11 +135,16 @@ async function gunzipPrefix(bytes: Uint8Array, need: number): Promise<Uint8Array
 /** Parses a NRRD file with attached data; throws NrrdError with the reason. */
 export async function parseNrrd(bytes: Uint8Array): Promise<NrrdVolume> {
   const { fields, dataOffset } = parseNrrdHeader(bytes);
-  if (fields['data file'] || fields.datafile) throw new NrrdError('detached data files (.nhdr + data file) are not supported; save as a single .nrrd');
+  if (fields['data file'] || fields.datafile)
+    throw new NrrdError('detached data files (.nhdr + data file) are not supported; save as a single .nrrd');
   const typeName = (fields.type ?? '').toLowerCase();
   const dtype = TYPE_NAMES[typeName];
-  if (!dtype) throw new NrrdError(`sample type "${fields.type ?? '(missing)'}" is not supported (use uint8, int8, uint16, int16, float or double)`);
-  const sizes = (fields.sizes ?? '').split(/\s+/).filter((s) => s !== '').map(Number);
+  if (!dtype)
+    throw new NrrdError(`sample type "${fields.type ?? '(missing)'}" is not supported (use uint8, int8, uint16, int16, float or double)`);
+  const sizes = (fields.sizes ?? '')
+    .split(/\s+/)
+    .filter((s) => s !== '')
+    .map(Number);
   const dimension = Number(fields.dimension);
   if (sizes.length !== dimension || sizes.some((s) => !Number.isInteger(s) || s < 1)) {
     throw new NrrdError(`bad "sizes: ${fields.sizes ?? ''}" for dimension ${fields.dimension ?? '(missing)'}`);
@@ -141,12 +160,16 @@ export async function parseNrrd(bytes: Uint8Array): Promise<NrrdVolume> {
   // Sizes are integers < 2^53 each; the product is checked before anything is allocated.
   const need = dims[0] * dims[1] * dims[2] * width;
   if (!(need <= NRRD_MAX_DATA_BYTES)) {
-    throw new NrrdError(`${dims.join('x')} ${dtype} is ${need} bytes of samples, more than the ${NRRD_MAX_DATA_BYTES} bytes (4 GiB) this reader takes`);
+    throw new NrrdError(
+      `${dims.join('x')} ${dtype} is ${need} bytes of samples, more than the ${NRRD_MAX_DATA_BYTES} bytes (4 GiB) this reader takes`,
+    );
   }
   const stored = bytes.subarray(dataOffset);
   const payload = gzip ? await gunzipPrefix(stored, need) : stored;
   if (payload.length < need) {
-    throw new NrrdError(`truncated: ${dims.join('x')} ${dtype} needs ${need} bytes of data, the file has ${payload.length}${gzip ? ' (after gunzip)' : ''}`);
+    throw new NrrdError(
+      `truncated: ${dims.join('x')} ${dtype} needs ${need} bytes of data, the file has ${payload.length}${gzip ? ' (after gunzip)' : ''}`,
+    );
   }
   const data = payload.length === need && gzip ? payload : payload.slice(0, need);
   const endian = (fields.endian ?? 'little').toLowerCase();

@@ -20,9 +20,29 @@ import { loadZfpStream, type ZfpGpuStream } from '../zfp/gpu-stream.ts';
 import { ZfpEncoder } from '../zfp/encoder.ts';
 import type { DType } from '../core/dtype.ts';
 import { formatDims, parseVolumeName, type Dims } from '../core/naming.ts';
-import { allNonFiniteMessage, countNonFinite, nonFiniteNotice, nonFiniteTotal, replaceNonFinite, type NonFiniteCount } from './non-finite.ts';
+import {
+  allNonFiniteMessage,
+  countNonFinite,
+  nonFiniteNotice,
+  nonFiniteTotal,
+  replaceNonFinite,
+  type NonFiniteCount,
+} from './non-finite.ts';
 import { generateDefaultVolume } from './procedural.ts';
-import { DEFAULT_RAW_RATE, DEFAULT_VOLUME_RATE, DEFAULT_VOLUME_NAME, type VolumeFileKind, VolumeFileError, type VolumeReader, type InspectOptions, type VolumeFileFacts, inspectVolumeFile, checkRate, checkNamedDims, sizeOf } from './inspect.ts';
+import {
+  DEFAULT_RAW_RATE,
+  DEFAULT_VOLUME_RATE,
+  DEFAULT_VOLUME_NAME,
+  type VolumeFileKind,
+  VolumeFileError,
+  type VolumeReader,
+  type InspectOptions,
+  type VolumeFileFacts,
+  inspectVolumeFile,
+  checkRate,
+  checkNamedDims,
+  sizeOf,
+} from './inspect.ts';
 
 // The inspection (what a file is) lives in inspect.ts; re-exported for the callers that open files.
 export * from './inspect.ts';
@@ -87,7 +107,13 @@ export function encoderFor(device: GPUDevice): Promise<ZfpEncoder> {
  * lists (and choosing the rate of raw/NRRD volumes). Throws an error naming
  * the file; nothing stays allocated on failure.
  */
-export async function openVolumeFile(device: GPUDevice, facts: VolumeFileFacts, bytes: Uint8Array, req: OpenRequest = {}, opts: OpenOptions = {}): Promise<OpenedVolume> {
+export async function openVolumeFile(
+  device: GPUDevice,
+  facts: VolumeFileFacts,
+  bytes: Uint8Array,
+  req: OpenRequest = {},
+  opts: OpenOptions = {},
+): Promise<OpenedVolume> {
   const { fileName } = facts;
   const display = fileName.split(/[\\/]/).pop() ?? fileName;
   const common = { name: display, fileName, kind: facts.kind, sourceBytes: facts.bytes, spacing: facts.spacing };
@@ -114,7 +140,16 @@ export async function openVolumeFile(device: GPUDevice, facts: VolumeFileFacts, 
       }
       const info = stream.info;
       const notes = info.notes.map((n) => `${fileName}: ${n}`);
-      return { ...common, stream, dims: info.dims, sourceDtype: 'float32', compressedBytes: info.paddedBytes, rate: info.rate, compressedHere: false, notes };
+      return {
+        ...common,
+        stream,
+        dims: info.dims,
+        sourceDtype: 'float32',
+        compressedBytes: info.paddedBytes,
+        rate: info.rate,
+        compressedHere: false,
+        notes,
+      };
     }
     case 'raw':
     case 'nrrd':
@@ -124,7 +159,9 @@ export async function openVolumeFile(device: GPUDevice, facts: VolumeFileFacts, 
       if (!dims || !dtype) throw new VolumeFileError(`${fileName}: give the volume's dimensions and sample type (the name carries none)`);
       let data = facts.kind === 'nrrd' ? facts.nrrd!.data : facts.kind === 'tiff' ? facts.samples! : bytes;
       if (sizeOf(dims, dtype) !== data.byteLength) {
-        throw new VolumeFileError(`${fileName}: ${formatDims(dims)} ${dtype} is ${sizeOf(dims, dtype)} bytes, the file has ${data.byteLength}`);
+        throw new VolumeFileError(
+          `${fileName}: ${formatDims(dims)} ${dtype} is ${sizeOf(dims, dtype)} bytes, the file has ${data.byteLength}`,
+        );
       }
       const rate = checkRate(fileName, req.rate ?? DEFAULT_RAW_RATE);
       const notes: string[] = [];
@@ -145,13 +182,30 @@ export async function openVolumeFile(device: GPUDevice, facts: VolumeFileFacts, 
         throw e;
       }
       const nf = nonFinite && nonFiniteTotal(nonFinite) > 0 ? { nonFinite } : {};
-      return { ...common, stream, dims, sourceDtype: dtype, compressedBytes: stream.info.paddedBytes, rate: stream.info.rate, compressedHere: true, notes, ...nf };
+      return {
+        ...common,
+        stream,
+        dims,
+        sourceDtype: dtype,
+        compressedBytes: stream.info.paddedBytes,
+        rate: stream.info.rate,
+        compressedHere: true,
+        notes,
+        ...nf,
+      };
     }
   }
 }
 
 /** Compresses an uncompressed volume on the GPU (fixed rate, with header), with the device's shared encoder. */
-export async function compressOnGpu(device: GPUDevice, data: Uint8Array, dtype: DType, dims: Dims, rate: number, fileName: string): Promise<ZfpGpuStream> {
+export async function compressOnGpu(
+  device: GPUDevice,
+  data: Uint8Array,
+  dtype: DType,
+  dims: Dims,
+  rate: number,
+  fileName: string,
+): Promise<ZfpGpuStream> {
   const encoder = await encoderFor(device);
   return encoder.compressToStream(data, dtype, dims, rate, { header: true, fileName });
 }
@@ -173,7 +227,8 @@ function missingMessage(facts: VolumeFileFacts, reader: VolumeReader): string {
   if (facts.kind === 'raw') {
     return `${fileName}: a raw volume needs its shape and type in the name (name_XxYxZ_dtype.raw)`;
   }
-  if (facts.missing.includes('dims')) return `${fileName}: no zfp header and no shape in the name (name it name_XxYxZ_float32.raw.crateR.zfp)`;
+  if (facts.missing.includes('dims'))
+    return `${fileName}: no zfp header and no shape in the name (name it name_XxYxZ_float32.raw.crateR.zfp)`;
   const fit = facts.fittingRates?.length ? ` (rates that fit its size: ${facts.fittingRates.join(', ')})` : '';
   return `${fileName}: no zfp header and no rate in the name (name_XxYxZ_float32.raw.crateR.zfp)${reader === 'command' ? '; give it with --rate R' : ''}${fit}`;
 }
@@ -183,7 +238,12 @@ function missingMessage(facts: VolumeFileFacts, reader: VolumeReader): string {
  * what the file does not say must be in `opts`, else a VolumeFileError says
  * what is missing. Header-less streams take the rate in their name first.
  */
-export async function openVolumeBytes(device: GPUDevice, bytes: Uint8Array, fileName: string, opts: OpenBytesOptions = {}): Promise<OpenedVolume> {
+export async function openVolumeBytes(
+  device: GPUDevice,
+  bytes: Uint8Array,
+  fileName: string,
+  opts: OpenBytesOptions = {},
+): Promise<OpenedVolume> {
   const reader = opts.reader ?? 'command';
   const facts = await inspectVolumeFile(fileName, bytes, { reader });
   const req: OpenRequest = {};
@@ -196,7 +256,13 @@ export async function openVolumeBytes(device: GPUDevice, bytes: Uint8Array, file
   return openVolumeFile(device, facts, bytes, req, opts);
 }
 
-const KIND_LABEL: Record<VolumeFileKind, string> = { zfp: 'zfp file', 'zfp-headerless': 'header-less zfp file', raw: 'raw', nrrd: 'NRRD', tiff: 'TIFF stack' };
+const KIND_LABEL: Record<VolumeFileKind, string> = {
+  zfp: 'zfp file',
+  'zfp-headerless': 'header-less zfp file',
+  raw: 'raw',
+  nrrd: 'NRRD',
+  tiff: 'TIFF stack',
+};
 
 /** One line on what was opened and how, e.g. "uint8 raw 66x66x66 compressed on the GPU at rate 8" (CLI logs and JSON). */
 export function describeOpenedVolume(v: OpenedVolume): string {

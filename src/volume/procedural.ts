@@ -86,7 +86,11 @@ export function generateDefaultVolume(dims: Dims = [128, 128, 128], seed = 20201
   // Shells: centre above the sheet, 4 shells, opened on the side the default
   // view sees at an angle (it looks from DEFAULT_VIEW_DIRECTION; the window
   // faces 35 degrees to its right, so the cut shows the shells' thickness).
-  const cx = 0.5, cy = 0.68, cz = 0.5, radius = 0.28, shells = 4;
+  const cx = 0.5,
+    cy = 0.68,
+    cz = 0.5,
+    radius = 0.28,
+    shells = 4;
   const [wx, wy, wz] = [DEFAULT_VIEW_DIRECTION[0] + 0.55, DEFAULT_VIEW_DIRECTION[1] - 0.1, DEFAULT_VIEW_DIRECTION[2] - 0.5];
   const wl = Math.hypot(wx, wy, wz);
   for (let k = 0; k < nz; k++) {
@@ -96,7 +100,9 @@ export function generateDefaultVolume(dims: Dims = [128, 128, 128], seed = 20201
       for (let i = 0; i < nx; i++) {
         const x = (i + 0.5) / nx;
         const sheet = 0.5 - 0.5 * Math.tanh((y - height[k * nx + i]) / layerWidth);
-        const dx = x - cx, dy = y - cy, dz = z - cz;
+        const dx = x - cx,
+          dy = y - cy,
+          dz = z - cz;
         const d = Math.sqrt(dx * dx + dy * dy + dz * dz);
         const r = d / radius;
         let shell = 0;

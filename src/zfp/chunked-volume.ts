@@ -114,7 +114,8 @@ export class ChunkedVolume implements BlockSource {
     const blockCount = blockGrid[0] * blockGrid[1] * blockGrid[2];
     this.info = { fileName: name, dims: [...dims], blockGrid, blockCount, bitsPerBlock: planned.bitsPerBlock, rate: planned.rate };
     const slotsPerShard = Math.min(poolChunks, Math.floor((maxShardBytes - 4) / chunkBytes));
-    if (slotsPerShard < 1) throw new ChunkError(`${name}: one chunk (${chunkBytes} bytes) does not fit one storage binding of ${maxShardBytes} bytes`);
+    if (slotsPerShard < 1)
+      throw new ChunkError(`${name}: one chunk (${chunkBytes} bytes) does not fit one storage binding of ${maxShardBytes} bytes`);
     const shardCount = Math.ceil(poolChunks / slotsPerShard);
     this.pageTable = device.createBuffer({
       label: `${name}.pageTable`,
@@ -136,12 +137,30 @@ export class ChunkedVolume implements BlockSource {
     for (let i = 0; i < shardCount; i++) {
       const firstSlot = i * slotsPerShard;
       const endSlot = Math.min(poolChunks, firstSlot + slotsPerShard);
-      new Uint32Array(mapped, 2 * i * PARAMS_STRIDE, STREAM_PARAMS_BYTES / 4).set([...dims, planned.bitsPerBlock, ...blockGrid, blockCount, 0, blockCount, 0, 0]);
+      new Uint32Array(mapped, 2 * i * PARAMS_STRIDE, STREAM_PARAMS_BYTES / 4).set([
+        ...dims,
+        planned.bitsPerBlock,
+        ...blockGrid,
+        blockCount,
+        0,
+        blockCount,
+        0,
+        0,
+      ]);
       new Uint32Array(mapped, (2 * i + 1) * PARAMS_STRIDE, POOL_PARAMS_BYTES / 4).set([
-        ...chunkGrid, this.chunkBlocks, chunkBytes / 4, this.headerBits, firstSlot, endSlot,
+        ...chunkGrid,
+        this.chunkBlocks,
+        chunkBytes / 4,
+        this.headerBits,
+        firstSlot,
+        endSlot,
       ]);
       // one zero word after the last slot: the bit reader may load the word after a block's last bit
-      const buffer = device.createBuffer({ label: `${name}.pool${i}`, size: (endSlot - firstSlot) * chunkBytes + 4, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST });
+      const buffer = device.createBuffer({
+        label: `${name}.pool${i}`,
+        size: (endSlot - firstSlot) * chunkBytes + 4,
+        usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
+      });
       const bindGroup = device.createBindGroup({
         label: `${name}.pool${i}.bindGroup`,
         layout: poolLayout,
@@ -170,22 +189,26 @@ export class ChunkedVolume implements BlockSource {
       throw new ChunkError(`${name}: ${what}`);
     };
     if (!dims.every((n) => Number.isInteger(n) && n >= 1)) fail(`impossible dimensions ${dims.join('x')}`);
-    if (!Number.isInteger(edge) || edge < 4 || edge % 4 !== 0 || edge > 256) fail(`the chunk edge ${edge} is not a multiple of 4 between 4 and 256`);
-    if (!chunkGrid.every((g, i) => g === Math.ceil(dims[i] / edge))) fail(`the chunk grid ${chunkGrid.join('x')} does not cover ${formatDims(dims)} in chunks of ${edge}`);
+    if (!Number.isInteger(edge) || edge < 4 || edge % 4 !== 0 || edge > 256)
+      fail(`the chunk edge ${edge} is not a multiple of 4 between 4 and 256`);
+    if (!chunkGrid.every((g, i) => g === Math.ceil(dims[i] / edge)))
+      fail(`the chunk grid ${chunkGrid.join('x')} does not cover ${formatDims(dims)} in chunks of ${edge}`);
     let planned;
     try {
       planned = planZfpStream(`${name} chunk`, [edge, edge, edge], rate, true);
     } catch (e) {
       fail((e as Error).message);
     }
-    if (chunkBytes !== planned!.paddedBytes) fail(`a ${edge}^3 chunk at rate ${rate} is ${planned!.paddedBytes} bytes as zfp writes it, not ${chunkBytes}`);
+    if (chunkBytes !== planned!.paddedBytes)
+      fail(`a ${edge}^3 chunk at rate ${rate} is ${planned!.paddedBytes} bytes as zfp writes it, not ${chunkBytes}`);
     if (!Number.isInteger(opts.poolChunks) || opts.poolChunks < 1) fail(`the pool must hold at least one chunk (got ${opts.poolChunks})`);
     const blocks = Math.ceil(dims[0] / 4) * Math.ceil(dims[1] / 4) * Math.ceil(dims[2] / 4);
     if (blocks >= 2 ** 32) fail(`${blocks} blocks do not fit 32-bit block ids`);
     // the page table is one storage binding; a chunk's bit offsets are 32-bit in WGSL
     const chunks = chunkGrid[0] * chunkGrid[1] * chunkGrid[2];
     const binding = Math.min(gpu.device.limits.maxStorageBufferBindingSize, gpu.device.limits.maxBufferSize);
-    if (chunks * 4 > binding) fail(`${chunks} chunks need a ${chunks * 4}-byte page table, more than one storage binding of this device (${binding} bytes)`);
+    if (chunks * 4 > binding)
+      fail(`${chunks} chunks need a ${chunks * 4}-byte page table, more than one storage binding of this device (${binding} bytes)`);
     if (chunkBytes * 8 >= 2 ** 32) fail(`a chunk of ${chunkBytes} bytes is too large to address in 32-bit bit offsets`);
     return new ChunkedVolume(gpu.device, layout, opts.poolChunks, opts.maxShardBytes ?? maxShardBytesFor(gpu.device));
   }
@@ -243,12 +266,16 @@ export class ChunkedVolume implements BlockSource {
    */
   put(chunk: ChunkIndex, bytes: Uint8Array): void {
     if (this.destroyed) throw new ChunkError(`${this.layout.name}: the chunk pool was destroyed`);
-    if (!Number.isInteger(chunk) || chunk < 0 || chunk >= this.chunkCount) throw new ChunkError(`${this.layout.name}: there is no chunk ${chunk} (the level has ${this.chunkCount})`);
+    if (!Number.isInteger(chunk) || chunk < 0 || chunk >= this.chunkCount)
+      throw new ChunkError(`${this.layout.name}: there is no chunk ${chunk} (the level has ${this.chunkCount})`);
     const at = this.chunkCoords(chunk);
     const where = `${this.layout.name} chunk (${at.join(', ')})`;
     const edge = this.layout.chunkEdge;
     if (bytes.byteLength !== this.layout.chunkBytes) {
-      throw new ChunkError(`${where}: ${bytes.byteLength} bytes, but a ${edge}^3 chunk at rate ${this.layout.rate} is ${this.layout.chunkBytes} bytes`, at);
+      throw new ChunkError(
+        `${where}: ${bytes.byteLength} bytes, but a ${edge}^3 chunk at rate ${this.layout.rate} is ${this.layout.chunkBytes} bytes`,
+        at,
+      );
     }
     let info;
     try {
@@ -256,8 +283,16 @@ export class ChunkedVolume implements BlockSource {
     } catch (e) {
       throw new ChunkError((e as Error).message, at);
     }
-    if (!info.hasHeader || info.dims.some((n) => n !== edge) || info.bitsPerBlock !== this.info.bitsPerBlock || info.payloadBitOffset !== this.headerBits) {
-      throw new ChunkError(`${where}: the chunk's zfp header says ${formatDims(info.dims)} at ${info.mode}; the level's chunks are ${edge}^3 at rate ${this.layout.rate}`, at);
+    if (
+      !info.hasHeader ||
+      info.dims.some((n) => n !== edge) ||
+      info.bitsPerBlock !== this.info.bitsPerBlock ||
+      info.payloadBitOffset !== this.headerBits
+    ) {
+      throw new ChunkError(
+        `${where}: the chunk's zfp header says ${formatDims(info.dims)} at ${info.mode}; the level's chunks are ${edge}^3 at rate ${this.layout.rate}`,
+        at,
+      );
     }
     // The block cache keeps decoded blocks after their chunk leaves the pool
     // (a store's chunks never change, so they stay valid); different bytes
@@ -265,7 +300,10 @@ export class ChunkedVolume implements BlockSource {
     const sum = checksum(bytes);
     const before = this.checksums.get(chunk);
     if (before !== undefined && before !== sum) {
-      throw new ChunkError(`${where}: its bytes differ from those read before for this chunk; the store changed while it was open: open it again`, at);
+      throw new ChunkError(
+        `${where}: its bytes differ from those read before for this chunk; the store changed while it was open: open it again`,
+        at,
+      );
     }
     this.checksums.set(chunk, sum);
     let slot = this.slotOf.get(chunk);
@@ -275,7 +313,13 @@ export class ChunkedVolume implements BlockSource {
       this.slotOf.set(chunk, slot);
     }
     const shard = this.shards.find((s) => slot! >= s.firstSlot && slot! < s.endSlot)!;
-    this.device.queue.writeBuffer(shard.buffer, (slot - shard.firstSlot) * this.layout.chunkBytes, bytes.buffer, bytes.byteOffset, bytes.byteLength);
+    this.device.queue.writeBuffer(
+      shard.buffer,
+      (slot - shard.firstSlot) * this.layout.chunkBytes,
+      bytes.buffer,
+      bytes.byteOffset,
+      bytes.byteLength,
+    );
     this.word[0] = slot;
     this.device.queue.writeBuffer(this.pageTable, chunk * 4, this.word);
     for (const log of this.changeLogs) log.add(chunk);
@@ -307,7 +351,9 @@ export class ChunkedVolume implements BlockSource {
         log.clear();
         return out;
       },
-      close: () => { this.changeLogs.delete(log); },
+      close: () => {
+        this.changeLogs.delete(log);
+      },
     };
   }
 

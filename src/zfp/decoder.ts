@@ -109,7 +109,11 @@ export class ZfpDecoder {
       visibility: GPUShaderStage.COMPUTE,
       buffer: { type: readOnly ? 'read-only-storage' : 'storage' },
     });
-    const uniform = (binding: number): GPUBindGroupLayoutEntry => ({ binding, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform' } });
+    const uniform = (binding: number): GPUBindGroupLayoutEntry => ({
+      binding,
+      visibility: GPUShaderStage.COMPUTE,
+      buffer: { type: 'uniform' },
+    });
     const layout = (label: string, ...entries: GPUBindGroupLayoutEntry[]) => bindGroupLayout(device, label, entries);
 
     const blocksLayout = layout('ZfpDecoder.decodeBlocks.layout', storage(0, true), storage(1, true), storage(2, true), storage(3, false));
@@ -132,7 +136,11 @@ export class ZfpDecoder {
       createComputePipeline(device, 'ZfpDecoder.chunkBlockRanges', zfpWgsl.poolRanges, 'chunk_block_ranges', {
         layout: [pool, poolRangesLayout],
       }),
-      IndirectArgs.create(device, { itemsPerWorkgroup: listWg, maxWorkgroupsPerDimension: maxWorkgroups, label: 'ZfpDecoder.indirectArgs' }),
+      IndirectArgs.create(device, {
+        itemsPerWorkgroup: listWg,
+        maxWorkgroupsPerDimension: maxWorkgroups,
+        label: 'ZfpDecoder.indirectArgs',
+      }),
     ]);
     return new ZfpDecoder(device, uniforms, blocks, volume, ranges, poolBlocks, poolRanges, args, maxWorkgroups, path);
   }
@@ -150,18 +158,22 @@ export class ZfpDecoder {
   encodeDecodeBlocks(target: ComputeTarget, a: DecodeBlocksArgs): void {
     this.check(a.stream);
     const { device } = this;
-    const listGroup = this.blockGroups.ref(a.blockIds).ref(a.slotIds).ref(a.slots).get(() =>
-      device.createBindGroup({
-        label: 'ZfpDecoder.decodeBlocks.bindGroup',
-        layout: this.decodeBlocksPipeline.getBindGroupLayout(1),
-        entries: [
-          { binding: 0, resource: binding(a.blockIds) },
-          { binding: 1, resource: binding(a.slotIds) },
-          { binding: 2, resource: { buffer: this.args.buffer } },
-          { binding: 3, resource: binding(a.slots) },
-        ],
-      }),
-    );
+    const listGroup = this.blockGroups
+      .ref(a.blockIds)
+      .ref(a.slotIds)
+      .ref(a.slots)
+      .get(() =>
+        device.createBindGroup({
+          label: 'ZfpDecoder.decodeBlocks.bindGroup',
+          layout: this.decodeBlocksPipeline.getBindGroupLayout(1),
+          entries: [
+            { binding: 0, resource: binding(a.blockIds) },
+            { binding: 1, resource: binding(a.slotIds) },
+            { binding: 2, resource: { buffer: this.args.buffer } },
+            { binding: 3, resource: binding(a.slots) },
+          ],
+        }),
+      );
     inPass(
       target,
       'ZfpDecoder.decodeBlocks',
@@ -186,17 +198,21 @@ export class ZfpDecoder {
   encodeChunkBlockRanges(target: ComputeTarget, a: ChunkBlockRangesArgs): void {
     this.check(a.pool);
     if (a.count === 0) return;
-    const group = this.poolRangeGroups.ref(a.chunkList).ref(a.params).ref(a.ranges).get(() =>
-      this.device.createBindGroup({
-        label: 'ZfpDecoder.chunkBlockRanges.bindGroup',
-        layout: this.poolRangesPipeline.getBindGroupLayout(1),
-        entries: [
-          { binding: 0, resource: binding(a.ranges) },
-          { binding: 1, resource: binding(a.chunkList) },
-          { binding: 2, resource: binding(a.params) },
-        ],
-      }),
-    );
+    const group = this.poolRangeGroups
+      .ref(a.chunkList)
+      .ref(a.params)
+      .ref(a.ranges)
+      .get(() =>
+        this.device.createBindGroup({
+          label: 'ZfpDecoder.chunkBlockRanges.bindGroup',
+          layout: this.poolRangesPipeline.getBindGroupLayout(1),
+          entries: [
+            { binding: 0, resource: binding(a.ranges) },
+            { binding: 1, resource: binding(a.chunkList) },
+            { binding: 2, resource: binding(a.params) },
+          ],
+        }),
+      );
     inPass(target, 'ZfpDecoder.chunkBlockRanges', (pass) => {
       pass.setPipeline(this.poolRangesPipeline);
       pass.setBindGroup(1, group);
@@ -260,8 +276,15 @@ export class ZfpDecoder {
     this.check(stream);
     const size = ZfpDecoder.volumeBytes(stream);
     const max = maxShardBytesFor(this.device);
-    if (size > max) throw new Error(`${stream.info.fileName}: the decoded volume (${size} bytes) is larger than one storage binding (${max}); decode it in slabs (encodeDecodeVolume)`);
-    const output = this.device.createBuffer({ label: 'ZfpDecoder.volume', size: Math.max(4, size), usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC });
+    if (size > max)
+      throw new Error(
+        `${stream.info.fileName}: the decoded volume (${size} bytes) is larger than one storage binding (${max}); decode it in slabs (encodeDecodeVolume)`,
+      );
+    const output = this.device.createBuffer({
+      label: 'ZfpDecoder.volume',
+      size: Math.max(4, size),
+      usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC,
+    });
     const encoder = this.device.createCommandEncoder({ label: 'ZfpDecoder.decodeVolume' });
     this.encodeDecodeVolume(encoder, { stream, output });
     this.device.queue.submit([encoder.finish()]);
@@ -288,15 +311,26 @@ export class ZfpDecoder {
    * `zPlane`); without a sink the volume is returned in one Float32Array.
    * For the CLI and tests, not for interactive paths.
    */
-  async readVolume(stream: ZfpGpuStream, opts: { maxSlabBytes?: number; sink?: (zPlane: number, slab: Float32Array) => void } = {}): Promise<Float32Array | undefined> {
+  async readVolume(
+    stream: ZfpGpuStream,
+    opts: { maxSlabBytes?: number; sink?: (zPlane: number, slab: Float32Array) => void } = {},
+  ): Promise<Float32Array | undefined> {
     this.check(stream);
     const { device } = this;
     const slabs = ZfpDecoder.volumeSlabs(stream, opts.maxSlabBytes);
     const largest = Math.max(...slabs.map(([z0, z1]) => ZfpDecoder.volumeBytes(stream, z0, z1)));
     const [nx, ny, nz] = stream.info.dims;
     const whole = opts.sink ? undefined : new Float32Array(nx * ny * nz);
-    const output = device.createBuffer({ label: 'ZfpDecoder.readVolume.slab', size: largest, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC });
-    const staging = device.createBuffer({ label: 'ZfpDecoder.readVolume.staging', size: largest, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+    const output = device.createBuffer({
+      label: 'ZfpDecoder.readVolume.slab',
+      size: largest,
+      usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC,
+    });
+    const staging = device.createBuffer({
+      label: 'ZfpDecoder.readVolume.staging',
+      size: largest,
+      usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST,
+    });
     try {
       for (const [z0, z1] of slabs) {
         const bytes = ZfpDecoder.volumeBytes(stream, z0, z1);

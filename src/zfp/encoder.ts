@@ -99,7 +99,10 @@ export class ZfpEncoder {
     const [nx, ny] = info.dims;
     const rowInputBytes = nx * ny * 4 * DTYPE_BYTES[dtype];
     const rowsPerSlab = Math.floor(maxShardBytes / rowInputBytes);
-    if (rowsPerSlab < 1) throw new ZfpFormatError(`${info.fileName}: 4 z planes of ${formatDims(info.dims)} ${dtype} (${rowInputBytes} bytes) do not fit one storage binding of ${maxShardBytes} bytes`);
+    if (rowsPerSlab < 1)
+      throw new ZfpFormatError(
+        `${info.fileName}: 4 z planes of ${formatDims(info.dims)} ${dtype} (${rowInputBytes} bytes) do not fit one storage binding of ${maxShardBytes} bytes`,
+      );
     const plans = planShards(info, maxShardBytes, bx * by, rowsPerSlab * bx * by);
     return ZfpGpuStream.create(this.device, info, plans, 'ZfpEncoder.stream');
   }
@@ -130,7 +133,8 @@ export class ZfpEncoder {
     if (a.inputZPlane > p0) throw new Error(`ZfpEncoder: shard ${a.shard} needs z planes from ${p0}, the input starts at ${a.inputZPlane}`);
     const [nx, ny] = info.dims;
     const needBytes = nx * ny * (p1 - a.inputZPlane) * DTYPE_BYTES[a.dtype];
-    if (refSize(a.input) < needBytes) throw new Error(`ZfpEncoder: the input has ${refSize(a.input)} bytes, shard ${a.shard} needs ${needBytes}`);
+    if (refSize(a.input) < needBytes)
+      throw new Error(`ZfpEncoder: the input has ${refSize(a.input)} bytes, shard ${a.shard} needs ${needBytes}`);
 
     const header = new Uint32Array(8);
     let headerWords = 0;
@@ -140,24 +144,37 @@ export class ZfpEncoder {
       new Uint8Array(header.buffer).set(h.bytes);
     }
     const record = new Uint32Array([
-      ...info.dims, DTYPE_CODE[a.dtype],
-      ...info.blockGrid, info.bitsPerBlock,
-      shard.firstBlock, shard.endBlock, shard.bitBase, a.inputZPlane,
-      headerWords, 0, 0, 0,
+      ...info.dims,
+      DTYPE_CODE[a.dtype],
+      ...info.blockGrid,
+      info.bitsPerBlock,
+      shard.firstBlock,
+      shard.endBlock,
+      shard.bitBase,
+      a.inputZPlane,
+      headerWords,
+      0,
+      0,
+      0,
       ...header,
     ]);
     const params = this.uniforms.get(record);
-    const group = this.groups.ref(a.input).key(shard.buffer).key(params.buffer).key(params.offset!).get(() =>
-      this.device.createBindGroup({
-        label: 'ZfpEncoder.bindGroup',
-        layout: this.groupLayout,
-        entries: [
-          { binding: 0, resource: binding(a.input) },
-          { binding: 1, resource: { buffer: shard.buffer } },
-          { binding: 2, resource: params },
-        ],
-      }),
-    );
+    const group = this.groups
+      .ref(a.input)
+      .key(shard.buffer)
+      .key(params.buffer)
+      .key(params.offset!)
+      .get(() =>
+        this.device.createBindGroup({
+          label: 'ZfpEncoder.bindGroup',
+          layout: this.groupLayout,
+          entries: [
+            { binding: 0, resource: binding(a.input) },
+            { binding: 1, resource: { buffer: shard.buffer } },
+            { binding: 2, resource: params },
+          ],
+        }),
+      );
     encoder.clearBuffer(shard.buffer);
     const desc: GPUComputePassDescriptor = { label: 'ZfpEncoder.encode' };
     if (a.timestampWrites) desc.timestampWrites = a.timestampWrites;
@@ -188,7 +205,11 @@ export class ZfpEncoder {
     try {
       const slabs = stream.shards.map((_, s) => ZfpEncoder.shardPlanes(stream, s));
       const largest = Math.max(...slabs.map(([z0, z1]) => (z1 - z0) * planeBytes));
-      input = device.createBuffer({ label: 'ZfpEncoder.input', size: Math.ceil(largest / 4) * 4, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST });
+      input = device.createBuffer({
+        label: 'ZfpEncoder.input',
+        size: Math.ceil(largest / 4) * 4,
+        usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
+      });
       for (let s = 0; s < stream.shards.length; s++) {
         const [z0, z1] = slabs[s];
         const slab = bytes.subarray(z0 * planeBytes, z1 * planeBytes);
@@ -214,7 +235,13 @@ export class ZfpEncoder {
   }
 
   /** Compresses to zfp's file bytes (see compressToStream). */
-  async compress(bytes: Uint8Array, dtype: DType, dims: Dims, rate: number, opts: CompressOptions = {}): Promise<{ bytes: Uint8Array; info: ZfpStreamInfo }> {
+  async compress(
+    bytes: Uint8Array,
+    dtype: DType,
+    dims: Dims,
+    rate: number,
+    opts: CompressOptions = {},
+  ): Promise<{ bytes: Uint8Array; info: ZfpStreamInfo }> {
     const stream = await this.compressToStream(bytes, dtype, dims, rate, opts);
     try {
       return { bytes: await stream.readBytes(), info: stream.info };

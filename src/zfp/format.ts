@@ -79,11 +79,15 @@ function fail(fileName: string, message: string): never {
   throw new ZfpFormatError(`${fileName}: ${message}`);
 }
 
-const RECOMPRESS = 'Re-compress it with a fixed rate: `zfp -f -3 X Y Z -r R -h`, zfpy.compress_numpy(a.astype(np.float32), rate=R), or `npm run cli -- compress`.';
+const RECOMPRESS =
+  'Re-compress it with a fixed rate: `zfp -f -3 X Y Z -r R -h`, zfpy.compress_numpy(a.astype(np.float32), rate=R), or `npm run cli -- compress`.';
 
 function checkBitsPerBlock(fileName: string, bits: number, rateText: string): void {
   if (bits < MIN_FLOAT_BLOCK_BITS) {
-    fail(fileName, `${rateText} gives ${bits} bits per block, fewer than the ${MIN_FLOAT_BLOCK_BITS} a float32 block needs (1 + 8 exponent bits); zfp writes such streams with blocks of varying length, which cannot be decoded block by block (use a rate of at least 0.1328125)`);
+    fail(
+      fileName,
+      `${rateText} gives ${bits} bits per block, fewer than the ${MIN_FLOAT_BLOCK_BITS} a float32 block needs (1 + 8 exponent bits); zfp writes such streams with blocks of varying length, which cannot be decoded block by block (use a rate of at least 0.1328125)`,
+    );
   }
   if (bits > 0x8000) fail(fileName, `${rateText} gives ${bits} bits per block; zfp allows at most 32768`);
 }
@@ -93,11 +97,15 @@ function checkRate(fileName: string, rate: number, where: string): void {
 }
 
 function checkDims(fileName: string, dims: Dims, where: string): void {
-  if (dims.some((n) => !Number.isSafeInteger(n) || n < 1)) fail(fileName, `absurd size ${formatDims(dims)} ${where}: every dimension must be at least 1`);
+  if (dims.some((n) => !Number.isSafeInteger(n) || n < 1))
+    fail(fileName, `absurd size ${formatDims(dims)} ${where}: every dimension must be at least 1`);
   const grid = blockGridOf(dims);
   const blocks = grid[0] * grid[1] * grid[2];
   if (blocks > MAX_BLOCKS) {
-    fail(fileName, `absurd size ${formatDims(dims)} ${where}: ${blocks.toExponential(3)} blocks of 4x4x4, more than the ${MAX_BLOCKS} (2^32 - 1) a stream may have`);
+    fail(
+      fileName,
+      `absurd size ${formatDims(dims)} ${where}: ${blocks.toExponential(3)} blocks of 4x4x4, more than the ${MAX_BLOCKS} (2^32 - 1) a stream may have`,
+    );
   }
 }
 
@@ -186,7 +194,10 @@ function headerless(fileName: string, fileBytes: number, opts: OpenZfpOptions): 
       fits.length === 0
         ? `; no fixed rate gives ${fileBytes} bytes for ${formatDims(name.dims)}, so this is not a fixed-rate stream (fixed-precision and fixed-accuracy streams have no fixed size)`
         : ` (the size fits rate ${fits.join(' or ')})`;
-    fail(fileName, `no zfp header and no rate: give the rate (--rate R) or name the file ${name.base}_${formatDims(name.dims)}_float32.raw.crateR.zfp${hint}`);
+    fail(
+      fileName,
+      `no zfp header and no rate: give the rate (--rate R) or name the file ${name.base}_${formatDims(name.dims)}_float32.raw.crateR.zfp${hint}`,
+    );
   }
   checkRate(fileName, rate, opts.rate === undefined ? 'in the file name' : 'given');
   const bits = bitsPerBlockForRate(rate);
@@ -233,7 +244,8 @@ export function planZfpStream(fileName: string, dims: Dims, rate: number, withHe
   const bits = bitsPerBlockForRate(rate);
   checkDims(fileName, dims, '');
   checkBitsPerBlock(fileName, bits, `rate ${rate}`);
-  if (withHeader && dims.some((n) => n > 0x10000)) fail(fileName, `a zfp header holds sizes up to 65536 per axis, not ${formatDims(dims)}; write it without header`);
+  if (withHeader && dims.some((n) => n > 0x10000))
+    fail(fileName, `a zfp header holds sizes up to 65536 per axis, not ${formatDims(dims)}; write it without header`);
   const payload = withHeader ? (bits > 2048 ? 148 : 96) : 0;
   const info = finish(fileName, 0, dims, bits, payload, `fixed rate ${bits / 64} bits/value (${bits} bits per block)`);
   info.fileBytes = info.paddedBytes;

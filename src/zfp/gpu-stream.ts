@@ -65,7 +65,12 @@ export function maxShardBytesFor(device: GPUDevice): number {
  * the extra word). `rowBlocks` > 1 keeps shard ends on multiples of it (the
  * encoder needs whole z rows of blocks); `maxBlocks` caps blocks per shard.
  */
-export function planShards(info: Pick<ZfpStreamInfo, 'blockCount' | 'bitsPerBlock' | 'payloadBitOffset' | 'fileName' | 'dims'>, maxShardBytes: number, rowBlocks = 1, maxBlocks = Infinity): ShardPlan[] {
+export function planShards(
+  info: Pick<ZfpStreamInfo, 'blockCount' | 'bitsPerBlock' | 'payloadBitOffset' | 'fileName' | 'dims'>,
+  maxShardBytes: number,
+  rowBlocks = 1,
+  maxBlocks = Infinity,
+): ShardPlan[] {
   const { blockCount, bitsPerBlock: bpb, payloadBitOffset: p0 } = info;
   const maxWords = Math.floor(maxShardBytes / 4) - 1;
   const plans: ShardPlan[] = [];
@@ -131,7 +136,8 @@ export class ZfpGpuStream implements BlockSource {
 
   /** Uploads the file `bytes` (as validated by openZfpStream) once. */
   static upload(device: GPUDevice, info: ZfpStreamInfo, bytes: Uint8Array, opts: UploadOptions = {}): ZfpGpuStream {
-    if (bytes.byteLength < info.requiredBytes) throw new Error(`${info.fileName}: ${bytes.byteLength} bytes given, the stream needs ${info.requiredBytes}`);
+    if (bytes.byteLength < info.requiredBytes)
+      throw new Error(`${info.fileName}: ${bytes.byteLength} bytes given, the stream needs ${info.requiredBytes}`);
     const plans = planShards(info, opts.maxShardBytes ?? maxShardBytesFor(device));
     return ZfpGpuStream.create(device, info, plans, opts.label ?? 'ZfpGpuStream', (plan, mapped) => {
       const start = plan.firstWord * 4;
@@ -197,7 +203,8 @@ export class ZfpGpuStream implements BlockSource {
 
   /** Shard holding block b. */
   shardOf(block: number): number {
-    let lo = 0, hi = this.shards.length - 1;
+    let lo = 0,
+      hi = this.shards.length - 1;
     while (lo < hi) {
       const mid = (lo + hi + 1) >> 1;
       if (this.shards[mid].firstBlock <= block) lo = mid;
@@ -226,7 +233,11 @@ export class ZfpGpuStream implements BlockSource {
     const { device, info } = this;
     const out = new Uint8Array(info.paddedBytes);
     const largest = Math.max(...this.shards.map((s) => s.wordCount)) * 4;
-    const staging = device.createBuffer({ label: 'ZfpGpuStream.readBytes', size: largest, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+    const staging = device.createBuffer({
+      label: 'ZfpGpuStream.readBytes',
+      size: largest,
+      usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST,
+    });
     try {
       for (const s of this.shards) {
         const encoder = device.createCommandEncoder({ label: 'ZfpGpuStream.readBytes' });
@@ -252,7 +263,12 @@ export class ZfpGpuStream implements BlockSource {
  * The one call the page and the CLI need: validates the file (throwing a
  * ZfpFormatError that names it, before any GPU allocation) and uploads it.
  */
-export function loadZfpStream(device: GPUDevice, bytes: Uint8Array, fileName: string, opts: OpenZfpOptions & UploadOptions = {}): ZfpGpuStream {
+export function loadZfpStream(
+  device: GPUDevice,
+  bytes: Uint8Array,
+  fileName: string,
+  opts: OpenZfpOptions & UploadOptions = {},
+): ZfpGpuStream {
   const info = openZfpStream(bytes, fileName, opts);
   return ZfpGpuStream.upload(device, info, bytes, opts);
 }

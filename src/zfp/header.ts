@@ -83,7 +83,8 @@ export function hasZfpMagic(bytes: Uint8Array): boolean {
 /** zfp's classification of (minbits, maxbits, maxprec, minexp). */
 function classify(minBits: number, maxBits: number, maxPrec: number, minExp: number): ZfpModeKind {
   if (minBits === ZFP_MIN_BITS && maxBits === ZFP_MAX_BITS && maxPrec === ZFP_MAX_PREC && minExp === ZFP_MIN_EXP) return 'expert';
-  if (minBits === maxBits && maxBits >= 1 && maxBits <= ZFP_MAX_BITS && maxPrec >= ZFP_MAX_PREC && minExp === ZFP_MIN_EXP) return 'fixed-rate';
+  if (minBits === maxBits && maxBits >= 1 && maxBits <= ZFP_MAX_BITS && maxPrec >= ZFP_MAX_PREC && minExp === ZFP_MIN_EXP)
+    return 'fixed-rate';
   if (minBits <= ZFP_MIN_BITS && maxBits >= ZFP_MAX_BITS && maxPrec >= 1 && minExp === ZFP_MIN_EXP) return 'fixed-precision';
   if (minBits <= ZFP_MIN_BITS && maxBits >= ZFP_MAX_BITS && maxPrec >= ZFP_MAX_PREC && minExp >= ZFP_MIN_EXP) return 'fixed-accuracy';
   if (minBits <= ZFP_MIN_BITS && maxBits >= ZFP_MAX_BITS && maxPrec >= ZFP_MAX_PREC && minExp < ZFP_MIN_EXP) return 'reversible';
@@ -94,12 +95,35 @@ function classify(minBits: number, maxBits: number, maxPrec: number, minExp: num
 export function decodeZfpMode(mode: bigint): ZfpMode {
   if (mode <= BigInt(ZFP_MODE_SHORT_MAX)) {
     const short = Number(mode);
-    if (short < 2048) return { kind: 'fixed-rate', minBits: short + 1, maxBits: short + 1, maxPrec: ZFP_MAX_PREC, minExp: ZFP_MIN_EXP, raw: short };
+    if (short < 2048)
+      return { kind: 'fixed-rate', minBits: short + 1, maxBits: short + 1, maxPrec: ZFP_MAX_PREC, minExp: ZFP_MIN_EXP, raw: short };
     if (short < 2048 + 128) {
-      return { kind: 'fixed-precision', minBits: ZFP_MIN_BITS, maxBits: ZFP_MAX_BITS, maxPrec: short + 1 - 2048, minExp: ZFP_MIN_EXP, raw: short };
+      return {
+        kind: 'fixed-precision',
+        minBits: ZFP_MIN_BITS,
+        maxBits: ZFP_MAX_BITS,
+        maxPrec: short + 1 - 2048,
+        minExp: ZFP_MIN_EXP,
+        raw: short,
+      };
     }
-    if (short === 2048 + 128) return { kind: 'reversible', minBits: ZFP_MIN_BITS, maxBits: ZFP_MAX_BITS, maxPrec: ZFP_MAX_PREC, minExp: ZFP_MIN_EXP - 1, raw: short };
-    return { kind: 'fixed-accuracy', minBits: ZFP_MIN_BITS, maxBits: ZFP_MAX_BITS, maxPrec: ZFP_MAX_PREC, minExp: short + ZFP_MIN_EXP - (2048 + 128) - 1, raw: short };
+    if (short === 2048 + 128)
+      return {
+        kind: 'reversible',
+        minBits: ZFP_MIN_BITS,
+        maxBits: ZFP_MAX_BITS,
+        maxPrec: ZFP_MAX_PREC,
+        minExp: ZFP_MIN_EXP - 1,
+        raw: short,
+      };
+    return {
+      kind: 'fixed-accuracy',
+      minBits: ZFP_MIN_BITS,
+      maxBits: ZFP_MAX_BITS,
+      maxPrec: ZFP_MAX_PREC,
+      minExp: short + ZFP_MIN_EXP - (2048 + 128) - 1,
+      raw: short,
+    };
   }
   // 64-bit word: 12 bits 0xfff, minbits-1 (15), maxbits-1 (15), maxprec-1 (7), minexp+16495 (15).
   let w = mode >> 12n;
@@ -115,21 +139,25 @@ export function decodeZfpMode(mode: bigint): ZfpMode {
 
 /** The mode word zfp writes for fixed rate with `bitsPerBlock` (zfp_stream_mode). */
 export function fixedRateModeWord(bitsPerBlock: number): bigint {
-  if (!Number.isInteger(bitsPerBlock) || bitsPerBlock < 1 || bitsPerBlock > 0x8000) throw new RangeError(`bits per block ${bitsPerBlock} out of range`);
+  if (!Number.isInteger(bitsPerBlock) || bitsPerBlock < 1 || bitsPerBlock > 0x8000)
+    throw new RangeError(`bits per block ${bitsPerBlock} out of range`);
   if (bitsPerBlock <= 2048) return BigInt(bitsPerBlock - 1);
   const minexp = BigInt(ZFP_MIN_EXP + 16495);
   const maxprec = BigInt(ZFP_MAX_PREC - 1);
   const bits = BigInt(bitsPerBlock - 1);
-  return (((((minexp << 7n) | maxprec) << 15n | bits) << 15n | bits) << 12n) | 0xfffn;
+  return (((((((minexp << 7n) | maxprec) << 15n) | bits) << 15n) | bits) << 12n) | 0xfffn;
 }
 
 /** Parses the header at the start of `bytes`; throws ZfpFormatError. */
 export function parseZfpHeader(bytes: Uint8Array): ZfpHeader {
-  if (bytes.length < ZFP_SHORT_HEADER_BITS / 8) throw new ZfpFormatError(`the file is ${bytes.length} bytes, shorter than a zfp header (12 bytes)`);
+  if (bytes.length < ZFP_SHORT_HEADER_BITS / 8)
+    throw new ZfpFormatError(`the file is ${bytes.length} bytes, shorter than a zfp header (12 bytes)`);
   if (!hasZfpMagic(bytes)) throw new ZfpFormatError('wrong magic: a zfp header starts with the bytes "zfp" (7a 66 70)');
   const codecVersion = bytes[3];
   if (codecVersion !== ZFP_CODEC_VERSION) {
-    throw new ZfpFormatError(`zfp codec version ${codecVersion} is not supported (expected ${ZFP_CODEC_VERSION}, as written by zfp 0.5.5 to 1.0.x)`);
+    throw new ZfpFormatError(
+      `zfp codec version ${codecVersion} is not supported (expected ${ZFP_CODEC_VERSION}, as written by zfp 0.5.5 to 1.0.x)`,
+    );
   }
   const meta = readBits(bytes, 32, 52);
   const typeCode = Number(meta & 3n);
@@ -160,7 +188,8 @@ export function parseZfpHeader(bytes: Uint8Array): ZfpHeader {
  */
 export function writeZfpHeader(dims: readonly [number, number, number], bitsPerBlock: number): { bytes: Uint8Array; bits: number } {
   for (const n of dims) {
-    if (!Number.isInteger(n) || n < 1 || n > 0x10000) throw new ZfpFormatError(`a zfp header holds 3D sizes from 1 to 65536, not ${dims.join('x')}`);
+    if (!Number.isInteger(n) || n < 1 || n > 0x10000)
+      throw new ZfpFormatError(`a zfp header holds 3D sizes from 1 to 65536, not ${dims.join('x')}`);
   }
   const mode = fixedRateModeWord(bitsPerBlock);
   const long = mode > BigInt(ZFP_MODE_SHORT_MAX);

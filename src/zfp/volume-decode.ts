@@ -40,7 +40,10 @@ export function volumeSlabs(stream: ZfpGpuStream, maxBytes = maxShardBytesFor(st
   const bz = stream.info.blockGrid[2];
   const rowBytes = nx * ny * 4 * 4;
   const rows = Math.floor(maxBytes / rowBytes);
-  if (rows < 1) throw new Error(`${stream.info.fileName}: one row of blocks (${rowBytes} bytes as float32) does not fit one storage binding of ${maxBytes} bytes`);
+  if (rows < 1)
+    throw new Error(
+      `${stream.info.fileName}: one row of blocks (${rowBytes} bytes as float32) does not fit one storage binding of ${maxBytes} bytes`,
+    );
   const slabs: [number, number][] = [];
   for (let z = 0; z < bz; z += rows) slabs.push([z, Math.min(bz, z + rows)]);
   return slabs;
@@ -72,13 +75,21 @@ export class VolumeDecodeKernel {
     readonly path: PrimitivePath,
   ) {}
 
-  static async create(device: GPUDevice, path: PrimitivePath, streamLayout: GPUBindGroupLayout, uniforms: UniformSlots, maxWorkgroups: number): Promise<VolumeDecodeKernel> {
+  static async create(
+    device: GPUDevice,
+    path: PrimitivePath,
+    streamLayout: GPUBindGroupLayout,
+    uniforms: UniformSlots,
+    maxWorkgroups: number,
+  ): Promise<VolumeDecodeKernel> {
     const layout = bindGroupLayout(device, 'ZfpDecoder.decodeVolume.layout', [
       { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform' } },
       { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
     ]);
     const parts = path === 'gpu' ? zfpWgsl.decodeVolumeTiled : zfpWgsl.decodeVolume;
-    const pipeline = await createComputePipeline(device, `ZfpDecoder.decodeVolume.${path}`, parts, 'decode_volume', { layout: [streamLayout, layout] });
+    const pipeline = await createComputePipeline(device, `ZfpDecoder.decodeVolume.${path}`, parts, 'decode_volume', {
+      layout: [streamLayout, layout],
+    });
     return new VolumeDecodeKernel(device, pipeline, uniforms, maxWorkgroups, path);
   }
 
@@ -106,16 +117,20 @@ export class VolumeDecodeKernel {
       const firstTile = tiled ? tileOf(lo, bx, tilesX) : 0;
       this.words.set([lo, hi, 4 * z0, firstTile]);
       const params = this.uniforms.get(this.words);
-      const group = this.groups.ref(a.output).key(params.buffer).key(params.offset!).get(() =>
-        this.device.createBindGroup({
-          label: 'ZfpDecoder.decodeVolume.bindGroup',
-          layout: this.pipeline.getBindGroupLayout(1),
-          entries: [
-            { binding: 0, resource: params },
-            { binding: 1, resource: binding(a.output) },
-          ],
-        }),
-      );
+      const group = this.groups
+        .ref(a.output)
+        .key(params.buffer)
+        .key(params.offset!)
+        .get(() =>
+          this.device.createBindGroup({
+            label: 'ZfpDecoder.decodeVolume.bindGroup',
+            layout: this.pipeline.getBindGroupLayout(1),
+            entries: [
+              { binding: 0, resource: params },
+              { binding: 1, resource: binding(a.output) },
+            ],
+          }),
+        );
       if (n === this.work.length) this.work.push({ shard: 0, group, workgroups: 0 });
       const w = this.work[n++];
       w.shard = s;

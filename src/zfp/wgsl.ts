@@ -19,8 +19,22 @@ import encode from '../../shaders/zfp/encode.wgsl?raw';
 const part = (name: string, code: string): WgslPart => ({ name: `shaders/zfp/${name}.wgsl`, code });
 
 // The decoder over a whole stream, or over chunks in a pool (page table).
-const decoderBase = [gridSnippet, part('u64', u64), part('stream', stream), part('stream_address', streamAddress), part('codec', codec), part('decode_block', decodeBlock)];
-const poolDecoderBase = [gridSnippet, part('u64', u64), part('stream', stream), part('pool_address', poolAddress), part('codec', codec), part('decode_block', decodeBlock)];
+const decoderBase = [
+  gridSnippet,
+  part('u64', u64),
+  part('stream', stream),
+  part('stream_address', streamAddress),
+  part('codec', codec),
+  part('decode_block', decodeBlock),
+];
+const poolDecoderBase = [
+  gridSnippet,
+  part('u64', u64),
+  part('stream', stream),
+  part('pool_address', poolAddress),
+  part('codec', codec),
+  part('decode_block', decodeBlock),
+];
 
 export const zfpWgsl = {
   decodeBlocks: [...decoderBase, part('decode_blocks', decodeBlocks)],

@@ -26,10 +26,19 @@ const comparable = (r: BenchRecord) => ({
   discarded: r.discarded,
 });
 
-test('a short benchmark runs in the page and its records are the CLI\'s', async ({ page }) => {
+test("a short benchmark runs in the page and its records are the CLI's", async ({ page }) => {
   test.setTimeout(300_000);
   const cli = runCli<{ records: BenchRecord[] }>([
-    'bench', join(SHARED_VOLUMES_DIR, FILE), '--modes', 'random,sweep-up,sweep-down', '--count', String(COUNT), '--seed', String(SEED), '--range', RANGE.join(','),
+    'bench',
+    join(SHARED_VOLUMES_DIR, FILE),
+    '--modes',
+    'random,sweep-up,sweep-down',
+    '--count',
+    String(COUNT),
+    '--seed',
+    String(SEED),
+    '--range',
+    RANGE.join(','),
   ]);
   await page.goto(`/?url=${SHARED_VOLUMES}${FILE}`);
   await expect(page.locator('body')).toHaveAttribute('data-status', 'ready', { timeout: 120_000 });
@@ -64,13 +73,23 @@ test('a short benchmark runs in the page and its records are the CLI\'s', async 
   // JSON download: per-isovalue records and per-mode summaries.
   const [json] = await Promise.all([page.waitForEvent('download'), page.locator('#bench-json').click()]);
   expect(json.suggestedFilename()).toBe(`${FILE}_bench.json`);
-  const result = JSON.parse(readFileSync((await json.path())!, 'utf8')) as { records: BenchRecord[]; summaries: { mode: string; count: number }[]; options: { seed: number; count: number; range: number[] } };
+  const result = JSON.parse(readFileSync((await json.path())!, 'utf8')) as {
+    records: BenchRecord[];
+    summaries: { mode: string; count: number }[];
+    options: { seed: number; count: number; range: number[] };
+  };
   expect(result.options).toMatchObject({ seed: SEED, count: COUNT, range: RANGE });
   expect(result.records).toHaveLength(3 * COUNT);
-  expect(result.summaries.map((s) => [s.mode, s.count])).toEqual([['random', COUNT - 1], ['sweep-up', COUNT - 1], ['sweep-down', COUNT - 1]]);
+  expect(result.summaries.map((s) => [s.mode, s.count])).toEqual([
+    ['random', COUNT - 1],
+    ['sweep-up', COUNT - 1],
+    ['sweep-down', COUNT - 1],
+  ]);
 
   const [csv] = await Promise.all([page.waitForEvent('download'), page.locator('#bench-csv').click()]);
-  const lines = readFileSync((await csv.path())!, 'utf8').trim().split('\n');
+  const lines = readFileSync((await csv.path())!, 'utf8')
+    .trim()
+    .split('\n');
   expect(lines[0]).toBe('mode,index,iso,gpuMs,wallMs,hitRate,activeBlocks,newBlocks,occupiedBlocks,triangles,discarded');
   expect(lines).toHaveLength(1 + 3 * COUNT);
 

@@ -13,9 +13,14 @@ export const SHARED_VOLUMES_DIR = join(root, '..', 'shared', 'data', 'volumes');
 export function runCli<T = Record<string, unknown>>(args: string[]): Promise<T> {
   const out = join(mkdtempSync(join(tmpdir(), 'zfpiso-cli-')), 'out.json');
   return new Promise((resolve, reject) => {
-    execFile(process.execPath, [join(root, 'scripts', 'cli.mjs'), ...args, '--json', out], { cwd: root, timeout: 600_000 }, (error, stdout, stderr) => {
-      if (error) reject(new Error(`cli ${args.join(' ')} failed: ${error.message}\n${stdout}\n${stderr}`));
-      else resolve(JSON.parse(readFileSync(out, 'utf8')) as T);
-    });
+    execFile(
+      process.execPath,
+      [join(root, 'scripts', 'cli.mjs'), ...args, '--json', out],
+      { cwd: root, timeout: 600_000 },
+      (error, stdout, stderr) => {
+        if (error) reject(new Error(`cli ${args.join(' ')} failed: ${error.message}\n${stdout}\n${stderr}`));
+        else resolve(JSON.parse(readFileSync(out, 'utf8')) as T);
+      },
+    );
   });
 }

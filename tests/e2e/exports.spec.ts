@@ -20,16 +20,19 @@ test('PNG screenshot and PLY export of the current surface', async ({ page }) =>
   // The image is the canvas at its pixel size, and shows the surface.
   const size = await page.locator('#view').evaluate((c: HTMLCanvasElement) => [c.width, c.height]);
   expect([bytes.readUInt32BE(16), bytes.readUInt32BE(20)]).toEqual(size);
-  const cover = await page.evaluate(async (data) => {
-    const bitmap = await createImageBitmap(new Blob([new Uint8Array(data)], { type: 'image/png' }));
-    const c = new OffscreenCanvas(bitmap.width, bitmap.height);
-    const g = c.getContext('2d')!;
-    g.drawImage(bitmap, 0, 0);
-    const d = g.getImageData(0, 0, c.width, c.height).data;
-    let n = 0;
-    for (let i = 0; i < d.length; i += 4) if (Math.abs(d[i] - d[0]) + Math.abs(d[i + 1] - d[1]) + Math.abs(d[i + 2] - d[2]) > 12) n++;
-    return n / (d.length / 4);
-  }, [...bytes]);
+  const cover = await page.evaluate(
+    async (data) => {
+      const bitmap = await createImageBitmap(new Blob([new Uint8Array(data)], { type: 'image/png' }));
+      const c = new OffscreenCanvas(bitmap.width, bitmap.height);
+      const g = c.getContext('2d')!;
+      g.drawImage(bitmap, 0, 0);
+      const d = g.getImageData(0, 0, c.width, c.height).data;
+      let n = 0;
+      for (let i = 0; i < d.length; i += 4) if (Math.abs(d[i] - d[0]) + Math.abs(d[i + 1] - d[1]) + Math.abs(d[i + 2] - d[2]) > 12) n++;
+      return n / (d.length / 4);
+    },
+    [...bytes],
+  );
   expect(cover).toBeGreaterThan(0.1);
 
   // The P key saves too.
@@ -39,12 +42,15 @@ test('PNG screenshot and PLY export of the current surface', async ({ page }) =>
 
   const [ply] = await Promise.all([page.waitForEvent('download'), page.locator('#save-ply').click()]);
   expect(ply.suggestedFilename()).toBe('default_iso0.43.ply');
-  await expect(page.locator('#messages .message.info').last()).toContainText(`Exported ${(await trianglesShown(page)).toLocaleString('en-US')} triangles`);
+  await expect(page.locator('#messages .message.info').last()).toContainText(
+    `Exported ${(await trianglesShown(page)).toLocaleString('en-US')} triangles`,
+  );
   const mesh = parsePly(new Uint8Array(readFileSync((await ply.path())!)));
   expect(mesh.indices.length / 3).toBe(await trianglesShown(page));
   expect(mesh.comments[0]).toContain('at isovalue 0.43');
   // Vertices in voxel index space, inside the 128³ volume; the soup's shared corners welded.
-  let lo = Infinity, hi = -Infinity;
+  let lo = Infinity,
+    hi = -Infinity;
   for (const v of mesh.positions) {
     lo = Math.min(lo, v);
     hi = Math.max(hi, v);

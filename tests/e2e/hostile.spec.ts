@@ -11,7 +11,8 @@ const f32 = (a: Float32Array) => new Uint8Array(a.buffer);
 /** A 16³ float32 sphere distance field (0 at the centre, ~13.9 at the corners). */
 function sphere(): Float32Array {
   const out = new Float32Array(16 ** 3);
-  for (let z = 0, i = 0; z < 16; z++) for (let y = 0; y < 16; y++) for (let x = 0; x < 16; x++, i++) out[i] = Math.hypot(x - 7.5, y - 7.5, z - 7.5);
+  for (let z = 0, i = 0; z < 16; z++)
+    for (let y = 0; y < 16; y++) for (let x = 0; x < 16; x++, i++) out[i] = Math.hypot(x - 7.5, y - 7.5, z - 7.5);
   return out;
 }
 
@@ -72,7 +73,11 @@ test('main page: lying names, gzip bombs and NaN volumes get messages; a file af
   expect((await pageState(page)).volume).toMatchObject({ kind: 'nrrd', dims: [16, 16, 16], fileName: 'bomb.nrrd' });
 
   // Damaged gzip (refused while checking the file, before the form), then a good file.
-  await dropBytes(page, 'cut.nrrd', nrrd(['type: float', 'dimension: 3', 'sizes: 16 16 16', 'encoding: gzip'], gzipSync(f32(sphere())).subarray(0, 200)));
+  await dropBytes(
+    page,
+    'cut.nrrd',
+    nrrd(['type: float', 'dimension: 3', 'sizes: 16 16 16', 'encoding: gzip'], gzipSync(f32(sphere())).subarray(0, 200)),
+  );
   await waitIdle(page);
   await expect(last).toContainText('cut.nrrd: the gzip data is damaged');
   before = await loads(page);
@@ -85,7 +90,16 @@ test('main page: lying names, gzip bombs and NaN volumes get messages; a file af
 
 test('neuron page: an SWC file that is not a tree is drawn as far as valid, with a message saying what was found', async ({ page }) => {
   await openApp(page, '/neuron.html?demo=0');
-  const swc = ['1 1 0 0 0 2 -1', '2 3 5 0 0 1 1', '3 3 10 0 0 1 2', '4 3 0 5 0 1 6', '5 3 0 10 0 1 4', '6 3 0 15 0 1 5', '7 3 20 0 0 1 7', '8 3 0 0 9 1 99'].join('\n');
+  const swc = [
+    '1 1 0 0 0 2 -1',
+    '2 3 5 0 0 1 1',
+    '3 3 10 0 0 1 2',
+    '4 3 0 5 0 1 6',
+    '5 3 0 10 0 1 4',
+    '6 3 0 15 0 1 5',
+    '7 3 20 0 0 1 7',
+    '8 3 0 0 9 1 99',
+  ].join('\n');
   await page.setInputFiles('#file-input', { name: 'loops.swc', mimeType: 'text/plain', buffer: Buffer.from(swc) });
   await expect(page.locator('#messages .message')).toContainText(
     'loops.swc: 1 sample is its own parent (id 7); not linked; 1 parent cycle (3 samples, id 4, 6, 5); their links are not drawn; 1 sample names a parent that is not in the file (id 8); drawn unlinked.',

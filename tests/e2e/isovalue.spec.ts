@@ -20,7 +20,9 @@ test('scrubbing shows the newest value; stale values are dropped', async ({ page
   const last = await page.evaluate(() => window.zfpiso!.iso!);
   expect(last).toBeLessThan(0.4);
   // The surface ends at the last value, and fewer surfaces than inputs were computed.
-  await page.waitForFunction(() => Math.fround(window.zfpiso!.stats!.isovalue) === Math.fround(window.zfpiso!.iso!), null, { timeout: 60_000 });
+  await page.waitForFunction(() => Math.fround(window.zfpiso!.stats!.isovalue) === Math.fround(window.zfpiso!.iso!), null, {
+    timeout: 60_000,
+  });
   const computed = (await page.evaluate(() => window.zfpiso!.statsCount)) - before;
   expect(computed).toBeGreaterThan(0);
   expect(computed).toBeLessThan(steps);

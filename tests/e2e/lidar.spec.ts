@@ -43,8 +43,14 @@ test('the shared LAZ file shows as 110,000 points, in every colour mode', async 
 
 test('a broken file gives a message naming it, and the page keeps working', async ({ page }) => {
   await openApp(page, '/lidar.html');
-  await page.setInputFiles('#file-input', { name: 'broken.laz', mimeType: 'application/octet-stream', buffer: Buffer.from('LASF but not really a point cloud') });
-  await expect(page.locator('#messages .message')).toContainText('broken.laz: truncated file: 33 bytes, shorter than a LAS header (227 bytes)');
+  await page.setInputFiles('#file-input', {
+    name: 'broken.laz',
+    mimeType: 'application/octet-stream',
+    buffer: Buffer.from('LASF but not really a point cloud'),
+  });
+  await expect(page.locator('#messages .message')).toContainText(
+    'broken.laz: truncated file: 33 bytes, shorter than a LAS header (227 bytes)',
+  );
   await expect(page.locator('body')).toHaveAttribute('data-status', 'ready');
   expect((await lidar(page)).loading).toBe(false);
 });

@@ -43,7 +43,10 @@ test('every shared volume file opens by drop, or is refused with the reason', as
   const statsBefore = await page.evaluate(() => window.zfpiso!.statsCount);
   await page.locator('#iso-slider').focus();
   await page.keyboard.press('Shift+ArrowLeft');
-  await page.waitForFunction((n) => window.zfpiso!.statsCount > n && Math.fround(window.zfpiso!.stats!.isovalue) === Math.fround(window.zfpiso!.iso!), statsBefore);
+  await page.waitForFunction(
+    (n) => window.zfpiso!.statsCount > n && Math.fround(window.zfpiso!.stats!.isovalue) === Math.fround(window.zfpiso!.iso!),
+    statsBefore,
+  );
   expect(await trianglesShown(page)).not.toBe(t0);
   expect((await pageState(page)).iso).toBeLessThan(37.37);
 
@@ -91,7 +94,10 @@ test('every shared volume file opens by drop, or is refused with the reason', as
 test('a malformed file shows its error and the previous surface remains usable', async ({ page }) => {
   await openApp(page);
   const before = await pageState(page);
-  const hydrogen = await page.evaluate(async (url) => [...new Uint8Array(await (await fetch(url)).arrayBuffer()).subarray(0, 100_000)], `${SHARED_VOLUMES}hydrogen_atom_128x128x128_float32.rate8.zfp`);
+  const hydrogen = await page.evaluate(
+    async (url) => [...new Uint8Array(await (await fetch(url)).arrayBuffer()).subarray(0, 100_000)],
+    `${SHARED_VOLUMES}hydrogen_atom_128x128x128_float32.rate8.zfp`,
+  );
 
   await dropBytes(page, 'cut_128x128x128_float32.zfp', new Uint8Array(hydrogen));
   await waitIdle(page);
@@ -104,7 +110,9 @@ test('a malformed file shows its error and the previous surface remains usable',
 
   await dropBytes(page, 'scan_10x10x10_uint16.raw', new Uint8Array(1000));
   await waitIdle(page);
-  await expect(page.locator('#messages .message').last()).toContainText('scan_10x10x10_uint16.raw: 10x10x10 uint16 is 2000 bytes, the file has 1000');
+  await expect(page.locator('#messages .message').last()).toContainText(
+    'scan_10x10x10_uint16.raw: 10x10x10 uint16 is 2000 bytes, the file has 1000',
+  );
 
   await dropBytes(page, 'notes.txt', new TextEncoder().encode('not a volume'));
   await waitIdle(page);
@@ -175,7 +183,12 @@ test('the form asks what a name does not say; Escape cancels and keeps the volum
   before = await loads(page);
   await dropFromUrl(page, '/data/zfp-vectors/ironProt_68x68x68_float32.rate4.zfp', 'ironProt_68x68x68_float32.raw.crate4.zfp');
   await waitForLoad(page, before);
-  expect((await pageState(page)).volume).toMatchObject({ kind: 'zfp-headerless', dims: [68, 68, 68], rate: 4, fileName: 'ironProt_68x68x68_float32.raw.crate4.zfp' });
+  expect((await pageState(page)).volume).toMatchObject({
+    kind: 'zfp-headerless',
+    dims: [68, 68, 68],
+    rate: 4,
+    fileName: 'ironProt_68x68x68_float32.raw.crate4.zfp',
+  });
   await expect(form).toBeHidden();
 
   // NRRD (raw encoding): shape and type from its header, the form only asks the rate.
@@ -189,7 +202,9 @@ test('the form asks what a name does not say; Escape cancels and keeps the volum
   before = await loads(page);
   await page.evaluate(async (url) => {
     const data = new Uint8Array(await (await fetch(url)).arrayBuffer());
-    const header = new TextEncoder().encode('NRRD0004\n# made in the test\ntype: uint8\ndimension: 3\nsizes: 66 66 66\nencoding: raw\nspacings: 1 1 1\n\n');
+    const header = new TextEncoder().encode(
+      'NRRD0004\n# made in the test\ntype: uint8\ndimension: 3\nsizes: 66 66 66\nencoding: raw\nspacings: 1 1 1\n\n',
+    );
     const dt = new DataTransfer();
     dt.items.add(new File([header, data], 'neghip.nrrd'));
     document.getElementById('view')!.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));

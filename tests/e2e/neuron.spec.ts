@@ -20,7 +20,10 @@ type PixelKind = 'trace-red' | 'volume-green' | 'volume-lit' | 'surface-orange';
  * (`inOther`), and how many of them are on the first one's `within.of`
  * pixels (`overlap`: the same place on screen).
  */
-async function pixels(page: Page, within?: { png: Buffer; kind: PixelKind; of: PixelKind }): Promise<Record<PixelKind, number> & { inOther: number; overlap: number }> {
+async function pixels(
+  page: Page,
+  within?: { png: Buffer; kind: PixelKind; of: PixelKind },
+): Promise<Record<PixelKind, number> & { inOther: number; overlap: number }> {
   const png = await page.locator('#view').screenshot();
   return page.evaluate(
     async ({ shots, within }) => {
@@ -32,14 +35,18 @@ async function pixels(page: Page, within?: { png: Buffer; kind: PixelKind; of: P
         return g.getImageData(0, 0, bitmap.width, bitmap.height).data;
       };
       const is = (kind: string, r: number, g: number, b: number) =>
-        kind === 'trace-red' ? r > 150 && g < 110 && b < 110 :
-        kind === 'volume-green' ? g > 90 && g > r + 25 && g > b + 25 :
-        kind === 'volume-lit' ? g > 60 && g >= r && g >= b :
-        r > 90 && g > 0.45 * r && g < 0.85 * r && g - b > 0.12 * r;
+        kind === 'trace-red'
+          ? r > 150 && g < 110 && b < 110
+          : kind === 'volume-green'
+            ? g > 90 && g > r + 25 && g > b + 25
+            : kind === 'volume-lit'
+              ? g > 60 && g >= r && g >= b
+              : r > 90 && g > 0.45 * r && g < 0.85 * r && g - b > 0.12 * r;
       const [a, b] = await Promise.all(shots.map(read));
       const out = { 'trace-red': 0, 'volume-green': 0, 'volume-lit': 0, 'surface-orange': 0, inOther: 0, overlap: 0 };
       for (let i = 0; i < a.length; i += 4) {
-        for (const k of ['trace-red', 'volume-green', 'volume-lit', 'surface-orange'] as const) if (is(k, a[i], a[i + 1], a[i + 2])) out[k]++;
+        for (const k of ['trace-red', 'volume-green', 'volume-lit', 'surface-orange'] as const)
+          if (is(k, a[i], a[i + 1], a[i + 2])) out[k]++;
         if (within && b && is(within.kind, b[i], b[i + 1], b[i + 2])) {
           out.inOther++;
           if (is(within.of, a[i], a[i + 1], a[i + 2])) out.overlap++;
@@ -142,7 +149,9 @@ test('the demo cell is shown on open', async ({ page }) => {
   expect(s.demo).toBe(true);
   expect(s.traces[0].samples).toBeGreaterThan(100);
   // Its isosurface follows the volume (computed after the page is ready).
-  await page.waitForFunction(() => (window.neuron!.surface!.triangles ?? 0) > 0 && !window.neuron!.surface!.computing, null, { timeout: 60_000 });
+  await page.waitForFunction(() => (window.neuron!.surface!.triangles ?? 0) > 0 && !window.neuron!.surface!.computing, null, {
+    timeout: 60_000,
+  });
   await waitForFrames(page, 1);
   await redraw(page);
   expect(await countPixels(page, 'surface-orange')).toBeGreaterThan(1000);

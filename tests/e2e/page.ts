@@ -27,19 +27,22 @@ export async function waitForFrames(page: Page, n = 1): Promise<void> {
 /** Fraction of canvas pixels that differ from the clear colour (from a screenshot). */
 export async function nonBackgroundFraction(page: Page): Promise<number> {
   const png = await page.locator('#view').screenshot();
-  return page.evaluate(async (bytes) => {
-    const blob = new Blob([new Uint8Array(bytes)], { type: 'image/png' });
-    const bitmap = await createImageBitmap(blob);
-    const c = new OffscreenCanvas(bitmap.width, bitmap.height);
-    const g = c.getContext('2d')!;
-    g.drawImage(bitmap, 0, 0);
-    const { data } = g.getImageData(0, 0, bitmap.width, bitmap.height);
-    // The clear colour is the top-left pixel's (the view's corner is background).
-    const [r0, g0, b0] = [data[0], data[1], data[2]];
-    let differ = 0;
-    for (let i = 0; i < data.length; i += 4) {
-      if (Math.abs(data[i] - r0) + Math.abs(data[i + 1] - g0) + Math.abs(data[i + 2] - b0) > 12) differ++;
-    }
-    return differ / (data.length / 4);
-  }, [...png]);
+  return page.evaluate(
+    async (bytes) => {
+      const blob = new Blob([new Uint8Array(bytes)], { type: 'image/png' });
+      const bitmap = await createImageBitmap(blob);
+      const c = new OffscreenCanvas(bitmap.width, bitmap.height);
+      const g = c.getContext('2d')!;
+      g.drawImage(bitmap, 0, 0);
+      const { data } = g.getImageData(0, 0, bitmap.width, bitmap.height);
+      // The clear colour is the top-left pixel's (the view's corner is background).
+      const [r0, g0, b0] = [data[0], data[1], data[2]];
+      let differ = 0;
+      for (let i = 0; i < data.length; i += 4) {
+        if (Math.abs(data[i] - r0) + Math.abs(data[i + 1] - g0) + Math.abs(data[i + 2] - b0) > 12) differ++;
+      }
+      return differ / (data.length / 4);
+    },
+    [...png],
+  );
 }

@@ -13,7 +13,9 @@ interface McEntry {
   dims_xyz: [number, number, number];
   isosurfaces: { iso: number; vtkMarchingCubes: { triangles: number } }[];
 }
-const mc = JSON.parse(readFileSync(fileURLToPath(new URL('../../../shared/data/reference/mc.json', import.meta.url)), 'utf8')) as { volumes: McEntry[] };
+const mc = JSON.parse(readFileSync(fileURLToPath(new URL('../../../shared/data/reference/mc.json', import.meta.url)), 'utf8')) as {
+  volumes: McEntry[];
+};
 const entry = (file: string) => mc.volumes.find((v) => v.file === file)!;
 
 test('the form runs every method on the fuel volume; they agree on the triangles', async ({ page }) => {
@@ -46,7 +48,13 @@ test("the API: serial MC (JS, Wasm) and naive WebGPU MC give VTK's triangle coun
   const fuel = entry('volumes/fuel_64x64x64_float32.raw');
   const isovalues = fuel.isosurfaces.map((s) => s.iso);
   const serial = await page.evaluate(
-    (a) => window.paperBench!.serialMc({ url: '/data/volumes/fuel_64x64x64_float32.raw', dims: a.dims, isovalues: a.isovalues, methods: ['js', 'wasm'] }),
+    (a) =>
+      window.paperBench!.serialMc({
+        url: '/data/volumes/fuel_64x64x64_float32.raw',
+        dims: a.dims,
+        isovalues: a.isovalues,
+        methods: ['js', 'wasm'],
+      }),
     { dims: fuel.dims_xyz, isovalues },
   );
   const vtk = fuel.isosurfaces.map((s) => s.vtkMarchingCubes.triangles);
@@ -56,7 +64,10 @@ test("the API: serial MC (JS, Wasm) and naive WebGPU MC give VTK's triangle coun
 
   const hydrogen = entry('volumes/hydrogen_atom_128x128x128_float32.rate8.zfp');
   const url = '/data/volumes/hydrogen_atom_128x128x128_float32.rate8.zfp';
-  const naive = await page.evaluate((a) => window.paperBench!.naiveMc({ url: a.url, isovalues: a.isovalues }), { url, isovalues: hydrogen.isosurfaces.slice(0, 3).map((s) => s.iso) });
+  const naive = await page.evaluate((a) => window.paperBench!.naiveMc({ url: a.url, isovalues: a.isovalues }), {
+    url,
+    isovalues: hydrogen.isosurfaces.slice(0, 3).map((s) => s.iso),
+  });
   expect(naive.triangles).toEqual(hydrogen.isosurfaces.slice(0, 3).map((s) => s.vtkMarchingCubes.triangles));
   expect(naive.adapter).toMatch(/swiftshader/i);
 
@@ -71,6 +82,11 @@ test("the API: serial MC (JS, Wasm) and naive WebGPU MC give VTK's triangle coun
 
 test('a volume that is not there is an error with its name', async ({ page }) => {
   await openApp(page, '/paper-bench.html');
-  const message = await page.evaluate(() => window.paperBench!.zfpWasm({ url: '/data/volumes/nothing.zfp', runs: 2 }).then(() => 'resolved', (e: Error) => e.message));
+  const message = await page.evaluate(() =>
+    window.paperBench!.zfpWasm({ url: '/data/volumes/nothing.zfp', runs: 2 }).then(
+      () => 'resolved',
+      (e: Error) => e.message,
+    ),
+  );
   expect(message).toContain('/data/volumes/nothing.zfp: HTTP 404');
 });

@@ -51,7 +51,8 @@ function instrument(): void {
     const t = performance.now();
     for (const b of list) trace.push({ k: 'submit', t, label: b.__label });
     const r = submit.call(this, list);
-    if (list.some((b) => b.__label === 'Viewer.frame')) void this.onSubmittedWorkDone().then(() => trace.push({ k: 'done', t: performance.now(), of: t }));
+    if (list.some((b) => b.__label === 'Viewer.frame'))
+      void this.onSubmittedWorkDone().then(() => trace.push({ k: 'done', t: performance.now(), of: t }));
     return r;
   };
   const mapAsync = GPUBuffer.prototype.mapAsync;
@@ -88,7 +89,11 @@ async function input(page: Page, fractions: number[], gapMs: number): Promise<vo
 }
 
 async function settle(page: Page): Promise<void> {
-  await page.waitForFunction(() => window.zfpiso!.stats !== undefined && Math.fround(window.zfpiso!.stats.isovalue) === Math.fround(window.zfpiso!.iso!), null, { timeout: 120_000 });
+  await page.waitForFunction(
+    () => window.zfpiso!.stats !== undefined && Math.fround(window.zfpiso!.stats.isovalue) === Math.fround(window.zfpiso!.iso!),
+    null,
+    { timeout: 120_000 },
+  );
   // every map requested so far resolved, and a frame after the last compute done
   await page.waitForFunction(
     () => {
@@ -108,7 +113,9 @@ const median = (xs: number[]) => {
   return s.length ? s[Math.floor((s.length - 1) / 2)] : NaN;
 };
 
-test('scrubbing: each surface is drawn before its statistics are mapped, and surfaces are submitted without waiting for maps', async ({ page }) => {
+test('scrubbing: each surface is drawn before its statistics are mapped, and surfaces are submitted without waiting for maps', async ({
+  page,
+}) => {
   test.setTimeout(400_000);
   await page.addInitScript(instrument);
   await openApp(page, `/?url=${VOLUME}`);
@@ -195,6 +202,8 @@ test('frame time at ~2.4 M triangles (bonsai at iso 20.37): printed', async ({ p
     });
   }
   const kept = frames.slice(1);
-  console.log(`[frame-time] ${VOLUME.split('/').pop()} iso 20.37, ${triangles} triangles: frame submit -> GPU done median ${median(kept).toFixed(0)} ms (${kept.map((x) => x.toFixed(0)).join(', ')})`);
+  console.log(
+    `[frame-time] ${VOLUME.split('/').pop()} iso 20.37, ${triangles} triangles: frame submit -> GPU done median ${median(kept).toFixed(0)} ms (${kept.map((x) => x.toFixed(0)).join(', ')})`,
+  );
   expect(triangles).toBeGreaterThan(2e6);
 });

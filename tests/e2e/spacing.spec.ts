@@ -12,12 +12,17 @@ import { acceptVolumeForm, loads, pageState, setIsovalue, SHARED_VOLUMES, waitFo
 
 const ISO = 80.37;
 
-test('a NRRD with spacings is drawn and exported to scale; the size can be corrected and is kept in the link', async ({ page, context }) => {
+test('a NRRD with spacings is drawn and exported to scale; the size can be corrected and is kept in the link', async ({
+  page,
+  context,
+}) => {
   await openApp(page);
   const before = await loads(page);
   await page.evaluate(async (url) => {
     const data = new Uint8Array(await (await fetch(url)).arrayBuffer());
-    const header = new TextEncoder().encode('NRRD0004\ntype: uint8\ndimension: 3\nsizes: 66 66 66\nencoding: raw\nspacings: 0.5 0.75 2\n\n');
+    const header = new TextEncoder().encode(
+      'NRRD0004\ntype: uint8\ndimension: 3\nsizes: 66 66 66\nencoding: raw\nspacings: 0.5 0.75 2\n\n',
+    );
     const dt = new DataTransfer();
     dt.items.add(new File([header, data], 'neghip_aniso.nrrd'));
     document.getElementById('view')!.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
@@ -32,14 +37,18 @@ test('a NRRD with spacings is drawn and exported to scale; the size can be corre
 
   // The exported mesh's box is the CLI's (same samples, same default rate 8) times the spacing.
   const cli = await runCli<{ isosurfaces: { triangles: number; bbox: { min: number[]; max: number[] } }[] }>([
-    'extract', join(SHARED_VOLUMES_DIR, 'neghip_66x66x66_uint8.raw'), '--iso', String(ISO),
+    'extract',
+    join(SHARED_VOLUMES_DIR, 'neghip_66x66x66_uint8.raw'),
+    '--iso',
+    String(ISO),
   ]);
   const [ref] = cli.isosurfaces;
   const [ply] = await Promise.all([page.waitForEvent('download'), page.locator('#save-ply').click()]);
   const mesh = parsePly(new Uint8Array(readFileSync((await ply.path())!)));
   expect(mesh.indices.length / 3).toBe(ref.triangles);
   expect(mesh.comments.join('\n')).toContain('world coordinates');
-  const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+  const lo = [Infinity, Infinity, Infinity],
+    hi = [-Infinity, -Infinity, -Infinity];
   for (let i = 0; i < mesh.positions.length; i++) {
     lo[i % 3] = Math.min(lo[i % 3], mesh.positions[i]);
     hi[i % 3] = Math.max(hi[i % 3], mesh.positions[i]);

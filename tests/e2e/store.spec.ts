@@ -19,23 +19,48 @@ const stores = join(root, 'test-results', 'stores');
 const store = join(stores, 'neghip-e2e.zarr');
 
 interface StoreState {
-  done: boolean; shownLevel: number; shownLevels: number[]; chunkBytesFetched: number; bytesFetched: number; chunksFetched: number; reason: string | null;
+  done: boolean;
+  shownLevel: number;
+  shownLevels: number[];
+  chunkBytesFetched: number;
+  bytesFetched: number;
+  chunksFetched: number;
+  reason: string | null;
   levels: { storedBytes: number; chunks: number; chunkBytes: number; chunksFetched: number; chunkBytesFetched: number }[];
   gpu: { total: number; budget: number };
 }
-const storeState = (page: import('@playwright/test').Page) => page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore) as Promise<StoreState>;
+const storeState = (page: import('@playwright/test').Page) =>
+  page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore) as Promise<StoreState>;
 
 test.beforeAll(() => {
   rmSync(store, { recursive: true, force: true });
   mkdirSync(stores, { recursive: true });
-  execFileSync(process.execPath, [join(root, 'scripts/convert.mjs'), join(SHARED_VOLUMES_DIR, 'neghip_66x66x66_uint8.raw'), '--out', store, '--chunk', '16', '--rate', '8', '--shard', '2', '--quiet'], { timeout: 600_000 });
+  execFileSync(
+    process.execPath,
+    [
+      join(root, 'scripts/convert.mjs'),
+      join(SHARED_VOLUMES_DIR, 'neghip_66x66x66_uint8.raw'),
+      '--out',
+      store,
+      '--chunk',
+      '16',
+      '--rate',
+      '8',
+      '--shard',
+      '2',
+      '--quiet',
+    ],
+    { timeout: 600_000 },
+  );
 });
 
 test('?store= shows coarse to fine; panel figures equal the CLI records', async ({ page }) => {
   test.setTimeout(300_000);
   const errors = watchErrors(page);
   await openApp(page, '/?store=/stores/neghip-e2e.zarr#iso=80');
-  await page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, { timeout: 240_000 });
+  await page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, {
+    timeout: 240_000,
+  });
   const st = await storeState(page);
   expect(st.reason).toBeNull();
   expect(st.shownLevels).toEqual([3, 2, 1, 0]);
@@ -48,7 +73,14 @@ test('?store= shows coarse to fine; panel figures equal the CLI records', async 
   await expect(page.locator('#store-section dd[data-k="chunks"]')).toHaveText(String(st.chunksFetched));
   await expect(page.locator('#store-section dd[data-k="bytes"]')).toHaveText(`${(st.bytesFetched / 2 ** 20).toFixed(2)} MiB`);
   await expect(page.locator('#store-progress')).toContainText('level 0 (full resolution)');
-  const cli = await runCli<{ store: { chunkBytesFetched: number; chunks: number }; isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', '--iso', '80']);
+  const cli = await runCli<{ store: { chunkBytesFetched: number; chunks: number }; isosurfaces: { triangles: number }[] }>([
+    'extract',
+    store,
+    '--level',
+    '0',
+    '--iso',
+    '80',
+  ]);
   expect(cli.store.chunks).toBe(st.levels[0].chunksFetched);
   expect(cli.store.chunkBytesFetched).toBe(st.levels[0].chunkBytesFetched);
   expect(await trianglesShown(page)).toBe(cli.isosurfaces[0].triangles);
@@ -56,11 +88,15 @@ test('?store= shows coarse to fine; panel figures equal the CLI records', async 
   // scrubbing streams: a new isovalue ends at level 0 with the CLI's triangles there
   await page.locator('#iso-value').fill('40');
   await page.locator('#iso-value').press('Enter');
-  await page.waitForFunction(() => {
-    const s = (window as unknown as { zfpisoStore?: { done: boolean; shownLevel: number } }).zfpisoStore;
-    const p = (window as unknown as { zfpiso?: { stats?: { isovalue: number } } }).zfpiso;
-    return s?.done === true && s.shownLevel === 0 && p?.stats?.isovalue === 40;
-  }, null, { timeout: 240_000 });
+  await page.waitForFunction(
+    () => {
+      const s = (window as unknown as { zfpisoStore?: { done: boolean; shownLevel: number } }).zfpisoStore;
+      const p = (window as unknown as { zfpiso?: { stats?: { isovalue: number } } }).zfpiso;
+      return s?.done === true && s.shownLevel === 0 && p?.stats?.isovalue === 40;
+    },
+    null,
+    { timeout: 240_000 },
+  );
   const cli40 = await runCli<{ isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', '--iso', '40']);
   expect(await trianglesShown(page)).toBe(cli40.isosurfaces[0].triangles);
   expect(errors).toEqual([]);
@@ -76,7 +112,9 @@ test('a picked .zarr folder opens like the served store', async ({ page }) => {
   const errors = watchErrors(page);
   await openApp(page, '/#iso=80');
   await page.locator('input[webkitdirectory]').setInputFiles(store);
-  await page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, { timeout: 240_000 });
+  await page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, {
+    timeout: 240_000,
+  });
   const st = (await storeState(page)) as StoreState & { url: string };
   expect(st.url).toBe('neghip-e2e.zarr');
   expect(st.shownLevels).toEqual([3, 2, 1, 0]);
@@ -88,7 +126,9 @@ test('a picked .zarr folder opens like the served store', async ({ page }) => {
 test('the link keeps the level: #level=1 stops at level 1, and the hash says level=1', async ({ page }) => {
   test.setTimeout(300_000);
   await openApp(page, '/?store=/stores/neghip-e2e.zarr#iso=80&level=1');
-  await page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, { timeout: 240_000 });
+  await page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, {
+    timeout: 240_000,
+  });
   const st = await storeState(page);
   expect(st.levels[0].chunksFetched).toBe(0);
   expect(st.shownLevels).toEqual([3, 2, 1]);
@@ -101,14 +141,22 @@ test('another volume replaces the store: its GPU side goes, no WebGPU error, and
   test.setTimeout(300_000);
   const errors = watchErrors(page);
   await openApp(page, '/?store=/stores/neghip-e2e.zarr#iso=80&level=2');
-  await page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, { timeout: 240_000 });
+  await page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, {
+    timeout: 240_000,
+  });
   await page.locator('#load-default').click();
-  await page.waitForFunction(() => (window as unknown as { zfpiso: { volume?: { kind: string } } }).zfpiso.volume?.kind === 'default', null, { timeout: 120_000 });
+  await page.waitForFunction(
+    () => (window as unknown as { zfpiso: { volume?: { kind: string } } }).zfpiso.volume?.kind === 'default',
+    null,
+    { timeout: 120_000 },
+  );
   // frames keep being drawn from the new volume's buffers (a freed store buffer would be a validation error)
   const frames = () => page.evaluate(() => (window as unknown as { zfpiso: { framesDrawn(): number } }).zfpiso.framesDrawn());
   const before = await frames();
   await page.keyboard.press(']');
-  await page.waitForFunction((n) => (window as unknown as { zfpiso: { framesDrawn(): number } }).zfpiso.framesDrawn() > n, before, { timeout: 60_000 });
+  await page.waitForFunction((n) => (window as unknown as { zfpiso: { framesDrawn(): number } }).zfpiso.framesDrawn() > n, before, {
+    timeout: 60_000,
+  });
   await page.waitForTimeout(500);
   await expect(page.locator('#messages')).not.toContainText(/WebGPU|validation|destroyed/i);
   await expect(page.locator('#store-progress')).toBeHidden();

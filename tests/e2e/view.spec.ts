@@ -16,7 +16,7 @@ async function canvasPixels(page: Page): Promise<Buffer> {
   return png;
 }
 
-test('the page opens on the built-in volume with a shaded surface and the CLI\'s triangle count', async ({ page }) => {
+test("the page opens on the built-in volume with a shaded surface and the CLI's triangle count", async ({ page }) => {
   const errors = watchErrors(page);
   const started = Date.now();
   await openApp(page);
@@ -47,7 +47,8 @@ test('dragging, panning and zooming change the view; R and double-click reset it
   const home = await canvasPixels(page);
   const homeCamera = await page.evaluate(() => window.zfpiso!.camera!());
   const box = (await view.boundingBox())!;
-  const cx = box.x + box.width / 2, cy = box.y + box.height / 2;
+  const cx = box.x + box.width / 2,
+    cy = box.y + box.height / 2;
 
   // Orbit
   await page.mouse.move(cx, cy);
@@ -101,7 +102,8 @@ test.describe('on a touch screen', () => {
   test('one finger rotates; two fingers pinch to zoom and move together to pan', async ({ page }) => {
     await openApp(page);
     const box = (await page.locator('#view').boundingBox())!;
-    const cx = box.x + box.width / 2, cy = box.y + box.height / 2;
+    const cx = box.x + box.width / 2,
+      cy = box.y + box.height / 2;
     // Chromium delivers touch moves aligned to animation frames, after the protocol call returns:
     // read the camera once it has stopped changing from one pair of frames to the next.
     const camera = () =>
@@ -130,13 +132,24 @@ test.describe('on a touch screen', () => {
     expect(rotated.distance).toBeCloseTo(home.distance, 6);
 
     // Spread two fingers apart: closer, the rotation kept.
-    await touch('touchStart', [[cx - 40, cy], [cx + 40, cy]]);
-    for (let i = 1; i <= 5; i++) await touch('touchMove', [[cx - 40 - 16 * i, cy], [cx + 40 + 16 * i, cy]]);
+    await touch('touchStart', [
+      [cx - 40, cy],
+      [cx + 40, cy],
+    ]);
+    for (let i = 1; i <= 5; i++)
+      await touch('touchMove', [
+        [cx - 40 - 16 * i, cy],
+        [cx + 40 + 16 * i, cy],
+      ]);
     const pinched = await camera();
     expect(pinched.distance).toBeLessThan(rotated.distance * 0.6);
     expect(pinched.rotation).toEqual(rotated.rotation);
     // Both fingers move together: a pan (the target moves; distance and rotation stay).
-    for (let i = 1; i <= 5; i++) await touch('touchMove', [[cx - 120 + 10 * i, cy + 10 * i], [cx + 120 + 10 * i, cy + 10 * i]]);
+    for (let i = 1; i <= 5; i++)
+      await touch('touchMove', [
+        [cx - 120 + 10 * i, cy + 10 * i],
+        [cx + 120 + 10 * i, cy + 10 * i],
+      ]);
     await touch('touchEnd', []);
     const panned = await camera();
     expect(panned.target).not.toEqual(pinched.target);

@@ -69,7 +69,8 @@ export async function trianglesShown(page: Page): Promise<number> {
   return Number((text ?? '').replace(/[^\d]/g, ''));
 }
 
-export const pageState = (page: Page) => page.evaluate(() => {
-  const s = window.zfpiso!;
-  return { volume: s.volume, iso: s.iso, stats: s.stats, loads: s.loads, messages: s.messages, loading: s.loading };
-});
+export const pageState = (page: Page) =>
+  page.evaluate(() => {
+    const s = window.zfpiso!;
+    return { volume: s.volume, iso: s.iso, stats: s.stats, loads: s.loads, messages: s.messages, loading: s.loading };
+  });

@@ -7,7 +7,11 @@
 // the runner's memory sampling (rss, arrayBuffers) covers those.
 
 export class AllocationLimitError extends Error {
-  constructor(readonly requestedBytes: number, readonly limitBytes: number, what: string) {
+  constructor(
+    readonly requestedBytes: number,
+    readonly limitBytes: number,
+    what: string,
+  ) {
     super(`fuzz guard: ${what} of ${requestedBytes} bytes requested (limit ${limitBytes})`);
     this.name = 'AllocationLimitError';
   }

@@ -32,7 +32,27 @@ function offset(rng: Rng, length: number): number {
 }
 
 const EXTREME_U32 = [0, 1, 2, 0x7f, 0x80, 0xff, 0x7fff, 0x8000, 0xffff, 0x10000, 0x7fffffff, 0x80000000, 0xfffffffe, 0xffffffff];
-const EXTREME_TEXT = ['0', '-1', '1', '-2147483648', '2147483647', '4294967295', '4294967296', '99999999999999999999', '1e308', '-1e308', '1e-320', 'nan', 'NaN', 'inf', '-inf', '65537', '0.5', '', '18446744073709551616'];
+const EXTREME_TEXT = [
+  '0',
+  '-1',
+  '1',
+  '-2147483648',
+  '2147483647',
+  '4294967295',
+  '4294967296',
+  '99999999999999999999',
+  '1e308',
+  '-1e308',
+  '1e-320',
+  'nan',
+  'NaN',
+  'inf',
+  '-inf',
+  '65537',
+  '0.5',
+  '',
+  '18446744073709551616',
+];
 
 function truncate(c: FuzzCase, rng: Rng): FuzzCase {
   const n = c.bytes.length;
@@ -97,7 +117,17 @@ function textField(c: FuzzCase, rng: Rng): FuzzCase {
   return { ...c, bytes, mutation: `number "${m[0]}" at ${start} -> "${value}"` };
 }
 
-const LYING_DIMS = ['0x64x64', '1x1x1', '65537x65537x65537', '4294967296x1x1', '99999999999999999999x2x2', '2097152x2097152x1', '100000x100000x100000', '3x5x7', '64x64x65'];
+const LYING_DIMS = [
+  '0x64x64',
+  '1x1x1',
+  '65537x65537x65537',
+  '4294967296x1x1',
+  '99999999999999999999x2x2',
+  '2097152x2097152x1',
+  '100000x100000x100000',
+  '3x5x7',
+  '64x64x65',
+];
 
 /** The name says something the file is not. */
 function lyingName(c: FuzzCase, rng: Rng): FuzzCase {
@@ -109,8 +139,10 @@ function lyingName(c: FuzzCase, rng: Rng): FuzzCase {
   const kind = int(rng, 5);
   let name: string;
   if (kind === 0) name = `${base}_${pick(rng, LYING_DIMS)}_${dtype}${ext}`;
-  else if (kind === 1) name = `${base}_${/_\d+x\d+x\d+/.exec(stem)?.[0].slice(1) ?? '16x16x16'}_float32.raw.${pick(rng, ['crate0', 'crate0.0', 'crate99999999', 'crate0.001', 'rate0', 'crate1e9', 'crate33000', 'crate8'])}.zfp`;
-  else if (kind === 2) name = `${stem.replace(/_(u?int(?:8|16)|float(?:32|64))/i, `_${pick(rng, ['uint8', 'int16', 'float64', 'float8', 'int32', 'bogus'])}`)}${ext}`;
+  else if (kind === 1)
+    name = `${base}_${/_\d+x\d+x\d+/.exec(stem)?.[0].slice(1) ?? '16x16x16'}_float32.raw.${pick(rng, ['crate0', 'crate0.0', 'crate99999999', 'crate0.001', 'rate0', 'crate1e9', 'crate33000', 'crate8'])}.zfp`;
+  else if (kind === 2)
+    name = `${stem.replace(/_(u?int(?:8|16)|float(?:32|64))/i, `_${pick(rng, ['uint8', 'int16', 'float64', 'float8', 'int32', 'bogus'])}`)}${ext}`;
   else if (kind === 3) name = `${stem}${pick(rng, ['.raw', '.zfp', '.nrrd', '.swc', '.tif', '.laz', '', '.RAW', '.raw.crate0.zfp'])}`;
   else name = `${base}_${pick(rng, LYING_DIMS)}_${dtype}.raw.${pick(rng, ['crate0', 'crate4', 'crate0.01'])}.zfp`;
   return { ...c, name, mutation: `name ${name}` };

@@ -135,7 +135,11 @@ export async function runTarget(target: FuzzTarget, opts: FuzzOptions): Promise<
         } else if (target.isCleanRejection(e, c.name)) {
           outcome = 'rejected';
           const text = e instanceof Error ? e.message : String(e);
-          const key = text.split(c.name).join('FILE').replace(/\d+(\.\d+)?/g, 'N').slice(0, 90);
+          const key = text
+            .split(c.name)
+            .join('FILE')
+            .replace(/\d+(\.\d+)?/g, 'N')
+            .slice(0, 90);
           rejections.set(key, (rejections.get(key) ?? 0) + 1);
         } else {
           outcome = 'crash';
@@ -162,7 +166,16 @@ export async function runTarget(target: FuzzTarget, opts: FuzzOptions): Promise<
         if (outcome === 'crash') report.crashes++;
         else if (outcome === 'hang') report.hangs++;
         else report.allocs++;
-        report.problems.push({ reader: target.reader, index: i, outcome, seed: c.seed, name: c.name, mutation: c.mutation, bytes: c.bytes.length, message: message.slice(0, 400) });
+        report.problems.push({
+          reader: target.reader,
+          index: i,
+          outcome,
+          seed: c.seed,
+          name: c.name,
+          mutation: c.mutation,
+          bytes: c.bytes.length,
+          message: message.slice(0, 400),
+        });
       }
       opts.onCase?.(target.reader, i, outcome);
     }
@@ -177,7 +190,19 @@ const mib = (n: number) => (n >= 2 ** 20 ? `${(n / 2 ** 20).toFixed(0)} MiB` : `
 
 /** The table of issue 13's closing note, one row per reader. */
 export function formatFuzzTable(reports: readonly ReaderReport[]): string {
-  const head = ['reader', 'cases', 'clean rejections', 'accepted', 'crashes', 'hangs', 'allocs > limit', 'slowest', 'peak RSS', 'peak ArrayBuffers', 'largest request'];
+  const head = [
+    'reader',
+    'cases',
+    'clean rejections',
+    'accepted',
+    'crashes',
+    'hangs',
+    'allocs > limit',
+    'slowest',
+    'peak RSS',
+    'peak ArrayBuffers',
+    'largest request',
+  ];
   const rows = reports.map((r) => [
     r.reader,
     String(r.cases),

@@ -138,11 +138,33 @@ const nrrdTarget: FuzzTarget = {
     u16.forEach((v, i) => dv.setUint16(2 * i, v, false));
     const f64 = Float64Array.from(f);
     return [
-      { name: 'float.nrrd', bytes: nrrd(['type: float', 'dimension: 3', 'sizes: 11 7 5', 'encoding: raw', 'endian: little', 'spacings: 1 1 2.5'], bytesOf(f)) },
+      {
+        name: 'float.nrrd',
+        bytes: nrrd(['type: float', 'dimension: 3', 'sizes: 11 7 5', 'encoding: raw', 'endian: little', 'spacings: 1 1 2.5'], bytesOf(f)),
+      },
       { name: 'uchar-gzip.nrrd', bytes: nrrd(['type: uchar', 'dimension: 3', 'sizes: 11 7 5', 'encoding: gzip'], gzipSync(u8)) },
-      { name: 'ushort-big.nrrd', bytes: nrrd(['type: unsigned short', 'dimension: 3', 'sizes: 11 7 5', 'encoding: raw', 'endian: big', 'space directions: (1,0,0) (0,1,0) (0,0,3)'], be16) },
-      { name: 'double-4d.nrrd', bytes: nrrd(['type: double', 'dimension: 4', 'sizes: 1 11 7 5', 'encoding: raw', 'endian: little'], bytesOf(f64)) },
-      { name: 'float-gzip.nrrd', bytes: nrrd(['type: float', 'dimension: 3', 'sizes: 11 7 5', 'encoding: gz', 'endian: little'], gzipSync(bytesOf(f))) },
+      {
+        name: 'ushort-big.nrrd',
+        bytes: nrrd(
+          [
+            'type: unsigned short',
+            'dimension: 3',
+            'sizes: 11 7 5',
+            'encoding: raw',
+            'endian: big',
+            'space directions: (1,0,0) (0,1,0) (0,0,3)',
+          ],
+          be16,
+        ),
+      },
+      {
+        name: 'double-4d.nrrd',
+        bytes: nrrd(['type: double', 'dimension: 4', 'sizes: 1 11 7 5', 'encoding: raw', 'endian: little'], bytesOf(f64)),
+      },
+      {
+        name: 'float-gzip.nrrd',
+        bytes: nrrd(['type: float', 'dimension: 3', 'sizes: 11 7 5', 'encoding: gz', 'endian: little'], gzipSync(bytesOf(f))),
+      },
     ];
   },
   open: openVolume,

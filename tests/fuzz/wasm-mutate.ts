@@ -18,11 +18,31 @@ function write(bytes: Uint8Array, at: number, width: Width, rand: Rand, littleEn
   if (at < 0 || at + size > bytes.length) return 'out of range';
   const v = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
   switch (width) {
-    case 'u8': { const x = pick(rand, U8); v.setUint8(at, x); return String(x); }
-    case 'u16': { const x = pick(rand, U16); v.setUint16(at, x, littleEndian); return String(x); }
-    case 'u32': { const x = pick(rand, U32); v.setUint32(at, x, littleEndian); return String(x); }
-    case 'u64': { const x = pick(rand, U64); v.setBigUint64(at, x, littleEndian); return String(x); }
-    case 'f64': { const x = pick(rand, F64); v.setFloat64(at, x, littleEndian); return String(x); }
+    case 'u8': {
+      const x = pick(rand, U8);
+      v.setUint8(at, x);
+      return String(x);
+    }
+    case 'u16': {
+      const x = pick(rand, U16);
+      v.setUint16(at, x, littleEndian);
+      return String(x);
+    }
+    case 'u32': {
+      const x = pick(rand, U32);
+      v.setUint32(at, x, littleEndian);
+      return String(x);
+    }
+    case 'u64': {
+      const x = pick(rand, U64);
+      v.setBigUint64(at, x, littleEndian);
+      return String(x);
+    }
+    case 'f64': {
+      const x = pick(rand, F64);
+      v.setFloat64(at, x, littleEndian);
+      return String(x);
+    }
   }
 }
 
@@ -39,9 +59,11 @@ export function flipBits(seed: Uint8Array, rand: Rand): { bytes: Uint8Array; wha
   const region = pick(rand, ['head', 'any', 'tail'] as const);
   for (let i = 0; i < flips; i++) {
     const at =
-      region === 'head' ? Math.floor(rand() * Math.min(bytes.length, 512)) :
-      region === 'tail' ? bytes.length - 1 - Math.floor(rand() * Math.min(bytes.length, 256)) :
-      Math.floor(rand() * bytes.length);
+      region === 'head'
+        ? Math.floor(rand() * Math.min(bytes.length, 512))
+        : region === 'tail'
+          ? bytes.length - 1 - Math.floor(rand() * Math.min(bytes.length, 256))
+          : Math.floor(rand() * bytes.length);
     bytes[at] ^= 1 << Math.floor(rand() * 8);
   }
   return { bytes, what: `${flips} bit flips (${region})` };
@@ -50,11 +72,27 @@ export function flipBits(seed: Uint8Array, rand: Rand): { bytes: Uint8Array; wha
 // ---------------------------------------------------------------- LAS
 
 const LAS_FIELDS: [string, number, Width][] = [
-  ['version major', 24, 'u8'], ['version minor', 25, 'u8'], ['header size', 94, 'u16'], ['offset to point data', 96, 'u32'],
-  ['VLR count', 100, 'u32'], ['point format', 104, 'u8'], ['record length', 105, 'u16'], ['legacy point count', 107, 'u32'],
-  ['x scale', 131, 'f64'], ['y scale', 139, 'f64'], ['z scale', 147, 'f64'], ['x offset', 155, 'f64'], ['z offset', 171, 'f64'],
-  ['max x', 179, 'f64'], ['min x', 187, 'f64'], ['max z', 211, 'f64'], ['min z', 219, 'f64'],
-  ['waveform start', 227, 'u64'], ['EVLR start', 235, 'u64'], ['EVLR count', 243, 'u32'], ['extended point count', 247, 'u64'],
+  ['version major', 24, 'u8'],
+  ['version minor', 25, 'u8'],
+  ['header size', 94, 'u16'],
+  ['offset to point data', 96, 'u32'],
+  ['VLR count', 100, 'u32'],
+  ['point format', 104, 'u8'],
+  ['record length', 105, 'u16'],
+  ['legacy point count', 107, 'u32'],
+  ['x scale', 131, 'f64'],
+  ['y scale', 139, 'f64'],
+  ['z scale', 147, 'f64'],
+  ['x offset', 155, 'f64'],
+  ['z offset', 171, 'f64'],
+  ['max x', 179, 'f64'],
+  ['min x', 187, 'f64'],
+  ['max z', 211, 'f64'],
+  ['min z', 219, 'f64'],
+  ['waveform start', 227, 'u64'],
+  ['EVLR start', 235, 'u64'],
+  ['EVLR count', 243, 'u32'],
+  ['extended point count', 247, 'u64'],
 ];
 
 export function lasField(seed: Uint8Array, rand: Rand): { bytes: Uint8Array; what: string } {
@@ -118,7 +156,8 @@ export function tiffField(seed: Uint8Array, rand: Rand): { bytes: Uint8Array; wh
   const part = rand();
   if (part < 0.15) return { bytes, what: `tag ${tag} type = ${write(bytes, entry + 2, 'u16', rand, le)}` };
   if (part < 0.4) return { bytes, what: `tag ${tag} count = ${write(bytes, entry + 4, 'u32', rand, le)}` };
-  if (type === 3 && dv.getUint32(entry + 4, le) === 1) return { bytes, what: `tag ${tag} value = ${write(bytes, entry + 8, 'u16', rand, le)}` };
+  if (type === 3 && dv.getUint32(entry + 4, le) === 1)
+    return { bytes, what: `tag ${tag} value = ${write(bytes, entry + 8, 'u16', rand, le)}` };
   return { bytes, what: `tag ${tag} value/offset = ${write(bytes, entry + 8, 'u32', rand, le)}` };
 }
 

@@ -60,7 +60,17 @@ describe.each(wasmFuzzTargets)('fuzz $reader', (target) => {
     const baseline = new Map<string, string>();
     for (const s of seeds) baseline.set(s.name, JSON.stringify(await target.open(s.name, s.bytes)));
     const rand = mulberry32(SEED * 7919 + target.reader.length);
-    const row: Row = { reader: target.reader, cases: 0, clean: 0, accepted: 0, crashes: 0, hangs: 0, peakHeapMiB: 0, peakRssMiB: 0, slowestMs: 0 };
+    const row: Row = {
+      reader: target.reader,
+      cases: 0,
+      clean: 0,
+      accepted: 0,
+      crashes: 0,
+      hangs: 0,
+      peakHeapMiB: 0,
+      peakRssMiB: 0,
+      slowestMs: 0,
+    };
     const problems: string[] = [];
     let peakBuffers = 0;
     for (let i = 0; i < CASES; i++) {
@@ -75,7 +85,8 @@ describe.each(wasmFuzzTargets)('fuzz $reader', (target) => {
         if (target.isCleanRejection(e, name)) row.clean++;
         else {
           row.crashes++;
-          if (problems.length < 20) problems.push(`${name} (${what}): ${(e as Error)?.stack?.split('\n').slice(0, 3).join(' | ') ?? String(e)}`);
+          if (problems.length < 20)
+            problems.push(`${name} (${what}): ${(e as Error)?.stack?.split('\n').slice(0, 3).join(' | ') ?? String(e)}`);
         }
       }
       const ms = performance.now() - t0;
@@ -95,7 +106,8 @@ describe.each(wasmFuzzTargets)('fuzz $reader', (target) => {
       // A valid file after this one (every 10th case, and always after a crash) opens as before.
       if (i % 10 === 9 || row.crashes > 0) {
         const after = JSON.stringify(await target.open(seed.name, seed.bytes));
-        if (after !== baseline.get(seed.name)) problems.push(`${seed.name} after ${name} (${what}) gives ${after}, not ${baseline.get(seed.name)}`);
+        if (after !== baseline.get(seed.name))
+          problems.push(`${seed.name} after ${name} (${what}) gives ${after}, not ${baseline.get(seed.name)}`);
       }
     }
     row.peakRssMiB = Math.round(row.peakRssMiB);

@@ -6,7 +6,9 @@ import type { Isosurface } from '../../src/isosurface/isosurface.ts';
 import { DRAW_ARGS_BYTES } from '../../src/isosurface/layout.ts';
 
 /** The cache state: slot -> block, block -> slot, and the LRU order (slots, least recently used first). */
-export async function readCacheState(iso: Isosurface): Promise<{ slotToBlock: Uint32Array; blockToSlot: Uint32Array; lruOrder: Uint32Array }> {
+export async function readCacheState(
+  iso: Isosurface,
+): Promise<{ slotToBlock: Uint32Array; blockToSlot: Uint32Array; lruOrder: Uint32Array }> {
   const { device } = iso.pipeline.gpu;
   const { cache } = iso.pipeline.parts;
   const lru = cache.lruLog;

@@ -38,6 +38,8 @@ export function gpuTest(name: string, fn: (ctx: { gpu: TestGpu }) => unknown | P
 }
 
 /** `gpuTest.for(cases)(name, (case, { gpu }) => ...)` */
-gpuTest.for = <T>(cases: readonly T[]) => (name: string, fn: (c: T, ctx: { gpu: TestGpu }) => unknown, timeoutMs?: number) => {
-  for (const c of cases) gpuTest(formatName(name, c), (ctx) => fn(c, ctx), timeoutMs);
-};
+gpuTest.for =
+  <T>(cases: readonly T[]) =>
+  (name: string, fn: (c: T, ctx: { gpu: TestGpu }) => unknown, timeoutMs?: number) => {
+    for (const c of cases) gpuTest(formatName(name, c), (ctx) => fn(c, ctx), timeoutMs);
+  };

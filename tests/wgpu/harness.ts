@@ -30,7 +30,12 @@ export async function runRegistered(file: string): Promise<void> {
         console.log(`  ✓ ${file} > ${t.name} (${Math.round(performance.now() - start)} ms)`);
       } catch (e) {
         failed++;
-        console.log(`  ✗ ${file} > ${t.name}\n      ${String((e as Error)?.stack ?? e).split('\n').slice(0, 16).join('\n      ')}`);
+        console.log(
+          `  ✗ ${file} > ${t.name}\n      ${String((e as Error)?.stack ?? e)
+            .split('\n')
+            .slice(0, 16)
+            .join('\n      ')}`,
+        );
       }
     }
     for (const t of registered.filter((r, i, all) => all.findIndex((x) => x.file === r.file) === i)) {

@@ -43,9 +43,11 @@ export function formatName(name: string, c: unknown): string {
 }
 
 /** `test.for(cases)(name, (case, ctx) => ...)` */
-test.for = <T>(cases: readonly T[]) => (name: string, fn: (c: T, ctx: object) => unknown, timeoutMs?: number) => {
-  for (const c of cases) test(formatName(name, c), () => fn(c, {}), timeoutMs);
-};
+test.for =
+  <T>(cases: readonly T[]) =>
+  (name: string, fn: (c: T, ctx: object) => unknown, timeoutMs?: number) => {
+    for (const c of cases) test(formatName(name, c), () => fn(c, {}), timeoutMs);
+  };
 export const it = test;
 
 export function beforeAll(fn: Fn): void {
@@ -75,7 +77,8 @@ function firstDifference(a: unknown, b: unknown, path = ''): string | undefined 
   if (Object.is(a, b)) return undefined;
   if (typeof a !== 'object' || typeof b !== 'object' || a === null || b === null) return `${path || 'value'}: ${show(a)} vs ${show(b)}`;
   if (ArrayBuffer.isView(a) || ArrayBuffer.isView(b)) {
-    if (!ArrayBuffer.isView(a) || !ArrayBuffer.isView(b) || a.constructor !== b.constructor) return `${path || 'value'}: ${show(a)} vs ${show(b)}`;
+    if (!ArrayBuffer.isView(a) || !ArrayBuffer.isView(b) || a.constructor !== b.constructor)
+      return `${path || 'value'}: ${show(a)} vs ${show(b)}`;
     const x = a as unknown as ArrayLike<number>;
     const y = b as unknown as ArrayLike<number>;
     if (x.length !== y.length) return `${path || 'value'}: length ${x.length} vs ${y.length}`;
@@ -83,7 +86,8 @@ function firstDifference(a: unknown, b: unknown, path = ''): string | undefined 
     return undefined;
   }
   if (Array.isArray(a) !== Array.isArray(b)) return `${path || 'value'}: ${show(a)} vs ${show(b)}`;
-  if (a instanceof Map || a instanceof Set) return firstDifference([...(a as Map<unknown, unknown>)], [...(b as Map<unknown, unknown>)], path);
+  if (a instanceof Map || a instanceof Set)
+    return firstDifference([...(a as Map<unknown, unknown>)], [...(b as Map<unknown, unknown>)], path);
   const ka = Object.keys(a).filter((k) => (a as Record<string, unknown>)[k] !== undefined);
   const kb = Object.keys(b).filter((k) => (b as Record<string, unknown>)[k] !== undefined);
   for (const k of new Set([...ka, ...kb])) {
@@ -127,7 +131,8 @@ function matchers(actual: unknown, negate: boolean) {
     toBe: (e: unknown) => check(Object.is(actual, e), `to be ${show(e)}`),
     toEqual: (e: unknown) => {
       const d = firstDifference(actual, e);
-      if ((d === undefined) === negate) throw new Error(negate ? `expected ${show(actual)} not to equal it` : `expected equal values; first difference ${d}`);
+      if ((d === undefined) === negate)
+        throw new Error(negate ? `expected ${show(actual)} not to equal it` : `expected equal values; first difference ${d}`);
     },
     toStrictEqual: (e: unknown) => check(firstDifference(actual, e) === undefined, `to equal ${show(e)}`),
     toBeGreaterThan: (e: number | bigint) => check(num(actual) > num(e), `to be > ${e}`),
@@ -149,7 +154,10 @@ function matchers(actual: unknown, negate: boolean) {
     toThrow: (want?: unknown) => {
       const r = thrownBy(actual);
       const ok = r.threw && errorMatches(r.error, want);
-      if (ok === negate) throw new Error(`expected the function ${negate ? 'not ' : ''}to throw${want === undefined ? '' : ` ${show(String(want))}`}${r.threw ? `; it threw: ${(r.error as Error)?.message ?? r.error}` : '; it did not throw'}`);
+      if (ok === negate)
+        throw new Error(
+          `expected the function ${negate ? 'not ' : ''}to throw${want === undefined ? '' : ` ${show(String(want))}`}${r.threw ? `; it threw: ${(r.error as Error)?.message ?? r.error}` : '; it did not throw'}`,
+        );
     },
   };
 }
@@ -174,7 +182,14 @@ export function expect(actual: unknown) {
       out[name] = async (...args: unknown[]) => {
         const v = await settled(wantReject);
         // `rejects.toThrow(x)` checks the rejection's error like vitest does.
-        const m = matchers(name === 'toThrow' && wantReject ? () => { throw v; } : v, negate) as unknown as Record<string, (...a: unknown[]) => void>;
+        const m = matchers(
+          name === 'toThrow' && wantReject
+            ? () => {
+                throw v;
+              }
+            : v,
+          negate,
+        ) as unknown as Record<string, (...a: unknown[]) => void>;
         m[name](...args);
       };
     }

@@ -64,7 +64,12 @@ export class VolumeLoader {
 
   loadFile(file: File): Promise<void> {
     return this.run(file.name, async (signal, progress) => {
-      const bytes = await readFile(file, (done, total) => progress(`Reading ${formatBytes(done)} of ${formatBytes(total ?? file.size)}…`, total ? (done / total) * 0.3 : undefined), signal);
+      const bytes = await readFile(
+        file,
+        (done, total) =>
+          progress(`Reading ${formatBytes(done)} of ${formatBytes(total ?? file.size)}…`, total ? (done / total) * 0.3 : undefined),
+        signal,
+      );
       return this.open(file.name, bytes, signal, progress);
     });
   }
@@ -91,7 +96,15 @@ export class VolumeLoader {
     }
     const name = fileNameOfUrl(resolved);
     return this.run(name, async (signal, progress) => {
-      const bytes = await fetchVolume(resolved, (done, total) => progress(`Downloading ${formatBytes(done)}${total ? ` of ${formatBytes(total)}` : ''}…`, total ? (done / total) * 0.3 : undefined), signal);
+      const bytes = await fetchVolume(
+        resolved,
+        (done, total) =>
+          progress(
+            `Downloading ${formatBytes(done)}${total ? ` of ${formatBytes(total)}` : ''}…`,
+            total ? (done / total) * 0.3 : undefined,
+          ),
+        signal,
+      );
       return this.open(name, bytes, signal, progress);
     });
   }
@@ -103,13 +116,23 @@ export class VolumeLoader {
     });
   }
 
-  private async open(fileName: string, bytes: Uint8Array, signal: AbortSignal, progress: (text: string, f?: number) => void): Promise<OpenedVolume | undefined> {
+  private async open(
+    fileName: string,
+    bytes: Uint8Array,
+    signal: AbortSignal,
+    progress: (text: string, f?: number) => void,
+  ): Promise<OpenedVolume | undefined> {
     progress('Checking the file…', 0.3);
     const facts: VolumeFileFacts = await inspectVolumeFile(fileName, bytes);
     return this.openFacts(facts, bytes, signal, progress);
   }
 
-  private async openFacts(facts: VolumeFileFacts, bytes: Uint8Array, signal: AbortSignal, progress: (text: string, f?: number) => void): Promise<OpenedVolume | undefined> {
+  private async openFacts(
+    facts: VolumeFileFacts,
+    bytes: Uint8Array,
+    signal: AbortSignal,
+    progress: (text: string, f?: number) => void,
+  ): Promise<OpenedVolume | undefined> {
     let request = {};
     if (facts.missing.length > 0 || facts.compresses) {
       progress('Waiting for the volume’s description…', 0.3);
@@ -122,7 +145,10 @@ export class VolumeLoader {
     });
   }
 
-  private async run(what: string, produce: (signal: AbortSignal, progress: (text: string, f?: number) => void) => Promise<OpenedVolume | undefined>): Promise<void> {
+  private async run(
+    what: string,
+    produce: (signal: AbortSignal, progress: (text: string, f?: number) => void) => Promise<OpenedVolume | undefined>,
+  ): Promise<void> {
     this.cancel();
     const job = ++this.generation;
     const controller = new AbortController();

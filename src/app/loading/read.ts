@@ -10,7 +10,12 @@ export class LoadCancelled extends Error {
 
 export type ReadProgress = (done: number, total: number | undefined) => void;
 
-async function drain(stream: ReadableStream<Uint8Array>, total: number | undefined, onProgress: ReadProgress, signal: AbortSignal): Promise<Uint8Array> {
+async function drain(
+  stream: ReadableStream<Uint8Array>,
+  total: number | undefined,
+  onProgress: ReadProgress,
+  signal: AbortSignal,
+): Promise<Uint8Array> {
   const reader = stream.getReader();
   const chunks: Uint8Array[] = [];
   let done = 0;
@@ -74,6 +79,10 @@ export async function fetchVolume(url: URL, onProgress: ReadProgress, signal: Ab
 }
 
 export function fileNameOfUrl(url: URL): string {
-  const last = url.pathname.split('/').filter((s) => s !== '').pop() ?? 'volume';
+  const last =
+    url.pathname
+      .split('/')
+      .filter((s) => s !== '')
+      .pop() ?? 'volume';
   return decodeURIComponent(last);
 }

@@ -5,9 +5,18 @@
 import { DirectoryHandleStore, FileMapStore, type DirectoryHandleLike } from '../../store/zarr/stores.ts';
 import type { AsyncReadable } from '@zarrita/storage';
 
-interface Entry { isFile: boolean; isDirectory: boolean; name: string; fullPath: string }
-interface FileEntry extends Entry { file(ok: (f: File) => void, fail: (e: unknown) => void): void }
-interface DirEntry extends Entry { createReader(): { readEntries(ok: (e: Entry[]) => void, fail: (e: unknown) => void): void } }
+interface Entry {
+  isFile: boolean;
+  isDirectory: boolean;
+  name: string;
+  fullPath: string;
+}
+interface FileEntry extends Entry {
+  file(ok: (f: File) => void, fail: (e: unknown) => void): void;
+}
+interface DirEntry extends Entry {
+  createReader(): { readEntries(ok: (e: Entry[]) => void, fail: (e: unknown) => void): void };
+}
 
 async function readAll(dir: DirEntry, prefix: string, out: Map<string, File>): Promise<void> {
   const reader = dir.createReader();
@@ -25,7 +34,9 @@ async function readAll(dir: DirEntry, prefix: string, out: Map<string, File>): P
 /** The dropped directory, if the drop holds one: its name and a store over its files. */
 export function droppedFolder(e: DragEvent): Promise<{ name: string; store: AsyncReadable }> | null {
   const items = [...(e.dataTransfer?.items ?? [])];
-  const entry = items.map((i) => (i as unknown as { webkitGetAsEntry?(): Entry | null }).webkitGetAsEntry?.() ?? null).find((x) => x?.isDirectory);
+  const entry = items
+    .map((i) => (i as unknown as { webkitGetAsEntry?(): Entry | null }).webkitGetAsEntry?.() ?? null)
+    .find((x) => x?.isDirectory);
   if (!entry) return null;
   return (async () => {
     const files = new Map<string, File>();

@@ -14,7 +14,8 @@ export function mountStoreView(p: Omit<StoreViewDeps, 'publish' | 'line' | 'pane
   line.id = 'store-progress';
   line.setAttribute('role', 'status');
   line.hidden = true;
-  line.style.cssText = 'position:absolute;left:8px;bottom:8px;padding:2px 8px;background:rgba(0,0,0,.6);color:#fff;font:12px system-ui;border-radius:4px;z-index:5';
+  line.style.cssText =
+    'position:absolute;left:8px;bottom:8px;padding:2px 8px;background:rgba(0,0,0,.6);color:#fff;font:12px system-ui;border-radius:4px;z-index:5';
   (document.getElementById('stage') ?? document.body).append(line);
   const panel = document.createElement('section');
   panel.id = 'store-section';
@@ -24,7 +25,9 @@ export function mountStoreView(p: Omit<StoreViewDeps, 'publish' | 'line' | 'pane
   const w = window as unknown as { zfpisoStore?: StorePageState };
   const view = new StoreView({
     ...p,
-    publish: (s) => { w.zfpisoStore = s; },
+    publish: (s) => {
+      w.zfpisoStore = s;
+    },
     line,
     panel,
   });
@@ -32,28 +35,40 @@ export function mountStoreView(p: Omit<StoreViewDeps, 'publish' | 'line' | 'pane
     if (f) void view.openStore(f.store, f.name);
   };
   // A dropped folder is a store (files keep going to the page's usual drop handler).
-  window.addEventListener('drop', (e) => {
-    const folder = droppedFolder(e);
-    if (!folder) return;
-    e.preventDefault();
-    e.stopImmediatePropagation();
-    const overlay = document.getElementById('drop-overlay');
-    if (overlay) overlay.hidden = true;
-    window.dispatchEvent(new Event('dragleave'));
-    folder.then(openFolder, (err: Error) => p.onError(`Could not read the dropped folder: ${err.message}`));
-  }, { capture: true });
+  window.addEventListener(
+    'drop',
+    (e) => {
+      const folder = droppedFolder(e);
+      if (!folder) return;
+      e.preventDefault();
+      e.stopImmediatePropagation();
+      const overlay = document.getElementById('drop-overlay');
+      if (overlay) overlay.hidden = true;
+      window.dispatchEvent(new Event('dragleave'));
+      folder.then(openFolder, (err: Error) => p.onError(`Could not read the dropped folder: ${err.message}`));
+    },
+    { capture: true },
+  );
   // "Open a .zarr folder…", next to the file picker
   const input = document.createElement('input');
   input.type = 'file';
   input.hidden = true;
   input.setAttribute('webkitdirectory', '');
-  input.addEventListener('change', () => { openFolder(pickedFolder([...(input.files ?? [])])); input.value = ''; });
+  input.addEventListener('change', () => {
+    openFolder(pickedFolder([...(input.files ?? [])]));
+    input.value = '';
+  });
   const button = document.createElement('button');
   button.type = 'button';
   button.id = 'open-store-folder';
   button.textContent = 'Open a .zarr folder…';
   button.addEventListener('click', () => {
-    pickDirectory().then((f) => (f ? openFolder(f) : input.click()), (err: Error) => { if (err.name !== 'AbortError') p.onError(err.message); });
+    pickDirectory().then(
+      (f) => (f ? openFolder(f) : input.click()),
+      (err: Error) => {
+        if (err.name !== 'AbortError') p.onError(err.message);
+      },
+    );
   });
   const fileInput = document.getElementById('file-input');
   fileInput?.parentElement?.append(button, input);

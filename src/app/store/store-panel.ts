@@ -7,7 +7,15 @@ import type { ZfpStore } from '../../store/zarr/open-store.ts';
 
 export interface StorePageState {
   url: string;
-  levels: { level: number; dims: number[]; chunks: number; chunkBytes: number; storedBytes: number; chunksFetched: number; chunkBytesFetched: number }[];
+  levels: {
+    level: number;
+    dims: number[];
+    chunks: number;
+    chunkBytes: number;
+    storedBytes: number;
+    chunksFetched: number;
+    chunkBytesFetched: number;
+  }[];
   shownLevel: number | null;
   /** Levels in the order they replaced each other on screen. */
   shownLevels: number[];
@@ -29,7 +37,10 @@ const escapeHtml = (s: string) => s.replace(/&/g, '&amp;').replace(/</g, '&lt;')
 
 export function renderStorePanel(panel: HTMLElement, store: ZfpStore, st: StorePageState, c: FetchCounters): void {
   const rows = st.levels
-    .map((l) => `<tr${st.shownLevel === l.level ? ' class="shown"' : ''}><td>${l.level}</td><td>${l.dims.join('×')}</td><td>${l.chunksFetched} / ${l.chunks}</td><td>${mib(l.storedBytes)}</td></tr>`)
+    .map(
+      (l) =>
+        `<tr${st.shownLevel === l.level ? ' class="shown"' : ''}><td>${l.level}</td><td>${l.dims.join('×')}</td><td>${l.chunksFetched} / ${l.chunks}</td><td>${mib(l.storedBytes)}</td></tr>`,
+    )
     .join('');
   panel.hidden = false;
   panel.innerHTML =

@@ -32,8 +32,12 @@ export class StoreLevelIsosurface implements PageIsosurface {
   ) {
     this.info = { ...shown.surface.info, valueRange };
     this.#detach.push(
-      controller.onError((e) => { for (const l of this.#errors) l(e); }),
-      shown.surface.onSubmit((iso) => { for (const l of this.#submits) l(iso); }),
+      controller.onError((e) => {
+        for (const l of this.#errors) l(e);
+      }),
+      shown.surface.onSubmit((iso) => {
+        for (const l of this.#submits) l(iso);
+      }),
     );
   }
 
@@ -64,9 +68,18 @@ export class StoreLevelIsosurface implements PageIsosurface {
     return s.stats;
   }
 
-  onStats(l: (s: IsosurfaceStats) => void): () => void { this.#stats.add(l); return () => this.#stats.delete(l); }
-  onError(l: (e: Error) => void): () => void { this.#errors.add(l); return () => this.#errors.delete(l); }
-  onSubmit(l: (iso: number) => void): () => void { this.#submits.add(l); return () => this.#submits.delete(l); }
+  onStats(l: (s: IsosurfaceStats) => void): () => void {
+    this.#stats.add(l);
+    return () => this.#stats.delete(l);
+  }
+  onError(l: (e: Error) => void): () => void {
+    this.#errors.add(l);
+    return () => this.#errors.delete(l);
+  }
+  onSubmit(l: (iso: number) => void): () => void {
+    this.#submits.add(l);
+    return () => this.#submits.delete(l);
+  }
 
   resetCache(): void {
     this.shown.surface.resetCache();

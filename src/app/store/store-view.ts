@@ -110,19 +110,48 @@ export class StoreView {
       this.d.onError(e instanceof StoreError ? e.message : `${url}: ${(e as Error).message}`);
       return;
     }
-    if (gen !== this.#gen) { controller.destroy(); return; }
+    if (gen !== this.#gen) {
+      controller.destroy();
+      return;
+    }
     // the previous store (if any) stops here; its level stays on screen until this one's first level replaces it
     const previous = this.#open;
     if (previous) this.#stop(previous);
     const finest = Math.min(this.d.linkLevel() ?? 0, store.levels.length - 1);
     controller.finest = finest;
     const state: StorePageState = {
-      url, shownLevel: null, shownLevels: [], done: false, bytesFetched: 0, chunkBytesFetched: 0, requests: 0, chunksFetched: 0,
+      url,
+      shownLevel: null,
+      shownLevels: [],
+      done: false,
+      bytesFetched: 0,
+      chunkBytesFetched: 0,
+      requests: 0,
+      chunksFetched: 0,
       reason: finest > 0 ? `the link asks for level ${finest}` : null,
-      levels: store.levels.map((l) => ({ level: l.index, dims: l.layout.dims, chunks: l.chunkCount, chunkBytes: l.layout.chunkBytes, storedBytes: l.storedBytes, chunksFetched: 0, chunkBytesFetched: 0 })),
+      levels: store.levels.map((l) => ({
+        level: l.index,
+        dims: l.layout.dims,
+        chunks: l.chunkCount,
+        chunkBytes: l.layout.chunkBytes,
+        storedBytes: l.storedBytes,
+        chunksFetched: 0,
+        chunkBytesFetched: 0,
+      })),
       gpu: { pools: 0, surfaces: 0, total: 0, budget: controller.budgetBytes },
     };
-    const o: OpenStore = { url, store, metered, fetcher: f, controller, valueRange: controller.valueRange ?? [0, 0], state, current: null, running: 0, lastProgress: null };
+    const o: OpenStore = {
+      url,
+      store,
+      metered,
+      fetcher: f,
+      controller,
+      valueRange: controller.valueRange ?? [0, 0],
+      state,
+      current: null,
+      running: 0,
+      lastProgress: null,
+    };
     this.#open = o;
     for (const note of store.notes) this.d.onError(`${url}: ${note}`);
     const fetchedOnce = new Set<string>();
@@ -184,7 +213,8 @@ export class StoreView {
   #progress(o: OpenStore, p: StreamProgress): void {
     if (this.#open !== o) return;
     o.lastProgress = p;
-    if (p.phase === 'fetching') this.#line(`${o.url}: level ${p.level}, ${p.chunksDone} / ${p.chunksNeeded} chunks, ${mib(o.metered.meter.bytes)}`);
+    if (p.phase === 'fetching')
+      this.#line(`${o.url}: level ${p.level}, ${p.chunksDone} / ${p.chunksNeeded} chunks, ${mib(o.metered.meter.bytes)}`);
     else if (p.phase === 'computing') this.#line(`${o.url}: level ${p.level}, computing the surface…`);
     this.#publish(o);
   }
@@ -197,23 +227,41 @@ export class StoreView {
       o.current.showAgain(s);
     } else {
       const first = o.current === null;
-      const iso = new StoreLevelIsosurface(o.controller, s, o.valueRange, (value) => this.#refine(o, value), () => {
-        // the session let this level go: another level of the store replaces it, or the store is done
-        if (this.#replacing && this.#open === o) return;
-        if (this.#open === o) this.close();
-        o.controller.destroy();
-      }, (bytes) => {
-        if (bytes !== o.controller.budgetBytes) this.d.onNotice(`${o.url}: the new memory budget (${mib(bytes)}) applies when the store is opened again; it streams within ${mib(o.controller.budgetBytes)} now.`);
-      });
+      const iso = new StoreLevelIsosurface(
+        o.controller,
+        s,
+        o.valueRange,
+        (value) => this.#refine(o, value),
+        () => {
+          // the session let this level go: another level of the store replaces it, or the store is done
+          if (this.#replacing && this.#open === o) return;
+          if (this.#open === o) this.close();
+          o.controller.destroy();
+        },
+        (bytes) => {
+          if (bytes !== o.controller.budgetBytes)
+            this.d.onNotice(
+              `${o.url}: the new memory budget (${mib(bytes)}) applies when the store is opened again; it streams within ${mib(o.controller.budgetBytes)} now.`,
+            );
+        },
+      );
       const lv = o.store.levels[s.level];
       const k = 2 ** s.level;
       const name = `${o.url} level ${s.level}`;
       const volume: LoadedVolume = {
         opened: {
           stream: { destroy() {} }, // the controller owns the pools
-          name, fileName: name, kind: 'zfp', dims: [...lv.layout.dims], sourceDtype: 'float32',
-          sourceBytes: lv.storedBytes, compressedBytes: lv.storedBytes, rate: lv.layout.rate, compressedHere: false,
-          spacing: [o.store.voxelSize[0] * k, o.store.voxelSize[1] * k, o.store.voxelSize[2] * k], notes: [],
+          name,
+          fileName: name,
+          kind: 'zfp',
+          dims: [...lv.layout.dims],
+          sourceDtype: 'float32',
+          sourceBytes: lv.storedBytes,
+          compressedBytes: lv.storedBytes,
+          rate: lv.layout.rate,
+          compressedHere: false,
+          spacing: [o.store.voxelSize[0] * k, o.store.voxelSize[1] * k, o.store.voxelSize[2] * k],
+          notes: [],
         },
         iso,
         ranges: o.controller.chunkRanges(s.level) ?? new Float32Array(0),
@@ -238,7 +286,11 @@ export class StoreView {
   #publish(o: OpenStore): void {
     const st = o.state;
     const g = o.controller.gpuBytes;
-    Object.assign(st, { bytesFetched: o.metered.meter.bytes, chunkBytesFetched: o.fetcher.counters.bytesFetched, requests: o.metered.meter.requests });
+    Object.assign(st, {
+      bytesFetched: o.metered.meter.bytes,
+      chunkBytesFetched: o.fetcher.counters.bytesFetched,
+      requests: o.metered.meter.requests,
+    });
     st.gpu = { ...g, budget: o.controller.budgetBytes };
     renderStorePanel(this.d.panel, o.store, st, o.fetcher.counters);
     this.d.publish({ ...st, levels: st.levels.map((l) => ({ ...l })), shownLevels: [...st.shownLevels] });

@@ -39,14 +39,32 @@ export function drawBenchChart(canvas: HTMLCanvasElement, records: BenchRecord[]
   if (!g) return;
   g.setTransform(dpr, 0, 0, dpr, 0, 0);
   g.clearRect(0, 0, cssW, cssH);
-  const left = 38, right = 6, bottom = 16;
+  const left = 38,
+    right = 6,
+    bottom = 16;
   const w = cssW - left - right;
   const x = (i: number) => left + (count > 1 ? (i / (count - 1)) * w : w / 2);
   const maxMs = niceMax(Math.max(0, ...records.map((r) => r.gpuMs)));
   const usable = cssH - bottom - 14 - 14;
   const panels: Panel[] = [
-    { top: 14, height: usable * 0.62, max: maxMs, ticks: [0, 0.5, 1], label: (v) => `${Number((v * maxMs).toPrecision(3))}`, value: (r) => r.gpuMs, title: 'GPU ms per surface' },
-    { top: 14 + usable * 0.62 + 14, height: usable * 0.38, max: 1, ticks: [0, 0.5, 1], label: (v) => `${Math.round(v * 100)}%`, value: (r) => r.hitRate, title: 'cache hit rate' },
+    {
+      top: 14,
+      height: usable * 0.62,
+      max: maxMs,
+      ticks: [0, 0.5, 1],
+      label: (v) => `${Number((v * maxMs).toPrecision(3))}`,
+      value: (r) => r.gpuMs,
+      title: 'GPU ms per surface',
+    },
+    {
+      top: 14 + usable * 0.62 + 14,
+      height: usable * 0.38,
+      max: 1,
+      ticks: [0, 0.5, 1],
+      label: (v) => `${Math.round(v * 100)}%`,
+      value: (r) => r.hitRate,
+      title: 'cache hit rate',
+    },
   ];
   g.font = '10px system-ui, sans-serif';
   g.lineWidth = 1;

@@ -53,10 +53,15 @@ export class BenchPanel {
       this.status.textContent = 'Cancelling after the current surface…';
     });
     byId('bench-json').addEventListener('click', () => {
-      if (this.last) download(new Blob([JSON.stringify(this.last, null, 2)], { type: 'application/json' }), `${this.last.baseName as string}_bench.json`);
+      if (this.last)
+        download(
+          new Blob([JSON.stringify(this.last, null, 2)], { type: 'application/json' }),
+          `${this.last.baseName as string}_bench.json`,
+        );
     });
     byId('bench-csv').addEventListener('click', () => {
-      if (this.last) download(new Blob([recordsToCsv(this.last.records)], { type: 'text/csv' }), `${this.last.baseName as string}_bench.csv`);
+      if (this.last)
+        download(new Blob([recordsToCsv(this.last.records)], { type: 'text/csv' }), `${this.last.baseName as string}_bench.csv`);
     });
   }
 
@@ -97,10 +102,15 @@ export class BenchPanel {
     const lo = this.lo.valueAsNumber;
     const hi = this.hi.valueAsNumber;
     const problem =
-      modes.length === 0 ? 'Choose at least one sequence.' :
-      !(count >= 2) ? 'Use at least 2 isovalues per sequence.' :
-      !Number.isFinite(seed) ? 'The seed must be a whole number.' :
-      !(Number.isFinite(lo) && Number.isFinite(hi) && hi > lo) ? 'The range needs From < To.' : undefined;
+      modes.length === 0
+        ? 'Choose at least one sequence.'
+        : !(count >= 2)
+          ? 'Use at least 2 isovalues per sequence.'
+          : !Number.isFinite(seed)
+            ? 'The seed must be a whole number.'
+            : !(Number.isFinite(lo) && Number.isFinite(hi) && hi > lo)
+              ? 'The range needs From < To.'
+              : undefined;
     if (problem) {
       this.status.textContent = problem;
       return;
@@ -137,7 +147,9 @@ export class BenchPanel {
       };
       this.last = full;
       this.show(full.summaries, full.records, modes, count);
-      this.status.textContent = this.cancelRequested ? `Cancelled after ${result.records.length} surfaces.` : `Done: ${result.records.length} surfaces.`;
+      this.status.textContent = this.cancelRequested
+        ? `Cancelled after ${result.records.length} surfaces.`
+        : `Done: ${result.records.length} surfaces.`;
       this.hooks.onDone(full);
     } catch (e) {
       this.status.textContent = 'The benchmark failed.';
@@ -164,15 +176,29 @@ export class BenchPanel {
       ['occupied', (s) => formatCount(s.meanOccupiedBlocks)],
       ['triangles', (s) => formatCount(s.meanTriangles)],
     ];
-    const head = el('tr', {}, el('th', { textContent: 'mean over' }), ...summaries.map((s) => {
-      const th = el('th', { textContent: s.mode });
-      th.style.color = MODE_COLORS[s.mode];
-      return th;
-    }));
+    const head = el(
+      'tr',
+      {},
+      el('th', { textContent: 'mean over' }),
+      ...summaries.map((s) => {
+        const th = el('th', { textContent: s.mode });
+        th.style.color = MODE_COLORS[s.mode];
+        return th;
+      }),
+    );
     this.table.replaceChildren(
       el('thead', {}, head),
-      el('tbody', {}, ...rows.map(([name, f]) => el('tr', {}, el('th', { textContent: name }), ...summaries.map((s) => el('td', { textContent: f(s) }))))),
+      el(
+        'tbody',
+        {},
+        ...rows.map(([name, f]) => el('tr', {}, el('th', { textContent: name }), ...summaries.map((s) => el('td', { textContent: f(s) })))),
+      ),
     );
-    drawBenchChart(this.chart, records, modes.filter((m) => BENCH_MODES.includes(m)), count);
+    drawBenchChart(
+      this.chart,
+      records,
+      modes.filter((m) => BENCH_MODES.includes(m)),
+      count,
+    );
   }
 }

@@ -13,9 +13,13 @@ export function volumeRows(v: Omit<OpenedVolume, 'stream'>, blockCount: number, 
   const [nx, ny, nz] = v.dims;
   const decoded = nx * ny * nz * 4;
   const source =
-    v.kind === 'default' ? 'generated, compressed on the GPU' :
-    v.compressedHere ? `${v.sourceDtype} ${v.kind === 'nrrd' ? 'NRRD' : v.kind === 'tiff' ? 'TIFF' : 'raw'}, compressed on the GPU` :
-    v.kind === 'zfp' ? 'zfp stream with header' : 'header-less zfp stream';
+    v.kind === 'default'
+      ? 'generated, compressed on the GPU'
+      : v.compressedHere
+        ? `${v.sourceDtype} ${v.kind === 'nrrd' ? 'NRRD' : v.kind === 'tiff' ? 'TIFF' : 'raw'}, compressed on the GPU`
+        : v.kind === 'zfp'
+          ? 'zfp stream with header'
+          : 'header-less zfp stream';
   return [
     ['name', v.name],
     ['dims', `${nx} × ${ny} × ${nz}`],
@@ -54,7 +58,10 @@ export class StatsPanel {
       ['isovalue', String(Number(s.isovalue.toPrecision(7)))],
       ['triangles', formatCount(s.triangles)],
       ['vertices', `${formatCount(s.vertices)} (${formatBytes(s.vertices * 8)})`],
-      ['active blocks', `${formatCount(s.activeBlocks)} of ${formatCount(blockCount)} (${formatPercent(s.activeBlocks / Math.max(1, blockCount))})`],
+      [
+        'active blocks',
+        `${formatCount(s.activeBlocks)} of ${formatCount(blockCount)} (${formatPercent(s.activeBlocks / Math.max(1, blockCount))})`,
+      ],
       ['occupied blocks', formatCount(s.occupiedBlocks)],
       ['decompressed', `${formatCount(s.newBlocks)} new blocks`],
       ['hit rate', formatPercent(s.hitRate)],
@@ -78,7 +85,13 @@ export class StatsPanel {
       ...s.stages.map((t) => {
         const bar = el('span', { className: 'stage-bar' });
         bar.style.width = `${(t.ms / max) * 100}%`;
-        const row = el('div', { className: 'stage' }, el('span', { className: 'stage-name', textContent: t.label, title: t.label }), el('span', { className: 'stage-track' }, bar), el('span', { className: 'stage-ms', textContent: formatMs(t.ms) }));
+        const row = el(
+          'div',
+          { className: 'stage' },
+          el('span', { className: 'stage-name', textContent: t.label, title: t.label }),
+          el('span', { className: 'stage-track' }, bar),
+          el('span', { className: 'stage-ms', textContent: formatMs(t.ms) }),
+        );
         row.dataset.stage = t.label;
         return row;
       }),

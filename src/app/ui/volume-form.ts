@@ -94,9 +94,11 @@ export class VolumeForm {
       if (facts.compresses) {
         const t = dtype ?? 'uint8';
         const expect =
-          facts.kind === 'nrrd' ? facts.nrrd!.data.byteLength :
-          facts.kind === 'tiff' ? facts.samples!.byteLength :
-          dims[0] * dims[1] * dims[2] * DTYPE_BYTES[t];
+          facts.kind === 'nrrd'
+            ? facts.nrrd!.data.byteLength
+            : facts.kind === 'tiff'
+              ? facts.samples!.byteLength
+              : dims[0] * dims[1] * dims[2] * DTYPE_BYTES[t];
         if (facts.kind === 'raw' && expect !== facts.bytes) {
           problem = `${dims.join(' × ')} ${t} is ${expect.toLocaleString('en-US')} bytes; the file has ${facts.bytes.toLocaleString('en-US')}.`;
         } else {

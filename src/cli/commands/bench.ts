@@ -25,7 +25,8 @@ function pad(cells: (string | number)[], widths: number[]): string {
 export const benchCommand: CliCommand = {
   name: 'bench',
   summary: 'isosurface benchmark: random / sweep-up / sweep-down isovalues, GPU ms and hit rates per mode',
-  usage: 'bench IN [--modes random,sweep-up,sweep-down] [--count N] [--seed S] [--range lo,hi] [--rate R] [--cache-budget MB] [--level L (IN a Zarr store URL or folder)]',
+  usage:
+    'bench IN [--modes random,sweep-up,sweep-down] [--count N] [--seed S] [--range lo,hi] [--rate R] [--cache-budget MB] [--level L (IN a Zarr store URL or folder)]',
   options: {
     level: { type: 'string' },
     modes: { type: 'string' },
@@ -46,7 +47,11 @@ export const benchCommand: CliCommand = {
     if (rangeList && (rangeList.length !== 2 || !(rangeList[0] < rangeList[1]))) throw new UsageError('--range must be lo,hi with lo < hi');
     const budget = budgetOption(args);
     const gpu = await ctx.gpu();
-    const volume = await openInputSurface(ctx, gpu, input, { rate: numberOption(args, 'rate'), level: numberOption(args, 'level'), budget });
+    const volume = await openInputSurface(ctx, gpu, input, {
+      rate: numberOption(args, 'rate'),
+      level: numberOption(args, 'level'),
+      budget,
+    });
     ctx.log(`${input}: ${volume.how}`);
     const { iso } = volume;
     try {
@@ -59,7 +64,10 @@ export const benchCommand: CliCommand = {
         range,
         seed,
         onProgress: (done, total, r) => {
-          if (done % 10 === 0 || done === total) ctx.log(`${done}/${total} ${r.mode} iso ${r.iso.toFixed(3)}: ${r.gpuMs.toFixed(1)} ms GPU, hit rate ${(r.hitRate * 100).toFixed(1)}%`);
+          if (done % 10 === 0 || done === total)
+            ctx.log(
+              `${done}/${total} ${r.mode} iso ${r.iso.toFixed(3)}: ${r.gpuMs.toFixed(1)} ms GPU, hit rate ${(r.hitRate * 100).toFixed(1)}%`,
+            );
         },
       });
       const header = ['mode', 'surfaces', 'mean ms', 'median ms', 'wall ms', 'hit rate %', 'active', 'new', 'occupied', 'triangles'];
@@ -76,7 +84,9 @@ export const benchCommand: CliCommand = {
         Math.round(s.meanTriangles),
       ]);
       const widths = header.map((h, i) => Math.max(h.length, ...rows.map((r) => String(r[i]).length)));
-      console.log(`\n${input} (${iso.info.dims.join('x')}), ${count} isovalues per mode in [${range[0]}, ${range[1]}], seed ${seed}, ${describeAdapter(gpu.adapter)}`);
+      console.log(
+        `\n${input} (${iso.info.dims.join('x')}), ${count} isovalues per mode in [${range[0]}, ${range[1]}], seed ${seed}, ${describeAdapter(gpu.adapter)}`,
+      );
       console.log(pad(header, widths));
       for (const r of rows) console.log(pad(r, widths));
       return {

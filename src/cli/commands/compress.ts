@@ -32,17 +32,20 @@ export const compressCommand: CliCommand = {
     const dimList = numberListOption(args, 'dims');
     let dims: Dims | undefined = name.dims;
     if (dimList) {
-      if (dimList.length !== 3 || dimList.some((n) => !Number.isInteger(n) || n < 1)) throw new UsageError('--dims must be three positive integers X,Y,Z');
+      if (dimList.length !== 3 || dimList.some((n) => !Number.isInteger(n) || n < 1))
+        throw new UsageError('--dims must be three positive integers X,Y,Z');
       dims = [dimList[0], dimList[1], dimList[2]];
     }
     if (!dims) throw new UsageError(`${input}: the name carries no shape (name_XxYxZ_dtype.raw): give --dims X,Y,Z`);
     const dtypeText = stringOption(args, 'dtype');
-    if (dtypeText !== undefined && !isDType(dtypeText)) throw new UsageError(`--dtype must be one of ${DTYPES.join(', ')} (got "${dtypeText}")`);
+    if (dtypeText !== undefined && !isDType(dtypeText))
+      throw new UsageError(`--dtype must be one of ${DTYPES.join(', ')} (got "${dtypeText}")`);
     const dtype: DType | undefined = (dtypeText as DType | undefined) ?? name.dtype;
     if (!dtype) throw new UsageError(`${input}: the name carries no type: give --dtype (${DTYPES.join(', ')})`);
     let bytes: Uint8Array = new Uint8Array(readFileSync(input));
     const expect = dims[0] * dims[1] * dims[2] * DTYPE_BYTES[dtype];
-    if (bytes.byteLength !== expect) throw new UsageError(`${input}: ${formatDims(dims)} ${dtype} is ${expect} bytes, the file has ${bytes.byteLength}`);
+    if (bytes.byteLength !== expect)
+      throw new UsageError(`${input}: ${formatDims(dims)} ${dtype} is ${expect} bytes, the file has ${bytes.byteLength}`);
 
     try {
       planZfpStream(basename(input), dims, rate, !args.values.headerless); // user mistakes before any GPU work

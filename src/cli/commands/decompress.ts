@@ -65,7 +65,9 @@ export const decompressCommand: CliCommand = {
       gbPerSecond: outputBytes / seconds / 1e9,
       timing: 'wall time of upload, GPU decode and read-back (file I/O excluded); GB/s of float32 data',
     };
-    ctx.log(`${output}: ${formatDims(info.dims)} float32 (${outputBytes} bytes) from rate ${info.rate}, ${seconds.toFixed(3)} s, ${summary.gbPerSecond.toFixed(3)} GB/s`);
+    ctx.log(
+      `${output}: ${formatDims(info.dims)} float32 (${outputBytes} bytes) from rate ${info.rate}, ${seconds.toFixed(3)} s, ${summary.gbPerSecond.toFixed(3)} GB/s`,
+    );
     return summary;
   },
 };

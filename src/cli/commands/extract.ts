@@ -18,7 +18,15 @@ import { decodeVertices } from '../../isosurface/vertex-format.ts';
 import { meshMetrics } from '../../mc/mesh-metrics.ts';
 import { LevelStoppedError } from '../../store/pinned-level.ts';
 import { openInputSurface } from '../input.ts';
-import { CommandFailed, numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
+import {
+  CommandFailed,
+  numberListOption,
+  numberOption,
+  requiredPositional,
+  stringOption,
+  UsageError,
+  type CliCommand,
+} from '../command.ts';
 
 export interface ExtractRecord {
   iso: number;
@@ -63,7 +71,11 @@ export const extractCommand: CliCommand = {
     const budget = budgetOption(args);
     const plyPrefix = stringOption(args, 'ply');
     const gpu = await ctx.gpu();
-    const volume = await openInputSurface(ctx, gpu, input, { rate: numberOption(args, 'rate'), level: numberOption(args, 'level'), budget });
+    const volume = await openInputSurface(ctx, gpu, input, {
+      rate: numberOption(args, 'rate'),
+      level: numberOption(args, 'level'),
+      budget,
+    });
     ctx.log(`${input}: ${volume.how}`);
     const { iso } = volume;
     const records: (ExtractRecord | { iso: number; error: string })[] = [];

@@ -13,7 +13,13 @@ export const gpuInfoCommand: CliCommand = {
     const result = { adapter: gpu.adapter, features, limits };
     console.log(`adapter:  ${describeAdapter(gpu.adapter)}`);
     console.log(`features: ${features.join(', ')}`);
-    for (const key of ['maxStorageBufferBindingSize', 'maxBufferSize', 'maxComputeWorkgroupStorageSize', 'maxComputeInvocationsPerWorkgroup', 'maxComputeWorkgroupsPerDimension']) {
+    for (const key of [
+      'maxStorageBufferBindingSize',
+      'maxBufferSize',
+      'maxComputeWorkgroupStorageSize',
+      'maxComputeInvocationsPerWorkgroup',
+      'maxComputeWorkgroupsPerDimension',
+    ]) {
       console.log(`${key.padEnd(36)} ${limits[key]}`);
     }
     return result;

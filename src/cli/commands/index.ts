@@ -9,4 +9,13 @@ import { infoCommand } from './info.ts';
 import { lasCommand } from './las.ts';
 import { tiffCommand } from './tiff.ts';
 
-export const commands: CliCommand[] = [infoCommand, compressCommand, decompressCommand, extractCommand, benchCommand, gpuInfoCommand, lasCommand, tiffCommand];
+export const commands: CliCommand[] = [
+  infoCommand,
+  compressCommand,
+  decompressCommand,
+  extractCommand,
+  benchCommand,
+  gpuInfoCommand,
+  lasCommand,
+  tiffCommand,
+];

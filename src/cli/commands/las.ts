@@ -74,9 +74,11 @@ export const lasCommand: CliCommand = {
         warnings,
         loadMs: ms,
       };
-      console.log(`${name}: LAS ${h.version}, point format ${h.pointFormat}${h.compressed ? ' (LAZ)' : ''}, ${h.pointCount} points${h.hasRGB ? ', RGB' : ''}`);
+      console.log(
+        `${name}: LAS ${h.version}, point format ${h.pointFormat}${h.compressed ? ' (LAZ)' : ''}, ${h.pointCount} points${h.hasRGB ? ', RGB' : ''}`,
+      );
       console.log(`bounds   ${JSON.stringify(h.bounds.min)} .. ${JSON.stringify(h.bounds.max)}`);
-      console.log(`decoded in ${ms.toFixed(1)} ms (${((h.pointCount / ms) * 1e3 / 1e6).toFixed(2)} M points/s)`);
+      console.log(`decoded in ${ms.toFixed(1)} ms (${(((h.pointCount / ms) * 1e3) / 1e6).toFixed(2)} M points/s)`);
       return result;
     } finally {
       reader.close();

@@ -30,10 +30,14 @@ export const tiffCommand: CliCommand = {
         r.close();
       }
       const t0 = performance.now();
-      const v = await loadTiffStack(sources, { onProgress: (done, total) => (done === total || done % 64 === 0) && ctx.log(`decoded ${done} of ${total} pages`) });
+      const v = await loadTiffStack(sources, {
+        onProgress: (done, total) => (done === total || done % 64 === 0) && ctx.log(`decoded ${done} of ${total} pages`),
+      });
       const ms = performance.now() - t0;
       const p = v.pages[0];
-      const sha256 = createHash('sha256').update(new Uint8Array(v.data.buffer, v.data.byteOffset, v.data.byteLength)).digest('hex');
+      const sha256 = createHash('sha256')
+        .update(new Uint8Array(v.data.buffer, v.data.byteOffset, v.data.byteLength))
+        .digest('hex');
       const stats = sampleStats(v.data);
       const result = {
         files: args.positionals,
@@ -59,7 +63,9 @@ export const tiffCommand: CliCommand = {
         imagej: v.imagej !== undefined,
         loadMs: ms,
       };
-      console.log(`${v.files.length > 1 ? `${v.files.length} files` : v.files[0]}: ${p.width}×${p.height}×${v.pages.length} ${v.dtype}${p.samplesPerPixel > 1 ? ` ×${p.samplesPerPixel}` : ''}, ${p.compressionName}`);
+      console.log(
+        `${v.files.length > 1 ? `${v.files.length} files` : v.files[0]}: ${p.width}×${p.height}×${v.pages.length} ${v.dtype}${p.samplesPerPixel > 1 ? ` ×${p.samplesPerPixel}` : ''}, ${p.compressionName}`,
+      );
       console.log(`min ${stats.min}  max ${stats.max}  mean ${stats.mean}`);
       console.log(`sha256 ${sha256}`);
       console.log(`decoded in ${ms.toFixed(1)} ms`);

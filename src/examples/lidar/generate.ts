@@ -173,7 +173,10 @@ export interface GenerateOptions {
 }
 
 /** Generates `count` points in chunks. Resolves when all chunks were delivered. */
-export async function generatePointCloud(count: number, options: GenerateOptions): Promise<{ bounds: { min: [number, number, number]; max: [number, number, number] } }> {
+export async function generatePointCloud(
+  count: number,
+  options: GenerateOptions,
+): Promise<{ bounds: { min: [number, number, number]; max: [number, number, number] } }> {
   const scene = new Scene(options.seed ?? 7);
   const rnd = mulberry32((options.seed ?? 7) * 7919 + 1);
   const chunkSize = options.chunkSize ?? 1 << 18;

@@ -40,22 +40,57 @@ declare global {
 }
 
 const CLASS_NAMES: Record<number, string> = {
-  0: 'never classified', 1: 'unclassified', 2: 'ground', 3: 'low vegetation', 4: 'medium vegetation', 5: 'high vegetation',
-  6: 'building', 7: 'low point (noise)', 8: 'model key point', 9: 'water', 10: 'rail', 11: 'road surface', 12: 'overlap',
-  13: 'wire guard', 14: 'wire conductor', 15: 'transmission tower', 16: 'wire connector', 17: 'bridge deck', 18: 'high noise',
+  0: 'never classified',
+  1: 'unclassified',
+  2: 'ground',
+  3: 'low vegetation',
+  4: 'medium vegetation',
+  5: 'high vegetation',
+  6: 'building',
+  7: 'low point (noise)',
+  8: 'model key point',
+  9: 'water',
+  10: 'rail',
+  11: 'road surface',
+  12: 'overlap',
+  13: 'wire guard',
+  14: 'wire conductor',
+  15: 'transmission tower',
+  16: 'wire connector',
+  17: 'bridge deck',
+  18: 'high noise',
 };
 // Same palette as class_color() in shaders/points/splat.wgsl, for the legend.
 const CLASS_COLORS: Record<number, [number, number, number]> = {
-  0: [0.62, 0.62, 0.62], 1: [0.62, 0.62, 0.62], 2: [0.68, 0.52, 0.32], 3: [0.55, 0.8, 0.35], 4: [0.28, 0.68, 0.25], 5: [0.1, 0.48, 0.16],
-  6: [0.9, 0.3, 0.25], 7: [1, 0.1, 0.8], 8: [0.95, 0.85, 0.2], 9: [0.2, 0.5, 0.95], 10: [0.75, 0.45, 0.85], 11: [0.45, 0.45, 0.5],
-  12: [0.85, 0.85, 0.55], 13: [0.95, 0.65, 0.2], 14: [0.95, 0.65, 0.2], 15: [0.9, 0.9, 0.9], 16: [0.6, 0.9, 0.9], 17: [0.55, 0.35, 0.25],
+  0: [0.62, 0.62, 0.62],
+  1: [0.62, 0.62, 0.62],
+  2: [0.68, 0.52, 0.32],
+  3: [0.55, 0.8, 0.35],
+  4: [0.28, 0.68, 0.25],
+  5: [0.1, 0.48, 0.16],
+  6: [0.9, 0.3, 0.25],
+  7: [1, 0.1, 0.8],
+  8: [0.95, 0.85, 0.2],
+  9: [0.2, 0.5, 0.95],
+  10: [0.75, 0.45, 0.85],
+  11: [0.45, 0.45, 0.5],
+  12: [0.85, 0.85, 0.55],
+  13: [0.95, 0.65, 0.2],
+  14: [0.95, 0.65, 0.2],
+  15: [0.9, 0.9, 0.9],
+  16: [0.6, 0.9, 0.9],
+  17: [0.55, 0.35, 0.25],
   18: [1, 0, 0],
 };
 function classColor(c: number): string {
   let rgb = CLASS_COLORS[c];
   if (!rgb) {
     const h = (c * 0.618034) % 1;
-    rgb = [0, 2 / 3, 1 / 3].map((o) => 0.35 + 0.6 * Math.min(1, Math.max(0, Math.abs(((h + o) % 1) * 6 - 3) - 1))) as [number, number, number];
+    rgb = [0, 2 / 3, 1 / 3].map((o) => 0.35 + 0.6 * Math.min(1, Math.max(0, Math.abs(((h + o) % 1) * 6 - 3) - 1))) as [
+      number,
+      number,
+      number,
+    ];
   }
   return `rgb(${rgb.map((v) => Math.round(v * 255)).join(',')})`;
 }
@@ -244,7 +279,9 @@ async function start(): Promise<void> {
     let reader: LasReader | undefined;
     try {
       // Streamed straight into the Wasm heap: the file's only copy.
-      reader = await LasReader.open(file, file.name, (done, total) => progress.set(done / total, `${formatBytes(done)} / ${formatBytes(total)}`));
+      reader = await LasReader.open(file, file.name, (done, total) =>
+        progress.set(done / total, `${formatBytes(done)} / ${formatBytes(total)}`),
+      );
       if (token !== loadToken) return;
       progress.start(`Decoding ${file.name}`);
       const h = reader.header;
@@ -274,7 +311,10 @@ async function start(): Promise<void> {
         stats.add(c.count, c.positions!, c.intensity, c.classification);
         points.append(c.positions!, packAttributes(c.count, c.rgb, rgbShift, c.intensity, c.classification), c.count, redrawDue());
         state.pointCount = points.pointCount;
-        progress.set(reader.pointsRead / Math.max(1, h.pointCount), `${formatCount(reader.pointsRead)} / ${formatCount(h.pointCount)} points`);
+        progress.set(
+          reader.pointsRead / Math.max(1, h.pointCount),
+          `${formatCount(reader.pointsRead)} / ${formatCount(h.pointCount)} points`,
+        );
         if (reader.pointsRead === c.count) finishStyle();
         await nextFrame();
         if (token !== loadToken) return;
@@ -359,7 +399,11 @@ async function start(): Promise<void> {
       finishStyle();
       await gpu.device.queue.onSubmittedWorkDone();
       state.loadMs = performance.now() - t0;
-      setInfoList(byId('cloud-info'), [...infoRows, ['generated in', formatMs(state.loadMs)], ['GPU memory', formatBytes(points.gpuBytes)]]);
+      setInfoList(byId('cloud-info'), [
+        ...infoRows,
+        ['generated in', formatMs(state.loadMs)],
+        ['GPU memory', formatBytes(points.gpuBytes)],
+      ]);
       box.setBounds({ min: [...stats.min], max: [...stats.max] }, [0.42, 0.47, 0.55, 1]);
       updateHud();
     } finally {

@@ -79,13 +79,20 @@ export class PointLayer implements RenderLayer {
     private readonly pipeline: GPURenderPipeline,
     private readonly layout: GPUBindGroupLayout,
   ) {
-    this.uniforms = viewer.device.createBuffer({ label: 'PointLayer.style', size: 48, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
+    this.uniforms = viewer.device.createBuffer({
+      label: 'PointLayer.style',
+      size: 48,
+      usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
+    });
     this.writeStyle();
   }
 
   static async create(viewer: Viewer): Promise<PointLayer> {
     const { device } = viewer;
-    const module = await createShaderModule(device, 'PointLayer.shader', [frameSnippet, { name: 'shaders/points/splat.wgsl', code: splatWgsl }]);
+    const module = await createShaderModule(device, 'PointLayer.shader', [
+      frameSnippet,
+      { name: 'shaders/points/splat.wgsl', code: splatWgsl },
+    ]);
     const layout = device.createBindGroupLayout({
       label: 'PointLayer.layout',
       entries: [
@@ -140,8 +147,16 @@ export class PointLayer implements RenderLayer {
       if (!batch || batch.filled === batch.capacity) {
         const capacity = Math.min(BATCH_POINTS, Math.max(1, this.total - this.uploaded), 1 << 30);
         const n = this.batches.length;
-        const pos = device.createBuffer({ label: `PointLayer.positions[${n}]`, size: capacity * 12, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST });
-        const attr = device.createBuffer({ label: `PointLayer.attributes[${n}]`, size: capacity * 8, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST });
+        const pos = device.createBuffer({
+          label: `PointLayer.positions[${n}]`,
+          size: capacity * 12,
+          usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
+        });
+        const attr = device.createBuffer({
+          label: `PointLayer.attributes[${n}]`,
+          size: capacity * 8,
+          usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
+        });
         batch = {
           positions: pos,
           attributes: attr,

@@ -19,8 +19,17 @@ export class DepthPrepass {
   private texture: GPUTexture | undefined;
   private textureView: GPUTextureView | undefined;
   /** Reused every frame (the view changes only on resize): the render loop allocates no descriptors. */
-  private readonly depthAttachment: GPURenderPassDepthStencilAttachment = { view: undefined as unknown as GPUTextureView, depthClearValue: 1, depthLoadOp: 'clear', depthStoreOp: 'store' };
-  private readonly passDescriptor: GPURenderPassDescriptor = { label: 'DepthPrepass.pass', colorAttachments: [], depthStencilAttachment: this.depthAttachment };
+  private readonly depthAttachment: GPURenderPassDepthStencilAttachment = {
+    view: undefined as unknown as GPUTextureView,
+    depthClearValue: 1,
+    depthLoadOp: 'clear',
+    depthStoreOp: 'store',
+  };
+  private readonly passDescriptor: GPURenderPassDescriptor = {
+    label: 'DepthPrepass.pass',
+    colorAttachments: [],
+    depthStencilAttachment: this.depthAttachment,
+  };
   private readonly drawers: DepthDrawer[] = [];
   private readonly listeners: (() => void)[] = [];
   private readonly removeHook: () => void;

@@ -110,7 +110,14 @@ export class NeuronIsosurface {
     });
   }
 
-  static async create(gpu: GpuContext, viewer: Viewer, prepass: DepthPrepass, messages: Messages, progress: Progress, onChange: () => void): Promise<NeuronIsosurface> {
+  static async create(
+    gpu: GpuContext,
+    viewer: Viewer,
+    prepass: DepthPrepass,
+    messages: Messages,
+    progress: Progress,
+    onChange: () => void,
+  ): Promise<NeuronIsosurface> {
     const layer = await SurfaceLayer.create(viewer, { depthPrepass: true });
     prepass.add(layer);
     return new NeuronIsosurface(gpu, viewer, layer, messages, progress, onChange);
@@ -149,7 +156,8 @@ export class NeuronIsosurface {
           const [lo, hi] = iso.info.valueRange;
           return keepIso !== undefined && keepIso >= lo && keepIso <= hi ? keepIso : chooseIsovalue(ranges, iso.info.valueRange);
         },
-        onStage: (stage) => this.progress.set(stage === 'ranges' ? 0.5 : 0.75, stage === 'ranges' ? 'block ranges…' : 'extracting the surface…'),
+        onStage: (stage) =>
+          this.progress.set(stage === 'ranges' ? 0.5 : 0.75, stage === 'ranges' ? 'block ranges…' : 'extracting the surface…'),
       });
       this.install(surface);
       for (const note of opened.notes) this.messages.show(note, 'info', 15000);
@@ -212,9 +220,15 @@ export class NeuronIsosurface {
     const decoded = nx * ny * nz * 4;
     setInfoList(this.statsList, [
       ['triangles', formatCount(s.triangles)],
-      ['active blocks', `${formatCount(s.activeBlocks)} of ${formatCount(v.iso.info.blockCount)} (${formatCount(s.occupiedBlocks)} with triangles)`],
+      [
+        'active blocks',
+        `${formatCount(s.activeBlocks)} of ${formatCount(v.iso.info.blockCount)} (${formatCount(s.occupiedBlocks)} with triangles)`,
+      ],
       ['GPU time', `${formatMs(s.gpuMs)}${s.timingSource === 'timestamp-query' ? '' : ' (queue wall time)'}`],
-      ['zfp stream', `${formatBytes(v.opened.compressedBytes)} at ${v.opened.rate} bits/value (${(decoded / v.opened.compressedBytes).toFixed(1)} : 1 vs float32)`],
+      [
+        'zfp stream',
+        `${formatBytes(v.opened.compressedBytes)} at ${v.opened.rate} bits/value (${(decoded / v.opened.compressedBytes).toFixed(1)} : 1 vs float32)`,
+      ],
     ]);
     this.viewer.requestFrame();
     this.onChange();
@@ -230,7 +244,15 @@ export class NeuronIsosurface {
     this.layer.setDrawData(undefined);
     this.isoControl.setEnabled(false);
     this.statsList.replaceChildren();
-    Object.assign(this.state, { isovalue: undefined, drawnIsovalue: undefined, triangles: undefined, activeBlocks: undefined, blockCount: undefined, gpuMs: undefined, compressedBytes: undefined });
+    Object.assign(this.state, {
+      isovalue: undefined,
+      drawnIsovalue: undefined,
+      triangles: undefined,
+      activeBlocks: undefined,
+      blockCount: undefined,
+      gpuMs: undefined,
+      compressedBytes: undefined,
+    });
     this.viewer.requestFrame();
   }
 }

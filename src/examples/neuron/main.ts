@@ -211,7 +211,21 @@ async function start(): Promise<void> {
   }
   setInterval(updateHud, 500);
 
-  const showVolume = (name: string, v: { dims: Vec3; data: TiffVolume['data']; channels: number; spacing?: Vec3; unit?: string; dtype: string; files: number; decodeMs: number; loadMs: number; pages?: number }) => {
+  const showVolume = (
+    name: string,
+    v: {
+      dims: Vec3;
+      data: TiffVolume['data'];
+      channels: number;
+      spacing?: Vec3;
+      unit?: string;
+      dtype: string;
+      files: number;
+      decodeMs: number;
+      loadMs: number;
+      pages?: number;
+    },
+  ) => {
     spacing = v.spacing ?? [1, 1, 1];
     unit = v.unit ?? 'px (uncalibrated)';
     summary = volume.setVolume({ dims: v.dims, spacing, data: v.data, channels: v.channels });
@@ -226,7 +240,10 @@ async function start(): Promise<void> {
       ['samples', `${v.dtype}, range ${dataValue(0)} – ${dataValue(1)}`],
       ['voxel', `${spacing.map((s) => Number(s.toPrecision(4))).join(' × ')} ${unit}`],
       ['load time', `${formatMs(v.loadMs)} (libtiff ${formatMs(v.decodeMs)})`],
-      ['GPU texture', `${summary.textureDims.join(' × ')} ${summary.format}, ${formatBytes(summary.gpuBytes)}${reduced ? ' (reduced to fit the device)' : ''}`],
+      [
+        'GPU texture',
+        `${summary.textureDims.join(' × ')} ${summary.format}, ${formatBytes(summary.gpuBytes)}${reduced ? ' (reduced to fit the device)' : ''}`,
+      ],
     ]);
   };
 
@@ -242,16 +259,24 @@ async function start(): Promise<void> {
     const what = files.length === 1 ? files[0].name : `${files.length} TIFF files`;
     progress.start(`Decoding ${what}`);
     // Each File is streamed into the Wasm heap when its turn comes, and freed after.
-    const v = await loadTiffStack(files.map((f) => ({ name: f.name, bytes: f })), {
-      yieldBetweenPages: true,
-      onProgress: (done, total) => progress.set(done / total, `${formatCount(done)} / ${formatCount(total)} pages`),
-    });
+    const v = await loadTiffStack(
+      files.map((f) => ({ name: f.name, bytes: f })),
+      {
+        yieldBetweenPages: true,
+        onProgress: (done, total) => progress.set(done / total, `${formatCount(done)} / ${formatCount(total)} pages`),
+      },
+    );
     if (token !== loadToken) return undefined;
     progress.start('Uploading to the GPU');
     await nextFrame();
     clearDemo();
     // The isosurface reads the same samples (multi-channel stacks: their mean, as the ray marcher shows them).
-    const facts = tiffVolumeFacts(what, v, files.reduce((n, f) => n + f.size, 0), { channels: 'mean' });
+    const facts = tiffVolumeFacts(
+      what,
+      v,
+      files.reduce((n, f) => n + f.size, 0),
+      { channels: 'mean' },
+    );
     showVolume(what, {
       dims: v.dims,
       data: v.data,
@@ -264,7 +289,8 @@ async function start(): Promise<void> {
       loadMs: performance.now() - t0,
       pages: v.pages.length,
     });
-    if (v.skippedPages > 0) messages.show(`${what}: ${v.skippedPages} page(s) of another size (thumbnails, previews) were left out.`, 'info', 8000);
+    if (v.skippedPages > 0)
+      messages.show(`${what}: ${v.skippedPages} page(s) of another size (thumbnails, previews) were left out.`, 'info', 8000);
     return surface.setStack({ name: what, facts, bytes: new Uint8Array(0), spacing });
   };
 
@@ -300,7 +326,8 @@ async function start(): Promise<void> {
     const swcs = files.filter((f) => /\.swc$/i.test(f.name));
     const other = files.filter((f) => !tiffs.includes(f) && !swcs.includes(f));
     messages.clear();
-    if (other.length > 0) messages.show(`Ignored ${other.map((f) => f.name).join(', ')}: this page reads .tif/.tiff stacks and .swc traces.`, 'info', 8000);
+    if (other.length > 0)
+      messages.show(`Ignored ${other.map((f) => f.name).join(', ')}: this page reads .tif/.tiff stacks and .swc traces.`, 'info', 8000);
     state.loading = true;
     try {
       const surfaceDone = tiffs.length > 0 ? await loadStack(tiffs, token) : undefined;
@@ -309,7 +336,7 @@ async function start(): Promise<void> {
       // The volume and traces are on screen; the isosurface follows (its errors are its own messages).
       await surfaceDone;
     } catch (e) {
-      const text = e instanceof TiffError ? e.message : (e as Error).message ?? String(e);
+      const text = e instanceof TiffError ? e.message : ((e as Error).message ?? String(e));
       messages.show(`Could not load the stack. ${text}`);
     } finally {
       if (token === loadToken) {
@@ -342,7 +369,15 @@ async function start(): Promise<void> {
     fit(true);
     void surface.setStack({
       name: 'the demo cell',
-      facts: { fileName: 'demo cell (synthetic)', kind: 'raw', bytes: demo.volume.byteLength, dims: demo.dims, dtype: 'uint8', missing: [], compresses: true },
+      facts: {
+        fileName: 'demo cell (synthetic)',
+        kind: 'raw',
+        bytes: demo.volume.byteLength,
+        dims: demo.dims,
+        dtype: 'uint8',
+        missing: [],
+        compresses: true,
+      },
       bytes: demo.volume,
       spacing: demo.spacing,
     });

@@ -56,7 +56,11 @@ export class SwcLayer implements RenderLayer, DepthDrawer {
     private readonly layout: GPUBindGroupLayout,
     private readonly pipelines: Record<'line' | 'tube' | 'joint' | 'lineDepth' | 'tubeDepth' | 'jointDepth', GPURenderPipeline>,
   ) {
-    this.uniforms = viewer.device.createBuffer({ label: 'SwcLayer.uniforms', size: 16, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
+    this.uniforms = viewer.device.createBuffer({
+      label: 'SwcLayer.uniforms',
+      size: 16,
+      usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
+    });
     viewer.addBeforeFrame(() => this.writeUniforms());
   }
 
@@ -76,7 +80,12 @@ export class SwcLayer implements RenderLayer, DepthDrawer {
         label: `SwcLayer.${label}`,
         layout: pipelineLayout,
         vertex: { module, entryPoint: vs },
-        fragment: fs === undefined ? undefined : fs.endsWith('_depth') ? { module, entryPoint: fs, targets: [] } : { module, entryPoint: fs, targets: [{ format: viewer.format }] },
+        fragment:
+          fs === undefined
+            ? undefined
+            : fs.endsWith('_depth')
+              ? { module, entryPoint: fs, targets: [] }
+              : { module, entryPoint: fs, targets: [{ format: viewer.format }] },
         primitive: { topology },
         depthStencil: { format: DEPTH_FORMAT, depthWriteEnabled: true, depthCompare: 'less-equal' },
       });
@@ -154,7 +163,11 @@ export class SwcLayer implements RenderLayer, DepthDrawer {
     this.box = k > 0 ? { min, max } : undefined;
     if (!this.segments || this.segments.size < data.byteLength) {
       this.segments?.destroy();
-      this.segments = device.createBuffer({ label: 'SwcLayer.segments', size: data.byteLength, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST });
+      this.segments = device.createBuffer({
+        label: 'SwcLayer.segments',
+        size: data.byteLength,
+        usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
+      });
       this.bindGroup = device.createBindGroup({
         label: 'SwcLayer.bindGroup',
         layout: this.layout,

@@ -77,7 +77,10 @@ export function bakeTransferFunction(tf: TransferFunction): Uint8Array<ArrayBuff
     const s = i / 255;
     const [r, g, b] = colormap(tf.colormap, s);
     const a = Math.pow(s, tf.gamma);
-    out.set([r * 255, g * 255, b * 255, a * 255].map((v) => Math.round(Math.min(255, Math.max(0, v)))), i * 4);
+    out.set(
+      [r * 255, g * 255, b * 255, a * 255].map((v) => Math.round(Math.min(255, Math.max(0, v)))),
+      i * 4,
+    );
   }
   return out;
 }

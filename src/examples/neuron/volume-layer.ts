@@ -95,7 +95,11 @@ export class VolumeLayer implements RenderLayer {
     private readonly layout: GPUBindGroupLayout,
   ) {
     const { device } = viewer;
-    this.uniforms = device.createBuffer({ label: 'VolumeLayer.uniforms', size: UNIFORM_BYTES, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
+    this.uniforms = device.createBuffer({
+      label: 'VolumeLayer.uniforms',
+      size: UNIFORM_BYTES,
+      usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
+    });
     this.tfTexture = device.createTexture({
       label: 'VolumeLayer.transferFunction',
       size: [256, 1],
@@ -110,7 +114,10 @@ export class VolumeLayer implements RenderLayer {
 
   static async create(viewer: Viewer, prepass: DepthPrepass): Promise<VolumeLayer> {
     const { device } = viewer;
-    const module = await createShaderModule(device, 'VolumeLayer.shader', [frameSnippet, { name: 'shaders/volume/raymarch.wgsl', code: raymarchWgsl }]);
+    const module = await createShaderModule(device, 'VolumeLayer.shader', [
+      frameSnippet,
+      { name: 'shaders/volume/raymarch.wgsl', code: raymarchWgsl },
+    ]);
     const layout = device.createBindGroupLayout({
       label: 'VolumeLayer.layout',
       entries: [

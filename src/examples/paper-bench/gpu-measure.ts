@@ -18,7 +18,11 @@ export interface GpuDecodeTimes {
 /** Decodes the whole stream `runs` times into one GPU buffer, one submission each. */
 export async function timeGpuDecode(device: GPUDevice, decoder: ZfpDecoder, stream: ZfpGpuStream, runs: number): Promise<GpuDecodeTimes> {
   const [nx, ny, nz] = stream.info.dims;
-  const output = device.createBuffer({ label: 'paperBench.decoded', size: Math.max(4, nx * ny * nz * 4), usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC });
+  const output = device.createBuffer({
+    label: 'paperBench.decoded',
+    size: Math.max(4, nx * ny * nz * 4),
+    usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC,
+  });
   const timer = new GpuTimer(device, 4);
   try {
     const ms: number[] = [];
@@ -56,7 +60,11 @@ export async function timeNaiveMc(
   decoder: ZfpDecoder,
   stream: ZfpGpuStream,
   isovalues: number[],
-  opts: { vertexCapacity?: number; onProgress?: (done: number, total: number, last: NaiveMcResult) => void; cancelled?: () => boolean } = {},
+  opts: {
+    vertexCapacity?: number;
+    onProgress?: (done: number, total: number, last: NaiveMcResult) => void;
+    cancelled?: () => boolean;
+  } = {},
 ): Promise<NaiveMcTimes> {
   const dims = stream.info.dims as Dims3;
   const volume = decoder.decodeVolume(stream);

@@ -24,10 +24,19 @@ import { interestingRange, meanAfterFirst, timeSerialMc, timeZfpWasm, type Seria
 export interface PaperBenchApi {
   version: 1;
   info(): { userAgent: string; hardwareConcurrency: number; webgpu: boolean };
-  serialMc(req: { url: string; dims: Dims3; isovalues: number[]; methods: SerialMethod[] }): Promise<Partial<Record<SerialMethod, SerialTimes>>>;
+  serialMc(req: {
+    url: string;
+    dims: Dims3;
+    isovalues: number[];
+    methods: SerialMethod[];
+  }): Promise<Partial<Record<SerialMethod, SerialTimes>>>;
   zfpWasm(req: { url: string; runs: number }): Promise<{ ms: number[]; dims: Dims3; floatBytes: number; sample: number[] }>;
   gpuDecode(req: { url: string; runs: number }): Promise<{ ms: number[]; timing: string; floatBytes: number; adapter: string }>;
-  naiveMc(req: { url: string; isovalues: number[]; vertexCapacity?: number }): Promise<{ ms: number[]; triangles: number[]; timing: string; adapter: string }>;
+  naiveMc(req: {
+    url: string;
+    isovalues: number[];
+    vertexCapacity?: number;
+  }): Promise<{ ms: number[]; triangles: number[]; timing: string; adapter: string }>;
 }
 
 declare global {
@@ -70,7 +79,8 @@ const api: PaperBenchApi = {
   async serialMc({ url, dims, isovalues, methods }) {
     const bytes = await fetchBytes(url);
     const values = new Float32Array(bytes.buffer, bytes.byteOffset, bytes.byteLength / 4);
-    if (values.length !== dims[0] * dims[1] * dims[2]) throw new Error(`${url}: ${values.length} floats, ${dims.join('x')} needs ${dims[0] * dims[1] * dims[2]}`);
+    if (values.length !== dims[0] * dims[1] * dims[2])
+      throw new Error(`${url}: ${values.length} floats, ${dims.join('x')} needs ${dims[0] * dims[1] * dims[2]}`);
     return timeSerialMc(values, dims, isovalues, methods);
   },
   async zfpWasm({ url, runs }) {
@@ -94,7 +104,12 @@ const api: PaperBenchApi = {
     const decoder = await ZfpDecoder.create(g.device);
     try {
       const t = await timeNaiveMc(g.device, decoder, stream, isovalues, { vertexCapacity });
-      return { ms: t.results.map((r) => r.gpuMs), triangles: t.results.map((r) => r.triangles), timing: t.results[0]?.timing ?? 'none', adapter: describeAdapter(g.adapter) };
+      return {
+        ms: t.results.map((r) => r.gpuMs),
+        triangles: t.results.map((r) => r.triangles),
+        timing: t.results[0]?.timing ?? 'none',
+        adapter: describeAdapter(g.adapter),
+      };
     } finally {
       decoder.destroy();
       stream.destroy();
@@ -128,7 +143,8 @@ async function loadVolume(name: string, bytes: Uint8Array): Promise<LoadedVolume
   if (!facts.dims || !facts.dtype) throw new Error(`${name}: give a zfp file with header or a raw volume named name_XxYxZ_dtype.raw`);
   const dtype: DType = facts.dtype;
   const [x, y, z] = facts.dims;
-  if (bytes.byteLength !== x * y * z * DTYPE_BYTES[dtype]) throw new Error(`${name}: ${x}x${y}x${z} ${dtype} needs ${x * y * z * DTYPE_BYTES[dtype]} bytes, the file has ${bytes.byteLength}`);
+  if (bytes.byteLength !== x * y * z * DTYPE_BYTES[dtype])
+    throw new Error(`${name}: ${x}x${y}x${z} ${dtype} needs ${x * y * z * DTYPE_BYTES[dtype]} bytes, the file has ${bytes.byteLength}`);
   const g = await gpu();
   const stream = await compressOnGpu(g.device, bytes, dtype, facts.dims, 8, name);
   try {
@@ -168,7 +184,16 @@ async function runForm(): Promise<void> {
     'the first run of each method is left out (warm-up), as in the paper.';
   const show = (label: string, ms: number[], triangles?: number[], throughput?: string) => {
     const s = summarize(ms);
-    body.append(row([label, `${s.mean.toFixed(2)} ms`, `${s.median.toFixed(2)} ms`, s.samples.length, triangles ? Math.round(meanAfterFirst(triangles)) : '', throughput ?? '']));
+    body.append(
+      row([
+        label,
+        `${s.mean.toFixed(2)} ms`,
+        `${s.median.toFixed(2)} ms`,
+        s.samples.length,
+        triangles ? Math.round(meanAfterFirst(triangles)) : '',
+        throughput ?? '',
+      ]),
+    );
   };
   const serial = methods.filter((m): m is SerialMethod => m === 'js' || m === 'wasm');
   if (serial.length) {
@@ -193,9 +218,17 @@ async function runForm(): Promise<void> {
         show(`zfp decode, WebGPU (${t.timing})`, t.ms, undefined, mbps(t.floatBytes, t.ms));
       }
       if (methods.includes('naive')) {
-        const t = await timeNaiveMc(g.device, decoder, stream, isovalues, { onProgress: (d, n) => (status.textContent = `naive WebGPU marching cubes ${d}/${n}…`) });
-        show(`naive MC, WebGPU (${t.results[0]?.timing})`, t.results.map((r) => r.gpuMs), t.results.map((r) => r.triangles));
-        body.append(row(['naive MC, GPU memory (volume + per-cell buffers + soup)', formatBytes(t.volumeBytes + t.workingBytes), '', '', '', '']));
+        const t = await timeNaiveMc(g.device, decoder, stream, isovalues, {
+          onProgress: (d, n) => (status.textContent = `naive WebGPU marching cubes ${d}/${n}…`),
+        });
+        show(
+          `naive MC, WebGPU (${t.results[0]?.timing})`,
+          t.results.map((r) => r.gpuMs),
+          t.results.map((r) => r.triangles),
+        );
+        body.append(
+          row(['naive MC, GPU memory (volume + per-cell buffers + soup)', formatBytes(t.volumeBytes + t.workingBytes), '', '', '', '']),
+        );
       }
     } finally {
       decoder.destroy();
@@ -227,15 +260,22 @@ function setUp(): void {
   if ('gpu' in navigator) {
     gpu()
       .then((g) => {
-        byId('gpu-info').replaceChildren(...[['adapter', describeAdapter(g.adapter)], ['CPU threads', String(navigator.hardwareConcurrency)]].flatMap(([k, v]) => {
-          const dt = document.createElement('dt');
-          dt.textContent = k;
-          const dd = document.createElement('dd');
-          dd.textContent = v;
-          return [dt, dd];
-        }));
+        byId('gpu-info').replaceChildren(
+          ...[
+            ['adapter', describeAdapter(g.adapter)],
+            ['CPU threads', String(navigator.hardwareConcurrency)],
+          ].flatMap(([k, v]) => {
+            const dt = document.createElement('dt');
+            dt.textContent = k;
+            const dd = document.createElement('dd');
+            dd.textContent = v;
+            return [dt, dd];
+          }),
+        );
       })
-      .catch((e: unknown) => messages.show(`No WebGPU here (${(e as Error).message}); the serial and Wasm measurements still run.`, 'info'));
+      .catch((e: unknown) =>
+        messages.show(`No WebGPU here (${(e as Error).message}); the serial and Wasm measurements still run.`, 'info'),
+      );
   }
 }
 

@@ -45,7 +45,8 @@ export async function timeSerialMc(
         out[m]!.triangles.push(triangles);
       }
       const counts = methods.map((m) => out[m]!.triangles[q]);
-      if (counts.some((n) => n !== counts[0])) throw new Error(`serial MC methods disagree at iso ${iso}: ${methods.map((m, i) => `${m} ${counts[i]}`).join(', ')}`);
+      if (counts.some((n) => n !== counts[0]))
+        throw new Error(`serial MC methods disagree at iso ${iso}: ${methods.map((m, i) => `${m} ${counts[i]}`).join(', ')}`);
       onProgress?.(q + 1, isovalues.length);
       // Let the page repaint and the driver's protocol breathe between surfaces.
       if (q % 8 === 7) await new Promise((r) => setTimeout(r, 0));
@@ -57,7 +58,11 @@ export async function timeSerialMc(
 }
 
 /** zfp's C decoder in Wasm on a fixed-rate stream with header: ms per whole-volume decode. */
-export async function timeZfpWasm(bytes: Uint8Array, runs: number, name = 'stream'): Promise<{ ms: number[]; dims: Dims3; floatBytes: number; sample: number[] }> {
+export async function timeZfpWasm(
+  bytes: Uint8Array,
+  runs: number,
+  name = 'stream',
+): Promise<{ ms: number[]; dims: Dims3; floatBytes: number; sample: number[] }> {
   const s = await ZfpWasmStream.load(bytes, name);
   try {
     const ms: number[] = [];

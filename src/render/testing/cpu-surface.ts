@@ -12,7 +12,9 @@ export function packTriangleSoup(positions: Float32Array, dims: Dims): Uint32Arr
   const out = new Uint32Array((positions.length / 3) * 2);
   for (let t = 0; t < positions.length; t += 9) {
     // The triangle's cell: the floor of its smallest corner, per axis.
-    const cell = [0, 1, 2].map((a) => Math.min(dims[a] - 2, Math.floor(Math.min(positions[t + a], positions[t + 3 + a], positions[t + 6 + a]))));
+    const cell = [0, 1, 2].map((a) =>
+      Math.min(dims[a] - 2, Math.floor(Math.min(positions[t + a], positions[t + 3 + a], positions[t + 6 + a]))),
+    );
     const block = cell.map((c) => c >> 2);
     const id = block[0] + grid[0] * (block[1] + grid[1] * block[2]);
     for (let v = 0; v < 3; v++) {
@@ -38,7 +40,12 @@ export function packTriangleSoup(positions: Float32Array, dims: Dims): Uint32Arr
  * vertex; a neighbour outside the volume or in a block `readable` rejects
  * gives a one-sided difference. Unnormalized.
  */
-export function soupNormals(values: Float32Array, dims: Dims, positions: Float32Array, readable: (block: number) => boolean = () => true): Float32Array {
+export function soupNormals(
+  values: Float32Array,
+  dims: Dims,
+  positions: Float32Array,
+  readable: (block: number) => boolean = () => true,
+): Float32Array {
   const [nx, ny, nz] = dims;
   const grid = dims.map((n) => Math.ceil(n / 4));
   const voxel = (x: number, y: number, z: number): number | undefined => {
@@ -113,23 +120,42 @@ export interface CpuSurface {
 }
 
 /** `readable`: blocks whose voxels the normals may use (default all; the pipeline reads only cached blocks). */
-export function createCpuSurface(device: GPUDevice, values: Float32Array, dims: Dims, iso: number, readable?: (block: number) => boolean): CpuSurface {
+export function createCpuSurface(
+  device: GPUDevice,
+  values: Float32Array,
+  dims: Dims,
+  iso: number,
+  readable?: (block: number) => boolean,
+): CpuSurface {
   const mc = marchingCubes(values, dims, iso);
   const packed = packTriangleSoup(mc.positions, dims);
   const normals = encodeNormals(soupNormals(values, dims, mc.positions, readable));
   const blockGrid = dims.map((n) => Math.ceil(n / 4)) as Dims;
   const blockCount = blockGrid[0] * blockGrid[1] * blockGrid[2];
   const make = (label: string, data: ArrayBufferView, usage: number) => {
-    const buffer = device.createBuffer({ label, size: Math.max(16, Math.ceil(data.byteLength / 4) * 4), usage: usage | GPUBufferUsage.COPY_DST });
+    const buffer = device.createBuffer({
+      label,
+      size: Math.max(16, Math.ceil(data.byteLength / 4) * 4),
+      usage: usage | GPUBufferUsage.COPY_DST,
+    });
     if (data.byteLength > 0) device.queue.writeBuffer(buffer, 0, data.buffer, data.byteOffset, data.byteLength);
     return buffer;
   };
   const vertices = make('CpuSurface.vertices', packed, GPUBufferUsage.VERTEX | GPUBufferUsage.STORAGE);
   const normalBuffer = make('CpuSurface.normals', normals, GPUBufferUsage.VERTEX | GPUBufferUsage.STORAGE);
-  const drawArgs = make('CpuSurface.drawArgs', new Uint32Array([mc.triangleCount * 3, 1, 0, 0]), GPUBufferUsage.INDIRECT | GPUBufferUsage.STORAGE);
+  const drawArgs = make(
+    'CpuSurface.drawArgs',
+    new Uint32Array([mc.triangleCount * 3, 1, 0, 0]),
+    GPUBufferUsage.INDIRECT | GPUBufferUsage.STORAGE,
+  );
   const slotData = make('CpuSurface.slotData', blocksOf(values, dims), GPUBufferUsage.STORAGE);
-  const blockToSlot = make('CpuSurface.blockToSlot', Uint32Array.from({ length: blockCount }, (_, i) => i), GPUBufferUsage.STORAGE);
-  let lo = Infinity, hi = -Infinity;
+  const blockToSlot = make(
+    'CpuSurface.blockToSlot',
+    Uint32Array.from({ length: blockCount }, (_, i) => i),
+    GPUBufferUsage.STORAGE,
+  );
+  let lo = Infinity,
+    hi = -Infinity;
   for (const v of values) {
     if (v < lo) lo = v;
     if (v > hi) hi = v;

@@ -56,7 +56,14 @@ const key = (level: number, chunk: ChunkIndex) => `${level}:${chunk}`;
 function defaultSleep(ms: number, signal: AbortSignal): Promise<void> {
   return new Promise((resolve, reject) => {
     const t = setTimeout(resolve, ms);
-    signal.addEventListener('abort', () => { clearTimeout(t); reject(signal.reason); }, { once: true });
+    signal.addEventListener(
+      'abort',
+      () => {
+        clearTimeout(t);
+        reject(signal.reason);
+      },
+      { once: true },
+    );
   });
 }
 
@@ -78,7 +85,10 @@ export class ChunkFetcher {
   #busyMs = 0;
   #counts = { bytesFetched: 0, requests: 0, aborted: 0, cacheHits: 0, retries: 0, failed: 0 };
 
-  constructor(readonly source: ChunkSource, options: FetcherOptions = {}) {
+  constructor(
+    readonly source: ChunkSource,
+    options: FetcherOptions = {},
+  ) {
     this.maxInFlight = Math.max(1, options.maxInFlight ?? 8);
     this.#retries = options.retries ?? 3;
     this.#backoffMs = options.backoffMs ?? 250;
@@ -212,7 +222,10 @@ export class ChunkFetcher {
         break;
       } catch (e) {
         if (isAbort(e) || ctl.signal.aborted) break;
-        error = e instanceof StoreError ? e : new StoreError('unreachable', `chunk ${chunk} of level ${level}: ${(e as Error).message}`, { cause: e });
+        error =
+          e instanceof StoreError
+            ? e
+            : new StoreError('unreachable', `chunk ${chunk} of level ${level}: ${(e as Error).message}`, { cause: e });
         if (error.kind === 'missing-chunk' || error.kind === 'codec' || error.kind === 'layout') break; // retrying cannot help
       }
     }

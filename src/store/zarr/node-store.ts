@@ -15,6 +15,7 @@ export function isStoreUrl(location: string): boolean {
 export function storeForLocation(location: string): AsyncReadable {
   if (isStoreUrl(location)) return new FetchStore(location);
   const path = resolve(location);
-  if (!existsSync(path) || !statSync(path).isDirectory()) throw new StoreError('unreachable', `${location}: no such folder (a Zarr store is a folder or an http(s) URL)`);
+  if (!existsSync(path) || !statSync(path).isDirectory())
+    throw new StoreError('unreachable', `${location}: no such folder (a Zarr store is a folder or an http(s) URL)`);
   return new FileSystemStore(path);
 }

@@ -73,7 +73,8 @@ export function zfpChunkBytes(chunkEdge: number, rate: number): number {
 
 function codecOf(name: string, meta: Json): { rate: number; shardChunks: number } {
   const codecs = meta.codecs as Json[] | undefined;
-  if (!Array.isArray(codecs) || codecs.length === 0) throw new StoreError('codec', `${name}: no codecs (raw float32 chunks); ${CONVERT_HINT}`);
+  if (!Array.isArray(codecs) || codecs.length === 0)
+    throw new StoreError('codec', `${name}: no codecs (raw float32 chunks); ${CONVERT_HINT}`);
   let list = codecs;
   let shardChunks = 1;
   if (list.length === 1 && list[0]?.name === 'sharding_indexed') {
@@ -85,12 +86,18 @@ function codecOf(name: string, meta: Json): { rate: number; shardChunks: number 
   }
   const names = list.map((c) => String(c?.name));
   if (list.length !== 1 || names[0] !== ZFPY_CODEC) {
-    throw new StoreError('codec', `${name}: its chunks are encoded with ${names.join(' + ') || 'nothing'}, not numcodecs.zfpy fixed rate; ${CONVERT_HINT}`);
+    throw new StoreError(
+      'codec',
+      `${name}: its chunks are encoded with ${names.join(' + ') || 'nothing'}, not numcodecs.zfpy fixed rate; ${CONVERT_HINT}`,
+    );
   }
   const cfg = (list[0].configuration ?? {}) as Json;
   if (cfg.mode !== ZFPY_FIXED_RATE_MODE) {
     const kind = { 3: 'fixed precision', 4: 'fixed accuracy', 5: 'reversible' }[Number(cfg.mode)] ?? `mode ${String(cfg.mode)}`;
-    throw new StoreError('codec', `${name}: numcodecs.zfpy in ${kind} mode; only fixed rate (mode 2) gives chunks of one size that the GPU decodes; ${CONVERT_HINT}`);
+    throw new StoreError(
+      'codec',
+      `${name}: numcodecs.zfpy in ${kind} mode; only fixed rate (mode 2) gives chunks of one size that the GPU decodes; ${CONVERT_HINT}`,
+    );
   }
   const rate = Number(cfg.rate);
   if (!(rate >= 0.140625 && rate <= 32)) throw new StoreError('codec', `${name}: zfpy rate ${String(cfg.rate)} is outside 0.140625..32`);
@@ -145,7 +152,13 @@ function voxelSizeOf(attrs: Json): [number, number, number] {
   return [1, 1, 1];
 }
 
-async function openLevel(mem: MetadataMemo, storeName: string, index: number, path: string, rangesPath: string | null): Promise<StoreLevel> {
+async function openLevel(
+  mem: MetadataMemo,
+  storeName: string,
+  index: number,
+  path: string,
+  rangesPath: string | null,
+): Promise<StoreLevel> {
   const name = `${storeName} level ${index}${path === String(index) || path === '' ? '' : ` (${path})`}`;
   const key = (path ? `/${path}/zarr.json` : '/zarr.json') as AbsolutePath;
   let meta: Json;
@@ -156,7 +169,8 @@ async function openLevel(mem: MetadataMemo, storeName: string, index: number, pa
     throw describeTransportError(e, name);
   }
   if (meta.node_type !== 'array') throw new StoreError('not-a-store', `${name}: not an array`);
-  if (meta.data_type !== 'float32') throw new StoreError('codec', `${name}: values are ${String(meta.data_type)}, the GPU decoder reads float32 zfp; ${CONVERT_HINT}`);
+  if (meta.data_type !== 'float32')
+    throw new StoreError('codec', `${name}: values are ${String(meta.data_type)}, the GPU decoder reads float32 zfp; ${CONVERT_HINT}`);
   const { rate, shardChunks } = codecOf(name, meta);
   const arr = await zarr.open.v3(zarr.root(mem).resolve(path || '/'), { kind: 'array' });
   const shape = arr.shape;
@@ -167,16 +181,35 @@ async function openLevel(mem: MetadataMemo, storeName: string, index: number, pa
   const [z, y, x] = shape.slice(lead);
   const [cz, cy, cx] = chunks.slice(lead);
   if (cz !== cy || cy !== cx) throw new StoreError('layout', `${name}: chunks [${chunks.join(', ')}] are not cubes; ${CONVERT_HINT}`);
-  if (cx % 4 !== 0 || cx <= 0) throw new StoreError('layout', `${name}: chunk edge ${cx} is not a multiple of 4 (zfp's 4^3 blocks would straddle chunks); ${CONVERT_HINT} --chunk 64`);
-  if (![x, y, z].every((n) => Number.isInteger(n) && n >= 1 && n <= MAX_EDGE)) throw new StoreError('layout', `${name}: shape [${shape.join(', ')}] is not a volume this reader takes (1 to ${MAX_EDGE} voxels per axis)`);
-  if (cx > MAX_CHUNK_EDGE) throw new StoreError('layout', `${name}: chunk edge ${cx} is above ${MAX_CHUNK_EDGE}; ${CONVERT_HINT} --chunk 64`);
+  if (cx % 4 !== 0 || cx <= 0)
+    throw new StoreError(
+      'layout',
+      `${name}: chunk edge ${cx} is not a multiple of 4 (zfp's 4^3 blocks would straddle chunks); ${CONVERT_HINT} --chunk 64`,
+    );
+  if (![x, y, z].every((n) => Number.isInteger(n) && n >= 1 && n <= MAX_EDGE))
+    throw new StoreError(
+      'layout',
+      `${name}: shape [${shape.join(', ')}] is not a volume this reader takes (1 to ${MAX_EDGE} voxels per axis)`,
+    );
+  if (cx > MAX_CHUNK_EDGE)
+    throw new StoreError('layout', `${name}: chunk edge ${cx} is above ${MAX_CHUNK_EDGE}; ${CONVERT_HINT} --chunk 64`);
   const C = cx;
   const chunkGrid: [number, number, number] = [Math.ceil(x / C), Math.ceil(y / C), Math.ceil(z / C)];
   const chunkCount = chunkGrid[0] * chunkGrid[1] * chunkGrid[2];
-  if (chunkCount > MAX_CHUNKS) throw new StoreError('layout', `${name}: ${chunkGrid.join(' x ')} chunks of ${C}^3; this reader takes at most ${MAX_CHUNKS} per level (convert with a larger --chunk)`);
+  if (chunkCount > MAX_CHUNKS)
+    throw new StoreError(
+      'layout',
+      `${name}: ${chunkGrid.join(' x ')} chunks of ${C}^3; this reader takes at most ${MAX_CHUNKS} per level (convert with a larger --chunk)`,
+    );
   const chunkBytes = zfpChunkBytes(C, rate);
   return {
-    index, path, shardChunks, chunkCount, storedBytes: chunkCount * chunkBytes, rangesPath, leadingAxes: lead,
+    index,
+    path,
+    shardChunks,
+    chunkCount,
+    storedBytes: chunkCount * chunkBytes,
+    rangesPath,
+    leadingAxes: lead,
     layout: { dims: [x, y, z], chunkEdge: C, chunkGrid, rate, chunkBytes, name },
   };
 }
@@ -186,7 +219,10 @@ export function checkChunk(layout: ChunkLevelLayout, chunk: ChunkIndex, bytes: U
   const [x, y, z] = chunkCoords(layout, chunk);
   const where = `${layout.name} chunk (${x}, ${y}, ${z})`;
   if (bytes.length !== layout.chunkBytes) {
-    throw new StoreError('corrupt', `${where}: ${bytes.length} bytes, a zfp fixed-rate ${layout.chunkEdge}^3 chunk at rate ${layout.rate} has ${layout.chunkBytes}`);
+    throw new StoreError(
+      'corrupt',
+      `${where}: ${bytes.length} bytes, a zfp fixed-rate ${layout.chunkEdge}^3 chunk at rate ${layout.rate} has ${layout.chunkBytes}`,
+    );
   }
   let header;
   try {
@@ -197,10 +233,16 @@ export function checkChunk(layout: ChunkLevelLayout, chunk: ChunkIndex, bytes: U
   const C = layout.chunkEdge;
   const [nx, ny, nz] = header.size;
   if (header.scalarType !== 'float32' || header.dimensionality !== 3 || nx !== C || ny !== C || nz !== C) {
-    throw new StoreError('corrupt', `${where}: its zfp header says ${header.scalarType} ${header.size.slice(0, header.dimensionality).join('x')}, the level has float32 ${C}^3 chunks`);
+    throw new StoreError(
+      'corrupt',
+      `${where}: its zfp header says ${header.scalarType} ${header.size.slice(0, header.dimensionality).join('x')}, the level has float32 ${C}^3 chunks`,
+    );
   }
   if (header.mode.kind !== 'fixed-rate' || header.mode.maxBits !== bitsPerBlockForRate(layout.rate)) {
-    throw new StoreError('corrupt', `${where}: its zfp header says ${header.mode.kind} with ${header.mode.maxBits} bits per block, the level is fixed rate ${layout.rate}`);
+    throw new StoreError(
+      'corrupt',
+      `${where}: its zfp header says ${header.mode.kind} with ${header.mode.maxBits} bits per block, the level is fixed rate ${layout.rate}`,
+    );
   }
 }
 
@@ -213,10 +255,15 @@ export async function openZfpStore(store: AsyncReadable, name: string): Promise<
   try {
     rootJson = await mem.json('/zarr.json');
   } catch (e) {
-    if (e instanceof StoreError) throw new StoreError('not-found', `${name}: no zarr.json at its root (HTTP 404 or no such folder): not a Zarr v3 store`);
+    if (e instanceof StoreError)
+      throw new StoreError('not-found', `${name}: no zarr.json at its root (HTTP 404 or no such folder): not a Zarr v3 store`);
     throw describeTransportError(e, name);
   }
-  if (rootJson.zarr_format !== 3) throw new StoreError('not-a-store', `${name}: zarr_format ${String(rootJson.zarr_format)}; only Zarr v3 stores are read (convert a v2 store with npm run convert -- STORE --out new.zarr)`);
+  if (rootJson.zarr_format !== 3)
+    throw new StoreError(
+      'not-a-store',
+      `${name}: zarr_format ${String(rootJson.zarr_format)}; only Zarr v3 stores are read (convert a v2 store with npm run convert -- STORE --out new.zarr)`,
+    );
   const levels: StoreLevel[] = [];
   const notes: string[] = [];
   let attrs: Json = {};
@@ -235,7 +282,10 @@ export async function openZfpStore(store: AsyncReadable, name: string): Promise<
       levels.push(await openLevel(mem, name, i, paths[i], typeof rp === 'string' ? rp : null));
     }
   }
-  if (levels.some((l) => !l.rangesPath)) notes.push('no per-chunk range arrays: the first surface of a level fetches every chunk of it (ranges are computed on the GPU as chunks arrive)');
+  if (levels.some((l) => !l.rangesPath))
+    notes.push(
+      'no per-chunk range arrays: the first surface of a level fetches every chunk of it (ranges are computed on the GPU as chunks arrive)',
+    );
   const arrays = new Map<number, Promise<zarr.Array<zarr.DataType, MetadataMemo>>>();
   const arrayOf = (level: number) => {
     let a = arrays.get(level);
@@ -248,7 +298,11 @@ export async function openZfpStore(store: AsyncReadable, name: string): Promise<
   const ours = isObject(attrs.zfpzarr) ? attrs.zfpzarr : null;
   const vr = ours?.value_range as number[] | undefined;
   return {
-    name, levels, notes, meter: metered.meter, metadataBytes: metered.meter.bytes,
+    name,
+    levels,
+    notes,
+    meter: metered.meter,
+    metadataBytes: metered.meter.bytes,
     voxelSize: voxelSizeOf(attrs),
     unit: typeof ours?.unit === 'string' ? ours.unit : null,
     valueRange: Array.isArray(vr) && vr.length === 2 ? [Number(vr[0]), Number(vr[1])] : null,
@@ -261,10 +315,12 @@ export async function openZfpStore(store: AsyncReadable, name: string): Promise<
         const arr = await arrayOf(level);
         got = await arr.getChunk([...new Array<number>(L.leadingAxes).fill(0), z, y, x], opts);
       } catch (e) {
-        if (zarr.isZarritaError(e, 'CodecPipelineError')) throw new StoreError('corrupt', `${where}: ${e.message} (a damaged shard index?)`, { cause: e });
+        if (zarr.isZarritaError(e, 'CodecPipelineError'))
+          throw new StoreError('corrupt', `${where}: ${e.message} (a damaged shard index?)`, { cause: e });
         throw describeTransportError(e, where);
       }
-      if (!(got.data instanceof Uint8Array)) throw new StoreError('missing-chunk', `${where}: the chunk is missing (HTTP 404 or no file); a complete store has every chunk`);
+      if (!(got.data instanceof Uint8Array))
+        throw new StoreError('missing-chunk', `${where}: the chunk is missing (HTTP 404 or no file); a complete store has every chunk`);
       checkChunk(L.layout, chunk, got.data);
       return got.data;
     },
@@ -276,13 +332,17 @@ export async function openZfpStore(store: AsyncReadable, name: string): Promise<
         const [gx, gy, gz] = L.layout.chunkGrid;
         const s = arr.shape;
         if (arr.dtype !== 'float32' || s.length !== 4 || s[0] !== gz || s[1] !== gy || s[2] !== gx || s[3] !== 2) {
-          throw new StoreError('corrupt', `${L.layout.name}: its range array ${L.rangesPath} is ${arr.dtype} [${s.join(', ')}], expected float32 [${gz}, ${gy}, ${gx}, 2]`);
+          throw new StoreError(
+            'corrupt',
+            `${L.layout.name}: its range array ${L.rangesPath} is ${arr.dtype} [${s.join(', ')}], expected float32 [${gz}, ${gy}, ${gx}, 2]`,
+          );
         }
         const got = await zarr.get(arr, null, { opts });
         return new Float32Array(got.data as Float32Array);
       } catch (e) {
         if (e instanceof StoreError) throw e;
-        if (zarr.isZarritaError(e)) throw new StoreError('corrupt', `${L.layout.name}: its range array ${L.rangesPath}: ${(e as Error).message}`, { cause: e });
+        if (zarr.isZarritaError(e))
+          throw new StoreError('corrupt', `${L.layout.name}: its range array ${L.rangesPath}: ${(e as Error).message}`, { cause: e });
         throw describeTransportError(e, `${L.layout.name} ranges`);
       }
     },

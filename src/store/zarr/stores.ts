@@ -31,7 +31,9 @@ export class MeteredStore implements AsyncReadable {
   }
   async getRange(key: AbsolutePath, range: RangeQuery, opts?: GetOptions): Promise<Uint8Array | undefined> {
     this.meter.requests++;
-    const bytes = this.inner.getRange ? await this.inner.getRange(key, range, opts) : await this.inner.get(key, opts).then((b) => b && sliceRange(b, range));
+    const bytes = this.inner.getRange
+      ? await this.inner.getRange(key, range, opts)
+      : await this.inner.get(key, opts).then((b) => b && sliceRange(b, range));
     this.meter.bytes += bytes?.length ?? 0;
     return bytes;
   }
@@ -51,7 +53,10 @@ export interface LinkOptions {
  */
 export class SimulatedLinkStore implements AsyncReadable {
   #pipeFreeAt = 0;
-  constructor(readonly inner: AsyncReadable, readonly link: LinkOptions) {}
+  constructor(
+    readonly inner: AsyncReadable,
+    readonly link: LinkOptions,
+  ) {}
   async #delay(bytes: number, signal?: AbortSignal): Promise<void> {
     const now = performance.now();
     const start = Math.max(now + this.link.latencyMs, this.#pipeFreeAt);
@@ -59,7 +64,14 @@ export class SimulatedLinkStore implements AsyncReadable {
     this.#pipeFreeAt = end;
     await new Promise<void>((resolve, reject) => {
       const timer = setTimeout(resolve, end - now);
-      signal?.addEventListener('abort', () => { clearTimeout(timer); reject(signal.reason ?? new DOMException('aborted', 'AbortError')); }, { once: true });
+      signal?.addEventListener(
+        'abort',
+        () => {
+          clearTimeout(timer);
+          reject(signal.reason ?? new DOMException('aborted', 'AbortError'));
+        },
+        { once: true },
+      );
     });
   }
   async get(key: AbsolutePath, opts?: GetOptions): Promise<Uint8Array | undefined> {
@@ -70,7 +82,9 @@ export class SimulatedLinkStore implements AsyncReadable {
   }
   async getRange(key: AbsolutePath, range: RangeQuery, opts?: GetOptions): Promise<Uint8Array | undefined> {
     aborted(opts?.signal);
-    const bytes = this.inner.getRange ? await this.inner.getRange(key, range, opts) : await this.inner.get(key, opts).then((b) => b && sliceRange(b, range));
+    const bytes = this.inner.getRange
+      ? await this.inner.getRange(key, range, opts)
+      : await this.inner.get(key, opts).then((b) => b && sliceRange(b, range));
     await this.#delay(bytes?.length ?? 0, opts?.signal);
     return bytes;
   }

@@ -17,24 +17,68 @@ export const NB = 0xaaaaaaaa;
 export const PERM: readonly number[] = (() => {
   const order: [number, number, number][] = [
     [0, 0, 0],
-    [1, 0, 0], [0, 1, 0], [0, 0, 1],
-    [0, 1, 1], [1, 0, 1], [1, 1, 0],
-    [2, 0, 0], [0, 2, 0], [0, 0, 2],
+    [1, 0, 0],
+    [0, 1, 0],
+    [0, 0, 1],
+    [0, 1, 1],
+    [1, 0, 1],
+    [1, 1, 0],
+    [2, 0, 0],
+    [0, 2, 0],
+    [0, 0, 2],
     [1, 1, 1],
-    [2, 1, 0], [2, 0, 1], [0, 2, 1], [1, 2, 0], [1, 0, 2], [0, 1, 2],
-    [3, 0, 0], [0, 3, 0], [0, 0, 3],
-    [2, 1, 1], [1, 2, 1], [1, 1, 2],
-    [0, 2, 2], [2, 0, 2], [2, 2, 0],
-    [3, 1, 0], [3, 0, 1], [0, 3, 1], [1, 3, 0], [1, 0, 3], [0, 1, 3],
-    [1, 2, 2], [2, 1, 2], [2, 2, 1],
-    [3, 1, 1], [1, 3, 1], [1, 1, 3],
-    [3, 2, 0], [3, 0, 2], [0, 3, 2], [2, 3, 0], [2, 0, 3], [0, 2, 3],
+    [2, 1, 0],
+    [2, 0, 1],
+    [0, 2, 1],
+    [1, 2, 0],
+    [1, 0, 2],
+    [0, 1, 2],
+    [3, 0, 0],
+    [0, 3, 0],
+    [0, 0, 3],
+    [2, 1, 1],
+    [1, 2, 1],
+    [1, 1, 2],
+    [0, 2, 2],
+    [2, 0, 2],
+    [2, 2, 0],
+    [3, 1, 0],
+    [3, 0, 1],
+    [0, 3, 1],
+    [1, 3, 0],
+    [1, 0, 3],
+    [0, 1, 3],
+    [1, 2, 2],
+    [2, 1, 2],
+    [2, 2, 1],
+    [3, 1, 1],
+    [1, 3, 1],
+    [1, 1, 3],
+    [3, 2, 0],
+    [3, 0, 2],
+    [0, 3, 2],
+    [2, 3, 0],
+    [2, 0, 3],
+    [0, 2, 3],
     [2, 2, 2],
-    [3, 2, 1], [3, 1, 2], [1, 3, 2], [2, 3, 1], [2, 1, 3], [1, 2, 3],
-    [0, 3, 3], [3, 0, 3], [3, 3, 0],
-    [3, 2, 2], [2, 3, 2], [2, 2, 3],
-    [1, 3, 3], [3, 1, 3], [3, 3, 1],
-    [2, 3, 3], [3, 2, 3], [3, 3, 2],
+    [3, 2, 1],
+    [3, 1, 2],
+    [1, 3, 2],
+    [2, 3, 1],
+    [2, 1, 3],
+    [1, 2, 3],
+    [0, 3, 3],
+    [3, 0, 3],
+    [3, 3, 0],
+    [3, 2, 2],
+    [2, 3, 2],
+    [2, 2, 3],
+    [1, 3, 3],
+    [3, 1, 3],
+    [3, 3, 1],
+    [2, 3, 3],
+    [3, 2, 3],
+    [3, 3, 2],
     [3, 3, 3],
   ];
   return order.map(([i, j, k]) => i + 4 * j + 16 * k);
@@ -45,7 +89,10 @@ export const PERM: readonly number[] = (() => {
 /** LSB-first reader over 32-bit little-endian words (same bits as zfp's 64-bit words). */
 export class BitReader {
   pos: number;
-  constructor(readonly words: Uint32Array, pos = 0) {
+  constructor(
+    readonly words: Uint32Array,
+    pos = 0,
+  ) {
     this.pos = pos;
   }
   readBit(): number {
@@ -62,7 +109,10 @@ export class BitReader {
 
 export class BitWriter {
   pos: number;
-  constructor(readonly words: Uint32Array, pos = 0) {
+  constructor(
+    readonly words: Uint32Array,
+    pos = 0,
+  ) {
     this.pos = pos;
   }
   writeBit(b: number): number {
@@ -79,23 +129,53 @@ export class BitWriter {
 // ---------------------------------------------------------------- transforms
 
 function fwdLift(p: Int32Array, o: number, s: number): void {
-  let x = p[o], y = p[o + s], z = p[o + 2 * s], w = p[o + 3 * s];
-  x = (x + w) | 0; x >>= 1; w = (w - x) | 0;
-  z = (z + y) | 0; z >>= 1; y = (y - z) | 0;
-  x = (x + z) | 0; x >>= 1; z = (z - x) | 0;
-  w = (w + y) | 0; w >>= 1; y = (y - w) | 0;
-  w = (w + (y >> 1)) | 0; y = (y - (w >> 1)) | 0;
-  p[o] = x; p[o + s] = y; p[o + 2 * s] = z; p[o + 3 * s] = w;
+  let x = p[o],
+    y = p[o + s],
+    z = p[o + 2 * s],
+    w = p[o + 3 * s];
+  x = (x + w) | 0;
+  x >>= 1;
+  w = (w - x) | 0;
+  z = (z + y) | 0;
+  z >>= 1;
+  y = (y - z) | 0;
+  x = (x + z) | 0;
+  x >>= 1;
+  z = (z - x) | 0;
+  w = (w + y) | 0;
+  w >>= 1;
+  y = (y - w) | 0;
+  w = (w + (y >> 1)) | 0;
+  y = (y - (w >> 1)) | 0;
+  p[o] = x;
+  p[o + s] = y;
+  p[o + 2 * s] = z;
+  p[o + 3 * s] = w;
 }
 
 function invLift(p: Int32Array, o: number, s: number): void {
-  let x = p[o], y = p[o + s], z = p[o + 2 * s], w = p[o + 3 * s];
-  y = (y + (w >> 1)) | 0; w = (w - (y >> 1)) | 0;
-  y = (y + w) | 0; w <<= 1; w = (w - y) | 0;
-  z = (z + x) | 0; x <<= 1; x = (x - z) | 0;
-  y = (y + z) | 0; z <<= 1; z = (z - y) | 0;
-  w = (w + x) | 0; x <<= 1; x = (x - w) | 0;
-  p[o] = x; p[o + s] = y; p[o + 2 * s] = z; p[o + 3 * s] = w;
+  let x = p[o],
+    y = p[o + s],
+    z = p[o + 2 * s],
+    w = p[o + 3 * s];
+  y = (y + (w >> 1)) | 0;
+  w = (w - (y >> 1)) | 0;
+  y = (y + w) | 0;
+  w <<= 1;
+  w = (w - y) | 0;
+  z = (z + x) | 0;
+  x <<= 1;
+  x = (x - z) | 0;
+  y = (y + z) | 0;
+  z <<= 1;
+  z = (z - y) | 0;
+  w = (w + x) | 0;
+  x <<= 1;
+  x = (x - w) | 0;
+  p[o] = x;
+  p[o + s] = y;
+  p[o + 2 * s] = z;
+  p[o + 3 * s] = w;
 }
 
 export function fwdXform(p: Int32Array): void {
@@ -158,7 +238,8 @@ export function encodeBlock(values: Float32Array, bitsPerBlock: number, w: BitWr
   let n = 0;
   for (let k = 32; bits > 0 && k-- > 0; ) {
     // bit plane k as two 32-bit halves (coefficients 0..31, 32..63)
-    let lo = 0, hi = 0;
+    let lo = 0,
+      hi = 0;
     for (let i = 0; i < 32; i++) {
       lo |= ((u[i] >>> k) & 1) << i;
       hi |= ((u[i + 32] >>> k) & 1) << i;
@@ -242,7 +323,9 @@ function pad(p: Float32Array, o: number, n: number, s: number): void {
 /** Gathers block (bx, by, bz) of a float32 volume (x fastest) with zfp's padding. */
 export function gatherBlock(vol: Float32Array, dims: Dims3, bx: number, by: number, bz: number, out: Float32Array): void {
   const [X, Y, Z] = dims;
-  const nx = Math.min(4, X - 4 * bx), ny = Math.min(4, Y - 4 * by), nz = Math.min(4, Z - 4 * bz);
+  const nx = Math.min(4, X - 4 * bx),
+    ny = Math.min(4, Y - 4 * by),
+    nz = Math.min(4, Z - 4 * bz);
   for (let z = 0; z < nz; z++) {
     for (let y = 0; y < ny; y++) {
       const row = 4 * bx + X * (4 * by + y + Y * (4 * bz + z));
@@ -306,7 +389,8 @@ export function blockRanges(vol: Float32Array, dims: Dims3): Float32Array {
     for (let j = 0; j < by; j++) {
       for (let i = 0; i < bx; i++, b++) {
         // Non-finite values are skipped; no finite value: the empty range [FLT_MAX, -FLT_MAX] (as the GPU kernel).
-        let lo = FLT_MAX, hi = -FLT_MAX;
+        let lo = FLT_MAX,
+          hi = -FLT_MAX;
         for (let z = 4 * k; z < Math.min(4 * k + 4, Z); z++) {
           for (let y = 4 * j; y < Math.min(4 * j + 4, Y); y++) {
             for (let x = 4 * i; x < Math.min(4 * i + 4, X); x++) {

@@ -4,7 +4,7 @@ import { computeBlockProfile } from '../../../src/app/ui/block-profile.ts';
 describe('block profile', () => {
   it('counts, per bin centre, the blocks whose range contains it (brute force check)', () => {
     let seed = 1;
-    const rnd = () => ((seed = (seed * 1103515245 + 12345) % 2 ** 31) / 2 ** 31);
+    const rnd = () => (seed = (seed * 1103515245 + 12345) % 2 ** 31) / 2 ** 31;
     const ranges = new Float32Array(2 * 500);
     for (let b = 0; b < 500; b++) {
       const a = rnd() * 100 - 10;

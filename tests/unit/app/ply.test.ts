@@ -12,7 +12,8 @@ import type { Dims } from '../../../src/core/naming.ts';
 function sphere(n: number): Float32Array {
   const v = new Float32Array(n * n * n);
   const c = (n - 1) / 2;
-  for (let z = 0; z < n; z++) for (let y = 0; y < n; y++) for (let x = 0; x < n; x++) v[x + n * (y + n * z)] = Math.hypot(x - c, y - c, z - c);
+  for (let z = 0; z < n; z++)
+    for (let y = 0; y < n; y++) for (let x = 0; x < n; x++) v[x + n * (y + n * z)] = Math.hypot(x - c, y - c, z - c);
   return v;
 }
 
@@ -40,7 +41,8 @@ describe('PLY export', () => {
     const edges = new Set<string>();
     for (let t = 0; t < f; t++) {
       for (let k = 0; k < 3; k++) {
-        const a = mesh.indices[3 * t + k], b = mesh.indices[3 * t + ((k + 1) % 3)];
+        const a = mesh.indices[3 * t + k],
+          b = mesh.indices[3 * t + ((k + 1) % 3)];
         edges.add(a < b ? `${a},${b}` : `${b},${a}`);
       }
     }

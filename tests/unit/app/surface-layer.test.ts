@@ -20,13 +20,24 @@ function sphereVolume(n: number): Float32Array {
   // Values decrease outward (inside = value >= iso), like a density.
   const v = new Float32Array(n * n * n);
   const c = (n - 1) / 2;
-  for (let z = 0; z < n; z++) for (let y = 0; y < n; y++) for (let x = 0; x < n; x++) v[x + n * (y + n * z)] = 20 - Math.hypot(x - c, y - c, z - c);
+  for (let z = 0; z < n; z++)
+    for (let y = 0; y < n; y++) for (let x = 0; x < n; x++) v[x + n * (y + n * z)] = 20 - Math.hypot(x - c, y - c, z - c);
   return v;
 }
 
 /** The layer drawn into a SIZE x SIZE image; with `prepass`, its depth alone first into the same depth buffer. */
-async function render(device: GPUDevice, layer: SurfaceLayer, camera: ArcballCamera, layout: GPUBindGroupLayout, prepass = false): Promise<Uint8Array> {
-  const color = device.createTexture({ size: [SIZE, SIZE], format: 'rgba8unorm', usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC });
+async function render(
+  device: GPUDevice,
+  layer: SurfaceLayer,
+  camera: ArcballCamera,
+  layout: GPUBindGroupLayout,
+  prepass = false,
+): Promise<Uint8Array> {
+  const color = device.createTexture({
+    size: [SIZE, SIZE],
+    format: 'rgba8unorm',
+    usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC,
+  });
   const depth = device.createTexture({ size: [SIZE, SIZE], format: DEPTH_FORMAT, usage: GPUTextureUsage.RENDER_ATTACHMENT });
   const uniforms = device.createBuffer({ size: FRAME_UNIFORM_BYTES, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
   device.queue.writeBuffer(uniforms, 0, frameUniformData(camera, SIZE, SIZE) as Float32Array<ArrayBuffer>);
@@ -44,7 +55,12 @@ async function render(device: GPUDevice, layer: SurfaceLayer, camera: ArcballCam
   }
   const pass = encoder.beginRenderPass({
     colorAttachments: [{ view: color.createView(), clearValue: { r: 0, g: 0, b: 0, a: 1 }, loadOp: 'clear', storeOp: 'store' }],
-    depthStencilAttachment: { view: depth.createView(), depthClearValue: 1, depthLoadOp: prepass ? 'load' : 'clear', depthStoreOp: 'store' },
+    depthStencilAttachment: {
+      view: depth.createView(),
+      depthClearValue: 1,
+      depthLoadOp: prepass ? 'load' : 'clear',
+      depthStoreOp: 'store',
+    },
   });
   pass.setBindGroup(0, group);
   layer.draw(pass);
@@ -65,7 +81,9 @@ function largestStep(img: Uint8Array): number {
   let worst = 0;
   for (let y = SIZE / 2 - 12; y < SIZE / 2 + 12; y++) {
     for (let x = SIZE / 2 - 12; x < SIZE / 2 + 12; x++) {
-      const a = lum(img, x, y), b = lum(img, x + 1, y), c = lum(img, x, y + 1);
+      const a = lum(img, x, y),
+        b = lum(img, x + 1, y),
+        c = lum(img, x, y + 1);
       worst = Math.max(worst, Math.abs(a - b), Math.abs(a - c));
     }
   }
@@ -139,7 +157,8 @@ describe('SurfaceLayer', () => {
     layer.setDrawData(oneSided.data);
     const partial = await render(device, layer, camera, frameLayout);
     oneSided.destroy();
-    let covered = 0, diff = 0;
+    let covered = 0,
+      diff = 0;
     for (let i = 0; i < SIZE * SIZE; i++) {
       const a = full[4 * i] + full[4 * i + 1] + full[4 * i + 2];
       const b = partial[4 * i] + partial[4 * i + 1] + partial[4 * i + 2];
@@ -171,15 +190,19 @@ describe('SurfaceLayer', () => {
     const img = await render(device, layer, camera, frameLayout);
     // The covered pixels' bounding box, against the CPU projection of the scaled soup's vertices.
     const box = (xs: number[], ys: number[]) => [Math.min(...xs), Math.min(...ys), Math.max(...xs), Math.max(...ys)];
-    const xs: number[] = [], ys: number[] = [];
-    for (let y = 0; y < SIZE; y++) for (let x = 0; x < SIZE; x++) if (lum(img, x, y) > 0) {
-      xs.push(x);
-      ys.push(y);
-    }
+    const xs: number[] = [],
+      ys: number[] = [];
+    for (let y = 0; y < SIZE; y++)
+      for (let x = 0; x < SIZE; x++)
+        if (lum(img, x, y) > 0) {
+          xs.push(x);
+          ys.push(y);
+        }
     const drawn = box(xs, ys);
     const vp = camera.viewProjection(mat4.create());
     const soup = marchingCubes(values, dims, 11.3).positions;
-    const px: number[] = [], py: number[] = [];
+    const px: number[] = [],
+      py: number[] = [];
     for (let i = 0; i < soup.length; i += 3) {
       const c = vec4.transformMat4(vec4.create(), [soup[i], soup[i + 1] * 0.75, soup[i + 2] * 2.5, 1], vp);
       px.push(((c[0] / c[3] + 1) / 2) * SIZE - 0.5);
@@ -199,7 +222,10 @@ describe('SurfaceLayer', () => {
     const surface = createCpuSurface(device, sphereVolume(24), dims, 11.3);
     const frameLayout = createFrameBindGroupLayout(device);
     const camera = new ArcballCamera();
-    const layer = await SurfaceLayer.create({ device, format: 'rgba8unorm', frameBindGroupLayout: frameLayout, camera }, { depthPrepass: true });
+    const layer = await SurfaceLayer.create(
+      { device, format: 'rgba8unorm', frameBindGroupLayout: frameLayout, camera },
+      { depthPrepass: true },
+    );
     layer.setDrawData(surface.data);
     layer.voxelSize = [0.5, 0.5, 1.5];
     camera.fit({ min: [0, 0, 0], max: [11.5, 11.5, 34.5] });

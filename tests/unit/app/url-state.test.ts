@@ -3,7 +3,14 @@ import { decodeViewState, encodeViewState } from '../../../src/app/url-state.ts'
 
 describe('view state in the URL hash', () => {
   it('round-trips isovalue and camera', () => {
-    const s = { iso: 37.37, camera: { rotation: [0.1, 0.2, 0.3, 0.927] as [number, number, number, number], target: [1, 2, 3] as [number, number, number], distance: 250.5 } };
+    const s = {
+      iso: 37.37,
+      camera: {
+        rotation: [0.1, 0.2, 0.3, 0.927] as [number, number, number, number],
+        target: [1, 2, 3] as [number, number, number],
+        distance: 250.5,
+      },
+    };
     const back = decodeViewState('#' + encodeViewState(s));
     expect(back.iso).toBeCloseTo(37.37, 5);
     expect(back.camera?.rotation[3]).toBeCloseTo(0.927, 6);

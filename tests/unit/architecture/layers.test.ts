@@ -106,12 +106,11 @@ describe('layers of src/', () => {
   });
 
   test('the checker sees imports (it could fail)', () => {
-    expect(importsOf(`import a from './a.ts';\nexport { b } from "../b.ts";\nconst c = await import('./c.ts');\n// import d from './d.ts';\nimport 'x';\nimport wgsl from '../../shaders/e.wgsl?raw';`)).toEqual([
-      './a.ts',
-      '../b.ts',
-      './c.ts',
-      '../../shaders/e.wgsl?raw',
-    ]);
+    expect(
+      importsOf(
+        `import a from './a.ts';\nexport { b } from "../b.ts";\nconst c = await import('./c.ts');\n// import d from './d.ts';\nimport 'x';\nimport wgsl from '../../shaders/e.wgsl?raw';`,
+      ),
+    ).toEqual(['./a.ts', '../b.ts', './c.ts', '../../shaders/e.wgsl?raw']);
     expect(edges.size).toBeGreaterThan(100);
   });
 });

@@ -13,7 +13,7 @@ import { interestingRange, meanAfterFirst } from '../../../src/examples/paper-be
 import { ROOT } from '../mc/reference.ts';
 
 describe('bench:paper', () => {
-  test("every quoted figure of the paper appears verbatim in paper.tex", (ctx) => {
+  test('every quoted figure of the paper appears verbatim in paper.tex', (ctx) => {
     const tex = join(ROOT, '..', 'shared', 'reference', 'paper.tex');
     if (!existsSync(tex)) return ctx.skip('paper.tex is not next to the repository');
     expect(checkAgainstPaper(tex)).toEqual([]);
@@ -25,7 +25,7 @@ describe('bench:paper', () => {
     const v = new Float32Array(16 ** 3);
     for (let z = 0; z < 16; z++)
       for (let y = 0; y < 16; y++)
-        for (let x = 0; x < 16; x++) v[x + 16 * (y + 16 * z)] = (x * 7 + y * 3 + z) % 10 / 20 + (y >= 4 && y < 12 ? 10 + 6 * x : 0);
+        for (let x = 0; x < 16; x++) v[x + 16 * (y + 16 * z)] = ((x * 7 + y * 3 + z) % 10) / 20 + (y >= 4 && y < 12 ? 10 + 6 * x : 0);
     const [lo, hi] = interestingRange(v, dims);
     expect(lo).toBeGreaterThan(10);
     expect(hi).toBeLessThanOrEqual(101);
@@ -68,11 +68,40 @@ describe('bench:paper', () => {
       expect(s.jsNode.triangles, s.volume).toEqual(s.native!.triangles);
       if (s.wasmChromium) expect(s.wasmChromium.triangles).toEqual(s.native!.triangles);
     }
-    const ratioOf = (num: (s: (typeof r.serial)[number]) => number[], den: (s: (typeof r.serial)[number]) => number[]) => avg(r.serial.map((s) => afterFirst(num(s)) / afterFirst(den(s))));
-    close(r.headline.serial.wasmNodeVsNative, ratioOf((s) => s.wasmNode.ms, (s) => s.native!.ms), 'wasm / native');
-    close(r.headline.serial.jsNodeVsNative, ratioOf((s) => s.jsNode.ms, (s) => s.native!.ms), 'js / native');
-    close(r.headline.serial.jsNodeVsWasmNode, ratioOf((s) => s.jsNode.ms, (s) => s.wasmNode.ms), 'js / wasm');
-    close(r.headline.serial.wasmChromiumVsNative, ratioOf((s) => s.wasmChromium!.ms, (s) => s.native!.ms), 'wasm chromium / native');
+    const ratioOf = (num: (s: (typeof r.serial)[number]) => number[], den: (s: (typeof r.serial)[number]) => number[]) =>
+      avg(r.serial.map((s) => afterFirst(num(s)) / afterFirst(den(s))));
+    close(
+      r.headline.serial.wasmNodeVsNative,
+      ratioOf(
+        (s) => s.wasmNode.ms,
+        (s) => s.native!.ms,
+      ),
+      'wasm / native',
+    );
+    close(
+      r.headline.serial.jsNodeVsNative,
+      ratioOf(
+        (s) => s.jsNode.ms,
+        (s) => s.native!.ms,
+      ),
+      'js / native',
+    );
+    close(
+      r.headline.serial.jsNodeVsWasmNode,
+      ratioOf(
+        (s) => s.jsNode.ms,
+        (s) => s.wasmNode.ms,
+      ),
+      'js / wasm',
+    );
+    close(
+      r.headline.serial.wasmChromiumVsNative,
+      ratioOf(
+        (s) => s.wasmChromium!.ms,
+        (s) => s.native!.ms,
+      ),
+      'wasm chromium / native',
+    );
 
     // Naive GPU MC: its triangles are the serial MC's at the same isovalues.
     for (const n of r.naive) {
@@ -87,7 +116,8 @@ describe('bench:paper', () => {
       const s = r.serial.find((x) => x.volume === b.volume)!;
       const random = b.records.filter((x) => x.mode === 'random');
       expect(random.length).toBeGreaterThan(1);
-      for (const x of random) if (x.index < s.native!.triangles.length) expect(x.triangles, `${b.volume} #${x.index}`).toBe(s.native!.triangles[x.index]);
+      for (const x of random)
+        if (x.index < s.native!.triangles.length) expect(x.triangles, `${b.volume} #${x.index}`).toBe(s.native!.triangles[x.index]);
       const n = r.naive.find((x) => x.volume === b.volume)!;
       const same = random.filter((x) => !x.discarded && x.index < n.ms.length);
       const h = r.headline.naiveVsBlock.find((x) => x.volume === b.volume)!;
@@ -112,8 +142,16 @@ describe('bench:paper', () => {
     }
     for (const h of r.headline.zfp) {
       const zs = r.zfp.filter((z) => z.rate === h.rate);
-      close(h.webgpuVsSerial, avg(zs.map((z) => mbps(z.floatBytes, z.webgpuMs) / mbps(z.floatBytes, z.zfpyMs))), `rate ${h.rate} webgpu / serial`);
-      close(h.wasmNodeVsSerial, avg(zs.map((z) => mbps(z.floatBytes, z.wasmNodeMs) / mbps(z.floatBytes, z.zfpyMs))), `rate ${h.rate} wasm / serial`);
+      close(
+        h.webgpuVsSerial,
+        avg(zs.map((z) => mbps(z.floatBytes, z.webgpuMs) / mbps(z.floatBytes, z.zfpyMs))),
+        `rate ${h.rate} webgpu / serial`,
+      );
+      close(
+        h.wasmNodeVsSerial,
+        avg(zs.map((z) => mbps(z.floatBytes, z.wasmNodeMs) / mbps(z.floatBytes, z.zfpyMs))),
+        `rate ${h.rate} wasm / serial`,
+      );
     }
     // The report shows these numbers (its tables are written from the same JSON).
     const md = writeReport(r);

@@ -30,19 +30,37 @@ function chunkFiles(dir: string): string[] {
 
 beforeAll(() => {
   // npm run convert's script: makes the converter's Python environment on first use
-  execFileSync(process.execPath, [
-    join(repoRoot, 'scripts/convert.mjs'),
-    join(sharedData, 'volumes/neghip_66x66x66_uint8.raw'),
-    '--out', store, '--chunk', '32', '--rate', '4,6', '--quiet',
-  ], { cwd: repoRoot, stdio: 'pipe', timeout: 900_000 });
+  execFileSync(
+    process.execPath,
+    [
+      join(repoRoot, 'scripts/convert.mjs'),
+      join(sharedData, 'volumes/neghip_66x66x66_uint8.raw'),
+      '--out',
+      store,
+      '--chunk',
+      '32',
+      '--rate',
+      '4,6',
+      '--quiet',
+    ],
+    { cwd: repoRoot, stdio: 'pipe', timeout: 900_000 },
+  );
   // zfpy's decode of every chunk file, written next to it as .f32
   const python = join(repoRoot, '.venv-converter/bin/python');
-  execFileSync(python, ['-c', `
+  execFileSync(
+    python,
+    [
+      '-c',
+      `
 import sys, pathlib, zfpy
 for p in pathlib.Path(sys.argv[1]).rglob('*'):
     if p.is_file() and p.name.isdigit() and '/ranges/' not in str(p):
         zfpy.decompress_numpy(p.read_bytes()).tofile(str(p) + '.f32')
-`, store], { encoding: 'utf8' });
+`,
+      store,
+    ],
+    { encoding: 'utf8' },
+  );
 }, 900_000);
 
 afterAll(() => rmSync(work, { recursive: true, force: true }));

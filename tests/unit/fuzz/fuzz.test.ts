@@ -19,12 +19,17 @@ const targets = [...coreFuzzTargets, ...wasmFuzzTargets].filter((t) => !only || 
 const reports: ReaderReport[] = [];
 
 for (const target of targets) {
-  it(`${target.reader}: ${cases} mutated files, no crash, hang or allocation over 1 GiB`, { timeout: Math.max(300_000, cases * 2_000) }, async () => {
+  it(`${target.reader}: ${cases} mutated files, no crash, hang or allocation over 1 GiB`, {
+    timeout: Math.max(300_000, cases * 2_000),
+  }, async () => {
     const report = await runTarget(target, { casesPerReader: cases, runSeed, timeLimitMs: 20_000, allocLimitBytes: 2 ** 30 });
     reports.push(report);
     const outDir = join(import.meta.dirname, '..', '..', '..', 'test-results');
     mkdirSync(outDir, { recursive: true });
-    writeFileSync(join(outDir, `fuzz-${cases}.json`), JSON.stringify({ cases, runSeed, table: formatFuzzTable(reports), reports }, null, 2) + '\n');
+    writeFileSync(
+      join(outDir, `fuzz-${cases}.json`),
+      JSON.stringify({ cases, runSeed, table: formatFuzzTable(reports), reports }, null, 2) + '\n',
+    );
     console.log(`\n${formatFuzzTable([report])}\nrejections: ${report.topRejections.map(([m, n]) => `${n}x ${m}`).join('\n  ')}`);
     const shown = report.problems.slice(0, 8).map((p) => `#${p.index} ${p.outcome} ${p.name} (${p.mutation}): ${p.message}`);
     expect(shown, `${report.problems.length} problems`).toEqual([]);

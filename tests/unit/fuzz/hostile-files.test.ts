@@ -36,10 +36,14 @@ function ramp(): Float32Array {
 }
 
 function cli(...args: string[]) {
-  const r = spawnSync(process.execPath, ['--import', join(repoRoot, 'scripts/register-node-loaders.mjs'), join(repoRoot, 'src/cli/main.ts'), ...args], {
-    encoding: 'utf8',
-    timeout: 240_000,
-  });
+  const r = spawnSync(
+    process.execPath,
+    ['--import', join(repoRoot, 'scripts/register-node-loaders.mjs'), join(repoRoot, 'src/cli/main.ts'), ...args],
+    {
+      encoding: 'utf8',
+      timeout: 240_000,
+    },
+  );
   return { status: r.status, stderr: r.stderr, stdout: r.stdout };
 }
 
@@ -54,7 +58,7 @@ async function rejection(p: Promise<unknown>): Promise<Error> {
 
 describe('lying names', () => {
   const stream = new Uint8Array(512); // the name decides what these bytes should be
-  it('.crate0 is the zfp reader\'s error naming the file (page, CLI, `cli info`)', async () => {
+  it(".crate0 is the zfp reader's error naming the file (page, CLI, `cli info`)", async () => {
     const name = 'v_4x4x4_float32.raw.crate0.zfp';
     const e = await rejection(inspectVolumeFile(name, stream));
     expect(e).toBeInstanceOf(ZfpFormatError);
@@ -64,7 +68,12 @@ describe('lying names', () => {
   });
 
   it('huge, zero and impossible dims in the name are rejected before any allocation', async () => {
-    for (const name of ['v_99999999999999999999x2x2_float32.raw', 'v_0x4x4_uint8.raw', 'v_65537x65537x65537_float32.raw.crate8.zfp', 'v_0x4x4_float32.raw.crate8.zfp']) {
+    for (const name of [
+      'v_99999999999999999999x2x2_float32.raw',
+      'v_0x4x4_uint8.raw',
+      'v_65537x65537x65537_float32.raw.crate8.zfp',
+      'v_0x4x4_float32.raw.crate8.zfp',
+    ]) {
       const e = await rejection(inspectVolumeFile(name, stream));
       expect(e instanceof VolumeFileError || e instanceof ZfpFormatError, `${name}: ${e.name}`).toBe(true);
       expect(e.message.startsWith(`${name}: `)).toBe(true);
@@ -103,12 +112,16 @@ describe('NRRD gzip', () => {
     expect(ms).toBeLessThan(5000);
   });
 
-  it('damaged gzip is the reader\'s error naming the file', async () => {
+  it("damaged gzip is the reader's error naming the file", async () => {
     const data = new Uint8Array(2 * 3 * 4).fill(7);
     const gz = gzipSync(data);
     const cases: [string, Uint8Array, RegExp][] = [
       ['not-gzip.nrrd', data, /the gzip data is damaged after 0 of 24 bytes \(.*(incorrect header check|invalid).*\)/i],
-      ['cut.nrrd', gz.subarray(0, gz.length - 12), /the gzip data is damaged after \d+ of 24 bytes \(.*(unexpected end|end of file|incomplete).*\)/i],
+      [
+        'cut.nrrd',
+        gz.subarray(0, gz.length - 12),
+        /the gzip data is damaged after \d+ of 24 bytes \(.*(unexpected end|end of file|incomplete).*\)/i,
+      ],
     ];
     for (const [name, payload, message] of cases) {
       const file = nrrd(['type: uchar', 'dimension: 3', 'sizes: 2 3 4', 'encoding: gzip'], payload);
@@ -123,43 +136,50 @@ describe('NRRD gzip', () => {
   it('absurd sizes give the number and the limit, before any allocation', async () => {
     const file = nrrd(['type: float', 'dimension: 3', 'sizes: 100000 100000 100000', 'encoding: gzip'], gzipSync(new Uint8Array(16)));
     const e = await rejection(parseNrrd(file));
-    expect(e.message).toBe(`100000x100000x100000 float32 is 4000000000000000 bytes of samples, more than the ${NRRD_MAX_DATA_BYTES} bytes (4 GiB) this reader takes`);
+    expect(e.message).toBe(
+      `100000x100000x100000 float32 is 4000000000000000 bytes of samples, more than the ${NRRD_MAX_DATA_BYTES} bytes (4 GiB) this reader takes`,
+    );
     const huge = nrrd(['type: float', 'dimension: 3', 'sizes: 1e300 1 1', 'encoding: raw'], new Uint8Array(16));
     await expect(parseNrrd(huge)).rejects.toThrow(/more than the 4294967296 bytes/);
   });
 });
 
 describe('NaN and Inf', () => {
-  gpuTest('raw float32 with NaN/Inf: replaced before compression, counted in a notice; the value range is the finite one', async ({ gpu }) => {
-    const v = ramp();
-    v[3] = NaN;
-    v[100] = Infinity;
-    v[101] = -Infinity;
-    v[269] = NaN; // the largest finite value becomes 268
-    const opened = await openVolumeBytes(gpu.device, f32bytes(v), 'nan_9x6x5_float32.raw', { rate: 32 });
-    expect(opened.nonFinite).toMatchObject({ values: 270, nan: 2, posInf: 1, negInf: 1, finiteMin: 0, finiteMax: 268 });
-    expect(opened.notes).toEqual([
-      'nan_9x6x5_float32.raw: 4 of 270 values are not finite (2 NaN, 1 +Inf, 1 -Inf); zfp cannot store NaN or Inf, so before compressing NaN and -Inf became the smallest finite value (0, outside every surface) and +Inf became the largest (268)',
-    ]);
-    const iso = await Isosurface.create(gpu, opened.stream);
-    try {
-      // rate 32: zfp is near-lossless here; the range is the finite one (0..268), not [0, 0] or NaN
-      const [lo, hi] = checkValueRange(opened.fileName, iso.info.valueRange);
-      expect(lo).toBeCloseTo(0, 3);
-      expect(hi).toBeCloseTo(268, 3);
-      const stats = await iso.compute(134);
-      expect(stats.triangles).toBeGreaterThan(0);
-    } finally {
-      iso.destroy();
-      opened.stream.destroy();
-    }
-  });
+  gpuTest(
+    'raw float32 with NaN/Inf: replaced before compression, counted in a notice; the value range is the finite one',
+    async ({ gpu }) => {
+      const v = ramp();
+      v[3] = NaN;
+      v[100] = Infinity;
+      v[101] = -Infinity;
+      v[269] = NaN; // the largest finite value becomes 268
+      const opened = await openVolumeBytes(gpu.device, f32bytes(v), 'nan_9x6x5_float32.raw', { rate: 32 });
+      expect(opened.nonFinite).toMatchObject({ values: 270, nan: 2, posInf: 1, negInf: 1, finiteMin: 0, finiteMax: 268 });
+      expect(opened.notes).toEqual([
+        'nan_9x6x5_float32.raw: 4 of 270 values are not finite (2 NaN, 1 +Inf, 1 -Inf); zfp cannot store NaN or Inf, so before compressing NaN and -Inf became the smallest finite value (0, outside every surface) and +Inf became the largest (268)',
+      ]);
+      const iso = await Isosurface.create(gpu, opened.stream);
+      try {
+        // rate 32: zfp is near-lossless here; the range is the finite one (0..268), not [0, 0] or NaN
+        const [lo, hi] = checkValueRange(opened.fileName, iso.info.valueRange);
+        expect(lo).toBeCloseTo(0, 3);
+        expect(hi).toBeCloseTo(268, 3);
+        const stats = await iso.compute(134);
+        expect(stats.triangles).toBeGreaterThan(0);
+      } finally {
+        iso.destroy();
+        opened.stream.destroy();
+      }
+    },
+  );
 
   gpuTest('an all-NaN or all-Inf volume is refused with a clear message; float64 beyond float32 counts as Inf', async ({ gpu }) => {
     for (const fill of [NaN, Infinity, -Infinity]) {
       const e = await rejection(openVolumeBytes(gpu.device, f32bytes(new Float32Array(270).fill(fill)), 'bad_9x6x5_float32.raw'));
       expect(e).toBeInstanceOf(VolumeFileError);
-      expect(e.message).toMatch(/^bad_9x6x5_float32\.raw: all 270 values are NaN or infinite \(270 (NaN|\+Inf|-Inf)\): there is no value range/);
+      expect(e.message).toMatch(
+        /^bad_9x6x5_float32\.raw: all 270 values are NaN or infinite \(270 (NaN|\+Inf|-Inf)\): there is no value range/,
+      );
     }
     const f64 = Float64Array.from(ramp());
     f64[5] = 1e300;
@@ -171,42 +191,49 @@ describe('NaN and Inf', () => {
   gpuTest('NRRD float with NaN takes the same path as raw', async ({ gpu }) => {
     const v = ramp();
     v.fill(NaN, 0, 10);
-    const opened = await openVolumeBytes(gpu.device, nrrd(['type: float', 'dimension: 3', 'sizes: 9 6 5', 'encoding: raw', 'endian: little'], f32bytes(v)), 'n.nrrd');
+    const opened = await openVolumeBytes(
+      gpu.device,
+      nrrd(['type: float', 'dimension: 3', 'sizes: 9 6 5', 'encoding: raw', 'endian: little'], f32bytes(v)),
+      'n.nrrd',
+    );
     expect(opened.notes[0]).toMatch(/^n\.nrrd: 10 of 270 values are not finite \(10 NaN\)/);
     opened.stream.destroy();
   });
 
-  gpuTest('a zfp file that decodes to Inf/NaN: the GPU block ranges skip them, as the CPU reference does; no finite value is refused', async ({ gpu }) => {
-    // 12x4x4 = 3 blocks at rate 8 (512 bits each, header-less). Block 1's bits all set: a non-zero
-    // block with the largest exponent, whose values overflow float32.
-    const dims: [number, number, number] = [12, 4, 4];
-    const enc = await ZfpEncoder.create(gpu.device);
-    const values = Float32Array.from({ length: 12 * 16 }, (_, i) => Math.sin(i));
-    const { bytes } = await enc.compress(f32bytes(values), 'float32', dims, 8, { header: false });
-    enc.destroy();
-    bytes.fill(0xff, 64, 128);
-    const decoded = decodeVolume(toWords(bytes), dims, 512);
-    const nonFinite = decoded.filter((x) => !Number.isFinite(x)).length;
-    expect(nonFinite, 'the damaged block decodes to non-finite values').toBeGreaterThan(0);
-    const reference = blockRanges(decoded, dims);
-    const opened = await openVolumeBytes(gpu.device, bytes, 'inf_12x4x4_float32.raw.crate8.zfp');
-    const iso = await Isosurface.create(gpu, opened.stream);
-    try {
-      const ranges = await iso.readBlockRanges();
-      expect([...ranges]).toEqual([...reference]);
-      expect(ranges.every((x) => Number.isFinite(x))).toBe(true);
-      const [lo, hi] = checkValueRange(opened.fileName, iso.info.valueRange);
-      const finite = decoded.filter((x) => Number.isFinite(x));
-      expect([lo, hi]).toEqual([Math.min(...finite), Math.max(...finite)]);
-    } finally {
-      iso.destroy();
-      opened.stream.destroy();
-    }
-    // No finite value at all: every block gets the empty range [FLT_MAX, -FLT_MAX], and so does the volume.
-    const FLT_MAX = 3.4028234663852886e38;
-    expect(() => checkValueRange('inf.zfp', [FLT_MAX, -FLT_MAX])).toThrow(/^inf\.zfp: the volume has no finite values/);
-    expect(() => checkValueRange('inf.zfp', [Infinity, -Infinity])).toThrow(VolumeFileError);
-  });
+  gpuTest(
+    'a zfp file that decodes to Inf/NaN: the GPU block ranges skip them, as the CPU reference does; no finite value is refused',
+    async ({ gpu }) => {
+      // 12x4x4 = 3 blocks at rate 8 (512 bits each, header-less). Block 1's bits all set: a non-zero
+      // block with the largest exponent, whose values overflow float32.
+      const dims: [number, number, number] = [12, 4, 4];
+      const enc = await ZfpEncoder.create(gpu.device);
+      const values = Float32Array.from({ length: 12 * 16 }, (_, i) => Math.sin(i));
+      const { bytes } = await enc.compress(f32bytes(values), 'float32', dims, 8, { header: false });
+      enc.destroy();
+      bytes.fill(0xff, 64, 128);
+      const decoded = decodeVolume(toWords(bytes), dims, 512);
+      const nonFinite = decoded.filter((x) => !Number.isFinite(x)).length;
+      expect(nonFinite, 'the damaged block decodes to non-finite values').toBeGreaterThan(0);
+      const reference = blockRanges(decoded, dims);
+      const opened = await openVolumeBytes(gpu.device, bytes, 'inf_12x4x4_float32.raw.crate8.zfp');
+      const iso = await Isosurface.create(gpu, opened.stream);
+      try {
+        const ranges = await iso.readBlockRanges();
+        expect([...ranges]).toEqual([...reference]);
+        expect(ranges.every((x) => Number.isFinite(x))).toBe(true);
+        const [lo, hi] = checkValueRange(opened.fileName, iso.info.valueRange);
+        const finite = decoded.filter((x) => Number.isFinite(x));
+        expect([lo, hi]).toEqual([Math.min(...finite), Math.max(...finite)]);
+      } finally {
+        iso.destroy();
+        opened.stream.destroy();
+      }
+      // No finite value at all: every block gets the empty range [FLT_MAX, -FLT_MAX], and so does the volume.
+      const FLT_MAX = 3.4028234663852886e38;
+      expect(() => checkValueRange('inf.zfp', [FLT_MAX, -FLT_MAX])).toThrow(/^inf\.zfp: the volume has no finite values/);
+      expect(() => checkValueRange('inf.zfp', [Infinity, -Infinity])).toThrow(VolumeFileError);
+    },
+  );
 
   it('`cli extract` on an all-NaN volume exits 2 with the message; with some NaN it prints the notice and a finite range', () => {
     const dir = mkdtempSync(join(tmpdir(), 'hostile-'));
@@ -244,7 +271,10 @@ describe('SWC trees that are not trees', () => {
   });
   it('missing root and dangling parents are said', () => {
     const t = swc(['1 1 0 0 0 1 7', '2 3 1 0 0 1 1', '3 3 2 0 0 1 2']);
-    expect(t.problems).toEqual(['1 sample names a parent that is not in the file (id 1); drawn unlinked', 'no root (no sample has parent -1)']);
+    expect(t.problems).toEqual([
+      '1 sample names a parent that is not in the file (id 1); drawn unlinked',
+      'no root (no sample has parent -1)',
+    ]);
     expect([...t.parentIndex]).toEqual([-1, 0, 1]);
   });
   it('a sound tree has no problems', () => {
@@ -286,7 +316,8 @@ describe('a file after a rejected file opens correctly', () => {
           (x: unknown) => x,
         );
         // bomb.nrrd is all zeros: a valid (constant) volume of the announced size.
-        if (badName !== 'bomb.nrrd') expect(e instanceof VolumeFileError || e instanceof ZfpFormatError, `${badName}: ${String(e)}`).toBe(true);
+        if (badName !== 'bomb.nrrd')
+          expect(e instanceof VolumeFileError || e instanceof ZfpFormatError, `${badName}: ${String(e)}`).toBe(true);
         const opened = await openVolumeBytes(gpu.device, bytes, name);
         expect(opened.dims).toEqual([9, 6, 5]);
         opened.stream.destroy();

@@ -19,13 +19,57 @@ const opts = { casesPerReader: 3, runSeed: 1, timeLimitMs: 200, allocLimitBytes:
 
 describe('fuzz runner', () => {
   it('counts clean rejections, acceptances, crashes, hangs and absurd allocations', async () => {
-    expect((await runTarget(target(async (name) => { throw new ReaderError(`${name}: bad`); }), opts)).rejected).toBe(3);
-    expect((await runTarget(target(async () => 'ok'), opts)).accepted).toBe(3);
+    expect(
+      (
+        await runTarget(
+          target(async (name) => {
+            throw new ReaderError(`${name}: bad`);
+          }),
+          opts,
+        )
+      ).rejected,
+    ).toBe(3);
+    expect(
+      (
+        await runTarget(
+          target(async () => 'ok'),
+          opts,
+        )
+      ).accepted,
+    ).toBe(3);
     // the reader's error without the file's name, and a bare TypeError, are crashes
-    expect((await runTarget(target(async () => { throw new ReaderError('bad'); }), opts)).crashes).toBe(3);
-    expect((await runTarget(target(async () => { throw new TypeError('x is undefined'); }), opts)).crashes).toBe(3);
-    expect((await runTarget(target(() => new Promise(() => {})), opts)).hangs).toBe(3);
-    const alloc = await runTarget(target(async () => new Float64Array(2 ** 28)), opts);
+    expect(
+      (
+        await runTarget(
+          target(async () => {
+            throw new ReaderError('bad');
+          }),
+          opts,
+        )
+      ).crashes,
+    ).toBe(3);
+    expect(
+      (
+        await runTarget(
+          target(async () => {
+            throw new TypeError('x is undefined');
+          }),
+          opts,
+        )
+      ).crashes,
+    ).toBe(3);
+    expect(
+      (
+        await runTarget(
+          target(() => new Promise(() => {})),
+          opts,
+        )
+      ).hangs,
+    ).toBe(3);
+    const alloc = await runTarget(
+      target(async () => new Float64Array(2 ** 28)),
+      opts,
+    );
     expect(alloc.allocs).toBe(3);
     expect(alloc.problems[0].message).toMatch(/new Float64Array\(268435456\) of 2147483648 bytes requested \(limit 1073741824\)/);
     // memory that does not pass through the guarded constructors (Buffer, engine allocations): seen by sampling

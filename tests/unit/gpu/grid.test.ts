@@ -60,7 +60,10 @@ describe('grid_invocation_index', () => {
     device.queue.writeBuffer(uniform, 0, new Uint32Array([count]));
     const bind = device.createBindGroup({
       layout: pipeline.getBindGroupLayout(0),
-      entries: [{ binding: 0, resource: { buffer: hits } }, { binding: 1, resource: { buffer: uniform } }],
+      entries: [
+        { binding: 0, resource: { buffer: hits } },
+        { binding: 1, resource: { buffer: uniform } },
+      ],
     });
     const encoder = device.createCommandEncoder();
     const pass = encoder.beginComputePass();

@@ -20,8 +20,12 @@ override VALUE: u32 = 1u;
 describe('createComputePipeline (per-device cache)', () => {
   gpuTest('the same request gives the same pipeline; constants, entry point and layout tell pipelines apart', async ({ gpu }) => {
     const { device } = gpu;
-    const layout = bindGroupLayout(device, 'test.layout', [{ binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } }]);
-    expect(bindGroupLayout(device, 'test.other-label', [{ visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' }, binding: 0 }])).toBe(layout);
+    const layout = bindGroupLayout(device, 'test.layout', [
+      { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
+    ]);
+    expect(
+      bindGroupLayout(device, 'test.other-label', [{ visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' }, binding: 0 }]),
+    ).toBe(layout);
     const count = countCompilations(device);
     try {
       const [a, b] = await Promise.all([
@@ -37,7 +41,9 @@ describe('createComputePipeline (per-device cache)', () => {
       ]);
       expect(new Set([a, ...others]).size).toBe(4);
       expect(count).toMatchObject({ modules: 1, pipelines: 4 });
-      expect(await createComputePipeline(device, 'test.f', [kernel], 'fill', { constants: { VALUE: 3 }, layout: [layout] })).toBe(others[2]);
+      expect(await createComputePipeline(device, 'test.f', [kernel], 'fill', { constants: { VALUE: 3 }, layout: [layout] })).toBe(
+        others[2],
+      );
       expect(count.pipelines).toBe(4);
       expect(pipelineCacheSize(device)).toMatchObject({ modules: 1, pipelines: 4 });
     } finally {
@@ -50,7 +56,10 @@ describe('createComputePipeline (per-device cache)', () => {
     const p4 = await createComputePipeline(device, 'test.c', [kernel], 'fill', { constants: { VALUE: 4 } });
     const pass = encoder.beginComputePass();
     pass.setPipeline(p4);
-    pass.setBindGroup(0, device.createBindGroup({ layout: p4.getBindGroupLayout(0), entries: [{ binding: 0, resource: { buffer: out } }] }));
+    pass.setBindGroup(
+      0,
+      device.createBindGroup({ layout: p4.getBindGroupLayout(0), entries: [{ binding: 0, resource: { buffer: out } }] }),
+    );
     pass.dispatchWorkgroups(1);
     pass.end();
     encoder.copyBufferToBuffer(out, 0, staging, 0, 16);

@@ -56,7 +56,9 @@ describe('storage binding limit', () => {
     const blocks = stream.info.blockCount;
     const tooSmall = await Isosurface.create(gpu, stream, { maxStorageBindingBytes: blocks * 8 - 256 }).catch((e: unknown) => e);
     expect(tooSmall).toBeInstanceOf(RangeError);
-    expect((tooSmall as Error).message).toMatch(new RegExp(`^${stream.info.fileName}: ${blocks} blocks need .* per-block buffers in one storage binding; this device binds at most`));
+    expect((tooSmall as Error).message).toMatch(
+      new RegExp(`^${stream.info.fileName}: ${blocks} blocks need .* per-block buffers in one storage binding; this device binds at most`),
+    );
     stream.destroy();
   });
 });

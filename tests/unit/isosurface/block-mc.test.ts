@@ -27,11 +27,11 @@ interface Case {
 }
 
 const CASES: Case[] = [
-  { dims: [4, 4, 4], kind: 'noise' },                  // one block
-  { dims: [3, 3, 3], kind: 'noise' },                  // one partial block
-  { dims: [2, 2, 2], kind: 'noise' },                  // one cell
-  { dims: [1, 6, 5], kind: 'noise' },                  // no cells at all
-  { dims: [5, 5, 5], kind: 'noise' },                  // 8 blocks, 7 of them partial
+  { dims: [4, 4, 4], kind: 'noise' }, // one block
+  { dims: [3, 3, 3], kind: 'noise' }, // one partial block
+  { dims: [2, 2, 2], kind: 'noise' }, // one cell
+  { dims: [1, 6, 5], kind: 'noise' }, // no cells at all
+  { dims: [5, 5, 5], kind: 'noise' }, // 8 blocks, 7 of them partial
   { dims: [9, 13, 6], kind: 'noise', options: { maxWorkgroupsPerDimension: 3 } }, // 2D/3D grids
   { dims: [17, 3, 11], kind: 'blobs', options: { initialCacheSlots: 1, initialVertexCapacity: 1 } }, // growth
   { dims: [16, 16, 16], kind: 'blobs' },

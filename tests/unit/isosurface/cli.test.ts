@@ -13,10 +13,14 @@ import { repoRoot, runPython, sharedData } from '../../helpers/python.ts';
 import { loadMcReference } from '../mc/reference.ts';
 
 function cli(...args: string[]) {
-  const r = spawnSync(process.execPath, ['--import', join(repoRoot, 'scripts/register-node-loaders.mjs'), join(repoRoot, 'src/cli/main.ts'), ...args], {
-    encoding: 'utf8',
-    timeout: 240_000,
-  });
+  const r = spawnSync(
+    process.execPath,
+    ['--import', join(repoRoot, 'scripts/register-node-loaders.mjs'), join(repoRoot, 'src/cli/main.ts'), ...args],
+    {
+      encoding: 'utf8',
+      timeout: 240_000,
+    },
+  );
   return { status: r.status, stderr: r.stderr, stdout: r.stdout };
 }
 
@@ -28,7 +32,18 @@ describe('isosurface CLI', () => {
   it('extract: VTK figures, kept cache, PLY files', () => {
     const isos = reference.isosurfaces.map((s) => s.iso_nominal);
     const out = join(dir, 'extract.json');
-    const r = cli('extract', join(sharedData, file), '--iso', [...isos, isos[isos.length - 1]].join(','), '--rate', '20', '--ply', join(dir, 'neghip'), '--json', out);
+    const r = cli(
+      'extract',
+      join(sharedData, file),
+      '--iso',
+      [...isos, isos[isos.length - 1]].join(','),
+      '--rate',
+      '20',
+      '--ply',
+      join(dir, 'neghip'),
+      '--json',
+      out,
+    );
     expect(r.status, r.stderr).toBe(0);
     const result = JSON.parse(readFileSync(out, 'utf8'));
     expect(result.dims).toEqual([66, 66, 66]);
@@ -84,10 +99,15 @@ print(json.dumps({'faces': nf, 'area': area}))
     expect(result.memoryBudgetBytes).toBe(1.75 * 2 ** 20);
     const [ok, failed, again] = result.isosurfaces;
     expect(ok.triangles).toBeGreaterThan(0);
-    expect(failed).toEqual({ iso: 20.5, error: expect.stringMatching(/^the surface at iso 20\.5 needs [\d.]+ MB .*the budget is 1\.75 MB/) });
+    expect(failed).toEqual({
+      iso: 20.5,
+      error: expect.stringMatching(/^the surface at iso 20\.5 needs [\d.]+ MB .*the budget is 1\.75 MB/),
+    });
     expect(again.triangles).toBe(ok.triangles);
     expect(r.stderr).toContain(`error: ${failed.error}`);
-    expect(r.stderr).toMatch(/error: 1 of 3 isosurfaces did not fit the GPU memory budget of 1\.75 MB \(iso 20\.5\); raise it with --cache-budget MB/);
+    expect(r.stderr).toMatch(
+      /error: 1 of 3 isosurfaces did not fit the GPU memory budget of 1\.75 MB \(iso 20\.5\); raise it with --cache-budget MB/,
+    );
   });
 
   it('bench: records and summaries, the same counts for the same seed', () => {
@@ -103,9 +123,14 @@ print(json.dumps({'faces': nf, 'area': area}))
     expect(Object.keys(a)).toEqual(['volume', 'adapter', 'options', 'records', 'summaries']);
     expect(a.options).toMatchObject({ modes: ['random', 'sweep-down'], count: 6, seed: 11, range: [10, 120] });
     expect(a.records).toHaveLength(12);
-    expect(a.summaries.map((s: { mode: string; count: number }) => [s.mode, s.count])).toEqual([['random', 5], ['sweep-down', 5]]);
+    expect(a.summaries.map((s: { mode: string; count: number }) => [s.mode, s.count])).toEqual([
+      ['random', 5],
+      ['sweep-down', 5],
+    ]);
     const counts = (run: typeof a) =>
-      run.records.map((r: Record<string, number | string>) => [r.mode, r.iso, r.activeBlocks, r.newBlocks, r.occupiedBlocks, r.triangles, r.cacheSlots].join());
+      run.records.map((r: Record<string, number | string>) =>
+        [r.mode, r.iso, r.activeBlocks, r.newBlocks, r.occupiedBlocks, r.triangles, r.cacheSlots].join(),
+      );
     expect(counts(a)).toEqual(counts(b));
     // each mode starts cold
     for (const mode of ['random', 'sweep-down']) {

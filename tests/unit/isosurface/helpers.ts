@@ -47,7 +47,13 @@ export function makeField(dims: Dims, seed: number, kind: FieldKind): Float32Arr
 }
 
 /** Compresses a float32 volume on the GPU (with zfp's header); the stream stays there. */
-export async function compressVolume(device: GPUDevice, values: Float32Array, dims: Dims, rate: number, maxShardBytes?: number): Promise<ZfpGpuStream> {
+export async function compressVolume(
+  device: GPUDevice,
+  values: Float32Array,
+  dims: Dims,
+  rate: number,
+  maxShardBytes?: number,
+): Promise<ZfpGpuStream> {
   const encoder = await ZfpEncoder.create(device);
   try {
     return await encoder.compressToStream(new Uint8Array(values.buffer, values.byteOffset, values.byteLength), 'float32', dims, rate, {
@@ -68,7 +74,9 @@ export async function compressVolume(device: GPUDevice, values: Float32Array, di
  */
 const testEnv = (globalThis as { process?: { env: Record<string, string | undefined> } }).process?.env ?? {};
 export const testPrimitivePath = pathFromEnv('ZFPISO_KERNEL_PATH', testEnv.ZFPISO_KERNEL_PATH);
-export const testDecoderPath = testEnv.ZFPISO_DECODER_PATH ? pathFromEnv('ZFPISO_DECODER_PATH', testEnv.ZFPISO_DECODER_PATH) : testPrimitivePath;
+export const testDecoderPath = testEnv.ZFPISO_DECODER_PATH
+  ? pathFromEnv('ZFPISO_DECODER_PATH', testEnv.ZFPISO_DECODER_PATH)
+  : testPrimitivePath;
 /** Isosurface options that apply the forced kernel families. */
 export const testKernelOptions = { zfpDecoderPath: testDecoderPath, primitivePath: testPrimitivePath } as const;
 

@@ -25,7 +25,11 @@ describe('LRU block cache', () => {
     const decoded = await decodeVolume(device, stream);
     const ranges = blockRanges(decoded, dims);
     const initialSlots = 12;
-    const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: initialSlots, initialVertexCapacity: 1 << 16, ...testKernelOptions });
+    const iso = await Isosurface.create(gpu, stream, {
+      initialCacheSlots: initialSlots,
+      initialVertexCapacity: 1 << 16,
+      ...testKernelOptions,
+    });
     if (testDecoderPath !== 'auto') expect(iso.pipeline.parts.decoder.path, 'forced decoder path').toBe(testDecoderPath);
     if (testPrimitivePath !== 'auto') {
       const { scan, slotScan, compact, compactIds } = iso.pipeline.parts;
@@ -41,7 +45,27 @@ describe('LRU block cache', () => {
     const at = (f: number) => Math.fround(lo + (hi - lo) * f);
     // nested surfaces up and down, repeats, jumps, a reset, and surfaces
     // larger than the cache (growth); fractions of the value range
-    const script: (number | 'reset')[] = [0.9, 0.8, 0.7, 0.85, 0.6, 0.95, 0.5, 0.9, 0.3, 0.3, 0.75, 'reset', 0.65, 0.2, 0.92, 0.1, 0.55, 0.05, 0.88];
+    const script: (number | 'reset')[] = [
+      0.9,
+      0.8,
+      0.7,
+      0.85,
+      0.6,
+      0.95,
+      0.5,
+      0.9,
+      0.3,
+      0.3,
+      0.75,
+      'reset',
+      0.65,
+      0.2,
+      0.92,
+      0.1,
+      0.55,
+      0.05,
+      0.88,
+    ];
     let evictions = 0;
     let growths = 0;
     let hits = 0;

@@ -43,11 +43,17 @@ struct View { grid: vec3u, _pad: u32, extent: vec3f, _pad2: f32 }
   const view = device.createBuffer({ size: 32, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
   device.queue.writeBuffer(view, 0, new Uint32Array([...info.blockGrid, 0]));
   device.queue.writeBuffer(view, 16, new Float32Array(info.dims.map((n) => n - 1)));
-  const target = device.createTexture({ size: [SIZE, SIZE], format: 'rgba8unorm', usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC });
+  const target = device.createTexture({
+    size: [SIZE, SIZE],
+    format: 'rgba8unorm',
+    usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC,
+  });
   const group = device.createBindGroup({ layout: pipeline.getBindGroupLayout(0), entries: [{ binding: 0, resource: { buffer: view } }] });
   return {
     encodeDraw(encoder: GPUCommandEncoder, data: IsosurfaceDrawData) {
-      const pass = encoder.beginRenderPass({ colorAttachments: [{ view: target.createView(), loadOp: 'clear', storeOp: 'store', clearValue: [0, 0, 0, 1] }] });
+      const pass = encoder.beginRenderPass({
+        colorAttachments: [{ view: target.createView(), loadOp: 'clear', storeOp: 'store', clearValue: [0, 0, 0, 1] }],
+      });
       pass.setPipeline(pipeline);
       pass.setBindGroup(0, group);
       for (const s of data.shards) {

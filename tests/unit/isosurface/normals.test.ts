@@ -25,7 +25,10 @@ function decodeNormal(packed: number): [number, number, number] {
 }
 
 describe('vertex normals', () => {
-  for (const [kind, dims, seed] of [['blobs', [29, 23, 19], 3], ['noise', [13, 11, 9], 8]] as const) {
+  for (const [kind, dims, seed] of [
+    ['blobs', [29, 23, 19], 3],
+    ['noise', [13, 11, 9], 8],
+  ] as const) {
     gpuTest(`${kind} ${dims.join('x')}: GPU normals = CPU gradient rule at every vertex`, async ({ gpu }) => {
       const { device } = gpu;
       const d = [...dims] as Dims;

@@ -50,7 +50,12 @@ function instrument(device: GPUDevice) {
 describe('pipelined scrubbing', () => {
   gpuTest('back-to-back surfaces are submitted without waiting for maps; each statistic is its own surface', async ({ gpu }) => {
     const { stream, decoded } = await setup(gpu.device);
-    const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: 1 << 16, initialVertexCapacity: 1 << 20, maxSurfacesInFlight: 3, ...testKernelOptions });
+    const iso = await Isosurface.create(gpu, stream, {
+      initialCacheSlots: 1 << 16,
+      initialVertexCapacity: 1 << 20,
+      maxSurfacesInFlight: 3,
+      ...testKernelOptions,
+    });
     const [lo, hi] = iso.info.valueRange;
     const values = [0.2, 0.55, 0.3, 0.7, 0.45].map((f) => Math.fround(lo + f * (hi - lo)));
     await iso.compute(values[0]); // pipelines warm

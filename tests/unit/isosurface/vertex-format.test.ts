@@ -43,11 +43,14 @@ describe('vertex format', () => {
       for (let a = 0; a < 3; a++) locals[4 * v + a] = v < 8 ? [0, 4, 2, 1.0019550323486328][v % 4] : random() * 4;
       ids[v] = Math.floor(random() * grid[0] * grid[1] * grid[2]);
     }
-    const pipeline = await createComputePipeline(device, 'test.vertexFormat', [
-      vertexFormatSnippet,
-      {
-        name: 'test/vertex_format.wgsl',
-        code: /* wgsl */ `
+    const pipeline = await createComputePipeline(
+      device,
+      'test.vertexFormat',
+      [
+        vertexFormatSnippet,
+        {
+          name: 'test/vertex_format.wgsl',
+          code: /* wgsl */ `
 @group(0) @binding(0) var<storage, read> locals: array<vec4f>;
 @group(0) @binding(1) var<storage, read> ids: array<u32>;
 @group(0) @binding(2) var<storage, read_write> packed: array<u32>;
@@ -59,8 +62,10 @@ describe('vertex format', () => {
   packed[v] = p;
   decoded[v] = vec4f(decode_vertex_position(p, ids[v], vec3u(${grid.join('u, ')}u)), 0.0);
 }`,
-      },
-    ], 'main');
+        },
+      ],
+      'main',
+    );
     const make = (data: ArrayBufferView | number) => {
       const size = typeof data === 'number' ? data : data.byteLength;
       const b = device.createBuffer({ size, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST });
@@ -71,7 +76,13 @@ describe('vertex format', () => {
     const encoder = device.createCommandEncoder();
     const pass = encoder.beginComputePass();
     pass.setPipeline(pipeline);
-    pass.setBindGroup(0, device.createBindGroup({ layout: pipeline.getBindGroupLayout(0), entries: buffers.map((buffer, binding) => ({ binding, resource: { buffer } })) }));
+    pass.setBindGroup(
+      0,
+      device.createBindGroup({
+        layout: pipeline.getBindGroupLayout(0),
+        entries: buffers.map((buffer, binding) => ({ binding, resource: { buffer } })),
+      }),
+    );
     pass.dispatchWorkgroups(n / 64);
     pass.end();
     device.queue.submit([encoder.finish()]);

@@ -69,8 +69,12 @@ export async function checkAgainstVtk(gpu: GpuContext, entries: McVolume[], cach
           expect(Math.abs(m.bbox!.min[a] - vtk.bbox!.min[a]), what).toBeLessThanOrEqual(1);
           expect(Math.abs(m.bbox!.max[a] - vtk.bbox!.max[a]), what).toBeLessThanOrEqual(1);
         }
-        const bboxError = Math.max(...[0, 1, 2].flatMap((a) => [Math.abs(m.bbox!.min[a] - vtk.bbox!.min[a]), Math.abs(m.bbox!.max[a] - vtk.bbox!.max[a])]));
-        log.push(`${what}: ${stats.triangles} triangles (= VTK), area ${((m.area / vtk.area - 1) * 100).toExponential(1)}%, bbox within ${bboxError.toFixed(4)}; ${stats.activeBlocks} active, ${stats.occupiedBlocks} occupied, ${stats.gpuMs.toFixed(0)} ms GPU`);
+        const bboxError = Math.max(
+          ...[0, 1, 2].flatMap((a) => [Math.abs(m.bbox!.min[a] - vtk.bbox!.min[a]), Math.abs(m.bbox!.max[a] - vtk.bbox!.max[a])]),
+        );
+        log.push(
+          `${what}: ${stats.triangles} triangles (= VTK), area ${((m.area / vtk.area - 1) * 100).toExponential(1)}%, bbox within ${bboxError.toFixed(4)}; ${stats.activeBlocks} active, ${stats.occupiedBlocks} occupied, ${stats.gpuMs.toFixed(0)} ms GPU`,
+        );
       }
     }
   } finally {

@@ -28,7 +28,10 @@ test('mc.json: every volume is covered here or in vtk-bonsai.test.ts', () => {
 });
 
 describe('isosurfaces of the shared volumes = vtkMarchingCubes', () => {
-  for (const group of groupByData(volumes.filter((v) => !v.file.includes('bonsai')), dataKey)) {
+  for (const group of groupByData(
+    volumes.filter((v) => !v.file.includes('bonsai')),
+    dataKey,
+  )) {
     gpuTest(group.map((v) => v.file).join(' = '), async ({ gpu }) => {
       const log = await checkAgainstVtk(gpu, group, cacheDir);
       console.log(log.join('\n'));

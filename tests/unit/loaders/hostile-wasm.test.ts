@@ -50,7 +50,11 @@ async function tiffStillWorks(): Promise<void> {
   const e = tiffExpected['imagejs_stack.tif'];
   const v = await loadTiffStack({ name: 'imagejs_stack.tif', bytes: tif('imagejs_stack.tif') });
   expect(v.dims).toEqual([e.width, e.height, e.pages]);
-  expect(createHash('sha256').update(new Uint8Array(v.data.buffer, v.data.byteOffset, v.data.byteLength)).digest('hex')).toBe(e.decoded.sha256_tifffile_layout);
+  expect(
+    createHash('sha256')
+      .update(new Uint8Array(v.data.buffer, v.data.byteOffset, v.data.byteLength))
+      .digest('hex'),
+  ).toBe(e.decoded.sha256_tifffile_layout);
 }
 
 /** A minimal LAS 1.4 file, point format 6, `n` points of `recordLength` bytes (extra bytes patterned). */
@@ -101,7 +105,11 @@ describe('LAS/LAZ', () => {
       expect(c.count * 16388).toBeLessThanOrEqual(64 << 20);
       const want = bytes.subarray(375 + at * 16388, 375 + (at + c.count) * 16388);
       // Buffer.equals: a deep toEqual over 64 MiB would take minutes.
-      expect(Buffer.from(c.records!.buffer, c.records!.byteOffset, c.records!.byteLength).equals(Buffer.from(want.buffer, want.byteOffset, want.byteLength))).toBe(true);
+      expect(
+        Buffer.from(c.records!.buffer, c.records!.byteOffset, c.records!.byteLength).equals(
+          Buffer.from(want.buffer, want.byteOffset, want.byteLength),
+        ),
+      ).toBe(true);
     }
     expect(at).toBe(n);
     expect(r.warnings).toEqual([]);
@@ -115,11 +123,15 @@ describe('LAS/LAZ', () => {
     for (const name of ['laspy_simple.las', 'laspy_simple.laz']) {
       const far = las(name);
       new DataView(far.buffer, far.byteOffset).setUint32(96, 0x7fff_ff00, true);
-      expect((await lasRejects(far, `far-${name}`)).message).toMatch(/the point data is said to start at byte 2147483392, past the end of the file/);
+      expect((await lasRejects(far, `far-${name}`)).message).toMatch(
+        /the point data is said to start at byte 2147483392, past the end of the file/,
+      );
       await lasStillWorks();
       const vlrs = las(name);
       new DataView(vlrs.buffer, vlrs.byteOffset).setUint32(100, 0xffff_fff0, true);
-      expect((await lasRejects(vlrs, `vlrs-${name}`)).message).toMatch(/announces 4294967280 variable-length records, but record \d+ does not fit/);
+      expect((await lasRejects(vlrs, `vlrs-${name}`)).message).toMatch(
+        /announces 4294967280 variable-length records, but record \d+ does not fit/,
+      );
       await lasStillWorks();
     }
     // LASzip's own VLR claiming more compressed items than it holds (LASzip read past it and trapped).
@@ -127,7 +139,9 @@ describe('LAS/LAZ', () => {
     const at = Buffer.from(items).indexOf('laszip encoded');
     expect(at).toBeGreaterThan(0);
     new DataView(items.buffer, items.byteOffset).setUint16(at - 2 + 54 + 32, 32768, true);
-    expect((await lasRejects(items, 'items.laz')).message).toMatch(/^items\.laz: corrupt LAZ header: the compression record \(\d+ bytes\) lists 32768 items/);
+    expect((await lasRejects(items, 'items.laz')).message).toMatch(
+      /^items\.laz: corrupt LAZ header: the compression record \(\d+ bytes\) lists 32768 items/,
+    );
     await lasStillWorks();
     expect(await loadLasWasm()).toBe(m); // nothing failed inside the module
     expect(m.HEAPU8.buffer.byteLength - heapBefore).toBeLessThan(64 << 20);
@@ -147,7 +161,9 @@ describe('LAS/LAZ', () => {
     for (const chunks of [2 ** 25 + 3, 2 ** 29, 0xffff_ffff]) {
       const b = las(name);
       new DataView(b.buffer, b.byteOffset).setUint32(tableOf(b) + 4, chunks, true);
-      expect((await lasRejects(b, `chunks-${name}`)).message).toMatch(new RegExp(`corrupt LAZ file: the chunk table announces ${chunks} chunks for 110000 points`));
+      expect((await lasRejects(b, `chunks-${name}`)).message).toMatch(
+        new RegExp(`corrupt LAZ file: the chunk table announces ${chunks} chunks for 110000 points`),
+      );
       await lasStillWorks();
     }
     expect(await loadLasWasm()).toBe(m); // nothing failed inside the module
@@ -171,7 +187,9 @@ describe('LAS/LAZ', () => {
     const laz = las('laspy_simple.laz');
     new DataView(laz.buffer, laz.byteOffset).setUint32(107, 0xffff_ffff, true);
     expect((await lasRejects(laz, 'count-1.laz')).message).toMatch(/^count-1\.laz: cannot read point 1066 of 4294967295/);
-    await expect(loadPointCloud(laz, 'count-1.laz')).rejects.toThrow(/^count-1\.laz: the file has 4,294,967,295 points .* more than this reader loads at once \(50,000,000\)/);
+    await expect(loadPointCloud(laz, 'count-1.laz')).rejects.toThrow(
+      /^count-1\.laz: the file has 4,294,967,295 points .* more than this reader loads at once \(50,000,000\)/,
+    );
     await lasStillWorks();
   });
 
@@ -197,7 +215,10 @@ describe('LAS/LAZ', () => {
       writeFileSync(join(dir, 'shrunk.las'), bytes);
       console.log = () => undefined;
       console.error = (s: string) => printed.push(s);
-      const r = (await lasCommand.run({ gpu: () => Promise.reject(new Error('no GPU')), log: () => undefined }, { values: {}, positionals: [join(dir, 'shrunk.las')] })) as {
+      const r = (await lasCommand.run(
+        { gpu: () => Promise.reject(new Error('no GPU')), log: () => undefined },
+        { values: {}, positionals: [join(dir, 'shrunk.las')] },
+      )) as {
         warnings: string[];
       };
       expect(r.warnings).toEqual(pc.warnings);
@@ -253,8 +274,15 @@ function makeTiff(o: { width: number; height: number; bits: number; pages: numbe
     dv.setUint16(at, entries, true);
     at += 2;
     const tags: [number, number, number][] = [
-      [256, 4, o.width], [257, 4, o.height], [258, 3, o.bits], [259, 3, o.compression ?? 1], [262, 3, 1],
-      [273, 4, dataAt + p * o.stripBytes], [277, 3, 1], [278, 4, o.height], [279, 4, o.stripBytes],
+      [256, 4, o.width],
+      [257, 4, o.height],
+      [258, 3, o.bits],
+      [259, 3, o.compression ?? 1],
+      [262, 3, 1],
+      [273, 4, dataAt + p * o.stripBytes],
+      [277, 3, 1],
+      [278, 4, o.height],
+      [279, 4, o.stripBytes],
     ];
     for (const [tag, type, value] of tags) {
       dv.setUint16(at, tag, true);
@@ -290,9 +318,13 @@ describe('TIFF', () => {
     expect([r.page(0).width, r.page(0).height, r.page(0).bitsPerSample]).toEqual([32768, 65537, 16]);
     const e = await tiffRejects(async () => r.readPage(0), 'huge.tif');
     r.close();
-    expect(e.message).toMatch(/^huge\.tif: page 0: the page is 32768 x 65537 pixels of 1 x 16-bit samples \(4\.00 GiB\), more than the largest page this reader decodes \(1 GiB\)/);
+    expect(e.message).toMatch(
+      /^huge\.tif: page 0: the page is 32768 x 65537 pixels of 1 x 16-bit samples \(4\.00 GiB\), more than the largest page this reader decodes \(1 GiB\)/,
+    );
     const s = await tiffRejects(() => loadTiffStack({ name: 'huge.tif', bytes }), 'huge.tif');
-    expect(s.message).toMatch(/the pages are 32768×65537 uint16 \(4\.00 GiB each\), more than the largest page this reader decodes \(1\.00 GiB\)/);
+    expect(s.message).toMatch(
+      /the pages are 32768×65537 uint16 \(4\.00 GiB each\), more than the largest page this reader decodes \(1\.00 GiB\)/,
+    );
     expect(m.HEAPU8.buffer.byteLength - heapBefore).toBeLessThan(16 << 20);
     expect(await loadTiffWasm()).toBe(m);
     await tiffStillWorks();

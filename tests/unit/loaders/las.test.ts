@@ -208,10 +208,12 @@ describe('bad files', () => {
 
   async function failure(bytes: Uint8Array, name: string, readAll = true): Promise<LasError> {
     try {
-      const pc = readAll ? await loadPointCloud(bytes, name) : await LasReader.open(bytes, name).then((r) => {
-        r.close();
-        return r;
-      });
+      const pc = readAll
+        ? await loadPointCloud(bytes, name)
+        : await LasReader.open(bytes, name).then((r) => {
+            r.close();
+            return r;
+          });
       throw new Error(`expected ${name} to fail, got ${'count' in pc ? pc.count : 0} points`);
     } catch (e) {
       expect(e).toBeInstanceOf(LasError);

@@ -19,7 +19,8 @@ describe('shared SWC files match the Python reader (expected.json)', () => {
     expect(s.duplicateIds).toBe(e.duplicate_ids);
     expect(s.typeCounts).toEqual(e.type_counts);
     expect(s.bbox).toEqual(e.bbox);
-    for (const k of ['min', 'max'] as const) for (let a = 0; a < 3; a++) expect(s.bboxWithRadius[k][a]).toBeCloseTo(e.bbox_with_radius[k][a], 10);
+    for (const k of ['min', 'max'] as const)
+      for (let a = 0; a < 3; a++) expect(s.bboxWithRadius[k][a]).toBeCloseTo(e.bbox_with_radius[k][a], 10);
     // Same float64 sum in the same (file) order: equal to the last bit.
     expect(s.totalCableLength).toBe(e.total_cable_length);
     expect(s.segmentCount).toBe(e.segment_count);

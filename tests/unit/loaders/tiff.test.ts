@@ -6,13 +6,23 @@ import { createHash } from 'node:crypto';
 import { readdirSync } from 'node:fs';
 import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect, test } from 'vitest';
-import { loadTiffStack, loadTiffWasm, sampleStats, TiffError, TiffReader, type SampleArray, type TiffSource } from '../../../src/loaders/tiff.ts';
+import {
+  loadTiffStack,
+  loadTiffWasm,
+  sampleStats,
+  TiffError,
+  TiffReader,
+  type SampleArray,
+  type TiffSource,
+} from '../../../src/loaders/tiff.ts';
 import { makeFixtures, readBytes, sharedData, sharedExpected, type Fixtures } from './fixtures.ts';
 
 const expected = sharedExpected('tiff');
 
 function sha256(data: SampleArray): string {
-  return createHash('sha256').update(new Uint8Array(data.buffer, data.byteOffset, data.byteLength)).digest('hex');
+  return createHash('sha256')
+    .update(new Uint8Array(data.buffer, data.byteOffset, data.byteLength))
+    .digest('hex');
 }
 
 const source = (dir: string, name: string): TiffSource => ({ name, bytes: readBytes(join(dir, name)) });
@@ -81,7 +91,12 @@ describe('TIFF variants written by tifffile', () => {
       expect(v.dims, name).toEqual([e.width, e.height, e.pages]);
       expect(v.samplesPerPixel, name).toBe(e.samples_per_pixel);
       const p = v.pages[0];
-      expect([p.compression, p.planarConfig, p.tiled, p.bitsPerSample], name).toEqual([e.compression, e.planar_config, e.tiled, e.bits_per_sample]);
+      expect([p.compression, p.planarConfig, p.tiled, p.bitsPerSample], name).toEqual([
+        e.compression,
+        e.planar_config,
+        e.tiled,
+        e.bits_per_sample,
+      ]);
       const s = sampleStats(v.data);
       if (e.lossy) {
         // JPEG: libjpeg-turbo versions may round the inverse DCT / colour
@@ -119,7 +134,10 @@ describe('TIFF variants written by tifffile', () => {
     const e = fx.expected.tiff['stack/'];
     const dir = join(fx.dir, 'stack');
     // Shuffled, and as text "slice10" < "slice2": the loader must still give 1, 2, ..., 12.
-    const files = readdirSync(dir).sort().reverse().map((n) => source(dir, n));
+    const files = readdirSync(dir)
+      .sort()
+      .reverse()
+      .map((n) => source(dir, n));
     const progress: number[] = [];
     const v = await loadTiffStack(files, { onProgress: (done) => progress.push(done), yieldBetweenPages: true });
     expect(v.files).toEqual(e.files);
@@ -139,7 +157,9 @@ describe('TIFF variants written by tifffile', () => {
   test('a stack whose files differ in shape names the odd file', async () => {
     const dir = join(fx.dir, 'stack');
     const files = [source(dir, 'slice1.tif'), source(dir, 'slice2.tif'), source(fx.dir, 'u8_deflate.tif')];
-    await expect(loadTiffStack(files)).rejects.toThrow(/^u8_deflate\.tif: its pages \(53×37 uint8\) do not match the stack \(22×18 uint16\)/);
+    await expect(loadTiffStack(files)).rejects.toThrow(
+      /^u8_deflate\.tif: its pages \(53×37 uint8\) do not match the stack \(22×18 uint16\)/,
+    );
   });
 });
 
@@ -156,7 +176,9 @@ describe('bad files', () => {
       /^hdr\.tif: truncated or corrupt TIFF/,
     );
     // The LZW file keeps its directory at the end: cutting it loses the directory.
-    await expect(loadTiffStack({ name: 'cut-lzw.tif', bytes: lzw().slice(0, 500_000) })).rejects.toThrow(/^cut-lzw\.tif: truncated or corrupt TIFF/);
+    await expect(loadTiffStack({ name: 'cut-lzw.tif', bytes: lzw().slice(0, 500_000) })).rejects.toThrow(
+      /^cut-lzw\.tif: truncated or corrupt TIFF/,
+    );
     // The ImageJ stack keeps its directories first: cutting it loses pixel data.
     await expect(loadTiffStack({ name: 'cut-stack.tif', bytes: stack().slice(0, 200_000) })).rejects.toThrow(
       // Checked before anything is allocated: the page's strips lie past the end of the cut file.

@@ -32,25 +32,29 @@ describe('committed Wasm modules', () => {
       expect(typeof (las as unknown as Record<string, unknown>)[f], f).toBe('function');
     }
     const tiff = await loadTiffWasm();
-    for (const f of ['_tiff_open', '_tiff_error', '_tiff_page_count', '_tiff_page_info', '_tiff_page_bytes', '_tiff_read_page', '_tiff_close']) {
+    for (const f of [
+      '_tiff_open',
+      '_tiff_error',
+      '_tiff_page_count',
+      '_tiff_page_info',
+      '_tiff_page_bytes',
+      '_tiff_read_page',
+      '_tiff_close',
+    ]) {
       expect(typeof (tiff as unknown as Record<string, unknown>)[f], f).toBe('function');
     }
   });
 });
 
 describe('reproducible build', () => {
-  test(
-    'npm run build:wasm -- --check rebuilds wasm/dist byte for byte',
-    (ctx) => {
-      if (!hasEmcc) {
-        ctx.skip('emcc is not installed (apt-get install emscripten): the rebuild check needs Debian\'s Emscripten');
-        return;
-      }
-      const r = spawnSync(process.execPath, [`${wasmDir}build.mjs`, '--check'], { encoding: 'utf8', timeout: 1_500_000 });
-      const output = `${r.stdout}${r.stderr}`;
-      expect(r.status, output).toBe(0);
-      expect(output).toMatch(/reproducible: las\.js, las\.wasm, tiff\.js, tiff\.wasm, zfp\.js, zfp\.wasm, build-info\.json are identical/);
-    },
-    1_600_000,
-  );
+  test('npm run build:wasm -- --check rebuilds wasm/dist byte for byte', (ctx) => {
+    if (!hasEmcc) {
+      ctx.skip("emcc is not installed (apt-get install emscripten): the rebuild check needs Debian's Emscripten");
+      return;
+    }
+    const r = spawnSync(process.execPath, [`${wasmDir}build.mjs`, '--check'], { encoding: 'utf8', timeout: 1_500_000 });
+    const output = `${r.stdout}${r.stderr}`;
+    expect(r.status, output).toBe(0);
+    expect(output).toMatch(/reproducible: las\.js, las\.wasm, tiff\.js, tiff\.wasm, zfp\.js, zfp\.wasm, build-info\.json are identical/);
+  }, 1_600_000);
 });

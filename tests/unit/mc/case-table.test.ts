@@ -37,9 +37,14 @@ test('the C header for the C++ MC holds the same table', () => {
   const block = (name: string) => {
     const m = new RegExp(`${name}[^=]*=\\s*\\{([\\s\\S]*?)\\n\\};`).exec(h);
     if (!m) throw new Error(`${name} not found in mc_tables.h`);
-    return m[1].replace(/\/\*[\s\S]*?\*\//g, '').match(/-?\d+/g)!.map(Number);
+    return m[1]
+      .replace(/\/\*[\s\S]*?\*\//g, '')
+      .match(/-?\d+/g)!
+      .map(Number);
   };
-  expect(block('MC_EDGE_CORNERS')).toEqual(Array.from({ length: 12 }, (_, e) => [EDGE_CORNERS[2 * e], EDGE_CORNERS[2 * e + 1], EDGE_AXIS[e]]).flat());
+  expect(block('MC_EDGE_CORNERS')).toEqual(
+    Array.from({ length: 12 }, (_, e) => [EDGE_CORNERS[2 * e], EDGE_CORNERS[2 * e + 1], EDGE_AXIS[e]]).flat(),
+  );
   expect(block('MC_CASE_VERTEX_COUNT')).toEqual(Array.from(CASE_VERTEX_COUNT));
   expect(block('MC_CASE_TRIANGLE_EDGES')).toEqual(Array.from(CASE_EDGE_TABLE));
 });
@@ -71,7 +76,8 @@ describe('structure', () => {
       expect(n % 3).toBe(0);
       expect(n).toBeLessThanOrEqual(15);
       expect(n === 0).toBe(c === 0 || c === 255);
-      for (let j = 0; j < CASE_TABLE_STRIDE; j++) expect(CASE_EDGE_TABLE[c * CASE_TABLE_STRIDE + j]).toBe(j < n ? CASE_TRIANGLE_EDGES[c][j] : -1);
+      for (let j = 0; j < CASE_TABLE_STRIDE; j++)
+        expect(CASE_EDGE_TABLE[c * CASE_TABLE_STRIDE + j]).toBe(j < n ? CASE_TRIANGLE_EDGES[c][j] : -1);
     }
   });
 

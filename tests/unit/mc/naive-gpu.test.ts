@@ -43,7 +43,11 @@ function makeField(dims: Dims3, seed: number, kind: Kind): Float32Array {
 }
 
 function upload(device: GPUDevice, values: Float32Array): GPUBuffer {
-  const buffer = device.createBuffer({ label: 'test.volume', size: Math.max(4, values.byteLength), usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST });
+  const buffer = device.createBuffer({
+    label: 'test.volume',
+    size: Math.max(4, values.byteLength),
+    usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
+  });
   if (values.byteLength > 0) device.queue.writeBuffer(buffer, 0, values as Float32Array<ArrayBuffer>);
   return buffer;
 }
@@ -55,7 +59,10 @@ async function expectSameSurface(mc: NaiveMarchingCubes, volume: GPUBuffer, valu
   expect(r.vertices).toBe(cpu.triangleCount * 3);
   const gpu = await mc.readPositions(r.vertices);
   const cmp = compareTriangleSoups(gpu, cpu.positions, { tolerance: TOLERANCE });
-  expect(cmp.equal, `${label} iso ${iso}: ${JSON.stringify({ ...cmp, examplesA: cmp.examplesA.slice(0, 2), examplesB: cmp.examplesB.slice(0, 2) })}`).toBe(true);
+  expect(
+    cmp.equal,
+    `${label} iso ${iso}: ${JSON.stringify({ ...cmp, examplesA: cmp.examplesA.slice(0, 2), examplesB: cmp.examplesB.slice(0, 2) })}`,
+  ).toBe(true);
   return r;
 }
 
@@ -157,7 +164,10 @@ describe('shared volumes', () => {
   const volumes = loadMcReference().volumes.filter((v) => /^volumes\/(fuel|hydrogen_atom)_.*float32\.raw$/.test(v.file));
 
   test('fuel and hydrogen are in mc.json', () => {
-    expect(volumes.map((v) => v.file).sort()).toEqual(['volumes/fuel_64x64x64_float32.raw', 'volumes/hydrogen_atom_128x128x128_float32.raw']);
+    expect(volumes.map((v) => v.file).sort()).toEqual([
+      'volumes/fuel_64x64x64_float32.raw',
+      'volumes/hydrogen_atom_128x128x128_float32.raw',
+    ]);
   });
 
   for (const v of volumes) {

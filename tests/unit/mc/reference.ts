@@ -60,7 +60,9 @@ export function runReferenceTool(args: string[]): any {
 }
 
 export function sha256(data: ArrayBufferView): string {
-  return createHash('sha256').update(new Uint8Array(data.buffer, data.byteOffset, data.byteLength)).digest('hex');
+  return createHash('sha256')
+    .update(new Uint8Array(data.buffer, data.byteOffset, data.byteLength))
+    .digest('hex');
 }
 
 export function asFloat32(bytes: Buffer): Float32Array {

@@ -32,7 +32,10 @@ const SMALL: { seed: number; dims: Dims; isos: number[] }[] = [
 ];
 
 function sameBits(a: Float32Array, b: Float32Array): boolean {
-  return a.length === b.length && Buffer.compare(Buffer.from(a.buffer, a.byteOffset, a.byteLength), Buffer.from(b.buffer, b.byteOffset, b.byteLength)) === 0;
+  return (
+    a.length === b.length &&
+    Buffer.compare(Buffer.from(a.buffer, a.byteOffset, a.byteLength), Buffer.from(b.buffer, b.byteOffset, b.byteLength)) === 0
+  );
 }
 
 const fuel = loadMcReference().volumes.find((v) => v.file === 'volumes/fuel_64x64x64_float32.raw')!;
@@ -91,7 +94,12 @@ describe.skipIf(!hasGxx)('native binary (g++ -O3)', () => {
   let binary = '';
   beforeAll(() => {
     dir = mkdtempSync(join(tmpdir(), 'zfpiso-mc-native-'));
-    binary = execFileSync(process.execPath, [join(ROOT, 'benchmarks', 'serial-mc', 'build.mjs'), 'native', '--if-stale'], { encoding: 'utf8' }).trim().split('\n').pop()!;
+    binary = execFileSync(process.execPath, [join(ROOT, 'benchmarks', 'serial-mc', 'build.mjs'), 'native', '--if-stale'], {
+      encoding: 'utf8',
+    })
+      .trim()
+      .split('\n')
+      .pop()!;
   }, 120_000);
   afterAll(() => rmSync(dir, { recursive: true, force: true }));
 
@@ -107,7 +115,12 @@ describe.skipIf(!hasGxx)('native binary (g++ -O3)', () => {
       writeFileSync(file, values);
       return { file, values, dims, isos };
     });
-    inputs.push({ file: join(SHARED_DATA, fuel.file), values: fuelValues(), dims: fuel.dims_xyz, isos: fuel.isosurfaces.map((s) => s.iso) });
+    inputs.push({
+      file: join(SHARED_DATA, fuel.file),
+      values: fuelValues(),
+      dims: fuel.dims_xyz,
+      isos: fuel.isosurfaces.map((s) => s.iso),
+    });
     for (const { file, values, dims, isos } of inputs) {
       const report = runNative(file, dims, isos);
       isos.forEach((iso, q) => {

@@ -26,7 +26,13 @@ describe('one cell', () => {
     // Edges 3 (x, from corner 6), 7 (y, from 5), 11 (z, from 3): t = 0.25.
     const verts = [];
     for (let v = 0; v < 9; v += 3) verts.push(Array.from(positions.subarray(v, v + 3)));
-    expect(verts.sort()).toEqual([[0.25, 1, 1], [1, 0.25, 1], [1, 1, 0.25]].sort());
+    expect(verts.sort()).toEqual(
+      [
+        [0.25, 1, 1],
+        [1, 0.25, 1],
+        [1, 1, 0.25],
+      ].sort(),
+    );
     // Normal (p1-p0)x(p2-p0) toward decreasing values: toward corner 0, away from corner 7.
     const [p0, p1, p2] = [0, 3, 6].map((o) => Array.from(positions.subarray(o, o + 3)));
     const a = p1.map((x, i) => x - p0[i]);
@@ -62,7 +68,13 @@ describe('one cell', () => {
     const { positions } = marchingCubes(values, dims, 0.5);
     const verts = [];
     for (let v = 0; v < positions.length; v += 3) verts.push(Array.from(positions.subarray(v, v + 3)));
-    expect(verts.sort()).toEqual([[3.5, 3, 2], [4, 2.5, 2], [4, 3, 1.5]].sort());
+    expect(verts.sort()).toEqual(
+      [
+        [3.5, 3, 2],
+        [4, 2.5, 2],
+        [4, 3, 1.5],
+      ].sort(),
+    );
   });
 });
 
@@ -83,10 +95,20 @@ describe('against vtkMarchingCubes soups', () => {
   });
   afterAll(() => rmSync(dir, { recursive: true, force: true }));
 
-  const cases: { name: string; dims: [number, number, number]; field: (x: number, y: number, z: number, r: () => number) => number; iso: number }[] = [
+  const cases: {
+    name: string;
+    dims: [number, number, number];
+    field: (x: number, y: number, z: number, r: () => number) => number;
+    iso: number;
+  }[] = [
     { name: 'noise 7x5x9', dims: [7, 5, 9], field: (_x, _y, _z, r) => r(), iso: 0.4137 },
     { name: 'noise 12x11x10', dims: [12, 11, 10], field: (_x, _y, _z, r) => r() * 10 - 5, iso: 0.0313 },
-    { name: 'sphere plus noise 20x18x16', dims: [20, 18, 16], field: (x, y, z, r) => Math.hypot(x - 9.3, y - 8.1, z - 7.7) + r() * 0.8, iso: 5.2371 },
+    {
+      name: 'sphere plus noise 20x18x16',
+      dims: [20, 18, 16],
+      field: (x, y, z, r) => Math.hypot(x - 9.3, y - 8.1, z - 7.7) + r() * 0.8,
+      iso: 5.2371,
+    },
     {
       // Cell (3a, 0, 3b) holds case c = a + 16b: every case, with random corner values.
       name: 'all 256 cases 48x2x48',
@@ -100,7 +122,13 @@ describe('against vtkMarchingCubes soups', () => {
       },
       iso: 0.5013,
     },
-    { name: 'gyroid 24x24x24', dims: [24, 24, 24], field: (x, y, z) => Math.sin(x / 2.1) * Math.cos(y / 2.3) + Math.sin(y / 2.3) * Math.cos(z / 1.9) + Math.sin(z / 1.9) * Math.cos(x / 2.1), iso: 0.1237 },
+    {
+      name: 'gyroid 24x24x24',
+      dims: [24, 24, 24],
+      field: (x, y, z) =>
+        Math.sin(x / 2.1) * Math.cos(y / 2.3) + Math.sin(y / 2.3) * Math.cos(z / 1.9) + Math.sin(z / 1.9) * Math.cos(x / 2.1),
+      iso: 0.1237,
+    },
   ];
   cases.forEach((c, n) => {
     test(`${c.name}: the same triangles, vertex order up to rotation, within 1e-5`, () => {
@@ -114,7 +142,12 @@ describe('against vtkMarchingCubes soups', () => {
         const at = (x: number, y: number, z: number) => values[x + nx * (y + ny * z)];
         for (let z = 0; z < nz - 1; z++)
           for (let x = 0; x < nx - 1; x++)
-            seen.add(caseIndex([0, 1, 2, 3, 4, 5, 6, 7].map((q) => at(x + (q & 1), (q >> 1) & 1, z + (q >> 2))), c.iso));
+            seen.add(
+              caseIndex(
+                [0, 1, 2, 3, 4, 5, 6, 7].map((q) => at(x + (q & 1), (q >> 1) & 1, z + (q >> 2))),
+                c.iso,
+              ),
+            );
         expect(seen.size).toBe(256);
       }
       const input = join(dir, `v${n}.f32`);
@@ -142,7 +175,8 @@ test('a surface inside the volume is closed and consistently oriented', () => {
   const values = new Float32Array(n * n * n);
   for (let z = 0, p = 0; z < n; z++)
     for (let y = 0; y < n; y++)
-      for (let x = 0; x < n; x++) values[p++] = 12 - Math.hypot(x - 19.6, y - 20.2, z - 19.1) + 2 * Math.sin(x * 0.7) * Math.cos(y * 0.5) + r();
+      for (let x = 0; x < n; x++)
+        values[p++] = 12 - Math.hypot(x - 19.6, y - 20.2, z - 19.1) + 2 * Math.sin(x * 0.7) * Math.cos(y * 0.5) + r();
   const { positions, triangleCount } = marchingCubes(values, [n, n, n], 0.5);
   expect(triangleCount).toBeGreaterThan(1000);
   const key = (v: number) => `${positions[3 * v]},${positions[3 * v + 1]},${positions[3 * v + 2]}`;

@@ -25,8 +25,16 @@ describe('IndirectArgs', () => {
       [5, 7],
     ]) {
       const args = await IndirectArgs.create(device, { itemsPerWorkgroup: items, maxWorkgroupsPerDimension: maxPerDim });
-      const counts = [0, 1, items - 1, items, items + 1, 65535 * items, 65535 * items + 1, 2 ** 24, 2 ** 27 + 5, 2 ** 32 - 1].filter((c) => c >= 0);
-      const out = upload(device, 'test.args', new Uint32Array(0), 3 * counts.length + 1, GPUBufferUsage.STORAGE | GPUBufferUsage.INDIRECT | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST);
+      const counts = [0, 1, items - 1, items, items + 1, 65535 * items, 65535 * items + 1, 2 ** 24, 2 ** 27 + 5, 2 ** 32 - 1].filter(
+        (c) => c >= 0,
+      );
+      const out = upload(
+        device,
+        'test.args',
+        new Uint32Array(0),
+        3 * counts.length + 1,
+        GPUBufferUsage.STORAGE | GPUBufferUsage.INDIRECT | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST,
+      );
       const countBufs = counts.map((c) => gpuCount(device, c, 4));
       const encoder = device.createCommandEncoder();
       counts.forEach((_, i) => args.encode(encoder, { count: countBufs[i], out: { buffer: out, offset: 4 + 12 * i } }));
@@ -55,13 +63,24 @@ describe('IndirectArgs', () => {
     mask.fill(0, ones);
     const maskBuf = upload(device, 'test.mask', mask);
     const scanned = upload(device, 'test.scanned', new Uint32Array(0), n);
-    const state = upload(device, 'test.state', new Uint32Array(0), 4, GPUBufferUsage.STORAGE | GPUBufferUsage.INDIRECT | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST);
+    const state = upload(
+      device,
+      'test.state',
+      new Uint32Array(0),
+      4,
+      GPUBufferUsage.STORAGE | GPUBufferUsage.INDIRECT | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST,
+    );
     const hits = upload(device, 'test.hits', new Uint32Array(n));
     const scan = await ExclusiveScan.create(device, { capacity: n });
     const args = await IndirectArgs.create(device, { itemsPerWorkgroup: 64 });
-    const mark = await createComputePipeline(device, 'test.mark', [gridSnippet, {
-      name: 'test/mark.wgsl',
-      code: /* wgsl */ `
+    const mark = await createComputePipeline(
+      device,
+      'test.mark',
+      [
+        gridSnippet,
+        {
+          name: 'test/mark.wgsl',
+          code: /* wgsl */ `
 @group(0) @binding(0) var<storage, read_write> hits: array<atomic<u32>>;
 @group(0) @binding(1) var<storage, read> state: array<u32>;
 @compute @workgroup_size(64)
@@ -69,10 +88,16 @@ fn main(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u, 
   let i = grid_invocation_index(wid, nwg, lid, 64u);
   if (i < state[0]) { atomicAdd(&hits[i], 1u); }
 }`,
-    }], 'main');
+        },
+      ],
+      'main',
+    );
     const bind = device.createBindGroup({
       layout: mark.getBindGroupLayout(0),
-      entries: [{ binding: 0, resource: { buffer: hits } }, { binding: 1, resource: { buffer: state, size: 4 } }],
+      entries: [
+        { binding: 0, resource: { buffer: hits } },
+        { binding: 1, resource: { buffer: state, size: 4 } },
+      ],
     });
     const encoder = device.createCommandEncoder();
     scan.encode(encoder, { input: maskBuf, output: scanned, count: n, totalOut: { buffer: state, offset: 0 } });

@@ -9,7 +9,22 @@ import { ExclusiveScan } from '../../../src/primitives/scan.ts';
 import { StreamCompact, StreamCompactIds } from '../../../src/primitives/compact.ts';
 import { RadixSortByKey } from '../../../src/primitives/sort.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
-import { LARGE_SIZES, SCAN_VARIANTS, largeSizes, SMALL_SIZES, cpuSortPermutation, diff, gpuCount, poison, randomMask, randomU32, read, rng, upload, variantOptions } from './helpers.ts';
+import {
+  LARGE_SIZES,
+  SCAN_VARIANTS,
+  largeSizes,
+  SMALL_SIZES,
+  cpuSortPermutation,
+  diff,
+  gpuCount,
+  poison,
+  randomMask,
+  randomU32,
+  read,
+  rng,
+  upload,
+  variantOptions,
+} from './helpers.ts';
 
 type Pattern = 'random' | 'few' | 'sorted' | 'reverse';
 const PATTERNS: Pattern[] = ['random', 'few', 'sorted', 'reverse'];
@@ -83,7 +98,9 @@ class Harness {
     }
     count.buffer.destroy();
     const found = problems.filter((p) => p !== '');
-    return found.length ? `n=${n} ${pattern} ${descending ? 'desc' : 'asc'}${inPlace ? ' in place' : ''} keyBits=${keyBits}: ${found.join('; ')}` : '';
+    return found.length
+      ? `n=${n} ${pattern} ${descending ? 'desc' : 'asc'}${inPlace ? ' in place' : ''} keyBits=${keyBits}: ${found.join('; ')}`
+      : '';
   }
 
   destroy(): void {
@@ -100,115 +117,131 @@ async function runAll(h: Harness, cases: Case[]): Promise<string[]> {
   return problems;
 }
 
-for (const variant of SCAN_VARIANTS) describe(`RadixSortByKey, ${variant.name} path`, () => {
-  gpuTest('small sizes: every pattern, ascending and descending', async ({ gpu }) => {
-    const { device } = gpu;
-    const opts = variantOptions(device, variant);
-    if (!opts) return;
-    const sort = await RadixSortByKey.create(device, { capacity: 65536 + EXTRA, ...opts });
-    expect(sort.path).toBe(variant.path);
-    expect(sort.subgroups).toBe(variant.subgroups);
-    const h = new Harness(device, sort, 65536 + EXTRA);
-    const cases: Case[] = [];
-    for (const n of SMALL_SIZES) for (const pattern of PATTERNS) for (const descending of [false, true]) cases.push({ n, pattern, descending });
-    expect(await runAll(h, cases)).toEqual([]);
-    h.destroy();
-    sort.destroy();
-  });
-
-  gpuTest('large sizes', async ({ gpu }) => {
-    const { device } = gpu;
-    const opts = variantOptions(device, variant);
-    if (!opts) return;
-    // The GPU path is slow on SwiftShader: its large sizes (largeSizes) and
-    // every pattern once, alternating directions.
-    const gpuPath = variant.path === 'gpu';
-    const [odd, mid, big] = gpuPath ? [...largeSizes('gpu'), 0] : LARGE_SIZES;
-    const sort = await RadixSortByKey.create(device, { capacity: Math.max(odd, big) + EXTRA, ...opts });
-    const h = new Harness(device, sort, Math.max(odd, big) + EXTRA);
-    const cases: Case[] = [];
-    for (const pattern of PATTERNS) {
-      for (const descending of [false, true]) {
-        if (!gpuPath || descending === (pattern.length % 2 === 0)) cases.push({ n: mid, pattern, descending });
-      }
-    }
-    // The subgroup variant changes only the digit-table scan (tested on
-    // every size by scan.test.ts): one size here.
-    if (!variant.subgroups) cases.push({ n: odd, pattern: 'random', descending: true });
-    if (!gpuPath) cases.push({ n: big, pattern: 'few', descending: false });
-    expect(await runAll(h, cases)).toEqual([]);
-    h.destroy();
-    sort.destroy();
-  });
-
-  gpuTest('in place (even and odd pass counts), fewer key bits, 2D grids, tiny chunks, grow', async ({ gpu }) => {
-    const { device } = gpu;
-    const opts = variantOptions(device, variant);
-    if (!opts) return;
-    const problems: string[] = [];
-    // Workgroups of 8 (fewer invocations than digits) and 40 (a partial second
-    // word in the GPU path's per-digit bitmaps).
-    for (const options of [{}, { chunk: 3, maxWorkgroupsPerDimension: 2, workgroupSize: 8 }, { chunk: 5, workgroupSize: 40 }]) {
-      const sort = await RadixSortByKey.create(device, { capacity: 10, ...options, ...opts });
-      sort.grow(70000);
-      expect(sort.capacity).toBe(70000);
-      const h = new Harness(device, sort, 70000);
-      for (const n of [0, 1, 257, 4095, 65537]) {
-        for (const [inPlace, keyBits, descending] of [
-          [true, 32, false],
-          [true, 12, true],
-          [true, 4, false],
-          [false, 12, false],
-          [false, 1, true],
-        ] as const) {
-          const p = await h.run({ n, pattern: n % 2 ? 'random' : 'few', descending }, inPlace, keyBits);
-          if (p) problems.push(`${JSON.stringify(options)} ${p}`);
-        }
-      }
+for (const variant of SCAN_VARIANTS)
+  describe(`RadixSortByKey, ${variant.name} path`, () => {
+    gpuTest('small sizes: every pattern, ascending and descending', async ({ gpu }) => {
+      const { device } = gpu;
+      const opts = variantOptions(device, variant);
+      if (!opts) return;
+      const sort = await RadixSortByKey.create(device, { capacity: 65536 + EXTRA, ...opts });
+      expect(sort.path).toBe(variant.path);
+      expect(sort.subgroups).toBe(variant.subgroups);
+      const h = new Harness(device, sort, 65536 + EXTRA);
+      const cases: Case[] = [];
+      for (const n of SMALL_SIZES)
+        for (const pattern of PATTERNS) for (const descending of [false, true]) cases.push({ n, pattern, descending });
+      expect(await runAll(h, cases)).toEqual([]);
       h.destroy();
       sort.destroy();
-    }
-    expect(problems).toEqual([]);
-  });
+    });
 
-  gpuTest('the cache update chain, on the GPU only: scan, compact IDs and ages, sort by age oldest first', async ({ gpu }) => {
-    const { device } = gpu;
-    const opts = variantOptions(device, variant);
-    if (!opts) return;
-    // Slots with ages; a mask of available slots; their ids sorted by age,
-    // descending, with the count known only to the GPU (the scan's total).
-    const slots = 300007;
-    const ages = randomU32(slots, 77).map((a) => a % 1000);
-    const avail = randomMask(slots, 0.4, 78);
-    const [scan, compactIds, compact, sort] = await Promise.all([
-      ExclusiveScan.create(device, { capacity: slots, ...opts }),
-      StreamCompactIds.create(device, opts),
-      StreamCompact.create(device, opts),
-      RadixSortByKey.create(device, { capacity: slots, ...opts }),
-    ]);
-    const agesBuf = upload(device, 'ages', ages);
-    const availBuf = upload(device, 'avail', avail);
-    const offsets = upload(device, 'offsets', new Uint32Array(0), slots);
-    const ids = upload(device, 'ids', new Uint32Array(0), slots);
-    const keys = upload(device, 'keys', new Uint32Array(0), slots);
-    const sortedIds = upload(device, 'sortedIds', new Uint32Array(0), slots);
-    const sortedAges = upload(device, 'sortedAges', new Uint32Array(0), slots);
-    const counts = upload(device, 'counts', new Uint32Array([slots, 0]));
-    const encoder = device.createCommandEncoder();
-    const slotCount = { buffer: counts, offset: 0 };
-    const availCount = { buffer: counts, offset: 4 };
-    scan.encode(encoder, { input: availBuf, output: offsets, count: slotCount, totalOut: availCount });
-    compactIds.encode(encoder, { mask: availBuf, offsets, output: ids, count: slotCount });
-    compact.encode(encoder, { mask: availBuf, offsets, values: agesBuf, output: keys, count: slotCount });
-    sort.encode(encoder, { keys, values: ids, keysOut: sortedAges, valuesOut: sortedIds, count: availCount, descending: true, keyBits: 10 });
-    device.queue.submit([encoder.finish()]);
+    gpuTest('large sizes', async ({ gpu }) => {
+      const { device } = gpu;
+      const opts = variantOptions(device, variant);
+      if (!opts) return;
+      // The GPU path is slow on SwiftShader: its large sizes (largeSizes) and
+      // every pattern once, alternating directions.
+      const gpuPath = variant.path === 'gpu';
+      const [odd, mid, big] = gpuPath ? [...largeSizes('gpu'), 0] : LARGE_SIZES;
+      const sort = await RadixSortByKey.create(device, { capacity: Math.max(odd, big) + EXTRA, ...opts });
+      const h = new Harness(device, sort, Math.max(odd, big) + EXTRA);
+      const cases: Case[] = [];
+      for (const pattern of PATTERNS) {
+        for (const descending of [false, true]) {
+          if (!gpuPath || descending === (pattern.length % 2 === 0)) cases.push({ n: mid, pattern, descending });
+        }
+      }
+      // The subgroup variant changes only the digit-table scan (tested on
+      // every size by scan.test.ts): one size here.
+      if (!variant.subgroups) cases.push({ n: odd, pattern: 'random', descending: true });
+      if (!gpuPath) cases.push({ n: big, pattern: 'few', descending: false });
+      expect(await runAll(h, cases)).toEqual([]);
+      h.destroy();
+      sort.destroy();
+    });
 
-    const availIds: number[] = [];
-    for (let i = 0; i < slots; i++) if (avail[i]) availIds.push(i);
-    const stable = availIds.slice().sort((a, b) => ages[b] - ages[a] || a - b);
-    expect((await read(device, counts))[1]).toBe(availIds.length);
-    expect(diff(await read(device, sortedIds), Uint32Array.from(stable), 'slot')).toBe('');
-    expect(diff(await read(device, sortedAges), Uint32Array.from(stable, (s) => ages[s]), 'age')).toBe('');
-    for (const p of [scan, compactIds, compact, sort]) p.destroy();
+    gpuTest('in place (even and odd pass counts), fewer key bits, 2D grids, tiny chunks, grow', async ({ gpu }) => {
+      const { device } = gpu;
+      const opts = variantOptions(device, variant);
+      if (!opts) return;
+      const problems: string[] = [];
+      // Workgroups of 8 (fewer invocations than digits) and 40 (a partial second
+      // word in the GPU path's per-digit bitmaps).
+      for (const options of [{}, { chunk: 3, maxWorkgroupsPerDimension: 2, workgroupSize: 8 }, { chunk: 5, workgroupSize: 40 }]) {
+        const sort = await RadixSortByKey.create(device, { capacity: 10, ...options, ...opts });
+        sort.grow(70000);
+        expect(sort.capacity).toBe(70000);
+        const h = new Harness(device, sort, 70000);
+        for (const n of [0, 1, 257, 4095, 65537]) {
+          for (const [inPlace, keyBits, descending] of [
+            [true, 32, false],
+            [true, 12, true],
+            [true, 4, false],
+            [false, 12, false],
+            [false, 1, true],
+          ] as const) {
+            const p = await h.run({ n, pattern: n % 2 ? 'random' : 'few', descending }, inPlace, keyBits);
+            if (p) problems.push(`${JSON.stringify(options)} ${p}`);
+          }
+        }
+        h.destroy();
+        sort.destroy();
+      }
+      expect(problems).toEqual([]);
+    });
+
+    gpuTest('the cache update chain, on the GPU only: scan, compact IDs and ages, sort by age oldest first', async ({ gpu }) => {
+      const { device } = gpu;
+      const opts = variantOptions(device, variant);
+      if (!opts) return;
+      // Slots with ages; a mask of available slots; their ids sorted by age,
+      // descending, with the count known only to the GPU (the scan's total).
+      const slots = 300007;
+      const ages = randomU32(slots, 77).map((a) => a % 1000);
+      const avail = randomMask(slots, 0.4, 78);
+      const [scan, compactIds, compact, sort] = await Promise.all([
+        ExclusiveScan.create(device, { capacity: slots, ...opts }),
+        StreamCompactIds.create(device, opts),
+        StreamCompact.create(device, opts),
+        RadixSortByKey.create(device, { capacity: slots, ...opts }),
+      ]);
+      const agesBuf = upload(device, 'ages', ages);
+      const availBuf = upload(device, 'avail', avail);
+      const offsets = upload(device, 'offsets', new Uint32Array(0), slots);
+      const ids = upload(device, 'ids', new Uint32Array(0), slots);
+      const keys = upload(device, 'keys', new Uint32Array(0), slots);
+      const sortedIds = upload(device, 'sortedIds', new Uint32Array(0), slots);
+      const sortedAges = upload(device, 'sortedAges', new Uint32Array(0), slots);
+      const counts = upload(device, 'counts', new Uint32Array([slots, 0]));
+      const encoder = device.createCommandEncoder();
+      const slotCount = { buffer: counts, offset: 0 };
+      const availCount = { buffer: counts, offset: 4 };
+      scan.encode(encoder, { input: availBuf, output: offsets, count: slotCount, totalOut: availCount });
+      compactIds.encode(encoder, { mask: availBuf, offsets, output: ids, count: slotCount });
+      compact.encode(encoder, { mask: availBuf, offsets, values: agesBuf, output: keys, count: slotCount });
+      sort.encode(encoder, {
+        keys,
+        values: ids,
+        keysOut: sortedAges,
+        valuesOut: sortedIds,
+        count: availCount,
+        descending: true,
+        keyBits: 10,
+      });
+      device.queue.submit([encoder.finish()]);
+
+      const availIds: number[] = [];
+      for (let i = 0; i < slots; i++) if (avail[i]) availIds.push(i);
+      const stable = availIds.slice().sort((a, b) => ages[b] - ages[a] || a - b);
+      expect((await read(device, counts))[1]).toBe(availIds.length);
+      expect(diff(await read(device, sortedIds), Uint32Array.from(stable), 'slot')).toBe('');
+      expect(
+        diff(
+          await read(device, sortedAges),
+          Uint32Array.from(stable, (s) => ages[s]),
+          'age',
+        ),
+      ).toBe('');
+      for (const p of [scan, compactIds, compact, sort]) p.destroy();
+    });
   });
-});

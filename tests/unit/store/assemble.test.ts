@@ -18,7 +18,11 @@ const work = mkdtempSync(join(tmpdir(), 'store-assemble-'));
 afterAll(() => rmSync(work, { recursive: true, force: true }));
 
 describe('assembleLevelStream', () => {
-  it.each([['8', 16], ['4.5', 32], ['1.4', 16]])('rate %s, chunk %i: level 0 equals zfpy on the whole input', async (rate, chunk) => {
+  it.each([
+    ['8', 16],
+    ['4.5', 32],
+    ['1.4', 16],
+  ])('rate %s, chunk %i: level 0 equals zfpy on the whole input', async (rate, chunk) => {
     const path = join(work, `neghip-${rate}-${chunk}.zarr`);
     convert('volumes/neghip_66x66x66_uint8.raw', path, ['--chunk', String(chunk), '--rate', rate, '--levels', '2']);
     const s = await openZfpStore(storeForLocation(path), path);
@@ -28,11 +32,14 @@ describe('assembleLevelStream', () => {
       const chunks = await Promise.all(Array.from({ length: L.chunkCount }, (_, i) => s.readChunk(level, i)));
       const ours = assembleLevelStream(L.layout, (i) => chunks[i]);
       const ref = join(work, `ref-${rate}-${chunk}-${level}.zfp`);
-      converterPython(`
+      converterPython(
+        `
 import sys, zfpy, numpy as np
 a = np.fromfile(sys.argv[1], dtype=np.uint8).reshape(66, 66, 66).astype(np.float32)
 open(sys.argv[4], 'wb').write(zfpy.compress_numpy(np.ascontiguousarray(a), rate=float(sys.argv[3]), write_header=True))
-`, [join(sharedData, 'volumes/neghip_66x66x66_uint8.raw'), String(level), String(L.layout.rate), ref]);
+`,
+        [join(sharedData, 'volumes/neghip_66x66x66_uint8.raw'), String(level), String(L.layout.rate), ref],
+      );
       expect(Buffer.from(ours).equals(readFileSync(ref)), `level ${level}`).toBe(true);
     }
   });

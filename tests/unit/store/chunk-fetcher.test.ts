@@ -6,7 +6,13 @@ import type { GetOptions } from '@zarrita/storage';
 import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
 import { StoreError } from '../../../src/store/zarr/errors.ts';
 
-interface Pending { level: number; chunk: number; signal: AbortSignal; resolve(b: Uint8Array): void; reject(e: unknown): void }
+interface Pending {
+  level: number;
+  chunk: number;
+  signal: AbortSignal;
+  resolve(b: Uint8Array): void;
+  reject(e: unknown): void;
+}
 
 class FakeStore {
   pending: Pending[] = [];
@@ -47,7 +53,15 @@ function setup(opts = {}) {
   const errors: string[] = [];
   fetcher.onChunk((level, chunk, bytes, fromCache) => got.push(`${level}:${chunk}:${bytes.length}${fromCache ? ':cache' : ''}`));
   fetcher.onError((_l, chunk, e) => errors.push(`${chunk}:${e.kind}`));
-  return { store, fetcher, got, errors, tick: (ms: number) => { clock += ms; } };
+  return {
+    store,
+    fetcher,
+    got,
+    errors,
+    tick: (ms: number) => {
+      clock += ms;
+    },
+  };
 }
 
 describe('ChunkFetcher', () => {
@@ -88,12 +102,13 @@ describe('ChunkFetcher', () => {
 
   it('serves chunks fetched before from the CPU cache, bounded in bytes (LRU)', async () => {
     const { store, fetcher, got } = setup({ cacheBytes: 25 });
-    fetcher.want(0, [9, 4]);          // 10 + 5 bytes
-    store.answer(9); store.answer(4);
+    fetcher.want(0, [9, 4]); // 10 + 5 bytes
+    store.answer(9);
+    store.answer(4);
     await fetcher.idle();
-    fetcher.want(0, [9]);             // hit, now most recent
+    fetcher.want(0, [9]); // hit, now most recent
     expect(got.at(-1)).toBe('0:9:10:cache');
-    fetcher.want(0, [11]);            // 12 bytes: 27 > 25, evicts 4 (least recent)
+    fetcher.want(0, [11]); // 12 bytes: 27 > 25, evicts 4 (least recent)
     store.answer(11);
     await fetcher.idle();
     got.length = 0;
@@ -108,11 +123,17 @@ describe('ChunkFetcher', () => {
 
   it('retries with growing backoff, then reports; a missing chunk is reported at once', async () => {
     const sleeps: number[] = [];
-    const { store, fetcher, errors, got } = setup({ retries: 2, backoffMs: 100, sleep: async (ms: number) => { sleeps.push(ms); } });
+    const { store, fetcher, errors, got } = setup({
+      retries: 2,
+      backoffMs: 100,
+      sleep: async (ms: number) => {
+        sleeps.push(ms);
+      },
+    });
     fetcher.want(0, [3, 4]);
     store.fail(3, new StoreError('http', 'HTTP 503'));
     await settle();
-    store.answer(3);                  // second attempt succeeds
+    store.answer(3); // second attempt succeeds
     store.fail(4, new StoreError('http', 'HTTP 503'));
     await settle();
     store.fail(4, new TypeError('fetch failed'));
@@ -136,11 +157,11 @@ describe('ChunkFetcher', () => {
 
   it('throughput is bytes over the time with requests in flight', async () => {
     const { store, fetcher, tick } = setup();
-    fetcher.want(0, [999]);           // 1000 bytes
+    fetcher.want(0, [999]); // 1000 bytes
     tick(500);
     store.answer(999);
     await fetcher.idle();
-    tick(10_000);                     // idle time does not count
+    tick(10_000); // idle time does not count
     expect(fetcher.counters.throughputBytesPerSecond).toBe(2000);
   });
 });

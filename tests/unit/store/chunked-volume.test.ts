@@ -36,10 +36,34 @@ interface Case {
 
 const cases: Case[] = [
   // 66^3 in 32^3 chunks: partial chunks and partial blocks at the far edges
-  { key: 'neghip', input: 'volumes/neghip_66x66x66_uint8.raw', dims: [66, 66, 66], chunk: 32, rate: 4, isovalues: [40.37, 133.37], partial: true },
-  { key: 'hydrogen', input: 'volumes/hydrogen_atom_128x128x128_float32.raw', dims: [128, 128, 128], chunk: 32, rate: 6, isovalues: [9.37, 60.37], partial: true },
+  {
+    key: 'neghip',
+    input: 'volumes/neghip_66x66x66_uint8.raw',
+    dims: [66, 66, 66],
+    chunk: 32,
+    rate: 4,
+    isovalues: [40.37, 133.37],
+    partial: true,
+  },
+  {
+    key: 'hydrogen',
+    input: 'volumes/hydrogen_atom_128x128x128_float32.raw',
+    dims: [128, 128, 128],
+    chunk: 32,
+    rate: 6,
+    isovalues: [9.37, 60.37],
+    partial: true,
+  },
   // 64^3 chunks (the converter's default): groups of 16^3 blocks
-  { key: 'bonsai', input: 'volumes/bonsai_256x256x256_float32.rate4.zfp', dims: [256, 256, 256], chunk: 64, rate: 4, isovalues: [80.37], partial: false },
+  {
+    key: 'bonsai',
+    input: 'volumes/bonsai_256x256x256_float32.rate4.zfp',
+    dims: [256, 256, 256],
+    chunk: 64,
+    rate: 4,
+    isovalues: [80.37],
+    partial: false,
+  },
 ];
 
 interface Made {
@@ -56,14 +80,34 @@ const made = new Map<string, Made>();
 beforeAll(() => {
   for (const c of cases) {
     const store = join(work, `${c.key}.zarr`);
-    execFileSync(process.execPath, [join(repoRoot, 'scripts/convert.mjs'), join(sharedData, c.input), '--out', store, '--chunk', String(c.chunk), '--rate', String(c.rate), '--levels', '1', '--quiet'], {
-      cwd: repoRoot,
-      stdio: 'pipe',
-      timeout: 900_000,
-    });
+    execFileSync(
+      process.execPath,
+      [
+        join(repoRoot, 'scripts/convert.mjs'),
+        join(sharedData, c.input),
+        '--out',
+        store,
+        '--chunk',
+        String(c.chunk),
+        '--rate',
+        String(c.rate),
+        '--levels',
+        '1',
+        '--quiet',
+      ],
+      {
+        cwd: repoRoot,
+        stdio: 'pipe',
+        timeout: 900_000,
+      },
+    );
     const python = join(repoRoot, '.venv-converter/bin/python');
     // zfpy's one-stream compression of the level-0 values, and the store's per-chunk ranges
-    execFileSync(python, ['-c', `
+    execFileSync(
+      python,
+      [
+        '-c',
+        `
 import sys, numpy as np, zarr, zfpy
 store, raw, dtype, nx, ny, nz, rate, out = sys.argv[1:]
 if raw.endswith('.zfp'):
@@ -73,14 +117,30 @@ else:
 open(out + '.zfp', 'wb').write(zfpy.compress_numpy(a, rate=float(rate), write_header=True))
 g = zarr.open_group(store, mode='r')
 np.asarray(g['ranges/0'][...], dtype='<f4').tofile(out + '.ranges')
-`, store, join(sharedData, c.input), c.input.includes('uint8') ? 'uint8' : '<f4', ...c.dims.map(String), String(c.rate), join(work, c.key)], { encoding: 'utf8' });
+`,
+        store,
+        join(sharedData, c.input),
+        c.input.includes('uint8') ? 'uint8' : '<f4',
+        ...c.dims.map(String),
+        String(c.rate),
+        join(work, c.key),
+      ],
+      { encoding: 'utf8' },
+    );
     const grid = c.dims.map((n) => Math.ceil(n / c.chunk)) as [number, number, number];
     const first = readFileSync(join(store, '0', 'c', '0', '0', '0'));
     made.set(c.key, {
       store,
       whole: new Uint8Array(readFileSync(join(work, `${c.key}.zfp`))),
       ranges: new Float32Array(new Uint8Array(readFileSync(join(work, `${c.key}.ranges`))).buffer),
-      layout: { dims: c.dims, chunkEdge: c.chunk, chunkGrid: grid, rate: c.rate, chunkBytes: first.byteLength, name: `${c.key}.zarr level 0` },
+      layout: {
+        dims: c.dims,
+        chunkEdge: c.chunk,
+        chunkGrid: grid,
+        rate: c.rate,
+        chunkBytes: first.byteLength,
+        name: `${c.key}.zarr level 0`,
+      },
     });
   }
 }, 900_000);
@@ -122,90 +182,102 @@ const allChunks = (m: Made) => Array.from({ length: m.layout.chunkGrid.reduce((a
 
 describe('a chunked store level through the GPU chunk pool', () => {
   for (const c of cases) {
-    gpuTest(`${c.key}: every chunk resident = the in-core pipeline on one zfpy stream, vertex for vertex; the needed chunks alone give the same`, async ({ gpu }) => {
-      const m = made.get(c.key)!;
-      const stream = loadZfpStream(gpu.device, m.whole, `${c.key}.zfp`);
-      const groupEdgeBlocks = c.chunk / 4;
-      const inCore = await Isosurface.create(gpu, stream, { groupEdgeBlocks });
-      const pool = ChunkedVolume.create(gpu, m.layout, { poolChunks: allChunks(m).length });
-      for (const chunk of allChunks(m)) pool.put(chunk, chunkBytes(m, chunk));
-      expect(pool.residentCount).toBe(allChunks(m).length);
-      const chunked = await Isosurface.create(gpu, pool);
-      expect(chunked.info.blockCount).toBe(inCore.info.blockCount);
-      for (const iso of c.isovalues) {
-        const a = await inCore.compute(iso);
-        const b = await chunked.compute(iso);
-        expect(a.triangles, `iso ${iso}`).toBeGreaterThan(100);
-        expect(b.triangles, `iso ${iso}`).toBe(a.triangles);
-        expect(b.activeBlocks, `iso ${iso}`).toBe(a.activeBlocks);
-        const [va, vb] = await Promise.all([inCore.readVertices(), chunked.readVertices()]);
-        expect(vb.length).toBe(va.length);
-        expect(Buffer.from(vb.buffer).equals(Buffer.from(va.buffer)), `iso ${iso}: vertices`).toBe(true);
-      }
-      // A second surface over the same pool (the stream controller makes one each time a level is shown again): it starts from every resident chunk.
-      chunked.destroy();
-      const again = await Isosurface.create(gpu, pool);
-      expect((await again.compute(c.isovalues[0])).triangles).toBe((await inCore.compute(c.isovalues[0])).triangles);
-      again.destroy();
-      pool.destroy();
+    gpuTest(
+      `${c.key}: every chunk resident = the in-core pipeline on one zfpy stream, vertex for vertex; the needed chunks alone give the same`,
+      async ({ gpu }) => {
+        const m = made.get(c.key)!;
+        const stream = loadZfpStream(gpu.device, m.whole, `${c.key}.zfp`);
+        const groupEdgeBlocks = c.chunk / 4;
+        const inCore = await Isosurface.create(gpu, stream, { groupEdgeBlocks });
+        const pool = ChunkedVolume.create(gpu, m.layout, { poolChunks: allChunks(m).length });
+        for (const chunk of allChunks(m)) pool.put(chunk, chunkBytes(m, chunk));
+        expect(pool.residentCount).toBe(allChunks(m).length);
+        const chunked = await Isosurface.create(gpu, pool);
+        expect(chunked.info.blockCount).toBe(inCore.info.blockCount);
+        for (const iso of c.isovalues) {
+          const a = await inCore.compute(iso);
+          const b = await chunked.compute(iso);
+          expect(a.triangles, `iso ${iso}`).toBeGreaterThan(100);
+          expect(b.triangles, `iso ${iso}`).toBe(a.triangles);
+          expect(b.activeBlocks, `iso ${iso}`).toBe(a.activeBlocks);
+          const [va, vb] = await Promise.all([inCore.readVertices(), chunked.readVertices()]);
+          expect(vb.length).toBe(va.length);
+          expect(Buffer.from(vb.buffer).equals(Buffer.from(va.buffer)), `iso ${iso}: vertices`).toBe(true);
+        }
+        // A second surface over the same pool (the stream controller makes one each time a level is shown again): it starts from every resident chunk.
+        chunked.destroy();
+        const again = await Isosurface.create(gpu, pool);
+        expect((await again.compute(c.isovalues[0])).triangles).toBe((await inCore.compute(c.isovalues[0])).triangles);
+        again.destroy();
+        pool.destroy();
 
-      // Only the chunks the surface needs: the same surface from fewer chunks.
-      for (const iso of c.partial ? c.isovalues : []) {
-        const need = neededChunks(m, iso);
-        expect(need.length).toBeLessThanOrEqual(allChunks(m).length);
-        const partial = ChunkedVolume.create(gpu, m.layout, { poolChunks: need.length });
-        for (const chunk of need) partial.put(chunk, chunkBytes(m, chunk));
-        const iso2 = await Isosurface.create(gpu, partial);
-        const a = await inCore.compute(iso);
-        const b = await iso2.compute(iso);
-        expect(b.triangles, `iso ${iso} from ${need.length} chunks`).toBe(a.triangles);
-        const [va, vb] = await Promise.all([inCore.readVertices(), iso2.readVertices()]);
-        expect(Buffer.from(vb.buffer).equals(Buffer.from(va.buffer)), `iso ${iso}: vertices from the needed chunks`).toBe(true);
-        iso2.destroy();
-        partial.destroy();
-      }
-      inCore.destroy();
-      stream.destroy();
-    }, 600_000);
+        // Only the chunks the surface needs: the same surface from fewer chunks.
+        for (const iso of c.partial ? c.isovalues : []) {
+          const need = neededChunks(m, iso);
+          expect(need.length).toBeLessThanOrEqual(allChunks(m).length);
+          const partial = ChunkedVolume.create(gpu, m.layout, { poolChunks: need.length });
+          for (const chunk of need) partial.put(chunk, chunkBytes(m, chunk));
+          const iso2 = await Isosurface.create(gpu, partial);
+          const a = await inCore.compute(iso);
+          const b = await iso2.compute(iso);
+          expect(b.triangles, `iso ${iso} from ${need.length} chunks`).toBe(a.triangles);
+          const [va, vb] = await Promise.all([inCore.readVertices(), iso2.readVertices()]);
+          expect(Buffer.from(vb.buffer).equals(Buffer.from(va.buffer)), `iso ${iso}: vertices from the needed chunks`).toBe(true);
+          iso2.destroy();
+          partial.destroy();
+        }
+        inCore.destroy();
+        stream.destroy();
+      },
+      600_000,
+    );
   }
 
-  gpuTest('hydrogen: a narrow surface needs a fraction of the chunks; evicted slots are reused without stale blocks', async ({ gpu }) => {
-    const m = made.get('hydrogen')!;
-    // the narrowest of a few surfaces (it must need under half of the store) and a wide one
-    const candidates = [30.37, 60.37, 120.37, 180.37, 230.37].map((iso) => ({ iso, need: neededChunks(m, iso) })).filter((x) => x.need.length > 0);
-    const narrow = candidates.reduce((a, b) => (b.need.length < a.need.length ? b : a));
-    const [high, low] = [narrow.iso, 9.37];
-    const needHigh = narrow.need;
-    const needLow = neededChunks(m, low);
-    expect(needHigh.length).toBeLessThan(allChunks(m).length / 2);
-    expect(needLow.length).toBeGreaterThan(needHigh.length);
-    const stream = loadZfpStream(gpu.device, m.whole, 'hydrogen.zfp');
-    const inCore = await Isosurface.create(gpu, stream, { groupEdgeBlocks: 8 });
-    const expected = new Map<number, number>();
-    for (const iso of [high, low]) expected.set(iso, (await inCore.compute(iso)).triangles);
-    expect(expected.get(high)).toBeGreaterThan(0);
-    // A pool just large enough for the larger set, so the second set reuses freed slots.
-    const pool = ChunkedVolume.create(gpu, m.layout, { poolChunks: Math.max(needHigh.length, needLow.length) });
-    const surface = await Isosurface.create(gpu, pool);
-    for (const chunk of needHigh) pool.put(chunk, chunkBytes(m, chunk));
-    expect((await surface.compute(high)).triangles).toBe(expected.get(high));
-    for (const chunk of needHigh) pool.evict(chunk);
-    expect(pool.residentCount).toBe(0);
-    // nothing resident: no surface, whatever the block cache still holds
-    expect((await surface.compute(high)).triangles).toBe(0);
-    for (const chunk of needLow) pool.put(chunk, chunkBytes(m, chunk));
-    expect((await surface.compute(low)).triangles).toBe(expected.get(low));
-    surface.destroy();
-    pool.destroy();
-    inCore.destroy();
-    stream.destroy();
-  }, 600_000);
+  gpuTest(
+    'hydrogen: a narrow surface needs a fraction of the chunks; evicted slots are reused without stale blocks',
+    async ({ gpu }) => {
+      const m = made.get('hydrogen')!;
+      // the narrowest of a few surfaces (it must need under half of the store) and a wide one
+      const candidates = [30.37, 60.37, 120.37, 180.37, 230.37]
+        .map((iso) => ({ iso, need: neededChunks(m, iso) }))
+        .filter((x) => x.need.length > 0);
+      const narrow = candidates.reduce((a, b) => (b.need.length < a.need.length ? b : a));
+      const [high, low] = [narrow.iso, 9.37];
+      const needHigh = narrow.need;
+      const needLow = neededChunks(m, low);
+      expect(needHigh.length).toBeLessThan(allChunks(m).length / 2);
+      expect(needLow.length).toBeGreaterThan(needHigh.length);
+      const stream = loadZfpStream(gpu.device, m.whole, 'hydrogen.zfp');
+      const inCore = await Isosurface.create(gpu, stream, { groupEdgeBlocks: 8 });
+      const expected = new Map<number, number>();
+      for (const iso of [high, low]) expected.set(iso, (await inCore.compute(iso)).triangles);
+      expect(expected.get(high)).toBeGreaterThan(0);
+      // A pool just large enough for the larger set, so the second set reuses freed slots.
+      const pool = ChunkedVolume.create(gpu, m.layout, { poolChunks: Math.max(needHigh.length, needLow.length) });
+      const surface = await Isosurface.create(gpu, pool);
+      for (const chunk of needHigh) pool.put(chunk, chunkBytes(m, chunk));
+      expect((await surface.compute(high)).triangles).toBe(expected.get(high));
+      for (const chunk of needHigh) pool.evict(chunk);
+      expect(pool.residentCount).toBe(0);
+      // nothing resident: no surface, whatever the block cache still holds
+      expect((await surface.compute(high)).triangles).toBe(0);
+      for (const chunk of needLow) pool.put(chunk, chunkBytes(m, chunk));
+      expect((await surface.compute(low)).triangles).toBe(expected.get(low));
+      surface.destroy();
+      pool.destroy();
+      inCore.destroy();
+      stream.destroy();
+    },
+    600_000,
+  );
 
-  gpuTest('chunks that are not this level\'s and a full pool are refused, naming the chunk; the pool stays usable', async ({ gpu }) => {
+  gpuTest("chunks that are not this level's and a full pool are refused, naming the chunk; the pool stays usable", async ({ gpu }) => {
     const m = made.get('neghip')!;
     const pool = ChunkedVolume.create(gpu, m.layout, { poolChunks: 2 });
     const good = chunkBytes(m, 0);
-    expect(() => pool.put(1, good.subarray(0, good.length - 8))).toThrow(/neghip\.zarr level 0 chunk \(1, 0, 0\): \d+ bytes, but a 32\^3 chunk at rate 4 is \d+ bytes/);
+    expect(() => pool.put(1, good.subarray(0, good.length - 8))).toThrow(
+      /neghip\.zarr level 0 chunk \(1, 0, 0\): \d+ bytes, but a 32\^3 chunk at rate 4 is \d+ bytes/,
+    );
     const other = made.get('hydrogen')!;
     expect(() => pool.put(1, chunkBytes(other, 0).subarray(0, good.length))).toThrow(ChunkError);
     const lying = good.slice();
@@ -222,12 +294,24 @@ describe('a chunked store level through the GPU chunk pool', () => {
     pool.put(1, chunkBytes(m, 1));
     expect(() => pool.put(2, chunkBytes(m, 2))).toThrow(/chunk \(2, 0, 0\): the pool is full \(2 chunks\)/);
     expect(pool.residentCount).toBe(2);
-    expect(() => ChunkedVolume.create(gpu, { ...m.layout, chunkEdge: 30 }, { poolChunks: 1 })).toThrow(/chunk edge 30 is not a multiple of 4/);
-    expect(() => ChunkedVolume.create(gpu, { ...m.layout, chunkBytes: 100 }, { poolChunks: 1 })).toThrow(/is \d+ bytes as zfp writes it, not 100/);
+    expect(() => ChunkedVolume.create(gpu, { ...m.layout, chunkEdge: 30 }, { poolChunks: 1 })).toThrow(
+      /chunk edge 30 is not a multiple of 4/,
+    );
+    expect(() => ChunkedVolume.create(gpu, { ...m.layout, chunkBytes: 100 }, { poolChunks: 1 })).toThrow(
+      /is \d+ bytes as zfp writes it, not 100/,
+    );
     // a hostile size from store metadata: refused before the page table is allocated
     const tiny = planZfpStream('4^3 chunk', [4, 4, 4], 4, true).paddedBytes;
-    const huge: ChunkLevelLayout = { ...m.layout, dims: [2 ** 12, 2 ** 12, 2 ** 13], chunkEdge: 4, chunkGrid: [2 ** 10, 2 ** 10, 2 ** 11], chunkBytes: tiny };
-    expect(() => ChunkedVolume.create(gpu, huge, { poolChunks: 1 })).toThrow(/chunks need a \d+-byte page table, more than one storage binding/);
+    const huge: ChunkLevelLayout = {
+      ...m.layout,
+      dims: [2 ** 12, 2 ** 12, 2 ** 13],
+      chunkEdge: 4,
+      chunkGrid: [2 ** 10, 2 ** 10, 2 ** 11],
+      chunkBytes: tiny,
+    };
+    expect(() => ChunkedVolume.create(gpu, huge, { poolChunks: 1 })).toThrow(
+      /chunks need a \d+-byte page table, more than one storage binding/,
+    );
     pool.destroy();
   });
 });

@@ -31,18 +31,25 @@ function rangeBytes(root: string): number {
 }
 
 function cli(...args: string[]) {
-  const r = spawnSync(process.execPath, ['--import', join(repoRoot, 'scripts/register-node-loaders.mjs'), join(repoRoot, 'src/cli/main.ts'), ...args], { encoding: 'utf8', timeout: 600_000 });
+  const r = spawnSync(
+    process.execPath,
+    ['--import', join(repoRoot, 'scripts/register-node-loaders.mjs'), join(repoRoot, 'src/cli/main.ts'), ...args],
+    { encoding: 'utf8', timeout: 600_000 },
+  );
   return { status: r.status, stderr: r.stderr, stdout: r.stdout };
 }
 
 beforeAll(() => {
   convert('volumes/bonsai_256x256x256_float32.rate4.zfp', store, ['--chunk', '32', '--rate', '4', '--shard', '2']);
   // the converter's input: bonsai decoded by zfpy; the same volume as one stream at rate 4
-  converterPython(`
+  converterPython(
+    `
 import sys, zfpy, numpy as np
 a = zfpy.decompress_numpy(open(sys.argv[1], 'rb').read())
 open(sys.argv[2], 'wb').write(zfpy.compress_numpy(np.ascontiguousarray(a, dtype=np.float32), rate=4, write_header=True))
-`, [join(sharedData, 'volumes/bonsai_256x256x256_float32.rate4.zfp'), oneStream]);
+`,
+    [join(sharedData, 'volumes/bonsai_256x256x256_float32.rate4.zfp'), oneStream],
+  );
 }, 900_000);
 afterAll(() => rmSync(work, { recursive: true, force: true }));
 
@@ -59,10 +66,14 @@ describe('CLI on stores', () => {
     const tri = (r: { isosurfaces: { triangles: number }[] }) => r.isosurfaces.map((x) => x.triangles);
     expect(tri(s)).toEqual(tri(c));
     // the same triangles, summed in another order (only the chunks fetched are in the pool)
-    s.isosurfaces.forEach((x: { surfaceArea: number }, i: number) => expect(Math.abs(x.surfaceArea / c.isosurfaces[i].surfaceArea - 1)).toBeLessThan(1e-12));
+    s.isosurfaces.forEach((x: { surfaceArea: number }, i: number) =>
+      expect(Math.abs(x.surfaceArea / c.isosurfaces[i].surfaceArea - 1)).toBeLessThan(1e-12),
+    );
     expect(s.isosurfaces[0].triangles).toBeGreaterThan(10_000);
-    const chunkBytes = 12 + 8 ** 3 * 32 + 4;            // 32^3 at rate 4: 512 blocks of 256 bits, header padded
-    const needed = Number(converterPython(`
+    const chunkBytes = 12 + 8 ** 3 * 32 + 4; // 32^3 at rate 4: 512 blocks of 256 bits, header padded
+    const needed = Number(
+      converterPython(
+        `
 import sys, zarr, numpy as np
 v = zarr.open_array(sys.argv[1] + '/0', mode='r')[:]     # z, y, x
 c = 32
@@ -82,13 +93,18 @@ need = np.zeros(lo.shape, bool)
 for iso in [np.float32(x) for x in sys.argv[2].split(',')]:
     need |= (nlo < iso) & (iso <= nhi)
 print(int(need.sum()))
-`, [store, isos]));
+`,
+        [store, isos],
+      ),
+    );
     expect(needed).toBeGreaterThan(0);
     expect(needed).toBeLessThan(512);
     expect(s.store).toMatchObject({ level: 0, chunks: needed, levelChunks: 512, chunkBytesFetched: needed * chunkBytes });
     // + metadata (zarr.json of the group, the levels, the range arrays), the range arrays' chunks and at most 64 shard indexes (8 x 16 + 4 bytes each)
     expect(s.store.bytesFetched).toBeGreaterThan(s.store.chunkBytesFetched + s.store.metadataBytes);
-    expect(s.store.bytesFetched).toBeLessThanOrEqual(s.store.chunkBytesFetched + s.store.metadataBytes + rangeBytes(store) + 64 * (8 * 16 + 4));
+    expect(s.store.bytesFetched).toBeLessThanOrEqual(
+      s.store.chunkBytesFetched + s.store.metadataBytes + rangeBytes(store) + 64 * (8 * 16 + 4),
+    );
   });
 
   it('bench --level 1 runs on the level; a damaged chunk is reported naming it', () => {
@@ -100,7 +116,7 @@ print(int(need.sum()))
     expect(b.store.chunks).toBeGreaterThan(0);
     expect(b.store.chunks).toBeLessThanOrEqual(64);
     expect(cli('extract', store, '--level', '7', '--iso', '1').stderr).toMatch(/--level 7 does not exist \(levels 0 to \d\)/);
-    truncateSync(join(store, '1/c/0/0/0'), 1000);    // the level-1 shard: its index is gone
+    truncateSync(join(store, '1/c/0/0/0'), 1000); // the level-1 shard: its index is gone
     const bad = cli('extract', store, '--level', '1', '--iso', '50');
     expect(bad.status).not.toBe(0);
     expect(bad.stderr).toMatch(/bonsai.zarr level 1 chunk \(\d, \d, \d\)/);

@@ -18,7 +18,10 @@ const sharded = join(work, 'neghip-shard.zarr');
 const open = async (path: string) => openZfpStore(storeForLocation(path), path);
 
 async function refusal(p: Promise<unknown>): Promise<StoreError> {
-  const e = await p.then(() => null, (x: unknown) => x);
+  const e = await p.then(
+    () => null,
+    (x: unknown) => x,
+  );
   expect(e).toBeInstanceOf(StoreError);
   return e as StoreError;
 }
@@ -32,8 +35,18 @@ afterAll(() => rmSync(work, { recursive: true, force: true }));
 describe('openZfpStore', () => {
   it('reads the levels of a converted store and every chunk as stored', async () => {
     const s = await open(plain);
-    expect(s.levels.map((l) => l.layout.dims)).toEqual([[66, 66, 66], [33, 33, 33], [17, 17, 17], [9, 9, 9]]);
-    expect(s.levels.map((l) => l.layout.chunkGrid)).toEqual([[5, 5, 5], [3, 3, 3], [2, 2, 2], [1, 1, 1]]);
+    expect(s.levels.map((l) => l.layout.dims)).toEqual([
+      [66, 66, 66],
+      [33, 33, 33],
+      [17, 17, 17],
+      [9, 9, 9],
+    ]);
+    expect(s.levels.map((l) => l.layout.chunkGrid)).toEqual([
+      [5, 5, 5],
+      [3, 3, 3],
+      [2, 2, 2],
+      [1, 1, 1],
+    ]);
     expect(s.levels.map((l) => l.layout.rate)).toEqual([8, 6, 6, 6]);
     // zfpy's stream: 12-byte header + 64 blocks x 64 R bits, padded to 8 bytes
     expect(s.levels[0].layout.chunkBytes).toBe(12 + 64 * 8 * 8 + 4);
@@ -44,9 +57,14 @@ describe('openZfpStore', () => {
       expect(Buffer.from(await s.readChunk(0, chunk)).equals(readFileSync(join(plain, `0/c/${z}/${y}/${x}`)))).toBe(true);
     }
     // ranges/<L> against zarr-python's reading of the same array
-    const ref = JSON.parse(converterPython(`
+    const ref = JSON.parse(
+      converterPython(
+        `
 import sys, json, zarr
-print(json.dumps(zarr.open_array(sys.argv[1], mode='r', path='ranges/1')[:].reshape(-1).tolist()))`, [plain])) as number[];
+print(json.dumps(zarr.open_array(sys.argv[1], mode='r', path='ranges/1')[:].reshape(-1).tolist()))`,
+        [plain],
+      ),
+    ) as number[];
     expect(Array.from((await s.readRanges(1))!)).toEqual(ref);
   });
 
@@ -54,7 +72,8 @@ print(json.dumps(zarr.open_array(sys.argv[1], mode='r', path='ranges/1')[:].resh
     const a = await open(plain);
     const b = await open(sharded);
     expect(b.levels[0].shardChunks).toBe(2);
-    for (const chunk of [0, 1, 31, 124]) expect(Buffer.from(await b.readChunk(0, chunk)).equals(Buffer.from(await a.readChunk(0, chunk)))).toBe(true);
+    for (const chunk of [0, 1, 31, 124])
+      expect(Buffer.from(await b.readChunk(0, chunk)).equals(Buffer.from(await a.readChunk(0, chunk)))).toBe(true);
     expect(await b.readRanges(0)).toEqual(await a.readRanges(0));
   });
 
@@ -62,7 +81,13 @@ print(json.dumps(zarr.open_array(sys.argv[1], mode='r', path='ranges/1')[:].resh
     const other = zarrPythonStore(join(work, 'other.zarr'), [20, 24, 36], 8, 'serializer=ZFPY(mode=2, rate=8), compressors=None');
     const s = await open(other);
     expect(s.levels).toHaveLength(1);
-    expect(s.levels[0].layout).toMatchObject({ dims: [36, 24, 20], chunkEdge: 8, chunkGrid: [5, 3, 3], rate: 8, chunkBytes: 12 + 8 * 64 + 4 });
+    expect(s.levels[0].layout).toMatchObject({
+      dims: [36, 24, 20],
+      chunkEdge: 8,
+      chunkGrid: [5, 3, 3],
+      rate: 8,
+      chunkBytes: 12 + 8 * 64 + 4,
+    });
     expect(await s.readRanges(0)).toBeNull();
     expect(s.notes.join()).toMatch(/no per-chunk range arrays/);
     expect((await s.readChunk(0, 44)).length).toBe(s.levels[0].layout.chunkBytes);
@@ -70,7 +95,9 @@ print(json.dumps(zarr.open_array(sys.argv[1], mode='r', path='ranges/1')[:].resh
 
   it('refuses other codecs, modes, types and chunk edges, saying how to convert', async () => {
     const gzip = zarrPythonStore(join(work, 'gzip.zarr'), [8, 8, 8], 8, 'compressors=zarr.codecs.GzipCodec()');
-    expect((await refusal(open(gzip))).message).toMatch(/gzip.zarr level 0.*bytes \+ gzip, not numcodecs.zfpy.*npm run convert -- STORE --out new.zarr/);
+    expect((await refusal(open(gzip))).message).toMatch(
+      /gzip.zarr level 0.*bytes \+ gzip, not numcodecs.zfpy.*npm run convert -- STORE --out new.zarr/,
+    );
     const acc = zarrPythonStore(join(work, 'acc.zarr'), [8, 8, 8], 8, 'serializer=ZFPY(mode=4, tolerance=0.01), compressors=None');
     expect((await refusal(open(acc))).message).toMatch(/acc.zarr level 0: numcodecs.zfpy in fixed accuracy mode/);
     const edge = zarrPythonStore(join(work, 'edge.zarr'), [12, 12, 12], 6, 'serializer=ZFPY(mode=2, rate=8), compressors=None');
@@ -84,7 +111,9 @@ print(json.dumps(zarr.open_array(sys.argv[1], mode='r', path='ranges/1')[:].resh
     const meta = JSON.parse(readFileSync(join(huge, 'zarr.json'), 'utf8'));
     meta.shape = [1e9, 1e9, 1e9];
     writeFileSync(join(huge, 'zarr.json'), JSON.stringify(meta));
-    expect((await refusal(open(huge))).message).toMatch(/huge.zarr level 0: 125000000 x 125000000 x 125000000 chunks of 8\^3; this reader takes at most 67108864 per level/);
+    expect((await refusal(open(huge))).message).toMatch(
+      /huge.zarr level 0: 125000000 x 125000000 x 125000000 chunks of 8\^3; this reader takes at most 67108864 per level/,
+    );
     meta.shape = [8, 8, 2 ** 32];
     writeFileSync(join(huge, 'zarr.json'), JSON.stringify(meta));
     expect((await refusal(open(huge))).message).toMatch(/huge.zarr level 0: shape \[8, 8, 4294967296\] is not a volume this reader takes/);
@@ -117,7 +146,11 @@ print(json.dumps(zarr.open_array(sys.argv[1], mode='r', path='ranges/1')[:].resh
     let base = '';
     beforeAll(async () => {
       server = createServer((req, res) => {
-        if (req.url?.startsWith('/forbidden/')) { res.statusCode = 403; res.end(); return; }
+        if (req.url?.startsWith('/forbidden/')) {
+          res.statusCode = 403;
+          res.end();
+          return;
+        }
         res.statusCode = 404;
         res.end();
       });

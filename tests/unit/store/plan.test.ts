@@ -19,7 +19,9 @@ let reference: { rule: number[][]; emitting: number[][]; ranges: number[] };
 
 beforeAll(() => {
   convert('volumes/hydrogen_atom_128x128x128_float32.raw', store, ['--chunk', '16', '--rate', '6', '--levels', '2']);
-  reference = JSON.parse(converterPython(`
+  reference = JSON.parse(
+    converterPython(
+      `
 import sys, json, numpy as np, zarr
 v = zarr.open_array(sys.argv[1], mode='r', path='0')[:].astype(np.float64)   # numcodecs.zfpy decode
 isos = json.loads(sys.argv[2]); C = 16
@@ -46,7 +48,10 @@ for iso in isos:
   t = np.pad(touched, [(0, gz*C-nz), (0, gy*C-ny), (0, gx*C-nx)]).reshape(gz, C, gy, C, gx, C).any(axis=(1, 3, 5))
   emitting.append(np.flatnonzero(t.reshape(-1)).tolist())
 print(json.dumps({'rule': rule, 'emitting': emitting, 'ranges': np.stack([lo, hi], -1).reshape(-1).tolist()}))
-`, [store, JSON.stringify(isos)]));
+`,
+      [store, JSON.stringify(isos)],
+    ),
+  );
 }, 900_000);
 afterAll(() => rmSync(work, { recursive: true, force: true }));
 
@@ -61,7 +66,10 @@ describe('chunk plan', () => {
       const plan = chunksNeeded(nb, iso);
       expect(plan, `iso ${iso}`).toEqual(reference.rule[i]);
       const planned = new Set(plan);
-      expect(reference.emitting[i].filter((c) => !planned.has(c)), `iso ${iso}`).toEqual([]);
+      expect(
+        reference.emitting[i].filter((c) => !planned.has(c)),
+        `iso ${iso}`,
+      ).toEqual([]);
       expect(reference.emitting[i].length).toBeGreaterThan(0);
     });
     // the hydrogen atom's high isovalues are a small blob around the nucleus
@@ -70,15 +78,24 @@ describe('chunk plan', () => {
 
   it('unknown ranges (NaN) make a chunk and its neighbours always needed', () => {
     const r = new Float32Array(2 * 27).fill(0);
-    r[2 * 13] = NaN; r[2 * 13 + 1] = NaN;          // the centre of 3x3x3
+    r[2 * 13] = NaN;
+    r[2 * 13 + 1] = NaN; // the centre of 3x3x3
     expect(chunksNeeded(neighbourhoodRanges([3, 3, 3], r), 5)).toHaveLength(27);
     const ends = new Float32Array(2 * 4).fill(0);
-    ends[0] = NaN; ends[1] = NaN;                  // chunk 0 of a 4x1x1 row
+    ends[0] = NaN;
+    ends[1] = NaN; // chunk 0 of a 4x1x1 row
     expect(chunksNeeded(neighbourhoodRanges([4, 1, 1], ends), 5)).toEqual([0, 1]);
   });
 
   it('orders chunks nearest-first to a point, ties by index', () => {
-    const layout = { dims: [40, 32, 32] as [number, number, number], chunkEdge: 16, chunkGrid: [3, 2, 2] as [number, number, number], rate: 8, chunkBytes: 0, name: 't' };
+    const layout = {
+      dims: [40, 32, 32] as [number, number, number],
+      chunkEdge: 16,
+      chunkGrid: [3, 2, 2] as [number, number, number],
+      rate: 8,
+      chunkBytes: 0,
+      name: 't',
+    };
     // chunk 2 (x = 32..40) has its centre at x = 36
     expect(nearestFirst(layout, [0, 1, 2, 3, 4, 5], [37, 0, 0])).toEqual([2, 1, 5, 4, 0, 3]);
     expect(nearestFirst(layout, [11, 0, 5], [16, 16, 16])).toEqual([0, 5, 11]);

@@ -21,12 +21,20 @@ beforeAll(async () => {
   mkdirSync(join(work, 'stores'));
   convert('volumes/neghip_66x66x66_uint8.raw', join(work, 'stores/neghip.zarr'), ['--chunk', '16', '--rate', '8', '--shard', '2']);
   const mw = storesMiddleware(join(work, 'stores'));
-  server = createServer((req, res) => mw(req, res, () => { res.statusCode = 418; res.end(); }));
+  server = createServer((req, res) =>
+    mw(req, res, () => {
+      res.statusCode = 418;
+      res.end();
+    }),
+  );
   await new Promise<void>((r) => server.listen(0, '127.0.0.1', () => r()));
   const a = server.address();
   base = `http://127.0.0.1:${typeof a === 'object' && a ? a.port : 0}`;
 }, 900_000);
-afterAll(() => { server.close(); rmSync(work, { recursive: true, force: true }); });
+afterAll(() => {
+  server.close();
+  rmSync(work, { recursive: true, force: true });
+});
 
 describe('/stores/ on the dev and preview servers', () => {
   it('serves a sharded store to zarrita with the same chunk bytes as the folder', async () => {
@@ -34,7 +42,8 @@ describe('/stores/ on the dev and preview servers', () => {
     const http = await openZfpStore(new FetchStore(url), url);
     const disk = await openZfpStore(storeForLocation(join(work, 'stores/neghip.zarr')), 'disk');
     expect(http.levels.map((l) => l.layout.dims)).toEqual(disk.levels.map((l) => l.layout.dims));
-    for (const c of [0, 31, 62, 124]) expect(Buffer.from(await http.readChunk(0, c)).equals(Buffer.from(await disk.readChunk(0, c)))).toBe(true);
+    for (const c of [0, 31, 62, 124])
+      expect(Buffer.from(await http.readChunk(0, c)).equals(Buffer.from(await disk.readChunk(0, c)))).toBe(true);
     expect(await http.readRanges(0)).toEqual(await disk.readRanges(0));
   });
 

@@ -9,7 +9,13 @@ import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
 import { chunksNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
-import { StreamController, type LevelStats, type LevelVolume, type StreamGpu, type StreamProgress } from '../../../src/store/stream-controller.ts';
+import {
+  StreamController,
+  type LevelStats,
+  type LevelVolume,
+  type StreamGpu,
+  type StreamProgress,
+} from '../../../src/store/stream-controller.ts';
 import type { ChunkLevelLayout } from '../../../src/store/types.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
 import { openZfpStore, type ZfpStore } from '../../../src/store/zarr/open-store.ts';
@@ -21,23 +27,40 @@ const path = join(work, 'hydrogen.zarr');
 class FakeVolume implements LevelVolume {
   resident = new Set<number>();
   destroyed = false;
-  constructor(readonly layout: ChunkLevelLayout, readonly poolChunks: number) {}
-  get poolBytes() { return this.poolChunks * this.layout.chunkBytes + 4 * this.layout.chunkGrid.reduce((a, b) => a * b); }
-  get residentCount() { return this.resident.size; }
-  has(c: number) { return this.resident.has(c); }
+  constructor(
+    readonly layout: ChunkLevelLayout,
+    readonly poolChunks: number,
+  ) {}
+  get poolBytes() {
+    return this.poolChunks * this.layout.chunkBytes + 4 * this.layout.chunkGrid.reduce((a, b) => a * b);
+  }
+  get residentCount() {
+    return this.resident.size;
+  }
+  has(c: number) {
+    return this.resident.has(c);
+  }
   put(c: number, bytes: Uint8Array) {
     if (bytes.length !== this.layout.chunkBytes) throw new Error('wrong size');
     if (this.resident.size >= this.poolChunks) throw new Error(`${this.layout.name}: pool full`);
     this.resident.add(c);
   }
-  evict(c: number) { this.resident.delete(c); }
-  destroy() { this.destroyed = true; }
+  evict(c: number) {
+    this.resident.delete(c);
+  }
+  destroy() {
+    this.destroyed = true;
+  }
 }
 
 function fakeGpu(store: ZfpStore, ranges: Float32Array[]) {
   const volumes: FakeVolume[] = [];
   const gpu: StreamGpu<FakeVolume, LevelStats> = {
-    createVolume: (layout, pool) => { const v = new FakeVolume(layout, pool); volumes.push(v); return v; },
+    createVolume: (layout, pool) => {
+      const v = new FakeVolume(layout, pool);
+      volumes.push(v);
+      return v;
+    },
     async createSurface(volume) {
       const level = store.levels.findIndex((l) => l.layout === volume.layout);
       const nb = neighbourhoodRanges(volume.layout.chunkGrid, ranges[level]);
@@ -81,8 +104,10 @@ describe('StreamController', () => {
     const needed = store.levels.map((l, i) => chunksNeeded(neighbourhoodRanges(l.layout.chunkGrid, ranges[i]), 20).length);
     const chunkBytes = store.levels.map((l) => l.layout.chunkBytes);
     const bound = needed.reduce((a, n, i) => a + n * chunkBytes[i], 0);
-    expect(fetcher.counters.bytesFetched).toBe(bound);                 // exactly the needed chunks, once
-    expect(progress.filter((p) => p.phase === 'shown').map((p) => [p.level, p.chunksDone, p.chunksNeeded])).toEqual(needed.map((n, i) => [i, n, n]).reverse());
+    expect(fetcher.counters.bytesFetched).toBe(bound); // exactly the needed chunks, once
+    expect(progress.filter((p) => p.phase === 'shown').map((p) => [p.level, p.chunksDone, p.chunksNeeded])).toEqual(
+      needed.map((n, i) => [i, n, n]).reverse(),
+    );
     // scrubbing back to the same value: all resident, level 0 at once, nothing fetched
     const before = fetcher.counters.requests;
     await c.setIsovalue(20);
@@ -96,7 +121,11 @@ describe('StreamController', () => {
     // scrub while level 0's chunks are on their way; nearest-first from a
     // corner, whose chunks the later (higher) isovalues do not need
     c.focus = [0, 0, 0];
-    const fetchingLevel0 = new Promise<void>((r) => c.onProgress((p) => { if (p.level === 0 && p.phase === 'fetching') r(); }));
+    const fetchingLevel0 = new Promise<void>((r) =>
+      c.onProgress((p) => {
+        if (p.level === 0 && p.phase === 'fetching') r();
+      }),
+    );
     const runs = [c.setIsovalue(1)];
     await fetchingLevel0;
     runs.push(...[200, 2, 150, 4, 100, 8, 5].map((iso) => c.setIsovalue(iso)));

@@ -35,7 +35,11 @@ async function inCore(gpu: GpuContext, isos: number[]): Promise<number[]> {
   const s = await openZfpStore(storeForLocation(path), path);
   const L = s.levels[0];
   const chunks = await Promise.all(Array.from({ length: L.chunkCount }, (_, i) => s.readChunk(0, i)));
-  const stream = loadZfpStream(gpu.device, assembleLevelStream(L.layout, (c) => chunks[c]), 'whole');
+  const stream = loadZfpStream(
+    gpu.device,
+    assembleLevelStream(L.layout, (c) => chunks[c]),
+    'whole',
+  );
   const iso = await Isosurface.create(gpu, stream);
   const out: number[] = [];
   for (const v of isos) out.push((await iso.compute(v)).triangles);
@@ -54,17 +58,21 @@ async function controller(gpu: GpuContext, budget: number, maxInFlight = 8, at =
 }
 
 describe('StreamController on ChunkedVolume', () => {
-  gpuTest('a store without range arrays: its first surface fetches the level whole, then its chunk ranges (from the GPU) equal NumPy\'s over zarr-python\'s decode and plan the next surface', async ({ gpu }) => {
-    const other = zarrPythonStore(join(work, 'other.zarr'), [20, 24, 36], 8, 'serializer=ZFPY(mode=2, rate=8), compressors=None');
-    const { store, fetcher, c, errors } = await controller(gpu, 256 << 20, 8, other);
-    expect(c.chunkRanges(0)).toBeNull();
-    expect(c.valueRange).toBeNull();
-    await c.setIsovalue(1);
-    expect(c.shown?.level).toBe(0);
-    expect(c.shown!.stats.triangles).toBeGreaterThan(0);
-    const lv = store.levels[0];
-    expect(fetcher.counters.bytesFetched).toBe(lv.chunkCount * lv.layout.chunkBytes);
-    const ref = JSON.parse(converterPython(`
+  gpuTest(
+    "a store without range arrays: its first surface fetches the level whole, then its chunk ranges (from the GPU) equal NumPy's over zarr-python's decode and plan the next surface",
+    async ({ gpu }) => {
+      const other = zarrPythonStore(join(work, 'other.zarr'), [20, 24, 36], 8, 'serializer=ZFPY(mode=2, rate=8), compressors=None');
+      const { store, fetcher, c, errors } = await controller(gpu, 256 << 20, 8, other);
+      expect(c.chunkRanges(0)).toBeNull();
+      expect(c.valueRange).toBeNull();
+      await c.setIsovalue(1);
+      expect(c.shown?.level).toBe(0);
+      expect(c.shown!.stats.triangles).toBeGreaterThan(0);
+      const lv = store.levels[0];
+      expect(fetcher.counters.bytesFetched).toBe(lv.chunkCount * lv.layout.chunkBytes);
+      const ref = JSON.parse(
+        converterPython(
+          `
 import sys, json, zarr
 a = zarr.open_array(sys.argv[1], mode='r')[:]
 out = []
@@ -74,19 +82,23 @@ for cz in range(3):
             s = a[cz * 8:(cz + 1) * 8, cy * 8:(cy + 1) * 8, cx * 8:(cx + 1) * 8]
             out += [float(s.min()), float(s.max())]
 print(json.dumps(out))
-`, [other])) as number[];
-    expect(Array.from(c.chunkRanges(0)!)).toEqual(ref);
-    expect(c.valueRange).toEqual([Math.min(...ref), Math.max(...ref)]);
-    // planned from those ranges now: a surface near the top of the range needs only some chunks
-    const iso = 2.6;
-    const need = chunksNeeded(neighbourhoodRanges(lv.layout.chunkGrid, c.chunkRanges(0)!), iso);
-    expect(need.length).toBeGreaterThan(0);
-    expect(need.length).toBeLessThan(lv.chunkCount);
-    await c.setIsovalue(iso);
-    expect(c.shown?.iso).toBe(iso);
-    expect(errors).toEqual([]);
-    c.destroy();
-  });
+`,
+          [other],
+        ),
+      ) as number[];
+      expect(Array.from(c.chunkRanges(0)!)).toEqual(ref);
+      expect(c.valueRange).toEqual([Math.min(...ref), Math.max(...ref)]);
+      // planned from those ranges now: a surface near the top of the range needs only some chunks
+      const iso = 2.6;
+      const need = chunksNeeded(neighbourhoodRanges(lv.layout.chunkGrid, c.chunkRanges(0)!), iso);
+      expect(need.length).toBeGreaterThan(0);
+      expect(need.length).toBeLessThan(lv.chunkCount);
+      await c.setIsovalue(iso);
+      expect(c.shown?.iso).toBe(iso);
+      expect(errors).toEqual([]);
+      c.destroy();
+    },
+  );
 
   gpuTest('refines to level 0: the in-core triangles, only the needed chunks fetched', async ({ gpu }) => {
     const [ref] = await inCore(gpu, [200]);
@@ -97,7 +109,12 @@ print(json.dumps(out))
     expect(shown).toEqual([2, 1, 0]);
     expect(c.shown!.stats.triangles).toBe(ref);
     expect(ref).toBeGreaterThan(0);
-    const needed = await Promise.all(store.levels.map(async (l, i) => chunksNeeded(neighbourhoodRanges(l.layout.chunkGrid, (await store.readRanges(i))!), 200).length * l.layout.chunkBytes));
+    const needed = await Promise.all(
+      store.levels.map(
+        async (l, i) =>
+          chunksNeeded(neighbourhoodRanges(l.layout.chunkGrid, (await store.readRanges(i))!), 200).length * l.layout.chunkBytes,
+      ),
+    );
     expect(fetcher.counters.bytesFetched).toBe(needed.reduce((a, b) => a + b, 0));
     expect(fetcher.counters.bytesFetched / store.levels.reduce((a, l) => a + l.storedBytes, 0)).toBeLessThan(0.15);
     expect(errors).toEqual([]);
@@ -108,7 +125,11 @@ print(json.dumps(out))
     const [ref] = await inCore(gpu, [30]);
     const { fetcher, c, errors } = await controller(gpu, 256 << 20, 2);
     c.focus = [0, 0, 0];
-    const level0 = new Promise<void>((r) => c.onProgress((p) => { if (p.level === 0 && p.phase === 'fetching') r(); }));
+    const level0 = new Promise<void>((r) =>
+      c.onProgress((p) => {
+        if (p.level === 0 && p.phase === 'fetching') r();
+      }),
+    );
     const runs = [c.setIsovalue(1)];
     await level0;
     runs.push(...[200, 2, 150, 4, 100, 8, 30].map((v) => c.setIsovalue(v)));
@@ -127,11 +148,13 @@ print(json.dumps(out))
     expect(storeBytes).toBeGreaterThan(2.5 * budget);
     const [lo, hi] = store.valueRange!;
     const stops: string[] = [];
-    c.onProgress((p) => { if (p.phase === 'stopped' && p.reason) stops.push(p.reason); });
+    c.onProgress((p) => {
+      if (p.phase === 'stopped' && p.reason) stops.push(p.reason);
+    });
     const levelsShown = new Set<number>();
     for (let i = 0; i < 20; i++) {
       await c.setIsovalue(lo + ((i + 0.5) / 20) * (hi - lo));
-      expect(c.shown, stops.join(" | ")).not.toBeNull();
+      expect(c.shown, stops.join(' | ')).not.toBeNull();
       levelsShown.add(c.shown!.level);
       expect(c.gpuBytes.total).toBeLessThanOrEqual(budget);
     }

@@ -24,13 +24,18 @@ const vectors = join(sharedData, 'zfp-vectors');
 const read = (dir: string, name: string) => new Uint8Array(readFileSync(join(dir, name)));
 
 describe('inspectVolumeFile', () => {
-
   it('reads headers, names and sizes', async () => {
-    const h = await inspectVolumeFile('hydrogen_atom_128x128x128_float32.rate8.zfp', read(volumes, 'hydrogen_atom_128x128x128_float32.rate8.zfp'));
+    const h = await inspectVolumeFile(
+      'hydrogen_atom_128x128x128_float32.rate8.zfp',
+      read(volumes, 'hydrogen_atom_128x128x128_float32.rate8.zfp'),
+    );
     expect(h).toMatchObject({ kind: 'zfp', dims: [128, 128, 128], rate: 8, missing: [], compresses: false });
     const raw = await inspectVolumeFile('neghip_66x66x66_uint8.raw', read(volumes, 'neghip_66x66x66_uint8.raw'));
     expect(raw).toMatchObject({ kind: 'raw', dims: [66, 66, 66], dtype: 'uint8', missing: [], compresses: true });
-    const headerless = await inspectVolumeFile('fuel_p8decoded_64x64x64_float32.rate4.zfp', read(vectors, 'fuel_p8decoded_64x64x64_float32.rate4.zfp'));
+    const headerless = await inspectVolumeFile(
+      'fuel_p8decoded_64x64x64_float32.rate4.zfp',
+      read(vectors, 'fuel_p8decoded_64x64x64_float32.rate4.zfp'),
+    );
     expect(headerless).toMatchObject({ kind: 'zfp-headerless', dims: [64, 64, 64], rate: 4, missing: [] });
   });
 
@@ -48,7 +53,9 @@ describe('inspectVolumeFile', () => {
 
   it('rejects fixed-precision streams with the codec message naming the file', async () => {
     for (const f of ['fuel_64x64x64_float8.zfp', 'hydrogen_atom_128x128x128_float8.zfp', 'bonsai_256x256x256_float8.zfp']) {
-      await expect(inspectVolumeFile(f, read(volumes, f))).rejects.toThrow(new RegExp(`^${f.replace(/\./g, '\\.')}: .*not a fixed-rate stream`));
+      await expect(inspectVolumeFile(f, read(volumes, f))).rejects.toThrow(
+        new RegExp(`^${f.replace(/\./g, '\\.')}: .*not a fixed-rate stream`),
+      );
     }
   });
 
@@ -58,7 +65,9 @@ describe('inspectVolumeFile', () => {
     await expect(inspectVolumeFile('neghip_64x64x64_uint8.raw', read(volumes, 'neghip_66x66x66_uint8.raw'))).rejects.toThrow(
       /^neghip_64x64x64_uint8\.raw: 64x64x64 uint8 is 262144 bytes, the file has 287496/,
     );
-    await expect(inspectVolumeFile('x_64x64x64_float32.rate3.zfp', read(vectors, 'fuel_p8decoded_64x64x64_float32.rate4.zfp'))).rejects.toThrow(/^x_64x64x64_float32\.rate3\.zfp: /);
+    await expect(
+      inspectVolumeFile('x_64x64x64_float32.rate3.zfp', read(vectors, 'fuel_p8decoded_64x64x64_float32.rate4.zfp')),
+    ).rejects.toThrow(/^x_64x64x64_float32\.rate3\.zfp: /);
   });
 
   it('reads multi-page TIFF files as volumes through libtiff', async () => {
@@ -68,16 +77,26 @@ describe('inspectVolumeFile', () => {
     expect(bat.samples!.byteLength).toBe(121 * 154 * 114);
     const stack = await inspectVolumeFile('imagejs_stack.tif', read(tiff, 'imagejs_stack.tif'));
     expect(stack).toMatchObject({ kind: 'tiff', dims: [128, 128, 10], dtype: 'uint16' });
-    await expect(inspectVolumeFile('imagejs_image-lzw.tif', read(tiff, 'imagejs_image-lzw.tif'))).rejects.toThrow(/^imagejs_image-lzw\.tif: 3 samples per pixel/);
+    await expect(inspectVolumeFile('imagejs_image-lzw.tif', read(tiff, 'imagejs_image-lzw.tif'))).rejects.toThrow(
+      /^imagejs_image-lzw\.tif: 3 samples per pixel/,
+    );
   });
 
   it('points non-volumes elsewhere', async () => {
     const las = read(join(sharedData, 'las'), 'laspy_simple.las');
-    await expect(inspectVolumeFile('laspy_simple.las', las)).rejects.toThrow(/point cloud, not a volume; open it in the LIDAR example page/);
-    await expect(inspectVolumeFile('laspy_simple.las', las, { reader: 'command' })).rejects.toThrow(/point cloud, not a volume this command reads/);
-    await expect(inspectVolumeFile('notes.txt', new TextEncoder().encode('hello'), { reader: 'command' })).rejects.toThrow(/^notes\.txt: not a volume this command reads/);
+    await expect(inspectVolumeFile('laspy_simple.las', las)).rejects.toThrow(
+      /point cloud, not a volume; open it in the LIDAR example page/,
+    );
+    await expect(inspectVolumeFile('laspy_simple.las', las, { reader: 'command' })).rejects.toThrow(
+      /point cloud, not a volume this command reads/,
+    );
+    await expect(inspectVolumeFile('notes.txt', new TextEncoder().encode('hello'), { reader: 'command' })).rejects.toThrow(
+      /^notes\.txt: not a volume this command reads/,
+    );
     await expect(inspectVolumeFile('notes.txt', new TextEncoder().encode('hello'))).rejects.toThrow(/^notes\.txt: not a volume/);
-    await expect(inspectVolumeFile('bad.nrrd', new TextEncoder().encode('NRRD0004\ntype: float\ndimension: 2\nsizes: 2 2\nencoding: raw\n\n'))).rejects.toThrow(/^bad\.nrrd: only 3D/);
+    await expect(
+      inspectVolumeFile('bad.nrrd', new TextEncoder().encode('NRRD0004\ntype: float\ndimension: 2\nsizes: 2 2\nencoding: raw\n\n')),
+    ).rejects.toThrow(/^bad\.nrrd: only 3D/);
   });
 });
 
@@ -160,7 +179,9 @@ describe('openVolumeBytes (the CLI: what the file does not say comes with the ca
 
   gpuTest('raw volumes: shape and type from the name or given; TIFF stacks as the page compresses them', async ({ gpu }) => {
     const bytes = read(volumes, 'neghip_66x66x66_uint8.raw');
-    await expect(openVolumeBytes(gpu.device, bytes, 'scan.raw')).rejects.toThrow(/^scan\.raw: a raw volume needs its shape and type in the name/);
+    await expect(openVolumeBytes(gpu.device, bytes, 'scan.raw')).rejects.toThrow(
+      /^scan\.raw: a raw volume needs its shape and type in the name/,
+    );
     const given = await openVolumeBytes(gpu.device, bytes, 'scan.raw', { dims: [66, 66, 66], dtype: 'uint8', rate: 6 });
     const facts = await inspectVolumeFile('neghip_66x66x66_uint8.raw', bytes);
     const page = await openVolumeFile(gpu.device, facts, bytes, { rate: 6 });

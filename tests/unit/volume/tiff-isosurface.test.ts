@@ -70,7 +70,7 @@ describe('the isosurface of a TIFF stack (neuron page path)', () => {
     }
   });
 
-  it('multi-channel stacks: the channels\' mean as float32, or refused for the main page', async () => {
+  it("multi-channel stacks: the channels' mean as float32, or refused for the main page", async () => {
     const name = 'imagejs_image-lzw.tif';
     const v = await load(name);
     expect(v.samplesPerPixel).toBe(3);
@@ -79,6 +79,7 @@ describe('the isosurface of a TIFF stack (neuron page path)', () => {
     expect(facts.dtype).toBe('float32');
     const mean = new Float32Array(facts.samples!.buffer, facts.samples!.byteOffset, facts.samples!.byteLength / 4);
     expect(mean.length).toBe(v.dims[0] * v.dims[1] * v.dims[2]);
-    for (const i of [0, 17, 1000, mean.length - 1]) expect(mean[i]).toBeCloseTo((v.data[3 * i] + v.data[3 * i + 1] + v.data[3 * i + 2]) / 3, 4);
+    for (const i of [0, 17, 1000, mean.length - 1])
+      expect(mean[i]).toBeCloseTo((v.data[3 * i] + v.data[3 * i + 1] + v.data[3 * i + 2]) / 3, 4);
   });
 });

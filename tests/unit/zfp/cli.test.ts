@@ -9,10 +9,14 @@ import { describe, expect, it } from 'vitest';
 import { repoRoot, runPython, sharedData } from '../../helpers/python.ts';
 
 function cli(...args: string[]) {
-  const r = spawnSync(process.execPath, ['--import', join(repoRoot, 'scripts/register-node-loaders.mjs'), join(repoRoot, 'src/cli/main.ts'), ...args], {
-    encoding: 'utf8',
-    timeout: 240_000,
-  });
+  const r = spawnSync(
+    process.execPath,
+    ['--import', join(repoRoot, 'scripts/register-node-loaders.mjs'), join(repoRoot, 'src/cli/main.ts'), ...args],
+    {
+      encoding: 'utf8',
+      timeout: 240_000,
+    },
+  );
   return { status: r.status, stderr: r.stderr, stdout: r.stdout };
 }
 
@@ -25,17 +29,35 @@ describe('zfp CLI', () => {
     const c = cli('compress', raw, '--rate', '3.3', '-o', zfp, '--json', join(dir, 'c.json'));
     expect(c.status, c.stderr).toBe(0);
     const cj = JSON.parse(readFileSync(join(dir, 'c.json'), 'utf8'));
-    expect(cj).toMatchObject({ dims: [66, 66, 66], dtype: 'uint8', rate: 211 / 64, bitsPerBlock: 211, header: true, outputBytes: readFileSync(zfp).byteLength });
+    expect(cj).toMatchObject({
+      dims: [66, 66, 66],
+      dtype: 'uint8',
+      rate: 211 / 64,
+      bitsPerBlock: 211,
+      header: true,
+      outputBytes: readFileSync(zfp).byteLength,
+    });
     expect(cj.gbPerSecond).toBeGreaterThan(0);
 
     const i = cli('info', zfp, '--json', join(dir, 'i.json'));
     expect(i.status, i.stderr).toBe(0);
-    expect(JSON.parse(readFileSync(join(dir, 'i.json'), 'utf8'))).toMatchObject({ kind: 'zfp', dims: [66, 66, 66], dtype: 'float32', bitsPerBlock: 211, payloadBitOffset: 96, problems: [] });
+    expect(JSON.parse(readFileSync(join(dir, 'i.json'), 'utf8'))).toMatchObject({
+      kind: 'zfp',
+      dims: [66, 66, 66],
+      dtype: 'float32',
+      bitsPerBlock: 211,
+      payloadBitOffset: 96,
+      problems: [],
+    });
 
     const out = join(dir, 'neghip.raw');
     const d = cli('decompress', zfp, '-o', out, '--json', join(dir, 'd.json'));
     expect(d.status, d.stderr).toBe(0);
-    expect(JSON.parse(readFileSync(join(dir, 'd.json'), 'utf8'))).toMatchObject({ dims: [66, 66, 66], outputBytes: 66 ** 3 * 4, bitsPerBlock: 211 });
+    expect(JSON.parse(readFileSync(join(dir, 'd.json'), 'utf8'))).toMatchObject({
+      dims: [66, 66, 66],
+      outputBytes: 66 ** 3 * 4,
+      bitsPerBlock: 211,
+    });
 
     const verdict = runPython(
       `
@@ -55,7 +77,9 @@ print(same, np.array_equal(dec.view(np.uint32), np.fromfile(out, '<u4').reshape(
   it('reports user mistakes with exit code 2', () => {
     const bad = cli('decompress', join(sharedData, 'volumes', 'fuel_64x64x64_float8.zfp'), '--rate', '8', '-o', join(dir, 'x.raw'));
     expect(bad.status).toBe(2);
-    expect(bad.stderr).toMatch(/fuel_64x64x64_float8\.zfp: a header-less fixed-rate 8 stream of 64x64x64 float32 is 262144 bytes .* the file has 5008/);
+    expect(bad.stderr).toMatch(
+      /fuel_64x64x64_float8\.zfp: a header-less fixed-rate 8 stream of 64x64x64 float32 is 262144 bytes .* the file has 5008/,
+    );
     const noRate = cli('compress', raw, '-o', join(dir, 'y.zfp'));
     expect(noRate.status).toBe(2);
     expect(noRate.stderr).toMatch(/--rate R/);

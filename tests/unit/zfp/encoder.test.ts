@@ -22,7 +22,9 @@ function randomVolume(dtype: DType, dims: Dims, random: () => number): Uint8Arra
   const bytes = new Uint8Array(n * DTYPE_BYTES[dtype]);
   const view = new DataView(bytes.buffer);
   const smooth = (i: number) => {
-    const x = i % dims[0], y = Math.floor(i / dims[0]) % dims[1], z = Math.floor(i / (dims[0] * dims[1]));
+    const x = i % dims[0],
+      y = Math.floor(i / dims[0]) % dims[1],
+      z = Math.floor(i / (dims[0] * dims[1]));
     return Math.sin(0.3 * x + 0.2 * y) * Math.cos(0.25 * z) + 0.1 * (random() - 0.5);
   };
   // the scale changes every 64 voxels, so blocks see very different exponents
@@ -36,10 +38,18 @@ function randomVolume(dtype: DType, dims: Dims, random: () => number): Uint8Arra
       if (scale === 1) scale = 10 ** (12 * random() - 6);
     }
     switch (dtype) {
-      case 'uint8': view.setUint8(i, Math.floor(random() * 256)); break;
-      case 'int8': view.setInt8(i, Math.floor(random() * 256) - 128); break;
-      case 'uint16': view.setUint16(i, Math.floor(random() * 65536), true); break;
-      case 'int16': view.setInt16(i, Math.floor(random() * 65536) - 32768, true); break;
+      case 'uint8':
+        view.setUint8(i, Math.floor(random() * 256));
+        break;
+      case 'int8':
+        view.setInt8(i, Math.floor(random() * 256) - 128);
+        break;
+      case 'uint16':
+        view.setUint16(i, Math.floor(random() * 65536), true);
+        break;
+      case 'int16':
+        view.setInt16(i, Math.floor(random() * 65536) - 32768, true);
+        break;
       case 'float32': {
         const v = scale === 0 && random() < 0.5 ? -0 : smooth(i) * scale;
         view.setFloat32(i * 4, v, true);
@@ -62,7 +72,10 @@ describe('ZfpEncoder', () => {
     const encoder = await ZfpEncoder.create(gpu.device);
     for (const v of vectors) {
       const input = readVector(v.input);
-      for (const [file, header] of [[v.compressed, false], [v.with_header.file, true]] as const) {
+      for (const [file, header] of [
+        [v.compressed, false],
+        [v.with_header.file, true],
+      ] as const) {
         for (const maxShardBytes of [undefined, 80000]) {
           const stream = await encoder.compressToStream(input, 'float32', v.dims_xyz, v.rate, { header, maxShardBytes });
           if (maxShardBytes) expect(stream.shards.length).toBeGreaterThan(1);
@@ -131,7 +144,13 @@ print(json.dumps(res))
 `,
       [dir, JSON.stringify(cases)],
     );
-    const results = JSON.parse(out) as { same_bytes: boolean; sizes: number[]; zfpy_decodes_ours_as_we_do: boolean; error_ours: number; error_zfp: number }[];
+    const results = JSON.parse(out) as {
+      same_bytes: boolean;
+      sizes: number[];
+      zfpy_decodes_ours_as_we_do: boolean;
+      error_ours: number;
+      error_zfp: number;
+    }[];
     results.forEach((r, i) => {
       const what = JSON.stringify(cases[i]);
       expect(r.same_bytes, `${what}: bytes equal to zfpy's (sizes ${r.sizes})`).toBe(true);
@@ -145,7 +164,9 @@ print(json.dumps(res))
   gpuTest('rejects a volume whose size does not match, before allocating', async ({ gpu }) => {
     const encoder = await ZfpEncoder.create(gpu.device);
     await expect(encoder.compressToStream(new Uint8Array(100), 'uint8', [5, 5, 5], 4)).rejects.toThrow(/5x5x5 uint8 is 125 bytes, got 100/);
-    await expect(encoder.compressToStream(new Uint8Array(125), 'uint8', [5, 5, 5], 0.05)).rejects.toThrow(/fewer than the 9 a float32 block needs/);
+    await expect(encoder.compressToStream(new Uint8Array(125), 'uint8', [5, 5, 5], 0.05)).rejects.toThrow(
+      /fewer than the 9 a float32 block needs/,
+    );
     encoder.destroy();
   });
 });

@@ -26,9 +26,21 @@ describe('zfp header and stream description', () => {
       expect(h.mode).toMatchObject({ kind: 'fixed-rate', maxBits: v.bits_per_block, minBits: v.bits_per_block });
       expect(h.headerBits).toBe(96);
       const info = openZfpStream(withHeader, v.with_header.file);
-      expect(info).toMatchObject({ dims: v.dims_xyz, rate: v.rate, bitsPerBlock: v.bits_per_block, blockCount: v.nblocks, payloadBitOffset: 96, paddedBytes: v.with_header.bytes });
+      expect(info).toMatchObject({
+        dims: v.dims_xyz,
+        rate: v.rate,
+        bitsPerBlock: v.bits_per_block,
+        blockCount: v.nblocks,
+        payloadBitOffset: 96,
+        paddedBytes: v.with_header.bytes,
+      });
       const bare = readVector(v.compressed);
-      expect(openZfpStream(bare, v.compressed)).toMatchObject({ dims: v.dims_xyz, rate: v.rate, payloadBitOffset: 0, paddedBytes: bare.byteLength });
+      expect(openZfpStream(bare, v.compressed)).toMatchObject({
+        dims: v.dims_xyz,
+        rate: v.rate,
+        payloadBitOffset: 0,
+        paddedBytes: bare.byteLength,
+      });
       // the header we write is zfp's
       expect(hex(writeZfpHeader(v.dims_xyz, v.bits_per_block).bytes)).toBe(v.header_hex);
     }
@@ -109,18 +121,53 @@ open(d + '/rate4.zfp', 'wb').write(zfpy.compress_numpy(a, rate=4, write_header=T
       ['2D', file('plane.zfp'), 'plane.zfp', /plane\.zfp: the zfp header describes a 2D field \(11x10\); only 3D/],
       ['float64', file('double.zfp'), 'd.zfp', /d\.zfp: the zfp stream holds float64 values; only float32/],
       ['int32', file('int32.zfp'), 'i.zfp', /i\.zfp: the zfp stream holds int32 values; only float32/],
-      ['wrong magic', patched((b) => (b[2] = 0x71)), 'x.zfp', /x\.zfp: no zfp header \(the file does not start with "zfp"\) and the name carries no shape/],
+      [
+        'wrong magic',
+        patched((b) => (b[2] = 0x71)),
+        'x.zfp',
+        /x\.zfp: no zfp header \(the file does not start with "zfp"\) and the name carries no shape/,
+      ],
       ['wrong codec version', patched((b) => (b[3] = 4)), 'v.zfp', /v\.zfp: zfp codec version 4 is not supported/],
-      ['truncated', good.subarray(0, good.byteLength - 9), 't.zfp', /t\.zfp: truncated: the header promises 11x10x9 float32 at 256 bits per block \(27 blocks\), 876 bytes with the header, but the file has 871 bytes/],
+      [
+        'truncated',
+        good.subarray(0, good.byteLength - 9),
+        't.zfp',
+        /t\.zfp: truncated: the header promises 11x10x9 float32 at 256 bits per block \(27 blocks\), 876 bytes with the header, but the file has 871 bytes/,
+      ],
       ['a bare header', good.subarray(0, 12), 'h.zfp', /h\.zfp: truncated/],
       ['shorter than a header', good.subarray(0, 7), 's.zfp', /s\.zfp: the file is 7 bytes, shorter than a zfp header/],
       ['absurd size', absurd, 'big.zfp', /big\.zfp: absurd size 65536x65536x65536 in the zfp header: 4\.398e\+12 blocks/],
-      ['headerless without rate', readVector(vectors[0].compressed).subarray(0), 'vol_64x64x64_float32.zfp', /no zfp header and no rate: give the rate \(--rate R\).*\(the size fits rate 2\)/],
-      ['headerless of the wrong size', readVector(vectors[0].compressed).subarray(8), 'vol_64x64x64_float32.raw.crate2.zfp', /a header-less fixed-rate 2 stream of 64x64x64 float32 is 65536 bytes .* but the file has 65528: truncated, or not a fixed-rate stream/],
-      ['fixed precision without header', new Uint8Array(5008), 'fuel_64x64x64_float8.zfp', /no fixed rate gives 5008 bytes for 64x64x64, so this is not a fixed-rate stream/],
-      ['headerless float64', readVector(vectors[0].compressed), 'vol_64x64x64_float64.raw.crate2.zfp', /the name says float64; only float32/],
+      [
+        'headerless without rate',
+        readVector(vectors[0].compressed).subarray(0),
+        'vol_64x64x64_float32.zfp',
+        /no zfp header and no rate: give the rate \(--rate R\).*\(the size fits rate 2\)/,
+      ],
+      [
+        'headerless of the wrong size',
+        readVector(vectors[0].compressed).subarray(8),
+        'vol_64x64x64_float32.raw.crate2.zfp',
+        /a header-less fixed-rate 2 stream of 64x64x64 float32 is 65536 bytes .* but the file has 65528: truncated, or not a fixed-rate stream/,
+      ],
+      [
+        'fixed precision without header',
+        new Uint8Array(5008),
+        'fuel_64x64x64_float8.zfp',
+        /no fixed rate gives 5008 bytes for 64x64x64, so this is not a fixed-rate stream/,
+      ],
+      [
+        'headerless float64',
+        readVector(vectors[0].compressed),
+        'vol_64x64x64_float64.raw.crate2.zfp',
+        /the name says float64; only float32/,
+      ],
       ['headerless absurd name', new Uint8Array(64), 'vol_0x64x64_float32.raw.crate2.zfp', /absurd size 0x64x64 in the file name/],
-      ['rate below 9 bits per block', new Uint8Array(64), 'vol_8x8x8_float32.raw.crate0.1.zfp', /rate 0\.1 gives 6 bits per block, fewer than the 9 a float32 block needs/],
+      [
+        'rate below 9 bits per block',
+        new Uint8Array(64),
+        'vol_8x8x8_float32.raw.crate0.1.zfp',
+        /rate 0\.1 gives 6 bits per block, fewer than the 9 a float32 block needs/,
+      ],
     ];
     for (const [what, bytes, name, message] of cases) {
       it(what, () => {

@@ -46,7 +46,10 @@ describe('64-bit bit offsets', () => {
     const bpb = 2047;
     const bitBase = 29;
     // blocks of a shard starting at `first`, up to 2^24 blocks in (2^35 bits: a 4 GiB shard)
-    const blocks = Uint32Array.from({ length: 256 }, (_, i) => first + (i < 4 ? [0, 1, 2 ** 24 - 1, 2 ** 21 + 3][i] : Math.floor(random() * 2 ** 24)));
+    const blocks = Uint32Array.from(
+      { length: 256 },
+      (_, i) => first + (i < 4 ? [0, 1, 2 ** 24 - 1, 2 ** 21 + 3][i] : Math.floor(random() * 2 ** 24)),
+    );
     const params = new Uint32Array(12);
     params.set([100, 100, 100, bpb, 25, 25, 25, 0, first, first + 2 ** 24, bitBase, 0]);
     const usage = GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST;
@@ -59,8 +62,26 @@ describe('64-bit bit offsets', () => {
     const encoder = device.createCommandEncoder();
     const pass = encoder.beginComputePass();
     pass.setPipeline(pipeline);
-    pass.setBindGroup(0, device.createBindGroup({ layout: streamBindGroupLayout(device), entries: [{ binding: 0, resource: { buffer: words } }, { binding: 1, resource: { buffer: uniform } }] }));
-    pass.setBindGroup(1, device.createBindGroup({ layout: group1, entries: [{ binding: 0, resource: { buffer: input } }, { binding: 1, resource: { buffer: output } }] }));
+    pass.setBindGroup(
+      0,
+      device.createBindGroup({
+        layout: streamBindGroupLayout(device),
+        entries: [
+          { binding: 0, resource: { buffer: words } },
+          { binding: 1, resource: { buffer: uniform } },
+        ],
+      }),
+    );
+    pass.setBindGroup(
+      1,
+      device.createBindGroup({
+        layout: group1,
+        entries: [
+          { binding: 0, resource: { buffer: input } },
+          { binding: 1, resource: { buffer: output } },
+        ],
+      }),
+    );
     pass.dispatchWorkgroups(blocks.length / 64);
     pass.end();
     device.queue.submit([encoder.finish()]);
@@ -78,10 +99,17 @@ describe('64-bit bit offsets', () => {
   });
 
   it('plans shards of a 2^32 - 1 block stream exactly', () => {
-    for (const [bpb, payload] of [[2048, 96], [9, 148], [333, 0]] as const) {
+    for (const [bpb, payload] of [
+      [2048, 96],
+      [9, 148],
+      [333, 0],
+    ] as const) {
       const blockCount = 0xffffffff;
       const maxShardBytes = 1 << 30;
-      const plans = planShards({ blockCount, bitsPerBlock: bpb, payloadBitOffset: payload, fileName: 'huge.zfp', dims: [1, 1, 1] }, maxShardBytes);
+      const plans = planShards(
+        { blockCount, bitsPerBlock: bpb, payloadBitOffset: payload, fileName: 'huge.zfp', dims: [1, 1, 1] },
+        maxShardBytes,
+      );
       let next = 0;
       for (const p of plans) {
         expect(p.firstBlock).toBe(next);

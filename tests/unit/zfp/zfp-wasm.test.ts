@@ -65,7 +65,11 @@ describe('zfp C decoder in Wasm = zfpy', () => {
     const { createHash } = await import('node:crypto');
     const mc = JSON.parse(readFileSync(join(SHARED_DATA, 'reference', 'mc.json'), 'utf8'));
     const entry = mc.volumes.find((x: { file: string }) => x.file.endsWith('bonsai_256x256x256_float32.rate4.zfp'));
-    expect(createHash('sha256').update(new Uint8Array(out.buffer, out.byteOffset, out.byteLength)).digest('hex')).toBe(entry.decoded_sha256);
+    expect(
+      createHash('sha256')
+        .update(new Uint8Array(out.buffer, out.byteOffset, out.byteLength))
+        .digest('hex'),
+    ).toBe(entry.decoded_sha256);
   });
 
   test('refuses what it cannot decode, with a message', async () => {
@@ -77,6 +81,8 @@ describe('zfp C decoder in Wasm = zfpy', () => {
     await expect(decodeZfpWasm(badMagic)).rejects.toThrow(/no valid zfp header/);
     await expect(decodeZfpWasm(good.slice(0, good.length >> 1))).rejects.toThrow(/truncated/);
     const v = vectors[0];
-    await expect(decodeZfpWasmRaw(bytes(v.compressed).slice(0, 100), v.dims_xyz, v.rate)).rejects.toThrow(/shorter than the shape and rate need/);
+    await expect(decodeZfpWasmRaw(bytes(v.compressed).slice(0, 100), v.dims_xyz, v.rate)).rejects.toThrow(
+      /shorter than the shape and rate need/,
+    );
   });
 });
