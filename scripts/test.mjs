@@ -36,6 +36,8 @@ const LIMITS_TESTS = [
   'tests/unit/zfp/offsets.test.ts',
   'tests/unit/isosurface/',
   'tests/unit/store/chunked-volume.test.ts',
+  // the stream controller's surfaces over chunk pools
+  'tests/unit/store/stream-gpu.test.ts',
 ];
 const LIMITS_EXCLUDE = ['tests/unit/isosurface/cli.test.ts'];
 // The `gpukernels` suite: on SwiftShader every kernel family is chosen as the
