@@ -7,35 +7,10 @@
 // Chunks are in index order and each is walked in order, so equal digits
 // keep their order: the sort is stable. Descending order complements the
 // digit (d ^ mask), so it is stable too and needs no reverse pass.
+// Composed after radix_sort_common.wgsl (uniforms, bindings, digit()).
 
 override WG: u32 = 64u;
 override CHUNK: u32 = 128u; // at most 255: per-digit counters are 8-bit lanes
-
-struct Sort {
-  n: u32,
-  units: u32,
-  capacity: u32,
-  count_in: u32,
-}
-
-struct Pass {
-  shift: u32,
-  mask: u32, // 15, or fewer bits in the last pass when keyBits is not a multiple of 4
-  flip: u32, // mask for descending, 0 for ascending
-}
-
-@group(0) @binding(0) var<uniform> sort: Sort;
-@group(0) @binding(1) var<uniform> pass_: Pass;
-@group(0) @binding(2) var<storage, read> keys_in: array<u32>;
-@group(0) @binding(3) var<storage, read> values_in: array<u32>;
-@group(0) @binding(4) var<storage, read_write> histograms: array<u32>;
-@group(0) @binding(5) var<storage, read> offsets: array<u32>;
-@group(0) @binding(6) var<storage, read_write> keys_out: array<u32>;
-@group(0) @binding(7) var<storage, read_write> values_out: array<u32>;
-
-fn digit(key: u32) -> u32 {
-  return ((key >> pass_.shift) & pass_.mask) ^ pass_.flip;
-}
 
 /** One count for the key's digit, in the 8-bit lane layout of `histogram`. */
 fn count_digit(key: u32) -> vec4u {

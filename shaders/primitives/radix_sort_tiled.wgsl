@@ -19,36 +19,11 @@
 // (one unit = one tile = one workgroup). Barriers are only reached in
 // uniform control flow (the early return depends on the workgroup index and
 // a uniform). Workgroup variables start zeroed (WGSL).
-
-struct Sort {
-  n: u32,
-  units: u32,
-  capacity: u32,
-  count_in: u32,
-}
-
-struct Pass {
-  shift: u32,
-  mask: u32, // 15, or fewer bits in the last pass when keyBits is not a multiple of 4
-  flip: u32, // mask for descending, 0 for ascending
-}
-
-@group(0) @binding(0) var<uniform> sort: Sort;
-@group(0) @binding(1) var<uniform> pass_: Pass;
-@group(0) @binding(2) var<storage, read> keys_in: array<u32>;
-@group(0) @binding(3) var<storage, read> values_in: array<u32>;
-@group(0) @binding(4) var<storage, read_write> histograms: array<u32>;
-@group(0) @binding(5) var<storage, read> offsets: array<u32>;
-@group(0) @binding(6) var<storage, read_write> keys_out: array<u32>;
-@group(0) @binding(7) var<storage, read_write> values_out: array<u32>;
+// Composed after radix_sort_common.wgsl (uniforms, bindings, digit()).
 
 const RADIX: u32 = 16u;
 /** Words of one digit's bitmap: one bit per invocation. */
 const MASK_WORDS: u32 = (WG + 31u) / 32u;
-
-fn digit(key: u32) -> u32 {
-  return ((key >> pass_.shift) & pass_.mask) ^ pass_.flip;
-}
 
 var<workgroup> digit_counts: array<atomic<u32>, RADIX>;
 

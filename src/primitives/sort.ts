@@ -7,10 +7,12 @@
 // workgroup-local stable ranking (radix_sort_tiled.wgsl, GPU path).
 
 import sortWgsl from '../../shaders/primitives/radix_sort.wgsl?raw';
+import sortCommonWgsl from '../../shaders/primitives/radix_sort_common.wgsl?raw';
 import sortTiledWgsl from '../../shaders/primitives/radix_sort_tiled.wgsl?raw';
 import { BindGroupCache } from '../gpu/bind-group-cache.ts';
 import { gridSnippet } from '../gpu/dispatch.ts';
 import { bindGroupLayout, createComputePipeline } from '../gpu/pipeline-cache.ts';
+import type { WgslPart } from '../gpu/wgsl.ts';
 import type { CountLike } from './count.ts';
 import {
   DispatchRecords,
@@ -25,6 +27,9 @@ import {
   type PrimitivePath,
 } from './dispatch-records.ts';
 import { ExclusiveScan } from './scan.ts';
+
+/** The uniforms, bindings and digit() both kernel families share. */
+const sortCommonSnippet: WgslPart = { name: 'shaders/primitives/radix_sort_common.wgsl', code: sortCommonWgsl };
 
 const RADIX_BITS = 4;
 const RADIX = 1 << RADIX_BITS;
@@ -141,8 +146,13 @@ export class RadixSortByKey {
       entry(7, { type: 'storage' }),
     ]);
     const parts = gpu
-      ? [tileConstants(wg, items), gridSnippet, { name: 'shaders/primitives/radix_sort_tiled.wgsl', code: sortTiledWgsl }]
-      : [gridSnippet, { name: 'shaders/primitives/radix_sort.wgsl', code: sortWgsl }];
+      ? [
+          tileConstants(wg, items),
+          gridSnippet,
+          sortCommonSnippet,
+          { name: 'shaders/primitives/radix_sort_tiled.wgsl', code: sortTiledWgsl },
+        ]
+      : [gridSnippet, sortCommonSnippet, { name: 'shaders/primitives/radix_sort.wgsl', code: sortWgsl }];
     const constants: Record<string, number> = gpu ? {} : { WG: wg, CHUNK: chunk };
     const [histogram, scatter, copy, records, scan] = await Promise.all([
       createComputePipeline(device, 'RadixSortByKey.histogram', parts, 'histogram', { layout: [histogramLayout], constants }),
