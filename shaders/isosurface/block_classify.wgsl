@@ -1,14 +1,17 @@
-// classify_blocks: see block_mc_common.wgsl. Needs block_mc_common.wgsl.
+// classify_blocks: see block_mc_common.wgsl. Needs block_mc_common.wgsl, edge_owner.wgsl.
 
 // ---- classify_blocks
-@group(1) @binding(0) var<storage, read> classify_counters: array<u32>;
+// The counters as a uniform: a storage binding more would pass the default
+// limit of 8 per stage (the counters are this pass's indirect arguments too).
+@group(1) @binding(0) var<uniform> classify_counters: array<vec4u, 16>;
 // Occupied blocks of this surface (cleared before the pass, then copied to
 // counters[C_OCCUPIED]: the counters are this pass's indirect arguments, so
 // they cannot be bound writable here).
 @group(1) @binding(4) var<storage, read_write> occupied_count: atomic<u32>;
-@group(1) @binding(1) var<storage, read_write> block_cases: array<u32>;     // 16 words per active entry: 4 cases per row (y, z)
-@group(1) @binding(2) var<storage, read_write> block_vertices: array<u32>;  // vertices per active entry
+@group(1) @binding(1) var<storage, read_write> slot_mc: array<u32>;         // per slot: 16 case words (4 cases per row (y, z)), then 16 row bases (expand_cells)
+@group(1) @binding(2) var<storage, read_write> block_indices: array<u32>;   // triangle corners per active entry
 @group(1) @binding(3) var<storage, read_write> block_cells: array<u32>;     // emitting cells per active entry
+@group(1) @binding(5) var<storage, read_write> block_vertices: array<u32>;  // owned cut edges (welded vertices) per active entry
 
 // Inside bits (value >= iso) of row (y, z) of the 5^3 neighbourhood, at bits shift..shift+4.
 fn row_bits(slots: ptr<function, array<u32, 8>>, y: u32, z: u32, shift: u32) -> u32 {
@@ -32,7 +35,7 @@ fn row_bits(slots: ptr<function, array<u32, 8>>, y: u32, z: u32, shift: u32) -> 
 fn classify_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
                    @builtin(local_invocation_index) lid: u32) {
   let i = grid_invocation_index(wid, nwg, lid, 64u);
-  if (i >= classify_counters[C_ACTIVE_GATED]) {
+  if (i >= classify_counters[C_ACTIVE_GATED >> 2u][C_ACTIVE_GATED & 3u]) {
     return;
   }
   let b = active_ids[i];
@@ -67,6 +70,7 @@ fn classify_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) n
     }
     layers[z] = layer;
   }
+  var indices = 0u;
   var vertices = 0u;
   var cells = 0u;
   // Most active blocks have no sign change at all (their neighbourhood range
@@ -87,14 +91,18 @@ fn classify_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) n
           // every case but 0 and 255 has triangles
           if (code != 0u && code != 255u && ((blocked >> r) & 1u) == 0u) {
             word |= code << (8u * x);
-            vertices += case_vertex_count(code);
+            indices += case_vertex_count(code);
             cells += 1u;
           }
         }
       }
-      block_cases[16u * i + y + 4u * z] = word;
+      slot_mc[32u * slots[0] + y + 4u * z] = word;
+      if (word != 0u) {
+        vertices += owned_vertices_of_row(word, c * 4u + vec3u(0u, y, z), volume.dims);
+      }
     }
   }
+  block_indices[i] = indices;
   block_vertices[i] = vertices;
   block_cells[i] = cells;
   if (cells > 0u) {

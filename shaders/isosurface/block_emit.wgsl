@@ -1,19 +1,17 @@
-// emit_vertices: see block_mc_common.wgsl. Needs block_mc_common.wgsl, vertex_format.wgsl.
+// emit_surface: see block_mc_common.wgsl. Needs block_mc_common.wgsl, vertex_format.wgsl, edge_owner.wgsl.
 
-// ---- emit_vertices: the emitting cells whose vertices reach one shard
-@group(1) @binding(0) var<storage, read> cell_records: array<u32>;
-@group(1) @binding(1) var<storage, read> cell_first: array<u32>;
-@group(2) @binding(0) var<storage, read> shard: array<u32, 8>;        // this shard's record (plan.wgsl)
-@group(2) @binding(1) var<storage, read_write> shard_vertices: array<vec2u>;
-@group(2) @binding(2) var<storage, read_write> shard_normals: array<u32>;
+// ---- emit_surface: the emitting cells whose triangle corners reach one index shard
+@group(1) @binding(0) var<storage, read> cell_list: array<vec2u>;   // (entry << 6 | cell, first index)
+@group(1) @binding(1) var<storage, read> slot_mc: array<u32>;       // per slot: 16 case words, 16 row bases
+@group(2) @binding(0) var<uniform> shard: array<vec4u, 2>;          // this shard's record (plan.wgsl): first, count, base
+@group(2) @binding(1) var<storage, read_write> shard_indices: array<u32>;
+// Welded vertices, 3 words each: packed position, block id, normal (vertex_format.wgsl).
+@group(2) @binding(2) var<storage, read_write> vertex_data: array<u32>;
 
 // Normals, once per surface (the renderer reads them, nothing per frame): the
 // central-difference gradient at both ends of the vertex's edge, interpolated
 // at the vertex -- the gradient VTK's ComputeNormals gives. A neighbour voxel
 // outside the volume or in a block not cached gives a one-sided difference.
-// The gradients are taken once per cell at its 8 corners: along each axis one
-// neighbour of a corner is another corner (already read), so a cell reads 24
-// voxels more, whatever its number of vertices.
 // The voxel at global grid point g: (value, 1) when it is readable, (0, 0) otherwise.
 fn grid_voxel(g: vec3i) -> vec2f {
   if (any(g < vec3i(0)) || any(g >= vec3i(volume.dims))) {
@@ -27,23 +25,45 @@ fn grid_voxel(g: vec3i) -> vec2f {
   return vec2f(slot_rows[slot * 16u + v.y + 4u * v.z][v.x], 1.0);
 }
 
+// Gradient at corner q of the cell whose corner 0 is at global grid point
+// `origin`: along each axis one neighbour is another corner (already read).
+fn corner_gradient(values: ptr<function, array<f32, 8>>, origin: vec3i, q: u32) -> vec3f {
+  let o = mc_corner_offset(q);
+  let g = origin + vec3i(o);
+  var d = vec3f(0.0);
+  for (var a = 0u; a < 3u; a++) {
+    let inner = (*values)[q ^ (1u << a)];
+    var step = vec3i(0);
+    step[a] = select(-1, 1, o[a] == 1u);
+    let outer = grid_voxel(g + step);
+    // inner is at +1 and outer at -1 when the corner is on the cell's lower side
+    let sign = select(1.0, -1.0, o[a] == 1u);
+    if (outer.y > 0.0) {
+      d[a] = 0.5 * sign * (inner - outer.x);
+    } else {
+      d[a] = sign * (inner - (*values)[q]);
+    }
+  }
+  return d;
+}
+
 @compute @workgroup_size(64)
-fn emit_vertices(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
-                 @builtin(local_invocation_index) lid: u32) {
+fn emit_surface(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+                @builtin(local_invocation_index) lid: u32) {
   let k = grid_invocation_index(wid, nwg, lid, 64u);
-  if (k >= shard[S_COUNT]) {
+  let record = shard[0];
+  if (k >= record[S_COUNT]) {
     return;
   }
-  let j = shard[S_FIRST] + k;
-  let record = cell_records[j];
-  let first = cell_first[j];
-  let b = active_ids[record >> 6u];
-  let l = cell_of(record & 63u);
+  let entry = cell_list[record[S_FIRST] + k];
+  let first = entry.y;
+  let b = active_ids[entry.x >> 6u];
+  let l = cell_of(entry.x & 63u);
   let c = block_coords_of(b, volume.grid);
   let own = block_to_slot[b];
-  // The 8 corners (q = x + 2y + 4z); every block the cell touches is cached.
+  // The 8 corners (q = x + 2y + 4z) and their blocks' slots; every block the cell touches is cached.
   var values: array<f32, 8>;
-  var code = 0u;
+  var slots: array<u32, 8>;
   for (var q = 0u; q < 8u; q++) {
     let p = l + mc_corner_offset(q);
     let d = p >> vec3u(2u);
@@ -51,37 +71,58 @@ fn emit_vertices(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg
     if (any(d != vec3u(0u))) {
       slot = block_to_slot[block_index_of(c + d, volume.grid)];
     }
+    slots[q] = slot;
     let v = p & vec3u(3u);
-    let value = slot_rows[slot * 16u + v.y + 4u * v.z][v.x];
-    values[q] = value;
-    code |= select(0u, 1u << q, value >= volume.iso);
+    values[q] = slot_rows[slot * 16u + v.y + 4u * v.z][v.x];
   }
+  let code = (slot_mc[32u * own + l.y + 4u * l.z] >> (8u * l.x)) & 255u;
   let words = case_words(code);
   let n = 3u * mc_case_triangles(words);
-  // Corner gradients (corner q at global grid point origin + offset(q)).
-  let origin = vec3i(c * 4u + l);
-  var grads: array<vec3f, 8>;
-  for (var q = 0u; q < 8u; q++) {
-    let o = mc_corner_offset(q);
-    let g = origin + vec3i(o);
-    var d = vec3f(0.0);
-    for (var a = 0u; a < 3u; a++) {
-      let inner = values[q ^ (1u << a)];
-      var step = vec3i(0);
-      step[a] = select(-1, 1, o[a] == 1u);
-      let outer = grid_voxel(g + step);
-      // bit 0: inner is at +1, outer at -1; bit 1: the other way round
-      let sign = select(1.0, -1.0, o[a] == 1u);
-      if (outer.y > 0.0) {
-        d[a] = 0.5 * sign * (inner - outer.x);
-      } else {
-        d[a] = sign * (inner - values[q]);
+  let g = c * 4u + l;
+  let last = last_cell_axes(g, volume.dims);
+  let cut = mc_cut_edges(code);
+  let base = record[S_BASE];
+
+  // The vertices this cell owns, written once: by the shard holding its first index.
+  var owned = owned_edges(last) & cut;
+  if (first >= base && owned != 0u) {
+    let row = l.y + 4u * l.z;
+    var vertex = slot_mc[32u * own + 16u + row] +
+      owned_vertices_before(slot_mc[32u * own + row], l.x, 0u, g - vec3u(l.x, 0u, 0u), volume.dims);
+    let capacity = arrayLength(&vertex_data) / 3u;
+    let origin = vec3i(g);
+    // Every edge an inner cell owns starts at corner 0: its gradient once.
+    let gradient0 = corner_gradient(&values, origin, 0u);
+    while (owned != 0u) {
+      let e = firstTrailingBit(owned);
+      owned &= owned - 1u;
+      let lower = mc_edge_lower(e);
+      let upper = mc_edge_upper(e);
+      let v0 = values[lower];
+      let v1 = values[upper];
+      // the project's interpolation formula (src/mc/README.md), from the lower corner
+      let t = (volume.iso - v0) / (v1 - v0);
+      var p = vec3f(l + mc_corner_offset(lower));
+      let axis = mc_edge_axis(e);
+      p[axis] = p[axis] + t;
+      if (vertex < capacity) {
+        vertex_data[3u * vertex] = encode_vertex_position(p);
+        vertex_data[3u * vertex + 1u] = b;
+        // Outward (toward decreasing values): minus the gradient.
+        var lower_gradient = gradient0;
+        if (lower != 0u) {
+          lower_gradient = corner_gradient(&values, origin, lower);
+        }
+        let gradient = mix(lower_gradient, corner_gradient(&values, origin, upper), t);
+        vertex_data[3u * vertex + 2u] = encode_vertex_normal(-gradient);
       }
+      vertex += 1u;
     }
-    grads[q] = d;
   }
-  let base = shard[S_BASE];
-  let size = arrayLength(&shard_vertices);
+
+  // Each triangle corner: the vertex of its edge, numbered by the edge's owner
+  // (this cell or a neighbour at one of its corners: same window of blocks).
+  let size = arrayLength(&shard_indices);
   for (var m = 0u; m < n; m++) {
     let v = first + m;
     if (v < base || v - base >= size) {
@@ -89,15 +130,15 @@ fn emit_vertices(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg
     }
     let e = mc_case_edge(words, m);
     let lower = mc_edge_lower(e);
-    let v0 = values[lower];
-    let v1 = values[mc_edge_upper(e)];
-    // the project's interpolation formula (src/mc/README.md), from the lower corner
-    let t = (volume.iso - v0) / (v1 - v0);
-    var p = vec3f(l + mc_corner_offset(lower));
-    let axis = mc_edge_axis(e);
-    p[axis] = p[axis] + t;
-    shard_vertices[v - base] = vec2u(encode_vertex_position(p), b);
-    // Outward (toward decreasing values): minus the gradient.
-    shard_normals[v - base] = encode_vertex_normal(-mix(grads[lower], grads[mc_edge_upper(e)], t));
+    // the owner's corner 0 is the edge's lower end, moved down on the axes where this cell is last
+    let at = lower & ~last;
+    let edge = mc_edge_of(mc_edge_axis(e), lower & last);
+    let p = l + mc_corner_offset(at);
+    let owner_slot = slots[at];
+    let local = p & vec3u(3u);
+    let row = local.y + 4u * local.z;
+    let index = slot_mc[32u * owner_slot + 16u + row] +
+      owned_vertices_before(slot_mc[32u * owner_slot + row], local.x, (1u << edge) - 1u, g + mc_corner_offset(at) - vec3u(local.x, 0u, 0u), volume.dims);
+    shard_indices[v - base] = index;
   }
 }

@@ -10,7 +10,7 @@ const NONE: u32 = 0xffffffffu;
 // after growth), the rest by the kernels and primitives of one computation.
 const C_BLOCKS: u32 = 0u;          // blocks in the volume
 const C_SLOTS: u32 = 1u;           // cache slots (capacity)
-const C_VERTEX_CAPACITY: u32 = 2u; // vertices the shards hold together
+const C_VERTEX_CAPACITY: u32 = 2u; // triangle corners (indices) the shards hold together
 const C_SHARDS: u32 = 3u;          // vertex shards
 const C_PER_SHARD: u32 = 4u;       // vertices per full shard
 const C_CELL_CAPACITY: u32 = 5u;   // entries of the emitting-cell list
@@ -22,7 +22,7 @@ const C_SLOTS_GATED: u32 = 10u;    // slots, or 0 when the cache is too small
 const C_NEW: u32 = 11u;            // active blocks not cached (scan total)
 const C_LOG_COMPACT: u32 = 12u;    // LRU log entries to compact: the tail when the log is full, else 0
 const C_LOG_VALID: u32 = 13u;      // valid entries kept by a log compaction (scan total)
-const C_VERTICES: u32 = 14u;       // vertices of the surface (scan total)
+const C_VERTICES: u32 = 14u;       // triangle corners (indices) of the surface (scan total)
 const C_OCCUPIED: u32 = 15u;       // active blocks that emit triangles (counted by classify_blocks)
 const C_STATUS: u32 = 16u;         // STATUS_* bits of this computation
 const C_SLOTS_USED: u32 = 17u;     // slots holding a block (kept across computations)
@@ -37,6 +37,9 @@ const C_REQUEST: u32 = 44u;        // host-written id of the submission; its sta
 const C_LOG_SIZE: u32 = 45u;       // positions of the LRU log (a power of two >= 2 x slots; host)
 const C_LOG_TAIL: u32 = 46u;       // next free position of the LRU log
 const C_LOG_BASE: u32 = 47u;       // where this computation appends its active slots (plan_update)
+const C_WELDED: u32 = 48u;          // welded vertices of the surface (scan total; C_VERTICES counts triangle corners)
+const C_WELDED_CAPACITY: u32 = 49u; // welded vertices the vertex buffer holds (host)
+const C_DRAWN_WELDED: u32 = 50u;    // welded vertices of the drawn surface
 // Indirect dispatch arguments (x, y, z), written by the plan kernels.
 const A_SLOTS: u32 = 24u;   // rebuild_log after a log compaction: ceil(2 x log size / 64), or 0
 const A_MARK: u32 = 28u;    // mark_cached, append_active, classify_blocks: ceil(active gated / 64)

@@ -99,7 +99,8 @@ fn first_ending_after(vertex: u32, n: u32) -> u32 {
 fn plan_vertices() {
   let total = counters[C_VERTICES];
   var status = counters[C_STATUS];
-  if (status == 0u && (total > counters[C_VERTEX_CAPACITY] || counters[C_CELLS] > counters[C_CELL_CAPACITY])) {
+  if (status == 0u && (total > counters[C_VERTEX_CAPACITY] || counters[C_CELLS] > counters[C_CELL_CAPACITY] ||
+                       counters[C_WELDED] > counters[C_WELDED_CAPACITY])) {
     status |= STATUS_VERTEX_OVERFLOW;
     counters[C_STATUS] = status;
   }
@@ -120,9 +121,9 @@ fn plan_vertices() {
       let last_entry = min(first_ending_after(base + per_shard - 1u, entries), entries - 1u);
       first = cell_offsets[first_entry];
       count = cell_offsets[last_entry] + cell_counts[last_entry] - first;
-      draw_args[4u * k] = min(total - base, per_shard);
+      draw_args[5u * k] = min(total - base, per_shard);
     } else if (ok) {
-      draw_args[4u * k] = 0u;
+      draw_args[5u * k] = 0u;
     }
     shard_info[r + S_FIRST] = first;
     shard_info[r + S_COUNT] = count;
@@ -134,6 +135,7 @@ fn plan_vertices() {
   }
   if (ok) {
     counters[C_DRAWN_VERTICES] = total;
+    counters[C_DRAWN_WELDED] = counters[C_WELDED];
     counters[C_DRAWN_OCCUPIED] = counters[C_OCCUPIED];
   }
 }

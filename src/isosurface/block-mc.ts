@@ -1,21 +1,25 @@
 // Block marching cubes over the cached blocks (docs/design.md, steps 4-5), in work
 // proportional to the surface (shaders/isosurface/block_*.wgsl):
 //   classify_blocks  one invocation per active block classifies its 64 cells
-//                    once: case codes, vertex count, emitting-cell count
-//   scans            vertex counts -> each block's first vertex and the total;
-//                    cell counts -> each block's first cell and the total
+//                    once: case codes (per slot), index, welded-vertex and
+//                    emitting-cell counts
+//   scans            of the three counts -> each block's first index, first
+//                    vertex and first cell, and the totals
 //   plan_vertices    overflow check, expansion and shard arguments, draw args
-//   expand_cells     the emitting-cell list (record, first vertex)
-//   emit_vertices    one invocation per emitting cell, per shard
+//   expand_cells     the emitting-cell list (record, first index), and per
+//                    slot the first vertex of each row of cells
+//   emit_surface     one invocation per emitting cell, per index shard: the
+//                    vertices of the cut edges it owns, its triangles' indices
 // So the vertex pass runs once per emitting cell, not once per cell of every
-// active block, and each block's voxels are classified once.
+// active block, each block's voxels are classified once, and each vertex is
+// computed once (edge_owner.wgsl), however many triangles share it.
 import { createCaseTableBuffer } from '../mc/case-table-wgsl.ts';
 import type { ExclusiveScan } from '../primitives/scan.ts';
 import { Counters } from './counters.ts';
 import { bindGroup, bufferLayout, storageBuffer } from '../gpu/bindings.ts';
 import { createComputePipeline } from '../gpu/pipeline-cache.ts';
 import { A, C, CELL_RECORD_BYTES } from './layout.ts';
-import { VertexShards } from './vertex-output.ts';
+import { SurfaceOutput } from './vertex-output.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
 
 export interface BlockMcParts {
@@ -29,8 +33,8 @@ export interface BlockMcParts {
   maxBindingBytes: number;
 }
 
-/** Bytes per cache slot of the per-active-block buffers: 16 case words + 4 counts/offsets. */
-export const MC_BYTES_PER_SLOT = 80;
+/** Bytes per cache slot of the per-slot and per-active-block buffers: 16 case words, 16 row bases, 6 counts/offsets. */
+export const MC_BYTES_PER_SLOT = 152;
 
 /** Entries of the emitting-cell list for `vertices` vertices (every emitting cell has >= 3). */
 export function cellCapacityFor(vertices: number, maxBindingBytes = Infinity): number {
@@ -44,17 +48,20 @@ export function cellBytesFor(vertices: number, maxBindingBytes = Infinity): numb
 
 interface EntryBuffers {
   capacity: number;
-  cases: GPUBuffer;
-  vertexCounts: GPUBuffer;
-  vertexOffsets: GPUBuffer;
+  /** Per slot: 16 case words, 16 row bases (block_classify.wgsl). */
+  slotMc: GPUBuffer;
+  indexCounts: GPUBuffer;
+  indexOffsets: GPUBuffer;
+  weldedCounts: GPUBuffer;
+  weldedOffsets: GPUBuffer;
   cellCounts: GPUBuffer;
   cellOffsets: GPUBuffer;
 }
 
 interface CellBuffers {
   capacity: number;
-  records: GPUBuffer;
-  first: GPUBuffer;
+  /** Per emitting cell: (entry << 6 | cell, first index). */
+  list: GPUBuffer;
 }
 
 interface Layouts {
@@ -68,7 +75,8 @@ interface Layouts {
 
 interface Groups {
   slotData: GPUBuffer;
-  shards: VertexShards['shards'];
+  shards: SurfaceOutput['shards'];
+  vertices: GPUBuffer;
   common: GPUBindGroup;
   classify: GPUBindGroup;
   expand: GPUBindGroup;
@@ -105,10 +113,22 @@ export class BlockMarchingCubes {
   static async create(device: GPUDevice, parts: BlockMcParts, capacity: number, vertexCapacity: number): Promise<BlockMarchingCubes> {
     const layouts: Layouts = {
       common: bufferLayout(device, 'Isosurface.blockMc.layout', ['uniform', 'uniform', 'read', 'read', 'read']),
-      classify: bufferLayout(device, 'Isosurface.classifyBlocks.layout', ['read', 'rw', 'rw', 'rw', 'rw']),
-      expand: bufferLayout(device, 'Isosurface.expandCells.layout', ['uniform', 'read', 'read', 'read', 'read', 'read', 'rw', 'rw']),
-      cells: bufferLayout(device, 'Isosurface.emitVertices.layout', ['read', 'read']),
-      shard: bufferLayout(device, 'Isosurface.shard.layout', ['read', 'rw', 'rw']),
+      classify: bufferLayout(device, 'Isosurface.classifyBlocks.layout', ['uniform', 'rw', 'rw', 'rw', 'rw', 'rw']),
+      expand: bufferLayout(device, 'Isosurface.expandCells.layout', [
+        'uniform',
+        'uniform',
+        'rw',
+        'read',
+        'read',
+        'read',
+        'read',
+        'rw',
+        'read',
+        'read',
+        'uniform',
+      ]),
+      cells: bufferLayout(device, 'Isosurface.emitSurface.layout', ['read', 'read']),
+      shard: bufferLayout(device, 'Isosurface.shard.layout', ['uniform', 'rw', 'rw']),
       plan: bufferLayout(device, 'Isosurface.planVertices.layout', ['rw', 'read', 'read', 'read', 'read', 'rw', 'rw']),
     };
     const constants = { MAX_WG_PER_DIM: parts.maxWorkgroupsPerDimension };
@@ -121,7 +141,7 @@ export class BlockMarchingCubes {
         layout: [layouts.expand],
         constants,
       }),
-      createComputePipeline(device, 'Isosurface.emitVertices', isosurfaceWgsl.blockEmit, 'emit_vertices', {
+      createComputePipeline(device, 'Isosurface.emitSurface', isosurfaceWgsl.blockEmit, 'emit_surface', {
         layout: [layouts.common, layouts.cells, layouts.shard],
         constants,
       }),
@@ -134,9 +154,11 @@ export class BlockMarchingCubes {
     const words = (label: string, perEntry = 1) => storageBuffer(this.device, `Isosurface.${label}`, capacity * 4 * perEntry);
     return {
       capacity,
-      cases: words('blockCases', 16),
-      vertexCounts: words('vertexCounts'),
-      vertexOffsets: words('vertexOffsets'),
+      slotMc: words('slotMc', 32),
+      indexCounts: words('indexCounts'),
+      indexOffsets: words('indexOffsets'),
+      weldedCounts: words('weldedCounts'),
+      weldedOffsets: words('weldedOffsets'),
       cellCounts: words('cellCounts'),
       cellOffsets: words('cellOffsets'),
     };
@@ -145,15 +167,11 @@ export class BlockMarchingCubes {
   private allocateCells(vertexCapacity: number): CellBuffers {
     const capacity = cellCapacityFor(vertexCapacity, this.parts.maxBindingBytes);
     this.parts.counters.set('cellCapacity', capacity);
-    return {
-      capacity,
-      records: storageBuffer(this.device, 'Isosurface.cellRecords', capacity * 4),
-      first: storageBuffer(this.device, 'Isosurface.cellFirstVertex', capacity * 4),
-    };
+    return { capacity, list: storageBuffer(this.device, 'Isosurface.cellList', capacity * CELL_RECORD_BYTES) };
   }
 
   private destroyEntries(e: EntryBuffers): void {
-    for (const b of [e.cases, e.vertexCounts, e.vertexOffsets, e.cellCounts, e.cellOffsets]) b.destroy();
+    for (const b of [e.slotMc, e.indexCounts, e.indexOffsets, e.weldedCounts, e.weldedOffsets, e.cellCounts, e.cellOffsets]) b.destroy();
   }
 
   /** Per-active-block buffers and the case table (counted with the cache). */
@@ -178,16 +196,15 @@ export class BlockMarchingCubes {
   resizeCells(vertexCapacity: number): void {
     const capacity = cellCapacityFor(vertexCapacity, this.parts.maxBindingBytes);
     if (capacity === this.cells.capacity) return;
-    this.cells.records.destroy();
-    this.cells.first.destroy();
+    this.cells.list.destroy();
     this.cells = this.allocateCells(vertexCapacity);
     this.groups = undefined;
   }
 
   /** Bind groups for the current cache slot data and vertex shards (rebuilt only when they change). */
-  private bind(slotData: GPUBuffer, shards: VertexShards): Groups {
+  private bind(slotData: GPUBuffer, shards: SurfaceOutput): Groups {
     const g = this.groups;
-    if (g && g.slotData === slotData && g.shards === shards.shards) return g;
+    if (g && g.slotData === slotData && g.shards === shards.shards && g.vertices === shards.vertices) return g;
     const d = this.device;
     const p = this.parts;
     const e = this.entries;
@@ -197,43 +214,48 @@ export class BlockMarchingCubes {
     this.groups = {
       slotData,
       shards: shards.shards,
+      vertices: shards.vertices,
       common: bindGroup(d, 'Isosurface.blockMc.bindGroup', L.common, [p.volume, this.caseTable, slotData, p.blockToSlot, p.activeIds]),
       classify: bindGroup(d, 'Isosurface.classifyBlocks.bindGroup', L.classify, [
         counters,
-        e.cases,
-        e.vertexCounts,
+        e.slotMc,
+        e.indexCounts,
         e.cellCounts,
         this.occupied,
+        e.weldedCounts,
       ]),
       expand: bindGroup(d, 'Isosurface.expandCells.bindGroup', L.expand, [
         this.caseTable,
         counters,
-        e.cases,
+        e.slotMc,
         e.cellCounts,
         e.cellOffsets,
-        e.vertexOffsets,
-        c.records,
-        c.first,
+        e.indexOffsets,
+        e.weldedOffsets,
+        c.list,
+        p.activeIds,
+        p.blockToSlot,
+        p.volume,
       ]),
-      cells: bindGroup(d, 'Isosurface.emitVertices.bindGroup', L.cells, [c.records, c.first]),
+      cells: bindGroup(d, 'Isosurface.emitSurface.bindGroup', L.cells, [c.list, e.slotMc]),
       plan: bindGroup(d, 'Isosurface.planVertices.bindGroup', L.plan, [
         counters,
-        e.vertexOffsets,
-        e.vertexCounts,
+        e.indexOffsets,
+        e.indexCounts,
         e.cellOffsets,
         e.cellCounts,
         shards.shardInfo,
         shards.drawArgs,
       ]),
       shardGroups: shards.shards.map((s, k) =>
-        bindGroup(d, `Isosurface.shard${k}.bindGroup`, L.shard, [shards.shardRecord(k), s.vertices, s.normals]),
+        bindGroup(d, `Isosurface.shard${k}.bindGroup`, L.shard, [shards.shardRecord(k), s.indices, shards.vertices]),
       ),
     };
     return this.groups;
   }
 
   /** Records classify_blocks over the active blocks (case codes, vertex and cell counts, occupied count). */
-  encodeClassify(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: VertexShards): void {
+  encodeClassify(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: SurfaceOutput): void {
     const g = this.bind(slotData, shards);
     const { counters } = this.parts;
     encoder.clearBuffer(this.occupied);
@@ -246,17 +268,18 @@ export class BlockMarchingCubes {
     encoder.copyBufferToBuffer(this.occupied, 0, counters.buffer, Counters.offset(C.occupied), 4);
   }
 
-  /** Records the scans of the vertex counts (-> offsets, vertices) and cell counts (-> offsets, cells). */
+  /** Records the scans of the index, welded-vertex and cell counts (-> offsets and the totals). */
   encodeScans(encoder: GPUCommandEncoder): void {
     const { counters, scan } = this.parts;
     const e = this.entries;
     const active = counters.count('activeGated');
-    scan.encode(encoder, { input: e.vertexCounts, output: e.vertexOffsets, count: active, totalOut: counters.count('vertices') });
+    scan.encode(encoder, { input: e.indexCounts, output: e.indexOffsets, count: active, totalOut: counters.count('vertices') });
+    scan.encode(encoder, { input: e.weldedCounts, output: e.weldedOffsets, count: active, totalOut: counters.count('welded') });
     scan.encode(encoder, { input: e.cellCounts, output: e.cellOffsets, count: active, totalOut: counters.count('cells') });
   }
 
   /** Records plan_vertices: overflow check, expansion and shard arguments, draw arguments. */
-  encodePlanVertices(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: VertexShards): void {
+  encodePlanVertices(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: SurfaceOutput): void {
     const g = this.bind(slotData, shards);
     const pass = encoder.beginComputePass({ label: 'Isosurface.planVertices' });
     pass.setPipeline(this.planPipeline);
@@ -266,7 +289,7 @@ export class BlockMarchingCubes {
   }
 
   /** Records expand_cells: the emitting-cell list (dispatch sized by plan_vertices, 0 when the surface does not fit). */
-  encodeCellList(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: VertexShards): void {
+  encodeCellList(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: SurfaceOutput): void {
     const g = this.bind(slotData, shards);
     const pass = encoder.beginComputePass({ label: 'Isosurface.expandCells' });
     pass.setPipeline(this.expandPipeline);
@@ -275,24 +298,23 @@ export class BlockMarchingCubes {
     pass.end();
   }
 
-  /** Records the vertex pass of every shard (each dispatch sized on the GPU). */
-  encodeVertices(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: VertexShards): void {
+  /** Records the vertex pass (vertices and indices) of every index shard (each dispatch sized on the GPU). */
+  encodeVertices(encoder: GPUCommandEncoder, slotData: GPUBuffer, shards: SurfaceOutput): void {
     const g = this.bind(slotData, shards);
-    const pass = encoder.beginComputePass({ label: 'Isosurface.emitVertices' });
+    const pass = encoder.beginComputePass({ label: 'Isosurface.emitSurface' });
     pass.setPipeline(this.emitPipeline);
     pass.setBindGroup(0, g.common);
     pass.setBindGroup(1, g.cells);
     for (let k = 0; k < shards.shards.length; k++) {
       pass.setBindGroup(2, g.shardGroups[k]);
-      pass.dispatchWorkgroupsIndirect(shards.shardInfo, VertexShards.dispatchArgsOffset(k));
+      pass.dispatchWorkgroupsIndirect(shards.shardInfo, SurfaceOutput.dispatchArgsOffset(k));
     }
     pass.end();
   }
 
   destroy(): void {
     this.destroyEntries(this.entries);
-    this.cells.records.destroy();
-    this.cells.first.destroy();
+    this.cells.list.destroy();
     this.caseTable.destroy();
     this.occupied.destroy();
   }

@@ -4,16 +4,28 @@
 import { CACHE_BYTES_PER_SLOT } from './lru-cache.ts';
 import { cellBytesFor, MC_BYTES_PER_SLOT } from './block-mc.ts';
 import { logBytesFor, SLOT_BYTES } from './layout.ts';
-import { VertexShards } from './vertex-output.ts';
+import { SurfaceOutput } from './vertex-output.ts';
 
 /** Bytes the cache takes at `slots` slots: slot data, maps, the LRU log, per-active buffers, blockToSlot. */
 export function cacheBytesFor(slots: number, blockCount: number): number {
   return slots * (CACHE_BYTES_PER_SLOT + MC_BYTES_PER_SLOT) + logBytesFor(slots) + blockCount * 4;
 }
 
-/** Bytes the vertex output takes at `vertices` vertices: the shards and the emitting-cell list. */
-export function vertexBytesFor(vertices: number, perShard: number): number {
-  return VertexShards.bytesFor(vertices, perShard) + cellBytesFor(vertices);
+/**
+ * Bytes the surface output takes at `indices` triangle corners and `welded`
+ * vertices: the index shards, the vertex buffer and the emitting-cell list.
+ */
+export function vertexBytesFor(indices: number, welded: number, perShard: number): number {
+  return SurfaceOutput.bytesFor(indices, welded, perShard) + cellBytesFor(indices);
+}
+
+/**
+ * Welded vertices to allocate with `indices` triangle corners: a closed
+ * surface has about one vertex per 6 corners, open pieces and small
+ * components more, so a quarter (a surface needing more grows them).
+ */
+export function weldedFor(indices: number): number {
+  return Math.max(1, Math.ceil(indices / 4));
 }
 
 /**

@@ -25,7 +25,7 @@ export class Counters {
     this.buffer = device.createBuffer({
       label: 'Isosurface.counters',
       size: COUNTERS_BYTES,
-      usage: GPUBufferUsage.STORAGE | GPUBufferUsage.INDIRECT | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST,
+      usage: GPUBufferUsage.STORAGE | GPUBufferUsage.UNIFORM | GPUBufferUsage.INDIRECT | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST,
     });
     this.group = bindGroup(device, 'Isosurface.counters.bindGroup', layout, [this.buffer]);
   }
@@ -57,6 +57,7 @@ export class Counters {
       | 'blocks'
       | 'slots'
       | 'vertexCapacity'
+      | 'weldedCapacity'
       | 'cellCapacity'
       | 'groups'
       | 'groupSize'

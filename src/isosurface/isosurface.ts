@@ -342,7 +342,7 @@ export class Isosurface {
     const c = raw.counters;
     const activeBlocks = c[C.active];
     const newBlocks = c[C.new] + r.earlierNew;
-    const vertices = c[C.vertices];
+    const indices = c[C.vertices];
     const stages = r.earlierMs > 0 ? [...raw.stages, { label: 'attempts before growth', ms: r.earlierMs }] : raw.stages;
     return {
       isovalue: r.iso,
@@ -350,8 +350,9 @@ export class Isosurface {
       newBlocks,
       occupiedBlocks: c[C.occupied],
       hitRate: hitRate(activeBlocks, newBlocks),
-      vertices,
-      triangles: vertices / 3,
+      vertices: c[C.welded],
+      indices,
+      triangles: indices / 3,
       cacheSlots: this.pipeline.parts.cache.capacity,
       cacheSlotsUsed: c[C.slotsUsed],
       cacheBytes: this.pipeline.cacheBytes,

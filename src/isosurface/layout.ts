@@ -36,6 +36,10 @@ export const C = {
   logSize: 45,
   logTail: 46,
   logBase: 47,
+  /** Welded vertices of the surface (scan total), their capacity (host), those of the drawn surface. */
+  welded: 48,
+  weldedCapacity: 49,
+  drawnWelded: 50,
 } as const;
 
 /** Word offsets of indirect dispatch arguments (x, y, z) in the counters buffer. */
@@ -62,15 +66,15 @@ export const SHARD_RECORD_BYTES = 256;
 export const S = { first: 0, count: 1, base: 2, args: 4 } as const;
 /** Bytes of one shard record bound by the vertex pass. */
 export const SHARD_RECORD_BINDING = 32;
-/** drawIndirect arguments per shard: [vertexCount, instanceCount, firstVertex, firstInstance]. */
-export const DRAW_ARGS_BYTES = 16;
+/** drawIndexedIndirect arguments per index shard: [indexCount, instanceCount, firstIndex, baseVertex, firstInstance]. */
+export const DRAW_ARGS_BYTES = 20;
 
 /** Bytes of one decoded block in the slot data (64 f32). */
 export const SLOT_BYTES = 256;
-/** Bytes of one compressed vertex. */
-export const VERTEX_BYTES = 8;
-/** Bytes of one vertex normal (octahedral, vertex_format.wgsl), in a buffer parallel to the vertices. */
-export const NORMAL_BYTES = 4;
+/** Bytes of one welded vertex: the compressed position (8 bytes) and its octahedral normal (vertex_format.wgsl). */
+export const VERTEX_BYTES = 12;
+/** Bytes of one index (a triangle corner). */
+export const INDEX_BYTES = 4;
 /** Bytes of one entry of the emitting-cell list: (entry << 6 | cell) and its first vertex. */
 export const CELL_RECORD_BYTES = 8;
 

@@ -4,7 +4,7 @@
 //   ActiveBlocks (active-blocks.ts)   chunk updates, neighbourhood ranges, active list
 //   BlockCache (lru-cache.ts)         Algorithm 1 and the decode into slots
 //   BlockMarchingCubes (block-mc.ts)  classification, counts, offsets, vertices
-//   VertexShards (vertex-output.ts)   the soup in <= 1-binding shards, draw args
+//   SurfaceOutput (vertex-output.ts)  welded vertices, indices in <= 1-binding shards, draw args
 // plus growth of the cache and the vertex output within a budget, and the
 // draw data the renderer binds. Scheduling (newest wins, surfaces in flight,
 // error scopes, statistics) is isosurface.ts's.
@@ -17,12 +17,14 @@ import { ZfpDecoder } from '../zfp/decoder.ts';
 import type { BlockSource } from '../zfp/gpu-stream.ts';
 import { ActiveBlocks, groupGrid } from './active-blocks.ts';
 import { BlockMarchingCubes } from './block-mc.ts';
-import { cacheBytesFor, formatMB, grownCapacity, maxCacheSlots, vertexBytesFor } from './budget.ts';
+import { cacheBytesFor, formatMB, grownCapacity, maxCacheSlots, vertexBytesFor, weldedFor } from './budget.ts';
 import { Counters } from './counters.ts';
 import {
   C,
+  COUNTER_WORDS,
   DEFAULT_GROUP_EDGE_BLOCKS,
   DRAW_ARGS_BYTES,
+  INDEX_BYTES,
   SLOT_BYTES,
   STATUS_CACHE_SHORTFALL,
   STATUS_VERTEX_OVERFLOW,
@@ -32,7 +34,7 @@ import {
 import { BlockCache } from './lru-cache.ts';
 import type { StatsReadback } from './stats-readback.ts';
 import { IsosurfaceBudgetError, type IsosurfaceDrawData, type IsosurfaceOptions, type VolumeInfo } from './types.ts';
-import { VertexShards } from './vertex-output.ts';
+import { SurfaceOutput } from './vertex-output.ts';
 
 /** The parts of one volume's pipeline (owned: destroy() frees them, except the stream). */
 export interface PipelineParts {
@@ -50,7 +52,7 @@ export interface PipelineParts {
   active: ActiveBlocks;
   cache: BlockCache;
   mc: BlockMarchingCubes;
-  shards: VertexShards;
+  shards: SurfaceOutput;
 }
 
 /** What one surface's passes need besides the parts. */
@@ -76,8 +78,11 @@ export class IsosurfacePipeline {
     readonly initialSlots: number,
     /** Slots whose data fits one storage binding (the cache never grows beyond). */
     readonly maxSlots: number,
+    /** Welded vertices that fit one binding (the vertex buffer never grows beyond). */
+    readonly maxWelded: number,
   ) {
     this.drawData = {
+      vertices: parts.shards.vertices,
       shards: parts.shards.drawShards,
       info,
       slotData: parts.cache.slotData,
@@ -101,14 +106,17 @@ export class IsosurfacePipeline {
     const maxWg = options.maxWorkgroupsPerDimension ?? limits.maxComputeWorkgroupsPerDimension;
     const { blockCount, blockGrid, dims } = stream.info;
     const bindingBytes = Math.min(options.maxVertexBindingBytes ?? Infinity, limits.maxStorageBufferBindingSize, limits.maxBufferSize);
-    const perShard = Math.floor(bindingBytes / VERTEX_BYTES);
-    if (perShard < 1) throw new RangeError(`maxVertexBindingBytes must hold at least one vertex (${VERTEX_BYTES} bytes)`);
+    const perShard = Math.floor(bindingBytes / INDEX_BYTES);
+    // The welded vertices are one binding (every index shard draws from them).
+    const maxWelded = Math.floor(Math.min(limits.maxStorageBufferBindingSize, limits.maxBufferSize) / VERTEX_BYTES);
+    if (perShard < 1) throw new RangeError(`maxVertexBindingBytes must hold at least one index (${INDEX_BYTES} bytes)`);
     const maxSlots = maxCacheSlots(limits, options.maxStorageBindingBytes);
     let slots = Math.max(1, Math.min(blockCount, maxSlots, options.initialCacheSlots ?? Math.ceil(blockCount / 10)));
     let vertices = Math.max(1, options.initialVertexCapacity ?? Math.min(2 ** 22, Math.max(2 ** 16, blockCount * 8)));
     // The initial buffers must fit the budget too: shrink both (keeping their
     // ratio) until they do; the per-block and per-shard bytes do not shrink.
-    const bytesAt = (s: number, v: number) => cacheBytesFor(s, blockCount) + vertexBytesFor(v, perShard);
+    const bytesAt = (s: number, v: number) =>
+      cacheBytesFor(s, blockCount) + vertexBytesFor(v, Math.min(maxWelded, weldedFor(v)), perShard);
     if (bytesAt(slots, vertices) > budget) {
       const smallest = bytesAt(1, 1);
       if (smallest > budget) {
@@ -197,7 +205,7 @@ export class IsosurfacePipeline {
       slots,
       vertices,
     );
-    const shards = new VertexShards(device, perShard, vertices);
+    const shards = new SurfaceOutput(device, perShard, vertices, Math.min(maxWelded, weldedFor(vertices)));
     let lo = Infinity;
     let hi = -Infinity;
     for (let b = 0; b < ranges.length / 2; b++) {
@@ -212,6 +220,7 @@ export class IsosurfacePipeline {
       info,
       slots,
       maxSlots,
+      maxWelded,
     );
     pipeline.writeShardCounters();
     return pipeline;
@@ -272,11 +281,12 @@ export class IsosurfacePipeline {
 
   // ---- growth
 
-  private budgetError(iso: number, slots: number, vertices: number, need: number, budget: number): IsosurfaceBudgetError {
+  private budgetError(iso: number, slots: number, indices: number, welded: number, need: number, budget: number): IsosurfaceBudgetError {
     const cache = cacheBytesFor(slots, this.info.blockCount);
-    const verts = vertexBytesFor(vertices, this.parts.shards.perShard);
+    const verts = vertexBytesFor(indices, welded, this.parts.shards.perShard);
     return new IsosurfaceBudgetError(
-      `the surface at iso ${iso} needs ${formatMB(need)} (cache: ${slots} blocks, ${formatMB(cache)}; vertices: ${vertices}, ${formatMB(verts)}), ` +
+      `the surface at iso ${iso} needs ${formatMB(need)} (cache: ${slots} blocks, ${formatMB(cache)}; ` +
+        `triangles: ${Math.floor(indices / 3)}, vertices: ${welded}, ${formatMB(verts)}), ` +
         `the budget is ${formatMB(budget)}; raise it (setMemoryBudget, or --cache-budget MB in the CLI). The previous surface is kept.`,
       need,
       budget,
@@ -290,38 +300,52 @@ export class IsosurfacePipeline {
     );
   }
 
+  private vertexBindingError(iso: number, welded: number): Error {
+    return new Error(
+      `Isosurface: the surface at iso ${iso} has ${welded} vertices (${formatMB(welded * VERTEX_BYTES)}), ` +
+        `but this device binds at most ${this.maxWelded} (${formatMB(this.maxWelded * VERTEX_BYTES)}: maxStorageBufferBindingSize) in one buffer. The previous surface is kept.`,
+    );
+  }
+
   /** Grows what the status says was too small, within `budget` (between submissions; nothing in flight). Throws the budget or binding refusal. */
   grow(status: number, c: Uint32Array, iso: number, budget: number): void {
     const blocks = this.info.blockCount;
-    const perShard = this.parts.shards.perShard;
+    const out = this.parts.shards;
+    const perShard = out.perShard;
     let slots = this.parts.cache.capacity;
-    let vertices = this.parts.shards.capacity;
+    let indices = out.capacity;
+    let welded = out.weldedCapacity;
     let minSlots = slots;
-    let minVertices = vertices;
+    let minIndices = indices;
+    let minWelded = welded;
     if (status & STATUS_CACHE_SHORTFALL) {
       minSlots = c[C.active];
       if (minSlots > this.maxSlots) throw this.bindingError(iso, minSlots);
       slots = grownCapacity(slots, minSlots, Math.min(blocks, this.maxSlots));
     }
     if (status & STATUS_VERTEX_OVERFLOW) {
-      minVertices = c[C.vertices];
-      vertices = grownCapacity(vertices, minVertices);
+      minIndices = Math.max(indices, c[C.vertices]);
+      minWelded = Math.max(welded, c[C.welded]);
+      if (minWelded > this.maxWelded) throw this.vertexBindingError(iso, minWelded);
+      if (c[C.vertices] > indices) indices = grownCapacity(indices, minIndices);
+      welded = Math.min(this.maxWelded, Math.max(minWelded, weldedFor(indices), c[C.welded] > welded ? grownCapacity(welded, minWelded) : welded));
     }
-    const bytes = (s: number, v: number) => cacheBytesFor(s, blocks) + vertexBytesFor(v, perShard);
-    const need = bytes(minSlots, minVertices);
-    if (need > budget) throw this.budgetError(iso, minSlots, minVertices, need, budget);
+    const bytes = (s: number, i: number, v: number) => cacheBytesFor(s, blocks) + vertexBytesFor(i, v, perShard);
+    const need = bytes(minSlots, minIndices, minWelded);
+    if (need > budget) throw this.budgetError(iso, minSlots, minIndices, minWelded, need, budget);
     // Headroom only as far as the budget allows.
-    if (bytes(slots, vertices) > budget) {
+    if (bytes(slots, indices, welded) > budget) {
       slots = minSlots;
-      vertices = minVertices;
+      indices = minIndices;
+      welded = minWelded;
     }
     if (slots > this.parts.cache.capacity) {
       this.parts.cache.grow(slots);
       this.parts.mc.resize(slots);
     }
-    if (vertices > this.parts.shards.capacity) {
-      this.parts.shards.resize(vertices);
-      this.parts.mc.resizeCells(vertices);
+    if (indices > out.capacity || welded > out.weldedCapacity) {
+      out.resize(Math.max(indices, out.capacity), Math.max(welded, out.weldedCapacity));
+      this.parts.mc.resizeCells(out.capacity);
       this.writeShardCounters();
     }
     this.refreshDrawData();
@@ -329,18 +353,22 @@ export class IsosurfacePipeline {
 
   writeShardCounters(): void {
     this.parts.counters.set('vertexCapacity', this.parts.shards.capacity);
+    this.parts.counters.set('weldedCapacity', this.parts.shards.weldedCapacity);
     this.parts.counters.set('shards', this.parts.shards.shards.length);
     this.parts.counters.set('perShard', this.parts.shards.perShard);
   }
 
   refreshDrawData(): void {
     const d = this.drawData;
-    const shards = this.parts.shards.drawShards;
+    const out = this.parts.shards;
+    const shards = out.drawShards;
     const changed =
       d.slotData !== this.parts.cache.slotData ||
+      d.vertices !== out.vertices ||
       d.shards.length !== shards.length ||
-      d.shards.some((s, k) => s.vertices !== shards[k].vertices || s.drawArgs !== shards[k].drawArgs);
+      d.shards.some((s, k) => s.indices !== shards[k].indices || s.drawArgs !== shards[k].drawArgs);
     if (!changed) return;
+    d.vertices = out.vertices;
     d.shards = shards;
     d.slotData = this.parts.cache.slotData;
     d.version++;
@@ -355,21 +383,43 @@ export class IsosurfacePipeline {
 
   // ---- readback (CLI, export): these wait for the GPU
 
-  /** The packed (position, block id) pairs of the drawn surface, shard after shard. */
-  async readVertices(): Promise<Uint32Array> {
+  /**
+   * The drawn surface as a triangle soup: per triangle corner its vertex's
+   * packed (position, block id) pair, and its normal (u32 octahedral), in
+   * index order (shard after shard).
+   */
+  async readSoup(): Promise<{ vertices: Uint32Array; normals: Uint32Array }> {
     const { device } = this;
-    const shards = this.parts.shards.shards;
-    const args = await readU32(device, this.parts.shards.drawArgs, 0, (shards.length * DRAW_ARGS_BYTES) / 4);
-    const counts = shards.map((_, k) => args[4 * k]);
+    const out = this.parts.shards;
+    const shards = out.shards;
+    const [args, counters] = await Promise.all([
+      readU32(device, out.drawArgs, 0, (shards.length * DRAW_ARGS_BYTES) / 4),
+      readU32(device, this.parts.counters.buffer, 0, COUNTER_WORDS),
+    ]);
+    const counts = shards.map((_, k) => args[(DRAW_ARGS_BYTES / 4) * k]);
     const total = counts.reduce((a, b) => a + b, 0);
-    const out = new Uint32Array(2 * total);
+    const welded = Math.min(counters[C.drawnWelded], out.weldedCapacity);
+    const data = welded > 0 ? await readU32(device, out.vertices, 0, 3 * welded) : new Uint32Array(0);
+    const vertices = new Uint32Array(2 * total);
+    const normals = new Uint32Array(total);
     let at = 0;
     for (let k = 0; k < shards.length; k++) {
       if (counts[k] === 0) continue;
-      out.set(await readU32(device, shards[k].vertices, 0, 2 * counts[k]), at);
-      at += 2 * counts[k];
+      const indices = await readU32(device, shards[k].indices, 0, counts[k]);
+      for (const v of indices) {
+        if (v >= welded) throw new Error(`Isosurface: index ${v} outside the ${welded} vertices of the surface`);
+        vertices[2 * at] = data[3 * v];
+        vertices[2 * at + 1] = data[3 * v + 1];
+        normals[at] = data[3 * v + 2];
+        at++;
+      }
     }
-    return out;
+    return { vertices, normals };
+  }
+
+  /** The packed (position, block id) pairs of the drawn surface's triangle corners (readSoup). */
+  async readVertices(): Promise<Uint32Array> {
+    return (await this.readSoup()).vertices;
   }
 
   /** Per-block (min, max), 2 f32 per block in raster block order (for the page's block-count profile). */

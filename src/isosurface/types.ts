@@ -15,7 +15,7 @@ export interface IsosurfaceOptions {
    * Default: half of the device's maxBufferSize, at most 2 GiB.
    */
   memoryBudgetBytes?: number;
-  /** Largest vertex buffer binding (tests lower it to force several shards). Default: the device limit. */
+  /** Largest index buffer binding (tests lower it to force several index shards). Default: the device limit. */
   maxVertexBindingBytes?: number;
   /**
    * Added by the pipeline: largest storage binding (default: the device's
@@ -76,7 +76,10 @@ export interface IsosurfaceStats {
   occupiedBlocks: number;
   /** 1 - newBlocks / activeBlocks (1 when nothing is active). */
   hitRate: number;
+  /** Welded vertices: one per cut grid edge (VTK's merged point count). */
   vertices: number;
+  /** Triangle corners: indices into the vertices, 3 per triangle. */
+  indices: number;
   triangles: number;
   cacheSlots: number;
   /** Slots holding a block (valid data), after this update. */
@@ -98,29 +101,26 @@ export interface IsosurfaceStats {
   fixedBytes?: number;
 }
 
-/** A vertex shard: part of the triangle soup in one buffer (one storage binding). */
-export interface VertexShard {
-  /**
-   * Compressed vertices, 8 bytes each: u32 packed position (10 bits per axis,
-   * x in bits 0-9, y 10-19, z 20-29; local = q * 4 / 1023 voxels from the
-   * block origin) and u32 block id (raster order, x fastest). Usage includes
-   * VERTEX and STORAGE.
-   */
-  vertices: GPUBuffer;
-  /**
-   * Added by the pipeline: per vertex of `vertices`, its normal (u32,
-   * octahedral: decode_vertex_normal in vertex_format.wgsl; 0 = none), the
-   * volume gradient computed once per surface. Usage includes VERTEX.
-   */
-  normals: GPUBuffer;
-  /** drawIndirect arguments [vertexCount, instanceCount, firstVertex, firstInstance], written by the GPU. */
+/** An index shard: part of the triangles, as indices into the welded vertices, in one buffer (one storage binding). */
+export interface IndexShard {
+  /** u32 indices into IsosurfaceDrawData.vertices, 3 per triangle. Usage includes INDEX and STORAGE. */
+  indices: GPUBuffer;
+  /** drawIndexedIndirect arguments [indexCount, instanceCount, firstIndex, baseVertex, firstInstance], written by the GPU. */
   drawArgs: GPUBuffer;
   drawArgsOffset: number;
 }
 
 /** What the renderer binds to draw the current surface (and shade it from the volume). */
 export interface IsosurfaceDrawData {
-  shards: VertexShard[];
+  /**
+   * The welded vertices, 12 bytes each: u32 packed position (10 bits per
+   * axis, x in bits 0-9, y 10-19, z 20-29; local = q * 4 / 1023 voxels from
+   * the block origin), u32 block id (raster order, x fastest), u32 normal
+   * (octahedral: decode_vertex_normal in vertex_format.wgsl; 0 = none), the
+   * volume gradient computed once per surface. Usage includes VERTEX and STORAGE.
+   */
+  vertices: GPUBuffer;
+  shards: IndexShard[];
   info: VolumeInfo;
   /** Decoded blocks, 64 f32 per slot (voxel x + 4y + 16z); valid for every active block of the drawn surface. */
   slotData: GPUBuffer;

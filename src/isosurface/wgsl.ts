@@ -10,6 +10,7 @@ import blockClassifyWgsl from '../../shaders/isosurface/block_classify.wgsl?raw'
 import blockExpandWgsl from '../../shaders/isosurface/block_expand.wgsl?raw';
 import blockEmitWgsl from '../../shaders/isosurface/block_emit.wgsl?raw';
 import vertexFormatWgsl from '../../shaders/isosurface/vertex_format.wgsl?raw';
+import edgeOwnerWgsl from '../../shaders/isosurface/edge_owner.wgsl?raw';
 import type { WgslPart } from '../gpu/wgsl.ts';
 import { mcCaseTableSnippet } from '../mc/case-table-wgsl.ts';
 import { gridSnippet } from '../gpu/dispatch.ts';
@@ -25,18 +26,26 @@ export const vertexFormatSnippet = part('vertex_format', vertexFormatWgsl);
 export const isosurfaceCommonSnippet = part('common', commonWgsl);
 
 const base = [gridSnippet, isosurfaceCommonSnippet];
+const edgeOwner = part('edge_owner', edgeOwnerWgsl);
 
 export const isosurfaceWgsl = {
   activeBlocks: [...base, part('active_blocks', activeBlocksWgsl)],
   activeGroups: [...base, part('active_groups', activeGroupsWgsl)],
   lru: [...base, part('lru', lruWgsl)],
   plan: [...base, part('plan', planWgsl)],
-  blockClassify: [...base, mcCaseTableSnippet, part('block_mc_common', blockMcCommonWgsl), part('block_classify', blockClassifyWgsl)],
-  blockExpand: [...base, mcCaseTableSnippet, part('block_expand', blockExpandWgsl)],
+  blockClassify: [
+    ...base,
+    mcCaseTableSnippet,
+    edgeOwner,
+    part('block_mc_common', blockMcCommonWgsl),
+    part('block_classify', blockClassifyWgsl),
+  ],
+  blockExpand: [...base, mcCaseTableSnippet, edgeOwner, part('block_expand', blockExpandWgsl)],
   blockEmit: [
     ...base,
     mcCaseTableSnippet,
     vertexFormatSnippet,
+    edgeOwner,
     part('block_mc_common', blockMcCommonWgsl),
     part('block_emit', blockEmitWgsl),
   ],

@@ -1,6 +1,6 @@
-// Draws the isosurface: the compressed-vertex soup of an IsosurfaceDrawData
-// (per shard a vertex buffer, its normal buffer and a GPU-written
-// drawIndirect record), lit with smooth normals from the volume gradient
+// Draws the isosurface: the welded compressed vertices of an
+// IsosurfaceDrawData (position and normal interleaved) and its index shards
+// (each with a GPU-written drawIndexedIndirect record), lit with smooth normals from the volume gradient
 // (computed once per surface by the pipeline; see shaders/render/surface.wgsl),
 // two-sided, with a headlight. Nothing is allocated per frame. Voxel
 // (i, j, k) is drawn at (i, j, k) * voxelSize; with `depthPrepass` it also
@@ -94,16 +94,11 @@ export class SurfaceLayer implements RenderLayer {
       entries: [{ binding: 0, visibility: GPUShaderStage.VERTEX | GPUShaderStage.FRAGMENT, buffer: { type: 'uniform' } }],
     });
     const pipelineLayout = device.createPipelineLayout({ label: 'SurfaceLayer', bindGroupLayouts: [target.frameBindGroupLayout, layout] });
-    const positions: GPUVertexBufferLayout = {
-      arrayStride: 8,
-      stepMode: 'vertex',
-      attributes: [{ shaderLocation: 0, offset: 0, format: 'uint32x2' }],
-    };
-    const normals: GPUVertexBufferLayout = {
-      arrayStride: 4,
-      stepMode: 'vertex',
-      attributes: [{ shaderLocation: 1, offset: 0, format: 'uint32' }],
-    };
+    // The welded vertices, 12 bytes each: packed position and block id, then the normal.
+    const position: GPUVertexAttribute = { shaderLocation: 0, offset: 0, format: 'uint32x2' };
+    const normal: GPUVertexAttribute = { shaderLocation: 1, offset: 8, format: 'uint32' };
+    const vertices: GPUVertexBufferLayout = { arrayStride: 12, stepMode: 'vertex', attributes: [position, normal] };
+    const positions: GPUVertexBufferLayout = { arrayStride: 12, stepMode: 'vertex', attributes: [position] };
     // Two-sided: no culling; the fragment shader tells the sides apart.
     const primitive: GPUPrimitiveState = { topology: 'triangle-list', cullMode: 'none' };
     const depthStencil: GPUDepthStencilState = { format: DEPTH_FORMAT, depthWriteEnabled: true, depthCompare: 'less' };
@@ -111,7 +106,7 @@ export class SurfaceLayer implements RenderLayer {
       device.createRenderPipelineAsync({
         label: 'SurfaceLayer.pipeline',
         layout: pipelineLayout,
-        vertex: { module, entryPoint: 'vs', buffers: [positions, normals] },
+        vertex: { module, entryPoint: 'vs', buffers: [vertices] },
         fragment: { module, entryPoint: 'fs', targets: [{ format: target.format }] },
         primitive,
         depthStencil,
@@ -206,11 +201,10 @@ export class SurfaceLayer implements RenderLayer {
     this.writeUniforms(data);
     pass.setPipeline(pipeline);
     pass.setBindGroup(1, this.ensureBindGroup(data));
-    const withNormals = pipeline === this.pipeline;
+    pass.setVertexBuffer(0, data.vertices);
     for (const shard of data.shards) {
-      pass.setVertexBuffer(0, shard.vertices);
-      if (withNormals) pass.setVertexBuffer(1, shard.normals);
-      pass.drawIndirect(shard.drawArgs, shard.drawArgsOffset);
+      pass.setIndexBuffer(shard.indices, 'uint32');
+      pass.drawIndexedIndirect(shard.drawArgs, shard.drawArgsOffset);
     }
   }
 

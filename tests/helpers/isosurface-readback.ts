@@ -3,7 +3,6 @@
 // the GPU, so the product never calls them.
 import { readU32 } from '../../src/gpu/buffers.ts';
 import type { Isosurface } from '../../src/isosurface/isosurface.ts';
-import { DRAW_ARGS_BYTES } from '../../src/isosurface/layout.ts';
 
 /** The cache state: slot -> block, block -> slot, and the LRU order (slots, least recently used first). */
 export async function readCacheState(
@@ -21,19 +20,7 @@ export async function readCacheState(
   return { slotToBlock, blockToSlot, lruOrder: log.filter((_, p) => valid[p] === 1) };
 }
 
-/** The normals of the drawn surface (u32 octahedral per vertex, vertex_format.wgsl), in readVertices' order. */
+/** The normals of the drawn surface (u32 octahedral per triangle corner, vertex_format.wgsl), in readVertices' order. */
 export async function readNormals(iso: Isosurface): Promise<Uint32Array> {
-  const { device } = iso.pipeline.gpu;
-  const { shards } = iso.pipeline.parts;
-  const list = shards.shards;
-  const args = await readU32(device, shards.drawArgs, 0, (list.length * DRAW_ARGS_BYTES) / 4);
-  const counts = list.map((_, k) => args[4 * k]);
-  const out = new Uint32Array(counts.reduce((a, b) => a + b, 0));
-  let at = 0;
-  for (let k = 0; k < list.length; k++) {
-    if (counts[k] === 0) continue;
-    out.set(await readU32(device, list[k].normals, 0, counts[k]), at);
-    at += counts[k];
-  }
-  return out;
+  return (await iso.pipeline.readSoup()).normals;
 }

@@ -3,6 +3,7 @@
 // newly decompressed blocks, hit rate), triangles and vertex memory, GPU time
 // per stage, frame rate.
 
+import { INDEX_BYTES, VERTEX_BYTES } from '../../isosurface/layout.ts';
 import type { IsosurfaceStats } from '../../isosurface/types.ts';
 import type { OpenedVolume } from '../../volume/open-volume.ts';
 import { setInfoList } from '../info-list.ts';
@@ -57,7 +58,8 @@ export class StatsPanel {
     setInfoList(this.surface, [
       ['isovalue', String(Number(s.isovalue.toPrecision(7)))],
       ['triangles', formatCount(s.triangles)],
-      ['vertices', `${formatCount(s.vertices)} (${formatBytes(s.vertices * 8)})`],
+      ['vertices', `${formatCount(s.vertices)} (${formatBytes(s.vertices * VERTEX_BYTES)})`],
+      ['indices', `${formatCount(s.indices)} (${formatBytes(s.indices * INDEX_BYTES)})`],
       [
         'active blocks',
         `${formatCount(s.activeBlocks)} of ${formatCount(blockCount)} (${formatPercent(s.activeBlocks / Math.max(1, blockCount))})`,

@@ -31,7 +31,9 @@ import {
 export interface ExtractRecord {
   iso: number;
   triangles: number;
+  /** Welded vertices (one per cut grid edge) and triangle corners. */
   vertices: number;
+  indices: number;
   activeBlocks: number;
   newBlocks: number;
   occupiedBlocks: number;
@@ -97,6 +99,7 @@ export const extractCommand: CliCommand = {
           iso: stats.isovalue,
           triangles: stats.triangles,
           vertices: stats.vertices,
+          indices: stats.indices,
           activeBlocks: stats.activeBlocks,
           newBlocks: stats.newBlocks,
           occupiedBlocks: stats.occupiedBlocks,

@@ -141,11 +141,19 @@ export function createCpuSurface(
     if (data.byteLength > 0) device.queue.writeBuffer(buffer, 0, data.buffer, data.byteOffset, data.byteLength);
     return buffer;
   };
-  const vertices = make('CpuSurface.vertices', packed, GPUBufferUsage.VERTEX | GPUBufferUsage.STORAGE);
-  const normalBuffer = make('CpuSurface.normals', normals, GPUBufferUsage.VERTEX | GPUBufferUsage.STORAGE);
+  // Drawn as the pipeline draws: 12-byte vertices (position pair, normal), one index per corner.
+  const corners = mc.triangleCount * 3;
+  const interleaved = new Uint32Array(3 * corners);
+  for (let i = 0; i < corners; i++) {
+    interleaved[3 * i] = packed[2 * i];
+    interleaved[3 * i + 1] = packed[2 * i + 1];
+    interleaved[3 * i + 2] = normals[i];
+  }
+  const vertices = make('CpuSurface.vertices', interleaved, GPUBufferUsage.VERTEX | GPUBufferUsage.STORAGE);
+  const indices = make('CpuSurface.indices', Uint32Array.from({ length: corners }, (_, i) => i), GPUBufferUsage.INDEX);
   const drawArgs = make(
     'CpuSurface.drawArgs',
-    new Uint32Array([mc.triangleCount * 3, 1, 0, 0]),
+    new Uint32Array([corners, 1, 0, 0, 0]),
     GPUBufferUsage.INDIRECT | GPUBufferUsage.STORAGE,
   );
   const slotData = make('CpuSurface.slotData', blocksOf(values, dims), GPUBufferUsage.STORAGE);
@@ -163,14 +171,15 @@ export function createCpuSurface(
   return {
     triangles: mc.triangleCount,
     data: {
-      shards: [{ vertices, normals: normalBuffer, drawArgs, drawArgsOffset: 0 }],
+      vertices,
+      shards: [{ indices, drawArgs, drawArgsOffset: 0 }],
       info: { dims, blockGrid, blockCount, valueRange: [lo, hi] },
       slotData,
       blockToSlot,
       version: 0,
     },
     destroy() {
-      for (const b of [vertices, normalBuffer, drawArgs, slotData, blockToSlot]) b.destroy();
+      for (const b of [vertices, indices, drawArgs, slotData, blockToSlot]) b.destroy();
     },
   };
 }

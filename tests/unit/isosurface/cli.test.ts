@@ -53,7 +53,8 @@ describe('isosurface CLI', () => {
       const vtk = s.vtkMarchingCubes;
       expect(rec.iso).toBe(s.iso);
       expect(rec.triangles).toBe(vtk.triangles);
-      expect(rec.vertices).toBe(3 * vtk.triangles);
+      expect(rec.vertices).toBe(vtk.points);
+      expect(rec.indices).toBe(3 * vtk.triangles);
       expect(Math.abs(rec.surfaceArea - vtk.area) / vtk.area).toBeLessThan(0.005);
       for (let a = 0; a < 3; a++) {
         expect(Math.abs(rec.bbox.min[a] - vtk.bbox!.min[a])).toBeLessThanOrEqual(1);

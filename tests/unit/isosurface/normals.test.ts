@@ -42,7 +42,7 @@ describe('vertex normals', () => {
         const stats = await iso.compute(t);
         const packed = await iso.readVertices();
         const normals = await readNormals(iso);
-        expect(normals.length).toBe(stats.vertices);
+        expect(normals.length).toBe(stats.indices);
         const positions = decodeVertices(packed, normals.length, iso.info);
         const { blockToSlot } = await readCacheState(iso);
         const readable = (b: number) => blockToSlot[b] !== NONE;

@@ -1,24 +1,28 @@
 // Triangle-for-triangle comparison of a GPU soup in the compressed vertex
 // format with the serial CPU marching cubes of the same decoded volume.
 //
-// The CPU soup is put in the same form: each triangle gets the block of the
-// cell that emitted it (the serial MC emits cells in raster order, so walking
-// the cells' case vertex counts assigns every triangle its cell) and its
-// vertices are quantized relative to that block as the kernel does. The two
-// soups are then compared as multisets of (block, 3 quantized vertices), a
-// triangle's starting vertex free but not its winding. Exact matches first;
-// what is left (a coordinate whose local * 1023/4 sits at a rounding
-// boundary, where float32 rounding of block-relative vs global coordinates
-// may differ) is matched with each quantized coordinate within 1, by maximum
-// bipartite matching over all triangles of the blocks concerned, so the
-// order of matching never matters.
+// A welded vertex is quantized relative to the block of the cell that owns
+// its edge, not necessarily the block of every triangle using it, so both
+// soups are put in absolute quantized coordinates: a block is 4 voxels =
+// 1023 quanta, so block b's q is 1023 * b + q. The CPU soup is quantized
+// as the kernel does, relative to the block of the cell that emitted each
+// triangle (the serial MC emits cells in raster order, so walking the cells'
+// case vertex counts assigns every triangle its cell). The two soups are
+// then compared as multisets of 3 quantized vertices, a triangle's starting
+// vertex free but not its winding. Exact matches first; what is left (a
+// coordinate whose local * 1023/4 sits at a rounding boundary, where float32
+// rounding of block-relative vs global coordinates may differ) is matched
+// with each quantized coordinate within 1, by maximum bipartite matching over
+// all triangles of the regions concerned (a region: the block-sized cube
+// holding a triangle's centroid), so the order of matching never matters.
 import { CASE_VERTEX_COUNT, caseIndex } from '../../../src/mc/case-table.ts';
 import { marchingCubes } from '../../../src/mc/serial-mc.ts';
 import type { Dims } from '../../../src/core/naming.ts';
 
 interface Tri {
-  block: number;
-  q: number[]; // 9 quantized coordinates, rotated to start at the smallest vertex
+  /** The region (block-sized cube) of the triangle's centroid. */
+  block: string;
+  q: number[]; // 9 absolute quantized coordinates, rotated to start at the smallest vertex
 }
 
 export interface BlockSoupComparison {
@@ -30,8 +34,9 @@ export interface BlockSoupComparison {
   unmatchedCpu: Tri[];
 }
 
-function canonical(block: number, q: number[]): Tri {
+function canonical(q: number[]): Tri {
   const v = [q.slice(0, 3), q.slice(3, 6), q.slice(6, 9)];
+  const block = [0, 1, 2].map((a) => Math.floor((q[a] + q[a + 3] + q[a + 6]) / 3069)).join(',');
   const less = (a: number[], b: number[]) => a[0] - b[0] || a[1] - b[1] || a[2] - b[2];
   let first = 0;
   if (less(v[1], v[first]) < 0) first = 1;
@@ -41,15 +46,19 @@ function canonical(block: number, q: number[]): Tri {
 
 const key = (t: Tri) => `${t.block}:${t.q.join(',')}`;
 
-export function gpuTriangles(packed: Uint32Array): Tri[] {
+export function gpuTriangles(packed: Uint32Array, dims: Dims): Tri[] {
+  const gx = Math.ceil(dims[0] / 4);
+  const gy = Math.ceil(dims[1] / 4);
   const out: Tri[] = [];
   for (let v = 0; v + 2 < packed.length / 2; v += 3) {
     const q: number[] = [];
     for (let k = 0; k < 3; k++) {
       const p = packed[2 * (v + k)];
-      q.push(p & 1023, (p >>> 10) & 1023, (p >>> 20) & 1023);
+      const b = packed[2 * (v + k) + 1];
+      const c = [b % gx, Math.floor(b / gx) % gy, Math.floor(b / (gx * gy))];
+      q.push((p & 1023) + 1023 * c[0], ((p >>> 10) & 1023) + 1023 * c[1], ((p >>> 20) & 1023) + 1023 * c[2]);
     }
-    out.push(canonical(packed[2 * v + 1], q));
+    out.push(canonical(q));
   }
   return out;
 }
@@ -59,8 +68,6 @@ export function cpuTriangles(values: Float32Array, dims: Dims, iso: number): Tri
   const [nx, ny, nz] = dims;
   const { positions } = marchingCubes(values, dims, iso);
   const t = Math.fround(iso);
-  const gx = Math.ceil(nx / 4);
-  const gy = Math.ceil(ny / 4);
   const corners = new Float32Array(8);
   const out: Tri[] = [];
   let p = 0;
@@ -70,11 +77,13 @@ export function cpuTriangles(values: Float32Array, dims: Dims, iso: number): Tri
         for (let c = 0; c < 8; c++) corners[c] = values[i + (c & 1) + nx * (j + ((c >> 1) & 1) + ny * (k + (c >> 2)))];
         const n = CASE_VERTEX_COUNT[caseIndex(corners, t)];
         const origin = [4 * (i >> 2), 4 * (j >> 2), 4 * (k >> 2)];
-        const block = (i >> 2) + gx * ((j >> 2) + gy * (k >> 2));
         for (let m = 0; m < n; m += 3) {
           const q: number[] = [];
-          for (let a = 0; a < 9; a++) q.push(Math.min(1023, Math.max(0, Math.round((positions[p + a] - origin[a % 3]) * 255.75))));
-          out.push(canonical(block, q));
+          for (let a = 0; a < 9; a++) {
+            const local = Math.min(1023, Math.max(0, Math.round((positions[p + a] - origin[a % 3]) * 255.75)));
+            q.push(local + (origin[a % 3] / 4) * 1023);
+          }
+          out.push(canonical(q));
           p += 9;
         }
       }
@@ -159,4 +168,21 @@ export function compareBlockSoups(gpu: Tri[], cpu: Tri[]): BlockSoupComparison {
     c.forEach((t, j) => !used.has(j) && unmatchedCpu.push(t));
   }
   return { trianglesGpu: gpu.length, trianglesCpu: cpu.length, exact, withinOne: withinOneCount, unmatchedGpu, unmatchedCpu };
+}
+
+/** Grid edges whose two ends are on different sides of `iso` (value >= iso inside): the welded vertex count. */
+export function crossedEdges(values: Float32Array, dims: Dims, iso: number): number {
+  const [nx, ny, nz] = dims;
+  const t = Math.fround(iso);
+  const inside = (x: number, y: number, z: number) => values[x + nx * (y + ny * z)] >= t;
+  let n = 0;
+  for (let z = 0; z < nz; z++)
+    for (let y = 0; y < ny; y++)
+      for (let x = 0; x < nx; x++) {
+        const here = inside(x, y, z);
+        if (x + 1 < nx && inside(x + 1, y, z) !== here) n++;
+        if (y + 1 < ny && inside(x, y + 1, z) !== here) n++;
+        if (z + 1 < nz && inside(x, y, z + 1) !== here) n++;
+      }
+  return n;
 }

@@ -64,6 +64,8 @@ export async function checkAgainstVtk(gpu: GpuContext, entries: McVolume[], cach
         // The classic table: the same triangles as VTK, so the same count.
         expect(stats.triangles, what).toBe(vtk.triangles);
         expect(m.triangles, what).toBe(vtk.triangles);
+        // One welded vertex per cut grid edge: VTK's merged points.
+        expect(stats.vertices, what).toBe(vtk.points);
         expect(Math.abs(m.area - vtk.area) / vtk.area, what).toBeLessThan(0.005);
         for (let a = 0; a < 3; a++) {
           expect(Math.abs(m.bbox!.min[a] - vtk.bbox!.min[a]), what).toBeLessThanOrEqual(1);
