@@ -115,8 +115,7 @@ export class IsosurfacePipeline {
     let vertices = Math.max(1, options.initialVertexCapacity ?? Math.min(2 ** 22, Math.max(2 ** 16, blockCount * 8)));
     // The initial buffers must fit the budget too: shrink both (keeping their
     // ratio) until they do; the per-block and per-shard bytes do not shrink.
-    const bytesAt = (s: number, v: number) =>
-      cacheBytesFor(s, blockCount) + vertexBytesFor(v, Math.min(maxWelded, weldedFor(v)), perShard);
+    const bytesAt = (s: number, v: number) => cacheBytesFor(s, blockCount) + vertexBytesFor(v, Math.min(maxWelded, weldedFor(v)), perShard);
     if (bytesAt(slots, vertices) > budget) {
       const smallest = bytesAt(1, 1);
       if (smallest > budget) {
@@ -328,7 +327,10 @@ export class IsosurfacePipeline {
       minWelded = Math.max(welded, c[C.welded]);
       if (minWelded > this.maxWelded) throw this.vertexBindingError(iso, minWelded);
       if (c[C.vertices] > indices) indices = grownCapacity(indices, minIndices);
-      welded = Math.min(this.maxWelded, Math.max(minWelded, weldedFor(indices), c[C.welded] > welded ? grownCapacity(welded, minWelded) : welded));
+      welded = Math.min(
+        this.maxWelded,
+        Math.max(minWelded, weldedFor(indices), c[C.welded] > welded ? grownCapacity(welded, minWelded) : welded),
+      );
     }
     const bytes = (s: number, i: number, v: number) => cacheBytesFor(s, blocks) + vertexBytesFor(i, v, perShard);
     const need = bytes(minSlots, minIndices, minWelded);

@@ -150,12 +150,12 @@ export function createCpuSurface(
     interleaved[3 * i + 2] = normals[i];
   }
   const vertices = make('CpuSurface.vertices', interleaved, GPUBufferUsage.VERTEX | GPUBufferUsage.STORAGE);
-  const indices = make('CpuSurface.indices', Uint32Array.from({ length: corners }, (_, i) => i), GPUBufferUsage.INDEX);
-  const drawArgs = make(
-    'CpuSurface.drawArgs',
-    new Uint32Array([corners, 1, 0, 0, 0]),
-    GPUBufferUsage.INDIRECT | GPUBufferUsage.STORAGE,
+  const indices = make(
+    'CpuSurface.indices',
+    Uint32Array.from({ length: corners }, (_, i) => i),
+    GPUBufferUsage.INDEX,
   );
+  const drawArgs = make('CpuSurface.drawArgs', new Uint32Array([corners, 1, 0, 0, 0]), GPUBufferUsage.INDIRECT | GPUBufferUsage.STORAGE);
   const slotData = make('CpuSurface.slotData', blocksOf(values, dims), GPUBufferUsage.STORAGE);
   const blockToSlot = make(
     'CpuSurface.blockToSlot',

@@ -36,7 +36,11 @@ struct View { grid: vec3u, _pad: u32, extent: vec3f, _pad2: f32 }
   ]);
   const pipeline = await device.createRenderPipelineAsync({
     layout: 'auto',
-    vertex: { module, entryPoint: 'vs', buffers: [{ arrayStride: 12, attributes: [{ shaderLocation: 0, offset: 0, format: 'uint32x2' }] }] },
+    vertex: {
+      module,
+      entryPoint: 'vs',
+      buffers: [{ arrayStride: 12, attributes: [{ shaderLocation: 0, offset: 0, format: 'uint32x2' }] }],
+    },
     fragment: { module, entryPoint: 'fs', targets: [{ format: 'rgba8unorm' }] },
     primitive: { topology: 'triangle-list' },
   });

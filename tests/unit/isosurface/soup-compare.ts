@@ -170,9 +170,14 @@ export function compareBlockSoups(gpu: Tri[], cpu: Tri[]): BlockSoupComparison {
   return { trianglesGpu: gpu.length, trianglesCpu: cpu.length, exact, withinOne: withinOneCount, unmatchedGpu, unmatchedCpu };
 }
 
-/** Grid edges whose two ends are on different sides of `iso` (value >= iso inside): the welded vertex count. */
+/**
+ * Grid edges of the cells whose two ends are on different sides of `iso`
+ * (value >= iso inside): the welded vertex count. A volume one voxel thin
+ * on an axis has no cells, so no edges of cells.
+ */
 export function crossedEdges(values: Float32Array, dims: Dims, iso: number): number {
   const [nx, ny, nz] = dims;
+  if (nx < 2 || ny < 2 || nz < 2) return 0;
   const t = Math.fround(iso);
   const inside = (x: number, y: number, z: number) => values[x + nx * (y + ny * z)] >= t;
   let n = 0;
