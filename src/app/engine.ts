@@ -2,7 +2,7 @@
 // `Isosurface` class satisfies this; the page only talks to this interface.
 import type { GpuContext } from '../gpu/device.ts';
 import { Isosurface } from '../isosurface/isosurface.ts';
-import type { IsosurfaceDrawData, IsosurfaceOptions, IsosurfaceStats, VolumeInfo } from '../isosurface/types.ts';
+import type { IsosurfaceDrawData, IsosurfaceOptions, IsosurfaceStats, SurfaceMesh, VolumeInfo } from '../isosurface/types.ts';
 import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
 
 export interface PageIsosurface {
@@ -18,8 +18,8 @@ export interface PageIsosurface {
   onSubmit(listener: (iso: number) => void): unknown;
   resetCache(): Promise<void> | void;
   setMemoryBudget(bytes: number): void;
-  /** Packed vertex pairs of the current surface. */
-  readVertices(): Promise<Uint32Array>;
+  /** The current surface as an indexed mesh (welded vertices, indices). */
+  readMesh(): Promise<SurfaceMesh>;
   /** [min, max] per block. */
   readBlockRanges(): Promise<Float32Array>;
   destroy(): void;

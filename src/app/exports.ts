@@ -5,7 +5,7 @@ import type { Viewer } from '../render/viewer.ts';
 import { download } from './dom.ts';
 import { captureViewPng } from './export/screenshot.ts';
 import { decodeVertices } from '../isosurface/vertex-format.ts';
-import { encodePly, weldVertices } from '../mc/ply.ts';
+import { encodePly } from '../mc/ply.ts';
 import { formatBytes } from './format.ts';
 import type { Messages } from './messages.ts';
 import type { Session } from './session.ts';
@@ -36,14 +36,13 @@ export async function savePly(session: Session, messages: Messages): Promise<voi
   const v = session.current;
   if (!v) return;
   try {
-    const packed = await v.iso.readVertices();
-    const count = packed.length / 2;
-    if (count === 0) {
+    const surface = await v.iso.readMesh();
+    if (surface.indices.length === 0) {
       messages.show('The surface is empty at this isovalue: nothing to export.', 'info', 4000);
       return;
     }
-    const soup = decodeVertices(packed, count, v.iso.info);
-    const mesh = weldVertices(soup);
+    // Welded on the GPU: one vertex per cut grid edge, as VTK's merged points.
+    const mesh = { positions: decodeVertices(surface.vertices, surface.vertices.length / 3, v.iso.info, 3), indices: surface.indices };
     // What is on screen: voxel (i, j, k) at (i, j, k) * voxel size (1 unless the file or the user gave one).
     const size = session.spacing;
     const isotropicUnit = size.every((s) => s === 1);
@@ -60,7 +59,7 @@ export async function savePly(session: Session, messages: Messages): Promise<voi
     ]);
     download(new Blob([ply as BlobPart], { type: 'application/octet-stream' }), `${baseName(session)}${isoTag(session)}.ply`);
     messages.show(
-      `Exported ${(count / 3).toLocaleString('en-US')} triangles, ${(mesh.positions.length / 3).toLocaleString('en-US')} vertices (${formatBytes(ply.byteLength)}).`,
+      `Exported ${(mesh.indices.length / 3).toLocaleString('en-US')} triangles, ${(mesh.positions.length / 3).toLocaleString('en-US')} vertices (${formatBytes(ply.byteLength)}).`,
       'info',
       4000,
     );

@@ -22,7 +22,7 @@ import { ZfpFormatError } from '../zfp/format.ts';
 import { UsageError } from './command.ts';
 
 /** What `extract` and `bench` use of a surface: an Isosurface, or a store level (PinnedLevelSurface). */
-export type InputSurface = Pick<Isosurface, 'info' | 'compute' | 'readVertices' | 'resetCache' | 'memoryBudget' | 'destroy'>;
+export type InputSurface = Pick<Isosurface, 'info' | 'compute' | 'readMesh' | 'resetCache' | 'memoryBudget' | 'destroy'>;
 
 export interface OpenedInput {
   iso: InputSurface;

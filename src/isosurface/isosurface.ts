@@ -24,6 +24,7 @@ import {
   type IsosurfaceDrawData,
   type IsosurfaceOptions,
   type IsosurfaceStats,
+  type SurfaceMesh,
   type VolumeInfo,
 } from './types.ts';
 
@@ -405,6 +406,11 @@ export class Isosurface {
   // ---- readback (CLI, export): these wait for the GPU; the tests' own readbacks are in tests/helpers
 
   /** The packed (position, block id) pairs of the drawn surface, shard after shard. */
+  /** The drawn surface as an indexed mesh (welded vertices, indices); waits for the GPU. */
+  readMesh(): Promise<SurfaceMesh> {
+    return this.pipeline.readMesh();
+  }
+
   readVertices(): Promise<Uint32Array> {
     return this.pipeline.readVertices();
   }

@@ -33,7 +33,7 @@ import {
 } from './layout.ts';
 import { BlockCache } from './lru-cache.ts';
 import type { StatsReadback } from './stats-readback.ts';
-import { IsosurfaceBudgetError, type IsosurfaceDrawData, type IsosurfaceOptions, type VolumeInfo } from './types.ts';
+import { IsosurfaceBudgetError, type IsosurfaceDrawData, type IsosurfaceOptions, type SurfaceMesh, type VolumeInfo } from './types.ts';
 import { SurfaceOutput } from './vertex-output.ts';
 
 /** The parts of one volume's pipeline (owned: destroy() frees them, except the stream). */
@@ -385,12 +385,8 @@ export class IsosurfacePipeline {
 
   // ---- readback (CLI, export): these wait for the GPU
 
-  /**
-   * The drawn surface as a triangle soup: per triangle corner its vertex's
-   * packed (position, block id) pair, and its normal (u32 octahedral), in
-   * index order (shard after shard).
-   */
-  async readSoup(): Promise<{ vertices: Uint32Array; normals: Uint32Array }> {
+  /** The drawn surface as an indexed mesh: its welded vertices and its indices (shard after shard). */
+  async readMesh(): Promise<SurfaceMesh> {
     const { device } = this;
     const out = this.parts.shards;
     const shards = out.shards;
@@ -399,22 +395,36 @@ export class IsosurfacePipeline {
       readU32(device, this.parts.counters.buffer, 0, COUNTER_WORDS),
     ]);
     const counts = shards.map((_, k) => args[(DRAW_ARGS_BYTES / 4) * k]);
-    const total = counts.reduce((a, b) => a + b, 0);
     const welded = Math.min(counters[C.drawnWelded], out.weldedCapacity);
-    const data = welded > 0 ? await readU32(device, out.vertices, 0, 3 * welded) : new Uint32Array(0);
-    const vertices = new Uint32Array(2 * total);
-    const normals = new Uint32Array(total);
+    const vertices = welded > 0 ? await readU32(device, out.vertices, 0, 3 * welded) : new Uint32Array(0);
+    const indices = new Uint32Array(counts.reduce((a, b) => a + b, 0));
     let at = 0;
     for (let k = 0; k < shards.length; k++) {
       if (counts[k] === 0) continue;
-      const indices = await readU32(device, shards[k].indices, 0, counts[k]);
-      for (const v of indices) {
-        if (v >= welded) throw new Error(`Isosurface: index ${v} outside the ${welded} vertices of the surface`);
-        vertices[2 * at] = data[3 * v];
-        vertices[2 * at + 1] = data[3 * v + 1];
-        normals[at] = data[3 * v + 2];
-        at++;
-      }
+      indices.set(await readU32(device, shards[k].indices, 0, counts[k]), at);
+      at += counts[k];
+    }
+    for (const v of indices) {
+      if (v >= welded) throw new Error(`Isosurface: index ${v} outside the ${welded} vertices of the surface`);
+    }
+    return { vertices, indices };
+  }
+
+  /**
+   * The drawn surface as a triangle soup: per triangle corner its vertex's
+   * packed (position, block id) pair, and its normal (u32 octahedral), in
+   * index order.
+   */
+  async readSoup(): Promise<{ vertices: Uint32Array; normals: Uint32Array }> {
+    const mesh = await this.readMesh();
+    const n = mesh.indices.length;
+    const vertices = new Uint32Array(2 * n);
+    const normals = new Uint32Array(n);
+    for (let i = 0; i < n; i++) {
+      const v = mesh.indices[i];
+      vertices[2 * i] = mesh.vertices[3 * v];
+      vertices[2 * i + 1] = mesh.vertices[3 * v + 1];
+      normals[i] = mesh.vertices[3 * v + 2];
     }
     return { vertices, normals };
   }

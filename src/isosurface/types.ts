@@ -101,6 +101,14 @@ export interface IsosurfaceStats {
   fixedBytes?: number;
 }
 
+/** A surface read back as an indexed mesh (CLI, PLY export). */
+export interface SurfaceMesh {
+  /** Per welded vertex 3 u32: packed position, block id, normal (IsosurfaceDrawData.vertices). */
+  vertices: Uint32Array;
+  /** 3 indices into `vertices` per triangle. */
+  indices: Uint32Array;
+}
+
 /** An index shard: part of the triangles, as indices into the welded vertices, in one buffer (one storage binding). */
 export interface IndexShard {
   /** u32 indices into IsosurfaceDrawData.vertices, 3 per triangle. Usage includes INDEX and STORAGE. */

@@ -25,14 +25,17 @@ function roundHalfEven(x: number): number {
 /**
  * Decodes `count` vertices of packed (position, block id) pairs into voxel
  * index space positions (xyz per vertex): 4 * block coordinates + q * 4 / 1023.
+ * `stride`: u32 per vertex (2 for a soup of pairs, 3 for welded vertices,
+ * whose third word is the normal).
  */
-export function decodeVertices(packed: Uint32Array, count: number, info: { blockGrid: Dims }): Float32Array {
-  if (packed.length < 2 * count) throw new Error(`decodeVertices: ${count} vertices need ${2 * count} words, got ${packed.length}`);
+export function decodeVertices(packed: Uint32Array, count: number, info: { blockGrid: Dims }, stride = 2): Float32Array {
+  if (packed.length < stride * count)
+    throw new Error(`decodeVertices: ${count} vertices need ${stride * count} words, got ${packed.length}`);
   const [gx, gy] = info.blockGrid;
   const out = new Float32Array(3 * count);
   for (let v = 0; v < count; v++) {
-    const p = packed[2 * v];
-    const b = packed[2 * v + 1];
+    const p = packed[stride * v];
+    const b = packed[stride * v + 1];
     const bx = b % gx;
     const by = Math.floor(b / gx) % gy;
     const bz = Math.floor(b / (gx * gy));

@@ -1,9 +1,9 @@
 // A surface as a binary little-endian PLY mesh: float x, y, z in
 // voxel index coordinates (voxel (i, j, k) at (i, j, k)), 3 vertex indices per
-// face. Vertices shared by neighbouring triangles are welded (the soup's
-// copies of a vertex decode to the same floats), so mesh tools see a
-// connected surface; faces keep the soup's order, one per triangle. Used by
-// the page's PLY export and `cli extract --ply`.
+// face, so mesh tools see a connected surface. The page's PLY export and
+// `cli extract --ply` write the GPU's welded mesh as it is (one vertex per
+// cut grid edge); `weldVertices` merges a soup's copies of a vertex (bit
+// identical floats) for soups from elsewhere (the serial MC, tests).
 
 export interface WeldedMesh {
   /** xyz per unique vertex */
@@ -48,6 +48,13 @@ export function weldVertices(soup: Float32Array): WeldedMesh {
   const positions = new Float32Array(count * 3);
   for (let u = 0; u < count; u++) positions.set(soup.subarray(3 * unique[u], 3 * unique[u] + 3), 3 * u);
   return { positions, indices };
+}
+
+/** The triangle soup (xyz per triangle corner) of an indexed mesh. */
+export function soupOf(positions: Float32Array, indices: Uint32Array): Float32Array {
+  const out = new Float32Array(3 * indices.length);
+  for (let i = 0; i < indices.length; i++) out.set(positions.subarray(3 * indices[i], 3 * indices[i] + 3), 3 * i);
+  return out;
 }
 
 export function encodePly(mesh: WeldedMesh, comments: string[] = []): Uint8Array {

@@ -3,10 +3,10 @@
 // isovalue fetches only the chunks its surface needs at that level (plan.ts)
 // into the level's pool of compressed chunks, then computes the surface with
 // the one isosurface pipeline over that pool. What `extract` and `bench`
-// read of an Isosurface (info, compute, readVertices, resetCache,
+// read of an Isosurface (info, compute, readMesh, resetCache,
 // memoryBudget), with the store's figures for their records.
 import type { Isosurface } from '../isosurface/isosurface.ts';
-import type { IsosurfaceStats, VolumeInfo } from '../isosurface/types.ts';
+import type { IsosurfaceStats, SurfaceMesh, VolumeInfo } from '../isosurface/types.ts';
 import type { ChunkedVolume } from '../zfp/chunked-volume.ts';
 import type { StreamController } from './stream-controller.ts';
 
@@ -67,9 +67,9 @@ export class PinnedLevelSurface {
     return shown.stats;
   }
 
-  readVertices(): Promise<Uint32Array> {
+  readMesh(): Promise<SurfaceMesh> {
     const shown = this.controller.shown;
-    return shown ? shown.surface.readVertices() : Promise.resolve(new Uint32Array(0));
+    return shown ? shown.surface.readMesh() : Promise.resolve({ vertices: new Uint32Array(0), indices: new Uint32Array(0) });
   }
 
   /** Empties the block cache (the pool of compressed chunks stays: that is the network's cache). */

@@ -4,7 +4,7 @@
 // surfaces), so destroying this one only detaches it, unless the store view
 // says the store itself is gone (another volume replaced it).
 import type { Isosurface } from '../../isosurface/isosurface.ts';
-import type { IsosurfaceDrawData, IsosurfaceStats, VolumeInfo } from '../../isosurface/types.ts';
+import type { IsosurfaceDrawData, IsosurfaceStats, SurfaceMesh, VolumeInfo } from '../../isosurface/types.ts';
 import type { ChunkStreamController } from '../../store/pinned-level.ts';
 import type { ShownSurface } from '../../store/stream-controller.ts';
 import type { ChunkedVolume } from '../../zfp/chunked-volume.ts';
@@ -90,8 +90,8 @@ export class StoreLevelIsosurface implements PageIsosurface {
     this.onBudget(bytes);
   }
 
-  readVertices(): Promise<Uint32Array> {
-    return this.shown.surface.readVertices();
+  readMesh(): Promise<SurfaceMesh> {
+    return this.shown.surface.readMesh();
   }
 
   readBlockRanges(): Promise<Float32Array> {

@@ -11,7 +11,7 @@
 import { writeFileSync } from 'node:fs';
 import { basename } from 'node:path';
 import { describeAdapter } from '../../gpu/device.ts';
-import { encodePly, weldVertices } from '../../mc/ply.ts';
+import { encodePly, soupOf } from '../../mc/ply.ts';
 import { formatMB } from '../../isosurface/budget.ts';
 import { IsosurfaceBudgetError } from '../../isosurface/types.ts';
 import { decodeVertices } from '../../isosurface/vertex-format.ts';
@@ -92,9 +92,9 @@ export const extractCommand: CliCommand = {
           records.push({ iso: Math.fround(value), error: e.message });
           continue;
         }
-        const packed = await iso.readVertices();
-        const positions = decodeVertices(packed, packed.length / 2, iso.info);
-        const m = meshMetrics(positions);
+        const surface = await iso.readMesh();
+        const welded = decodeVertices(surface.vertices, surface.vertices.length / 3, iso.info, 3);
+        const m = meshMetrics(soupOf(welded, surface.indices));
         const record: ExtractRecord = {
           iso: stats.isovalue,
           triangles: stats.triangles,
@@ -113,7 +113,10 @@ export const extractCommand: CliCommand = {
         };
         if (plyPrefix) {
           record.ply = `${plyPrefix}-iso${stats.isovalue}.ply`;
-          writeFileSync(record.ply, encodePly(weldVertices(positions), [`iso ${stats.isovalue} of ${basename(input)}, voxel index space`]));
+          writeFileSync(
+            record.ply,
+            encodePly({ positions: welded, indices: surface.indices }, [`iso ${stats.isovalue} of ${basename(input)}, voxel index space`]),
+          );
         }
         records.push(record);
         ctx.log(

@@ -68,7 +68,7 @@ describe('isosurface CLI', () => {
     expect(again.triangles).toBe(result.isosurfaces[isos.length - 1].triangles);
     expect(again.newBlocks).toBe(0);
     expect(again.hitRate).toBe(1);
-    // PLY: numpy reads the soup back, same triangle count and area
+    // PLY: numpy reads the mesh back, same triangle count and area
     const ply = result.isosurfaces[1].ply;
     const read = runPython(
       `
@@ -82,18 +82,20 @@ f = np.frombuffer(data[end + 12 * nv:], np.dtype([('n', 'u1'), ('i', '<i4', 3)])
 assert (f['n'] == 3).all()
 t = v[f['i']]
 area = 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1).sum()
-print(json.dumps({'faces': nf, 'area': area}))
+print(json.dumps({'faces': nf, 'vertices': nv, 'area': area}))
 `,
       [ply],
     );
     const plyStats = JSON.parse(read);
     expect(plyStats.faces).toBe(result.isosurfaces[1].triangles);
+    // the GPU's welded vertices as they are: VTK's merged points
+    expect(plyStats.vertices).toBe(reference.isosurfaces[1].vtkMarchingCubes.points);
     expect(plyStats.area).toBeCloseTo(result.isosurfaces[1].surfaceArea, 3);
   });
 
   it('extract: surfaces over the memory budget are recorded with the message, and the exit status is 1', () => {
     const out = join(dir, 'budget.json');
-    // 1.75 MB holds the small surface at 120.5, not the one at 20.5 (2828 active blocks, 2.09 MB with 4-byte normals per vertex); 120.5 again still fits.
+    // 1.75 MB holds the small surface at 120.5, not the one at 20.5 (2828 active blocks); 120.5 again still fits.
     const r = cli('extract', join(sharedData, file), '--iso', '120.5,20.5,120.5', '--cache-budget', '1.75', '--json', out);
     expect(r.status, r.stderr).toBe(1);
     const result = JSON.parse(readFileSync(out, 'utf8'));

@@ -49,9 +49,9 @@ export async function checkAgainstVtk(gpu: GpuContext, entries: McVolume[], cach
   const log: string[] = [];
   const prepared = await prepareVolume(gpu.device, entries[0], cacheDir);
   // The budget is the device's default (half of maxBufferSize, at most 2 GiB) but at least 256 MiB: on a
-  // device with WebGPU's default limits (ZFPISO_TEST_LIMITS=default) that default is 128 MiB, below the
-  // bonsai's densest surface (2.4 M triangles: 152 MB with 4-byte normals per vertex), which the page
-  // would refuse there with the budget error; this test is about the triangles, not the budget.
+  // device with WebGPU's default limits (ZFPISO_TEST_LIMITS=default) that default is 128 MiB, about what
+  // bonsai's densest surface (2.4 M triangles, 1.2 M vertices) needs with the cache at its growth
+  // headroom; this test is about the triangles, not the budget.
   const budget = Math.max(256 * 2 ** 20, Math.min(gpu.device.limits.maxBufferSize / 2, 2 ** 31));
   const iso = await Isosurface.create(gpu, prepared.stream, { memoryBudgetBytes: budget, ...testKernelOptions });
   try {

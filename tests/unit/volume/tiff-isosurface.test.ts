@@ -46,8 +46,8 @@ describe('the isosurface of a TIFF stack (neuron page path)', () => {
     try {
       const { iso, initialIso, firstStats } = surface;
       expect(firstStats.triangles).toBeGreaterThan(1000);
-      const packed = await iso.readVertices();
-      const p = decodeVertices(packed, packed.length / 2, iso.info);
+      const mesh = await iso.readMesh();
+      const p = decodeVertices(mesh.vertices, mesh.vertices.length / 3, iso.info, 3);
       const [lo, hi] = iso.info.valueRange;
       const tolerance = 0.01 * (hi - lo);
       const [nx, ny, nz] = v.dims;
