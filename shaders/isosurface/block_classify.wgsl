@@ -31,6 +31,23 @@ fn row_bits(slots: ptr<function, array<u32, 8>>, y: u32, z: u32, shift: u32) -> 
   return bits << shift;
 }
 
+// The blocks d (bits, d = dx + 2dy + 4dz) that cells on the +faces r reach:
+// the non-empty subsets of r; byte r of (0x0e040200, 0xfe543210).
+fn blocks_reached(r: u32) -> u32 {
+  return (select(0x0e040200u, 0xfe543210u, r >= 4u) >> (8u * (r & 3u))) & 255u;
+}
+
+// Bits x, x+1 of a 5-bit row into byte x, for x = 0..3.
+fn spread_pairs(v: u32) -> u32 {
+  return (v & 3u) | ((v & 6u) << 7u) | ((v & 12u) << 14u) | ((v & 24u) << 21u);
+}
+
+// Bit 0 of each byte of v that is 0 (exact per byte: no borrow between bytes).
+fn zero_bytes(v: u32) -> u32 {
+  let y = (v & 0x7f7f7f7fu) + 0x7f7f7f7fu;
+  return (~(y | v | 0x7f7f7f7fu)) >> 7u;
+}
+
 @compute @workgroup_size(64)
 fn classify_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
                    @builtin(local_invocation_index) lid: u32) {
@@ -50,14 +67,11 @@ fn classify_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) n
     missing |= select(0u, 1u << d, s == NONE);
   }
   // blocked: bit r set when a cell reaching the neighbours r (bit 0: x = 3,
-  // bit 1: y = 3, bit 2: z = 3) touches a missing block.
+  // bit 1: y = 3, bit 2: z = 3) touches a missing block, i.e. a missing d
+  // with d a non-empty subset of r.
   var blocked = 0u;
-  for (var r = 0u; r < 8u; r++) {
-    for (var d = 1u; d < 8u; d++) {
-      if ((d & ~r) == 0u && ((missing >> d) & 1u) == 1u) {
-        blocked |= 1u << r;
-      }
-    }
+  for (var r = 1u; r < 8u; r++) {
+    blocked |= select(0u, 1u << r, (missing & blocks_reached(r)) != 0u);
   }
   // Cells inside the volume: l < ext on each axis (dims - 4c >= 1).
   let ext = min(vec3u(4u), volume.dims - c * 4u - 1u);
@@ -78,22 +92,29 @@ fn classify_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) n
   let any_inside = (layers[0] | layers[1] | layers[2] | layers[3] | layers[4]) != 0u;
   let all_inside = (layers[0] & layers[1] & layers[2] & layers[3] & layers[4]) == 0x1ffffffu;
   let mixed = any_inside && !all_inside;
+  // The bytes of cells x < ext.x in a row.
+  let columns = select((1u << (8u * ext.x)) - 1u, 0xffffffffu, ext.x >= 4u);
   for (var z = 0u; z < 4u; z++) {
     let lower = layers[z];
     let upper = layers[z + 1u];
     for (var y = 0u; y < 4u; y++) {
       var word = 0u;
       if (mixed && z < ext.z && y < ext.y) {
-        for (var x = 0u; x < ext.x; x++) {
-          let r = select(0u, 1u, x == 3u) | select(0u, 2u, y == 3u) | select(0u, 4u, z == 3u);
-          let s = x + 5u * y;
-          let code = ((lower >> s) & 3u) | (((lower >> (s + 5u)) & 3u) << 2u) | (((upper >> s) & 3u) << 4u) | (((upper >> (s + 5u)) & 3u) << 6u);
-          // every case but 0 and 255 has triangles
-          if (code != 0u && code != 255u && ((blocked >> r) & 1u) == 0u) {
-            word |= code << (8u * x);
-            indices += case_vertex_count(code);
-            cells += 1u;
+        // The 4 cases of the row at once: byte x gets bits x, x+1 of each of
+        // the 4 rows of 5 inside bits around it (corners 0-1, 2-3, 4-5, 6-7).
+        let s = 5u * y;
+        word = spread_pairs((lower >> s) & 31u) | (spread_pairs((lower >> (s + 5u)) & 31u) << 2u) |
+          (spread_pairs((upper >> s) & 31u) << 4u) | (spread_pairs((upper >> (s + 5u)) & 31u) << 6u);
+        let r = select(0u, 2u, y == 3u) | select(0u, 4u, z == 3u);
+        let unblocked = select(0x00ffffffu, 0u, ((blocked >> r) & 1u) == 1u) | select(0xff000000u, 0u, ((blocked >> (r | 1u)) & 1u) == 1u);
+        word &= columns & unblocked;
+        // every case but 0 and 255 has triangles: clear the 255 bytes
+        word &= ~(zero_bytes(~word) * 255u);
+        if (word != 0u) {
+          for (var x = 0u; x < 4u; x++) {
+            indices += case_vertex_count((word >> (8u * x)) & 255u);
           }
+          cells += 4u - countOneBits(zero_bytes(word));
         }
       }
       slot_mc[32u * slots[0] + y + 4u * z] = word;
