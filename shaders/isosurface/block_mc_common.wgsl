@@ -3,13 +3,16 @@
 //   classify_blocks  one invocation per active block: the inside bits of its
 //                    5^3 neighbourhood (block + its +x/+y/+z neighbour
 //                    voxels), every cell's case once; writes the block's
-//                    case codes (64 bytes), vertex count and emitting-cell count
-//   (scans of both counts give each block's first vertex and first cell)
+//                    case codes (64 bytes, per slot), index count, welded
+//                    vertex count and emitting-cell count
+//   (scans of the three give each block's first index, vertex and cell)
 //   expand_cells     one invocation per active block with emitting cells:
 //                    writes each emitting cell's record (entry, cell) and
-//                    first vertex into the cell list
-//   emit_vertices    one invocation per emitting cell (of one vertex shard):
-//                    its corners, its case, its vertices
+//                    first index into the cell list, and the block's row
+//                    bases of the welded numbering (edge_owner.wgsl)
+//   emit_surface     one invocation per emitting cell (of one index shard):
+//                    its corners, the vertices of the cut edges it owns,
+//                    the indices of its triangles
 // No workgroup memory, no barriers, no atomics but the occupied-block counter:
 // nothing depends on the workgroup size, the subgroup size or the scheduling.
 //
@@ -22,7 +25,7 @@
 // are never read.
 //
 // This file: the bindings and helpers classify_blocks (block_classify.wgsl)
-// and emit_vertices (block_emit.wgsl) share. Each kernel is its own module, so
+// and emit_surface (block_emit.wgsl) share. Each kernel is its own module, so
 // no two resource variables of a module share a binding.
 // Needs common.wgsl, shaders/common/grid.wgsl, shaders/mc/case_table.wgsl.
 
