@@ -345,9 +345,12 @@ export class IsosurfacePipeline {
       this.parts.cache.grow(slots);
       this.parts.mc.resize(slots);
     }
-    if (indices > out.capacity || welded > out.weldedCapacity) {
-      out.resize(Math.max(indices, out.capacity), Math.max(welded, out.weldedCapacity));
+    if (indices > out.capacity) {
+      out.resize(indices, Math.max(welded, out.weldedCapacity));
       this.parts.mc.resizeCells(out.capacity);
+      this.writeShardCounters();
+    } else if (welded > out.weldedCapacity) {
+      out.resizeVertices(welded);
       this.writeShardCounters();
     }
     this.refreshDrawData();

@@ -94,6 +94,14 @@ export class SurfaceOutput {
     return Math.max(capacity, 1) * INDEX_BYTES + Math.max(welded, 1) * VERTEX_BYTES + shards * (DRAW_ARGS_BYTES + SHARD_RECORD_BYTES);
   }
 
+  private createVertexBuffer(welded: number): GPUBuffer {
+    return this.device.createBuffer({
+      label: 'Isosurface.vertices',
+      size: Math.max(1, welded) * VERTEX_BYTES,
+      usage: GPUBufferUsage.VERTEX | GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC,
+    });
+  }
+
   private allocate(capacity: number, welded: number): void {
     const d = this.device;
     const count = Math.max(1, Math.ceil(capacity / this.perShard));
@@ -110,11 +118,7 @@ export class SurfaceOutput {
         size,
       });
     }
-    this.vertexBuffer = d.createBuffer({
-      label: 'Isosurface.vertices',
-      size: Math.max(1, welded) * VERTEX_BYTES,
-      usage: GPUBufferUsage.VERTEX | GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC,
-    });
+    this.vertexBuffer = this.createVertexBuffer(welded);
     // [0, 1, 0, 0, 0] per shard: nothing drawn until a surface is computed.
     this.drawArgsBuffer = d.createBuffer({
       label: 'Isosurface.drawArgs',
@@ -149,6 +153,13 @@ export class SurfaceOutput {
   resize(capacity: number, welded: number): void {
     this.destroyBuffers();
     this.allocate(capacity, welded);
+  }
+
+  /** Replaces only the vertex buffer, by one holding `welded` vertices (the index shards stay). Call between submissions. */
+  resizeVertices(welded: number): void {
+    this.vertexBuffer.destroy();
+    this.vertexBuffer = this.createVertexBuffer(welded);
+    this.weldedValue = Math.max(1, welded);
   }
 
   destroy(): void {

@@ -11,6 +11,7 @@ import { marchingCubes } from '../../../src/mc/serial-mc.ts';
 import type { Dims } from '../../../src/core/naming.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { compressVolume, decodeVolume, makeField } from './helpers.ts';
+import { crossedEdges } from './soup-compare.ts';
 
 const dims: Dims = [30, 27, 22];
 
@@ -121,6 +122,41 @@ describe('Isosurface', () => {
     iso.destroy();
     stream.destroy();
   });
+
+  gpuTest(
+    'welded-vertex overflow alone: the vertex buffer grows, the indices are not regrown, the surface is the same',
+    async ({ gpu }) => {
+      // Lone voxels on the volume's z = 0 face: each an open piece of 4 triangles (12 indices) on 5 cut
+      // edges, so more welded vertices than the quarter of the indices the vertex buffer starts with.
+      const noiseDims: Dims = [14, 13, 3];
+      const values = new Float32Array(noiseDims[0] * noiseDims[1] * noiseDims[2]);
+      for (let y = 1; y < noiseDims[1]; y += 3) for (let x = 1; x < noiseDims[0]; x += 3) values[x + noiseDims[0] * y] = 1;
+      const stream = await compressVolume(gpu.device, values, noiseDims, 16);
+      const decoded = await decodeVolume(gpu.device, stream);
+      const roomy = await Isosurface.create(gpu, stream, { initialCacheSlots: 100_000, initialVertexCapacity: 1 << 20 });
+      const t = 0.5;
+      const reference = await roomy.compute(t);
+      const referenceSoup = await roomy.readVertices();
+      roomy.destroy();
+      expect(reference.vertices).toBeGreaterThan(reference.indices / 4);
+      expect(reference.vertices).toBe(crossedEdges(decoded, noiseDims, t));
+
+      const iso = await Isosurface.create(gpu, stream, { initialCacheSlots: 100_000, initialVertexCapacity: reference.indices });
+      const indexBuffers = iso.drawData.shards.map((s) => s.indices);
+      const vertexBuffer = iso.drawData.vertices;
+      const stats = await iso.compute(t);
+      expect(stats.grew).toBe(true);
+      expect(stats.vertices).toBe(reference.vertices);
+      expect(stats.triangles).toBe(marchingCubes(decoded, noiseDims, t).triangleCount);
+      // the same index buffers (objects), a new vertex buffer
+      expect(iso.drawData.shards.length).toBe(indexBuffers.length);
+      iso.drawData.shards.forEach((s, k) => expect(s.indices).toBe(indexBuffers[k]));
+      expect(iso.drawData.vertices).not.toBe(vertexBuffer);
+      expect(await iso.readVertices()).toEqual(referenceSoup);
+      iso.destroy();
+      stream.destroy();
+    },
+  );
 
   gpuTest('destroy rejects what is waiting; a destroyed object refuses work', async ({ gpu }) => {
     const { stream } = await setup(gpu.device);
