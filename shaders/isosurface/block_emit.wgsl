@@ -84,8 +84,9 @@ fn emit_surface(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
   let base = record[S_BASE];
 
   // The vertices this cell owns, written once: by the shard holding its first index.
+  let size = arrayLength(&shard_indices);
   var owned = owned_edges(last) & cut;
-  if (first >= base && owned != 0u) {
+  if (first >= base && first - base < size && owned != 0u) {
     let row = l.y + 4u * l.z;
     var vertex = slot_mc[32u * own + 16u + row] +
       owned_vertices_before(slot_mc[32u * own + row], l.x, 0u, g - vec3u(l.x, 0u, 0u), volume.dims);
@@ -122,7 +123,6 @@ fn emit_surface(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
 
   // Each triangle corner: the vertex of its edge, numbered by the edge's owner
   // (this cell or a neighbour at one of its corners: same window of blocks).
-  let size = arrayLength(&shard_indices);
   for (var m = 0u; m < n; m++) {
     let v = first + m;
     if (v < base || v - base >= size) {

@@ -411,10 +411,6 @@ export class Isosurface {
     return this.pipeline.readMesh();
   }
 
-  readVertices(): Promise<Uint32Array> {
-    return this.pipeline.readVertices();
-  }
-
   /** Per-block (min, max), 2 f32 per block in raster block order (for the page's block-count profile). */
   readBlockRanges(): Promise<Float32Array> {
     return this.pipeline.readBlockRanges();

@@ -327,10 +327,9 @@ export class IsosurfacePipeline {
       minWelded = Math.max(welded, c[C.welded]);
       if (minWelded > this.maxWelded) throw this.vertexBindingError(iso, minWelded);
       if (c[C.vertices] > indices) indices = grownCapacity(indices, minIndices);
-      welded = Math.min(
-        this.maxWelded,
-        Math.max(minWelded, weldedFor(indices), c[C.welded] > welded ? grownCapacity(welded, minWelded) : welded),
-      );
+      if (c[C.welded] > welded) welded = grownCapacity(welded, minWelded);
+      // at least the quarter of the indices a new output starts with
+      welded = Math.min(this.maxWelded, Math.max(welded, weldedFor(indices)));
     }
     const bytes = (s: number, i: number, v: number) => cacheBytesFor(s, blocks) + vertexBytesFor(i, v, perShard);
     const need = bytes(minSlots, minIndices, minWelded);
@@ -411,30 +410,6 @@ export class IsosurfacePipeline {
       if (v >= welded) throw new Error(`Isosurface: index ${v} outside the ${welded} vertices of the surface`);
     }
     return { vertices, indices };
-  }
-
-  /**
-   * The drawn surface as a triangle soup: per triangle corner its vertex's
-   * packed (position, block id) pair, and its normal (u32 octahedral), in
-   * index order.
-   */
-  async readSoup(): Promise<{ vertices: Uint32Array; normals: Uint32Array }> {
-    const mesh = await this.readMesh();
-    const n = mesh.indices.length;
-    const vertices = new Uint32Array(2 * n);
-    const normals = new Uint32Array(n);
-    for (let i = 0; i < n; i++) {
-      const v = mesh.indices[i];
-      vertices[2 * i] = mesh.vertices[3 * v];
-      vertices[2 * i + 1] = mesh.vertices[3 * v + 1];
-      normals[i] = mesh.vertices[3 * v + 2];
-    }
-    return { vertices, normals };
-  }
-
-  /** The packed (position, block id) pairs of the drawn surface's triangle corners (readSoup). */
-  async readVertices(): Promise<Uint32Array> {
-    return (await this.readSoup()).vertices;
   }
 
   /** Per-block (min, max), 2 f32 per block in raster block order (for the page's block-count profile). */

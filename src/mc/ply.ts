@@ -2,52 +2,13 @@
 // voxel index coordinates (voxel (i, j, k) at (i, j, k)), 3 vertex indices per
 // face, so mesh tools see a connected surface. The page's PLY export and
 // `cli extract --ply` write the GPU's welded mesh as it is (one vertex per
-// cut grid edge); `weldVertices` merges a soup's copies of a vertex (bit
-// identical floats) for soups from elsewhere (the serial MC, tests).
+// cut grid edge, Isosurface.readMesh).
 
-export interface WeldedMesh {
+export interface IndexedMesh {
   /** xyz per unique vertex */
   positions: Float32Array;
   /** 3 indices per triangle */
   indices: Uint32Array;
-}
-
-/** Merges vertices with bit-identical positions (open-addressing hash on the float bits). */
-export function weldVertices(soup: Float32Array): WeldedMesh {
-  const n = soup.length / 3;
-  const bits = new Uint32Array(soup.buffer, soup.byteOffset, soup.length);
-  let size = 1;
-  while (size < n * 2) size <<= 1;
-  const table = new Int32Array(size).fill(-1);
-  const mask = size - 1;
-  const unique = new Uint32Array(n);
-  const indices = new Uint32Array(n);
-  let count = 0;
-  for (let v = 0; v < n; v++) {
-    const x = bits[3 * v],
-      y = bits[3 * v + 1],
-      z = bits[3 * v + 2];
-    let h = (Math.imul(x, 0x9e3779b1) ^ Math.imul(y, 0x85ebca77) ^ Math.imul(z, 0xc2b2ae3d)) >>> 0;
-    h = (h ^ (h >>> 15)) & mask;
-    for (;;) {
-      const u = table[h];
-      if (u < 0) {
-        table[h] = count;
-        unique[count] = v;
-        indices[v] = count++;
-        break;
-      }
-      const w = unique[u];
-      if (bits[3 * w] === x && bits[3 * w + 1] === y && bits[3 * w + 2] === z) {
-        indices[v] = u;
-        break;
-      }
-      h = (h + 1) & mask;
-    }
-  }
-  const positions = new Float32Array(count * 3);
-  for (let u = 0; u < count; u++) positions.set(soup.subarray(3 * unique[u], 3 * unique[u] + 3), 3 * u);
-  return { positions, indices };
 }
 
 /** The triangle soup (xyz per triangle corner) of an indexed mesh. */
@@ -57,7 +18,7 @@ export function soupOf(positions: Float32Array, indices: Uint32Array): Float32Ar
   return out;
 }
 
-export function encodePly(mesh: WeldedMesh, comments: string[] = []): Uint8Array {
+export function encodePly(mesh: IndexedMesh, comments: string[] = []): Uint8Array {
   const vertices = mesh.positions.length / 3;
   const faces = mesh.indices.length / 3;
   const header =

@@ -20,7 +20,31 @@ export async function readCacheState(
   return { slotToBlock, blockToSlot, lruOrder: log.filter((_, p) => valid[p] === 1) };
 }
 
-/** The normals of the drawn surface (u32 octahedral per triangle corner, vertex_format.wgsl), in readVertices' order. */
-export async function readNormals(iso: Isosurface): Promise<Uint32Array> {
-  return (await iso.pipeline.readSoup()).normals;
+/**
+ * The drawn surface as a triangle soup: per triangle corner its vertex's
+ * packed (position, block id) pair and its normal (u32 octahedral,
+ * vertex_format.wgsl), in index order.
+ */
+export async function readSoup(iso: Pick<Isosurface, 'readMesh'>): Promise<{ vertices: Uint32Array; normals: Uint32Array }> {
+  const mesh = await iso.readMesh();
+  const n = mesh.indices.length;
+  const vertices = new Uint32Array(2 * n);
+  const normals = new Uint32Array(n);
+  for (let i = 0; i < n; i++) {
+    const v = mesh.indices[i];
+    vertices[2 * i] = mesh.vertices[3 * v];
+    vertices[2 * i + 1] = mesh.vertices[3 * v + 1];
+    normals[i] = mesh.vertices[3 * v + 2];
+  }
+  return { vertices, normals };
+}
+
+/** The packed (position, block id) pairs of the drawn surface's triangle corners. */
+export async function readVertices(iso: Pick<Isosurface, 'readMesh'>): Promise<Uint32Array> {
+  return (await readSoup(iso)).vertices;
+}
+
+/** The normals of the drawn surface, in readVertices' order. */
+export async function readNormals(iso: Pick<Isosurface, 'readMesh'>): Promise<Uint32Array> {
+  return (await readSoup(iso)).normals;
 }

@@ -12,6 +12,7 @@ import type { Dims } from '../../../src/core/naming.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { compressVolume, decodeVolume, makeField } from './helpers.ts';
 import { crossedEdges } from './soup-compare.ts';
+import { readVertices } from '../../helpers/isosurface-readback.ts';
 
 const dims: Dims = [30, 27, 22];
 
@@ -77,7 +78,7 @@ describe('Isosurface', () => {
     const errors: Error[] = [];
     iso.onError((e) => errors.push(e));
     const kept = await iso.compute(small);
-    const keptVertices = await iso.readVertices();
+    const keptVertices = await readVertices(iso);
     const version = iso.drawData.version;
     const error = await iso.compute(large).then(
       () => undefined,
@@ -92,7 +93,7 @@ describe('Isosurface', () => {
     expect(errors).toEqual([error]);
     // the vertices and draw arguments still hold the previous surface (the
     // cache may have grown on the way: that alone fitted the budget)
-    expect([...(await iso.readVertices())]).toEqual([...keptVertices]);
+    expect([...(await readVertices(iso))]).toEqual([...keptVertices]);
     expect(keptVertices.length / 2).toBe(kept.indices);
     // with room, the same surface grows what it needs and is exact
     iso.setMemoryBudget(64 << 20);
@@ -136,7 +137,7 @@ describe('Isosurface', () => {
       const roomy = await Isosurface.create(gpu, stream, { initialCacheSlots: 100_000, initialVertexCapacity: 1 << 20 });
       const t = 0.5;
       const reference = await roomy.compute(t);
-      const referenceSoup = await roomy.readVertices();
+      const referenceSoup = await readVertices(roomy);
       roomy.destroy();
       expect(reference.vertices).toBeGreaterThan(reference.indices / 4);
       expect(reference.vertices).toBe(crossedEdges(decoded, noiseDims, t));
@@ -152,11 +153,43 @@ describe('Isosurface', () => {
       expect(iso.drawData.shards.length).toBe(indexBuffers.length);
       iso.drawData.shards.forEach((s, k) => expect(s.indices).toBe(indexBuffers[k]));
       expect(iso.drawData.vertices).not.toBe(vertexBuffer);
-      expect(await iso.readVertices()).toEqual(referenceSoup);
+      expect(await readVertices(iso)).toEqual(referenceSoup);
       iso.destroy();
       stream.destroy();
     },
   );
+
+  gpuTest('the welded mesh of a closed surface is one connected manifold: V - E + F = 2, every edge in two triangles', async ({ gpu }) => {
+    // A ball inside the volume: a sphere's surface, closed.
+    const n = 22;
+    const ball = new Float32Array(n * n * n);
+    const c = (n - 1) / 2;
+    for (let z = 0; z < n; z++)
+      for (let y = 0; y < n; y++) for (let x = 0; x < n; x++) ball[x + n * (y + n * z)] = 8 - Math.hypot(x - c, y - c, z - c);
+    const stream = await compressVolume(gpu.device, ball, [n, n, n], 16);
+    const iso = await Isosurface.create(gpu, stream);
+    const stats = await iso.compute(0.37);
+    const mesh = await iso.readMesh();
+    expect(mesh.indices.length).toBe(stats.indices);
+    expect(mesh.vertices.length / 3).toBe(stats.vertices);
+    const edges = new Map<string, number>();
+    const used = new Uint8Array(stats.vertices);
+    for (let t = 0; t < mesh.indices.length; t += 3) {
+      for (let k = 0; k < 3; k++) {
+        const a = mesh.indices[t + k];
+        const b = mesh.indices[t + ((k + 1) % 3)];
+        used[a] = 1;
+        const key = a < b ? `${a},${b}` : `${b},${a}`;
+        edges.set(key, (edges.get(key) ?? 0) + 1);
+      }
+    }
+    // Every vertex used; welded (a soup's copies left apart would break both counts).
+    expect(used.every((u) => u === 1)).toBe(true);
+    expect([...edges.values()].every((k) => k === 2)).toBe(true);
+    expect(stats.vertices - edges.size + stats.triangles).toBe(2);
+    iso.destroy();
+    stream.destroy();
+  });
 
   gpuTest('destroy rejects what is waiting; a destroyed object refuses work', async ({ gpu }) => {
     const { stream } = await setup(gpu.device);

@@ -13,6 +13,7 @@ import type { Dims } from '../../../src/core/naming.ts';
 import { blockRanges } from '../../../src/zfp/cpu/codec.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { compressVolume, decodeVolume, makeField } from './helpers.ts';
+import { readVertices } from '../../helpers/isosurface-readback.ts';
 
 const dims: Dims = [37, 30, 25];
 
@@ -40,7 +41,7 @@ describe('storage binding limit', () => {
     expect(kept.grew).toBe(true);
     expect(kept.cacheSlots).toBeLessThanOrEqual(maxSlots); // growth headroom capped at the binding
     expect(kept.triangles).toBe(marchingCubes(decoded, dims, small).triangleCount);
-    const keptVertices = await iso.readVertices();
+    const keptVertices = await readVertices(iso);
     const refused = await iso.compute(large).catch((e: unknown) => e);
     expect(refused).toBeInstanceOf(Error);
     expect((refused as Error).message).toBe(
@@ -48,7 +49,7 @@ describe('storage binding limit', () => {
         `but this device binds at most ${maxSlots} slots (${((maxSlots * 256) / 2 ** 20).toFixed(2)} MB: maxStorageBufferBindingSize) in one buffer. The previous surface is kept.`,
     );
     expect(errors).toEqual([refused]);
-    expect(await iso.readVertices()).toEqual(keptVertices);
+    expect(await readVertices(iso)).toEqual(keptVertices);
     expect((await iso.compute(small)).triangles).toBe(kept.triangles);
     iso.destroy();
 

@@ -18,6 +18,7 @@ import { gpuTest } from '../../helpers/gpu.ts';
 import { rng } from '../mc/reference.ts';
 import { compressVolume, decodeVolume, drawnSoup, makeField, testKernelOptions, VERTEX_TOLERANCE, type FieldKind } from './helpers.ts';
 import { compareBlockSoups, cpuTriangles, crossedEdges, gpuTriangles } from './soup-compare.ts';
+import { readVertices } from '../../helpers/isosurface-readback.ts';
 
 interface Case {
   dims: Dims;
@@ -47,7 +48,7 @@ async function checkSurfaces(iso: Isosurface, decoded: Float32Array, c: Case, la
   for (let k = 0; k < 4; k++) {
     const t = Math.fround(lo + (hi - lo) * (0.1 + 0.8 * random()));
     const stats = await iso.compute(t);
-    const packed = await iso.readVertices();
+    const packed = await readVertices(iso);
     const cpu = marchingCubes(decoded, c.dims, t);
     expect(stats.triangles, `${label} iso ${t}`).toBe(cpu.triangleCount);
     expect(stats.indices).toBe(packed.length / 2);

@@ -8,6 +8,7 @@ import { ZfpDecoder } from '../../../src/zfp/decoder.ts';
 import { ZfpEncoder } from '../../../src/zfp/encoder.ts';
 import type { ZfpGpuStream } from '../../../src/zfp/gpu-stream.ts';
 import { rng } from '../mc/reference.ts';
+import { readVertices } from '../../helpers/isosurface-readback.ts';
 
 /** Largest quantization error of a decoded vertex coordinate (half a step of 4/1023), plus float32 slack. */
 export const VERTEX_TOLERANCE = 0.5 * (4 / 1023) + 1e-4;
@@ -98,6 +99,6 @@ export async function decodeVolume(device: GPUDevice, stream: ZfpGpuStream): Pro
 
 /** The drawn surface as a float32 soup in voxel index space. */
 export async function drawnSoup(iso: Isosurface): Promise<Float32Array> {
-  const packed = await iso.readVertices();
+  const packed = await readVertices(iso);
   return decodeVertices(packed, packed.length / 2, iso.info);
 }

@@ -12,7 +12,7 @@ import { soupNormals } from '../../../src/render/testing/cpu-surface.ts';
 import type { Dims } from '../../../src/core/naming.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { compressVolume, decodeVolume, makeField } from './helpers.ts';
-import { readCacheState, readNormals } from '../../helpers/isosurface-readback.ts';
+import { readCacheState, readNormals, readVertices } from '../../helpers/isosurface-readback.ts';
 
 /** vertex_format.wgsl decode_vertex_normal, in TS (unit vector, or zero for 0). */
 function decodeNormal(packed: number): [number, number, number] {
@@ -40,7 +40,7 @@ describe('vertex normals', () => {
       for (const f of [0.35, 0.6]) {
         const t = Math.fround(lo + f * (hi - lo));
         const stats = await iso.compute(t);
-        const packed = await iso.readVertices();
+        const packed = await readVertices(iso);
         const normals = await readNormals(iso);
         expect(normals.length).toBe(stats.indices);
         const positions = decodeVertices(packed, normals.length, iso.info);

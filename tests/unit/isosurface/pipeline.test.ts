@@ -12,6 +12,7 @@ import { marchingCubes } from '../../../src/mc/serial-mc.ts';
 import type { Dims } from '../../../src/core/naming.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { compressVolume, decodeVolume, makeField, testKernelOptions } from './helpers.ts';
+import { readVertices } from '../../helpers/isosurface-readback.ts';
 
 const dims: Dims = [33, 29, 26];
 
@@ -85,7 +86,7 @@ describe('pipelined scrubbing', () => {
     }
     expect(seen.map((s) => s.isovalue)).toEqual([...values.slice(1, 4), values[4]]);
     for (const s of seen) expect(s.triangles, `iso ${s.isovalue}`).toBe(marchingCubes(decoded, dims, s.isovalue).triangleCount);
-    expect((await iso.readVertices()).length / 6).toBe(seen[seen.length - 1].triangles);
+    expect((await readVertices(iso)).length / 6).toBe(seen[seen.length - 1].triangles);
     iso.destroy();
     stream.destroy();
   });
@@ -116,7 +117,7 @@ describe('pipelined scrubbing', () => {
     const [lo, hi] = iso.info.valueRange;
     const kept = await iso.compute(Math.fround(lo + 0.4 * (hi - lo)));
     expect(kept.triangles).toBeGreaterThan(0);
-    const keptVertices = await iso.readVertices();
+    const keptVertices = await readVertices(iso);
     const errors: Error[] = [];
     const stats: IsosurfaceStats[] = [];
     iso.onError((e) => errors.push(e));
@@ -128,7 +129,7 @@ describe('pipelined scrubbing', () => {
     expect((failed as Error).message).toMatch(/failed on the GPU \(validation error: .+\); the previous surface is kept/);
     expect(errors).toEqual([failed]);
     expect(stats).toEqual([]); // never { active: 0, triangles: 0 } or the previous counters
-    expect(await iso.readVertices()).toEqual(keptVertices);
+    expect(await readVertices(iso)).toEqual(keptVertices);
     iso.destroy();
     stream.destroy();
   });

@@ -18,6 +18,7 @@ import { ChunkedVolume, ChunkError, type ChunkLevelLayout } from '../../../src/z
 import { planZfpStream } from '../../../src/zfp/format.ts';
 import { loadZfpStream } from '../../../src/zfp/gpu-stream.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
+import { readVertices } from '../../helpers/isosurface-readback.ts';
 import { repoRoot, sharedData } from '../../helpers/python.ts';
 
 const work = mkdtempSync(join(tmpdir(), 'chunked-volume-'));
@@ -200,7 +201,7 @@ describe('a chunked store level through the GPU chunk pool', () => {
           expect(a.triangles, `iso ${iso}`).toBeGreaterThan(100);
           expect(b.triangles, `iso ${iso}`).toBe(a.triangles);
           expect(b.activeBlocks, `iso ${iso}`).toBe(a.activeBlocks);
-          const [va, vb] = await Promise.all([inCore.readVertices(), chunked.readVertices()]);
+          const [va, vb] = await Promise.all([readVertices(inCore), readVertices(chunked)]);
           expect(vb.length).toBe(va.length);
           expect(Buffer.from(vb.buffer).equals(Buffer.from(va.buffer)), `iso ${iso}: vertices`).toBe(true);
         }
@@ -221,7 +222,7 @@ describe('a chunked store level through the GPU chunk pool', () => {
           const a = await inCore.compute(iso);
           const b = await iso2.compute(iso);
           expect(b.triangles, `iso ${iso} from ${need.length} chunks`).toBe(a.triangles);
-          const [va, vb] = await Promise.all([inCore.readVertices(), iso2.readVertices()]);
+          const [va, vb] = await Promise.all([readVertices(inCore), readVertices(iso2)]);
           expect(Buffer.from(vb.buffer).equals(Buffer.from(va.buffer)), `iso ${iso}: vertices from the needed chunks`).toBe(true);
           iso2.destroy();
           partial.destroy();
