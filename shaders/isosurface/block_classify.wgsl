@@ -1,6 +1,8 @@
 // classify_blocks: see block_mc_common.wgsl. Needs block_mc_common.wgsl, edge_owner.wgsl.
 
 // ---- classify_blocks
+// The slot data as rows of 4 voxels: voxel (x, y, z) of slot s is row s * 16 + y + 4z, component x.
+@group(0) @binding(2) var<storage, read> slot_rows: array<vec4f>;
 // The counters as a uniform: a storage binding more would pass the default
 // limit of 8 per stage (the counters are this pass's indirect arguments too).
 @group(1) @binding(0) var<uniform> classify_counters: array<vec4u, 16>;
@@ -8,7 +10,7 @@
 // counters[C_OCCUPIED]: the counters are this pass's indirect arguments, so
 // they cannot be bound writable here).
 @group(1) @binding(4) var<storage, read_write> occupied_count: atomic<u32>;
-@group(1) @binding(1) var<storage, read_write> slot_mc: array<u32>;         // per slot: 16 case words (4 cases per row (y, z)), then 16 row bases (expand_cells)
+@group(1) @binding(1) var<storage, read_write> slot_mc: array<u32>;         // per slot and row (y, z): 4 case bytes, then the row base (expand_cells)
 @group(1) @binding(2) var<storage, read_write> block_indices: array<u32>;   // triangle corners per active entry
 @group(1) @binding(3) var<storage, read_write> block_cells: array<u32>;     // emitting cells per active entry
 @group(1) @binding(5) var<storage, read_write> block_vertices: array<u32>;  // owned cut edges (welded vertices) per active entry
@@ -117,7 +119,7 @@ fn classify_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) n
           cells += 4u - countOneBits(zero_bytes(word));
         }
       }
-      slot_mc[32u * slots[0] + y + 4u * z] = word;
+      slot_mc[32u * slots[0] + 2u * (y + 4u * z)] = word;
       if (word != 0u) {
         vertices += owned_vertices_of_row(word, c * 4u + vec3u(0u, y, z), volume.dims);
       }

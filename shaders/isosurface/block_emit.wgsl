@@ -1,8 +1,11 @@
 // emit_surface: see block_mc_common.wgsl. Needs block_mc_common.wgsl, vertex_format.wgsl, edge_owner.wgsl.
 
 // ---- emit_surface: the emitting cells whose triangle corners reach one index shard
+// The slot data voxel by voxel: voxel (x, y, z) of slot s is s * 64 + x + 4y + 16z (the
+// same buffer classify reads as rows; scalar reads measured about 3% faster here on SwiftShader).
+@group(0) @binding(2) var<storage, read> slot_voxels: array<f32>;
 @group(1) @binding(0) var<storage, read> cell_list: array<vec2u>;   // (entry << 6 | cell, first index)
-@group(1) @binding(1) var<storage, read> slot_mc: array<u32>;       // per slot: 16 case words, 16 row bases
+@group(1) @binding(1) var<storage, read> slot_mc: array<vec2u>;     // per slot and row: (4 case bytes, row base)
 @group(2) @binding(0) var<uniform> shard: array<vec4u, 2>;          // this shard's record (plan.wgsl): first, count, base
 @group(2) @binding(1) var<storage, read_write> shard_indices: array<u32>;
 // Welded vertices, 3 words each: packed position, block id, normal (vertex_format.wgsl).
@@ -22,7 +25,7 @@ fn grid_voxel(g: vec3i) -> vec2f {
     return vec2f(0.0);
   }
   let v = vec3u(g) & vec3u(3u);
-  return vec2f(slot_rows[slot * 16u + v.y + 4u * v.z][v.x], 1.0);
+  return vec2f(slot_voxels[slot * 64u + v.x + 4u * v.y + 16u * v.z], 1.0);
 }
 
 // Gradient at corner q of the cell whose corner 0 is at global grid point
@@ -73,9 +76,10 @@ fn emit_surface(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
     }
     slots[q] = slot;
     let v = p & vec3u(3u);
-    values[q] = slot_rows[slot * 16u + v.y + 4u * v.z][v.x];
+    values[q] = slot_voxels[slot * 64u + v.x + 4u * v.y + 16u * v.z];
   }
-  let code = (slot_mc[32u * own + l.y + 4u * l.z] >> (8u * l.x)) & 255u;
+  let own_row = slot_mc[16u * own + l.y + 4u * l.z];
+  let code = (own_row.x >> (8u * l.x)) & 255u;
   let words = case_words(code);
   let n = 3u * mc_case_triangles(words);
   let g = c * 4u + l;
@@ -87,9 +91,8 @@ fn emit_surface(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
   let size = arrayLength(&shard_indices);
   var owned = owned_edges(last) & cut;
   if (first >= base && first - base < size && owned != 0u) {
-    let row = l.y + 4u * l.z;
-    var vertex = slot_mc[32u * own + 16u + row] +
-      owned_vertices_before(slot_mc[32u * own + row], l.x, 0u, g - vec3u(l.x, 0u, 0u), volume.dims);
+    var vertex = own_row.y +
+      owned_vertices_before(own_row.x, l.x, 0u, g - vec3u(l.x, 0u, 0u), volume.dims);
     let capacity = arrayLength(&vertex_data) / 3u;
     let origin = vec3i(g);
     // Every edge an inner cell owns starts at corner 0: its gradient once.
@@ -137,8 +140,9 @@ fn emit_surface(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
     let owner_slot = slots[at];
     let local = p & vec3u(3u);
     let row = local.y + 4u * local.z;
-    let index = slot_mc[32u * owner_slot + 16u + row] +
-      owned_vertices_before(slot_mc[32u * owner_slot + row], local.x, (1u << edge) - 1u, g + mc_corner_offset(at) - vec3u(local.x, 0u, 0u), volume.dims);
+    let owner_row = slot_mc[16u * owner_slot + row];
+    let index = owner_row.y +
+      owned_vertices_before(owner_row.x, local.x, (1u << edge) - 1u, g + mc_corner_offset(at) - vec3u(local.x, 0u, 0u), volume.dims);
     shard_indices[v - base] = index;
   }
 }

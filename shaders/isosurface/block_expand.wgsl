@@ -28,9 +28,9 @@ fn expand_cells(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
   var first = expand_index_offsets[i];
   var vertex = expand_vertex_offsets[i];
   for (var w = 0u; w < 16u; w++) {
-    let word = expand_slot_mc[32u * slot + w];
+    let word = expand_slot_mc[32u * slot + 2u * w];
     // the first vertex the cells of row w own (the emit pass numbers from here)
-    expand_slot_mc[32u * slot + 16u + w] = vertex;
+    expand_slot_mc[32u * slot + 2u * w + 1u] = vertex;
     if (word == 0u) {
       continue;
     }

@@ -33,8 +33,7 @@
 @group(0) @binding(0) var<uniform> volume: VolumeParams;
 // packCaseTable(): case c in words 2c, 2c+1, read as 4 words per vec4.
 @group(0) @binding(1) var<uniform> case_table: array<vec4u, 128>;
-// The slot data as rows of 4 voxels: voxel (x, y, z) of slot s is row s * 16 + y + 4z, component x.
-@group(0) @binding(2) var<storage, read> slot_rows: array<vec4f>;
+// @group(0) @binding(2): the slot data, declared by each kernel in the shape it reads.
 @group(0) @binding(3) var<storage, read> block_to_slot: array<u32>;
 @group(0) @binding(4) var<storage, read> active_ids: array<u32>;
 

@@ -8,7 +8,8 @@
 //
 // The owner numbers the vertices of its owned cut edges in edge order. A
 // block numbers its cells' vertices in cell order (x fastest), from the first
-// vertex of each row of 4 cells (per-slot row bases, expand_cells).
+// vertex of each row of 4 cells (per-slot row bases, expand_cells, stored
+// beside the row's 4 case bytes so one 8-byte read gets both).
 // Needs shaders/mc/case_table.wgsl (corner and edge numbering).
 
 // Bit e set when edge e of a cell with case `code` is cut (its two corners differ).
@@ -46,34 +47,38 @@ fn mc_edge_of(axis: u32, corner: u32) -> u32 {
   return 4u * axis + select(select(xy, xz, axis == 1u), yz, axis == 0u);
 }
 
+// Bit 0 of each byte of a row's 4 case bytes: edge (a, b) of that cell is cut.
+fn row_cut(word: u32, a: u32, b: u32) -> u32 {
+  return ((word >> a) ^ (word >> b)) & 0x01010101u;
+}
+
 // Vertices owned by the cells x < `upto` of a row (4 case bytes in `word`)
 // whose cell x = 0 is at global grid point g0, plus, of cell `upto` (when
-// < 4), its owned cut edges in `edge_bits` (a mask of edges to count there).
+// < 4), its owned cut edges in `edge_bits` (a mask of edges to count there;
+// 0 when upto is 4).
+// Without branches or loops, the volume's upper faces included: the emit pass
+// calls it per triangle corner, and a rarely taken general path (the former
+// per-cell loop for rows on the upper faces) cost about 5% of a surface on
+// SwiftShader even where no lane took it.
 fn owned_vertices_before(word: u32, upto: u32, edge_bits: u32, g0: vec3u, dims: vec3u) -> u32 {
-  // A row with no cell on the volume's upper faces: every cell owns edges 0,
-  // 4 and 8 only, so count them for the 4 case bytes at once (bit 0 of each
-  // byte: corner 0 differs from corner 1, 2 or 4).
-  if (g0.y + 2u != dims.y && g0.z + 2u != dims.z && g0.x + 5u < dims.x) {
-    let cut0 = (word ^ (word >> 1u)) & 0x01010101u;
-    let cut4 = (word ^ (word >> 2u)) & 0x01010101u;
-    let cut8 = (word ^ (word >> 4u)) & 0x01010101u;
-    let below = select((1u << (8u * upto)) - 1u, 0xffffffffu, upto >= 4u);
-    // at most 3 per byte: the byte sums do not carry
-    var k = (((cut0 + cut4 + cut8) & below) * 0x01010101u) >> 24u;
-    if (upto < 4u) {
-      let at = 8u * upto;
-      k += select(0u, (cut0 >> at) & 1u, (edge_bits & 1u) != 0u) + select(0u, (cut4 >> at) & 1u, (edge_bits & 0x10u) != 0u) +
-        select(0u, (cut8 >> at) & 1u, (edge_bits & 0x100u) != 0u);
-    }
-    return k;
-  }
-  var k = 0u;
-  for (var x = 0u; x < min(upto + 1u, 4u); x++) {
-    let code = (word >> (8u * x)) & 255u;
-    let mask = select(0xfffu, edge_bits, x == upto);
-    k += countOneBits(owned_edges(last_cell_axes(g0 + vec3u(x, 0u, 0u), dims)) & mc_cut_edges(code) & mask);
-  }
-  return k;
+  let y = select(0u, 0xffffffffu, g0.y + 2u == dims.y);
+  let z = select(0u, 0xffffffffu, g0.z + 2u == dims.z);
+  // the byte of the cell on the volume's last x (none when it is not in this row)
+  let x_last = dims.x - 2u - g0.x;
+  let x = select(0u, 255u << ((8u * x_last) & 31u), x_last < 4u);
+  // Owned cut edges per cell, summed byte-wise (at most 12 per byte: no
+  // carries). Every cell owns edges 0, 4, 8; cells on the upper faces more
+  // (owned_edges): edges 1, 10 on the last y, 2, 6 on the last z, 3 on both;
+  // the last x adds 5, 9, then 11 with the last y, 7 with the last z.
+  var per_cell = row_cut(word, 0u, 1u) + row_cut(word, 0u, 2u) + row_cut(word, 0u, 4u) +
+    (y & (row_cut(word, 2u, 3u) + row_cut(word, 2u, 6u))) + (z & (row_cut(word, 4u, 5u) + row_cut(word, 4u, 6u))) +
+    (y & z & row_cut(word, 6u, 7u));
+  per_cell += x & (row_cut(word, 1u, 3u) + row_cut(word, 1u, 5u) + (y & row_cut(word, 3u, 7u)) + (z & row_cut(word, 5u, 7u)));
+  let below = select((1u << (8u * upto)) - 1u, 0xffffffffu, upto >= 4u);
+  // cell `upto` itself (edge_bits is 0 when upto is 4)
+  let last = select(0u, 1u, upto == x_last) | (y & 2u) | (z & 4u);
+  let own = countOneBits(owned_edges(last) & mc_cut_edges((word >> ((8u * upto) & 31u)) & 255u) & edge_bits);
+  return (((per_cell & below) * 0x01010101u) >> 24u) + own;
 }
 
 // Vertices a row of cells owns (the row's share of its block's count).

@@ -33,7 +33,7 @@ export interface BlockMcParts {
   maxBindingBytes: number;
 }
 
-/** Bytes per cache slot of the per-slot and per-active-block buffers: 16 case words, 16 row bases, 6 counts/offsets. */
+/** Bytes per cache slot of the per-slot and per-active-block buffers: per row of 4 cells its case bytes and row base (32 words), 6 counts/offsets. */
 export const MC_BYTES_PER_SLOT = 152;
 
 /** Entries of the emitting-cell list for `vertices` vertices (every emitting cell has >= 3). */
@@ -48,7 +48,7 @@ export function cellBytesFor(vertices: number, maxBindingBytes = Infinity): numb
 
 interface EntryBuffers {
   capacity: number;
-  /** Per slot: 16 case words, 16 row bases (block_classify.wgsl). */
+  /** Per slot, per row (y, z) of 4 cells: 4 case bytes, then the row base (block_classify.wgsl, block_expand.wgsl). */
   slotMc: GPUBuffer;
   indexCounts: GPUBuffer;
   indexOffsets: GPUBuffer;
