@@ -27,8 +27,7 @@ import { openZfpStore } from '../src/store/zarr/open-store.ts';
 import { MeteredStore, SimulatedLinkStore } from '../src/store/zarr/stores.ts';
 import { loadZfpStream } from '../src/zfp/gpu-stream.ts';
 import { printTable, summarize, writeJson } from './lib/report.ts';
-import { chunkedGpu } from '../src/store/gpu-port.ts';
-import { StreamController } from '../src/store/stream-controller.ts';
+import { createChunkStream } from '../src/store/gpu-port.ts';
 import { execFileSync } from 'node:child_process';
 
 const root = fileURLToPath(new URL('..', import.meta.url));
@@ -99,7 +98,7 @@ async function main() {
         fetcher.onChunk((level, _c, _b, fromCache) => {
           if (level === 0 && !fromCache) chunks0++;
         });
-        const c = await StreamController.create(store, fetcher, chunkedGpu(gpu), budgetBytes);
+        const c = await createChunkStream(store, fetcher, gpu, budgetBytes);
         let t1 = NaN;
         let stopped = '';
         c.onShown(() => {

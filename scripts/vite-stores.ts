@@ -4,10 +4,13 @@
 // HTTP Range requests (206 with Content-Range; zarrita reads shard indexes
 // and inner chunks with them), HEAD, and CORS headers (a page on another
 // origin may read the store, including the Range header and the lengths).
+// A /stores/~faults(...)/ prefix serves the same stores through a
+// misbehaving server (store-faults.ts), for the tests and benchmarks.
 import { createReadStream, existsSync, statSync } from 'node:fs';
 import type { IncomingMessage, ServerResponse } from 'node:http';
 import { join, normalize, resolve, sep } from 'node:path';
 import type { Plugin } from 'vite';
+import { FaultInjector, parseFaultPrefix } from './store-faults.ts';
 
 export const STORES_PREFIX = '/stores/';
 
@@ -30,7 +33,7 @@ export function parseRange(header: string, size: number): [number, number] | nul
   return [start, end];
 }
 
-export function storesMiddleware(folder = defaultStoresFolder()) {
+export function storesMiddleware(folder = defaultStoresFolder(), faults = new FaultInjector()) {
   const root = resolve(folder);
   return (req: IncomingMessage, res: ServerResponse, next: () => void) => {
     const url = req.url ?? '';
@@ -56,6 +59,8 @@ export function storesMiddleware(folder = defaultStoresFolder()) {
       res.end();
       return;
     }
+    const faulty = parseFaultPrefix(rel);
+    if (faulty) rel = faulty.rest;
     const path = normalize(join(root, rel));
     if (!path.startsWith(root + sep) || !existsSync(path) || !statSync(path).isFile()) {
       res.statusCode = 404;
@@ -81,12 +86,30 @@ export function storesMiddleware(folder = defaultStoresFolder()) {
       res.statusCode = 206;
       res.setHeader('Content-Range', `bytes ${start}-${end}/${size}`);
     }
-    res.setHeader('Content-Length', String(end - start + 1));
-    if (req.method === 'HEAD' || size === 0) {
-      res.end();
-      return;
-    }
-    createReadStream(path, { start, end }).pipe(res);
+    const serve = (cut?: number) => {
+      res.setHeader('Content-Length', String(end - start + 1));
+      if (req.method === 'HEAD' || size === 0) {
+        res.end();
+        return;
+      }
+      if (cut === undefined) {
+        createReadStream(path, { start, end }).pipe(res);
+        return;
+      }
+      // the headers promise the whole body; the connection drops halfway
+      const stop = start + Math.floor((end - start + 1) * cut);
+      if (stop <= start) {
+        res.flushHeaders();
+        setImmediate(() => req.socket.destroy());
+        return;
+      }
+      const part = createReadStream(path, { start, end: stop - 1 });
+      part.on('data', (b) => res.write(b));
+      part.on('end', () => setImmediate(() => req.socket.destroy()));
+    };
+    const fault = faulty ? faults.decide(faulty.spec, req.method ?? 'GET', rel, range) : null;
+    if (fault) faults.apply(fault, req, res, serve);
+    else serve();
   };
 }
 

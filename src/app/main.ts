@@ -1,6 +1,11 @@
 // Page entry: the WebGPU device, the viewer and its layers, the panel, and
-// the first volume (?url=… from this origin, else the built-in one).
-import { describeAdapter } from '../gpu/device.ts';
+// the first volume (?url=… from this origin, else the built-in one). A lost
+// device (a driver reset, or the tests' loseDevice hook) is not the end: a
+// new device, the viewer and layers made again on it (same camera, style and
+// panel), and what was on screen opened again (the file, URL, built-in
+// volume or store) at the same isovalue and view, with a message.
+import { describeAdapter, type GpuContext } from '../gpu/device.ts';
+import { ArcballCamera } from '../render/camera.ts';
 import { BoxLayer } from '../render/box-layer.ts';
 import { SurfaceLayer } from '../render/surface-layer.ts';
 import { Viewer } from '../render/viewer.ts';
@@ -13,7 +18,7 @@ import { VolumeLoader } from './loading/loader.ts';
 import { mountStoreView, storeParameter } from './store/mount.ts';
 import type { StoreView } from './store/store-view.ts';
 import { Messages, showFatal } from './messages.ts';
-import { publishPageState } from './page-state.ts';
+import { type PageState, publishPageState } from './page-state.ts';
 import { Session } from './session.ts';
 import { startGpu } from './start-gpu.ts';
 import { BenchPanel } from './ui/bench-panel.ts';
@@ -50,28 +55,51 @@ async function start(): Promise<void> {
     return show(text, kind, timeoutMs);
   };
 
-  const gpu = await startGpu(stage, messages, 'page.device', () => {
+  const fatal = () => {
     state.status = 'error';
-  });
-  if (!gpu) return;
-  state.adapter = gpu.adapter;
-  setInfoList(byId('gpu-info'), [
-    ['adapter', describeAdapter(gpu.adapter)],
-    ['max buffer', `${(gpu.limits.maxBufferSize / 2 ** 20).toFixed(0)} MiB`],
-    ['max binding', `${(gpu.limits.maxStorageBufferBindingSize / 2 ** 20).toFixed(0)} MiB`],
-    ['timing', gpu.features.timestampQuery ? 'GPU timestamps per stage' : 'queue wall time (no timestamp-query)'],
-  ]);
-
+  };
+  // recoveries run one after the other (a new device may be lost while what was on screen reopens)
+  let recovering = Promise.resolve();
+  const lost = (m: string) => {
+    recovering = recovering.then(() => recover(m));
+  };
+  const first = await startGpu(stage, messages, 'page.device', fatal, lost);
+  if (!first) return;
+  let gpu: GpuContext = first;
+  const canvas = byId<HTMLCanvasElement>('view');
+  const camera = new ArcballCamera();
   let link: ViewLink | undefined;
-  const viewer = new Viewer(gpu.device, byId<HTMLCanvasElement>('view'), { onCameraChange: () => link?.schedule() });
-  // Y up, as in ParaView and vtk.js (and CT scans like the bonsai); the Display section changes it.
-  viewer.upAxis = 'y';
-  link = new ViewLink(viewer.camera);
+  let viewer!: Viewer;
+  let surface!: SurfaceLayer;
+  let box!: BoxLayer;
+  let boxVisible = true;
+  /** The viewer and its layers on `g` (again after a lost device: same camera, up axis, style, box). */
+  const mountGraphics = async (g: GpuContext): Promise<void> => {
+    const old = viewer ? { up: viewer.upAxis, style: surface.style, voxelSize: surface.voxelSize } : null;
+    viewer?.destroy();
+    viewer = new Viewer(g.device, canvas, { camera, onCameraChange: () => link?.schedule() });
+    // Y up, as in ParaView and vtk.js (and CT scans like the bonsai); the Display section changes it.
+    viewer.upAxis = old?.up ?? 'y';
+    [box, surface] = await Promise.all([BoxLayer.create(viewer), SurfaceLayer.create(viewer)]);
+    if (old) {
+      surface.style = old.style;
+      surface.voxelSize = old.voxelSize;
+    }
+    viewer.addLayer(surface);
+    if (boxVisible) viewer.addLayer(box);
+    state.adapter = g.adapter;
+    setInfoList(byId('gpu-info'), [
+      ['adapter', describeAdapter(g.adapter)],
+      ['max buffer', `${(g.limits.maxBufferSize / 2 ** 20).toFixed(0)} MiB`],
+      ['max binding', `${(g.limits.maxStorageBufferBindingSize / 2 ** 20).toFixed(0)} MiB`],
+      ['timing', g.features.timestampQuery ? 'GPU timestamps per stage' : 'queue wall time (no timestamp-query)'],
+    ]);
+  };
+  await mountGraphics(gpu);
+  link = new ViewLink(camera);
   state.framesDrawn = () => viewer.framesDrawn;
-  state.camera = () => viewer.camera.getState();
-  const [box, surface] = await Promise.all([BoxLayer.create(viewer), SurfaceLayer.create(viewer)]);
-  viewer.addLayer(surface);
-  viewer.addLayer(box);
+  state.camera = () => camera.getState();
+  state.loseDevice = () => gpu.device.destroy();
 
   const initialView = ViewLink.initial();
   let pendingIso = initialView.iso;
@@ -95,7 +123,15 @@ async function start(): Promise<void> {
   const budget = new BudgetControl(byId('budget-mb'), byId('budget-bar'), byId('budget-note'), defaultBudgetBytes(gpu.limits), (bytes) =>
     session.current?.iso.setMemoryBudget(bytes),
   );
-  const hud: Hud = new Hud(byId('hud'), viewer, (text) => stats.setFps(text));
+  const frames = {
+    get fps() {
+      return viewer.fps;
+    },
+    get framesDrawn() {
+      return viewer.framesDrawn;
+    },
+  };
+  const hud: Hud = new Hud(byId('hud'), frames, (text) => stats.setFps(text));
   const stats = new StatsPanel(byId('surface-stats'), byId('memory-stats'), byId('stage-times'), () => hud.fpsLabel);
   const bench: BenchPanel = new BenchPanel({
     context: () => {
@@ -129,27 +165,31 @@ async function start(): Promise<void> {
     },
     onError: (m) => messages.show(m),
   });
-  const session = new Session({
-    viewer,
-    surface,
-    box,
-    isoControl,
-    spacing,
-    stats,
-    budget,
-    hud,
-    bench,
-    link,
-    messages,
-    state,
-    volumeInfo: byId('volume-info'),
-  });
+  const makeSession = () =>
+    new Session({
+      viewer,
+      surface,
+      box,
+      isoControl,
+      spacing,
+      stats,
+      budget,
+      hud,
+      bench,
+      link: link!,
+      messages,
+      state,
+      volumeInfo: byId('volume-info'),
+    });
+  let session = makeSession();
   session.pendingCamera = initialView.camera;
   session.pendingSpacing = initialView.spacing;
 
   let nextUrl: string | undefined;
+  /** Opens what is on screen again (set whenever a volume or a store's first level is installed). */
+  let reopen: (() => Promise<void>) | undefined;
   const loader = new VolumeLoader({
-    gpu,
+    gpu: () => gpu,
     progress: new ProgressView(byId('progress')),
     form: new VolumeForm(byId<HTMLDialogElement>('volume-form')),
     memoryBudget: () => budget.bytes,
@@ -166,6 +206,7 @@ async function start(): Promise<void> {
       link?.setLevel(undefined); // a store's view sets it again after installing its level
       volumeUrl = nextUrl;
       setUrlParameter(volumeUrl);
+      reopen = () => loader.reload();
     },
     onError: (m) => messages.show(m),
     onNotice: (m) => messages.show(m, 'info', 15000),
@@ -214,6 +255,7 @@ async function start(): Promise<void> {
     },
     stepIso: (steps) => isoControl.step(steps),
     setBoxVisible: (on) => {
+      boxVisible = on;
       if (on) viewer.addLayer(box);
       else viewer.removeLayer(box);
     },
@@ -235,19 +277,73 @@ async function start(): Promise<void> {
     },
   });
 
+  /**
+   * The device was lost: a new one, the graphics made again on it, and what
+   * was on screen opened again at the same isovalue and view. Losses in
+   * quick succession (a device that keeps failing) end in the fatal message.
+   */
+  const losses: number[] = [];
+  async function recover(reason: string): Promise<void> {
+    const now = performance.now();
+    losses.push(now);
+    while (losses.length > 0 && now - losses[0] > 60_000) losses.shift();
+    state.deviceLosses = (state.deviceLosses ?? 0) + 1;
+    if (losses.length > 3) {
+      fatal();
+      showFatal(stage, `${reason} It was lost ${losses.length} times within a minute; reload the page to try again.`);
+      return;
+    }
+    state.status = 'loading';
+    document.body.dataset.status = 'recovering';
+    messages.show(`${reason.replace(/ reload the page to continue\.?$/i, '')} A new GPU device is being started; what was on screen opens again.`, 'info', 15000);
+    // what to open again, taken before the old session lets it go
+    const store = storeView?.reopener() ?? null;
+    const again = store ? store.open : reopen;
+    const iso = store ? store.iso : session.drawnIsovalue;
+    const view = camera.getState();
+    const userSpacing = session.current ? spacing.value : undefined;
+    loader.cancel();
+    storeView?.close();
+    session.destroy();
+    const next = await startGpu(stage, messages, 'page.device', fatal, lost);
+    if (!next) return;
+    gpu = next;
+    await mountGraphics(gpu);
+    session = makeSession();
+    session.pendingCamera = view;
+    session.pendingSpacing = userSpacing;
+    pendingIso = iso;
+    if (again) await again();
+    if (!session.current) {
+      nextUrl = undefined;
+      await loader.loadDefault();
+    }
+    if ((state.status as PageState['status']) !== 'error') {
+      state.status = 'ready';
+      document.body.dataset.status = 'ready';
+    }
+  }
+
   // The first volume: ?store= or ?url= when given (falling back to the built-in one if it fails).
   const url = urlParameter();
   const storeUrl = storeParameter();
   storeView = mountStoreView({
-    gpu,
+    gpu: () => gpu,
     budgetBytes: () => budget.bytes,
     onError: (m) => messages.show(m),
     onNotice: (m) => messages.show(m, 'info', 8000),
     // each level the store's controller shows becomes the volume on screen; a finer or coarser one keeps the camera
-    install: (v, level, first) => {
-      if (!first) session.pendingCamera = viewer.camera.getState();
+    install: (v, level, firstLevel) => {
+      if (!firstLevel) session.pendingCamera = camera.getState();
       session.install(v);
       link?.setLevel(level);
+      if (firstLevel) {
+        const view = storeView!;
+        reopen = async () => {
+          const again = view.reopener();
+          if (again) await again.open();
+        };
+      }
     },
     linkIso: ([lo, hi]) => {
       const wanted = pendingIso;

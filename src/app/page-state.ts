@@ -37,6 +37,10 @@ export interface PageState {
   messages: string[];
   bench?: BenchResult;
   benchRunning: boolean;
+  /** Devices lost so far (each followed by a new device and the volume opened again). */
+  deviceLosses?: number;
+  /** Destroys the page's device, as a driver reset would lose it (tests of the recovery). */
+  loseDevice?: () => void;
 }
 
 declare global {

@@ -27,11 +27,23 @@ export interface CliCommand {
   run(ctx: CliContext, args: ParsedArgs): Promise<unknown>;
 }
 
-/** A user mistake: printed without a stack trace, exit code 2. */
+/** A wrong command line (an unknown option, a missing or malformed argument): printed with the usage, exit code 2. */
 export class UsageError extends Error {
   constructor(message: string) {
     super(message);
     this.name = 'UsageError';
+  }
+}
+
+/**
+ * A failure of the data or the network: a file that cannot be read or is not
+ * what it claims, a store that cannot be reached or is damaged. Printed
+ * without the usage (the command line was right), exit code 1.
+ */
+export class InputError extends Error {
+  constructor(message: string, options?: { cause?: unknown }) {
+    super(message, options);
+    this.name = 'InputError';
   }
 }
 

@@ -2,13 +2,14 @@
 // raw, NRRD, TIFF stack, or `default`) opened as the page opens it
 // (src/volume/open-volume.ts) with the isosurface pipeline over its stream,
 // or a Zarr store (URL or folder) streamed at --level L (src/store/): each
-// isovalue fetches only the chunks its surface needs. User mistakes become
-// UsageErrors (exit status 2); everything made is freed on failure.
+// isovalue fetches only the chunks its surface needs. A file or store that
+// cannot be read is an InputError (exit status 1), a wrong option a
+// UsageError (2); everything made is freed on failure.
 import { readFileSync } from 'node:fs';
 import { basename } from 'node:path';
 import type { GpuContext } from '../gpu/device.ts';
 import { Isosurface } from '../isosurface/isosurface.ts';
-import { isStoreInput, openStoreInput, type StoreRecord } from '../store/cli-input.ts';
+import { isStoreInput, NoSuchLevelError, openStoreInput, type StoreRecord } from '../store/cli-input.ts';
 import { StoreError } from '../store/zarr/errors.ts';
 import {
   checkValueRange,
@@ -19,7 +20,7 @@ import {
   VolumeFileError,
 } from '../volume/open-volume.ts';
 import { ZfpFormatError } from '../zfp/format.ts';
-import { UsageError } from './command.ts';
+import { InputError, UsageError } from './command.ts';
 
 /** What `extract` and `bench` use of a surface: an Isosurface, or a store level (PinnedLevelSurface). */
 export type InputSurface = Pick<Isosurface, 'info' | 'compute' | 'readMesh' | 'resetCache' | 'memoryBudget' | 'destroy'>;
@@ -34,24 +35,29 @@ export interface OpenedInput {
   destroy(): void;
 }
 
-/** --level is for stores; `budget`: the pipeline's memory budget (for a store: pools, cache and vertices together). */
+/**
+ * --level and --deadline are for stores; `budget`: the pipeline's memory
+ * budget (for a store: everything it holds on the GPU).
+ */
 export async function openInputSurface(
   ctx: { log(m: string): void },
   gpu: GpuContext,
   path: string,
-  opts: { rate?: number; level?: number; budget?: number },
+  opts: { rate?: number; level?: number; budget?: number; deadlineMs?: number },
 ): Promise<OpenedInput> {
   if (isStoreInput(path)) {
     try {
-      const s = await openStoreInput(gpu, path, opts.level, opts.budget, (m) => ctx.log(`error: ${m}`));
+      const s = await openStoreInput(gpu, path, opts);
       for (const note of s.notes) ctx.log(`note: ${note}`);
       return { iso: s.surface, how: s.how, rate: s.rate, notes: s.notes, store: s.record, destroy: () => s.surface.destroy() };
     } catch (e) {
-      if (e instanceof StoreError || e instanceof ZfpFormatError) throw new UsageError(e.message);
+      if (e instanceof NoSuchLevelError) throw new UsageError(e.message);
+      if (e instanceof StoreError || e instanceof ZfpFormatError) throw new InputError(e.message, { cause: e });
       throw e;
     }
   }
   if (opts.level !== undefined) throw new UsageError('--level is for a Zarr store (a URL or a folder with zarr.json)');
+  if (opts.deadlineMs !== undefined) throw new UsageError('--deadline is for a Zarr store (a URL or a folder with zarr.json)');
   const { rate } = opts;
   if (rate !== undefined && !(rate > 0)) throw new UsageError('--rate must be positive');
   // `default`: the page's built-in volume, same field, same rate, same stream.
@@ -60,7 +66,7 @@ export async function openInputSurface(
     try {
       bytes = new Uint8Array(readFileSync(path));
     } catch (e) {
-      throw new UsageError(`cannot read ${path}: ${(e as Error).message}`);
+      throw new InputError(`cannot read ${path}: ${(e as Error).message}`);
     }
   }
   let v;
@@ -69,7 +75,7 @@ export async function openInputSurface(
       ? await openVolumeBytes(gpu.device, bytes, basename(path), { rate, reader: 'command' })
       : await openDefaultVolume(gpu.device, rate === undefined ? {} : { rate });
   } catch (e) {
-    if (e instanceof VolumeFileError || e instanceof ZfpFormatError) throw new UsageError(e.message);
+    if (e instanceof VolumeFileError || e instanceof ZfpFormatError) throw new InputError(e.message, { cause: e });
     throw e;
   }
   for (const note of v.notes) ctx.log(`note: ${note}`);
@@ -80,7 +86,7 @@ export async function openInputSurface(
   } catch (e) {
     iso?.destroy();
     v.stream.destroy();
-    if (e instanceof VolumeFileError) throw new UsageError(e.message);
+    if (e instanceof VolumeFileError) throw new InputError(e.message, { cause: e });
     throw e;
   }
   const stream = v.stream;

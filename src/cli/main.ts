@@ -4,7 +4,7 @@ import { writeFileSync } from 'node:fs';
 import { parseArgs } from 'node:util';
 import { describeAdapter, WebGpuUnavailableError, type GpuContext } from '../gpu/device.ts';
 import { requestNodeGpu } from '../gpu/node-gpu.ts';
-import { CommandFailed, UsageError, type CliCommand, type CliContext, type ParsedArgs } from './command.ts';
+import { CommandFailed, InputError, UsageError, type CliCommand, type CliContext, type ParsedArgs } from './command.ts';
 import { commands } from './commands/index.ts';
 
 function usage(): string {
@@ -87,7 +87,7 @@ async function main(argv: string[]): Promise<number> {
       console.error(`error: ${e.message}\nusage: npm run cli -- ${command.usage}`);
       return 2;
     }
-    if (e instanceof WebGpuUnavailableError) {
+    if (e instanceof InputError || e instanceof WebGpuUnavailableError) {
       console.error(`error: ${e.message}`);
       return 1;
     }

@@ -11,6 +11,7 @@
 // recording. Concurrent requests share one promise; a failed compilation is
 // forgotten, so a later request tries again. A shared pipeline keeps the label
 // of its first request.
+import { baseDevice } from './memory-meter.ts';
 import { composeWgsl, createShaderModule, type WgslPart } from './wgsl.ts';
 
 export interface ComputePipelineOptions {
@@ -52,10 +53,11 @@ class DeviceCache {
 const caches = new WeakMap<GPUDevice, DeviceCache>();
 
 function cacheOf(device: GPUDevice): DeviceCache {
-  let c = caches.get(device);
+  const base = baseDevice(device); // a metered view shares its device's cache
+  let c = caches.get(base);
   if (!c) {
     c = new DeviceCache();
-    caches.set(device, c);
+    caches.set(base, c);
   }
   return c;
 }

@@ -403,6 +403,11 @@ export class Isosurface {
     return this.budget;
   }
 
+  /** Bytes the cache and vertex buffers hold now (what the budget caps). */
+  get budgetedBytes(): number {
+    return this.pipeline.cacheBytes + this.pipeline.vertexBytes;
+  }
+
   // ---- readback (CLI, export): these wait for the GPU; the tests' own readbacks are in tests/helpers
 
   /** The packed (position, block id) pairs of the drawn surface, shard after shard. */

@@ -8,6 +8,7 @@
 // needs only COPY_SRC usage.
 
 import type { GpuCount } from '../gpu/buffer-ref.ts';
+import { baseDevice } from '../gpu/memory-meter.ts';
 
 /** A count on the GPU, or a host number (written to a small ring of slots). */
 export type CountLike = GpuCount | number;
@@ -54,10 +55,12 @@ export function toGpuCount(device: GPUDevice, count: CountLike): GpuCount {
     return count;
   }
   if (!Number.isInteger(count) || count < 0 || count > 0xffffffff) throw new RangeError(`count ${count} is not a u32`);
-  let ring = rings.get(device);
+  // one ring per device, shared by its metered views (it outlives any of them)
+  const base = baseDevice(device);
+  let ring = rings.get(base);
   if (!ring) {
-    ring = new HostCountRing(device);
-    rings.set(device, ring);
+    ring = new HostCountRing(base);
+    rings.set(base, ring);
   }
   return ring.slot(count);
 }

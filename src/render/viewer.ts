@@ -62,10 +62,12 @@ export interface ViewerOptions {
   clearColor?: GPUColor;
   /** Called after every camera change (e.g. to store the view in the URL). */
   onCameraChange?: () => void;
+  /** The camera to drive (default: a new one); a viewer made again on a new device keeps the old one's. */
+  camera?: ArcballCamera;
 }
 
 export class Viewer {
-  readonly camera = new ArcballCamera();
+  readonly camera: ArcballCamera;
   readonly controls: CameraControls;
   readonly format: GPUTextureFormat;
   readonly frameBindGroupLayout: GPUBindGroupLayout;
@@ -101,6 +103,7 @@ export class Viewer {
     readonly canvas: HTMLCanvasElement,
     options: ViewerOptions = {},
   ) {
+    this.camera = options.camera ?? new ArcballCamera();
     const context = canvas.getContext('webgpu');
     if (!context) throw new Error('Could not get a WebGPU context for the canvas.');
     this.context = context;

@@ -7,13 +7,19 @@ import { join } from 'node:path';
 import type { GpuContext } from '../gpu/device.ts';
 import { defaultMemoryBudget } from '../isosurface/budget.ts';
 import { ChunkFetcher } from './fetch/chunk-fetcher.ts';
-import { chunkedGpu } from './gpu-port.ts';
+import { chunkedGpu, createChunkStream } from './gpu-port.ts';
 import { PinnedLevelSurface } from './pinned-level.ts';
-import { StreamController } from './stream-controller.ts';
-import { StoreError } from './zarr/errors.ts';
 import { isStoreUrl, storeForLocation } from './zarr/node-store.ts';
 import { openZfpStore } from './zarr/open-store.ts';
 import { MeteredStore } from './zarr/stores.ts';
+
+/** --level names a level the store does not have (a wrong command line, not a data failure). */
+export class NoSuchLevelError extends Error {
+  constructor(message: string) {
+    super(message);
+    this.name = 'NoSuchLevelError';
+  }
+}
 
 /** A URL, or a folder with a zarr.json at its root. */
 export function isStoreInput(input: string): boolean {
@@ -37,10 +43,20 @@ export interface StoreRecord {
   requests: number;
   /** Every chunk of every level (what a full download would be). */
   storeChunkBytes: number;
-  /** GPU memory budget of the stream: pools, caches and vertices. */
+  /** GPU memory budget of the stream: everything it holds on the GPU. */
   budgetBytes: number;
-  /** GPU bytes accounted at the end (pools + the surface's buffers). */
+  /** GPU bytes held now, counted where they are made (pools, the surface's per-level buffers, cache, vertices, scratch). */
   gpuBytes: number;
+  /** Of gpuBytes: the pool of compressed chunks, and the surface's cache and vertex buffers. */
+  gpuPoolBytes: number;
+  gpuCacheBytes: number;
+  gpuVertexBytes: number;
+  /** The most GPU bytes held at once so far. */
+  gpuPeakBytes: number;
+  /** Requests tried again after a transient failure, requests that failed for good, and what the failed tries saw. */
+  retries: number;
+  failedRequests: number;
+  faults: Record<string, number>;
 }
 
 export interface StoreInput {
@@ -53,19 +69,26 @@ export interface StoreInput {
   record(): StoreRecord;
 }
 
-/** `budget`: the GPU memory of the whole stream (pools, cache, vertices); by default the pipeline's default budget. */
+export interface StoreInputOptions {
+  /** The level to stream (default 0). */
+  level?: number;
+  /** The GPU memory of the whole stream (everything it holds); by default the pipeline's default budget. */
+  budget?: number;
+  /** How long one request is tried (default 30 s; retrying-store.ts). */
+  deadlineMs?: number;
+}
+
 export async function openStoreInput(
   gpu: GpuContext,
   input: string,
-  level: number | undefined,
-  budget: number | undefined,
-  onError: (message: string) => void,
+  opts: StoreInputOptions,
 ): Promise<StoreInput> {
   const metered = new MeteredStore(storeForLocation(input));
-  const store = await openZfpStore(metered, input);
+  const store = await openZfpStore(metered, input, opts.deadlineMs === undefined ? {} : { retry: { deadlineMs: opts.deadlineMs } });
+  const { level } = opts;
   const L = level ?? 0;
   if (!Number.isInteger(L) || L < 0 || L >= store.levels.length) {
-    throw new StoreError('layout', `${input}: --level ${level} does not exist (levels 0 to ${store.levels.length - 1})`);
+    throw new NoSuchLevelError(`${input}: --level ${level} does not exist (levels 0 to ${store.levels.length - 1})`);
   }
   const lv = store.levels[L];
   const fetcher = new ChunkFetcher(store, { maxInFlight: 8 });
@@ -76,9 +99,9 @@ export async function openStoreInput(
     fetched.add(c);
     chunkBytes += bytes.byteLength;
   });
-  fetcher.onError((_l, _c, e) => onError(e.message));
-  const budgetBytes = budget ?? defaultMemoryBudget(gpu.device.limits);
-  const controller = await StreamController.create(store, fetcher, chunkedGpu(gpu), budgetBytes);
+  const budgetBytes = opts.budget ?? defaultMemoryBudget(gpu.device.limits);
+  const port = chunkedGpu(gpu);
+  const controller = await createChunkStream(store, fetcher, port, budgetBytes);
   const surface = new PinnedLevelSurface(controller, L);
   const record = (): StoreRecord => ({
     store: input,
@@ -96,6 +119,13 @@ export async function openStoreInput(
     storeChunkBytes: store.levels.reduce((a, l) => a + l.storedBytes, 0),
     budgetBytes,
     gpuBytes: controller.gpuBytes.total,
+    gpuPoolBytes: controller.gpuBytes.pools,
+    gpuCacheBytes: controller.gpuBytes.cache,
+    gpuVertexBytes: controller.gpuBytes.vertices,
+    gpuPeakBytes: port.meter.peak,
+    retries: store.retries.retries,
+    failedRequests: store.retries.failed,
+    faults: { ...store.retries.faults },
   });
   const how =
     `Zarr store, level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 chunks, rate ${lv.layout.rate}), ` +

@@ -1,15 +1,43 @@
 // The stream controller's GPU side: one ChunkedVolume (pool of compressed
-// chunks + page table) per level and the one isosurface pipeline over it.
+// chunks + page table) per level and the one isosurface pipeline over it,
+// all made on a metered view of the device, so what the stream holds on the
+// GPU is counted where it is made (src/gpu/memory-meter.ts).
 import type { GpuContext } from '../gpu/device.ts';
+import { GpuMemoryMeter, meteredGpu } from '../gpu/memory-meter.ts';
 import { Isosurface } from '../isosurface/isosurface.ts';
 import type { IsosurfaceStats } from '../isosurface/types.ts';
 import { ChunkedVolume } from '../zfp/chunked-volume.ts';
-import type { StreamGpu } from './stream-controller.ts';
+import { maxShardBytesFor } from '../zfp/gpu-stream.ts';
+import type { ChunkFetcher } from './fetch/chunk-fetcher.ts';
+import { StreamController, type StreamGpu } from './stream-controller.ts';
+import type { ZfpStore } from './zarr/open-store.ts';
 
-export function chunkedGpu(gpu: GpuContext): StreamGpu<ChunkedVolume, IsosurfaceStats, Isosurface> {
+export interface ChunkedStreamGpu extends StreamGpu<ChunkedVolume, IsosurfaceStats, Isosurface> {
+  readonly meter: GpuMemoryMeter;
+}
+
+export function chunkedGpu(gpu: GpuContext, meter = new GpuMemoryMeter()): ChunkedStreamGpu {
+  const view = meteredGpu(gpu, meter).gpu;
+  const maxShardBytes = maxShardBytesFor(gpu.device);
   return {
+    meter,
+    get allocatedBytes() {
+      return meter.bytes;
+    },
+    poolBytesFor: (layout, poolChunks) => ChunkedVolume.bytesFor(layout, poolChunks, maxShardBytes),
     createVolume: (layout, poolChunks) =>
-      ChunkedVolume.create(gpu, layout, { poolChunks: Math.min(poolChunks, ChunkedVolume.maxPoolChunks(gpu, layout)) }),
-    createSurface: (volume, memoryBudgetBytes) => Isosurface.create(gpu, volume, { memoryBudgetBytes }),
+      ChunkedVolume.create(view, layout, { poolChunks: Math.min(poolChunks, ChunkedVolume.maxPoolChunks(view, layout)) }),
+    createSurface: (volume, memoryBudgetBytes) => Isosurface.create(view, volume, { memoryBudgetBytes }),
   };
+}
+
+/** The controller over real GPU pools and surfaces, its port's meter counting what it holds. */
+export function createChunkStream(
+  store: ZfpStore,
+  fetcher: ChunkFetcher,
+  gpu: GpuContext | ChunkedStreamGpu,
+  budgetBytes: number,
+): Promise<StreamController<ChunkedVolume, IsosurfaceStats, Isosurface>> {
+  const port = 'meter' in gpu ? gpu : chunkedGpu(gpu);
+  return StreamController.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budgetBytes);
 }

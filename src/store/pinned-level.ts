@@ -12,7 +12,11 @@ import type { StreamController } from './stream-controller.ts';
 
 /** The level could not show a surface at this isovalue (over the budget, a failed chunk): the controller's reason. */
 export class LevelStoppedError extends Error {
-  constructor(message: string) {
+  constructor(
+    message: string,
+    /** True when the reason is the memory budget (not a failed chunk or a GPU error). */
+    readonly overBudget = false,
+  ) {
     super(message);
     this.name = 'LevelStoppedError';
   }
@@ -23,6 +27,7 @@ export type ChunkStreamController = StreamController<ChunkedVolume, IsosurfaceSt
 export class PinnedLevelSurface {
   readonly info: VolumeInfo;
   #reason: string | null = null;
+  #overBudget = false;
   #errors: string[] = [];
 
   constructor(
@@ -40,7 +45,10 @@ export class PinnedLevelSurface {
       valueRange: controller.valueRange ?? [0, 0],
     };
     controller.onProgress((p) => {
-      if (p.phase === 'stopped') this.#reason = p.reason ?? `level ${level} stopped`;
+      if (p.phase === 'stopped') {
+        this.#reason = p.reason ?? `level ${level} stopped`;
+        this.#overBudget = p.cause === 'budget';
+      }
     });
     controller.onError((e) => this.#errors.push(e.message));
   }
@@ -60,7 +68,7 @@ export class PinnedLevelSurface {
     await this.controller.setIsovalue(iso);
     const shown = this.controller.shown;
     if (!shown || shown.level !== this.level || shown.iso !== iso) {
-      throw new LevelStoppedError(this.#reason ?? `level ${this.level}: no surface at isovalue ${iso}`);
+      throw new LevelStoppedError(this.#reason ?? `level ${this.level}: no surface at isovalue ${iso}`, this.#overBudget);
     }
     // a store without range arrays: its value range is known once a level was resident whole
     if (this.info.valueRange[0] === this.info.valueRange[1]) this.info.valueRange = this.controller.valueRange ?? this.info.valueRange;

@@ -5,9 +5,20 @@
 // resident that level's Isosurface computes the surface, which replaces the
 // coarser one. A new isovalue starts over from the finest level whose needed
 // chunks are all resident (so scrubbing stays at full detail where it can),
-// and aborts requests no longer needed (newest wins). Everything on the GPU
-// stays within the budget: pools get half of it (coarsest first), the two
-// live surfaces (shown and next) a quarter each for cache and vertices.
+// and aborts requests no longer needed (newest wins).
+//
+// One budget, spent where needed: everything the stream holds on the GPU
+// (pools, surfaces with their per-level buffers, cache, vertices, scratch)
+// is counted where it is made (the port's allocatedBytes) and stays within
+// the budget. A level's pool holds the chunks its surface needs (it grows
+// and shrinks with the isovalue) and its surface gets the rest; when room
+// runs short, pools of levels that are not on screen go first (their chunks
+// stay in the fetcher's CPU cache).
+//
+// A chunk that fails (after the store's own retries) leaves the coarser
+// surface on screen: the refinement stops with the reason, and once the
+// chunk's cool-down has passed the onRetry listeners are told (the page asks
+// for the same isovalue again; the CLI reports the failure instead).
 import type { ChunkFetcher } from './fetch/chunk-fetcher.ts';
 import { chunksNeeded, nearestFirst, neighbourhoodRanges } from './plan.ts';
 import type { ChunkIndex, ChunkLevelLayout } from './types.ts';
@@ -17,11 +28,14 @@ import type { ZfpStore } from './zarr/open-store.ts';
 /** What the controller needs of a ChunkedVolume (src/zfp/chunked-volume.ts). */
 export interface LevelVolume {
   readonly poolChunks: number;
+  /** GPU bytes the pool holds (slots, page table, parameters). */
   readonly poolBytes: number;
   readonly residentCount: number;
   has(chunk: ChunkIndex): boolean;
   put(chunk: ChunkIndex, bytes: Uint8Array): void;
   evict(chunk: ChunkIndex): void;
+  /** Sets the capacity (at least the resident count), resident chunks kept. */
+  resize(poolChunks: number): void;
   destroy(): void;
 }
 /** What it needs of the surface statistics. */
@@ -29,14 +43,16 @@ export interface LevelStats {
   triangles: number;
   cacheBytes: number;
   vertexBytes: number;
-  /** Per-volume buffers outside the Isosurface's budget (block and group ranges, maps): counted too. */
+  /** Per-volume buffers outside the surface's cap (the pool, ranges, masks, maps). */
   fixedBytes?: number;
 }
 /** What it needs of an Isosurface over a LevelVolume. */
 export interface LevelSurface<S extends LevelStats = LevelStats> {
   compute(iso: number): Promise<S>;
   /** The cap for cache and vertex buffers (Isosurface.setMemoryBudget). */
-  setMemoryBudget?(bytes: number): void;
+  setMemoryBudget(bytes: number): void;
+  /** What the cache and vertex buffers hold now (what the cap limits). */
+  readonly budgetedBytes: number;
   /** [min, max] per block of the level (raster block order): the ranges of a store without range arrays. */
   readBlockRanges?(): Promise<Float32Array>;
   destroy(): void;
@@ -49,6 +65,10 @@ export interface StreamGpu<
 > {
   createVolume(layout: ChunkLevelLayout, poolChunks: number): V;
   createSurface(volume: V, memoryBudgetBytes: number): Promise<F>;
+  /** GPU bytes held now by everything made here (pools, surfaces and all their buffers). */
+  readonly allocatedBytes: number;
+  /** GPU bytes a pool of `poolChunks` chunks of this layout holds. */
+  poolBytesFor(layout: ChunkLevelLayout, poolChunks: number): number;
 }
 
 export interface StreamProgress {
@@ -61,6 +81,10 @@ export interface StreamProgress {
   phase: 'fetching' | 'computing' | 'shown' | 'stopped';
   /** Why refinement stopped above level 0 (phase 'stopped'). */
   reason?: string;
+  /** Why it stopped: the memory budget, a chunk that could not be fetched or put, or the GPU. */
+  cause?: 'budget' | 'chunk' | 'gpu';
+  /** A stop for a failed chunk: when the refinement will be tried again (ms from now). */
+  retryInMs?: number;
 }
 
 export interface ShownSurface<V, S extends LevelStats, F extends LevelSurface<S> = LevelSurface<S>> {
@@ -69,6 +93,16 @@ export interface ShownSurface<V, S extends LevelStats, F extends LevelSurface<S>
   volume: V;
   surface: F;
   stats: S;
+}
+
+/** GPU bytes of the stream now: pools, surfaces (everything else: per-level buffers, cache, vertices, scratch), and both. */
+export interface StreamGpuBytes {
+  pools: number;
+  surfaces: number;
+  total: number;
+  /** Of the surfaces: cache and vertex buffers (the part the budget's remainder caps). */
+  cache: number;
+  vertices: number;
 }
 
 interface Waiting {
@@ -105,7 +139,13 @@ export class StreamController<
   #progress = new Set<(p: StreamProgress) => void>();
   #shownListeners = new Set<(s: ShownSurface<V, S, F>) => void>();
   #errors = new Set<(e: Error) => void>();
+  #retryListeners = new Set<(iso: number) => void>();
+  #retryTimer: ReturnType<typeof setTimeout> | null = null;
+  /** The isovalue of the newest setIsovalue. */
+  #iso = NaN;
   #destroyed = false;
+  /** The whole stream's GPU memory: pools, surfaces, everything (applies from the next step on when changed). */
+  budgetBytes: number;
   /** Where "nearest first" measures from, in level-0 voxels (default: the volume's centre). */
   focus: [number, number, number];
   /**
@@ -119,9 +159,10 @@ export class StreamController<
     readonly store: ZfpStore,
     readonly fetcher: ChunkFetcher,
     readonly gpu: StreamGpu<V, S, F>,
-    readonly budgetBytes: number,
+    budgetBytes: number,
     ranges: (Float32Array | null)[],
   ) {
+    this.budgetBytes = budgetBytes;
     this.levels = store.levels.map((l, i) => ({
       index: i,
       layout: l.layout,
@@ -134,9 +175,14 @@ export class StreamController<
     const d = store.levels[0].layout.dims;
     this.focus = [d[0] / 2, d[1] / 2, d[2] / 2];
     fetcher.onChunk((level, chunk, bytes) => this.#arrived(level, chunk, bytes));
-    fetcher.onError((level, chunk, e) => {
-      for (const l of this.#errors) l(e);
-      if (this.#waiting?.level === level && this.#waiting.missing.has(chunk)) this.#stop(level, e.message);
+    fetcher.onError((level, chunk, e, repeated) => {
+      if (!repeated) for (const l of this.#errors) l(e);
+      const w = this.#waiting;
+      if (w?.level !== level || !w.missing.has(chunk)) return;
+      const at = fetcher.retryAt(level, chunk);
+      const inMs = at === undefined ? undefined : Math.max(0, at - performance.now());
+      this.#stop(level, e.message, 'chunk', inMs);
+      if (inMs !== undefined) this.#scheduleRetry(w.iso, inMs);
     });
   }
 
@@ -159,9 +205,15 @@ export class StreamController<
     this.#shownListeners.add(l);
     return () => this.#shownListeners.delete(l);
   }
+  /** Chunk failures (each once, not its repeats during the cool-down) and GPU errors. */
   onError(l: (e: Error) => void): () => void {
     this.#errors.add(l);
     return () => this.#errors.delete(l);
+  }
+  /** A refinement stopped by a failed chunk may be tried again now, at this isovalue (still the newest). */
+  onRetry(l: (iso: number) => void): () => void {
+    this.#retryListeners.add(l);
+    return () => this.#retryListeners.delete(l);
   }
 
   get shown(): ShownSurface<V, S, F> | null {
@@ -189,22 +241,28 @@ export class StreamController<
     return null;
   }
 
-  /** GPU bytes accounted: every pool plus the live surfaces' cache and vertex buffers. */
-  get gpuBytes(): { pools: number; surfaces: number; total: number } {
+  /** GPU bytes held now (counted where they are made), split into pools and surfaces. */
+  get gpuBytes(): StreamGpuBytes {
     let pools = 0;
     for (const l of this.levels) pools += l.volume?.poolBytes ?? 0;
-    let surfaces = 0;
+    let cache = 0;
+    let vertices = 0;
     for (const [level] of this.#surfaces) {
-      const s = this.#lastStats.get(level);
-      // an Isosurface's fixed bytes include its source's pool, counted above
-      if (s) surfaces += s.cacheBytes + s.vertexBytes + Math.max(0, (s.fixedBytes ?? 0) - (this.levels[level].volume?.poolBytes ?? 0));
+      const st = this.#lastStats.get(level);
+      if (st) {
+        cache += st.cacheBytes;
+        vertices += st.vertexBytes;
+      }
     }
-    return { pools, surfaces, total: pools + surfaces };
+    const total = this.gpu.allocatedBytes;
+    return { pools, surfaces: total - pools, total, cache, vertices };
   }
 
   /** Newest wins: resolves when this isovalue's refinement ends (finest level reached, stopped, or superseded). */
   async setIsovalue(iso: number): Promise<void> {
     const gen = ++this.#gen;
+    this.#iso = iso;
+    this.#clearRetry();
     this.#waiting?.done();
     this.#waiting = null;
     // abort requests this isovalue does not need (newest wins); keep the rest
@@ -235,21 +293,93 @@ export class StreamController<
     }
   }
 
-  async #refine(L: number, iso: number, gen: number): Promise<boolean> {
-    const lv = this.levels[L];
-    const pool = this.#ensureVolume(lv);
-    if (!pool)
-      return this.#stop(
-        L,
-        `level ${L} does not fit: its pool of compressed chunks (${lv.layout.chunkBytes} bytes each) gets no room in the budget of ${mib(this.budgetBytes)} MiB`,
-      );
-    let needed = lv.nb ? chunksNeeded(lv.nb, iso) : allChunks(lv.layout);
-    if (needed.length > pool.poolChunks) {
-      return this.#stop(
-        L,
-        `level ${L} needs ${needed.length} chunks (${mib(needed.length * lv.layout.chunkBytes)} MiB) at iso ${iso}${lv.nb ? '' : ' (no range arrays: every chunk)'}, its pool holds ${pool.poolChunks} within the budget of ${mib(this.budgetBytes)} MiB`,
+  /** Bytes free within the budget now (a little is kept for short-lived buffers: statistics, staging). */
+  #free(): number {
+    return this.budgetBytes - RESERVE_BYTES - this.gpu.allocatedBytes;
+  }
+
+  /** Lets pools (and surfaces) of levels outside `keep` go, finest first, until `bytes` are free; whether they are. */
+  #release(bytes: number, keep: ReadonlySet<number>): boolean {
+    for (let L = 0; L < this.levels.length && this.#free() < bytes; L++) {
+      if (keep.has(L)) continue;
+      const lv = this.levels[L];
+      const surface = this.#surfaces.get(L);
+      if (surface) {
+        surface.destroy();
+        this.#surfaces.delete(L);
+        this.#lastStats.delete(L);
+      }
+      if (lv.volume) {
+        lv.volume.destroy();
+        lv.volume = null;
+        lv.lru.clear();
+      }
+    }
+    return this.#free() >= bytes;
+  }
+
+  /** Levels whose GPU state must stay: the one on screen and the one being refined. */
+  #keep(L: number): Set<number> {
+    const keep = new Set([L]);
+    if (this.#shown) keep.add(this.#shown.level);
+    return keep;
+  }
+
+  /** Held by the surface on screen when it is another level's (for messages). */
+  #shownNote(L: number): string {
+    const s = this.#shown;
+    if (!s || s.level === L) return '';
+    return ` besides level ${s.level} on screen`;
+  }
+
+  /**
+   * Gives level L a pool of at least `n` chunks (grown, or made), and room
+   * for its surface when it has none yet; a pool far larger than `n` gives
+   * back what it does not need (chunks not in `wanted` evicted first).
+   * Returns why it cannot, or null.
+   */
+  #fitPool(lv: Level<V>, n: number, wanted: ReadonlySet<ChunkIndex>, iso: number): string | null {
+    const L = lv.index;
+    const v = lv.volume;
+    const have = v?.poolChunks ?? 0;
+    if (v && have > 2 * n + 8) {
+      const target = Math.max(n, 1);
+      for (const c of [...lv.lru.keys()]) {
+        if (v.residentCount <= target) break;
+        if (wanted.has(c)) continue;
+        v.evict(c);
+        lv.lru.delete(c);
+      }
+      v.resize(Math.max(target, v.residentCount));
+    }
+    if (v && n <= v.poolChunks) return null;
+    const extra = this.gpu.poolBytesFor(lv.layout, n) - (v?.poolBytes ?? 0);
+    const surfaceNeeds = this.#surfaces.has(L) ? 0 : estimateFixedBytes(lv.layout) + MIN_SURFACE_BYTES;
+    if (!this.#release(extra + surfaceNeeds, this.#keep(L))) {
+      const all = lv.nb ? '' : ' (no range arrays: every chunk)';
+      return (
+        `level ${L} needs ${n} chunks (${mib(n * lv.layout.chunkBytes)} MiB) at iso ${iso}${all}` +
+        (surfaceNeeds ? ` and about ${mib(surfaceNeeds)} MiB for its surface's per-level buffers and a minimal cache` : '') +
+        `; the budget of ${mib(this.budgetBytes)} MiB has ${mib(Math.max(0, this.#free()))} MiB free${this.#shownNote(L)}`
       );
     }
+    if (v) v.resize(n);
+    else lv.volume = this.gpu.createVolume(lv.layout, n);
+    return null;
+  }
+
+  /** The cap of level L's cache and vertex buffers: the budget less everything else held now. */
+  #capFor(L: number, surface: F): number {
+    return this.budgetBytes - RESERVE_BYTES - (this.gpu.allocatedBytes - surface.budgetedBytes);
+  }
+
+  async #refine(L: number, iso: number, gen: number): Promise<boolean> {
+    const lv = this.levels[L];
+    let needed = lv.nb ? chunksNeeded(lv.nb, iso) : allChunks(lv.layout);
+    const wanted = new Set(needed);
+    const refused = this.#fitPool(lv, needed.length, wanted, iso);
+    if (refused) return this.#stop(L, refused, 'budget');
+    const pool = lv.volume!;
     const s = 1 / 2 ** L;
     needed = nearestFirst(lv.layout, needed, [this.focus[0] * s, this.focus[1] * s, this.focus[2] * s]);
     for (const c of needed)
@@ -268,16 +398,15 @@ export class StreamController<
         phase,
       });
     if (missing.size > 0) {
-      const wanted = new Set(needed);
       let mine: Waiting | null = null;
       await new Promise<void>((resolve) => {
         mine = this.#waiting = { level: L, iso, needed: needed.length, missing, done: resolve };
         // evict chunks this surface does not need first, so arrivals find room
+        this.#makeRoom(lv, missing.size, wanted);
         this.fetcher.want(
           L,
           needed.filter((c) => missing.has(c)),
         );
-        this.#makeRoom(lv, missing.size, wanted);
         progress('fetching');
         if (missing.size === 0) resolve();
       });
@@ -288,33 +417,31 @@ export class StreamController<
     progress('computing');
     let surface = this.#surfaces.get(L);
     try {
-      // each of the (at most two) live surfaces: fixed buffers + cache + vertices within a quarter
-      const quarter = Math.floor(this.budgetBytes / 4);
       if (!surface) {
         const fixed = estimateFixedBytes(lv.layout);
-        if (quarter - fixed < MIN_SURFACE_BYTES) {
+        if (!this.#release(fixed + MIN_SURFACE_BYTES, this.#keep(L))) {
           return this.#stop(
             L,
-            `level ${L}'s surface needs about ${mib(fixed)} MiB of per-block buffers (ranges, maps) besides its cache and vertices; a quarter of the budget of ${mib(this.budgetBytes)} MiB does not hold them`,
+            `level ${L}'s surface needs about ${mib(fixed)} MiB of per-level buffers (ranges, maps) besides its cache and vertices; ` +
+              `the budget of ${mib(this.budgetBytes)} MiB has ${mib(Math.max(0, this.#free()))} MiB free${this.#shownNote(L)}`,
+            'budget',
           );
         }
-        surface = await this.gpu.createSurface(pool, quarter - fixed);
+        surface = await this.gpu.createSurface(pool, Math.max(MIN_SURFACE_BYTES, this.#free() - fixed));
         this.#surfaces.set(L, surface);
       }
-      let stats = await surface.compute(iso);
-      const actualFixed = Math.max(0, (stats.fixedBytes ?? 0) - pool.poolBytes);
-      if (actualFixed > estimateFixedBytes(lv.layout)) {
-        // the estimate was short: tighten the cap, or give the level up
-        if (quarter - actualFixed < MIN_SURFACE_BYTES || !surface.setMemoryBudget) {
-          surface.destroy();
-          this.#surfaces.delete(L);
-          return this.#stop(
-            L,
-            `level ${L}'s surface holds ${mib(actualFixed)} MiB of per-block buffers; a quarter of the budget of ${mib(this.budgetBytes)} MiB does not hold them with a cache`,
-          );
-        }
-        surface.setMemoryBudget(quarter - actualFixed);
-        if (stats.cacheBytes + stats.vertexBytes + actualFixed > quarter) stats = await surface.compute(iso);
+      if (gen !== this.#gen || this.#destroyed) return false;
+      let stats: S;
+      try {
+        surface.setMemoryBudget(Math.max(1, this.#capFor(L, surface)));
+        stats = await surface.compute(iso);
+      } catch (e) {
+        // over its cap: let go of pools of levels not on screen and try once more with what that frees
+        if ((e as Error).name !== 'IsosurfaceBudgetError') throw e;
+        const before = this.#free();
+        if (!this.#release(Infinity, this.#keep(L)) && this.#free() <= before) throw e;
+        surface.setMemoryBudget(Math.max(1, this.#capFor(L, surface)));
+        stats = await surface.compute(iso);
       }
       this.#lastStats.set(L, stats);
       // A store without range arrays: the level was fetched whole; its chunk
@@ -331,32 +458,26 @@ export class StreamController<
     } catch (e) {
       if (isAbort(e) || (e as Error).name === 'IsosurfaceSupersededError') return false;
       // a surface over its budget is the pipeline's clear refusal: the finer level stops, the coarser stays
-      if ((e as Error).name === 'IsosurfaceBudgetError') return this.#stop(L, (e as Error).message);
+      if ((e as Error).name === 'IsosurfaceBudgetError') return this.#stop(L, (e as Error).message, 'budget');
       for (const l of this.#errors) l(e as Error);
-      return this.#stop(L, (e as Error).message);
+      return this.#stop(L, (e as Error).message, 'gpu');
     }
   }
 
   #show(s: ShownSurface<V, S, F>): void {
-    const old = this.#shown;
     this.#shown = s;
     for (const l of this.#shownListeners) l(s);
-    // keep two surfaces at most: the one shown and (if different) none other
+    // one surface stays: the one shown now (the coarser one it replaces goes)
     for (const [level, surf] of this.#surfaces) {
-      if (level !== s.level && level !== old?.level) {
+      if (level !== s.level) {
         surf.destroy();
         this.#surfaces.delete(level);
         this.#lastStats.delete(level);
       }
     }
-    if (old && old.level !== s.level) {
-      old.surface.destroy();
-      this.#surfaces.delete(old.level);
-      this.#lastStats.delete(old.level);
-    }
   }
 
-  #stop(level: number, reason: string): false {
+  #stop(level: number, reason: string, cause: NonNullable<StreamProgress['cause']>, retryInMs?: number): false {
     const w = this.#waiting;
     this.#waiting = null;
     if (w) {
@@ -371,28 +492,33 @@ export class StreamController<
       bytesFetched: this.fetcher.counters.bytesFetched,
       phase: 'stopped',
       reason,
+      cause,
+      ...(retryInMs !== undefined ? { retryInMs } : {}),
     });
     return false;
+  }
+
+  #scheduleRetry(iso: number, inMs: number): void {
+    this.#clearRetry();
+    if (this.#retryListeners.size === 0) return;
+    const gen = this.#gen;
+    this.#retryTimer = setTimeout(() => {
+      this.#retryTimer = null;
+      if (gen !== this.#gen || this.#destroyed || iso !== this.#iso) return;
+      for (const l of this.#retryListeners) l(iso);
+    }, inMs + 50);
+  }
+
+  #clearRetry(): void {
+    if (this.#retryTimer !== null) clearTimeout(this.#retryTimer);
+    this.#retryTimer = null;
   }
 
   #emit(p: StreamProgress): void {
     for (const l of this.#progress) l(p);
   }
 
-  #ensureVolume(lv: Level<V>): V | null {
-    if (lv.volume) return lv.volume;
-    let used = 0;
-    for (const l of this.levels) used += l.volume?.poolBytes ?? 0;
-    const room = Math.floor(this.budgetBytes / 2) - used;
-    const count = lv.layout.chunkGrid[0] * lv.layout.chunkGrid[1] * lv.layout.chunkGrid[2];
-    // page table: 4 bytes per chunk of the level; the rest is the pool
-    const capacity = Math.min(count, Math.floor((room - 4 * count - 256) / lv.layout.chunkBytes));
-    if (capacity <= 0) return null;
-    lv.volume = this.gpu.createVolume(lv.layout, capacity);
-    return lv.volume;
-  }
-
-  #makeRoom(lv: Level<V>, count: number, keep: Set<ChunkIndex>): void {
+  #makeRoom(lv: Level<V>, count: number, keep: ReadonlySet<ChunkIndex>): void {
     const v = lv.volume!;
     let free = v.poolChunks - v.residentCount;
     for (const c of [...lv.lru.keys()]) {
@@ -414,7 +540,7 @@ export class StreamController<
         lv.volume.put(chunk, bytes);
       } catch (e) {
         for (const l of this.#errors) l(e as Error);
-        this.#stop(level, (e as Error).message);
+        this.#stop(level, (e as Error).message, 'chunk');
         return;
       }
     }
@@ -434,6 +560,7 @@ export class StreamController<
   destroy(): void {
     this.#destroyed = true;
     this.#gen++;
+    this.#clearRetry();
     this.fetcher.cancelAll();
     this.#waiting?.done();
     for (const s of this.#surfaces.values()) s.destroy();
@@ -446,6 +573,8 @@ export class StreamController<
   }
 }
 
+/** Kept free within the budget for short-lived buffers (statistics and readback staging, uniforms). */
+const RESERVE_BYTES = 1 << 20;
 /** Below this, a surface's cache and vertex buffers are too small to be worth creating. */
 const MIN_SURFACE_BYTES = 256 << 10;
 

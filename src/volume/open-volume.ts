@@ -15,6 +15,7 @@
 // for it; openVolumeFile does the work. openVolumeBytes does both for callers
 // that cannot ask (the CLI: what is missing must come with the call).
 // Errors name the file.
+import { baseDevice } from '../gpu/memory-meter.ts';
 import { ZfpFormatError } from '../zfp/header.ts';
 import { loadZfpStream, type ZfpGpuStream } from '../zfp/gpu-stream.ts';
 import { ZfpEncoder } from '../zfp/encoder.ts';
@@ -92,11 +93,12 @@ const encoders = new WeakMap<GPUDevice, Promise<ZfpEncoder>>();
 
 /** One encoder per device, created on first use. */
 export function encoderFor(device: GPUDevice): Promise<ZfpEncoder> {
-  let e = encoders.get(device);
+  const base = baseDevice(device); // shared by the device's metered views
+  let e = encoders.get(base);
   if (!e) {
-    e = ZfpEncoder.create(device);
-    e.catch(() => encoders.delete(device));
-    encoders.set(device, e);
+    e = ZfpEncoder.create(base);
+    e.catch(() => encoders.delete(base));
+    encoders.set(base, e);
   }
   return e;
 }

@@ -82,41 +82,45 @@ export interface ChunkedVolumeOptions {
 export class ChunkedVolume implements BlockSource {
   readonly addressing = 'pool';
   readonly info: BlockSource['info'];
-  readonly shards: readonly PoolShard[];
+  /** The pool's pieces; replaced (not mutated) when the pool grows, so readers pick up the new list at their next encode. */
+  shards: readonly PoolShard[] = [];
   /** Blocks per chunk edge (C / 4): the pipeline's groups are the chunks. */
   readonly chunkBlocks: number;
   readonly chunkCount: number;
   /** Where block 0 starts inside a chunk's stream (96 or 148 bits). */
   readonly headerBits: number;
   private readonly pageTable: GPUBuffer;
-  private readonly params: GPUBuffer;
+  private params: GPUBuffer | null = null;
   private readonly slotOf = new Map<ChunkIndex, number>();
-  private readonly freeSlots: number[] = [];
+  private freeSlots: number[] = [];
   /** One change log per reader (each Isosurface over this pool), so a surface created later still sees every resident chunk. */
   private readonly changeLogs = new Set<Set<ChunkIndex>>();
   /** A checksum of the bytes each chunk index was first put with (kept after evictions). */
   private readonly checksums = new Map<ChunkIndex, number>();
   private readonly word = new Uint32Array(1);
+  private readonly bitsPerBlock: number;
+  private readonly slotsPerShard: number;
+  private capacity = 0;
   private destroyed = false;
 
   private constructor(
     readonly device: GPUDevice,
     readonly layout: ChunkLevelLayout,
-    readonly poolChunks: number,
+    poolChunks: number,
     maxShardBytes: number,
   ) {
     const { dims, chunkEdge: edge, chunkGrid, rate, chunkBytes, name } = layout;
     const planned = planZfpStream(`${name} chunk`, [edge, edge, edge], rate, true);
     this.chunkBlocks = edge / 4;
     this.headerBits = planned.payloadBitOffset;
+    this.bitsPerBlock = planned.bitsPerBlock;
     this.chunkCount = chunkGrid[0] * chunkGrid[1] * chunkGrid[2];
     const blockGrid: [number, number, number] = [Math.ceil(dims[0] / 4), Math.ceil(dims[1] / 4), Math.ceil(dims[2] / 4)];
     const blockCount = blockGrid[0] * blockGrid[1] * blockGrid[2];
     this.info = { fileName: name, dims: [...dims], blockGrid, blockCount, bitsPerBlock: planned.bitsPerBlock, rate: planned.rate };
-    const slotsPerShard = Math.min(poolChunks, Math.floor((maxShardBytes - 4) / chunkBytes));
-    if (slotsPerShard < 1)
+    this.slotsPerShard = Math.floor((maxShardBytes - 4) / chunkBytes);
+    if (this.slotsPerShard < 1)
       throw new ChunkError(`${name}: one chunk (${chunkBytes} bytes) does not fit one storage binding of ${maxShardBytes} bytes`);
-    const shardCount = Math.ceil(poolChunks / slotsPerShard);
     this.pageTable = device.createBuffer({
       label: `${name}.pageTable`,
       size: Math.max(4, this.chunkCount * 4),
@@ -125,21 +129,120 @@ export class ChunkedVolume implements BlockSource {
     });
     new Uint32Array(this.pageTable.getMappedRange()).fill(NONE);
     this.pageTable.unmap();
-    this.params = device.createBuffer({
+    this.resize(poolChunks);
+  }
+
+  /** Chunks the pool holds at most (resize() changes it). */
+  get poolChunks(): number {
+    return this.capacity;
+  }
+
+  /**
+   * Sets the capacity to `poolChunks` slots (at least the resident count),
+   * resident chunks kept. Growing fills the last shard up to a binding's
+   * size (its buffer replaced by a larger copy) and adds shards after it;
+   * shrinking first moves the chunks of slots past the end into free slots
+   * before it (GPU copies, page table rewritten; the bytes are the same, so
+   * nothing decoded goes stale), then cuts the shards. Parameters and bind
+   * groups are made again; work already submitted keeps the old buffers
+   * alive until it is done.
+   */
+  resize(poolChunks: number): void {
+    if (this.destroyed) throw new ChunkError(`${this.layout.name}: the chunk pool was destroyed`);
+    if (!Number.isInteger(poolChunks) || poolChunks < 1) throw new ChunkError(`${this.layout.name}: a pool of ${poolChunks} chunks`);
+    if (poolChunks < this.residentCount)
+      throw new ChunkError(`${this.layout.name}: cannot shrink the pool to ${poolChunks} chunks, ${this.residentCount} are resident`);
+    if (poolChunks === this.capacity) return;
+    const { device } = this;
+    const { chunkBytes, name } = this.layout;
+    const encoder = device.createCommandEncoder({ label: `${name}.pool.resize` });
+    const retired: GPUBuffer[] = [];
+    let shards: Array<Omit<PoolShard, 'bindGroup'>> = this.shards.map(({ bindGroup: _, ...rest }) => rest);
+    const shardOf = (slot: number) => shards.find((sh) => slot >= sh.firstSlot && slot < sh.endSlot)!;
+    const newBuffer = (index: number, slots: number) =>
+      device.createBuffer({
+        label: `${name}.pool${index}`,
+        // one zero word after the last slot: the bit reader may load the word after a block's last bit
+        size: slots * chunkBytes + 4,
+        usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST | GPUBufferUsage.COPY_SRC,
+      });
+    if (poolChunks < this.capacity) {
+      // move the chunks of slots >= poolChunks into free slots below it
+      const low = this.freeSlots.filter((sl) => sl < poolChunks).sort((x, y) => y - x);
+      let scratch: GPUBuffer | null = null; // a copy within one buffer goes through it (WebGPU copies between two)
+      for (const [chunk, slot] of this.slotOf) {
+        if (slot < poolChunks) continue;
+        const to = low.pop()!;
+        const from = shardOf(slot);
+        const into = shardOf(to);
+        const src = (slot - from.firstSlot) * chunkBytes;
+        const dst = (to - into.firstSlot) * chunkBytes;
+        if (from.buffer === into.buffer) {
+          scratch ??= device.createBuffer({ label: `${name}.pool.move`, size: chunkBytes, usage: GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST });
+          encoder.copyBufferToBuffer(from.buffer, src, scratch, 0, chunkBytes);
+          encoder.copyBufferToBuffer(scratch, 0, into.buffer, dst, chunkBytes);
+        } else {
+          encoder.copyBufferToBuffer(from.buffer, src, into.buffer, dst, chunkBytes);
+        }
+        if (scratch && !retired.includes(scratch)) retired.push(scratch);
+        this.slotOf.set(chunk, to);
+        this.word[0] = to;
+        device.queue.writeBuffer(this.pageTable, chunk * 4, this.word);
+      }
+      this.freeSlots = low.sort((x, y) => y - x);
+      const kept: typeof shards = [];
+      for (const sh of shards) {
+        if (sh.firstSlot >= poolChunks) retired.push(sh.buffer);
+        else if (sh.endSlot <= poolChunks) kept.push(sh);
+        else {
+          const buffer = newBuffer(kept.length, poolChunks - sh.firstSlot);
+          encoder.copyBufferToBuffer(sh.buffer, 0, buffer, 0, (poolChunks - sh.firstSlot) * chunkBytes);
+          retired.push(sh.buffer);
+          kept.push({ ...sh, buffer, endSlot: poolChunks });
+        }
+      }
+      shards = kept;
+    } else {
+      const last = shards[shards.length - 1];
+      if (last && last.endSlot - last.firstSlot < this.slotsPerShard) {
+        const endSlot = Math.min(poolChunks, last.firstSlot + this.slotsPerShard);
+        const buffer = newBuffer(shards.length - 1, endSlot - last.firstSlot);
+        encoder.copyBufferToBuffer(last.buffer, 0, buffer, 0, last.buffer.size);
+        retired.push(last.buffer);
+        shards[shards.length - 1] = { ...last, buffer, endSlot };
+      }
+      for (let first = shards.length ? shards[shards.length - 1].endSlot : 0; first < poolChunks; first += this.slotsPerShard) {
+        const endSlot = Math.min(poolChunks, first + this.slotsPerShard);
+        shards.push({ buffer: newBuffer(shards.length, endSlot - first), firstSlot: first, endSlot, firstBlock: 0, endBlock: this.info.blockCount });
+      }
+      // lowest free slot first (pop takes from the end)
+      const added: number[] = [];
+      for (let sl = poolChunks - 1; sl >= this.capacity; sl--) added.push(sl);
+      this.freeSlots = [...added, ...this.freeSlots];
+    }
+    device.queue.submit([encoder.finish()]);
+    for (const b of retired) b.destroy(); // freed once the copies are done
+    this.bind(shards);
+    this.capacity = poolChunks;
+  }
+
+  /** The parameters (one StreamParams and one PoolParams record per shard) and each shard's bind group. */
+  private bind(shards: ReadonlyArray<Omit<PoolShard, 'bindGroup'>>): void {
+    const { device } = this;
+    const { dims, chunkGrid, chunkBytes, name } = this.layout;
+    const { blockGrid, blockCount } = this.info;
+    const params = device.createBuffer({
       label: `${name}.poolParams`,
-      size: PARAMS_STRIDE * (2 * shardCount - 1) + POOL_PARAMS_BYTES,
+      size: PARAMS_STRIDE * (2 * shards.length - 1) + POOL_PARAMS_BYTES,
       usage: GPUBufferUsage.UNIFORM,
       mappedAtCreation: true,
     });
-    const mapped = this.params.getMappedRange();
-    const shards: PoolShard[] = [];
+    const mapped = params.getMappedRange();
     const poolLayout = poolBindGroupLayout(device);
-    for (let i = 0; i < shardCount; i++) {
-      const firstSlot = i * slotsPerShard;
-      const endSlot = Math.min(poolChunks, firstSlot + slotsPerShard);
+    const made: PoolShard[] = shards.map((shard, i) => {
       new Uint32Array(mapped, 2 * i * PARAMS_STRIDE, STREAM_PARAMS_BYTES / 4).set([
         ...dims,
-        planned.bitsPerBlock,
+        this.bitsPerBlock,
         ...blockGrid,
         blockCount,
         0,
@@ -152,30 +255,25 @@ export class ChunkedVolume implements BlockSource {
         this.chunkBlocks,
         chunkBytes / 4,
         this.headerBits,
-        firstSlot,
-        endSlot,
+        shard.firstSlot,
+        shard.endSlot,
       ]);
-      // one zero word after the last slot: the bit reader may load the word after a block's last bit
-      const buffer = device.createBuffer({
-        label: `${name}.pool${i}`,
-        size: (endSlot - firstSlot) * chunkBytes + 4,
-        usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
-      });
       const bindGroup = device.createBindGroup({
         label: `${name}.pool${i}.bindGroup`,
         layout: poolLayout,
         entries: [
-          { binding: 0, resource: { buffer } },
-          { binding: 1, resource: { buffer: this.params, offset: 2 * i * PARAMS_STRIDE, size: STREAM_PARAMS_BYTES } },
+          { binding: 0, resource: { buffer: shard.buffer } },
+          { binding: 1, resource: { buffer: params, offset: 2 * i * PARAMS_STRIDE, size: STREAM_PARAMS_BYTES } },
           { binding: 2, resource: { buffer: this.pageTable } },
-          { binding: 3, resource: { buffer: this.params, offset: (2 * i + 1) * PARAMS_STRIDE, size: POOL_PARAMS_BYTES } },
+          { binding: 3, resource: { buffer: params, offset: (2 * i + 1) * PARAMS_STRIDE, size: POOL_PARAMS_BYTES } },
         ],
       });
-      shards.push({ buffer, firstSlot, endSlot, bindGroup, firstBlock: 0, endBlock: blockCount });
-    }
-    this.params.unmap();
-    this.shards = shards;
-    for (let s = poolChunks - 1; s >= 0; s--) this.freeSlots.push(s);
+      return { ...shard, bindGroup };
+    });
+    params.unmap();
+    this.params?.destroy();
+    this.params = params;
+    this.shards = made;
   }
 
   /**
@@ -224,7 +322,15 @@ export class ChunkedVolume implements BlockSource {
 
   /** Bytes of GPU memory held: the pool, the page table and the parameters. */
   get byteSize(): number {
-    return this.shards.reduce((n, s) => n + s.buffer.size, 0) + this.pageTable.size + this.params.size;
+    return this.shards.reduce((n, s) => n + s.buffer.size, 0) + this.pageTable.size + (this.params?.size ?? 0);
+  }
+
+  /** Bytes a pool of `poolChunks` chunks of this layout holds (the budget's estimate before one is made). */
+  static bytesFor(layout: ChunkLevelLayout, poolChunks: number, maxShardBytes: number): number {
+    const perShard = Math.max(1, Math.floor((maxShardBytes - 4) / layout.chunkBytes));
+    const shards = Math.max(1, Math.ceil(poolChunks / perShard));
+    const chunks = layout.chunkGrid[0] * layout.chunkGrid[1] * layout.chunkGrid[2];
+    return poolChunks * layout.chunkBytes + 4 * shards + Math.max(4, 4 * chunks) + PARAMS_STRIDE * (2 * shards - 1) + POOL_PARAMS_BYTES;
   }
 
   /** Same as byteSize (the name the store side uses for budget accounting). */
@@ -362,7 +468,7 @@ export class ChunkedVolume implements BlockSource {
     this.destroyed = true;
     for (const s of this.shards) s.buffer.destroy();
     this.pageTable.destroy();
-    this.params.destroy();
+    this.params?.destroy();
   }
 }
 

@@ -17,6 +17,7 @@
 // (src/primitives/indirect.ts) turns the count into dispatch arguments in its
 // own 16-byte buffer, inside the decode pass.
 
+import { baseDevice } from '../gpu/memory-meter.ts';
 import { BindGroupCache } from '../gpu/bind-group-cache.ts';
 import { binding, inPass, refSize, type ComputeTarget, type GpuBufferRef, type GpuCount } from '../gpu/buffer-ref.ts';
 import { dispatchWorkgroups } from '../gpu/dispatch.ts';
@@ -146,7 +147,7 @@ export class ZfpDecoder {
   }
 
   private check(stream: BlockSource): void {
-    if (stream.device !== this.device) throw new Error('ZfpDecoder: the stream belongs to another device');
+    if (baseDevice(stream.device) !== baseDevice(this.device)) throw new Error('ZfpDecoder: the stream belongs to another device');
     if (stream.isDestroyed) throw new Error(`ZfpDecoder: the stream of ${stream.info.fileName} was destroyed`);
   }
 

@@ -2,7 +2,9 @@
 // the built-in generator, to a computed first surface. Only a volume that got
 // all the way is handed to `onLoaded`; on any failure or cancel everything
 // made so far is freed, the message names the file, and the current volume
-// stays. A newer load cancels an older one.
+// stays. A newer load cancels an older one. `reload()` opens the last volume
+// that got all the way again, with the answers the user gave the form (the
+// page does so on a new device after the old one was lost).
 
 import type { GpuContext } from '../../gpu/device.ts';
 import {
@@ -27,7 +29,8 @@ export interface LoadedVolume extends SurfaceVolume {
 }
 
 export interface LoaderDeps {
-  gpu: GpuContext;
+  /** The device to load on (the page's current one). */
+  gpu: () => GpuContext;
   progress: ProgressView;
   form: VolumeForm;
   /** The isovalue a volume opens at. */
@@ -47,9 +50,16 @@ const PHASE_TEXT: Record<OpenPhase, string> = {
   compress: 'Compressing on the GPU…',
 };
 
+type Produce = (signal: AbortSignal, progress: (text: string, f?: number) => void) => Promise<OpenedVolume | undefined>;
+
 export class VolumeLoader {
   private generation = 0;
   private controller: AbortController | undefined;
+  /** The last load that got all the way, and the form's answer it used. */
+  private last: { what: string; produce: Produce; answer: object | undefined } | undefined;
+  /** The form's answer of the running load; the one replayed by reload(). */
+  private answer: object | undefined;
+  private replay: object | undefined;
 
   constructor(private readonly deps: LoaderDeps) {}
 
@@ -112,8 +122,21 @@ export class VolumeLoader {
   loadDefault(): Promise<void> {
     return this.run('Built-in volume', async (_signal, progress) => {
       progress('Generating and compressing on the GPU…', undefined);
-      return openDefaultVolume(this.deps.gpu.device);
+      return openDefaultVolume(this.deps.gpu().device);
     });
+  }
+
+  /** Whether there is a last volume to open again. */
+  get canReload(): boolean {
+    return this.last !== undefined;
+  }
+
+  /** Opens the last volume that got all the way again (same file, URL or generator; the form's answers replayed). */
+  reload(): Promise<void> {
+    const last = this.last;
+    if (!last) return Promise.resolve();
+    this.replay = last.answer;
+    return this.run(last.what, last.produce);
   }
 
   private async open(
@@ -136,25 +159,29 @@ export class VolumeLoader {
     let request = {};
     if (facts.missing.length > 0 || facts.compresses) {
       progress('Waiting for the volume’s description…', 0.3);
-      const answer = await this.deps.form.ask(facts);
+      const replayed = this.replay;
+      this.replay = undefined;
+      const answer = replayed ?? (await this.deps.form.ask(facts));
       if (!answer || signal.aborted) throw new LoadCancelled();
       request = answer;
+      this.answer = answer;
     }
-    return openVolumeFile(this.deps.gpu.device, facts, bytes, request, {
+    return openVolumeFile(this.deps.gpu().device, facts, bytes, request, {
       onPhase: (phase) => progress(PHASE_TEXT[phase], undefined),
     });
   }
 
-  private async run(
-    what: string,
-    produce: (signal: AbortSignal, progress: (text: string, f?: number) => void) => Promise<OpenedVolume | undefined>,
-  ): Promise<void> {
+  private async run(what: string, produce: Produce): Promise<void> {
+    const replay = this.replay;
     this.cancel();
+    this.replay = replay;
+    this.answer = undefined;
     const job = ++this.generation;
     const controller = new AbortController();
     this.controller = controller;
     const { signal } = controller;
-    const { progress, gpu } = this.deps;
+    const { progress } = this.deps;
+    const gpu = this.deps.gpu();
     const started = performance.now();
     progress.start(what, () => this.cancel());
     this.deps.onBusy(true);
@@ -172,6 +199,7 @@ export class VolumeLoader {
         onStage: (stage) => (stage === 'ranges' ? set('Computing block ranges…', 0.65) : set('Extracting the surface…', 0.8)),
       });
       try {
+        this.last = { what, produce, answer: this.answer };
         this.deps.onLoaded({ ...surface, loadMs: performance.now() - started });
         for (const note of surface.opened.notes) this.deps.onNotice?.(note);
       } catch (e) {

@@ -28,6 +28,7 @@ export class StoreLevelIsosurface implements PageIsosurface {
     private readonly request: (iso: number) => Promise<void>,
     /** Called once, when the session lets this level go. */
     private readonly onRelease: () => void,
+    /** The user changed the GPU memory budget (the store view gives it to the controller). */
     private readonly onBudget: (bytes: number) => void = () => {},
   ) {
     this.info = { ...shown.surface.info, valueRange };
@@ -85,7 +86,7 @@ export class StoreLevelIsosurface implements PageIsosurface {
     this.shown.surface.resetCache();
   }
 
-  /** The store's budget is fixed when it opens (pools, caches and vertices are shared out then): the store view says to reopen it. */
+  /** The whole store's budget (pools, surfaces, everything): applies from the next step of the refinement on. */
   setMemoryBudget(bytes: number): void {
     this.onBudget(bytes);
   }

@@ -10,13 +10,13 @@
 // aborted). A progress line (level, chunks done / needed, bytes) and a panel
 // (levels, network, memory). Errors name the store; the current surface stays.
 import type { AsyncReadable } from '@zarrita/storage';
-import { FetchStore } from 'zarrita';
 import type { GpuContext } from '../../gpu/device.ts';
 import { ChunkFetcher } from '../../store/fetch/chunk-fetcher.ts';
-import { chunkedGpu } from '../../store/gpu-port.ts';
+import { createChunkStream } from '../../store/gpu-port.ts';
 import type { ChunkStreamController } from '../../store/pinned-level.ts';
-import { StreamController, type StreamProgress } from '../../store/stream-controller.ts';
+import type { StreamProgress } from '../../store/stream-controller.ts';
 import { StoreError } from '../../store/zarr/errors.ts';
+import { HttpStore } from '../../store/zarr/http-store.ts';
 import { openZfpStore, type ZfpStore } from '../../store/zarr/open-store.ts';
 import { MeteredStore } from '../../store/zarr/stores.ts';
 import { chooseIsovalue } from '../iso-choice.ts';
@@ -27,7 +27,8 @@ import { type ShownLevel, StoreLevelIsosurface } from './store-surface.ts';
 export type { StorePageState };
 
 export interface StoreViewDeps {
-  gpu: GpuContext;
+  /** The device to stream to (the page's current one). */
+  gpu: () => GpuContext;
   /** Puts a level on screen as the current volume (Session.install); `first` for the store's first level. */
   install(volume: LoadedVolume, level: number, first: boolean): void;
   /** The isovalue to open at when the page's link gives one inside the value range. */
@@ -47,6 +48,7 @@ const mib = (b: number) => `${(b / 2 ** 20).toFixed(2)} MiB`;
 
 interface OpenStore {
   url: string;
+  source: AsyncReadable;
   store: ZfpStore;
   metered: MeteredStore;
   fetcher: ChunkFetcher;
@@ -57,6 +59,8 @@ interface OpenStore {
   /** Refinements started and not yet ended (the isovalue changed meanwhile). */
   running: number;
   lastProgress: StreamProgress | null;
+  /** The isovalue asked for last. */
+  iso: number;
 }
 
 export class StoreView {
@@ -69,7 +73,18 @@ export class StoreView {
 
   /** A store by URL (same origin, or another one with CORS). */
   open(url: string): Promise<void> {
-    return this.openStore(new FetchStore(new URL(url, location.href).href), url);
+    return this.openStore(new HttpStore(new URL(url, location.href).href), url);
+  }
+
+  /**
+   * What opens the store on screen again, at the isovalue it was asked for
+   * (the page, on a new device after the old one was lost); null when no
+   * store is open. Take it before the session lets the store's level go.
+   */
+  reopener(): { iso: number; open: () => Promise<void> } | null {
+    const o = this.#open;
+    if (!o) return null;
+    return { iso: o.iso, open: () => this.openStore(o.source, o.url) };
   }
 
   /**
@@ -104,7 +119,7 @@ export class StoreView {
     try {
       store = await openZfpStore(metered, url);
       f = new ChunkFetcher(store, { maxInFlight: 8 });
-      controller = await StreamController.create(store, f, chunkedGpu(this.d.gpu), this.d.budgetBytes());
+      controller = await createChunkStream(store, f, this.d.gpu(), this.d.budgetBytes());
     } catch (e) {
       if (gen === this.#gen) this.#line('');
       this.d.onError(e instanceof StoreError ? e.message : `${url}: ${(e as Error).message}`);
@@ -138,10 +153,13 @@ export class StoreView {
         chunksFetched: 0,
         chunkBytesFetched: 0,
       })),
-      gpu: { pools: 0, surfaces: 0, total: 0, budget: controller.budgetBytes },
+      retries: 0,
+      failedRequests: 0,
+      gpu: { pools: 0, surfaces: 0, cache: 0, vertices: 0, total: 0, peak: 0, budget: controller.budgetBytes },
     };
     const o: OpenStore = {
       url,
+      source,
       store,
       metered,
       fetcher: f,
@@ -151,6 +169,7 @@ export class StoreView {
       current: null,
       running: 0,
       lastProgress: null,
+      iso: NaN,
     };
     this.#open = o;
     for (const note of store.notes) this.d.onError(`${url}: ${note}`);
@@ -165,6 +184,10 @@ export class StoreView {
     controller.onProgress((p) => this.#progress(o, p));
     controller.onShown((s) => this.#shown(o, s));
     controller.onError((e) => this.d.onError(e.message));
+    // a chunk that failed has cooled down: the same isovalue again (the coarser surface stayed meanwhile)
+    controller.onRetry((value) => {
+      if (this.#open === o && value === o.iso) void this.#refine(o, value);
+    });
     this.#publish(o);
 
     // The isovalue: the link's, else Otsu over the finest known chunk ranges. A
@@ -191,6 +214,7 @@ export class StoreView {
   /** One isovalue's refinement, with `done` and the line kept current. */
   async #refine(o: OpenStore, iso: number): Promise<void> {
     if (this.#open !== o) return; // stopped: its level on screen only waits to be replaced
+    o.iso = iso;
     o.running++;
     o.state.done = false;
     this.#publish(o);
@@ -203,7 +227,8 @@ export class StoreView {
     o.state.done = true;
     const shown = o.state.shownLevel;
     const p = o.lastProgress;
-    if (p?.phase === 'stopped' && p.reason) o.state.reason = p.reason;
+    if (p?.phase === 'stopped' && p.reason)
+      o.state.reason = p.retryInMs !== undefined ? `${p.reason} (trying again in ${Math.ceil(p.retryInMs / 1000)} s)` : p.reason;
     if (shown === null) this.#line(`${o.url}: nothing shown${o.state.reason ? `; ${o.state.reason}` : ''}`);
     else if (shown === 0) this.#line(`${o.url}: level 0 (full resolution), ${mib(o.metered.meter.bytes)} fetched`);
     else this.#line(`${o.url}: level ${shown} shown${o.state.reason ? `; ${o.state.reason}` : ''}`);
@@ -239,10 +264,11 @@ export class StoreView {
           o.controller.destroy();
         },
         (bytes) => {
-          if (bytes !== o.controller.budgetBytes)
-            this.d.onNotice(
-              `${o.url}: the new memory budget (${mib(bytes)}) applies when the store is opened again; it streams within ${mib(o.controller.budgetBytes)} now.`,
-            );
+          if (bytes === o.controller.budgetBytes) return;
+          // the whole stream's budget from now on; a refinement that stopped for room tries again
+          o.controller.budgetBytes = bytes;
+          o.state.gpu.budget = bytes;
+          if (this.#open === o && Number.isFinite(o.iso)) void this.#refine(o, o.iso);
         },
       );
       const lv = o.store.levels[s.level];
@@ -291,7 +317,9 @@ export class StoreView {
       chunkBytesFetched: o.fetcher.counters.bytesFetched,
       requests: o.metered.meter.requests,
     });
-    st.gpu = { ...g, budget: o.controller.budgetBytes };
+    st.gpu = { ...g, peak: Math.max(st.gpu.peak, g.total), budget: o.controller.budgetBytes };
+    st.retries = o.store.retries.retries;
+    st.failedRequests = o.store.retries.failed;
     renderStorePanel(this.d.panel, o.store, st, o.fetcher.counters);
     this.d.publish({ ...st, levels: st.levels.map((l) => ({ ...l })), shownLevels: [...st.shownLevels] });
   }

@@ -1,6 +1,6 @@
 // A one-line readout over the view: isovalue, triangles, last surface time,
 // frame rate (or "idle" when nothing is being drawn).
-import type { Viewer } from '../../render/viewer.ts';
+
 import { formatMs, formatShortCount } from '../format.ts';
 
 export class Hud {
@@ -11,7 +11,7 @@ export class Hud {
 
   constructor(
     private readonly root: HTMLElement,
-    private readonly viewer: Viewer,
+    private readonly viewer: { readonly fps: number; readonly framesDrawn: number },
     private readonly onFps?: (text: string) => void,
   ) {
     setInterval(() => this.render(), 500);

@@ -9,7 +9,7 @@ import { runBenchmark } from '../../bench/harness.ts';
 import { BENCH_MODES, isBenchMode, type BenchMode } from '../../bench/sequences.ts';
 import { numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
 import { openInputSurface } from '../input.ts';
-import { budgetOption } from './extract.ts';
+import { budgetOption, deadlineOption } from './extract.ts';
 
 function modesOption(text: string | undefined): BenchMode[] {
   if (text === undefined) return [...BENCH_MODES];
@@ -26,9 +26,10 @@ export const benchCommand: CliCommand = {
   name: 'bench',
   summary: 'isosurface benchmark: random / sweep-up / sweep-down isovalues, GPU ms and hit rates per mode',
   usage:
-    'bench IN [--modes random,sweep-up,sweep-down] [--count N] [--seed S] [--range lo,hi] [--rate R] [--cache-budget MB] [--level L (IN a Zarr store URL or folder)]',
+    'bench IN [--modes random,sweep-up,sweep-down] [--count N] [--seed S] [--range lo,hi] [--rate R] [--cache-budget MB] [--level L] [--deadline S] (--level, --deadline: IN a Zarr store URL or folder)',
   options: {
     level: { type: 'string' },
+    deadline: { type: 'string' },
     modes: { type: 'string' },
     count: { type: 'string' },
     seed: { type: 'string' },
@@ -51,6 +52,7 @@ export const benchCommand: CliCommand = {
       rate: numberOption(args, 'rate'),
       level: numberOption(args, 'level'),
       budget,
+      deadlineMs: deadlineOption(args),
     });
     ctx.log(`${input}: ${volume.how}`);
     const { iso } = volume;

@@ -9,7 +9,7 @@ import { formatDims, parseVolumeName, type Dims } from '../../core/naming.ts';
 import { allNonFiniteMessage, countNonFinite, nonFiniteNotice, nonFiniteTotal, replaceNonFinite } from '../../volume/non-finite.ts';
 import { ZfpEncoder } from '../../zfp/encoder.ts';
 import { planZfpStream, ZfpFormatError } from '../../zfp/format.ts';
-import { numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
+import { InputError, numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
 
 export const compressCommand: CliCommand = {
   name: 'compress',
@@ -42,10 +42,15 @@ export const compressCommand: CliCommand = {
       throw new UsageError(`--dtype must be one of ${DTYPES.join(', ')} (got "${dtypeText}")`);
     const dtype: DType | undefined = (dtypeText as DType | undefined) ?? name.dtype;
     if (!dtype) throw new UsageError(`${input}: the name carries no type: give --dtype (${DTYPES.join(', ')})`);
-    let bytes: Uint8Array = new Uint8Array(readFileSync(input));
+    let bytes: Uint8Array;
+    try {
+      bytes = new Uint8Array(readFileSync(input));
+    } catch (e) {
+      throw new InputError(`cannot read ${input}: ${(e as Error).message}`);
+    }
     const expect = dims[0] * dims[1] * dims[2] * DTYPE_BYTES[dtype];
     if (bytes.byteLength !== expect)
-      throw new UsageError(`${input}: ${formatDims(dims)} ${dtype} is ${expect} bytes, the file has ${bytes.byteLength}`);
+      throw new InputError(`${input}: ${formatDims(dims)} ${dtype} is ${expect} bytes, the file has ${bytes.byteLength}`);
 
     try {
       planZfpStream(basename(input), dims, rate, !args.values.headerless); // user mistakes before any GPU work
@@ -57,7 +62,7 @@ export const compressCommand: CliCommand = {
     const nonFinite = countNonFinite(bytes, dtype);
     const notes: string[] = [];
     if (nonFinite && nonFiniteTotal(nonFinite) > 0) {
-      if (nonFiniteTotal(nonFinite) === nonFinite.values) throw new UsageError(`${input}: ${allNonFiniteMessage(nonFinite)}`);
+      if (nonFiniteTotal(nonFinite) === nonFinite.values) throw new InputError(`${input}: ${allNonFiniteMessage(nonFinite)}`);
       bytes = replaceNonFinite(bytes, dtype as 'float32' | 'float64', nonFinite);
       notes.push(`${input}: ${nonFiniteNotice(nonFinite)}`);
       ctx.log(`note: ${notes[0]}`);
@@ -70,7 +75,7 @@ export const compressCommand: CliCommand = {
       try {
         result = await encoder.compress(bytes, dtype, dims, rate, { header: !args.values.headerless, fileName: basename(input) });
       } catch (e) {
-        if (e instanceof ZfpFormatError) throw new UsageError(e.message);
+        if (e instanceof ZfpFormatError) throw new InputError(e.message);
         throw e;
       }
       const seconds = (performance.now() - t0) / 1000;

@@ -8,7 +8,7 @@ import { formatDims } from '../../core/naming.ts';
 import { ZfpDecoder } from '../../zfp/decoder.ts';
 import { openZfpStream, ZfpFormatError } from '../../zfp/format.ts';
 import { ZfpGpuStream } from '../../zfp/gpu-stream.ts';
-import { numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
+import { InputError, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
 
 export const decompressCommand: CliCommand = {
   name: 'decompress',
@@ -19,12 +19,17 @@ export const decompressCommand: CliCommand = {
     const input = requiredPositional(args, 0, 'IN.zfp');
     const output = stringOption(args, 'out');
     if (!output) throw new UsageError('give the output file with -o OUT.raw');
-    const bytes = new Uint8Array(readFileSync(input));
+    let bytes: Uint8Array;
+    try {
+      bytes = new Uint8Array(readFileSync(input));
+    } catch (e) {
+      throw new InputError(`cannot read ${input}: ${(e as Error).message}`);
+    }
     let info;
     try {
       info = openZfpStream(bytes, basename(input), { rate: numberOption(args, 'rate') });
     } catch (e) {
-      if (e instanceof ZfpFormatError) throw new UsageError(e.message);
+      if (e instanceof ZfpFormatError) throw new InputError(e.message);
       throw e;
     }
     const { device } = await ctx.gpu();

@@ -47,6 +47,14 @@ export interface ExtractRecord {
   ply?: string;
 }
 
+/** --deadline S (a store's per-request retry deadline) -> ms (shared with `bench`). */
+export function deadlineOption(args: Parameters<typeof numberOption>[0]): number | undefined {
+  const s = numberOption(args, 'deadline');
+  if (s === undefined) return undefined;
+  if (!(s > 0)) throw new UsageError('--deadline must be a positive number of seconds');
+  return s * 1000;
+}
+
 /** --cache-budget MB -> bytes (shared with `bench`). */
 export function budgetOption(args: Parameters<typeof numberOption>[0]): number | undefined {
   const mb = numberOption(args, 'cache-budget');
@@ -58,9 +66,11 @@ export function budgetOption(args: Parameters<typeof numberOption>[0]): number |
 export const extractCommand: CliCommand = {
   name: 'extract',
   summary: 'isosurfaces on the GPU (block cache kept between isovalues): counts, area, bbox, GPU time; --ply soups',
-  usage: 'extract IN --iso a,b,c [--rate R] [--cache-budget MB] [--ply PREFIX] [--level L (IN a Zarr store URL or folder)]',
+  usage:
+    'extract IN --iso a,b,c [--rate R] [--cache-budget MB] [--ply PREFIX] [--level L] [--deadline S] (--level, --deadline: IN a Zarr store URL or folder)',
   options: {
     level: { type: 'string' },
+    deadline: { type: 'string' },
     iso: { type: 'string' },
     rate: { type: 'string' },
     'cache-budget': { type: 'string' },
@@ -77,10 +87,12 @@ export const extractCommand: CliCommand = {
       rate: numberOption(args, 'rate'),
       level: numberOption(args, 'level'),
       budget,
+      deadlineMs: deadlineOption(args),
     });
     ctx.log(`${input}: ${volume.how}`);
     const { iso } = volume;
     const records: (ExtractRecord | { iso: number; error: string })[] = [];
+    let storeRecord: ReturnType<NonNullable<typeof volume.store>> | undefined;
     try {
       for (const value of isovalues) {
         let stats;
@@ -89,7 +101,8 @@ export const extractCommand: CliCommand = {
         } catch (e) {
           if (!(e instanceof IsosurfaceBudgetError) && !(e instanceof LevelStoppedError)) throw e;
           ctx.log(`error: ${e.message}`);
-          records.push({ iso: Math.fround(value), error: e.message });
+          const budget = e instanceof IsosurfaceBudgetError || (e instanceof LevelStoppedError && e.overBudget);
+          records.push({ iso: Math.fround(value), error: e.message, ...(budget ? { budget: true } : {}) });
           continue;
         }
         const surface = await iso.readMesh();
@@ -124,6 +137,7 @@ export const extractCommand: CliCommand = {
             `hit rate ${(stats.hitRate * 100).toFixed(1)}%, area ${m.area.toFixed(2)}, ${stats.gpuMs.toFixed(1)} ms GPU (${stats.timingSource})${record.ply ? ` -> ${record.ply}` : ''}`,
         );
       }
+      storeRecord = volume.store?.(); // before destroy: the GPU bytes held with the last surface
     } finally {
       volume.destroy();
     }
@@ -137,16 +151,20 @@ export const extractCommand: CliCommand = {
       adapter: describeAdapter(gpu.adapter),
       memoryBudgetBytes: iso.memoryBudget,
       isosurfaces: records,
-      ...(volume.store ? { store: volume.store() } : {}),
+      ...(storeRecord ? { store: storeRecord } : {}),
     };
-    // Surfaces that did not fit are failures: the JSON still gets every record, then the exit status says so.
-    const failed = records.filter((r): r is { iso: number; error: string } => 'error' in r);
+    // Surfaces that did not fit or could not be fetched are failures: the JSON still gets every record, then the exit status says so.
+    const failed = records.filter((r): r is { iso: number; error: string; budget?: boolean } => 'error' in r);
     if (failed.length > 0) {
-      throw new CommandFailed(
-        `${failed.length} of ${records.length} isosurfaces did not fit the GPU memory budget of ${formatMB(iso.memoryBudget)} ` +
-          `(iso ${failed.map((f) => f.iso).join(', ')}); raise it with --cache-budget MB`,
-        result,
-      );
+      const overBudget = failed.filter((f) => f.budget);
+      const other = failed.filter((f) => !f.budget);
+      const parts: string[] = [];
+      if (overBudget.length > 0)
+        parts.push(
+          `${overBudget.length} did not fit the GPU memory budget of ${formatMB(iso.memoryBudget)} (iso ${overBudget.map((f) => f.iso).join(', ')}); raise it with --cache-budget MB`,
+        );
+      for (const f of other) parts.push(`iso ${f.iso}: ${f.error}`);
+      throw new CommandFailed(`${failed.length} of ${records.length} isosurfaces failed: ${parts.join('; ')}`, result);
     }
     return result;
   },

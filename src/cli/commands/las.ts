@@ -4,7 +4,7 @@ import { createHash } from 'node:crypto';
 import { readFileSync } from 'node:fs';
 import { basename } from 'node:path';
 import { LasError, LasReader, scaled, type Vec3 } from '../../loaders/las.ts';
-import { numberOption, requiredPositional, UsageError, type CliCommand } from '../command.ts';
+import { InputError, numberOption, requiredPositional, UsageError, type CliCommand } from '../command.ts';
 
 export const lasCommand: CliCommand = {
   name: 'las',
@@ -19,7 +19,7 @@ export const lasCommand: CliCommand = {
     try {
       bytes = readFileSync(path);
     } catch (e) {
-      throw new UsageError(`cannot read ${path}: ${(e as Error).message}`);
+      throw new InputError(`cannot read ${path}: ${(e as Error).message}`);
     }
     const name = basename(path);
     const t0 = performance.now();

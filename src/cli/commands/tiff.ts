@@ -5,7 +5,7 @@ import { createHash } from 'node:crypto';
 import { readFileSync } from 'node:fs';
 import { basename } from 'node:path';
 import { loadTiffStack, sampleStats, TiffError, TiffReader, type TiffSource } from '../../loaders/tiff.ts';
-import { UsageError, type CliCommand } from '../command.ts';
+import { InputError, UsageError, type CliCommand } from '../command.ts';
 
 export const tiffCommand: CliCommand = {
   name: 'tiff',
@@ -18,7 +18,7 @@ export const tiffCommand: CliCommand = {
       try {
         return { name: basename(path), bytes: readFileSync(path) };
       } catch (e) {
-        throw new UsageError(`cannot read ${path}: ${(e as Error).message}`);
+        throw new InputError(`cannot read ${path}: ${(e as Error).message}`);
       }
     });
     try {

@@ -1,10 +1,14 @@
 // Fetches the chunks a surface needs: a bounded number of requests in
 // flight, in the caller's priority order (nearest first), each cancellable.
 // `want` replaces the wanted list (newest wins): queued chunks no longer
-// wanted are dropped and requests in flight for them are aborted. Failed
-// requests are retried with exponential backoff, then reported. Fetched
-// chunks go into a CPU-side LRU bounded in bytes, so scrubbing back (or a
-// chunk evicted from the GPU pool) does not fetch again.
+// wanted are dropped and requests in flight for them are aborted. The store
+// tries each request again while that can help (zarr/retrying-store.ts); a
+// chunk whose request still failed is reported, and is not asked for again
+// until its cool-down has passed (5 s, doubling per failure up to 2 min):
+// asked for sooner, its last error is reported again at once, so the caller
+// keeps what it shows and tries later (`retryAt`). Fetched chunks go into a
+// CPU-side LRU bounded in bytes, so scrubbing back (or a chunk evicted from
+// the GPU pool) does not fetch again.
 import type { GetOptions } from '@zarrita/storage';
 import type { ChunkIndex } from '../types.ts';
 import { isAbort, StoreError } from '../zarr/errors.ts';
@@ -17,10 +21,16 @@ export interface ChunkSource {
 export interface FetcherOptions {
   /** Requests in flight at most (default 8). */
   maxInFlight?: number;
-  /** Retries after a failure before it is reported (default 3). */
+  /**
+   * Retries here after a failure before it is reported (default 0: the store
+   * retries each request until its deadline, zarr/retrying-store.ts; a store
+   * without that may ask for some).
+   */
   retries?: number;
-  /** First backoff delay; doubles per retry (default 250 ms). */
+  /** First backoff delay of those retries; doubles per retry (default 250 ms). */
   backoffMs?: number;
+  /** A failed chunk is not asked for again before this; doubles per failure up to 2 min (default 5 s). */
+  coolDownMs?: number;
   /** CPU-side cache of compressed chunks, bytes (default 256 MiB). */
   cacheBytes?: number;
   /** Injected in tests: the backoff wait, and the clock for throughput. */
@@ -39,7 +49,7 @@ export interface FetchCounters {
   /** Chunks served from the CPU-side cache. */
   cacheHits: number;
   retries: number;
-  /** Chunks reported as failed after their retries. */
+  /** Chunk failures reported (a chunk asked for again during its cool-down is not counted again). */
   failed: number;
   /** bytesFetched / seconds with at least one request in flight. */
   throughputBytesPerSecond: number;
@@ -49,7 +59,8 @@ export interface FetchCounters {
 }
 
 export type ChunkListener = (level: number, chunk: ChunkIndex, bytes: Uint8Array, fromCache: boolean) => void;
-export type ChunkErrorListener = (level: number, chunk: ChunkIndex, error: StoreError) => void;
+/** `repeated`: the chunk was asked for during its cool-down, and this is its last error again. */
+export type ChunkErrorListener = (level: number, chunk: ChunkIndex, error: StoreError, repeated: boolean) => void;
 
 const key = (level: number, chunk: ChunkIndex) => `${level}:${chunk}`;
 
@@ -71,13 +82,15 @@ export class ChunkFetcher {
   readonly maxInFlight: number;
   readonly #retries: number;
   readonly #backoffMs: number;
+  readonly #coolDownMs: number;
   readonly #sleep: NonNullable<FetcherOptions['sleep']>;
   readonly #now: () => number;
   readonly #cache: ByteLru<string>;
   #queue: Array<{ level: number; chunk: ChunkIndex }> = [];
   #wanted = new Set<string>();
   #inFlight = new Map<string, AbortController>();
-  #failed = new Set<string>();
+  /** Chunks whose last request failed: the error, how often, and when they may be asked for again. */
+  #failed = new Map<string, { error: StoreError; failures: number; retryAt: number }>();
   #chunkListeners = new Set<ChunkListener>();
   #errorListeners = new Set<ChunkErrorListener>();
   #idleWaiters: Array<() => void> = [];
@@ -90,8 +103,9 @@ export class ChunkFetcher {
     options: FetcherOptions = {},
   ) {
     this.maxInFlight = Math.max(1, options.maxInFlight ?? 8);
-    this.#retries = options.retries ?? 3;
+    this.#retries = options.retries ?? 0;
     this.#backoffMs = options.backoffMs ?? 250;
+    this.#coolDownMs = options.coolDownMs ?? 5000;
     this.#sleep = options.sleep ?? defaultSleep;
     this.#now = options.now ?? (() => performance.now());
     this.#cache = new ByteLru(options.cacheBytes ?? 256 << 20);
@@ -125,7 +139,8 @@ export class ChunkFetcher {
   /**
    * The chunks wanted now, most urgent first; replaces the previous list.
    * Cached chunks are delivered at once (synchronously), the rest fetched.
-   * Chunks that failed for good are not fetched again until `retryFailed`.
+   * A chunk that failed and is still cooling down is not fetched: its last
+   * error is reported again (on a microtask).
    */
   want(level: number, chunks: readonly ChunkIndex[]): void {
     this.#wanted = new Set(chunks.map((c) => key(level, c)));
@@ -137,18 +152,37 @@ export class ChunkFetcher {
       }
     }
     this.#queue = [];
+    const now = this.#now();
+    const stillFailed: Array<[ChunkIndex, StoreError]> = [];
     for (const chunk of chunks) {
       const k = key(level, chunk);
       const hit = this.#cache.get(k);
+      const failed = this.#failed.get(k);
       if (hit) {
         this.#counts.cacheHits++;
         for (const l of this.#chunkListeners) l(level, chunk, hit, true);
-      } else if (!this.#inFlight.has(k) && !this.#failed.has(k)) {
+      } else if (failed && failed.retryAt > now) {
+        stillFailed.push([chunk, failed.error]);
+      } else if (!this.#inFlight.has(k)) {
         this.#queue.push({ level, chunk });
       }
     }
     this.#pump();
     this.#checkIdle();
+    if (stillFailed.length > 0) {
+      const wanted = this.#wanted;
+      queueMicrotask(() => {
+        for (const [chunk, error] of stillFailed) {
+          if (this.#wanted !== wanted) return; // a newer list replaced this one
+          for (const l of this.#errorListeners) l(level, chunk, error, true);
+        }
+      });
+    }
+  }
+
+  /** When a failed chunk may be asked for again (ms on this fetcher's clock), or undefined if it has not failed. */
+  retryAt(level: number, chunk: ChunkIndex): number | undefined {
+    return this.#failed.get(key(level, chunk))?.retryAt;
   }
 
   /**
@@ -175,6 +209,7 @@ export class ChunkFetcher {
     this.want(0, []);
   }
 
+  /** Forgets every failure: failed chunks are fetched again when next wanted. */
   retryFailed(): void {
     this.#failed.clear();
   }
@@ -211,6 +246,8 @@ export class ChunkFetcher {
   async #run(level: number, chunk: ChunkIndex, k: string, ctl: AbortController): Promise<void> {
     let error: StoreError | null = null;
     let bytes: Uint8Array | null = null;
+    // An abort that is not ours (a shard index shared with a chunk whose request was aborted) is tried again at once.
+    let foreignAborts = 0;
     for (let attempt = 0; attempt <= this.#retries && !ctl.signal.aborted; attempt++) {
       try {
         if (attempt > 0) {
@@ -221,7 +258,15 @@ export class ChunkFetcher {
         bytes = await this.source.readChunk(level, chunk, { signal: ctl.signal });
         break;
       } catch (e) {
-        if (isAbort(e) || ctl.signal.aborted) break;
+        if (ctl.signal.aborted) break;
+        if (isAbort(e) || (e as StoreError)?.kind === 'aborted') {
+          if (++foreignAborts > 8) {
+            error = new StoreError('aborted', `chunk ${chunk} of level ${level}: aborted`, { cause: e });
+            break;
+          }
+          attempt--;
+          continue;
+        }
         error =
           e instanceof StoreError
             ? e
@@ -233,12 +278,15 @@ export class ChunkFetcher {
     this.#inFlight.delete(k);
     if (bytes && !ctl.signal.aborted) {
       this.#counts.bytesFetched += bytes.length;
+      this.#failed.delete(k);
       this.#cache.set(k, bytes);
       for (const l of this.#chunkListeners) l(level, chunk, bytes, false);
     } else if (error) {
       this.#counts.failed++;
-      this.#failed.add(k);
-      for (const l of this.#errorListeners) l(level, chunk, error);
+      const failures = (this.#failed.get(k)?.failures ?? 0) + 1;
+      const wait = Math.min(120_000, this.#coolDownMs * 2 ** (failures - 1));
+      this.#failed.set(k, { error, failures, retryAt: this.#now() + wait });
+      for (const l of this.#errorListeners) l(level, chunk, error, false);
     }
     this.#pump();
     this.#checkIdle();

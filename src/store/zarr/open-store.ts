@@ -9,7 +9,8 @@ import * as zarr from 'zarrita';
 import { bitsPerBlockForRate, fixedRateStreamBytes } from '../../zfp/format.ts';
 import { parseZfpHeader, ZFP_LONG_HEADER_BITS, ZFP_SHORT_HEADER_BITS } from '../../zfp/header.ts';
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
-import { describeTransportError, StoreError } from './errors.ts';
+import { describeTransportError, RequestFailedError, StoreError } from './errors.ts';
+import { type RetryCounters, type RetryPolicy, RetryingStore } from './retrying-store.ts';
 import { MeteredStore, type StoreMeter } from './stores.ts';
 import { registerZfpyPassThrough, ZFPY_CODEC, ZFPY_FIXED_RATE_MODE } from './zfpy-passthrough.ts';
 
@@ -40,8 +41,10 @@ export interface ZfpStore {
   valueRange: [number, number] | null;
   /** Things a user should know (an unfinished store, no range arrays). */
   notes: string[];
-  /** Every byte and request through the store (metadata included). */
+  /** Every byte and request through the store (metadata included; every try of a retried request counts). */
   meter: StoreMeter;
+  /** Tries after failures, requests that failed for good, faults seen (retrying-store.ts). */
+  retries: RetryCounters;
   /** Bytes read while opening (metadata). */
   metadataBytes: number;
   /** The chunk's stored bytes, checked; rejects with StoreError (or an AbortError). */
@@ -107,7 +110,7 @@ function codecOf(name: string, meta: Json): { rate: number; shardChunks: number 
 /** Caches JSON documents (zarr.json) so that zarrita and our checks read each once. */
 class MetadataMemo implements AsyncReadable {
   #memo = new Map<string, Promise<Uint8Array | undefined>>();
-  constructor(readonly inner: MeteredStore) {}
+  constructor(readonly inner: RetryingStore) {}
   get(key: AbsolutePath, opts?: GetOptions): Promise<Uint8Array | undefined> {
     if (!key.endsWith('zarr.json')) return this.inner.get(key, opts);
     let hit = this.#memo.get(key);
@@ -118,13 +121,17 @@ class MetadataMemo implements AsyncReadable {
     }
     return hit;
   }
-  getRange(...args: Parameters<MeteredStore['getRange']>) {
+  getRange(...args: Parameters<RetryingStore['getRange']>) {
     return this.inner.getRange(...args);
   }
   async json(key: AbsolutePath): Promise<Json> {
     const bytes = await this.get(key);
     if (!bytes) throw new StoreError('not-found', `${key} is missing`);
-    return JSON.parse(new TextDecoder().decode(bytes)) as Json;
+    try {
+      return JSON.parse(new TextDecoder().decode(bytes)) as Json;
+    } catch (e) {
+      throw new StoreError('corrupt', `${key} is not JSON (${(e as Error).message})`);
+    }
   }
 }
 
@@ -165,7 +172,8 @@ async function openLevel(
   try {
     meta = await mem.json(key);
   } catch (e) {
-    if (e instanceof StoreError) throw new StoreError('not-found', `${name}: its zarr.json is missing`);
+    if (e instanceof StoreError && e.kind === 'not-found') throw new StoreError('not-found', `${name}: its zarr.json is missing`);
+    if (e instanceof StoreError && e.kind === 'corrupt') throw new StoreError('corrupt', `${name}: ${e.message}`);
     throw describeTransportError(e, name);
   }
   if (meta.node_type !== 'array') throw new StoreError('not-a-store', `${name}: not an array`);
@@ -246,17 +254,24 @@ export function checkChunk(layout: ChunkLevelLayout, chunk: ChunkIndex, bytes: U
   }
 }
 
+export interface OpenStoreOptions {
+  /** How requests are tried again (retrying-store.ts; tests shorten the waits). */
+  retry?: RetryPolicy;
+}
+
 /** Opens the store; `name` is for messages (its URL or folder). Rejects with StoreError. */
-export async function openZfpStore(store: AsyncReadable, name: string): Promise<ZfpStore> {
+export async function openZfpStore(store: AsyncReadable, name: string, options: OpenStoreOptions = {}): Promise<ZfpStore> {
   registerZfpyPassThrough();
   const metered = store instanceof MeteredStore ? store : new MeteredStore(store);
-  const mem = new MetadataMemo(metered);
+  const retrying = new RetryingStore(metered, options.retry);
+  const mem = new MetadataMemo(retrying);
   let rootJson: Json;
   try {
     rootJson = await mem.json('/zarr.json');
   } catch (e) {
-    if (e instanceof StoreError)
+    if (e instanceof StoreError && e.kind === 'not-found')
       throw new StoreError('not-found', `${name}: no zarr.json at its root (HTTP 404 or no such folder): not a Zarr v3 store`);
+    if (e instanceof StoreError && e.kind === 'corrupt') throw new StoreError('corrupt', `${name}: ${e.message}`);
     throw describeTransportError(e, name);
   }
   if (rootJson.zarr_format !== 3)
@@ -291,6 +306,7 @@ export async function openZfpStore(store: AsyncReadable, name: string): Promise<
     let a = arrays.get(level);
     if (!a) {
       a = zarr.open.v3(zarr.root(mem).resolve(levels[level].path || '/'), { kind: 'array' });
+      a.catch(() => arrays.delete(level)); // a failed open is tried again by the next chunk
       arrays.set(level, a);
     }
     return a;
@@ -302,6 +318,7 @@ export async function openZfpStore(store: AsyncReadable, name: string): Promise<
     levels,
     notes,
     meter: metered.meter,
+    retries: retrying.counters,
     metadataBytes: metered.meter.bytes,
     voxelSize: voxelSizeOf(attrs),
     unit: typeof ours?.unit === 'string' ? ours.unit : null,
@@ -340,7 +357,7 @@ export async function openZfpStore(store: AsyncReadable, name: string): Promise<
         const got = await zarr.get(arr, null, { opts });
         return new Float32Array(got.data as Float32Array);
       } catch (e) {
-        if (e instanceof StoreError) throw e;
+        if (e instanceof StoreError && !(e instanceof RequestFailedError)) throw e;
         if (zarr.isZarritaError(e))
           throw new StoreError('corrupt', `${L.layout.name}: its range array ${L.rangesPath}: ${(e as Error).message}`, { cause: e });
         throw describeTransportError(e, `${L.layout.name} ranges`);

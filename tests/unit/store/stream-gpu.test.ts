@@ -13,7 +13,7 @@ import type { GpuContext } from '../../../src/gpu/device.ts';
 import { Isosurface } from '../../../src/isosurface/isosurface.ts';
 import { assembleLevelStream } from '../../../src/store/assemble.ts';
 import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
-import { chunkedGpu } from '../../../src/store/gpu-port.ts';
+import { createChunkStream } from '../../../src/store/gpu-port.ts';
 import { chunksNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
 import { StreamController } from '../../../src/store/stream-controller.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
@@ -51,7 +51,7 @@ async function inCore(gpu: GpuContext, isos: number[]): Promise<number[]> {
 async function controller(gpu: GpuContext, budget: number, maxInFlight = 8, at = path) {
   const store = await openZfpStore(storeForLocation(at), at);
   const fetcher = new ChunkFetcher(store, { maxInFlight });
-  const c = await StreamController.create(store, fetcher, chunkedGpu(gpu), budget);
+  const c = await createChunkStream(store, fetcher, gpu, budget);
   const errors: string[] = [];
   c.onError((e) => errors.push(e.message));
   return { store, fetcher, c, errors };
