@@ -1,19 +1,22 @@
 // A misbehaving object store, for the tests and `bench:stream --faults`: the
 // /stores/ middleware (vite-stores.ts) serves
-//   /stores/~faults(rate=0.3;seed=7[;kinds=500,503,429,drop,truncate,slow][;match=TEXT])/NAME.zarr/...
+//   /stores/~faults(rate=0.3;seed=7[;kinds=500,503,429,drop,truncate,slow,403][;match=TEXT])/NAME.zarr/...
 // as NAME.zarr, failing each attempt with probability `rate` the ways object
 // stores and proxies fail: HTTP 500, 503 and 429 (both with Retry-After: 1),
 // a connection dropped before the answer, a body cut after its headers
 // (Content-Length promises more), or an answer held back (slow, then
-// correct). Every kind of request is hit (metadata, range arrays, shard
+// correct); those are the default kinds. 403 (a permanent refusal) only
+// when asked for. Every kind of request is hit (metadata, range arrays, shard
 // indexes, chunks). `match` limits the faults to paths containing TEXT (one
 // chunk at 100%). Decisions are a hash of the seed, the request (path and
 // range) and how many times that request came before, so they are seeded and
 // independent per attempt whatever order concurrent requests arrive in.
 import type { IncomingMessage, ServerResponse } from 'node:http';
 
-export type FaultKind = '500' | '503' | '429' | 'drop' | 'truncate' | 'slow';
-export const FAULT_KINDS: readonly FaultKind[] = ['500', '503', '429', 'drop', 'truncate', 'slow'];
+export type FaultKind = '500' | '503' | '429' | 'drop' | 'truncate' | 'slow' | '403';
+/** The kinds a server passing through trouble shows (the default). */
+export const TRANSIENT_FAULTS: readonly FaultKind[] = ['500', '503', '429', 'drop', 'truncate', 'slow'];
+const ALL_KINDS: readonly FaultKind[] = [...TRANSIENT_FAULTS, '403'];
 
 export interface FaultSpec {
   rate: number;
@@ -26,15 +29,15 @@ export interface FaultSpec {
 export function parseFaultPrefix(path: string): { spec: FaultSpec; rest: string } | null {
   const m = /^~faults\(([^)]*)\)\/(.*)$/.exec(path);
   if (!m) return null;
-  const spec: FaultSpec = { rate: 0, seed: 1, kinds: [...FAULT_KINDS], match: null };
+  const spec: FaultSpec = { rate: 0, seed: 1, kinds: [...TRANSIENT_FAULTS], match: null };
   for (const part of m[1].split(';')) {
     const [k, v = ''] = part.split('=');
     if (k === 'rate') spec.rate = Math.min(1, Math.max(0, Number(v) || 0));
     else if (k === 'seed') spec.seed = Math.trunc(Number(v) || 0);
-    else if (k === 'kinds') spec.kinds = v.split(',').filter((x): x is FaultKind => (FAULT_KINDS as readonly string[]).includes(x));
+    else if (k === 'kinds') spec.kinds = v.split(',').filter((x): x is FaultKind => (ALL_KINDS as readonly string[]).includes(x));
     else if (k === 'match') spec.match = decodeURIComponent(v);
   }
-  if (spec.kinds.length === 0) spec.kinds = [...FAULT_KINDS];
+  if (spec.kinds.length === 0) spec.kinds = [...TRANSIENT_FAULTS];
   return { spec, rest: m[2] };
 }
 
@@ -63,6 +66,13 @@ export class FaultInjector {
   readonly #attempts = new Map<string, number>();
   /** Faults injected, by kind (for the tests and the benchmark's table). */
   readonly injected: Record<string, number> = {};
+  /** Faults injected, by what was asked: metadata (zarr.json), range arrays, shard indexes (suffix ranges), chunks. */
+  readonly injectedOn: Record<'metadata' | 'ranges' | 'shard index' | 'chunk', number> = {
+    metadata: 0,
+    ranges: 0,
+    'shard index': 0,
+    chunk: 0,
+  };
 
   decide(spec: FaultSpec, method: string, path: string, range: string | undefined): FaultKind | null {
     if (spec.rate <= 0 || (spec.match && !path.includes(spec.match))) return null;
@@ -73,6 +83,14 @@ export class FaultInjector {
     if (unit(key) >= spec.rate) return null;
     const kind = spec.kinds[Math.floor(unit(`${key}|kind`) * spec.kinds.length)];
     this.injected[kind] = (this.injected[kind] ?? 0) + 1;
+    const what = path.endsWith('zarr.json')
+      ? 'metadata'
+      : /(^|\/)ranges\//.test(path)
+        ? 'ranges'
+        : range?.startsWith('bytes=-')
+          ? 'shard index'
+          : 'chunk';
+    this.injectedOn[what]++;
     return kind;
   }
 
@@ -85,6 +103,10 @@ export class FaultInjector {
       case '500':
         res.statusCode = 500;
         res.end('injected fault');
+        return;
+      case '403':
+        res.statusCode = 403;
+        res.end('Forbidden');
         return;
       case '503':
       case '429':

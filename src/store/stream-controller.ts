@@ -135,6 +135,10 @@ export class StreamController<
   #shown: ShownSurface<V, S, F> | null = null;
   #surfaces = new Map<number, F>();
   #lastStats = new Map<number, S>();
+  /** GPU bytes each level's surface held when last shown, besides the pool (per-level buffers, cache, vertices). */
+  #footprint = new Map<number, number>();
+  /** Surfaces being made, per level (so two refinements never make two for one level). */
+  #creating = new Map<number, Promise<F>>();
   #waiting: Waiting | null = null;
   #progress = new Set<(p: StreamProgress) => void>();
   #shownListeners = new Set<(s: ShownSurface<V, S, F>) => void>();
@@ -288,9 +292,19 @@ export class StreamController<
     }
     for (let L = start; L >= finest; L--) {
       if (gen !== this.#gen || this.#destroyed) return;
-      const ok = await this.#refine(L, iso, gen);
-      if (!ok) return;
+      const step = await this.#refine(L, iso, gen);
+      if (step !== 'shown' && step !== 'skipped') return;
     }
+  }
+
+  /**
+   * A coarser level than the one on screen that finds no room (the finer
+   * surface holds it) is skipped, not a stop: the finer surface stays until
+   * the next finer level replaces it.
+   */
+  #skippable(L: number): boolean {
+    const s = this.#shown;
+    return s !== null && s.level < L && L > Math.max(0, Math.min(this.finest, this.coarsest));
   }
 
   /** Bytes free within the budget now (a little is kept for short-lived buffers: statistics, staging). */
@@ -338,12 +352,13 @@ export class StreamController<
    * back what it does not need (chunks not in `wanted` evicted first).
    * Returns why it cannot, or null.
    */
-  #fitPool(lv: Level<V>, n: number, wanted: ReadonlySet<ChunkIndex>, iso: number): string | null {
+  #fitPool(lv: Level<V>, needed: number, wanted: ReadonlySet<ChunkIndex>, iso: number): string | null {
     const L = lv.index;
+    const n = Math.max(1, needed); // a pool holds one chunk at least (an isovalue outside the level needs none)
     const v = lv.volume;
     const have = v?.poolChunks ?? 0;
     if (v && have > 2 * n + 8) {
-      const target = Math.max(n, 1);
+      const target = n;
       for (const c of [...lv.lru.keys()]) {
         if (v.residentCount <= target) break;
         if (wanted.has(c)) continue;
@@ -368,17 +383,29 @@ export class StreamController<
     return null;
   }
 
-  /** The cap of level L's cache and vertex buffers: the budget less everything else held now. */
-  #capFor(L: number, surface: F): number {
-    return this.budgetBytes - RESERVE_BYTES - (this.gpu.allocatedBytes - surface.budgetedBytes);
+  /**
+   * The cap of level L's cache and vertex buffers: the budget less
+   * everything else held now and, with `headroom`, less room for the next
+   * coarser level's surface (a new isovalue shows it first while this one
+   * stays on screen): what it took last time, else its per-level buffers and
+   * a quarter of this surface's cache and vertices (a level has 4x fewer
+   * surface cells than the next finer one).
+   */
+  #capFor(L: number, surface: F, headroom: boolean): number {
+    let room = 0;
+    const coarser = this.levels[L + 1];
+    if (headroom && coarser && L + 1 <= this.coarsest && !this.#surfaces.has(L + 1)) {
+      room = this.#footprint.get(L + 1) ?? estimateFixedBytes(coarser.layout) + Math.ceil(surface.budgetedBytes / 4);
+    }
+    return this.budgetBytes - RESERVE_BYTES - room - (this.gpu.allocatedBytes - surface.budgetedBytes);
   }
 
-  async #refine(L: number, iso: number, gen: number): Promise<boolean> {
+  async #refine(L: number, iso: number, gen: number): Promise<'shown' | 'stopped' | 'skipped'> {
     const lv = this.levels[L];
     let needed = lv.nb ? chunksNeeded(lv.nb, iso) : allChunks(lv.layout);
     const wanted = new Set(needed);
     const refused = this.#fitPool(lv, needed.length, wanted, iso);
-    if (refused) return this.#stop(L, refused, 'budget');
+    if (refused) return this.#skippable(L) ? 'skipped' : this.#stop(L, refused, 'budget');
     const pool = lv.volume!;
     const s = 1 / 2 ** L;
     needed = nearestFirst(lv.layout, needed, [this.focus[0] * s, this.focus[1] * s, this.focus[2] * s]);
@@ -411,15 +438,19 @@ export class StreamController<
         if (missing.size === 0) resolve();
       });
       if (this.#waiting === mine) this.#waiting = null; // a newer isovalue may already wait
-      if (gen !== this.#gen || this.#destroyed) return false;
-      if (missing.size > 0) return false; // stopped by a failed chunk
+      if (gen !== this.#gen || this.#destroyed) return 'stopped';
+      if (missing.size > 0) return 'stopped'; // stopped by a failed chunk
     }
     progress('computing');
-    let surface = this.#surfaces.get(L);
+    // a surface being made for this level (by an older isovalue's refinement) is the one to use
+    let surface = this.#surfaces.get(L) ?? (await this.#creating.get(L)?.catch(() => undefined));
+    if (gen !== this.#gen || this.#destroyed) return 'stopped';
+    if (surface && this.#surfaces.get(L) !== surface) surface = undefined; // let go meanwhile
     try {
       if (!surface) {
         const fixed = estimateFixedBytes(lv.layout);
         if (!this.#release(fixed + MIN_SURFACE_BYTES, this.#keep(L))) {
+          if (this.#skippable(L)) return 'skipped';
           return this.#stop(
             L,
             `level ${L}'s surface needs about ${mib(fixed)} MiB of per-level buffers (ranges, maps) besides its cache and vertices; ` +
@@ -427,23 +458,34 @@ export class StreamController<
             'budget',
           );
         }
-        surface = await this.gpu.createSurface(pool, Math.max(MIN_SURFACE_BYTES, this.#free() - fixed));
+        const making = this.gpu.createSurface(pool, Math.max(MIN_SURFACE_BYTES, this.#free() - fixed));
+        this.#creating.set(L, making);
+        try {
+          surface = await making;
+        } finally {
+          if (this.#creating.get(L) === making) this.#creating.delete(L);
+        }
+        // the level's pool may have been let go meanwhile (a newer isovalue needed the room), or the controller closed
+        if (this.#destroyed || lv.volume !== pool) {
+          surface.destroy();
+          return 'stopped';
+        }
         this.#surfaces.set(L, surface);
       }
-      if (gen !== this.#gen || this.#destroyed) return false;
+      if (gen !== this.#gen || this.#destroyed) return 'stopped';
       let stats: S;
       try {
-        surface.setMemoryBudget(Math.max(1, this.#capFor(L, surface)));
+        surface.setMemoryBudget(Math.max(1, this.#capFor(L, surface, true)));
         stats = await surface.compute(iso);
       } catch (e) {
-        // over its cap: let go of pools of levels not on screen and try once more with what that frees
-        if ((e as Error).name !== 'IsosurfaceBudgetError') throw e;
-        const before = this.#free();
-        if (!this.#release(Infinity, this.#keep(L)) && this.#free() <= before) throw e;
-        surface.setMemoryBudget(Math.max(1, this.#capFor(L, surface)));
+        // over its cap: without the room kept for a coarser surface, and with the pools of other levels let go, once more
+        if ((e as Error).name !== 'IsosurfaceBudgetError' || gen !== this.#gen) throw e;
+        this.#release(Infinity, this.#keep(L));
+        surface.setMemoryBudget(Math.max(1, this.#capFor(L, surface, false)));
         stats = await surface.compute(iso);
       }
       this.#lastStats.set(L, stats);
+      this.#footprint.set(L, Math.max(0, (stats.fixedBytes ?? 0) - pool.poolBytes) + stats.cacheBytes + stats.vertexBytes);
       // A store without range arrays: the level was fetched whole; its chunk
       // ranges come from the GPU's block ranges, so the next isovalue fetches
       // only what it needs.
@@ -451,14 +493,17 @@ export class StreamController<
         lv.ranges = chunkRangesOfBlocks(lv.layout, await surface.readBlockRanges());
         lv.nb = neighbourhoodRanges(lv.layout.chunkGrid, lv.ranges);
       }
-      if (gen !== this.#gen || this.#destroyed) return false;
+      if (gen !== this.#gen || this.#destroyed) return 'stopped';
       this.#show({ level: L, iso, volume: pool, surface, stats });
       progress('shown');
-      return true;
+      return 'shown';
     } catch (e) {
-      if (isAbort(e) || (e as Error).name === 'IsosurfaceSupersededError') return false;
+      // superseded: a newer isovalue may have let this level's surface go while it computed
+      if (gen !== this.#gen || this.#destroyed) return 'stopped';
+      if (isAbort(e) || (e as Error).name === 'IsosurfaceSupersededError') return 'stopped';
       // a surface over its budget is the pipeline's clear refusal: the finer level stops, the coarser stays
-      if ((e as Error).name === 'IsosurfaceBudgetError') return this.#stop(L, (e as Error).message, 'budget');
+      if ((e as Error).name === 'IsosurfaceBudgetError')
+        return this.#skippable(L) ? 'skipped' : this.#stop(L, (e as Error).message, 'budget');
       for (const l of this.#errors) l(e as Error);
       return this.#stop(L, (e as Error).message, 'gpu');
     }
@@ -477,7 +522,7 @@ export class StreamController<
     }
   }
 
-  #stop(level: number, reason: string, cause: NonNullable<StreamProgress['cause']>, retryInMs?: number): false {
+  #stop(level: number, reason: string, cause: NonNullable<StreamProgress['cause']>, retryInMs?: number): 'stopped' {
     const w = this.#waiting;
     this.#waiting = null;
     if (w) {
@@ -495,7 +540,7 @@ export class StreamController<
       cause,
       ...(retryInMs !== undefined ? { retryInMs } : {}),
     });
-    return false;
+    return 'stopped';
   }
 
   #scheduleRetry(iso: number, inMs: number): void {

@@ -91,7 +91,7 @@ export const extractCommand: CliCommand = {
     });
     ctx.log(`${input}: ${volume.how}`);
     const { iso } = volume;
-    const records: (ExtractRecord | { iso: number; error: string })[] = [];
+    const records: (ExtractRecord | { iso: number; error: string; overBudget?: boolean })[] = [];
     let storeRecord: ReturnType<NonNullable<typeof volume.store>> | undefined;
     try {
       for (const value of isovalues) {
@@ -102,7 +102,7 @@ export const extractCommand: CliCommand = {
           if (!(e instanceof IsosurfaceBudgetError) && !(e instanceof LevelStoppedError)) throw e;
           ctx.log(`error: ${e.message}`);
           const budget = e instanceof IsosurfaceBudgetError || (e instanceof LevelStoppedError && e.overBudget);
-          records.push({ iso: Math.fround(value), error: e.message, ...(budget ? { budget: true } : {}) });
+          records.push({ iso: Math.fround(value), error: e.message, ...(budget ? { overBudget: true } : {}) });
           continue;
         }
         const surface = await iso.readMesh();
@@ -154,10 +154,10 @@ export const extractCommand: CliCommand = {
       ...(storeRecord ? { store: storeRecord } : {}),
     };
     // Surfaces that did not fit or could not be fetched are failures: the JSON still gets every record, then the exit status says so.
-    const failed = records.filter((r): r is { iso: number; error: string; budget?: boolean } => 'error' in r);
+    const failed = records.filter((r): r is { iso: number; error: string; overBudget?: boolean } => 'error' in r);
     if (failed.length > 0) {
-      const overBudget = failed.filter((f) => f.budget);
-      const other = failed.filter((f) => !f.budget);
+      const overBudget = failed.filter((f) => f.overBudget);
+      const other = failed.filter((f) => !f.overBudget);
       const parts: string[] = [];
       if (overBudget.length > 0)
         parts.push(

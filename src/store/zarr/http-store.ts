@@ -49,6 +49,9 @@ function describeFetchFailure(e: unknown): TransportError {
   if (code === 'ENOTFOUND' || code === 'EAI_AGAIN')
     return new TransportError('unreachable', `the host was not found (${detail})`, true, { cause: e });
   if (code) return new TransportError('dropped', `the connection dropped before the answer (${code}: ${detail})`, true, { cause: e });
+  // a request the runtime will not make at all (a blocked port, a malformed URL)
+  if (err.cause && /bad port|invalid|not supported|unsupported/i.test(detail))
+    return new TransportError('unreachable', `the request cannot be made (${detail})`, false, { cause: e });
   if (err.cause) return new TransportError('dropped', `the connection dropped before the answer (${detail})`, true, { cause: e });
   // A browser hides the cause (an unreachable host, a CORS refusal and a dropped connection look the same).
   return new TransportError('cors-or-unreachable', `CORS or unreachable (the browser hides the cause: ${err.message})`, true, {

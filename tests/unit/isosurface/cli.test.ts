@@ -3,7 +3,7 @@
 // from mc.json and writes readable PLY soups; bench writes deterministic
 // records (two runs with one seed agree on every count) and summaries;
 // a surface over the memory budget is recorded and makes extract exit 1;
-// user mistakes exit with code 2.
+// a wrong command line exits with code 2, a file that is not a volume with 1.
 import { spawnSync } from 'node:child_process';
 import { mkdtempSync, readFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -105,11 +105,12 @@ print(json.dumps({'faces': nf, 'vertices': nv, 'area': area}))
     expect(failed).toEqual({
       iso: 20.5,
       error: expect.stringMatching(/^the surface at iso 20\.5 needs [\d.]+ MB .*the budget is 1\.75 MB/),
+      overBudget: true,
     });
     expect(again.triangles).toBe(ok.triangles);
     expect(r.stderr).toContain(`error: ${failed.error}`);
     expect(r.stderr).toMatch(
-      /error: 1 of 3 isosurfaces did not fit the GPU memory budget of 1\.75 MB \(iso 20\.5\); raise it with --cache-budget MB/,
+      /error: 1 of 3 isosurfaces failed: 1 did not fit the GPU memory budget of 1\.75 MB \(iso 20\.5\); raise it with --cache-budget MB/,
     );
   });
 
@@ -143,14 +144,15 @@ print(json.dumps({'faces': nf, 'vertices': nv, 'area': area}))
     }
   });
 
-  it('user mistakes: exit code 2 and a message', () => {
+  it('a wrong command line: exit code 2 and the usage; a file that is not a volume: 1', () => {
     const raw = join(sharedData, file);
     expect(cli('extract', raw).status).toBe(2);
     const bad = cli('extract', raw, '--iso', '1,x');
     expect(bad.status).toBe(2);
     expect(bad.stderr).toMatch(/--iso must be comma-separated numbers/);
     const noShape = cli('extract', join(sharedData, 'las/laspy_simple.las'), '--iso', '1');
-    expect(noShape.status).toBe(2);
+    expect(noShape.status).toBe(1);
+    expect(noShape.stderr).not.toMatch(/usage:/);
     expect(noShape.stderr).toMatch(/not a volume this command reads/);
     expect(cli('bench', raw, '--modes', 'zigzag').status).toBe(2);
   });

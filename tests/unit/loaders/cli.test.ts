@@ -84,7 +84,7 @@ describe('the command line', () => {
     expect(bad.status).toBe(1);
     expect(bad.stderr).toMatch(/error: imagejs_stack\.tif: not a LAS\/LAZ file/);
     const missing = cli('tiff', join(out, 'nope.tif'));
-    expect(missing.status).toBe(2);
+    expect(missing.status).toBe(1);
     expect(missing.stderr).toMatch(/cannot read .*nope\.tif/);
   });
 });

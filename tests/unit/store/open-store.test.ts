@@ -5,7 +5,7 @@ import { mkdtempSync, readFileSync, rmSync, truncateSync, unlinkSync, writeFileS
 import { createServer, type Server } from 'node:http';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { FetchStore } from 'zarrita';
+import { HttpStore } from '../../../src/store/zarr/http-store.ts';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import { StoreError } from '../../../src/store/zarr/errors.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
@@ -141,7 +141,7 @@ print(json.dumps(zarr.open_array(sys.argv[1], mode='r', path='ranges/1')[:].resh
     expect((await refusal(t.readChunk(0, 31))).message).toMatch(/neghip-shard.zarr level 0 chunk \(1, 1, 1\): \d+ bytes/);
   });
 
-  describe('over HTTP (zarrita FetchStore)', () => {
+  describe('over HTTP (HttpStore)', () => {
     let server: Server;
     let base = '';
     beforeAll(async () => {
@@ -160,14 +160,21 @@ print(json.dumps(zarr.open_array(sys.argv[1], mode='r', path='ranges/1')[:].resh
     });
     afterAll(() => server.close());
 
-    it('404, HTTP errors and an unreachable host are messages naming the store', async () => {
+    it('404, HTTP errors and an unreachable host are messages naming the store and what was observed', async () => {
       const url404 = `${base}/none.zarr`;
-      expect((await refusal(openZfpStore(new FetchStore(url404), url404))).message).toMatch(/none.zarr: no zarr.json at its root/);
+      expect((await refusal(openZfpStore(new HttpStore(url404), url404))).message).toMatch(/none.zarr: no zarr.json at its root/);
       const url403 = `${base}/forbidden/a.zarr`;
-      expect((await refusal(openZfpStore(new FetchStore(url403), url403))).message).toMatch(/a.zarr: the server answered HTTP 403/);
-      const closed = 'http://127.0.0.1:9/x.zarr';
-      const e = await refusal(openZfpStore(new FetchStore(closed), closed));
-      expect(e.message).toMatch(/x.zarr: the request failed .*unreachable, or it refused this page \(CORS\)/);
+      // a 403 is an answer: refused at once, not retried
+      const forbidden = await refusal(openZfpStore(new HttpStore(url403), url403));
+      expect(forbidden.message).toMatch(/a.zarr: GET \/zarr.json: HTTP 403 Forbidden$/);
+      // a port nothing listens on: a host that never answered gets a few quick tries, then the cause
+      const gone = createServer();
+      await new Promise<void>((r) => gone.listen(0, '127.0.0.1', () => r()));
+      const port = (gone.address() as { port: number }).port;
+      await new Promise<void>((r) => gone.close(() => r()));
+      const closed = `http://127.0.0.1:${port}/x.zarr`;
+      const e = await refusal(openZfpStore(new HttpStore(closed), closed, { retry: { firstDelayMs: 1 } }));
+      expect(e.message).toMatch(/x.zarr: GET \/zarr.json: the connection was refused .*, 3 tries over/);
     });
   });
 });

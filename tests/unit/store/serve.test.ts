@@ -1,7 +1,8 @@
 // The dev/preview servers' /stores/ middleware, on a real HTTP server: a
-// sharded store opened through zarrita's FetchStore (shard index by a suffix
-// range after a HEAD, inner chunks by byte ranges) gives the same chunks as
-// the folder; CORS preflight and headers; malformed and unsatisfiable ranges.
+// sharded store opened through our HttpStore (shard index by a suffix range,
+// inner chunks by byte ranges) and through zarrita's FetchStore (a HEAD, then
+// ranges) gives the same chunks as the folder; CORS preflight and headers;
+// malformed and unsatisfiable ranges.
 import { mkdirSync, mkdtempSync, rmSync } from 'node:fs';
 import { createServer, type Server } from 'node:http';
 import { tmpdir } from 'node:os';
@@ -9,6 +10,7 @@ import { join } from 'node:path';
 import { FetchStore } from 'zarrita';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import { parseRange, storesMiddleware } from '../../../scripts/vite-stores.ts';
+import { HttpStore } from '../../../src/store/zarr/http-store.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
 import { openZfpStore } from '../../../src/store/zarr/open-store.ts';
 import { convert } from './stores.ts';
@@ -39,12 +41,13 @@ afterAll(() => {
 describe('/stores/ on the dev and preview servers', () => {
   it('serves a sharded store to zarrita with the same chunk bytes as the folder', async () => {
     const url = `${base}/stores/neghip.zarr`;
-    const http = await openZfpStore(new FetchStore(url), url);
     const disk = await openZfpStore(storeForLocation(join(work, 'stores/neghip.zarr')), 'disk');
-    expect(http.levels.map((l) => l.layout.dims)).toEqual(disk.levels.map((l) => l.layout.dims));
-    for (const c of [0, 31, 62, 124])
-      expect(Buffer.from(await http.readChunk(0, c)).equals(Buffer.from(await disk.readChunk(0, c)))).toBe(true);
-    expect(await http.readRanges(0)).toEqual(await disk.readRanges(0));
+    for (const http of [await openZfpStore(new HttpStore(url), url), await openZfpStore(new FetchStore(url), url)]) {
+      expect(http.levels.map((l) => l.layout.dims)).toEqual(disk.levels.map((l) => l.layout.dims));
+      for (const c of [0, 31, 62, 124])
+        expect(Buffer.from(await http.readChunk(0, c)).equals(Buffer.from(await disk.readChunk(0, c)))).toBe(true);
+      expect(await http.readRanges(0)).toEqual(await disk.readRanges(0));
+    }
   });
 
   it('answers CORS preflights and ranges, refuses bad ones', async () => {

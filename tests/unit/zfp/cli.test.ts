@@ -1,6 +1,7 @@
 // The CLI commands end to end on the shared files: compress (uint8 -> zfp
 // with header, as zfpy writes it), decompress (as zfpy decodes it), info,
-// and a user mistake reported with exit code 2.
+// a file that is not what it says reported with exit code 1 (a data failure),
+// a wrong command line with exit code 2.
 import { spawnSync } from 'node:child_process';
 import { mkdtempSync, readFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -74,9 +75,10 @@ print(same, np.array_equal(dec.view(np.uint32), np.fromfile(out, '<u4').reshape(
     expect(verdict.trim()).toBe('True True');
   });
 
-  it('reports user mistakes with exit code 2', () => {
+  it('a bad input file exits 1 without the usage; a wrong command line exits 2', () => {
     const bad = cli('decompress', join(sharedData, 'volumes', 'fuel_64x64x64_float8.zfp'), '--rate', '8', '-o', join(dir, 'x.raw'));
-    expect(bad.status).toBe(2);
+    expect(bad.status).toBe(1);
+    expect(bad.stderr).not.toMatch(/usage:/);
     expect(bad.stderr).toMatch(
       /fuel_64x64x64_float8\.zfp: a header-less fixed-rate 8 stream of 64x64x64 float32 is 262144 bytes .* the file has 5008/,
     );
