@@ -1,4 +1,4 @@
-// `npm run bench:stream [-- --size N --repeats R --iso-fraction F --budget-mb M --only bonsai|gen]`:
+// `npm run bench:stream [-- --size N --repeats R --iso-fraction F --budget-mb M --only bonsai|gen --faults F --links localhost,link]`:
 // a store served over HTTP on localhost (the dev server's /stores/
 // middleware) and through a simulated link (100 Mbit/s, 20 ms per request,
 // in the fetch layer), for bonsai and a generated N^3 volume (default 256;
@@ -7,14 +7,17 @@
 // needs, fetched into ChunkedVolume pools, coarsest level first. Per case:
 // time to the first surface (coarsest level) and to the full-resolution
 // one (level 0), bytes fetched / store size, level-0 chunks fetched against
-// the plan's count, GPU bytes accounted; next to the in-core path (level 0
-// as one zfp stream read from disk). Median of the repeats after a
+// the plan's count, requests and retries, GPU bytes held (counted where they
+// are made) and their peak; next to the in-core path (level 0 as one zfp
+// stream read from disk). With --faults F every case runs again through the
+// server's faulty prefix (scripts/store-faults.ts: a fraction F of requests
+// fail every way, a new seed per repeat). Median of the repeats after a
 // discarded first.
 import { existsSync, mkdirSync, readFileSync, writeFileSync } from 'node:fs';
 import { createServer } from 'node:http';
 import { join } from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { FetchStore } from 'zarrita';
+import { FaultInjector, faultPrefix } from '../scripts/store-faults.ts';
 import { storesMiddleware } from '../scripts/vite-stores.ts';
 import { describeAdapter } from '../src/gpu/device.ts';
 import { requestNodeGpu } from '../src/gpu/node-gpu.ts';
@@ -23,11 +26,12 @@ import { assembleLevelStream } from '../src/store/assemble.ts';
 import { ChunkFetcher } from '../src/store/fetch/chunk-fetcher.ts';
 import { chunksNeeded, neighbourhoodRanges } from '../src/store/plan.ts';
 import { storeForLocation } from '../src/store/zarr/node-store.ts';
+import { HttpStore } from '../src/store/zarr/http-store.ts';
 import { openZfpStore } from '../src/store/zarr/open-store.ts';
 import { MeteredStore, SimulatedLinkStore } from '../src/store/zarr/stores.ts';
 import { loadZfpStream } from '../src/zfp/gpu-stream.ts';
 import { printTable, summarize, writeJson } from './lib/report.ts';
-import { createChunkStream } from '../src/store/gpu-port.ts';
+import { chunkedGpu, createChunkStream } from '../src/store/gpu-port.ts';
 import { execFileSync } from 'node:child_process';
 
 const root = fileURLToPath(new URL('..', import.meta.url));
@@ -39,9 +43,13 @@ const opt = (name: string, def: string) => {
 const size = Number(opt('size', '256'));
 const repeats = Number(opt('repeats', '3'));
 const isoFraction = Number(opt('iso-fraction', '0.3'));
-// the GPU memory of the stream (pools, caches, vertices, per-block buffers): a quarter must hold a level's per-block buffers (~48 B per block)
-const budgetBytes = Number(opt('budget-mb', String(Math.max(1024, Math.ceil(((size ** 3 / 64) * 48 * 4.5) / 2 ** 20))))) * 2 ** 20;
+// the GPU memory of the whole stream: 512 MiB (the page's default on most GPUs) and level 0's per-level buffers (~48 B per block)
+const budgetBytes = Number(opt('budget-mb', String(512 + Math.ceil((48 * (size / 4) ** 3) / 2 ** 20)))) * 2 ** 20;
 const only = opt('only', '');
+const faultRate = Number(opt('faults', '0'));
+const links = opt('links', 'localhost,link')
+  .split(',')
+  .map((l) => (l === 'link' ? '100 Mbit/s + 20 ms' : 'localhost'));
 const jsonOut = opt('json', join(root, 'benchmarks/results/stream-swiftshader.json'));
 const folder = join(root, '.cache/bench-stream');
 mkdirSync(folder, { recursive: true });
@@ -60,7 +68,8 @@ async function main() {
   const gpu = await requestNodeGpu({ label: 'bench.stream' });
   convert(join(root, '../shared/data/volumes/bonsai_256x256x256_float32.rate4.zfp'), 'bonsai.zarr', ['--rate', '4']);
   convert(`gen:${size}x${size}x${size}`, `gen${size}.zarr`, ['--rate', '4']);
-  const mw = storesMiddleware(folder);
+  const faults = new FaultInjector();
+  const mw = storesMiddleware(folder, faults);
   const server = createServer((req, res) =>
     mw(req, res, () => {
       res.statusCode = 404;
@@ -72,85 +81,104 @@ async function main() {
   const rows: (string | number)[][] = [];
   const records: Record<string, unknown>[] = [];
   for (const name of ['bonsai.zarr', `gen${size}.zarr`].filter((n) => !only || n.startsWith(only))) {
-    const url = `http://127.0.0.1:${port}/stores/${name}`;
     // the chunk pool (ChunkedVolume): only the planned chunks, coarsest level first
-    for (const link of ['localhost', '100 Mbit/s + 20 ms'] as const) {
-      const first: number[] = [],
-        full: number[] = [];
-      let bytes = 0,
-        storeBytes = 0,
-        triangles = 0,
-        iso = 0,
-        planned = NaN,
-        level0Chunks = 0,
-        gpuBytes = 0;
-      for (let r = 0; r < repeats; r++) {
-        const inner = new FetchStore(url);
-        const metered = new MeteredStore(
-          link === 'localhost' ? inner : new SimulatedLinkStore(inner, { mbitPerSecond: 100, latencyMs: 20 }),
+    for (const link of links) {
+      for (const rate of faultRate > 0 ? [0, faultRate] : [0]) {
+        const first: number[] = [],
+          full: number[] = [];
+        let bytes = 0,
+          storeBytes = 0,
+          triangles = 0,
+          iso = 0,
+          planned = NaN,
+          level0Chunks = 0,
+          gpuBytes = 0,
+          gpuPeak = 0,
+          requests = 0,
+          retries = 0;
+        for (let r = 0; r < repeats; r++) {
+          const url = `http://127.0.0.1:${port}/stores/${rate > 0 ? `${faultPrefix({ rate, seed: r + 1 })}/` : ''}${name}`;
+          const inner = new HttpStore(url);
+          const metered = new MeteredStore(
+            link === 'localhost' ? inner : new SimulatedLinkStore(inner, { mbitPerSecond: 100, latencyMs: 20 }),
+          );
+          const t0 = performance.now();
+          const store = await openZfpStore(metered, url);
+          const [lo, hi] = store.valueRange ?? [0, 1];
+          iso = lo + isoFraction * (hi - lo);
+          const fetcher = new ChunkFetcher(store);
+          let chunks0 = 0;
+          fetcher.onChunk((level, _c, _b, fromCache) => {
+            if (level === 0 && !fromCache) chunks0++;
+          });
+          const port_ = chunkedGpu(gpu);
+          const c = await createChunkStream(store, fetcher, port_, budgetBytes);
+          let t1 = NaN;
+          let stopped = '';
+          c.onShown(() => {
+            if (Number.isNaN(t1)) t1 = performance.now();
+          });
+          c.onProgress((p) => {
+            if (p.phase === 'stopped') stopped = p.reason ?? '';
+          });
+          await c.setIsovalue(iso);
+          const t2 = performance.now();
+          if (c.shown?.level !== 0)
+            throw new Error(`${name}: refinement stopped at level ${c.shown?.level}: ${stopped} (raise --budget-mb)`);
+          triangles = c.shown.stats.triangles;
+          first.push(t1 - t0);
+          full.push(t2 - t0);
+          bytes = metered.meter.bytes;
+          requests = metered.meter.requests;
+          retries = store.retries.retries;
+          storeBytes = store.levels.reduce((a, l) => a + l.storedBytes, 0);
+          level0Chunks = chunks0;
+          gpuBytes = c.gpuBytes.total;
+          gpuPeak = port_.meter.peak;
+          const ranges = c.chunkRanges(0);
+          planned = ranges ? chunksNeeded(neighbourhoodRanges(store.levels[0].layout.chunkGrid, ranges), iso).length : NaN;
+          c.destroy();
+        }
+        const f = summarize(first.slice(1)),
+          g = summarize(full.slice(1));
+        const faultText = rate > 0 ? `${(rate * 100).toFixed(0)}%` : '0';
+        rows.push([
+          name,
+          link,
+          faultText,
+          f.median,
+          g.median,
+          bytes / storeBytes,
+          `${level0Chunks} / ${planned}`,
+          requests,
+          retries,
+          (gpuBytes / 2 ** 20).toFixed(1),
+          (gpuPeak / 2 ** 20).toFixed(1),
+          triangles,
+        ]);
+        console.log(
+          `${name}, ${link}, faults ${faultText}: first surface ${f.median.toFixed(0)} ms, full resolution ${g.median.toFixed(0)} ms, fetched ${(bytes / storeBytes).toFixed(3)} of the store, level-0 chunks ${level0Chunks} / ${planned} planned, ${requests} requests, ${retries} retries, ${triangles} triangles`,
         );
-        const t0 = performance.now();
-        const store = await openZfpStore(metered, url);
-        const [lo, hi] = store.valueRange ?? [0, 1];
-        iso = lo + isoFraction * (hi - lo);
-        const fetcher = new ChunkFetcher(store);
-        let chunks0 = 0;
-        fetcher.onChunk((level, _c, _b, fromCache) => {
-          if (level === 0 && !fromCache) chunks0++;
+        records.push({
+          store: name,
+          link,
+          faultRate: rate,
+          path: 'chunk pool',
+          iso,
+          firstSurfaceMs: f,
+          fullSurfaceMs: g,
+          bytesFetched: bytes,
+          storeChunkBytes: storeBytes,
+          level0ChunksFetched: level0Chunks,
+          level0ChunksPlanned: planned,
+          requests,
+          retries,
+          gpuBytes,
+          gpuPeakBytes: gpuPeak,
+          budgetBytes,
+          triangles,
         });
-        const c = await createChunkStream(store, fetcher, gpu, budgetBytes);
-        let t1 = NaN;
-        let stopped = '';
-        c.onShown(() => {
-          if (Number.isNaN(t1)) t1 = performance.now();
-        });
-        c.onProgress((p) => {
-          if (p.phase === 'stopped') stopped = p.reason ?? '';
-        });
-        await c.setIsovalue(iso);
-        const t2 = performance.now();
-        if (c.shown?.level !== 0) throw new Error(`${name}: refinement stopped at level ${c.shown?.level}: ${stopped} (raise --budget-mb)`);
-        triangles = c.shown.stats.triangles;
-        first.push(t1 - t0);
-        full.push(t2 - t0);
-        bytes = metered.meter.bytes;
-        storeBytes = store.levels.reduce((a, l) => a + l.storedBytes, 0);
-        level0Chunks = chunks0;
-        gpuBytes = c.gpuBytes.total;
-        const ranges = c.chunkRanges(0);
-        planned = ranges ? chunksNeeded(neighbourhoodRanges(store.levels[0].layout.chunkGrid, ranges), iso).length : NaN;
-        c.destroy();
       }
-      const f = summarize(first.slice(1)),
-        g = summarize(full.slice(1));
-      rows.push([
-        name,
-        link,
-        f.median,
-        g.median,
-        bytes / storeBytes,
-        `${level0Chunks} / ${planned}`,
-        (gpuBytes / 2 ** 20).toFixed(0),
-        triangles,
-      ]);
-      console.log(
-        `${name}, ${link}: first surface ${f.median.toFixed(0)} ms, full resolution ${g.median.toFixed(0)} ms, fetched ${(bytes / storeBytes).toFixed(3)} of the store, level-0 chunks ${level0Chunks} / ${planned} planned, ${triangles} triangles`,
-      );
-      records.push({
-        store: name,
-        link,
-        path: 'chunk pool',
-        iso,
-        firstSurfaceMs: f,
-        fullSurfaceMs: g,
-        bytesFetched: bytes,
-        storeChunkBytes: storeBytes,
-        level0ChunksFetched: level0Chunks,
-        level0ChunksPlanned: planned,
-        gpuBytes,
-        budgetBytes,
-        triangles,
-      });
     }
     // in-core: level 0 as one stream, from disk
     // read from the folder, not 4096 requests at once through the little server
@@ -168,22 +196,37 @@ async function main() {
     for (let r = 0; r < repeats; r++) {
       const t0 = performance.now();
       const stream = loadZfpStream(gpu.device, new Uint8Array(readFileSync(file)), file);
-      const surface = await Isosurface.create(gpu, stream, { memoryBudgetBytes: Math.floor(budgetBytes / 4) }); // what a streamed surface gets
+      const surface = await Isosurface.create(gpu, stream, { memoryBudgetBytes: budgetBytes });
       await surface.compute(lo + isoFraction * (hi - lo));
       surface.destroy();
       stream.destroy();
       times.push(performance.now() - t0);
     }
     const t = summarize(times.slice(1));
-    rows.push([name, 'in-core (level 0 as one stream from disk)', NaN, t.median, NaN, '', '', NaN]);
+    rows.push([name, 'in-core (level 0 as one stream from disk)', '', NaN, t.median, NaN, '', NaN, NaN, '', '', NaN]);
     records.push({ store: name, link: 'in-core', fullSurfaceMs: t });
   }
+  server.closeAllConnections();
   server.close();
   printTable(
     `bench:stream, ${describeAdapter(gpu.adapter)}, median of ${repeats - 1} after a discarded first; gen size ${size}^3; the stream controller (the page's and the CLI's path): the planned chunks into ChunkedVolume pools, coarsest level first; budget ${budgetBytes / 2 ** 20} MiB`,
-    ['store', 'link', 'first surface ms', 'full-res ms', 'fetched / store', 'L0 chunks fetched / planned', 'GPU MiB', 'triangles'],
+    [
+      'store',
+      'link',
+      'faults',
+      'first surface ms',
+      'full-res ms',
+      'fetched / store',
+      'L0 chunks fetched / planned',
+      'requests',
+      'retries',
+      'GPU MiB',
+      'peak MiB',
+      'triangles',
+    ],
     rows,
   );
+  if (faultRate > 0) console.log(`faults injected: ${JSON.stringify(faults.injected)}, on ${JSON.stringify(faults.injectedOn)}`);
   writeJson(jsonOut, {
     date: new Date().toISOString(),
     adapter: describeAdapter(gpu.adapter),
@@ -191,6 +234,8 @@ async function main() {
     repeats,
     isoFraction,
     budgetBytes,
+    faultRate,
+    faultsInjected: faults.injected,
     records,
   });
   gpu.device.destroy();

@@ -295,7 +295,11 @@ async function start(): Promise<void> {
     }
     state.status = 'loading';
     document.body.dataset.status = 'recovering';
-    messages.show(`${reason.replace(/ reload the page to continue\.?$/i, '')} A new GPU device is being started; what was on screen opens again.`, 'info', 15000);
+    messages.show(
+      `${reason.replace(/ reload the page to continue\.?$/i, '')} A new GPU device is being started; what was on screen opens again.`,
+      'info',
+      15000,
+    );
     // what to open again, taken before the old session lets it go
     const store = storeView?.reopener() ?? null;
     const again = store ? store.open : reopen;

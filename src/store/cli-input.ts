@@ -78,11 +78,7 @@ export interface StoreInputOptions {
   deadlineMs?: number;
 }
 
-export async function openStoreInput(
-  gpu: GpuContext,
-  input: string,
-  opts: StoreInputOptions,
-): Promise<StoreInput> {
+export async function openStoreInput(gpu: GpuContext, input: string, opts: StoreInputOptions): Promise<StoreInput> {
   const metered = new MeteredStore(storeForLocation(input));
   const store = await openZfpStore(metered, input, opts.deadlineMs === undefined ? {} : { retry: { deadlineMs: opts.deadlineMs } });
   const { level } = opts;

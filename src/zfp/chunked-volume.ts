@@ -178,7 +178,11 @@ export class ChunkedVolume implements BlockSource {
         const src = (slot - from.firstSlot) * chunkBytes;
         const dst = (to - into.firstSlot) * chunkBytes;
         if (from.buffer === into.buffer) {
-          scratch ??= device.createBuffer({ label: `${name}.pool.move`, size: chunkBytes, usage: GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST });
+          scratch ??= device.createBuffer({
+            label: `${name}.pool.move`,
+            size: chunkBytes,
+            usage: GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST,
+          });
           encoder.copyBufferToBuffer(from.buffer, src, scratch, 0, chunkBytes);
           encoder.copyBufferToBuffer(scratch, 0, into.buffer, dst, chunkBytes);
         } else {
@@ -213,7 +217,13 @@ export class ChunkedVolume implements BlockSource {
       }
       for (let first = shards.length ? shards[shards.length - 1].endSlot : 0; first < poolChunks; first += this.slotsPerShard) {
         const endSlot = Math.min(poolChunks, first + this.slotsPerShard);
-        shards.push({ buffer: newBuffer(shards.length, endSlot - first), firstSlot: first, endSlot, firstBlock: 0, endBlock: this.info.blockCount });
+        shards.push({
+          buffer: newBuffer(shards.length, endSlot - first),
+          firstSlot: first,
+          endSlot,
+          firstBlock: 0,
+          endBlock: this.info.blockCount,
+        });
       }
       // lowest free slot first (pop takes from the end)
       const added: number[] = [];

@@ -1,7 +1,7 @@
 // Runs the headless CLI (the same modules on Dawn) from a page test, for
 // comparisons between what the page shows and what the CLI computes.
-import { execFile } from 'node:child_process';
-import { mkdtempSync, readFileSync } from 'node:fs';
+import { execFile, execFileSync } from 'node:child_process';
+import { mkdirSync, mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -23,4 +23,32 @@ export function runCli<T = Record<string, unknown>>(args: string[]): Promise<T> 
       },
     );
   });
+}
+
+/** The preview server's stores folder (/stores/ serves it). */
+export const E2E_STORES_DIR = join(root, 'test-results', 'stores');
+
+/** The neghip volume converted into test-results/stores/NAME (16^3 chunks, rate 8, shards of 2^3), made again each run. */
+export function convertNeghipStore(name: string): string {
+  const out = join(E2E_STORES_DIR, name);
+  rmSync(out, { recursive: true, force: true });
+  mkdirSync(E2E_STORES_DIR, { recursive: true });
+  execFileSync(
+    process.execPath,
+    [
+      join(root, 'scripts/convert.mjs'),
+      join(SHARED_VOLUMES_DIR, 'neghip_66x66x66_uint8.raw'),
+      '--out',
+      out,
+      '--chunk',
+      '16',
+      '--rate',
+      '8',
+      '--shard',
+      '2',
+      '--quiet',
+    ],
+    { timeout: 600_000 },
+  );
+  return out;
 }

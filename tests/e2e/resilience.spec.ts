@@ -7,19 +7,13 @@
 // - a lost device (the page's loseDevice hook destroys it, as a driver reset
 //   would lose it) gives a new device, and what was on screen opens again at
 //   the same isovalue and view: the built-in volume, and a store mid-stream.
-import { execFileSync } from 'node:child_process';
-import { mkdirSync, rmSync } from 'node:fs';
-import { join } from 'node:path';
-import { fileURLToPath } from 'node:url';
 import { expect, type Page, test } from '@playwright/test';
-import { runCli, SHARED_VOLUMES_DIR } from './cli.ts';
+import { convertNeghipStore, runCli } from './cli.ts';
 import { openApp, watchErrors } from './page.ts';
 import { trianglesShown } from './volume-page.ts';
 
-const root = fileURLToPath(new URL('../../', import.meta.url));
-const stores = join(root, 'test-results', 'stores');
 const NAME = 'neghip-resilience.zarr';
-const store = join(stores, NAME);
+let store = '';
 
 interface StoreState {
   done: boolean;
@@ -30,8 +24,7 @@ interface StoreState {
   failedRequests: number;
   gpu: { total: number; budget: number };
 }
-const storeState = (page: Page) =>
-  page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore) as Promise<StoreState>;
+const storeState = (page: Page) => page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore) as Promise<StoreState>;
 const storeDone = (page: Page) =>
   page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, {
     timeout: 240_000,
@@ -40,25 +33,7 @@ const storeDone = (page: Page) =>
 const realErrors = (errors: string[]) => errors.filter((e) => !/Failed to load resource|net::ERR_/.test(e));
 
 test.beforeAll(() => {
-  rmSync(store, { recursive: true, force: true });
-  mkdirSync(stores, { recursive: true });
-  execFileSync(
-    process.execPath,
-    [
-      join(root, 'scripts/convert.mjs'),
-      join(SHARED_VOLUMES_DIR, 'neghip_66x66x66_uint8.raw'),
-      '--out',
-      store,
-      '--chunk',
-      '16',
-      '--rate',
-      '8',
-      '--shard',
-      '2',
-      '--quiet',
-    ],
-    { timeout: 600_000 },
-  );
+  store = convertNeghipStore(NAME);
 });
 
 test('30% of requests failing: level 0 with exactly the fault-free triangles, for two seeds', async ({ page }) => {
@@ -143,9 +118,13 @@ test('a lost device while a store streams: it opens again and ends at the same l
   const cli = await runCli<{ isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', '--iso', '80']);
   // slow answers keep it streaming long enough to lose the device on the way
   await openApp(page, `/?store=/stores/~faults(rate=0.5;seed=3;kinds=slow)/${NAME}#iso=80`);
-  await page.waitForFunction(() => ((window as unknown as { zfpisoStore?: { shownLevels: number[] } }).zfpisoStore?.shownLevels.length ?? 0) >= 1, null, {
-    timeout: 240_000,
-  });
+  await page.waitForFunction(
+    () => ((window as unknown as { zfpisoStore?: { shownLevels: number[] } }).zfpisoStore?.shownLevels.length ?? 0) >= 1,
+    null,
+    {
+      timeout: 240_000,
+    },
+  );
   await page.evaluate(() => window.zfpiso!.loseDevice!());
   await page.waitForFunction(() => window.zfpiso!.deviceLosses === 1 && window.zfpiso!.status === 'ready', null, { timeout: 240_000 });
   await storeDone(page);

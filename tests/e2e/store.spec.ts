@@ -5,18 +5,12 @@
 // bytes fetched at level 0, triangles at the same isovalue); scrubbing goes
 // through the stream; an unknown store is a message naming it while the
 // page stays usable.
-import { execFileSync } from 'node:child_process';
-import { mkdirSync, rmSync } from 'node:fs';
-import { join } from 'node:path';
-import { fileURLToPath } from 'node:url';
 import { expect, test } from '@playwright/test';
-import { runCli, SHARED_VOLUMES_DIR } from './cli.ts';
+import { convertNeghipStore, runCli } from './cli.ts';
 import { openApp, watchErrors } from './page.ts';
 import { trianglesShown } from './volume-page.ts';
 
-const root = fileURLToPath(new URL('../../', import.meta.url));
-const stores = join(root, 'test-results', 'stores');
-const store = join(stores, 'neghip-e2e.zarr');
+let store = '';
 
 interface StoreState {
   done: boolean;
@@ -33,25 +27,7 @@ const storeState = (page: import('@playwright/test').Page) =>
   page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore) as Promise<StoreState>;
 
 test.beforeAll(() => {
-  rmSync(store, { recursive: true, force: true });
-  mkdirSync(stores, { recursive: true });
-  execFileSync(
-    process.execPath,
-    [
-      join(root, 'scripts/convert.mjs'),
-      join(SHARED_VOLUMES_DIR, 'neghip_66x66x66_uint8.raw'),
-      '--out',
-      store,
-      '--chunk',
-      '16',
-      '--rate',
-      '8',
-      '--shard',
-      '2',
-      '--quiet',
-    ],
-    { timeout: 600_000 },
-  );
+  store = convertNeghipStore('neghip-e2e.zarr');
 });
 
 test('?store= shows coarse to fine; panel figures equal the CLI records', async ({ page }) => {

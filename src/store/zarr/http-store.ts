@@ -90,8 +90,7 @@ export class HttpStore implements AsyncReadable {
     const signal = outer ? AbortSignal.any([outer, timeout.signal]) : timeout.signal;
     const headers: Record<string, string> = {};
     if (range) {
-      headers.Range =
-        'suffixLength' in range ? `bytes=-${range.suffixLength}` : `bytes=${range.offset}-${range.offset + range.length - 1}`;
+      headers.Range = 'suffixLength' in range ? `bytes=-${range.suffixLength}` : `bytes=${range.offset}-${range.offset + range.length - 1}`;
     }
     const url = resolveKey(this.url, key);
     try {
@@ -168,7 +167,11 @@ function expectedLength(r: Response, range: RangeQuery | undefined): number | un
     n = range.length;
   }
   if (n !== undefined && n > MAX_BODY_BYTES)
-    throw new TransportError('corrupt', `the answer announces ${n} bytes, more than ${MAX_BODY_BYTES} this reader takes per request`, false);
+    throw new TransportError(
+      'corrupt',
+      `the answer announces ${n} bytes, more than ${MAX_BODY_BYTES} this reader takes per request`,
+      false,
+    );
   return n;
 }
 

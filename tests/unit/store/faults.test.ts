@@ -62,14 +62,36 @@ const read = (path: string) => JSON.parse(readFileSync(path, 'utf8')) as Extract
 
 describe('a store behind a misbehaving server', () => {
   it('30% of requests failing every way: exactly the fault-free surface, for several seeds', async () => {
-    const ref = await cli('extract', `${base}/hydrogen.zarr`, '--level', '0', '--iso', '20,120', '--ply', join(work, 'ref'), '--json', join(work, 'ref.json'));
+    const ref = await cli(
+      'extract',
+      `${base}/hydrogen.zarr`,
+      '--level',
+      '0',
+      '--iso',
+      '20,120',
+      '--ply',
+      join(work, 'ref'),
+      '--json',
+      join(work, 'ref.json'),
+    );
     expect(ref.status, ref.stderr).toBe(0);
     const clean = read(join(work, 'ref.json'));
     expect(clean.store.retries).toBe(0);
     expect(clean.isosurfaces[0].triangles).toBeGreaterThan(10_000);
     for (const seed of [1, 2, 3]) {
       const url = `${base}/${faultPrefix({ rate: 0.3, seed })}/hydrogen.zarr`;
-      const r = await cli('extract', url, '--level', '0', '--iso', '20,120', '--ply', join(work, `s${seed}`), '--json', join(work, `s${seed}.json`));
+      const r = await cli(
+        'extract',
+        url,
+        '--level',
+        '0',
+        '--iso',
+        '20,120',
+        '--ply',
+        join(work, `s${seed}`),
+        '--json',
+        join(work, `s${seed}.json`),
+      );
       expect(r.status, r.stderr).toBe(0);
       const got = read(join(work, `s${seed}.json`));
       expect(got.store.retries).toBeGreaterThan(20);

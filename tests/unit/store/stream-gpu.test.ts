@@ -15,7 +15,6 @@ import { assembleLevelStream } from '../../../src/store/assemble.ts';
 import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
 import { createChunkStream } from '../../../src/store/gpu-port.ts';
 import { chunksNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
-import { StreamController } from '../../../src/store/stream-controller.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
 import { openZfpStore } from '../../../src/store/zarr/open-store.ts';
 import { loadZfpStream } from '../../../src/zfp/gpu-stream.ts';
