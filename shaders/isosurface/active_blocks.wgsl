@@ -24,16 +24,21 @@ fn neighbourhood_range(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroup
   neighbourhood_ranges[b] = neighbourhood_of(b);
 }
 
+// Over the neighbours present (a pool's: those whose chunk is resident; the
+// plan makes every chunk a surface needs resident with its 26 neighbours).
 fn neighbourhood_of(b: u32) -> vec2f {
-  let c = block_coords_of(b, volume.grid);
+  let c = block_coords(b, volume.grid);
   let lo = max(c, vec3u(1u)) - 1u;
   let hi = min(c + 1u, volume.grid - 1u);
   var r = block_ranges[b];
   for (var z = lo.z; z <= hi.z; z++) {
     for (var y = lo.y; y <= hi.y; y++) {
       for (var x = lo.x; x <= hi.x; x++) {
-        let o = block_ranges[block_index_of(vec3u(x, y, z), volume.grid)];
-        r = vec2f(min(r.x, o.x), max(r.y, o.y));
+        let n = block_at(vec3u(x, y, z), volume.grid);
+        if (n != NONE) {
+          let o = block_ranges[n];
+          r = vec2f(min(r.x, o.x), max(r.y, o.y));
+        }
       }
     }
   }
@@ -41,8 +46,9 @@ fn neighbourhood_of(b: u32) -> vec2f {
 }
 
 // ---- chunked volumes: after chunks arrived in (or left) the pool, the
-// neighbourhood ranges of every block within one block of those chunks
-// (entry i: block i % (C/4 + 2)^3 of the chunk's box grown by one block).
+// neighbourhood ranges of every resident block within one block of those
+// chunks (entry i: block i % (C/4 + 2)^3 of the box of chunk
+// region_chunks[i / (C/4 + 2)^3].y grown by one block; .x is its slot).
 struct ChunkRegion {
   count: u32,         // chunks in region_chunks
   chunk_blocks: u32,  // blocks per chunk edge
@@ -52,7 +58,7 @@ struct ChunkRegion {
   pad2: u32,
 }
 
-@group(1) @binding(0) var<storage, read> region_chunks: array<u32>;
+@group(1) @binding(0) var<storage, read> region_chunks: array<vec2u>;
 @group(1) @binding(1) var<uniform> region: ChunkRegion;
 
 @compute @workgroup_size(64)
@@ -64,7 +70,7 @@ fn neighbourhood_range_chunks(@builtin(workgroup_id) wid: vec3u, @builtin(num_wo
   if (i >= region.count * per) {
     return;
   }
-  let chunk = region_chunks[i / per];
+  let chunk = region_chunks[i / per].y;
   let l = i % per;
   let g = region.chunk_grid;
   let cc = vec3u(chunk % g.x, (chunk / g.x) % g.y, chunk / (g.x * g.y));
@@ -72,6 +78,9 @@ fn neighbourhood_range_chunks(@builtin(workgroup_id) wid: vec3u, @builtin(num_wo
   if (any(c < vec3i(0)) || any(vec3u(c) >= volume.grid)) {
     return;
   }
-  let b = block_index_of(vec3u(c), volume.grid);
+  let b = block_at(vec3u(c), volume.grid);
+  if (b == NONE) {
+    return;
+  }
   neighbourhood_ranges[b] = neighbourhood_of(b);
 }

@@ -1,6 +1,8 @@
-// Hierarchical active-block selection: groups of edge^3 blocks (in raster
-// order over the group grid; a chunked store's chunks are such groups), each
-// with the range of its blocks' neighbourhood ranges, computed once at load.
+// Hierarchical active-block selection: groups of edge^3 blocks (a stream's:
+// in raster order over the group grid; a pool's: its slots, the resident
+// chunks, blocks_pool.wgsl), each with the range of its blocks'
+// neighbourhood ranges (a stream's computed once at load, a pool's as
+// chunks come and go).
 // Per isovalue: one compare per group, then one compare per block of the
 // active groups only, so the cost follows the surface, not the volume.
 // A block is active (lo < iso <= hi over its 27-block neighbourhood,
@@ -22,11 +24,9 @@ struct GroupParams {
 @group(0) @binding(0) var<uniform> volume: VolumeParams;
 @group(0) @binding(1) var<uniform> groups: GroupParams;
 
-// Block coordinates of block `local` (raster order within the group) of group g (may lie outside the grid).
-fn group_block(g: u32, local: u32) -> vec3u {
-  let gc = vec3u(g % groups.grid.x, (g / groups.grid.x) % groups.grid.y, g / (groups.grid.x * groups.grid.y));
-  let e = groups.edge;
-  return gc * e + vec3u(local % e, (local / e) % e, local / (e * e));
+// The id of block `local` (raster order within the group) of group g, NONE when absent (blocks_*.wgsl).
+fn group_block(g: u32, local: u32) -> u32 {
+  return group_block_id(g, local, volume.grid, groups.grid, groups.edge);
 }
 
 // ---- at load: each group's range over its blocks' neighbourhood ranges
@@ -47,27 +47,30 @@ fn group_range_of(g: u32) -> vec2f {
   // an empty range (lo > hi) covers no isovalue
   var r = vec2f(3.0e38, -3.0e38);
   for (var local = 0u; local < groups.per_group; local++) {
-    let c = group_block(g, local);
-    if (all(c < volume.grid)) {
-      let o = load_neighbourhood_ranges[block_index_of(c, volume.grid)];
+    let b = group_block(g, local);
+    if (b != NONE) {
+      let o = load_neighbourhood_ranges[b];
       r = vec2f(min(r.x, o.x), max(r.y, o.y));
     }
   }
   return r;
 }
 
-// ---- chunked volumes (groups are the chunks): after chunks arrived or
-// left, the ranges of those groups and their 26 neighbours, whose blocks'
-// neighbourhood ranges may have changed (entry i: neighbour i % 27 of chunk
-// changed_chunks[i / 27]).
+// ---- chunked volumes (groups are the slots): after chunks arrived or left,
+// the ranges of their slots and of the resident chunks around them, whose
+// blocks' neighbourhood ranges may have changed (entry i: neighbour i % 27
+// of chunk changed_chunks[i / 27].y, whose slot is .x; an emptied slot gets
+// the empty range).
 struct ChangedChunks {
   count: u32,
   pad0: u32,
   pad1: u32,
   pad2: u32,
+  chunk_grid: vec3u,  // chunks per axis of the level
+  pad3: u32,
 }
 
-@group(2) @binding(0) var<storage, read> changed_chunks: array<u32>;
+@group(2) @binding(0) var<storage, read> changed_chunks: array<vec2u>;
 @group(2) @binding(1) var<uniform> changed: ChangedChunks;
 
 @compute @workgroup_size(64)
@@ -77,16 +80,24 @@ fn group_range_chunks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups
   if (i >= changed.count * 27u) {
     return;
   }
-  let chunk = changed_chunks[i / 27u];
+  let entry = changed_chunks[i / 27u];
   let k = i % 27u;
-  let gg = groups.grid;
+  if (k == 13u) {
+    // the slot itself (its chunk now, or none)
+    load_group_ranges[entry.x] = group_range_of(entry.x);
+    return;
+  }
+  let gg = changed.chunk_grid;
+  let chunk = entry.y;
   let cc = vec3u(chunk % gg.x, (chunk / gg.x) % gg.y, chunk / (gg.x * gg.y));
   let c = vec3i(cc) + vec3i(i32(k % 3u), i32((k / 3u) % 3u), i32(k / 9u)) - vec3i(1);
   if (any(c < vec3i(0)) || any(vec3u(c) >= gg)) {
     return;
   }
-  let g = u32(c.x) + gg.x * (u32(c.y) + gg.y * u32(c.z));
-  load_group_ranges[g] = group_range_of(g);
+  let g = group_of_chunk(u32(c.x) + gg.x * (u32(c.y) + gg.y * u32(c.z)));
+  if (g != NONE) {
+    load_group_ranges[g] = group_range_of(g);
+  }
 }
 
 // ---- per isovalue, pass 1: one compare per group
@@ -120,14 +131,12 @@ fn mark_group_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups)
   if (i >= blocks_counters[C_GROUP_BLOCKS]) {
     return;
   }
-  let c = group_block(blocks_active_groups[i / groups.per_group], i % groups.per_group);
+  let b = group_block(blocks_active_groups[i / groups.per_group], i % groups.per_group);
   var is_active = false;
-  var b = 0u;
-  if (all(c < volume.grid)) {
-    b = block_index_of(c, volume.grid);
+  if (b != NONE) {
     let r = blocks_neighbourhood_ranges[b];
     is_active = r.x < volume.iso && volume.iso <= r.y;
   }
   block_mask[i] = select(0u, 1u, is_active);
-  block_ids[i] = b;
+  block_ids[i] = select(b, 0u, b == NONE);
 }

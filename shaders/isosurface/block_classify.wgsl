@@ -58,7 +58,7 @@ fn classify_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) n
     return;
   }
   let b = active_ids[i];
-  let c = block_coords_of(b, volume.grid);
+  let c = block_coords(b, volume.grid);
   // The 8 blocks the cells of b touch (d = dx + 2dy + 4dz); `missing` has bit d
   // set for those not cached (or outside the grid).
   var slots: array<u32, 8>;

@@ -8,7 +8,7 @@
 @group(1) @binding(1) var<storage, read> slot_mc: array<vec2u>;     // per slot and row: (4 case bytes, row base)
 @group(2) @binding(0) var<uniform> shard: array<vec4u, 2>;          // this shard's record (plan.wgsl): first, count, base
 @group(2) @binding(1) var<storage, read_write> shard_indices: array<u32>;
-// Welded vertices, 3 words each: packed position, block id, normal (vertex_format.wgsl).
+// Welded vertices, 3 words each: the edge and the fraction along it, the block's coordinates, the normal (vertex_format.wgsl).
 @group(2) @binding(2) var<storage, read_write> vertex_data: array<u32>;
 
 // Normals, once per surface (the renderer reads them, nothing per frame): the
@@ -20,7 +20,7 @@ fn grid_voxel(g: vec3i) -> vec2f {
   if (any(g < vec3i(0)) || any(g >= vec3i(volume.dims))) {
     return vec2f(0.0);
   }
-  let slot = block_to_slot[block_index_of(vec3u(g) >> vec3u(2u), volume.grid)];
+  let slot = cached_slot_at(vec3u(g) >> vec3u(2u));
   if (slot == NONE) {
     return vec2f(0.0);
   }
@@ -62,7 +62,7 @@ fn emit_surface(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
   let first = entry.y;
   let b = active_ids[entry.x >> 6u];
   let l = cell_of(entry.x & 63u);
-  let c = block_coords_of(b, volume.grid);
+  let c = block_coords(b, volume.grid);
   let own = block_to_slot[b];
   // The 8 corners (q = x + 2y + 4z) and their blocks' slots; every block the cell touches is cached.
   var values: array<f32, 8>;
@@ -72,7 +72,7 @@ fn emit_surface(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
     let d = p >> vec3u(2u);
     var slot = own;
     if (any(d != vec3u(0u))) {
-      slot = block_to_slot[block_index_of(c + d, volume.grid)];
+      slot = cached_slot_at(c + d);
     }
     slots[q] = slot;
     let v = p & vec3u(3u);
@@ -106,12 +106,10 @@ fn emit_surface(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
       let v1 = values[upper];
       // the project's interpolation formula (src/mc/README.md), from the lower corner
       let t = (volume.iso - v0) / (v1 - v0);
-      var p = vec3f(l + mc_corner_offset(lower));
-      let axis = mc_edge_axis(e);
-      p[axis] = p[axis] + t;
       if (vertex < capacity) {
-        vertex_data[3u * vertex] = encode_vertex_position(p);
-        vertex_data[3u * vertex + 1u] = b;
+        let w = encode_vertex_edge(l + mc_corner_offset(lower), mc_edge_axis(e), t, c);
+        vertex_data[3u * vertex] = w.x;
+        vertex_data[3u * vertex + 1u] = w.y;
         // Outward (toward decreasing values): minus the gradient.
         var lower_gradient = gradient0;
         if (lower != 0u) {

@@ -23,7 +23,7 @@ fn expand_cells(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
   }
   let b = expand_active_ids[i];
   let slot = expand_block_to_slot[b];
-  let origin = block_coords_of(b, expand_volume.grid) * 4u;
+  let origin = block_coords(b, expand_volume.grid) * 4u;
   var at = expand_cell_offsets[i];
   var first = expand_index_offsets[i];
   var vertex = expand_vertex_offsets[i];

@@ -27,7 +27,8 @@
 // This file: the bindings and helpers classify_blocks (block_classify.wgsl)
 // and emit_surface (block_emit.wgsl) share. Each kernel is its own module, so
 // no two resource variables of a module share a binding.
-// Needs common.wgsl, shaders/common/grid.wgsl, shaders/mc/case_table.wgsl.
+// Needs common.wgsl, a block id snippet (blocks_stream.wgsl or blocks_pool.wgsl),
+// shaders/common/grid.wgsl, shaders/mc/case_table.wgsl.
 
 // ---- group 0 of classify and emit: the volume and the cache
 @group(0) @binding(0) var<uniform> volume: VolumeParams;
@@ -50,12 +51,20 @@ fn cell_of(cell: u32) -> vec3u {
   return vec3u(cell & 3u, (cell >> 2u) & 3u, cell >> 4u);
 }
 
-// Slot of block c + d (d in {0, 1}^3), NONE outside the grid or not cached.
-fn neighbour_slot(c: vec3u, d: vec3u) -> u32 {
-  let n = c + d;
+// Cache slot of the block at coordinates n, NONE outside the grid, not present (blocks_*.wgsl) or not cached.
+fn cached_slot_at(n: vec3u) -> u32 {
   if (any(n >= volume.grid)) {
     return NONE;
   }
-  return block_to_slot[block_index_of(n, volume.grid)];
+  let b = block_at(n, volume.grid);
+  if (b == NONE) {
+    return NONE;
+  }
+  return block_to_slot[b];
+}
+
+// Slot of block c + d (d in {0, 1}^3), NONE outside the grid or not cached.
+fn neighbour_slot(c: vec3u, d: vec3u) -> u32 {
+  return cached_slot_at(c + d);
 }
 

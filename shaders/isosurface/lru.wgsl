@@ -287,3 +287,35 @@ fn fill_none(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: ve
     fill_target[i] = NONE;
   }
 }
+
+// ---- forget_slots: a chunk pool's slot got another chunk (or none): the
+// blocks decoded from its old chunk are forgotten, so a pool id never names
+// a stale block (blocks_pool.wgsl). Entry i: block i % per_chunk of the slot
+// in list entry i / per_chunk. The cache slot keeps its log entry (it is
+// reused in LRU order: assign_slots skips an empty slot's old block).
+struct ForgetParams {
+  count: u32,      // entries of the list
+  per_chunk: u32,  // block ids per pool slot
+  pad0: u32,
+  pad1: u32,
+}
+
+@group(0) @binding(0) var<storage, read> forget_list: array<vec2u>;
+@group(0) @binding(1) var<uniform> forget: ForgetParams;
+@group(0) @binding(2) var<storage, read_write> forget_block_to_slot: array<u32>;
+@group(0) @binding(3) var<storage, read_write> forget_slot_to_block: array<u32>;
+
+@compute @workgroup_size(64)
+fn forget_slots(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
+                @builtin(local_invocation_index) lid: u32) {
+  let i = grid_invocation_index(wid, nwg, lid, 64u);
+  if (i >= forget.count * forget.per_chunk) {
+    return;
+  }
+  let b = forget_list[i / forget.per_chunk].x * forget.per_chunk + i % forget.per_chunk;
+  let slot = forget_block_to_slot[b];
+  if (slot != NONE) {
+    forget_slot_to_block[slot] = NONE;
+    forget_block_to_slot[b] = NONE;
+  }
+}

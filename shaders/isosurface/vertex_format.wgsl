@@ -1,25 +1,32 @@
-// The compressed vertex format (8 bytes per vertex, src/isosurface/types.ts):
-// word 0 packs the position relative to the block's origin 4 * (bx, by, bz),
-// quantized to 10 bits per axis, q = round(local * 1023 / 4) with local in
-// [0, 4] voxels (x in bits 0-9, y in 10-19, z in 20-29); word 1 is the block
-// id bx + gx * (by + gy * bz). The renderer composes this file in and calls
-// decode_vertex_position; the extraction kernel calls encode_vertex_position.
-//
-// Normals (4 bytes per vertex, a parallel buffer per shard, written once per
-// surface by the vertex pass): the unit gradient direction, octahedral-encoded
-// as two 16-bit values q = 1 + round((o * 0.5 + 0.5) * 65534) (x in bits
-// 0-15, y in 16-31); 0 means "no gradient" (flat shading).
+// The compressed vertex format (12 bytes per welded vertex, src/isosurface/types.ts).
+// Every vertex lies on a cut grid edge, so it is written as that edge and a
+// fraction along it, and its block by its coordinates (not a raster id, so
+// levels of any block count place vertices alike):
+//   word 0: the edge's lower corner relative to the block's origin, 0..4 per
+//           axis (bits 0-2 x, 3-5 y, 6-8 z), the edge's axis (bits 9-10), the
+//           fraction t along it quantized to 16 bits (11-26: round(t * 65535)),
+//           and bits 8-11 of the block's z (27-30)
+//   word 1: the block's coordinates bx (bits 0-11), by (12-23), bits 0-7 of bz (24-31)
+//   word 2: the normal (below)
+// Block coordinates have 12 bits per axis: volumes of up to 16384 voxels per
+// axis (MAX_VERTEX_VOXELS in vertex-format.ts; larger ones are refused when
+// a pipeline is made). The renderer composes this file in and calls
+// decode_vertex_position; the extraction kernel calls encode_vertex_edge.
 
-fn encode_vertex_position(local: vec3f) -> u32 {
-  let q = vec3u(clamp(round(local * (1023.0 / 4.0)), vec3f(0.0), vec3f(1023.0)));
-  return q.x | (q.y << 10u) | (q.z << 20u);
+fn encode_vertex_edge(corner: vec3u, axis: u32, t: f32, block: vec3u) -> vec2u {
+  let q = u32(round(clamp(t, 0.0, 1.0) * 65535.0));
+  let w0 = corner.x | (corner.y << 3u) | (corner.z << 6u) | (axis << 9u) | (q << 11u) | ((block.z >> 8u) << 27u);
+  let w1 = block.x | (block.y << 12u) | ((block.z & 255u) << 24u);
+  return vec2u(w0, w1);
 }
 
 // Voxel-index-space position (voxel (i, j, k) at (i, j, k)) of a vertex.
-fn decode_vertex_position(packed: u32, block_id: u32, block_grid: vec3u) -> vec3f {
-  let q = vec3u(packed & 1023u, (packed >> 10u) & 1023u, (packed >> 20u) & 1023u);
-  let b = vec3u(block_id % block_grid.x, (block_id / block_grid.x) % block_grid.y, block_id / (block_grid.x * block_grid.y));
-  return vec3f(b * 4u) + vec3f(q) * (4.0 / 1023.0);
+fn decode_vertex_position(w0: u32, w1: u32) -> vec3f {
+  let block = vec3u(w1 & 4095u, (w1 >> 12u) & 4095u, (w1 >> 24u) | (((w0 >> 27u) & 15u) << 8u));
+  let corner = vec3u(w0 & 7u, (w0 >> 3u) & 7u, (w0 >> 6u) & 7u);
+  var p = vec3f(block * 4u + corner);
+  p[(w0 >> 9u) & 3u] += f32((w0 >> 11u) & 65535u) / 65535.0;
+  return p;
 }
 
 // Octahedral encoding of a gradient (any length); 0 when it has none.

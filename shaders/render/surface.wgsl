@@ -11,7 +11,7 @@
 // page; a microscope stack's spacing on the neuron page, where the surface
 // shares the space of the volume rendering and the traces).
 struct Surface {
-  block_grid: vec4u,   // blocks per axis; w: 1 = gradient normals, 0 = flat
+  flags: vec4u,        // w: 1 = gradient normals, 0 = flat (xyz unused)
   dims: vec4i,         // voxels per axis
   front: vec4f,        // front (outside) colour; a: ambient
   back: vec4f,         // back (inside) colour;  a: specular strength
@@ -35,12 +35,12 @@ fn world_of(p: vec3f) -> vec3f {
 
 @vertex
 fn vs(@location(0) v: vec2u, @location(1) packed_normal: u32) -> VsOut {
-  let p = decode_vertex_position(v.x, v.y, surface.block_grid.xyz);
+  let p = decode_vertex_position(v.x, v.y);
   var out: VsOut;
   out.world = world_of(p);
   out.clip = frame.view_proj * vec4f(out.world, 1.0);
   out.normal = vec3f(0.0);
-  if (surface.block_grid.w != 0u) {
+  if (surface.flags.w != 0u) {
     // The gradient in index space, per world unit: d/dx_world = d/dx_index / voxel size.
     out.normal = decode_vertex_normal(packed_normal) / surface.voxel_size.xyz;
   }
@@ -54,7 +54,7 @@ struct DepthOut {
 // Depth only (opaque-layer pre-pass of the neuron page): positions only.
 @vertex
 fn vs_depth(@location(0) v: vec2u) -> DepthOut {
-  let p = decode_vertex_position(v.x, v.y, surface.block_grid.xyz);
+  let p = decode_vertex_position(v.x, v.y);
   return DepthOut(frame.view_proj * vec4f(world_of(p), 1.0));
 }
 

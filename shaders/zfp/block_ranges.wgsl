@@ -9,18 +9,19 @@ fn block_ranges(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
                 @builtin(local_invocation_index) lid: u32) {
   let b = stream.shard_first_block + grid_invocation_index(wid, nwg, lid, 64u);
   if (b >= stream.shard_end_block) { return; }
-  let r = block_value_range(b);
+  let r = block_value_range_at(b, block_coords(b));
   ranges[2u * b] = r.x;
   ranges[2u * b + 1u] = r.y;
 }
 
-// [min, max] of block b's finite decoded values inside the volume. Converts
+// [min, max] of block b's finite decoded values inside the volume (block
+// coordinates `coords`: the padding beyond the volume is left out). Converts
 // each integer to float bits as it reads it: one 64-entry private array per
 // invocation (decode_block_ints), not a second one of float bits.
-fn block_value_range(b: u32) -> vec2f {
+fn block_value_range_at(b: u32, coords: vec3u) -> vec2f {
   var q: array<i32, 64>;
   let emax = decode_block_ints(b, &q);
-  let c = block_coords(b) * 4u;
+  let c = coords * 4u;
   let d = stream.dims;
   let nx = min(4u, d.x - c.x);
   let ny = min(4u, d.y - c.y);

@@ -1,11 +1,15 @@
 // Where a block starts when the volume arrives as chunks (a chunked store,
 // src/zfp/chunked-volume.ts): every chunk of C^3 voxels is a zfp stream of
-// its own (header, then its (C/4)^3 blocks in raster order), copied whole
-// into a slot of a pool; the page table maps chunk -> slot (0xffffffff: not
-// resident). A pool shard holds slots [first_slot, end_slot) back to back,
-// slot_words 32-bit words each. The stream uniform still gives the level's
-// dims, block grid and bits per block; a chunk's blocks are those of the
-// whole level compressed as one stream (zfp codes each block alone).
+// its own (header, then its B = (C/4)^3 blocks in raster order), copied
+// whole into a slot of a pool. Blocks are named by their pool id: slot * B
+// + the block's index within its chunk (shaders/isosurface/blocks_pool.wgsl),
+// so finding a block needs no table. The page table maps chunk -> slot
+// (0xffffffff: not resident) and the slot table slot -> chunk, for the
+// passes that start from chunks or need coordinates. A pool shard holds
+// slots [first_slot, end_slot) back to back, slot_words 32-bit words each.
+// The stream uniform still gives the level's dims, block grid and bits per
+// block; a chunk's blocks are those of the whole level compressed as one
+// stream (zfp codes each block alone).
 
 struct PoolParams {
   chunk_grid: vec3u,    // chunks per axis
@@ -18,25 +22,23 @@ struct PoolParams {
 
 @group(0) @binding(2) var<storage, read> page_table: array<u32>;
 @group(0) @binding(3) var<uniform> pool: PoolParams;
+@group(0) @binding(4) var<storage, read> slot_chunks: array<u32>;
 
 const POOL_NONE = 0xffffffffu;
 
-fn chunk_of_block(b: u32) -> u32 {
-  let c = block_coords(b) / pool.chunk_blocks;
-  return c.x + pool.chunk_grid.x * (c.y + pool.chunk_grid.y * c.z);
+fn blocks_per_chunk() -> u32 {
+  return pool.chunk_blocks * pool.chunk_blocks * pool.chunk_blocks;
 }
 
 fn block_in_shard(b: u32) -> bool {
-  let slot = page_table[chunk_of_block(b)];
-  return slot != POOL_NONE && slot >= pool.first_slot && slot < pool.end_slot;
+  let slot = b / blocks_per_chunk();
+  return slot >= pool.first_slot && slot < pool.end_slot;
 }
 
 // (word, bit) where block b starts; only for blocks in this shard.
 fn block_start(b: u32) -> vec2u {
-  let slot = page_table[chunk_of_block(b)];
-  let l = block_coords(b) % pool.chunk_blocks;
-  let local = l.x + pool.chunk_blocks * (l.y + pool.chunk_blocks * l.z);
+  let per = blocks_per_chunk();
   // < 2^32: ChunkedVolume.create checks that a chunk's stream holds fewer bits
-  let bit = pool.header_bits + local * stream.bits_per_block;
-  return vec2u((slot - pool.first_slot) * pool.slot_words + bit / 32u, bit % 32u);
+  let bit = pool.header_bits + (b % per) * stream.bits_per_block;
+  return vec2u((b / per - pool.first_slot) * pool.slot_words + bit / 32u, bit % 32u);
 }

@@ -42,7 +42,7 @@ export async function savePly(session: Session, messages: Messages): Promise<voi
       return;
     }
     // Welded on the GPU: one vertex per cut grid edge, as VTK's merged points.
-    const mesh = { positions: decodeVertices(surface.vertices, surface.vertices.length / 3, v.iso.info, 3), indices: surface.indices };
+    const mesh = { positions: decodeVertices(surface.vertices, surface.vertices.length / 3), indices: surface.indices };
     // What is on screen: voxel (i, j, k) at (i, j, k) * voxel size (1 unless the file or the user gave one).
     const size = session.spacing;
     const isotropicUnit = size.every((s) => s === 1);

@@ -9,16 +9,20 @@
 // So only the groups scale with the volume; a surface costs the same in a
 // small volume and in a large mostly-empty one. The active list is
 // group-major (lru-model.ts activeBlocks gives the same order).
+// A chunk pool's groups are its slots and its blocks have pool ids
+// (block-ids.ts): everything here is sized by the pool, and the ranges
+// follow the chunks as they come and go (encodeChunkUpdates).
 import { dispatchWorkgroups } from '../gpu/dispatch.ts';
 import { readF32 } from '../gpu/buffers.ts';
 import type { ExclusiveScan } from '../primitives/scan.ts';
 import type { StreamCompact, StreamCompactIds } from '../primitives/compact.ts';
-import type { ChunkedVolume } from '../zfp/chunked-volume.ts';
+import type { ChunkedVolume, SlotChange } from '../zfp/chunked-volume.ts';
 import type { ZfpDecoder } from '../zfp/decoder.ts';
 import type { BlockSource, ZfpGpuStream } from '../zfp/gpu-stream.ts';
 import { Counters } from './counters.ts';
 import { bindGroup, bufferLayout, storageBuffer } from '../gpu/bindings.ts';
 import { createComputePipeline } from '../gpu/pipeline-cache.ts';
+import type { BlockIds } from './block-ids.ts';
 import { A } from './layout.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
 
@@ -35,6 +39,8 @@ export interface ActiveBlocksParts {
   maxWorkgroupsPerDimension: number;
   /** Blocks per group along each axis. */
   groupEdge: number;
+  /** How blocks are named (a stream's raster ids, a pool's ids). */
+  ids: BlockIds;
 }
 
 /** The group grid of a block grid: ceil(grid / edge) per axis. */
@@ -75,14 +81,16 @@ export class ActiveBlocks {
     layouts: ActiveLayouts,
     chunkPipelines?: { neighbourhood: GPUComputePipeline; groups: GPUComputePipeline },
   ) {
-    const { blockCount, blockGrid } = parts.stream.info;
+    const { ids } = parts;
+    const blockCount = ids.count;
     const edge = parts.groupEdge;
-    const grid = groupGrid(blockGrid, edge);
+    const pool = ids.pool;
+    // a stream's groups tile its block grid; a pool's are its slots
+    const grid: [number, number, number] = pool ? [pool.poolChunks, 1, 1] : groupGrid(parts.stream.info.blockGrid, edge);
     this.groupCount = grid[0] * grid[1] * grid[2];
     this.groupSize = edge ** 3;
     const entries = this.groupCount * this.groupSize;
-    const pool = parts.stream.addressing === 'pool' ? (parts.stream as ChunkedVolume) : undefined;
-    // A pool starts empty: every block has the empty range until its chunk arrives.
+    // A pool starts empty: every block has the empty range until its chunk arrives (group ranges start at [0, 0], never active).
     this.blockRanges = pool ? emptyRanges(device, blockCount) : parts.decoder.computeBlockRanges(parts.stream as ZfpGpuStream);
     this.neighbourhoodRanges = storageBuffer(device, 'Isosurface.neighbourhoodRanges', blockCount * 8);
     this.groupRanges = storageBuffer(device, 'Isosurface.groupRanges', this.groupCount * 8);
@@ -121,20 +129,16 @@ export class ActiveBlocks {
         throw new RangeError(
           `${pool.info.fileName}: the groups must be the chunks (groupEdgeBlocks ${edge}, chunk edge ${pool.chunkBlocks} blocks)`,
         );
-      const list = device.createBuffer({
-        label: 'Isosurface.changedChunks',
-        size: Math.max(4, pool.chunkCount * 4),
-        usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
-      });
       const uniform = (label: string, size: number) =>
         device.createBuffer({ label, size, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
       const decodeParams = uniform('Isosurface.changedChunks.decodeParams', 16);
       const regionParams = uniform('Isosurface.changedChunks.regionParams', 32);
-      const groupParams = uniform('Isosurface.changedChunks.groupParams', 16);
+      const groupParams = uniform('Isosurface.changedChunks.groupParams', 32);
       this.chunkUpdate = {
         pool,
         changes: pool.changeLog(),
-        list,
+        list: null,
+        listEntries: 0,
         decodeParams,
         regionParams,
         groupParams,
@@ -145,53 +149,81 @@ export class ActiveBlocks {
           this.blockRanges,
           this.neighbourhoodRanges,
         ]),
-        regionGroup: bindGroup(device, 'Isosurface.neighbourhoodRangeChunks.bindGroup', layouts.region, [list, regionParams]),
+        regionGroup: null,
         loadGroup: bindGroup(device, 'Isosurface.groupRange.bindGroup', layouts.load, [this.neighbourhoodRanges, this.groupRanges]),
-        changedGroup: bindGroup(device, 'Isosurface.groupRangeChunks.bindGroup', layouts.changed, [list, groupParams]),
+        changedGroup: null,
+        layouts,
         words: new Uint32Array(8),
       };
     }
   }
 
+  /** The change list, at least `entries` (slot, chunk) pairs long (made again, with its bind groups, when it must grow). */
+  private changeList(u: ChunkUpdate, entries: number): GPUBuffer {
+    if (!u.list || u.listEntries < entries) {
+      u.list?.destroy();
+      u.listEntries = Math.max(entries, 2 * u.pool.poolChunks + 16);
+      u.list = this.device.createBuffer({
+        label: 'Isosurface.changedChunks',
+        size: u.listEntries * 8,
+        usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
+      });
+      u.regionGroup = bindGroup(this.device, 'Isosurface.neighbourhoodRangeChunks.bindGroup', u.layouts.region, [u.list, u.regionParams]);
+      u.changedGroup = bindGroup(this.device, 'Isosurface.groupRangeChunks.bindGroup', u.layouts.changed, [u.list, u.groupParams]);
+    }
+    return u.list;
+  }
+
   /**
-   * Chunked volumes: records the range updates of the chunks put or evicted
-   * since the last surface (their blocks' ranges from the pool, the
-   * neighbourhood ranges within one block of them, the ranges of their
-   * groups and the groups around them). Cost follows the changed chunks.
-   * Call right before the submission that follows (the chunk list is
+   * Chunked volumes: records the range updates of the slots whose chunk
+   * arrived or left since the last surface (their blocks' ranges from the
+   * pool, `forget` dropping what the cache decoded from those slots, the
+   * neighbourhood ranges within one block of those chunks, the ranges of
+   * their slots and of the resident chunks around them). Cost follows the
+   * changes. Call right before the submission that follows (the list is
    * written with queue.writeBuffer).
    */
-  encodeChunkUpdates(encoder: GPUCommandEncoder): number {
+  encodeChunkUpdates(
+    encoder: GPUCommandEncoder,
+    forget: (pass: GPUComputePassEncoder, list: GPUBuffer, params: GPUBuffer, count: number) => void,
+  ): number {
     const u = this.chunkUpdate;
     if (!u) return 0;
-    const changed = u.changes.take();
+    const changed: SlotChange[] = u.changes.take();
     if (changed.length === 0) return 0;
     const { device } = this;
     const count = changed.length;
     const cb = u.pool.chunkBlocks;
-    device.queue.writeBuffer(u.list, 0, new Uint32Array(changed));
+    const list = this.changeList(u, count);
+    const pairs = new Uint32Array(2 * count);
+    changed.forEach((c, i) => pairs.set([c.slot, c.chunk], 2 * i));
+    device.queue.writeBuffer(list, 0, pairs);
     u.words.set([count, cb ** 3, 0, 0]);
     device.queue.writeBuffer(u.decodeParams, 0, u.words, 0, 4);
     u.words.set([count, cb, 0, 0, ...u.pool.layout.chunkGrid, 0]);
     device.queue.writeBuffer(u.regionParams, 0, u.words, 0, 8);
-    u.words.set([count, 0, 0, 0]);
-    device.queue.writeBuffer(u.groupParams, 0, u.words, 0, 4);
+    u.words.set([count, 0, 0, 0, ...u.pool.layout.chunkGrid, 0]);
+    device.queue.writeBuffer(u.groupParams, 0, u.words, 0, 8);
+    const { ids } = this.parts;
     const pass = encoder.beginComputePass({ label: 'Isosurface.chunkUpdates' });
     this.parts.decoder.encodeChunkBlockRanges(pass, {
       pool: u.pool,
-      chunkList: u.list,
+      chunkList: list,
       params: u.decodeParams,
       count,
       ranges: this.blockRanges,
     });
+    forget(pass, list, u.decodeParams, count);
     pass.setPipeline(u.neighbourhood);
     pass.setBindGroup(0, u.neighbourhoodGroup);
-    pass.setBindGroup(1, u.regionGroup);
+    pass.setBindGroup(1, u.regionGroup!);
+    ids.bind(pass, 2);
     dispatchWorkgroups(pass, Math.ceil((count * (cb + 2) ** 3) / 64), this.parts.maxWorkgroupsPerDimension);
     pass.setPipeline(u.groups);
     pass.setBindGroup(0, this.common);
     pass.setBindGroup(1, u.loadGroup);
-    pass.setBindGroup(2, u.changedGroup);
+    pass.setBindGroup(2, u.changedGroup!);
+    ids.bind(pass, 3);
     dispatchWorkgroups(pass, Math.ceil((count * 27) / 64), this.parts.maxWorkgroupsPerDimension);
     pass.end();
     return count;
@@ -210,63 +242,76 @@ export class ActiveBlocks {
     };
     const neighbourhoodLayout = layouts.neighbourhood;
     const constants = { MAX_WG_PER_DIM: parts.maxWorkgroupsPerDimension };
-    const groups = isosurfaceWgsl.activeGroups;
-    const pooled = parts.stream.addressing === 'pool';
+    const { ids } = parts;
+    const groups = [...isosurfaceWgsl.activeGroups, ids.part];
+    const blocks = [...isosurfaceWgsl.activeBlocks, ids.part];
+    const pooled = ids.kind === 'pool';
     const [neighbourhood, groupRange, markGroups, markBlocks, chunkNeighbourhood, chunkGroups] = await Promise.all([
-      createComputePipeline(device, 'Isosurface.neighbourhoodRange', isosurfaceWgsl.activeBlocks, 'neighbourhood_range', {
-        layout: [neighbourhoodLayout],
-        constants,
-      }),
-      createComputePipeline(device, 'Isosurface.groupRange', groups, 'group_range', { layout: [layouts.common, layouts.load], constants }),
+      pooled
+        ? undefined
+        : createComputePipeline(device, 'Isosurface.neighbourhoodRange', blocks, 'neighbourhood_range', {
+            layout: [neighbourhoodLayout],
+            constants,
+          }),
+      pooled
+        ? undefined
+        : createComputePipeline(device, 'Isosurface.groupRange', groups, 'group_range', {
+            layout: [layouts.common, layouts.load],
+            constants,
+          }),
       createComputePipeline(device, 'Isosurface.markActiveGroups', groups, 'mark_active_groups', {
         layout: [layouts.common, layouts.markGroups],
         constants,
       }),
       createComputePipeline(device, 'Isosurface.markGroupBlocks', groups, 'mark_group_blocks', {
-        layout: [layouts.common, layouts.markBlocks],
+        layout: ids.layouts([layouts.common, layouts.markBlocks]),
         constants,
       }),
       pooled
-        ? createComputePipeline(device, 'Isosurface.neighbourhoodRangeChunks', isosurfaceWgsl.activeBlocks, 'neighbourhood_range_chunks', {
-            layout: [neighbourhoodLayout, layouts.region],
+        ? createComputePipeline(device, 'Isosurface.neighbourhoodRangeChunks', blocks, 'neighbourhood_range_chunks', {
+            layout: ids.layouts([neighbourhoodLayout, layouts.region]),
             constants,
           })
         : undefined,
       pooled
         ? createComputePipeline(device, 'Isosurface.groupRangeChunks', groups, 'group_range_chunks', {
-            layout: [layouts.common, layouts.load, layouts.changed],
+            layout: ids.layouts([layouts.common, layouts.load, layouts.changed]),
             constants,
           })
         : undefined,
     ]);
     const chunkPipelines = chunkNeighbourhood && chunkGroups ? { neighbourhood: chunkNeighbourhood, groups: chunkGroups } : undefined;
     const active = new ActiveBlocks(device, parts, markGroups, markBlocks, layouts, chunkPipelines);
-    const encoder = device.createCommandEncoder({ label: 'Isosurface.neighbourhoodRanges' });
-    const pass = encoder.beginComputePass({ label: 'Isosurface.neighbourhoodRanges' });
-    pass.setPipeline(neighbourhood);
-    pass.setBindGroup(
-      0,
-      bindGroup(device, 'Isosurface.neighbourhoodRange.bindGroup', neighbourhoodLayout, [
-        parts.volume,
-        active.blockRanges,
-        active.neighbourhoodRanges,
-      ]),
-    );
-    dispatchWorkgroups(pass, Math.ceil(parts.stream.info.blockCount / 64), parts.maxWorkgroupsPerDimension);
-    pass.setPipeline(groupRange);
-    pass.setBindGroup(0, active.common);
-    pass.setBindGroup(
-      1,
-      bindGroup(device, 'Isosurface.groupRange.bindGroup', layouts.load, [active.neighbourhoodRanges, active.groupRanges]),
-    );
-    dispatchWorkgroups(pass, Math.ceil(active.groupCount / 64), parts.maxWorkgroupsPerDimension);
-    pass.end();
-    device.queue.submit([encoder.finish()]);
+    if (neighbourhood && groupRange) {
+      // a whole stream: every range at once
+      const encoder = device.createCommandEncoder({ label: 'Isosurface.neighbourhoodRanges' });
+      const pass = encoder.beginComputePass({ label: 'Isosurface.neighbourhoodRanges' });
+      pass.setPipeline(neighbourhood);
+      pass.setBindGroup(
+        0,
+        bindGroup(device, 'Isosurface.neighbourhoodRange.bindGroup', neighbourhoodLayout, [
+          parts.volume,
+          active.blockRanges,
+          active.neighbourhoodRanges,
+        ]),
+      );
+      dispatchWorkgroups(pass, Math.ceil(ids.count / 64), parts.maxWorkgroupsPerDimension);
+      pass.setPipeline(groupRange);
+      pass.setBindGroup(0, active.common);
+      pass.setBindGroup(
+        1,
+        bindGroup(device, 'Isosurface.groupRange.bindGroup', layouts.load, [active.neighbourhoodRanges, active.groupRanges]),
+      );
+      dispatchWorkgroups(pass, Math.ceil(active.groupCount / 64), parts.maxWorkgroupsPerDimension);
+      pass.end();
+      device.queue.submit([encoder.finish()]);
+    }
     return active;
   }
 
+  /** Block ids (a stream's blocks, a pool's slots x blocks per chunk). */
   get blockCount(): number {
-    return this.parts.stream.info.blockCount;
+    return this.parts.ids.count;
   }
 
   /** Entries the scan must hold: every block of every group. */
@@ -291,6 +336,7 @@ export class ActiveBlocks {
     pass.setPipeline(this.markBlocks);
     pass.setBindGroup(0, this.common);
     pass.setBindGroup(1, this.markBlocksGroup);
+    this.parts.ids.bind(pass, 2);
     pass.dispatchWorkgroupsIndirect(counters.buffer, Counters.offset(A.groupBlocks));
     pass.end();
     const entries = counters.count('groupBlocks');
@@ -304,7 +350,7 @@ export class ActiveBlocks {
     });
   }
 
-  /** The per-block (min, max) ranges, 2 f32 per block in raster block order (waits for the GPU). */
+  /** The per-block (min, max) ranges, 2 f32 per block id (a stream's raster order, a pool's ids; waits for the GPU). */
   async readBlockRanges(): Promise<Float32Array> {
     return readF32(this.device, this.blockRanges);
   }
@@ -328,7 +374,7 @@ export class ActiveBlocks {
       this.blockIds,
       this.activeIds,
       this.groupParams,
-      ...(u ? [u.list, u.decodeParams, u.regionParams, u.groupParams] : []),
+      ...(u ? [u.decodeParams, u.regionParams, u.groupParams, ...(u.list ? [u.list] : [])] : []),
     ];
   }
 
@@ -350,18 +396,21 @@ interface ActiveLayouts {
 
 interface ChunkUpdate {
   pool: ChunkedVolume;
-  /** This surface's log of chunks put or evicted (ChunkedVolume.changeLog). */
+  /** This surface's log of (slot, chunk) changes (ChunkedVolume.changeLog). */
   changes: ReturnType<ChunkedVolume['changeLog']>;
-  list: GPUBuffer;
+  /** (slot, chunk) pairs, listEntries long; made on first use and when it must grow. */
+  list: GPUBuffer | null;
+  listEntries: number;
   decodeParams: GPUBuffer;
   regionParams: GPUBuffer;
   groupParams: GPUBuffer;
   neighbourhood: GPUComputePipeline;
   groups: GPUComputePipeline;
   neighbourhoodGroup: GPUBindGroup;
-  regionGroup: GPUBindGroup;
+  regionGroup: GPUBindGroup | null;
   loadGroup: GPUBindGroup;
-  changedGroup: GPUBindGroup;
+  changedGroup: GPUBindGroup | null;
+  layouts: ActiveLayouts;
   words: Uint32Array<ArrayBuffer>;
 }
 

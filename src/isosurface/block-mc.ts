@@ -20,6 +20,7 @@ import { bindGroup, bufferLayout, storageBuffer } from '../gpu/bindings.ts';
 import { createComputePipeline } from '../gpu/pipeline-cache.ts';
 import { A, C, CELL_RECORD_BYTES } from './layout.ts';
 import { SurfaceOutput } from './vertex-output.ts';
+import type { BlockIds } from './block-ids.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
 
 export interface BlockMcParts {
@@ -31,6 +32,8 @@ export interface BlockMcParts {
   maxWorkgroupsPerDimension: number;
   /** maxStorageBufferBindingSize: the cell list is two bindings of 4 bytes per cell. */
   maxBindingBytes: number;
+  /** How blocks are named (block-ids.ts). */
+  ids: BlockIds;
 }
 
 /** Bytes per cache slot of the per-slot and per-active-block buffers: per row of 4 cells its case bytes and row base (32 words), 6 counts/offsets. */
@@ -132,17 +135,18 @@ export class BlockMarchingCubes {
       plan: bufferLayout(device, 'Isosurface.planVertices.layout', ['rw', 'read', 'read', 'read', 'read', 'rw', 'rw']),
     };
     const constants = { MAX_WG_PER_DIM: parts.maxWorkgroupsPerDimension };
+    const { ids } = parts;
     const [classify, expand, emit, plan] = await Promise.all([
-      createComputePipeline(device, 'Isosurface.classifyBlocks', isosurfaceWgsl.blockClassify, 'classify_blocks', {
-        layout: [layouts.common, layouts.classify],
+      createComputePipeline(device, 'Isosurface.classifyBlocks', [...isosurfaceWgsl.blockClassify, ids.part], 'classify_blocks', {
+        layout: ids.layouts([layouts.common, layouts.classify]),
         constants,
       }),
-      createComputePipeline(device, 'Isosurface.expandCells', isosurfaceWgsl.blockExpand, 'expand_cells', {
-        layout: [layouts.expand],
+      createComputePipeline(device, 'Isosurface.expandCells', [...isosurfaceWgsl.blockExpand, ids.part], 'expand_cells', {
+        layout: ids.layouts([layouts.expand]),
         constants,
       }),
-      createComputePipeline(device, 'Isosurface.emitSurface', isosurfaceWgsl.blockEmit, 'emit_surface', {
-        layout: [layouts.common, layouts.cells, layouts.shard],
+      createComputePipeline(device, 'Isosurface.emitSurface', [...isosurfaceWgsl.blockEmit, ids.part], 'emit_surface', {
+        layout: ids.layouts([layouts.common, layouts.cells, layouts.shard]),
         constants,
       }),
       createComputePipeline(device, 'Isosurface.planVertices', isosurfaceWgsl.plan, 'plan_vertices', { layout: [layouts.plan], constants }),
@@ -263,6 +267,7 @@ export class BlockMarchingCubes {
     pass.setPipeline(this.classifyPipeline);
     pass.setBindGroup(0, g.common);
     pass.setBindGroup(1, g.classify);
+    this.parts.ids.bind(pass, 2);
     pass.dispatchWorkgroupsIndirect(counters.buffer, Counters.offset(A.mark));
     pass.end();
     encoder.copyBufferToBuffer(this.occupied, 0, counters.buffer, Counters.offset(C.occupied), 4);
@@ -294,6 +299,7 @@ export class BlockMarchingCubes {
     const pass = encoder.beginComputePass({ label: 'Isosurface.expandCells' });
     pass.setPipeline(this.expandPipeline);
     pass.setBindGroup(0, g.expand);
+    this.parts.ids.bind(pass, 1);
     pass.dispatchWorkgroupsIndirect(this.parts.counters.buffer, Counters.offset(A.expand));
     pass.end();
   }
@@ -305,6 +311,7 @@ export class BlockMarchingCubes {
     pass.setPipeline(this.emitPipeline);
     pass.setBindGroup(0, g.common);
     pass.setBindGroup(1, g.cells);
+    this.parts.ids.bind(pass, 3);
     for (let k = 0; k < shards.shards.length; k++) {
       pass.setBindGroup(2, g.shardGroups[k]);
       pass.dispatchWorkgroupsIndirect(shards.shardInfo, SurfaceOutput.dispatchArgsOffset(k));

@@ -41,6 +41,8 @@ export interface BlockCacheParts {
   /** The active list (ActiveBlocks.activeIds). */
   activeIds: GPUBuffer;
   maxWorkgroupsPerDimension: number;
+  /** Block ids (a stream's blocks, a pool's slots x blocks per chunk): blockToSlot holds one entry per id. */
+  blockIds: number;
 }
 
 /** Bytes per slot of the buffers sized by the capacity (slot data, maps, slot positions, victims, new mask/offsets/ids); the log adds logBytesFor(slots). */
@@ -87,6 +89,8 @@ interface Pipelines {
   rebuildLayout: GPUBindGroupLayout;
   rebuildCompactedLayout: GPUBindGroupLayout;
   fillLayout: GPUBindGroupLayout;
+  forget: GPUComputePipeline;
+  forgetLayout: GPUBindGroupLayout;
 }
 
 const FILL_SLOTS = 8;
@@ -102,6 +106,7 @@ export class BlockCache {
   private readonly rebuildParams: GPUBuffer;
   private fillsRecorded = 0;
   private readonly fillGroups = new BindGroupCache();
+  private readonly forgetGroups = new BindGroupCache();
 
   private constructor(
     private readonly device: GPUDevice,
@@ -111,7 +116,7 @@ export class BlockCache {
     private readonly logScan: ExclusiveScan,
     capacity: number,
   ) {
-    const blocks = parts.stream.info.blockCount;
+    const blocks = parts.blockIds;
     this.blockToSlot = storageBuffer(device, 'Isosurface.blockToSlot', blocks * 4, GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST);
     this.fillParams = device.createBuffer({
       label: 'Isosurface.fillParams',
@@ -148,9 +153,10 @@ export class BlockCache {
       { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform', hasDynamicOffset: true, minBindingSize: 8 } },
       { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
     ]);
+    const forgetLayout = bufferLayout(device, 'Isosurface.forgetSlots.layout', ['read', 'uniform', 'rw', 'rw']);
     const constants = { MAX_WG_PER_DIM: parts.maxWorkgroupsPerDimension };
     const wgsl = isosurfaceWgsl.lru;
-    const [mark, pick, assign, append, rebuild, rebuildCompacted, fill, logScan] = await Promise.all([
+    const [mark, pick, assign, append, rebuild, rebuildCompacted, fill, forget, logScan] = await Promise.all([
       createComputePipeline(device, 'Isosurface.markCached', wgsl, 'mark_cached', { layout: [markLayout], constants }),
       createComputePipeline(device, 'Isosurface.pickVictims', wgsl, 'pick_victims_of_new', { layout: [pickLayout], constants }),
       createComputePipeline(device, 'Isosurface.assignSlots', wgsl, 'assign_slots', { layout: [assignLayout], constants }),
@@ -161,6 +167,7 @@ export class BlockCache {
         constants,
       }),
       createComputePipeline(device, 'Isosurface.fillNone', wgsl, 'fill_none', { layout: [fillLayout], constants }),
+      createComputePipeline(device, 'Isosurface.forgetSlots', wgsl, 'forget_slots', { layout: [forgetLayout], constants }),
       ExclusiveScan.create(device, { capacity: logSizeFor(capacity), maxWorkgroupsPerDimension: parts.maxWorkgroupsPerDimension }),
     ]);
     const pipelines = {
@@ -178,12 +185,36 @@ export class BlockCache {
       rebuildLayout,
       rebuildCompactedLayout,
       fillLayout,
+      forget,
+      forgetLayout,
     };
     return new BlockCache(device, parts, pipelines, logScan, capacity);
   }
 
   get capacity(): number {
     return this.slots.capacity;
+  }
+
+  /**
+   * A chunk pool's slots in `list` ((slot, chunk) pairs, `params`: count and
+   * ids per slot) got other chunks: what was decoded from them is forgotten
+   * (lru.wgsl forget_slots). Recorded into the caller's pass.
+   */
+  encodeForget(pass: GPUComputePassEncoder, list: GPUBuffer, params: GPUBuffer, count: number, perChunk: number): void {
+    const group = this.forgetGroups
+      .ref(list)
+      .ref(this.slots.slotToBlock)
+      .get(() =>
+        bindGroup(this.device, 'Isosurface.forgetSlots.bindGroup', this.pipelines.forgetLayout, [
+          list,
+          params,
+          this.blockToSlot,
+          this.slots.slotToBlock,
+        ]),
+      );
+    pass.setPipeline(this.pipelines.forget);
+    pass.setBindGroup(0, group);
+    dispatchWorkgroups(pass, Math.ceil((count * perChunk) / 64), this.parts.maxWorkgroupsPerDimension);
   }
 
   /** 64 f32 per slot, voxel x + 4y + 16z of the slot's block. */
@@ -353,7 +384,7 @@ export class BlockCache {
   /** Empties every slot and block entry (submits): the log holds the slots in order, all empty. Capacity stays. */
   private clear(capacity: number): void {
     const encoder = this.device.createCommandEncoder({ label: 'Isosurface.clearCache' });
-    this.encodeFill(encoder, this.blockToSlot, 0, this.parts.stream.info.blockCount);
+    this.encodeFill(encoder, this.blockToSlot, 0, this.parts.blockIds);
     this.encodeFill(encoder, this.slots.slotToBlock, 0, capacity);
     this.encodeRebuild(encoder, this.slots, this.slots.logScratch, capacity, 0, false);
     this.submitFills(encoder);

@@ -12,9 +12,9 @@ import type { GpuContext } from '../gpu/device.ts';
 import { readU32 } from '../gpu/buffers.ts';
 import { StreamCompact, StreamCompactIds } from '../primitives/compact.ts';
 import { ExclusiveScan } from '../primitives/scan.ts';
-import type { ChunkedVolume } from '../zfp/chunked-volume.ts';
 import { ZfpDecoder } from '../zfp/decoder.ts';
 import type { BlockSource } from '../zfp/gpu-stream.ts';
+import { blockIdsOf, type BlockIds } from './block-ids.ts';
 import { ActiveBlocks, groupGrid } from './active-blocks.ts';
 import { BlockMarchingCubes } from './block-mc.ts';
 import { cacheBytesFor, formatMB, grownCapacity, maxCacheSlots, vertexBytesFor, weldedFor } from './budget.ts';
@@ -35,6 +35,7 @@ import { BlockCache } from './lru-cache.ts';
 import type { StatsReadback } from './stats-readback.ts';
 import { IsosurfaceBudgetError, type IsosurfaceDrawData, type IsosurfaceOptions, type SurfaceMesh, type VolumeInfo } from './types.ts';
 import { SurfaceOutput } from './vertex-output.ts';
+import { MAX_VERTEX_VOXELS } from './vertex-format.ts';
 
 /** The parts of one volume's pipeline (owned: destroy() frees them, except the stream). */
 export interface PipelineParts {
@@ -53,6 +54,8 @@ export interface PipelineParts {
   cache: BlockCache;
   mc: BlockMarchingCubes;
   shards: SurfaceOutput;
+  /** How blocks are named: a stream's raster ids, a pool's ids (block-ids.ts). */
+  ids: BlockIds;
 }
 
 /** What one surface's passes need besides the parts. */
@@ -104,7 +107,14 @@ export class IsosurfacePipeline {
     const { device } = gpu;
     const limits = device.limits;
     const maxWg = options.maxWorkgroupsPerDimension ?? limits.maxComputeWorkgroupsPerDimension;
-    const { blockCount, blockGrid, dims } = stream.info;
+    const { blockGrid, dims } = stream.info;
+    if (dims.some((n) => n > MAX_VERTEX_VOXELS))
+      throw new RangeError(
+        `${stream.info.fileName}: ${dims.join('x')} voxels; vertices place their blocks with 12 bits per axis, so a volume may have at most ${MAX_VERTEX_VOXELS} voxels along an axis`,
+      );
+    // Per-block buffers hold one entry per block id: a stream's blocks, a pool's slots x blocks per chunk (block-ids.ts).
+    const ids = blockIdsOf(device, stream);
+    const blockCount = ids.count;
     const bindingBytes = Math.min(options.maxVertexBindingBytes ?? Infinity, limits.maxStorageBufferBindingSize, limits.maxBufferSize);
     const perShard = Math.floor(bindingBytes / INDEX_BYTES);
     // The welded vertices are one binding (every index shard draws from them).
@@ -137,11 +147,12 @@ export class IsosurfacePipeline {
       vertices = Math.max(1, Math.floor(vertices * lo));
     }
 
-    const pool = stream.addressing === 'pool' ? (stream as ChunkedVolume) : undefined;
+    const pool = ids.pool;
     const groupEdge = pool ? pool.chunkBlocks : (options.groupEdgeBlocks ?? DEFAULT_GROUP_EDGE_BLOCKS);
     if (!Number.isInteger(groupEdge) || groupEdge < 1 || groupEdge > 64)
       throw new RangeError(`groupEdgeBlocks must be an integer in 1..64 (got ${groupEdge})`);
-    const groupEntries = groupGrid(blockGrid, groupEdge).reduce((a, b) => a * b, 1) * groupEdge ** 3;
+    // a pool's groups are its slots
+    const groupEntries = pool ? blockCount : groupGrid(blockGrid, groupEdge).reduce((a, b) => a * b, 1) * groupEdge ** 3;
     // Per-block buffers are bound whole too: neighbourhood ranges (8 B per block), the group-grid lists (4 B per entry).
     const perBlockBinding = Math.max(blockCount * 8, groupEntries * 4);
     const storageBinding = Math.min(options.maxStorageBindingBytes ?? Infinity, limits.maxStorageBufferBindingSize, limits.maxBufferSize);
@@ -180,12 +191,23 @@ export class IsosurfacePipeline {
       compactIds,
       maxWorkgroupsPerDimension: maxWg,
       groupEdge,
+      ids,
     });
     // A pool starts empty: its value range is the store's (the caller knows it), not the blocks'.
     const [cache, ranges] = await Promise.all([
       BlockCache.create(
         device,
-        { stream, decoder, counters, scan: slotScan, compact, compactIds, activeIds: active.activeIds, maxWorkgroupsPerDimension: maxWg },
+        {
+          stream,
+          decoder,
+          counters,
+          scan: slotScan,
+          compact,
+          compactIds,
+          activeIds: active.activeIds,
+          maxWorkgroupsPerDimension: maxWg,
+          blockIds: blockCount,
+        },
         slots,
       ),
       pool ? new Float32Array(0) : active.readBlockRanges(),
@@ -200,6 +222,7 @@ export class IsosurfacePipeline {
         blockToSlot: cache.blockToSlot,
         maxWorkgroupsPerDimension: maxWg,
         maxBindingBytes: limits.maxStorageBufferBindingSize,
+        ids,
       },
       slots,
       vertices,
@@ -215,7 +238,7 @@ export class IsosurfacePipeline {
     const info: VolumeInfo = { dims: [...dims], blockGrid: [...blockGrid], blockCount, valueRange: [lo, hi] };
     const pipeline = new IsosurfacePipeline(
       gpu,
-      { stream, volume, counters, decoder, scan, slotScan, compact, compactIds, active, cache, mc, shards },
+      { stream, volume, counters, decoder, scan, slotScan, compact, compactIds, active, cache, mc, shards, ids },
       info,
       slots,
       maxSlots,
@@ -239,7 +262,9 @@ export class IsosurfacePipeline {
     counters.set('request', a.requestId);
     s.mark(encoder, 0);
     if (!a.verticesOnly) {
-      active.encodeChunkUpdates(encoder);
+      active.encodeChunkUpdates(encoder, (pass, list, params, count) =>
+        cache.encodeForget(pass, list, params, count, this.parts.ids.pool?.blocksPerChunk ?? 1),
+      );
       active.encode(encoder);
       const pass = encoder.beginComputePass({ label: 'Isosurface.planCache' });
       counters.encodePlanCache(pass);
@@ -430,5 +455,6 @@ export class IsosurfacePipeline {
     p.decoder.destroy();
     p.counters.destroy();
     p.volume.destroy();
+    p.ids.destroy();
   }
 }

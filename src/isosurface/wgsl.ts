@@ -11,6 +11,8 @@ import blockExpandWgsl from '../../shaders/isosurface/block_expand.wgsl?raw';
 import blockEmitWgsl from '../../shaders/isosurface/block_emit.wgsl?raw';
 import vertexFormatWgsl from '../../shaders/isosurface/vertex_format.wgsl?raw';
 import edgeOwnerWgsl from '../../shaders/isosurface/edge_owner.wgsl?raw';
+import blocksStreamWgsl from '../../shaders/isosurface/blocks_stream.wgsl?raw';
+import blocksPoolWgsl from '../../shaders/isosurface/blocks_pool.wgsl?raw';
 import type { WgslPart } from '../gpu/wgsl.ts';
 import { mcCaseTableSnippet } from '../mc/case-table-wgsl.ts';
 import { gridSnippet } from '../gpu/dispatch.ts';
@@ -18,12 +20,18 @@ import { gridSnippet } from '../gpu/dispatch.ts';
 const part = (name: string, code: string): WgslPart => ({ name: `shaders/isosurface/${name}.wgsl`, code });
 
 /**
- * The compressed vertex format: `decode_vertex_position(packed, block_id,
- * block_grid) -> vec3f` (voxel index space) and `encode_vertex_position`.
- * The renderer composes this part into its vertex shader.
+ * The compressed vertex format: `decode_vertex_position(w0, w1) -> vec3f`
+ * (voxel index space) and `encode_vertex_edge`. The renderer composes this
+ * part into its vertex shader.
  */
 export const vertexFormatSnippet = part('vertex_format', vertexFormatWgsl);
 export const isosurfaceCommonSnippet = part('common', commonWgsl);
+
+/** How kernels name blocks (block-ids.ts): a stream's raster ids, a pool's slot-relative ids. Composed after a kernel's parts. */
+export const blockIdsSnippet = {
+  stream: part('blocks_stream', blocksStreamWgsl),
+  pool: part('blocks_pool', blocksPoolWgsl),
+};
 
 const base = [gridSnippet, isosurfaceCommonSnippet];
 const edgeOwner = part('edge_owner', edgeOwnerWgsl);

@@ -153,9 +153,9 @@ export class SurfaceLayer implements RenderLayer {
     const { info } = data;
     const s = this.style;
     const { u32, i32, f32 } = this.views;
-    u32[0] = info.blockGrid[0];
-    u32[1] = info.blockGrid[1];
-    u32[2] = info.blockGrid[2];
+    u32[0] = 0;
+    u32[1] = 0;
+    u32[2] = 0;
     u32[3] = s.smooth ? 1 : 0;
     i32[4] = info.dims[0];
     i32[5] = info.dims[1];

@@ -31,11 +31,20 @@ export interface LevelVolume {
   /** GPU bytes the pool holds (slots, page table, parameters). */
   readonly poolBytes: number;
   readonly residentCount: number;
+  /** Slots neither holding a chunk nor set aside for one. */
+  readonly freeCount: number;
   has(chunk: ChunkIndex): boolean;
   put(chunk: ChunkIndex, bytes: Uint8Array): void;
   evict(chunk: ChunkIndex): void;
   /** Sets the capacity (at least the resident count), resident chunks kept. */
   resize(poolChunks: number): void;
+  /** Sets slots aside for these chunks, in this order (others set aside are given back): slots follow the plan, not arrivals. */
+  reserve(chunks: readonly ChunkIndex[]): void;
+  /** Whether a slot is set aside for this chunk. */
+  isReserved(chunk: ChunkIndex): boolean;
+  /** The slot of a resident chunk (its blocks' ids start at slot x blocksPerChunk), or undefined. */
+  slotOfChunk(chunk: ChunkIndex): number | undefined;
+  readonly blocksPerChunk: number;
   destroy(): void;
 }
 /** What it needs of the surface statistics. */
@@ -53,7 +62,7 @@ export interface LevelSurface<S extends LevelStats = LevelStats> {
   setMemoryBudget(bytes: number): void;
   /** What the cache and vertex buffers hold now (what the cap limits). */
   readonly budgetedBytes: number;
-  /** [min, max] per block of the level (raster block order): the ranges of a store without range arrays. */
+  /** [min, max] per block id (slot x blocksPerChunk + block in chunk): the ranges of a store without range arrays. */
   readBlockRanges?(): Promise<Float32Array>;
   destroy(): void;
 }
@@ -139,6 +148,9 @@ export class StreamController<
   #footprint = new Map<number, number>();
   /** Surfaces being made, per level (so two refinements never make two for one level). */
   #creating = new Map<number, Promise<F>>();
+  /** The pool capacity each surface was made for. */
+  #surfaceCapacity = new WeakMap<F, number>();
+  #retired: F | null = null;
   #waiting: Waiting | null = null;
   #progress = new Set<(p: StreamProgress) => void>();
   #shownListeners = new Set<(s: ShownSurface<V, S, F>) => void>();
@@ -369,7 +381,7 @@ export class StreamController<
     }
     if (v && n <= v.poolChunks) return null;
     const extra = this.gpu.poolBytesFor(lv.layout, n) - (v?.poolBytes ?? 0);
-    const surfaceNeeds = this.#surfaces.has(L) ? 0 : estimateFixedBytes(lv.layout) + MIN_SURFACE_BYTES;
+    const surfaceNeeds = this.#surfaces.has(L) ? 0 : estimateFixedBytes(lv.layout, n) + MIN_SURFACE_BYTES;
     if (!this.#release(extra + surfaceNeeds, this.#keep(L))) {
       const all = lv.nb ? '' : ' (no range arrays: every chunk)';
       return (
@@ -395,7 +407,9 @@ export class StreamController<
     let room = 0;
     const coarser = this.levels[L + 1];
     if (headroom && coarser && L + 1 <= this.coarsest && !this.#surfaces.has(L + 1)) {
-      room = this.#footprint.get(L + 1) ?? estimateFixedBytes(coarser.layout) + Math.ceil(surface.budgetedBytes / 4);
+      room =
+        this.#footprint.get(L + 1) ??
+        estimateFixedBytes(coarser.layout, coarser.volume?.poolChunks ?? chunkCount(coarser.layout)) + Math.ceil(surface.budgetedBytes / 4);
     }
     return this.budgetBytes - RESERVE_BYTES - room - (this.gpu.allocatedBytes - surface.budgetedBytes);
   }
@@ -429,7 +443,10 @@ export class StreamController<
       await new Promise<void>((resolve) => {
         mine = this.#waiting = { level: L, iso, needed: needed.length, missing, done: resolve };
         // evict chunks this surface does not need first, so arrivals find room
+        const coming = needed.filter((c) => missing.has(c));
+        pool.reserve(coming); // gives back what an older isovalue set aside
         this.#makeRoom(lv, missing.size, wanted);
+        pool.reserve(coming);
         this.fetcher.want(
           L,
           needed.filter((c) => missing.has(c)),
@@ -446,9 +463,20 @@ export class StreamController<
     let surface = this.#surfaces.get(L) ?? (await this.#creating.get(L)?.catch(() => undefined));
     if (gen !== this.#gen || this.#destroyed) return 'stopped';
     if (surface && this.#surfaces.get(L) !== surface) surface = undefined; // let go meanwhile
+    // A surface's per-block state is sized by its pool's capacity when it was
+    // made (block ids are slot-relative): once the pool was resized it is
+    // made again. The old one stays drawn, if it is on screen, until the new
+    // one replaces it.
+    if (surface && this.#surfaceCapacity.get(surface) !== pool.poolChunks) {
+      this.#surfaces.delete(L);
+      this.#lastStats.delete(L);
+      if (this.#shown?.surface === surface) this.#retire(surface);
+      else surface.destroy();
+      surface = undefined;
+    }
     try {
       if (!surface) {
-        const fixed = estimateFixedBytes(lv.layout);
+        const fixed = estimateFixedBytes(lv.layout, pool.poolChunks);
         if (!this.#release(fixed + MIN_SURFACE_BYTES, this.#keep(L))) {
           if (this.#skippable(L)) return 'skipped';
           return this.#stop(
@@ -471,6 +499,7 @@ export class StreamController<
           return 'stopped';
         }
         this.#surfaces.set(L, surface);
+        this.#surfaceCapacity.set(surface, pool.poolChunks);
       }
       if (gen !== this.#gen || this.#destroyed) return 'stopped';
       let stats: S;
@@ -490,7 +519,7 @@ export class StreamController<
       // ranges come from the GPU's block ranges, so the next isovalue fetches
       // only what it needs.
       if (!lv.nb && surface.readBlockRanges && pool.residentCount === chunkCount(lv.layout)) {
-        lv.ranges = chunkRangesOfBlocks(lv.layout, await surface.readBlockRanges());
+        lv.ranges = chunkRangesOfIds(lv.layout, await surface.readBlockRanges(), pool);
         lv.nb = neighbourhoodRanges(lv.layout.chunkGrid, lv.ranges);
       }
       if (gen !== this.#gen || this.#destroyed) return 'stopped';
@@ -512,7 +541,7 @@ export class StreamController<
   #show(s: ShownSurface<V, S, F>): void {
     this.#shown = s;
     for (const l of this.#shownListeners) l(s);
-    // one surface stays: the one shown now (the coarser one it replaces goes)
+    // one surface stays: the one shown now (the coarser one it replaces goes, and one made for a pool's old capacity)
     for (const [level, surf] of this.#surfaces) {
       if (level !== s.level) {
         surf.destroy();
@@ -520,6 +549,16 @@ export class StreamController<
         this.#lastStats.delete(level);
       }
     }
+    if (this.#retired && this.#retired !== s.surface) {
+      this.#retired.destroy();
+      this.#retired = null;
+    }
+  }
+
+  /** A surface made for a pool's old capacity that is still on screen: destroyed when another one is shown. */
+  #retire(surface: F): void {
+    if (this.#retired && this.#retired !== surface) this.#retired.destroy();
+    this.#retired = surface;
   }
 
   #stop(level: number, reason: string, cause: NonNullable<StreamProgress['cause']>, retryInMs?: number): 'stopped' {
@@ -565,7 +604,7 @@ export class StreamController<
 
   #makeRoom(lv: Level<V>, count: number, keep: ReadonlySet<ChunkIndex>): void {
     const v = lv.volume!;
-    let free = v.poolChunks - v.residentCount;
+    let free = v.freeCount;
     for (const c of [...lv.lru.keys()]) {
       if (free >= count) break;
       if (keep.has(c)) continue;
@@ -580,7 +619,7 @@ export class StreamController<
     const w = this.#waiting;
     if (!lv?.volume || w?.level !== level || !w.missing.has(chunk)) return;
     if (!lv.volume.has(chunk)) {
-      if (lv.volume.residentCount >= lv.volume.poolChunks) this.#makeRoom(lv, 1, w.missing);
+      if (lv.volume.freeCount === 0 && !lv.volume.isReserved(chunk)) this.#makeRoom(lv, 1, w.missing);
       try {
         lv.volume.put(chunk, bytes);
       } catch (e) {
@@ -610,6 +649,8 @@ export class StreamController<
     this.#waiting?.done();
     for (const s of this.#surfaces.values()) s.destroy();
     this.#surfaces.clear();
+    this.#retired?.destroy();
+    this.#retired = null;
     for (const l of this.levels) {
       l.volume?.destroy();
       l.volume = null;
@@ -624,14 +665,15 @@ const RESERVE_BYTES = 1 << 20;
 const MIN_SURFACE_BYTES = 256 << 10;
 
 /**
- * The Isosurface's per-volume buffers outside its budget (src/isosurface/README.md,
- * "Buffers": ranges, neighbourhood ranges, masks, lists and maps per block,
- * about 40 B; per group (= chunk) 20 B; scratch), rounded up.
+ * The Isosurface's per-volume buffers outside its budget over a pool of
+ * `poolChunks` slots (src/isosurface/README.md, "Buffers": per block id its
+ * ranges, neighbourhood range, masks, lists and cache map, about 40 B; per
+ * slot 20 B; scratch), rounded up. Block ids are the pool's slots x blocks
+ * per chunk: nothing here grows with the level.
  */
-export function estimateFixedBytes(layout: ChunkLevelLayout): number {
-  const blocks = layout.dims.reduce((a, n) => a * Math.ceil(n / 4), 1);
-  const chunks = layout.chunkGrid[0] * layout.chunkGrid[1] * layout.chunkGrid[2];
-  return 48 * blocks + 32 * chunks + (64 << 10);
+export function estimateFixedBytes(layout: ChunkLevelLayout, poolChunks: number): number {
+  const ids = poolChunks * (layout.chunkEdge / 4) ** 3;
+  return 48 * ids + 32 * poolChunks + (64 << 10);
 }
 
 const chunkCount = (layout: ChunkLevelLayout) => layout.chunkGrid[0] * layout.chunkGrid[1] * layout.chunkGrid[2];
@@ -640,27 +682,26 @@ function allChunks(layout: ChunkLevelLayout): ChunkIndex[] {
   return Array.from({ length: chunkCount(layout) }, (_, i) => i);
 }
 
-/** [min, max] per chunk from [min, max] per 4^3 block (raster block order of the level). */
-export function chunkRangesOfBlocks(layout: ChunkLevelLayout, blockRanges: Float32Array): Float32Array {
-  const bg = layout.dims.map((n) => Math.ceil(n / 4));
-  const [gx, gy] = layout.chunkGrid;
-  const per = layout.chunkEdge / 4;
+/** [min, max] per chunk from [min, max] per block id of the pool (resident chunks; the others get the empty range). */
+export function chunkRangesOfIds(
+  layout: ChunkLevelLayout,
+  idRanges: Float32Array,
+  pool: Pick<LevelVolume, 'slotOfChunk' | 'blocksPerChunk'>,
+): Float32Array {
   const out = new Float32Array(2 * chunkCount(layout));
-  for (let i = 0; i < out.length; i += 2) {
-    out[i] = Infinity;
-    out[i + 1] = -Infinity;
-  }
-  for (let bz = 0; bz < bg[2]; bz++) {
-    for (let by = 0; by < bg[1]; by++) {
-      for (let bx = 0; bx < bg[0]; bx++) {
-        const b = bx + bg[0] * (by + bg[1] * bz);
-        const c = Math.floor(bx / per) + gx * (Math.floor(by / per) + gy * Math.floor(bz / per));
-        const lo = blockRanges[2 * b],
-          hi = blockRanges[2 * b + 1];
-        if (lo < out[2 * c]) out[2 * c] = lo;
-        if (hi > out[2 * c + 1]) out[2 * c + 1] = hi;
+  const per = pool.blocksPerChunk;
+  for (let c = 0; c < out.length / 2; c++) {
+    let lo = Infinity;
+    let hi = -Infinity;
+    const slot = pool.slotOfChunk(c);
+    if (slot !== undefined) {
+      for (let b = slot * per; b < (slot + 1) * per; b++) {
+        if (idRanges[2 * b] < lo) lo = idRanges[2 * b];
+        if (idRanges[2 * b + 1] > hi) hi = idRanges[2 * b + 1];
       }
     }
+    out[2 * c] = lo;
+    out[2 * c + 1] = hi;
   }
   return out;
 }

@@ -12,11 +12,17 @@
 // rate: a fully resident level gives the in-core pipeline's surface.
 //
 // The pool is cut into pieces no larger than one storage binding (shards,
-// each with its bind group 0 for the decoder kernels). put/evict write the
-// chunk and its page-table entry with queue.writeBuffer (ordered after work
-// already submitted) and note the chunk as changed; the isosurface pipeline
-// takes the changed chunks before its next surface and recomputes the block
-// ranges of just those chunks on the GPU (changeLog: one per surface, so a surface made later starts from every resident chunk).
+// each with its bind group 0 for the decoder kernels). Blocks are named by
+// pool id, slot * B + the block's index in its chunk (B = (C/4)^3), so
+// everything the isosurface pipeline keeps per block follows the pool's
+// capacity, never the level's size (shaders/isosurface/blocks_pool.wgsl).
+// put/evict write the chunk, its page-table entry (chunk -> slot) and its
+// slot-table entry (slot -> chunk) with queue.writeBuffer (ordered after
+// work already submitted) and note (slot, chunk) as changed; the isosurface
+// pipeline takes the changes before its next surface and recomputes the
+// block ranges of just those slots on the GPU and forgets what it had
+// decoded from them (changeLog: one per surface, so a surface made later
+// starts from every resident chunk).
 
 import { formatDims } from '../core/naming.ts';
 import { bufferLayout } from '../gpu/bindings.ts';
@@ -60,7 +66,13 @@ const PARAMS_STRIDE = 256;
 
 /** Bind group layout 0 of the decoder kernels over a pool (pool_address.wgsl; the device's, from the pipeline cache). */
 export function poolBindGroupLayout(device: GPUDevice): GPUBindGroupLayout {
-  return bufferLayout(device, 'ChunkedVolume.layout', ['read', 'uniform', 'read', 'uniform']);
+  return bufferLayout(device, 'ChunkedVolume.layout', ['read', 'uniform', 'read', 'uniform', 'read']);
+}
+
+/** One change of a pool: `chunk` arrived in or left `slot`. */
+export interface SlotChange {
+  slot: number;
+  chunk: ChunkIndex;
 }
 
 interface PoolShard {
@@ -89,12 +101,17 @@ export class ChunkedVolume implements BlockSource {
   readonly chunkCount: number;
   /** Where block 0 starts inside a chunk's stream (96 or 148 bits). */
   readonly headerBits: number;
-  private readonly pageTable: GPUBuffer;
+  /** chunk -> slot (NONE: not resident), one word per chunk of the level: the per-level state. */
+  readonly pageTable: GPUBuffer;
+  /** slot -> chunk (NONE: empty), one word per slot. */
+  slotChunks: GPUBuffer;
   private params: GPUBuffer | null = null;
   private readonly slotOf = new Map<ChunkIndex, number>();
   private freeSlots: number[] = [];
+  /** Slots set aside for chunks on their way (reserve()). */
+  private readonly reservedSlot = new Map<ChunkIndex, number>();
   /** One change log per reader (each Isosurface over this pool), so a surface created later still sees every resident chunk. */
-  private readonly changeLogs = new Set<Set<ChunkIndex>>();
+  private readonly changeLogs = new Set<Map<string, SlotChange>>();
   /** A checksum of the bytes each chunk index was first put with (kept after evictions). */
   private readonly checksums = new Map<ChunkIndex, number>();
   private readonly word = new Uint32Array(1);
@@ -129,6 +146,7 @@ export class ChunkedVolume implements BlockSource {
     });
     new Uint32Array(this.pageTable.getMappedRange()).fill(NONE);
     this.pageTable.unmap();
+    this.slotChunks = device.createBuffer({ label: `${name}.slotChunks`, size: 4, usage: GPUBufferUsage.STORAGE });
     this.resize(poolChunks);
   }
 
@@ -153,6 +171,7 @@ export class ChunkedVolume implements BlockSource {
     if (poolChunks < this.residentCount)
       throw new ChunkError(`${this.layout.name}: cannot shrink the pool to ${poolChunks} chunks, ${this.residentCount} are resident`);
     if (poolChunks === this.capacity) return;
+    this.reserve([]);
     const { device } = this;
     const { chunkBytes, name } = this.layout;
     const encoder = device.createCommandEncoder({ label: `${name}.pool.resize` });
@@ -192,6 +211,8 @@ export class ChunkedVolume implements BlockSource {
         this.slotOf.set(chunk, to);
         this.word[0] = to;
         device.queue.writeBuffer(this.pageTable, chunk * 4, this.word);
+        this.logChange(slot, chunk);
+        this.logChange(to, chunk);
       }
       this.freeSlots = low.sort((x, y) => y - x);
       const kept: typeof shards = [];
@@ -230,6 +251,18 @@ export class ChunkedVolume implements BlockSource {
       for (let sl = poolChunks - 1; sl >= this.capacity; sl--) added.push(sl);
       this.freeSlots = [...added, ...this.freeSlots];
     }
+    // the slot table, made again at the new size (chunks that moved included)
+    const slotChunks = device.createBuffer({
+      label: `${name}.slotChunks`,
+      size: poolChunks * 4,
+      usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
+      mappedAtCreation: true,
+    });
+    const table = new Uint32Array(slotChunks.getMappedRange()).fill(NONE);
+    for (const [chunk, slot] of this.slotOf) table[slot] = chunk;
+    slotChunks.unmap();
+    retired.push(this.slotChunks);
+    this.slotChunks = slotChunks;
     device.queue.submit([encoder.finish()]);
     for (const b of retired) b.destroy(); // freed once the copies are done
     this.bind(shards);
@@ -276,6 +309,7 @@ export class ChunkedVolume implements BlockSource {
           { binding: 1, resource: { buffer: params, offset: 2 * i * PARAMS_STRIDE, size: STREAM_PARAMS_BYTES } },
           { binding: 2, resource: { buffer: this.pageTable } },
           { binding: 3, resource: { buffer: params, offset: (2 * i + 1) * PARAMS_STRIDE, size: POOL_PARAMS_BYTES } },
+          { binding: 4, resource: { buffer: this.slotChunks } },
         ],
       });
       return { ...shard, bindGroup };
@@ -332,7 +366,7 @@ export class ChunkedVolume implements BlockSource {
 
   /** Bytes of GPU memory held: the pool, the page table and the parameters. */
   get byteSize(): number {
-    return this.shards.reduce((n, s) => n + s.buffer.size, 0) + this.pageTable.size + (this.params?.size ?? 0);
+    return this.shards.reduce((n, s) => n + s.buffer.size, 0) + this.pageTable.size + this.slotChunks.size + (this.params?.size ?? 0);
   }
 
   /** Bytes a pool of `poolChunks` chunks of this layout holds (the budget's estimate before one is made). */
@@ -410,9 +444,9 @@ export class ChunkedVolume implements BlockSource {
         at,
       );
     }
-    // The block cache keeps decoded blocks after their chunk leaves the pool
-    // (a store's chunks never change, so they stay valid); different bytes
-    // under the same index would show stale blocks, so they are refused.
+    // A store's chunks never change while it is open: different bytes under
+    // a chunk index read before mean the store changed, and a surface would
+    // mix two versions of it, so they are refused.
     const sum = checksum(bytes);
     const before = this.checksums.get(chunk);
     if (before !== undefined && before !== sum) {
@@ -423,6 +457,11 @@ export class ChunkedVolume implements BlockSource {
     }
     this.checksums.set(chunk, sum);
     let slot = this.slotOf.get(chunk);
+    if (slot === undefined && this.reservedSlot.has(chunk)) {
+      slot = this.reservedSlot.get(chunk)!;
+      this.reservedSlot.delete(chunk);
+      this.slotOf.set(chunk, slot);
+    }
     if (slot === undefined) {
       slot = this.freeSlots.pop();
       if (slot === undefined) throw new ChunkError(`${where}: the pool is full (${this.poolChunks} chunks); evict one first`, at);
@@ -438,7 +477,13 @@ export class ChunkedVolume implements BlockSource {
     );
     this.word[0] = slot;
     this.device.queue.writeBuffer(this.pageTable, chunk * 4, this.word);
-    for (const log of this.changeLogs) log.add(chunk);
+    this.word[0] = chunk;
+    this.device.queue.writeBuffer(this.slotChunks, slot * 4, this.word);
+    this.logChange(slot, chunk);
+  }
+
+  private logChange(slot: number, chunk: ChunkIndex): void {
+    for (const log of this.changeLogs) log.set(`${slot}:${chunk}`, { slot, chunk });
   }
 
   /** Frees the chunk's slot; its blocks become inactive from the next surface on. */
@@ -449,21 +494,62 @@ export class ChunkedVolume implements BlockSource {
     this.freeSlots.push(slot);
     this.word[0] = NONE;
     this.device.queue.writeBuffer(this.pageTable, chunk * 4, this.word);
-    for (const log of this.changeLogs) log.add(chunk);
+    this.device.queue.writeBuffer(this.slotChunks, slot * 4, this.word);
+    this.logChange(slot, chunk);
   }
 
   /**
-   * A reader's view of the changes: `take()` gives the chunks put or evicted
-   * since its last call (the pipeline recomputes their ranges); the first
-   * call gives every chunk resident when the reader was made. `close()` when
-   * the reader goes.
+   * Sets slots aside for `chunks` (in this order, lowest free slot first)
+   * that are neither resident nor set aside yet, and gives back those set
+   * aside for chunks not in the list. So the slot a chunk lands in follows
+   * the caller's order (the plan's), not the order chunks arrive in: the
+   * same surfaces come out with their vertices in the same order whatever
+   * the network did.
    */
-  changeLog(): { take(): ChunkIndex[]; close(): void } {
-    const log = new Set<ChunkIndex>(this.slotOf.keys());
+  reserve(chunks: readonly ChunkIndex[]): void {
+    const keep = new Set(chunks);
+    for (const [c, s] of this.reservedSlot) {
+      if (keep.has(c)) continue;
+      this.reservedSlot.delete(c);
+      this.freeSlots.push(s);
+    }
+    this.freeSlots.sort((a, b) => b - a);
+    for (const c of chunks) {
+      if (this.slotOf.has(c) || this.reservedSlot.has(c)) continue;
+      const s = this.freeSlots.pop();
+      if (s === undefined) return;
+      this.reservedSlot.set(c, s);
+    }
+  }
+
+  isReserved(chunk: ChunkIndex): boolean {
+    return this.reservedSlot.has(chunk);
+  }
+
+  /** The slot a resident chunk is in (its blocks' pool ids start at slot * B), or undefined. */
+  slotOfChunk(chunk: ChunkIndex): number | undefined {
+    return this.slotOf.get(chunk);
+  }
+
+  /** Blocks per chunk, B = (C/4)^3: the pool ids of slot s are s * B ... s * B + B - 1. */
+  get blocksPerChunk(): number {
+    return this.chunkBlocks ** 3;
+  }
+
+  /**
+   * A reader's view of the changes: `take()` gives the (slot, chunk) pairs
+   * put, evicted or moved since its last call (the pipeline recomputes those
+   * slots' ranges and forgets what it decoded from them); the first call
+   * gives every resident chunk in its slot when the reader was made.
+   * `close()` when the reader goes.
+   */
+  changeLog(): { take(): SlotChange[]; close(): void } {
+    const log = new Map<string, SlotChange>();
+    for (const [chunk, slot] of this.slotOf) log.set(`${slot}:${chunk}`, { slot, chunk });
     this.changeLogs.add(log);
     return {
       take: () => {
-        const out = [...log];
+        const out = [...log.values()];
         log.clear();
         return out;
       },
@@ -478,6 +564,7 @@ export class ChunkedVolume implements BlockSource {
     this.destroyed = true;
     for (const s of this.shards) s.buffer.destroy();
     this.pageTable.destroy();
+    this.slotChunks.destroy();
     this.params?.destroy();
   }
 }

@@ -22,7 +22,7 @@ export async function readCacheState(
 
 /**
  * The drawn surface as a triangle soup: per triangle corner its vertex's
- * packed (position, block id) pair and its normal (u32 octahedral,
+ * position words (edge and fraction; block coordinates) and its normal (u32 octahedral,
  * vertex_format.wgsl), in index order.
  */
 export async function readSoup(iso: Pick<Isosurface, 'readMesh'>): Promise<{ vertices: Uint32Array; normals: Uint32Array }> {
@@ -39,7 +39,7 @@ export async function readSoup(iso: Pick<Isosurface, 'readMesh'>): Promise<{ ver
   return { vertices, normals };
 }
 
-/** The packed (position, block id) pairs of the drawn surface's triangle corners. */
+/** The position word pairs (edge and fraction; block coordinates) of the drawn surface's triangle corners. */
 export async function readVertices(iso: Pick<Isosurface, 'readMesh'>): Promise<Uint32Array> {
   return (await readSoup(iso)).vertices;
 }

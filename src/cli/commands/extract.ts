@@ -106,7 +106,7 @@ export const extractCommand: CliCommand = {
           continue;
         }
         const surface = await iso.readMesh();
-        const welded = decodeVertices(surface.vertices, surface.vertices.length / 3, iso.info, 3);
+        const welded = decodeVertices(surface.vertices, surface.vertices.length / 3);
         const m = meshMetrics(soupOf(welded, surface.indices));
         const record: ExtractRecord = {
           iso: stats.isovalue,

@@ -3,30 +3,37 @@
 // "cached" (slot = block id), so SurfaceLayer can be tested without the
 // pipeline. Not a product path.
 import type { IsosurfaceDrawData } from '../../isosurface/types.ts';
+import { encodeVertexEdge } from '../../isosurface/vertex-format.ts';
 import { marchingCubes } from '../../mc/serial-mc.ts';
 import type { Dims } from '../../core/naming.ts';
 
-/** Packs a triangle soup (voxel coordinates) into u32 pairs (position in its cell's block, block id). */
+/** Packs a triangle soup (voxel coordinates) into the position words of the vertex format (edge and fraction; block coordinates), 2 u32 per corner. */
 export function packTriangleSoup(positions: Float32Array, dims: Dims): Uint32Array {
-  const grid = dims.map((n) => Math.ceil(n / 4));
   const out = new Uint32Array((positions.length / 3) * 2);
+  const corner: [number, number, number] = [0, 0, 0];
   for (let t = 0; t < positions.length; t += 9) {
-    // The triangle's cell: the floor of its smallest corner, per axis.
+    // The triangle's cell: the floor of its smallest corner, per axis; its block places the vertices.
     const cell = [0, 1, 2].map((a) =>
       Math.min(dims[a] - 2, Math.floor(Math.min(positions[t + a], positions[t + 3 + a], positions[t + 6 + a]))),
     );
-    const block = cell.map((c) => c >> 2);
-    const id = block[0] + grid[0] * (block[1] + grid[1] * block[2]);
+    const block = cell.map((c) => c >> 2) as [number, number, number];
     for (let v = 0; v < 3; v++) {
-      let packed = 0;
+      const p = positions.subarray(t + 3 * v, t + 3 * v + 3);
+      // the vertex's edge: along the axis whose coordinate is farthest from a whole number
+      let axis = 0;
+      let best = -1;
       for (let a = 0; a < 3; a++) {
-        const local = positions[t + 3 * v + a] - 4 * block[a];
-        const q = Math.min(1023, Math.max(0, Math.round((local * 1023) / 4)));
-        packed |= q << (10 * a);
+        const f = p[a] - Math.floor(p[a]);
+        if (Math.min(f, 1 - f) > best) {
+          best = Math.min(f, 1 - f);
+          axis = a;
+        }
       }
+      for (let a = 0; a < 3; a++) corner[a] = Math.min(4, Math.max(0, (a === axis ? Math.floor(p[a]) : Math.round(p[a])) - 4 * block[a]));
+      const [w0, w1] = encodeVertexEdge(corner, axis, p[axis] - Math.floor(p[axis]), block);
       const i = (t / 9) * 6 + 2 * v;
-      out[i] = packed >>> 0;
-      out[i + 1] = id;
+      out[i] = w0;
+      out[i + 1] = w1;
     }
   }
   return out;

@@ -1,6 +1,6 @@
 // The PLY export: packed vertices decode to the positions marching cubes
-// made (within the 10-bit quantization), and an indexed mesh's file reads
-// back as written. (The GPU's welded mesh itself: behaviour.test.ts.)
+// made (within the 16-bit quantization along the edge), and an indexed
+// mesh's file reads back as written. (The GPU's welded mesh itself: behaviour.test.ts.)
 import { describe, expect, it } from 'vitest';
 import { encodePly, parsePly, soupOf } from '../../../src/mc/ply.ts';
 import { decodeVertices } from '../../../src/isosurface/vertex-format.ts';
@@ -21,18 +21,17 @@ describe('PLY export', () => {
   const values = sphere(21);
   const mc = marchingCubes(values, dims, 7.3);
   const packed = packTriangleSoup(mc.positions, dims);
-  const grid: Dims = [6, 6, 6];
 
   it('decodes packed vertices to within the quantization step', () => {
-    const soup = decodeVertices(packed, packed.length / 2, { blockGrid: grid });
+    const soup = decodeVertices(packed, packed.length / 2, 2);
     expect(soup.length).toBe(mc.positions.length);
     let worst = 0;
     for (let i = 0; i < soup.length; i++) worst = Math.max(worst, Math.abs(soup[i] - mc.positions[i]));
-    expect(worst).toBeLessThanOrEqual(2 / 1023 + 1e-6);
+    expect(worst).toBeLessThanOrEqual(0.5 / 65535 + 2e-6);
   });
 
   it('writes binary little-endian PLY that reads back exactly', () => {
-    const soup = decodeVertices(packed, packed.length / 2, { blockGrid: grid });
+    const soup = decodeVertices(packed, packed.length / 2, 2);
     // An indexed mesh: the soup's corners as vertices, listed in reverse.
     const corners = soup.length / 3;
     const positions = new Float32Array(soup.length);

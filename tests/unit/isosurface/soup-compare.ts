@@ -1,23 +1,23 @@
 // Triangle-for-triangle comparison of a GPU soup in the compressed vertex
 // format with the serial CPU marching cubes of the same decoded volume.
 //
-// A welded vertex is quantized relative to the block of the cell that owns
-// its edge, not necessarily the block of every triangle using it, so both
-// soups are put in absolute quantized coordinates: a block is 4 voxels =
-// 1023 quanta, so block b's q is 1023 * b + q. The CPU soup is quantized
-// as the kernel does, relative to the block of the cell that emitted each
-// triangle (the serial MC emits cells in raster order, so walking the cells'
-// case vertex counts assigns every triangle its cell). The two soups are
-// then compared as multisets of 3 quantized vertices, a triangle's starting
-// vertex free but not its winding. Exact matches first; what is left (a
-// coordinate whose local * 1023/4 sits at a rounding boundary, where float32
-// rounding of block-relative vs global coordinates may differ) is matched
-// with each quantized coordinate within 1, by maximum bipartite matching over
-// all triangles of the regions concerned (a region: the block-sized cube
-// holding a triangle's centroid), so the order of matching never matters.
-import { CASE_VERTEX_COUNT, caseIndex } from '../../../src/mc/case-table.ts';
+// A welded vertex is its grid edge and the fraction along it in 16 bits, so
+// both soups are put in absolute quantized coordinates, 65535 quanta per
+// voxel: the GPU's is (4 * block + corner) * 65535 (+ the fraction's 16 bits
+// on the edge's axis), the CPU's is each coordinate * 65535, rounded. The two
+// soups are then compared as multisets of 3 quantized vertices, a triangle's
+// starting vertex free but not its winding. Exact matches first; what is
+// left (float32 rounding of the fraction or of the CPU's coordinates moves a
+// value by a quantum) is matched with each quantized coordinate within 1, by
+// maximum bipartite matching over all triangles of the regions concerned (a
+// region: the block-sized cube holding a triangle's centroid), so the order
+// of matching never matters.
 import { marchingCubes } from '../../../src/mc/serial-mc.ts';
 import type { Dims } from '../../../src/core/naming.ts';
+import { vertexBlock } from '../../../src/isosurface/vertex-format.ts';
+
+/** Quanta per voxel. */
+const Q = 65535;
 
 interface Tri {
   /** The region (block-sized cube) of the triangle's centroid. */
@@ -36,7 +36,7 @@ export interface BlockSoupComparison {
 
 function canonical(q: number[]): Tri {
   const v = [q.slice(0, 3), q.slice(3, 6), q.slice(6, 9)];
-  const block = [0, 1, 2].map((a) => Math.floor((q[a] + q[a + 3] + q[a + 6]) / 3069)).join(',');
+  const block = [0, 1, 2].map((a) => Math.floor((q[a] + q[a + 3] + q[a + 6]) / (3 * 4 * Q))).join(',');
   const less = (a: number[], b: number[]) => a[0] - b[0] || a[1] - b[1] || a[2] - b[2];
   let first = 0;
   if (less(v[1], v[first]) < 0) first = 1;
@@ -46,50 +46,32 @@ function canonical(q: number[]): Tri {
 
 const key = (t: Tri) => `${t.block}:${t.q.join(',')}`;
 
-export function gpuTriangles(packed: Uint32Array, dims: Dims): Tri[] {
-  const gx = Math.ceil(dims[0] / 4);
-  const gy = Math.ceil(dims[1] / 4);
+/** The GPU soup (position word pairs, 2 u32 per corner) as quantized triangles. */
+export function gpuTriangles(packed: Uint32Array, _dims?: Dims): Tri[] {
   const out: Tri[] = [];
   for (let v = 0; v + 2 < packed.length / 2; v += 3) {
     const q: number[] = [];
     for (let k = 0; k < 3; k++) {
-      const p = packed[2 * (v + k)];
-      const b = packed[2 * (v + k) + 1];
-      const c = [b % gx, Math.floor(b / gx) % gy, Math.floor(b / (gx * gy))];
-      q.push((p & 1023) + 1023 * c[0], ((p >>> 10) & 1023) + 1023 * c[1], ((p >>> 20) & 1023) + 1023 * c[2]);
+      const w0 = packed[2 * (v + k)];
+      const b = vertexBlock(w0, packed[2 * (v + k) + 1]);
+      const corner = [w0 & 7, (w0 >>> 3) & 7, (w0 >>> 6) & 7];
+      const axis = (w0 >>> 9) & 3;
+      for (let a = 0; a < 3; a++) q.push((4 * b[a] + corner[a]) * Q + (a === axis ? (w0 >>> 11) & 65535 : 0));
     }
     out.push(canonical(q));
   }
   return out;
 }
 
-/** The serial MC soup of `values` at `iso`, each triangle with its block and quantized block-relative vertices. */
+/** The serial MC soup of `values` at `iso`, quantized like the GPU's. */
 export function cpuTriangles(values: Float32Array, dims: Dims, iso: number): Tri[] {
-  const [nx, ny, nz] = dims;
   const { positions } = marchingCubes(values, dims, iso);
-  const t = Math.fround(iso);
-  const corners = new Float32Array(8);
   const out: Tri[] = [];
-  let p = 0;
-  for (let k = 0; k < nz - 1; k++) {
-    for (let j = 0; j < ny - 1; j++) {
-      for (let i = 0; i < nx - 1; i++) {
-        for (let c = 0; c < 8; c++) corners[c] = values[i + (c & 1) + nx * (j + ((c >> 1) & 1) + ny * (k + (c >> 2)))];
-        const n = CASE_VERTEX_COUNT[caseIndex(corners, t)];
-        const origin = [4 * (i >> 2), 4 * (j >> 2), 4 * (k >> 2)];
-        for (let m = 0; m < n; m += 3) {
-          const q: number[] = [];
-          for (let a = 0; a < 9; a++) {
-            const local = Math.min(1023, Math.max(0, Math.round((positions[p + a] - origin[a % 3]) * 255.75)));
-            q.push(local + (origin[a % 3] / 4) * 1023);
-          }
-          out.push(canonical(q));
-          p += 9;
-        }
-      }
-    }
+  for (let p = 0; p < positions.length; p += 9) {
+    const q: number[] = [];
+    for (let a = 0; a < 9; a++) q.push(Math.round(positions[p + a] * Q));
+    out.push(canonical(q));
   }
-  if (p !== positions.length) throw new Error(`cell walk used ${p / 3} of ${positions.length / 3} vertices`);
   return out;
 }
 

@@ -1,48 +1,58 @@
 // The compressed vertex format: the WGSL encode/decode (vertex_format.wgsl,
 // what the kernel writes and the renderer reads) against the TS twin
-// (vertex-format.ts), and the layout constants shared by TS and WGSL.
+// (vertex-format.ts), up to the largest block coordinates, and the layout
+// constants shared by TS and WGSL.
 import { readFileSync } from 'node:fs';
 import { describe, expect, test } from 'vitest';
 import { readF32, readU32 } from '../../../src/gpu/buffers.ts';
 import { createComputePipeline } from '../../../src/gpu/pipeline-cache.ts';
 import { A, C, NONE, S, SHARD_RECORD_BYTES, STATUS_CACHE_SHORTFALL, STATUS_VERTEX_OVERFLOW } from '../../../src/isosurface/layout.ts';
-import { decodeVertices, encodeVertexPosition, VERTEX_QUANTUM } from '../../../src/isosurface/vertex-format.ts';
+import { decodeVertices, encodeVertexEdge, MAX_VERTEX_VOXELS, VERTEX_QUANTUM, vertexBlock } from '../../../src/isosurface/vertex-format.ts';
 import { vertexFormatSnippet } from '../../../src/isosurface/wgsl.ts';
-import type { Dims } from '../../../src/core/naming.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { rng } from '../mc/reference.ts';
 
 describe('vertex format', () => {
-  test('TS encode/decode: 10 bits per axis, block origin + q * 4 / 1023', () => {
-    const info = { blockGrid: [3, 5, 2] as Dims };
-    const random = rng(3);
-    const packed = new Uint32Array(2 * 1000);
-    const expected: number[] = [];
-    for (let v = 0; v < 1000; v++) {
-      const local: [number, number, number] = [random() * 4, random() * 4, random() * 4];
-      if (v === 0) local.splice(0, 3, 0, 4, 2);
-      const block = Math.floor(random() * 30);
-      packed[2 * v] = encodeVertexPosition(local);
-      packed[2 * v + 1] = block;
-      const origin = [4 * (block % 3), 4 * (Math.floor(block / 3) % 5), 4 * Math.floor(block / 15)];
-      for (let a = 0; a < 3; a++) expected.push(origin[a] + local[a]);
+  /** Random edges (corner 0..4 per axis, axis, t) in random blocks, the extremes first (block 4095 on every axis, t 0 and 1). */
+  function randomEdges(n: number, seed: number) {
+    const random = rng(seed);
+    const corners = new Uint32Array(4 * n);
+    const blocks = new Uint32Array(4 * n);
+    const ts = new Float32Array(n);
+    for (let v = 0; v < n; v++) {
+      for (let a = 0; a < 3; a++) {
+        corners[4 * v + a] = v < 4 ? [0, 4, 2, 3][v] : Math.floor(random() * 5);
+        blocks[4 * v + a] = v < 4 ? [0, 4095, 255, 256][v] : Math.floor(random() * 4096);
+      }
+      corners[4 * v + 3] = v % 3; // the axis
+      ts[v] = v < 4 ? [0, 1, 0.5, 1 / 65535][v] : Math.fround(random());
     }
-    expect(packed[0]).toBe(0 | (1023 << 10) | (512 << 20)); // 2 * 255.75 = 511.5: to even
-    const decoded = decodeVertices(packed, 1000, info);
-    for (let i = 0; i < expected.length; i++) expect(Math.abs(decoded[i] - expected[i])).toBeLessThanOrEqual(VERTEX_QUANTUM / 2 + 1e-5);
+    return { corners, blocks, ts };
+  }
+  const at = (a: Uint32Array, v: number): [number, number, number] => [a[4 * v], a[4 * v + 1], a[4 * v + 2]];
+
+  test('TS encode/decode: the edge, 16 bits along it, 12-bit block coordinates (16384 voxels per axis)', () => {
+    const n = 1000;
+    const { corners, blocks, ts } = randomEdges(n, 3);
+    const packed = new Uint32Array(2 * n);
+    for (let v = 0; v < n; v++) packed.set(encodeVertexEdge(at(corners, v), corners[4 * v + 3], ts[v], at(blocks, v)), 2 * v);
+    expect(MAX_VERTEX_VOXELS).toBe(16384);
+    // corner (4, 4, 4) on axis 1 at t = 1 in block (4095, 4095, 4095)
+    expect(vertexBlock(packed[2], packed[3])).toEqual([4095, 4095, 4095]);
+    const decoded = decodeVertices(packed, n, 2);
+    for (let v = 0; v < n; v++) {
+      for (let a = 0; a < 3; a++) {
+        const expected = 4 * blocks[4 * v + a] + corners[4 * v + a] + (a === corners[4 * v + 3] ? ts[v] : 0);
+        // half a step along the edge, and float32 rounding of coordinates up to 16384
+        expect(Math.abs(decoded[3 * v + a] - expected)).toBeLessThanOrEqual(VERTEX_QUANTUM / 2 + Math.abs(expected) * 2 ** -23);
+      }
+    }
   });
 
-  gpuTest('WGSL encode_vertex_position / decode_vertex_position = the TS twin', async ({ gpu }) => {
+  gpuTest('WGSL encode_vertex_edge / decode_vertex_position = the TS twin', async ({ gpu }) => {
     const { device } = gpu;
     const n = 4096;
-    const grid: Dims = [7, 3, 11];
-    const random = rng(9);
-    const locals = new Float32Array(4 * n);
-    const ids = new Uint32Array(n);
-    for (let v = 0; v < n; v++) {
-      for (let a = 0; a < 3; a++) locals[4 * v + a] = v < 8 ? [0, 4, 2, 1.0019550323486328][v % 4] : random() * 4;
-      ids[v] = Math.floor(random() * grid[0] * grid[1] * grid[2]);
-    }
+    const { corners, blocks, ts } = randomEdges(n, 9);
     const pipeline = await createComputePipeline(
       device,
       'test.vertexFormat',
@@ -51,16 +61,17 @@ describe('vertex format', () => {
         {
           name: 'test/vertex_format.wgsl',
           code: /* wgsl */ `
-@group(0) @binding(0) var<storage, read> locals: array<vec4f>;
-@group(0) @binding(1) var<storage, read> ids: array<u32>;
-@group(0) @binding(2) var<storage, read_write> packed: array<u32>;
-@group(0) @binding(3) var<storage, read_write> decoded: array<vec4f>;
+@group(0) @binding(0) var<storage, read> corners: array<vec4u>;
+@group(0) @binding(1) var<storage, read> blocks: array<vec4u>;
+@group(0) @binding(2) var<storage, read> ts: array<f32>;
+@group(0) @binding(3) var<storage, read_write> packed: array<vec2u>;
+@group(0) @binding(4) var<storage, read_write> decoded: array<vec4f>;
 @compute @workgroup_size(64) fn main(@builtin(global_invocation_id) id: vec3u) {
   let v = id.x;
-  if (v >= arrayLength(&ids)) { return; }
-  let p = encode_vertex_position(locals[v].xyz);
-  packed[v] = p;
-  decoded[v] = vec4f(decode_vertex_position(p, ids[v], vec3u(${grid.join('u, ')}u)), 0.0);
+  if (v >= arrayLength(&ts)) { return; }
+  let w = encode_vertex_edge(corners[v].xyz, corners[v].w, ts[v], blocks[v].xyz);
+  packed[v] = w;
+  decoded[v] = vec4f(decode_vertex_position(w.x, w.y), 0.0);
 }`,
         },
       ],
@@ -72,7 +83,7 @@ describe('vertex format', () => {
       if (typeof data !== 'number') device.queue.writeBuffer(b, 0, data as BufferSource);
       return b;
     };
-    const buffers = [make(locals), make(ids), make(4 * n), make(16 * n)];
+    const buffers = [make(corners), make(blocks), make(ts), make(8 * n), make(16 * n)];
     const encoder = device.createCommandEncoder();
     const pass = encoder.beginComputePass();
     pass.setPipeline(pipeline);
@@ -86,20 +97,18 @@ describe('vertex format', () => {
     pass.dispatchWorkgroups(n / 64);
     pass.end();
     device.queue.submit([encoder.finish()]);
-    const gpuPacked = await readU32(device, buffers[2]);
-    const gpuDecoded = await readF32(device, buffers[3]);
-    const pairs = new Uint32Array(2 * n);
-    let differentQ = 0;
+    const gpuPacked = await readU32(device, buffers[3]);
+    const gpuDecoded = await readF32(device, buffers[4]);
+    let different = 0;
     for (let v = 0; v < n; v++) {
-      const tsPacked = encodeVertexPosition([locals[4 * v], locals[4 * v + 1], locals[4 * v + 2]]);
-      if (tsPacked !== gpuPacked[v]) differentQ++;
-      pairs[2 * v] = gpuPacked[v];
-      pairs[2 * v + 1] = ids[v];
+      const [w0, w1] = encodeVertexEdge(at(corners, v), corners[4 * v + 3], ts[v], at(blocks, v));
+      if (w0 !== gpuPacked[2 * v] || w1 !== gpuPacked[2 * v + 1]) different++;
     }
-    expect(differentQ).toBe(0);
-    const tsDecoded = decodeVertices(pairs, n, { blockGrid: grid });
-    for (let v = 0; v < n; v++) {
-      for (let a = 0; a < 3; a++) expect(Math.abs(gpuDecoded[4 * v + a] - tsDecoded[3 * v + a])).toBeLessThan(1e-5);
+    expect(different).toBe(0);
+    const tsDecoded = decodeVertices(gpuPacked, n, 2);
+    for (let i = 0; i < 3 * n; i++) {
+      const v = Math.floor(i / 3);
+      expect(Math.abs(gpuDecoded[4 * v + (i % 3)] - tsDecoded[i])).toBeLessThanOrEqual(Math.abs(tsDecoded[i]) * 2 ** -22);
     }
   });
 

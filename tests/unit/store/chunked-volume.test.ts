@@ -194,7 +194,8 @@ describe('a chunked store level through the GPU chunk pool', () => {
         for (const chunk of allChunks(m)) pool.put(chunk, chunkBytes(m, chunk));
         expect(pool.residentCount).toBe(allChunks(m).length);
         const chunked = await Isosurface.create(gpu, pool);
-        expect(chunked.info.blockCount).toBe(inCore.info.blockCount);
+        // per-block state follows the pool (its slots x blocks per chunk), not the level
+        expect(chunked.info.blockCount).toBe(pool.poolChunks * pool.blocksPerChunk);
         for (const iso of c.isovalues) {
           const a = await inCore.compute(iso);
           const b = await chunked.compute(iso);

@@ -47,7 +47,7 @@ describe('the isosurface of a TIFF stack (neuron page path)', () => {
       const { iso, initialIso, firstStats } = surface;
       expect(firstStats.triangles).toBeGreaterThan(1000);
       const mesh = await iso.readMesh();
-      const p = decodeVertices(mesh.vertices, mesh.vertices.length / 3, iso.info, 3);
+      const p = decodeVertices(mesh.vertices, mesh.vertices.length / 3);
       const [lo, hi] = iso.info.valueRange;
       const tolerance = 0.01 * (hi - lo);
       const [nx, ny, nz] = v.dims;

@@ -1,0 +1,58 @@
+// Block ids of a chunk pool (ChunkedVolume): a chunk in pool slot s has the
+// ids s * B ... s * B + B - 1 (B = (C/4)^3 blocks, raster order within the
+// chunk), so everything the pipeline keeps per block is sized by the pool's
+// slots, never by the level: a level of any size has ids for what is
+// resident only. The page table (chunk -> slot) finds the block at given
+// coordinates, the slot table (slot -> chunk) the coordinates of an id. The
+// groups of the active-block selection are the slots (the resident chunks).
+// Needs common.wgsl. Bind group 3 of every kernel that composes it.
+
+struct PoolBlocks {
+  chunk_grid: vec3u,    // chunks per axis
+  chunk_blocks: u32,    // blocks per chunk edge (C / 4)
+}
+
+@group(3) @binding(0) var<uniform> pool_blocks: PoolBlocks;
+@group(3) @binding(1) var<storage, read> pool_page_table: array<u32>;
+@group(3) @binding(2) var<storage, read> pool_slot_chunks: array<u32>;
+
+// Block coordinates of id b (its slot holds a chunk).
+fn block_coords(b: u32, grid: vec3u) -> vec3u {
+  let cb = pool_blocks.chunk_blocks;
+  let per = cb * cb * cb;
+  let chunk = pool_slot_chunks[b / per];
+  let l = b % per;
+  let g = pool_blocks.chunk_grid;
+  let cc = vec3u(chunk % g.x, (chunk / g.x) % g.y, chunk / (g.x * g.y));
+  return cc * cb + vec3u(l % cb, (l / cb) % cb, l / (cb * cb));
+}
+
+// The id of the block at coordinates c (inside the grid), NONE when its chunk is not resident.
+fn block_at(c: vec3u, grid: vec3u) -> u32 {
+  let cb = pool_blocks.chunk_blocks;
+  let g = pool_blocks.chunk_grid;
+  let cc = c / cb;
+  let slot = pool_page_table[cc.x + g.x * (cc.y + g.y * cc.z)];
+  if (slot == NONE) {
+    return NONE;
+  }
+  let l = c % cb;
+  return slot * cb * cb * cb + l.x + cb * (l.y + cb * l.z);
+}
+
+// Block `local` of group g (group = pool slot), NONE when the slot is empty or the block outside the volume.
+fn group_block_id(g: u32, local: u32, grid: vec3u, group_grid: vec3u, edge: u32) -> u32 {
+  if (pool_slot_chunks[g] == NONE) {
+    return NONE;
+  }
+  let b = g * edge * edge * edge + local;
+  if (any(block_coords(b, grid) >= grid)) {
+    return NONE;
+  }
+  return b;
+}
+
+// The group of chunk `chunk`: its slot, NONE when it is not resident.
+fn group_of_chunk(chunk: u32) -> u32 {
+  return pool_page_table[chunk];
+}

@@ -1,0 +1,30 @@
+// Block ids of a whole stream (ZfpGpuStream): raster order over the volume's
+// block grid, every block present. The other id snippet is blocks_pool.wgsl;
+// the kernels see only these three functions.
+// Needs common.wgsl.
+
+// Block coordinates of block b.
+fn block_coords(b: u32, grid: vec3u) -> vec3u {
+  return block_coords_of(b, grid);
+}
+
+// The id of the block at coordinates c (inside the grid), NONE when it is not present.
+fn block_at(c: vec3u, grid: vec3u) -> u32 {
+  return block_index_of(c, grid);
+}
+
+// Block `local` of group g (groups: edge^3 blocks in raster order over the
+// group grid), NONE outside the volume.
+fn group_block_id(g: u32, local: u32, grid: vec3u, group_grid: vec3u, edge: u32) -> u32 {
+  let gc = vec3u(g % group_grid.x, (g / group_grid.x) % group_grid.y, g / (group_grid.x * group_grid.y));
+  let c = gc * edge + vec3u(local % edge, (local / edge) % edge, local / (edge * edge));
+  if (any(c >= grid)) {
+    return NONE;
+  }
+  return block_index_of(c, grid);
+}
+
+// The group of chunk `chunk` (a chunked source's update passes; a stream has no chunks).
+fn group_of_chunk(chunk: u32) -> u32 {
+  return chunk;
+}
