@@ -9,11 +9,12 @@
 // Occupied blocks of this surface (cleared before the pass, then copied to
 // counters[C_OCCUPIED]: the counters are this pass's indirect arguments, so
 // they cannot be bound writable here).
-@group(1) @binding(4) var<storage, read_write> occupied_count: atomic<u32>;
+@group(1) @binding(3) var<storage, read_write> occupied_count: atomic<u32>;
 @group(1) @binding(1) var<storage, read_write> slot_mc: array<u32>;         // per slot and row (y, z): 4 case bytes, then the row base (expand_cells)
-@group(1) @binding(2) var<storage, read_write> block_indices: array<u32>;   // triangle corners per active entry
-@group(1) @binding(3) var<storage, read_write> block_cells: array<u32>;     // emitting cells per active entry
-@group(1) @binding(5) var<storage, read_write> block_vertices: array<u32>;  // owned cut edges (welded vertices) per active entry
+// Per active entry, in three regions of count_stride words (one binding, so
+// a chunk pool's tables still fit the default of 8 storage buffers per
+// stage): triangle corners, owned cut edges (welded vertices), emitting cells.
+@group(1) @binding(2) var<storage, read_write> block_counts: array<u32>;
 
 // Inside bits (value >= iso) of row (y, z) of the 5^3 neighbourhood, at bits shift..shift+4.
 fn row_bits(slots: ptr<function, array<u32, 8>>, y: u32, z: u32, shift: u32) -> u32 {
@@ -125,9 +126,10 @@ fn classify_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) n
       }
     }
   }
-  block_indices[i] = indices;
-  block_vertices[i] = vertices;
-  block_cells[i] = cells;
+  let stride = count_stride(classify_counters[C_SLOTS >> 2u][C_SLOTS & 3u]);
+  block_counts[i] = indices;
+  block_counts[stride + i] = vertices;
+  block_counts[2u * stride + i] = cells;
   if (cells > 0u) {
     atomicAdd(&occupied_count, 1u);
   }

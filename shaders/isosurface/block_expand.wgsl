@@ -5,14 +5,14 @@
 @group(0) @binding(0) var<uniform> expand_case_table: array<vec4u, 128>;
 @group(0) @binding(1) var<uniform> expand_counters: array<vec4u, 16>;
 @group(0) @binding(2) var<storage, read_write> expand_slot_mc: array<u32>;   // cases in, row bases out (block_classify.wgsl)
-@group(0) @binding(3) var<storage, read> expand_cells_of: array<u32>;        // block_cells
-@group(0) @binding(4) var<storage, read> expand_cell_offsets: array<u32>;    // exclusive scan of block_cells
-@group(0) @binding(5) var<storage, read> expand_index_offsets: array<u32>;   // exclusive scan of block_indices
-@group(0) @binding(6) var<storage, read> expand_vertex_offsets: array<u32>;  // exclusive scan of block_vertices
-@group(0) @binding(7) var<storage, read_write> expand_cell_list: array<vec2u>;
-@group(0) @binding(8) var<storage, read> expand_active_ids: array<u32>;
-@group(0) @binding(9) var<storage, read> expand_block_to_slot: array<u32>;
-@group(0) @binding(10) var<uniform> expand_volume: VolumeParams;
+@group(0) @binding(3) var<storage, read> expand_cells_of: array<u32>;        // emitting cells per active entry (block_classify.wgsl)
+// Exclusive scans of the three counts (block_classify.wgsl), one region each
+// of count_stride words: triangle corners, welded vertices, emitting cells.
+@group(0) @binding(4) var<storage, read> expand_offsets: array<u32>;
+@group(0) @binding(5) var<storage, read_write> expand_cell_list: array<vec2u>;
+@group(0) @binding(6) var<storage, read> expand_active_ids: array<u32>;
+@group(0) @binding(7) var<storage, read> expand_block_to_slot: array<u32>;
+@group(0) @binding(8) var<uniform> expand_volume: VolumeParams;
 
 @compute @workgroup_size(64)
 fn expand_cells(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg: vec3u,
@@ -24,9 +24,10 @@ fn expand_cells(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
   let b = expand_active_ids[i];
   let slot = expand_block_to_slot[b];
   let origin = block_coords(b, expand_volume.grid) * 4u;
-  var at = expand_cell_offsets[i];
-  var first = expand_index_offsets[i];
-  var vertex = expand_vertex_offsets[i];
+  let stride = count_stride(expand_counters[C_SLOTS >> 2u][C_SLOTS & 3u]);
+  var first = expand_offsets[i];
+  var vertex = expand_offsets[stride + i];
+  var at = expand_offsets[2u * stride + i];
   for (var w = 0u; w < 16u; w++) {
     let word = expand_slot_mc[32u * slot + 2u * w];
     // the first vertex the cells of row w own (the emit pass numbers from here)

@@ -10,17 +10,27 @@
 struct PoolBlocks {
   chunk_grid: vec3u,    // chunks per axis
   chunk_blocks: u32,    // blocks per chunk edge (C / 4)
+  slot_table: u32,      // where the slot table starts in pool_tables (the level's chunk count)
+  pad0: u32,
+  pad1: u32,
+  pad2: u32,
 }
 
 @group(3) @binding(0) var<uniform> pool_blocks: PoolBlocks;
-@group(3) @binding(1) var<storage, read> pool_page_table: array<u32>;
-@group(3) @binding(2) var<storage, read> pool_slot_chunks: array<u32>;
+// The level's tables (ChunkedVolume.tables): the page table (chunk -> slot),
+// then the slot table (slot -> chunk). One binding: the kernels that use it
+// stay within WebGPU's default of 8 storage buffers per stage.
+@group(3) @binding(1) var<storage, read> pool_tables: array<u32>;
+
+fn pool_slot_chunk(slot: u32) -> u32 {
+  return pool_tables[pool_blocks.slot_table + slot];
+}
 
 // Block coordinates of id b (its slot holds a chunk).
 fn block_coords(b: u32, grid: vec3u) -> vec3u {
   let cb = pool_blocks.chunk_blocks;
   let per = cb * cb * cb;
-  let chunk = pool_slot_chunks[b / per];
+  let chunk = pool_slot_chunk(b / per);
   let l = b % per;
   let g = pool_blocks.chunk_grid;
   let cc = vec3u(chunk % g.x, (chunk / g.x) % g.y, chunk / (g.x * g.y));
@@ -32,7 +42,7 @@ fn block_at(c: vec3u, grid: vec3u) -> u32 {
   let cb = pool_blocks.chunk_blocks;
   let g = pool_blocks.chunk_grid;
   let cc = c / cb;
-  let slot = pool_page_table[cc.x + g.x * (cc.y + g.y * cc.z)];
+  let slot = pool_tables[cc.x + g.x * (cc.y + g.y * cc.z)];
   if (slot == NONE) {
     return NONE;
   }
@@ -42,7 +52,7 @@ fn block_at(c: vec3u, grid: vec3u) -> u32 {
 
 // Block `local` of group g (group = pool slot), NONE when the slot is empty or the block outside the volume.
 fn group_block_id(g: u32, local: u32, grid: vec3u, group_grid: vec3u, edge: u32) -> u32 {
-  if (pool_slot_chunks[g] == NONE) {
+  if (pool_slot_chunk(g) == NONE) {
     return NONE;
   }
   let b = g * edge * edge * edge + local;
@@ -54,5 +64,5 @@ fn group_block_id(g: u32, local: u32, grid: vec3u, group_grid: vec3u, edge: u32)
 
 // The group of chunk `chunk`: its slot, NONE when it is not resident.
 fn group_of_chunk(chunk: u32) -> u32 {
-  return pool_page_table[chunk];
+  return pool_tables[chunk];
 }

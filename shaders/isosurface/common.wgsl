@@ -72,3 +72,9 @@ fn block_index_of(c: vec3u, grid: vec3u) -> u32 {
   return c.x + grid.x * (c.y + grid.y * c.z);
 }
 
+// Words per region of the block counts and their offsets (block_classify.wgsl,
+// block_expand.wgsl): the cache slots rounded up to 64, so each region starts
+// at a multiple of 256 bytes (a storage binding's offset alignment).
+fn count_stride(slots: u32) -> u32 {
+  return (slots + 63u) & ~63u;
+}

@@ -3,9 +3,10 @@
 // its own (header, then its B = (C/4)^3 blocks in raster order), copied
 // whole into a slot of a pool. Blocks are named by their pool id: slot * B
 // + the block's index within its chunk (shaders/isosurface/blocks_pool.wgsl),
-// so finding a block needs no table. The page table maps chunk -> slot
-// (0xffffffff: not resident) and the slot table slot -> chunk, for the
-// passes that start from chunks or need coordinates. A pool shard holds
+// so finding a block needs no table. The level's tables (one buffer: the
+// page table, chunk -> slot, 0xffffffff when not resident, then from word
+// slot_table the slot table, slot -> chunk) serve the passes that start
+// from chunks or need coordinates. A pool shard holds
 // slots [first_slot, end_slot) back to back, slot_words 32-bit words each.
 // The stream uniform still gives the level's dims, block grid and bits per
 // block; a chunk's blocks are those of the whole level compressed as one
@@ -18,11 +19,14 @@ struct PoolParams {
   header_bits: u32,     // where block 0 starts inside a chunk's stream
   first_slot: u32,      // slots of this shard
   end_slot: u32,
+  slot_table: u32,      // where the slot table starts in `tables` (the level's chunk count)
+  _pad0: u32,
+  _pad1: u32,
+  _pad2: u32,
 }
 
-@group(0) @binding(2) var<storage, read> page_table: array<u32>;
+@group(0) @binding(2) var<storage, read> tables: array<u32>;
 @group(0) @binding(3) var<uniform> pool: PoolParams;
-@group(0) @binding(4) var<storage, read> slot_chunks: array<u32>;
 
 const POOL_NONE = 0xffffffffu;
 

@@ -4,9 +4,10 @@
 // per-block buffer of the pipeline is sized by what the pool holds, never by
 // the level (a 16384^3 level has 2^36 blocks; a pool of 2000 chunks of 64^3
 // has 8 M ids). The kernels see three functions (block_coords, block_at,
-// group_block_id); a pool's need its page table and slot table, in bind
-// group 3 of every kernel that composes them (groups before it that the
-// kernel does not use get an empty one).
+// group_block_id); a pool's need its level's tables (page table and slot
+// table, one storage binding), in bind group 3 of every kernel that
+// composes them (groups before it that the kernel does not use get an empty
+// one).
 import { bindGroup, bufferLayout } from '../gpu/bindings.ts';
 import { bindGroupLayout } from '../gpu/pipeline-cache.ts';
 import type { WgslPart } from '../gpu/wgsl.ts';
@@ -52,14 +53,14 @@ export function blockIdsOf(device: GPUDevice, source: BlockSource): BlockIds {
     );
   const empty = bindGroupLayout(device, 'Isosurface.empty.layout', []);
   const emptyGroup = device.createBindGroup({ label: 'Isosurface.empty.bindGroup', layout: empty, entries: [] });
-  const tablesLayout = bufferLayout(device, 'Isosurface.poolBlocks.layout', ['uniform', 'read', 'read']);
+  const tablesLayout = bufferLayout(device, 'Isosurface.poolBlocks.layout', ['uniform', 'read']);
   const params = device.createBuffer({
     label: 'Isosurface.poolBlocks',
-    size: 16,
+    size: 32,
     usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
   });
-  device.queue.writeBuffer(params, 0, new Uint32Array([...pool.layout.chunkGrid, pool.chunkBlocks]));
-  const tables = bindGroup(device, 'Isosurface.poolBlocks.bindGroup', tablesLayout, [params, pool.pageTable, pool.slotChunks]);
+  device.queue.writeBuffer(params, 0, new Uint32Array([...pool.layout.chunkGrid, pool.chunkBlocks, pool.chunkCount, 0, 0, 0]));
+  const tables = bindGroup(device, 'Isosurface.poolBlocks.bindGroup', tablesLayout, [params, pool.tables]);
   return {
     kind: 'pool',
     part: blockIdsSnippet.pool,

@@ -39,6 +39,21 @@ export interface BlockMcParts {
 /** Bytes per cache slot of the per-slot and per-active-block buffers: per row of 4 cells its case bytes and row base (32 words), 6 counts/offsets. */
 export const MC_BYTES_PER_SLOT = 152;
 
+/** The regions of the block counts and offsets buffers (block_classify.wgsl). */
+const INDICES = 0;
+const WELDED = 1;
+const CELLS = 2;
+
+/** Words per region: the capacity rounded up to 64 (count_stride in common.wgsl). */
+function countStride(capacity: number): number {
+  return Math.ceil(capacity / 64) * 64;
+}
+
+/** Region k of a counts or offsets buffer, as a binding. */
+function region(e: { capacity: number; stride: number }, buffer: GPUBuffer, k: number): GPUBufferBinding {
+  return { buffer, offset: k * e.stride * 4, size: Math.max(4, e.capacity * 4) };
+}
+
 /** Entries of the emitting-cell list for `vertices` vertices (every emitting cell has >= 3). */
 export function cellCapacityFor(vertices: number, maxBindingBytes = Infinity): number {
   return Math.max(1, Math.min(Math.floor(vertices / 3) + 1, Math.floor(maxBindingBytes / 4)));
@@ -53,12 +68,12 @@ interface EntryBuffers {
   capacity: number;
   /** Per slot, per row (y, z) of 4 cells: 4 case bytes, then the row base (block_classify.wgsl, block_expand.wgsl). */
   slotMc: GPUBuffer;
-  indexCounts: GPUBuffer;
-  indexOffsets: GPUBuffer;
-  weldedCounts: GPUBuffer;
-  weldedOffsets: GPUBuffer;
-  cellCounts: GPUBuffer;
-  cellOffsets: GPUBuffer;
+  /** Per active entry, three regions of `stride` words: triangle corners, welded vertices, emitting cells (block_classify.wgsl). */
+  counts: GPUBuffer;
+  /** Their exclusive scans, in the same three regions. */
+  offsets: GPUBuffer;
+  /** Words per region: the capacity rounded up to 64 (256-byte binding offsets; count_stride in common.wgsl). */
+  stride: number;
 }
 
 interface CellBuffers {
@@ -116,20 +131,8 @@ export class BlockMarchingCubes {
   static async create(device: GPUDevice, parts: BlockMcParts, capacity: number, vertexCapacity: number): Promise<BlockMarchingCubes> {
     const layouts: Layouts = {
       common: bufferLayout(device, 'Isosurface.blockMc.layout', ['uniform', 'uniform', 'read', 'read', 'read']),
-      classify: bufferLayout(device, 'Isosurface.classifyBlocks.layout', ['uniform', 'rw', 'rw', 'rw', 'rw', 'rw']),
-      expand: bufferLayout(device, 'Isosurface.expandCells.layout', [
-        'uniform',
-        'uniform',
-        'rw',
-        'read',
-        'read',
-        'read',
-        'read',
-        'rw',
-        'read',
-        'read',
-        'uniform',
-      ]),
+      classify: bufferLayout(device, 'Isosurface.classifyBlocks.layout', ['uniform', 'rw', 'rw', 'rw']),
+      expand: bufferLayout(device, 'Isosurface.expandCells.layout', ['uniform', 'uniform', 'rw', 'read', 'read', 'rw', 'read', 'read', 'uniform']),
       cells: bufferLayout(device, 'Isosurface.emitSurface.layout', ['read', 'read']),
       shard: bufferLayout(device, 'Isosurface.shard.layout', ['uniform', 'rw', 'rw']),
       plan: bufferLayout(device, 'Isosurface.planVertices.layout', ['rw', 'read', 'read', 'read', 'read', 'rw', 'rw']),
@@ -156,15 +159,13 @@ export class BlockMarchingCubes {
 
   private allocateEntries(capacity: number): EntryBuffers {
     const words = (label: string, perEntry = 1) => storageBuffer(this.device, `Isosurface.${label}`, capacity * 4 * perEntry);
+    const stride = countStride(capacity);
     return {
       capacity,
       slotMc: words('slotMc', 32),
-      indexCounts: words('indexCounts'),
-      indexOffsets: words('indexOffsets'),
-      weldedCounts: words('weldedCounts'),
-      weldedOffsets: words('weldedOffsets'),
-      cellCounts: words('cellCounts'),
-      cellOffsets: words('cellOffsets'),
+      counts: storageBuffer(this.device, 'Isosurface.blockCounts', 3 * stride * 4),
+      offsets: storageBuffer(this.device, 'Isosurface.blockOffsets', 3 * stride * 4),
+      stride,
     };
   }
 
@@ -175,7 +176,7 @@ export class BlockMarchingCubes {
   }
 
   private destroyEntries(e: EntryBuffers): void {
-    for (const b of [e.slotMc, e.indexCounts, e.indexOffsets, e.weldedCounts, e.weldedOffsets, e.cellCounts, e.cellOffsets]) b.destroy();
+    for (const b of [e.slotMc, e.counts, e.offsets]) b.destroy();
   }
 
   /** Per-active-block buffers and the case table (counted with the cache). */
@@ -220,22 +221,13 @@ export class BlockMarchingCubes {
       shards: shards.shards,
       vertices: shards.vertices,
       common: bindGroup(d, 'Isosurface.blockMc.bindGroup', L.common, [p.volume, this.caseTable, slotData, p.blockToSlot, p.activeIds]),
-      classify: bindGroup(d, 'Isosurface.classifyBlocks.bindGroup', L.classify, [
-        counters,
-        e.slotMc,
-        e.indexCounts,
-        e.cellCounts,
-        this.occupied,
-        e.weldedCounts,
-      ]),
+      classify: bindGroup(d, 'Isosurface.classifyBlocks.bindGroup', L.classify, [counters, e.slotMc, e.counts, this.occupied]),
       expand: bindGroup(d, 'Isosurface.expandCells.bindGroup', L.expand, [
         this.caseTable,
         counters,
         e.slotMc,
-        e.cellCounts,
-        e.cellOffsets,
-        e.indexOffsets,
-        e.weldedOffsets,
+        region(e, e.counts, CELLS),
+        e.offsets,
         c.list,
         p.activeIds,
         p.blockToSlot,
@@ -244,10 +236,10 @@ export class BlockMarchingCubes {
       cells: bindGroup(d, 'Isosurface.emitSurface.bindGroup', L.cells, [c.list, e.slotMc]),
       plan: bindGroup(d, 'Isosurface.planVertices.bindGroup', L.plan, [
         counters,
-        e.indexOffsets,
-        e.indexCounts,
-        e.cellOffsets,
-        e.cellCounts,
+        region(e, e.offsets, INDICES),
+        region(e, e.counts, INDICES),
+        region(e, e.offsets, CELLS),
+        region(e, e.counts, CELLS),
         shards.shardInfo,
         shards.drawArgs,
       ]),
@@ -278,9 +270,11 @@ export class BlockMarchingCubes {
     const { counters, scan } = this.parts;
     const e = this.entries;
     const active = counters.count('activeGated');
-    scan.encode(encoder, { input: e.indexCounts, output: e.indexOffsets, count: active, totalOut: counters.count('vertices') });
-    scan.encode(encoder, { input: e.weldedCounts, output: e.weldedOffsets, count: active, totalOut: counters.count('welded') });
-    scan.encode(encoder, { input: e.cellCounts, output: e.cellOffsets, count: active, totalOut: counters.count('cells') });
+    const scanOf = (k: number, total: 'vertices' | 'welded' | 'cells') =>
+      scan.encode(encoder, { input: region(e, e.counts, k), output: region(e, e.offsets, k), count: active, totalOut: counters.count(total) });
+    scanOf(INDICES, 'vertices');
+    scanOf(WELDED, 'welded');
+    scanOf(CELLS, 'cells');
   }
 
   /** Records plan_vertices: overflow check, expansion and shard arguments, draw arguments. */

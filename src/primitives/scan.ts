@@ -8,7 +8,7 @@ import scanTiledWgsl from '../../shaders/primitives/scan_tiled.wgsl?raw';
 import workgroupScanWgsl from '../../shaders/primitives/workgroup_scan.wgsl?raw';
 import workgroupScanSubgroupsWgsl from '../../shaders/primitives/workgroup_scan_subgroups.wgsl?raw';
 import { KeyedCache } from '../gpu/bind-group-cache.ts';
-import type { GpuCount } from '../gpu/buffer-ref.ts';
+import { binding, type GpuBufferRef, type GpuCount, refBuffer } from '../gpu/buffer-ref.ts';
 import { gridSnippet } from '../gpu/dispatch.ts';
 import { bindGroupLayout, createComputePipeline } from '../gpu/pipeline-cache.ts';
 import type { WgslPart } from '../gpu/wgsl.ts';
@@ -56,10 +56,10 @@ export interface ExclusiveScanOptions extends PrimitiveOptions {
 }
 
 export interface ExclusiveScanArgs {
-  /** u32 elements; needs STORAGE usage. Not the same buffer as `output`. */
-  input: GPUBuffer;
-  /** Receives the exclusive prefix sums of the first `count` elements; STORAGE usage. */
-  output: GPUBuffer;
+  /** u32 elements (a buffer, or a range of one); needs STORAGE usage. Not the same buffer as `output`. */
+  input: GpuBufferRef;
+  /** Receives the exclusive prefix sums of the first `count` elements (a buffer or a range); STORAGE usage. */
+  output: GpuBufferRef;
   /** Elements to scan (clamped to the capacity). A GpuCount's buffer needs COPY_SRC. */
   count: CountLike;
   /** Where to write the sum of all `count` elements; its buffer needs COPY_DST. */
@@ -197,24 +197,24 @@ export class ExclusiveScan {
     this.records.setCapacity(capacity);
   }
 
-  private bindGroup(name: string, src: GPUBuffer, dst: GPUBuffer, carry: GPUBuffer): GPUBindGroup {
+  private bindGroup(name: string, src: GpuBufferRef, dst: GpuBufferRef, carry: GPUBuffer): GPUBindGroup {
     return this.device.createBindGroup({
       label: `ExclusiveScan.${name}`,
       layout: this.layout,
       entries: [
         { binding: 0, resource: { buffer: this.records.params, size: RECORD_UNIFORM_SIZE } },
-        { binding: 1, resource: { buffer: src } },
-        { binding: 2, resource: { buffer: dst } },
+        { binding: 1, resource: binding(src) },
+        { binding: 2, resource: binding(dst) },
         { binding: 3, resource: { buffer: carry } },
         { binding: 4, resource: { buffer: this.total } },
       ],
     });
   }
 
-  private userGroups(input: GPUBuffer, output: GPUBuffer): UserBindGroups {
+  private userGroups(input: GpuBufferRef, output: GpuBufferRef): UserBindGroups {
     return this.userBindGroups
-      .key(input)
-      .key(output)
+      .ref(input)
+      .ref(output)
       .get(() => {
         const single = this.levels === 1;
         return {
@@ -226,7 +226,7 @@ export class ExclusiveScan {
 
   /** Records the scan: a count copy, one compute pass, and the total copy if asked. */
   encode(encoder: GPUCommandEncoder, args: ExclusiveScanArgs): void {
-    if (args.input === args.output) throw new Error('ExclusiveScan: input and output must be different buffers');
+    if (refBuffer(args.input) === refBuffer(args.output)) throw new Error('ExclusiveScan: input and output must be different buffers');
     const user = this.userGroups(args.input, args.output);
     const params = this.records.params;
     this.records.encodeCount(encoder, args.count);

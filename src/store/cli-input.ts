@@ -9,6 +9,7 @@ import { defaultMemoryBudget } from '../isosurface/budget.ts';
 import { ChunkFetcher } from './fetch/chunk-fetcher.ts';
 import { chunkedGpu, createChunkStream } from './gpu-port.ts';
 import { PinnedLevelSurface } from './pinned-level.ts';
+import { StoreError } from './zarr/errors.ts';
 import { isStoreUrl, storeForLocation } from './zarr/node-store.ts';
 import { openZfpStore } from './zarr/open-store.ts';
 import { MeteredStore } from './zarr/stores.ts';
@@ -87,6 +88,7 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
     throw new NoSuchLevelError(`${input}: --level ${level} does not exist (levels 0 to ${store.levels.length - 1})`);
   }
   const lv = store.levels[L];
+  if (lv.unusable) throw new StoreError('layout', `${input}: --level ${L}: ${lv.unusable}`);
   const fetcher = new ChunkFetcher(store, { maxInFlight: 8 });
   const fetched = new Set<number>();
   let chunkBytes = 0;

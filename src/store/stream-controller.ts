@@ -90,8 +90,8 @@ export interface StreamProgress {
   phase: 'fetching' | 'computing' | 'shown' | 'stopped';
   /** Why refinement stopped above level 0 (phase 'stopped'). */
   reason?: string;
-  /** Why it stopped: the memory budget, a chunk that could not be fetched or put, or the GPU. */
-  cause?: 'budget' | 'chunk' | 'gpu';
+  /** Why it stopped: the memory budget, a chunk that could not be fetched or put, the GPU, or a limit of the level's layout. */
+  cause?: 'budget' | 'chunk' | 'gpu' | 'limit';
   /** A stop for a failed chunk: when the refinement will be tried again (ms from now). */
   retryInMs?: number;
 }
@@ -125,8 +125,10 @@ interface Waiting {
 interface Level<V> {
   index: number;
   layout: ChunkLevelLayout;
-  /** [min, max] per chunk (the store's range array, or computed once the level was resident whole), or null. */
+  /** [min, max] per chunk (the store's range array, read when the level is first needed, or computed once the level was resident whole), or null. */
   ranges: Float32Array | null;
+  /** The range array being read (a level's are read when refinement first reaches it). */
+  reading: Promise<void> | null;
   /** Neighbourhood ranges per chunk, or null while unknown (every chunk needed). */
   nb: Float32Array | null;
   volume: V | null;
@@ -176,7 +178,6 @@ export class StreamController<
     readonly fetcher: ChunkFetcher,
     readonly gpu: StreamGpu<V, S, F>,
     budgetBytes: number,
-    ranges: (Float32Array | null)[],
   ) {
     this.budgetBytes = budgetBytes;
     this.levels = store.levels.map((l, i) => ({
@@ -184,8 +185,9 @@ export class StreamController<
       layout: l.layout,
       volume: null,
       lru: new Map(),
-      ranges: ranges[i],
-      nb: ranges[i] ? neighbourhoodRanges(l.layout.chunkGrid, ranges[i]!) : null,
+      ranges: null,
+      reading: null,
+      nb: null,
     }));
     this.coarsest = this.levels.length - 1;
     const d = store.levels[0].layout.dims;
@@ -202,15 +204,38 @@ export class StreamController<
     });
   }
 
-  /** Reads the range arrays (metadata), then the controller is ready for setIsovalue. */
+  /**
+   * Reads the coarsest level's range array, then the controller is ready for
+   * setIsovalue. A finer level's is read when refinement first reaches it,
+   * so opening costs the same whatever the store's size.
+   */
   static async create<V extends LevelVolume, S extends LevelStats, F extends LevelSurface<S>>(
     store: ZfpStore,
     fetcher: ChunkFetcher,
     gpu: StreamGpu<V, S, F>,
     budgetBytes: number,
   ): Promise<StreamController<V, S, F>> {
-    const ranges = await Promise.all(store.levels.map((_, i) => store.readRanges(i)));
-    return new StreamController(store, fetcher, gpu, budgetBytes, ranges);
+    const c = new StreamController(store, fetcher, gpu, budgetBytes);
+    await c.#readRanges(c.levels[c.levels.length - 1]);
+    return c;
+  }
+
+  /** The level's range array, read once (a failed read is tried again next time; rejects with its StoreError). */
+  #readRanges(lv: Level<V>): Promise<void> {
+    if (lv.ranges || !this.store.levels[lv.index].rangesPath) return Promise.resolve();
+    lv.reading ??= this.store.readRanges(lv.index).then(
+      (r) => {
+        if (r && !lv.ranges) {
+          lv.ranges = r;
+          lv.nb = neighbourhoodRanges(lv.layout.chunkGrid, r);
+        }
+      },
+      (e) => {
+        lv.reading = null;
+        throw e;
+      },
+    );
+    return lv.reading;
   }
 
   onProgress(l: (p: StreamProgress) => void): () => void {
@@ -416,6 +441,18 @@ export class StreamController<
 
   async #refine(L: number, iso: number, gen: number): Promise<'shown' | 'stopped' | 'skipped'> {
     const lv = this.levels[L];
+    const unusable = this.store.levels[L].unusable;
+    if (unusable) return this.#stop(L, unusable, 'limit');
+    if (!lv.ranges) {
+      try {
+        await this.#readRanges(lv);
+      } catch (e) {
+        if (gen !== this.#gen || this.#destroyed) return 'stopped';
+        for (const l of this.#errors) l(e as Error);
+        return this.#stop(L, (e as Error).message, 'chunk');
+      }
+      if (gen !== this.#gen || this.#destroyed) return 'stopped';
+    }
     let needed = lv.nb ? chunksNeeded(lv.nb, iso) : allChunks(lv.layout);
     const wanted = new Set(needed);
     const refused = this.#fitPool(lv, needed.length, wanted, iso);

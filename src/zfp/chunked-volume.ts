@@ -16,9 +16,14 @@
 // pool id, slot * B + the block's index in its chunk (B = (C/4)^3), so
 // everything the isosurface pipeline keeps per block follows the pool's
 // capacity, never the level's size (shaders/isosurface/blocks_pool.wgsl).
-// put/evict write the chunk, its page-table entry (chunk -> slot) and its
-// slot-table entry (slot -> chunk) with queue.writeBuffer (ordered after
-// work already submitted) and note (slot, chunk) as changed; the isosurface
+// The level's tables are one buffer, made with the pool and never resized:
+// the page table (chunk -> slot, a word per chunk of the level) and the slot
+// table (slot -> chunk, a word per slot a pool of the level can have, which
+// is at most its chunk count): 8 bytes per chunk of the level, the only
+// per-level state on the GPU (one storage binding, so kernels that use it
+// stay within WebGPU's default of 8 per stage). put/evict write the chunk
+// and both entries with queue.writeBuffer (ordered after work already
+// submitted) and note (slot, chunk) as changed; the isosurface
 // pipeline takes the changes before its next surface and recomputes the
 // block ranges of just those slots on the GPU and forgets what it had
 // decoded from them (changeLog: one per surface, so a surface made later
@@ -61,12 +66,12 @@ export class ChunkError extends Error {
 
 const NONE = 0xffffffff;
 const STREAM_PARAMS_BYTES = 48;
-const POOL_PARAMS_BYTES = 32;
+const POOL_PARAMS_BYTES = 48;
 const PARAMS_STRIDE = 256;
 
 /** Bind group layout 0 of the decoder kernels over a pool (pool_address.wgsl; the device's, from the pipeline cache). */
 export function poolBindGroupLayout(device: GPUDevice): GPUBindGroupLayout {
-  return bufferLayout(device, 'ChunkedVolume.layout', ['read', 'uniform', 'read', 'uniform', 'read']);
+  return bufferLayout(device, 'ChunkedVolume.layout', ['read', 'uniform', 'read', 'uniform']);
 }
 
 /** One change of a pool: `chunk` arrived in or left `slot`. */
@@ -101,10 +106,11 @@ export class ChunkedVolume implements BlockSource {
   readonly chunkCount: number;
   /** Where block 0 starts inside a chunk's stream (96 or 148 bits). */
   readonly headerBits: number;
-  /** chunk -> slot (NONE: not resident), one word per chunk of the level: the per-level state. */
-  readonly pageTable: GPUBuffer;
-  /** slot -> chunk (NONE: empty), one word per slot. */
-  slotChunks: GPUBuffer;
+  /**
+   * The level's tables: words [0, chunkCount) chunk -> slot (NONE: not
+   * resident), words [chunkCount, 2 chunkCount) slot -> chunk (NONE: empty).
+   */
+  readonly tables: GPUBuffer;
   private params: GPUBuffer | null = null;
   private readonly slotOf = new Map<ChunkIndex, number>();
   private freeSlots: number[] = [];
@@ -138,15 +144,14 @@ export class ChunkedVolume implements BlockSource {
     this.slotsPerShard = Math.floor((maxShardBytes - 4) / chunkBytes);
     if (this.slotsPerShard < 1)
       throw new ChunkError(`${name}: one chunk (${chunkBytes} bytes) does not fit one storage binding of ${maxShardBytes} bytes`);
-    this.pageTable = device.createBuffer({
-      label: `${name}.pageTable`,
-      size: Math.max(4, this.chunkCount * 4),
+    this.tables = device.createBuffer({
+      label: `${name}.tables`,
+      size: 8 * this.chunkCount,
       usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
       mappedAtCreation: true,
     });
-    new Uint32Array(this.pageTable.getMappedRange()).fill(NONE);
-    this.pageTable.unmap();
-    this.slotChunks = device.createBuffer({ label: `${name}.slotChunks`, size: 4, usage: GPUBufferUsage.STORAGE });
+    new Uint32Array(this.tables.getMappedRange()).fill(NONE);
+    this.tables.unmap();
     this.resize(poolChunks);
   }
 
@@ -167,7 +172,8 @@ export class ChunkedVolume implements BlockSource {
    */
   resize(poolChunks: number): void {
     if (this.destroyed) throw new ChunkError(`${this.layout.name}: the chunk pool was destroyed`);
-    if (!Number.isInteger(poolChunks) || poolChunks < 1) throw new ChunkError(`${this.layout.name}: a pool of ${poolChunks} chunks`);
+    if (!Number.isInteger(poolChunks) || poolChunks < 1 || poolChunks > this.chunkCount)
+      throw new ChunkError(`${this.layout.name}: a pool of ${poolChunks} chunks (the level has ${this.chunkCount})`);
     if (poolChunks < this.residentCount)
       throw new ChunkError(`${this.layout.name}: cannot shrink the pool to ${poolChunks} chunks, ${this.residentCount} are resident`);
     if (poolChunks === this.capacity) return;
@@ -209,8 +215,8 @@ export class ChunkedVolume implements BlockSource {
         }
         if (scratch && !retired.includes(scratch)) retired.push(scratch);
         this.slotOf.set(chunk, to);
-        this.word[0] = to;
-        device.queue.writeBuffer(this.pageTable, chunk * 4, this.word);
+        this.writeTables(chunk, to);
+        this.writeSlot(slot, NONE);
         this.logChange(slot, chunk);
         this.logChange(to, chunk);
       }
@@ -251,18 +257,6 @@ export class ChunkedVolume implements BlockSource {
       for (let sl = poolChunks - 1; sl >= this.capacity; sl--) added.push(sl);
       this.freeSlots = [...added, ...this.freeSlots];
     }
-    // the slot table, made again at the new size (chunks that moved included)
-    const slotChunks = device.createBuffer({
-      label: `${name}.slotChunks`,
-      size: poolChunks * 4,
-      usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
-      mappedAtCreation: true,
-    });
-    const table = new Uint32Array(slotChunks.getMappedRange()).fill(NONE);
-    for (const [chunk, slot] of this.slotOf) table[slot] = chunk;
-    slotChunks.unmap();
-    retired.push(this.slotChunks);
-    this.slotChunks = slotChunks;
     device.queue.submit([encoder.finish()]);
     for (const b of retired) b.destroy(); // freed once the copies are done
     this.bind(shards);
@@ -283,16 +277,9 @@ export class ChunkedVolume implements BlockSource {
     const mapped = params.getMappedRange();
     const poolLayout = poolBindGroupLayout(device);
     const made: PoolShard[] = shards.map((shard, i) => {
-      new Uint32Array(mapped, 2 * i * PARAMS_STRIDE, STREAM_PARAMS_BYTES / 4).set([
-        ...dims,
-        this.bitsPerBlock,
-        ...blockGrid,
-        blockCount,
-        0,
-        blockCount,
-        0,
-        0,
-      ]);
+      // the level's block count is not used by the pool's kernels (blocks are named by pool id): clamped to a u32
+      const count = Math.min(blockCount, 0xffffffff);
+      new Uint32Array(mapped, 2 * i * PARAMS_STRIDE, STREAM_PARAMS_BYTES / 4).set([...dims, this.bitsPerBlock, ...blockGrid, count, 0, count, 0, 0]);
       new Uint32Array(mapped, (2 * i + 1) * PARAMS_STRIDE, POOL_PARAMS_BYTES / 4).set([
         ...chunkGrid,
         this.chunkBlocks,
@@ -300,6 +287,10 @@ export class ChunkedVolume implements BlockSource {
         this.headerBits,
         shard.firstSlot,
         shard.endSlot,
+        this.chunkCount,
+        0,
+        0,
+        0,
       ]);
       const bindGroup = device.createBindGroup({
         label: `${name}.pool${i}.bindGroup`,
@@ -307,9 +298,8 @@ export class ChunkedVolume implements BlockSource {
         entries: [
           { binding: 0, resource: { buffer: shard.buffer } },
           { binding: 1, resource: { buffer: params, offset: 2 * i * PARAMS_STRIDE, size: STREAM_PARAMS_BYTES } },
-          { binding: 2, resource: { buffer: this.pageTable } },
+          { binding: 2, resource: { buffer: this.tables } },
           { binding: 3, resource: { buffer: params, offset: (2 * i + 1) * PARAMS_STRIDE, size: POOL_PARAMS_BYTES } },
-          { binding: 4, resource: { buffer: this.slotChunks } },
         ],
       });
       return { ...shard, bindGroup };
@@ -344,13 +334,16 @@ export class ChunkedVolume implements BlockSource {
     if (chunkBytes !== planned!.paddedBytes)
       fail(`a ${edge}^3 chunk at rate ${rate} is ${planned!.paddedBytes} bytes as zfp writes it, not ${chunkBytes}`);
     if (!Number.isInteger(opts.poolChunks) || opts.poolChunks < 1) fail(`the pool must hold at least one chunk (got ${opts.poolChunks})`);
-    const blocks = Math.ceil(dims[0] / 4) * Math.ceil(dims[1] / 4) * Math.ceil(dims[2] / 4);
-    if (blocks >= 2 ** 32) fail(`${blocks} blocks do not fit 32-bit block ids`);
-    // the page table is one storage binding; a chunk's bit offsets are 32-bit in WGSL
+    // a level may have any number of blocks (2^36 for 16384^3): the pipeline names blocks by pool id
+    // the level's tables are one storage binding; a chunk's bit offsets are 32-bit in WGSL
     const chunks = chunkGrid[0] * chunkGrid[1] * chunkGrid[2];
     const binding = Math.min(gpu.device.limits.maxStorageBufferBindingSize, gpu.device.limits.maxBufferSize);
-    if (chunks * 4 > binding)
-      fail(`${chunks} chunks need a ${chunks * 4}-byte page table, more than one storage binding of this device (${binding} bytes)`);
+    if (chunks * 8 > binding)
+      fail(
+        `${chunks} chunks need ${chunks * 8} bytes of tables (chunk -> slot, slot -> chunk), more than one storage binding of this device (${binding} bytes: maxStorageBufferBindingSize); convert with larger chunks`,
+      );
+    if ((opts.poolChunks > chunks ? chunks : opts.poolChunks) * (edge / 4) ** 3 >= 2 ** 32)
+      fail(`a pool of ${opts.poolChunks} chunks of ${edge}^3 has more block ids than 32 bits hold`);
     if (chunkBytes * 8 >= 2 ** 32) fail(`a chunk of ${chunkBytes} bytes is too large to address in 32-bit bit offsets`);
     return new ChunkedVolume(gpu.device, layout, opts.poolChunks, opts.maxShardBytes ?? maxShardBytesFor(gpu.device));
   }
@@ -366,7 +359,7 @@ export class ChunkedVolume implements BlockSource {
 
   /** Bytes of GPU memory held: the pool, the page table and the parameters. */
   get byteSize(): number {
-    return this.shards.reduce((n, s) => n + s.buffer.size, 0) + this.pageTable.size + this.slotChunks.size + (this.params?.size ?? 0);
+    return this.shards.reduce((n, s) => n + s.buffer.size, 0) + this.tables.size + (this.params?.size ?? 0);
   }
 
   /** Bytes a pool of `poolChunks` chunks of this layout holds (the budget's estimate before one is made). */
@@ -374,7 +367,7 @@ export class ChunkedVolume implements BlockSource {
     const perShard = Math.max(1, Math.floor((maxShardBytes - 4) / layout.chunkBytes));
     const shards = Math.max(1, Math.ceil(poolChunks / perShard));
     const chunks = layout.chunkGrid[0] * layout.chunkGrid[1] * layout.chunkGrid[2];
-    return poolChunks * layout.chunkBytes + 4 * shards + Math.max(4, 4 * chunks) + PARAMS_STRIDE * (2 * shards - 1) + POOL_PARAMS_BYTES;
+    return poolChunks * layout.chunkBytes + 4 * shards + 8 * chunks + PARAMS_STRIDE * (2 * shards - 1) + POOL_PARAMS_BYTES;
   }
 
   /** Same as byteSize (the name the store side uses for budget accounting). */
@@ -475,11 +468,20 @@ export class ChunkedVolume implements BlockSource {
       bytes.byteOffset,
       bytes.byteLength,
     );
-    this.word[0] = slot;
-    this.device.queue.writeBuffer(this.pageTable, chunk * 4, this.word);
-    this.word[0] = chunk;
-    this.device.queue.writeBuffer(this.slotChunks, slot * 4, this.word);
+    this.writeTables(chunk, slot);
     this.logChange(slot, chunk);
+  }
+
+  /** Page-table entry of `chunk` and slot-table entry of `slot` (each NONE to clear). */
+  private writeTables(chunk: ChunkIndex, slot: number): void {
+    this.word[0] = slot;
+    this.device.queue.writeBuffer(this.tables, chunk * 4, this.word);
+    if (slot !== NONE) this.writeSlot(slot, chunk);
+  }
+
+  private writeSlot(slot: number, chunk: ChunkIndex): void {
+    this.word[0] = chunk;
+    this.device.queue.writeBuffer(this.tables, (this.chunkCount + slot) * 4, this.word);
   }
 
   private logChange(slot: number, chunk: ChunkIndex): void {
@@ -492,9 +494,8 @@ export class ChunkedVolume implements BlockSource {
     if (slot === undefined || this.destroyed) return;
     this.slotOf.delete(chunk);
     this.freeSlots.push(slot);
-    this.word[0] = NONE;
-    this.device.queue.writeBuffer(this.pageTable, chunk * 4, this.word);
-    this.device.queue.writeBuffer(this.slotChunks, slot * 4, this.word);
+    this.writeTables(chunk, NONE);
+    this.writeSlot(slot, NONE);
     this.logChange(slot, chunk);
   }
 
@@ -563,8 +564,7 @@ export class ChunkedVolume implements BlockSource {
     if (this.destroyed) return;
     this.destroyed = true;
     for (const s of this.shards) s.buffer.destroy();
-    this.pageTable.destroy();
-    this.slotChunks.destroy();
+    this.tables.destroy();
     this.params?.destroy();
   }
 }

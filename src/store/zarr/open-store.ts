@@ -6,7 +6,9 @@
 // (size and zfp header), so the GPU only ever sees well-formed streams.
 import type { AbsolutePath, AsyncReadable, GetOptions } from '@zarrita/storage';
 import * as zarr from 'zarrita';
+import { constantChunkStream } from '../../zfp/cpu/constant-stream.ts';
 import { bitsPerBlockForRate, fixedRateStreamBytes } from '../../zfp/format.ts';
+import { MAX_VERTEX_VOXELS } from '../../isosurface/vertex-format.ts';
 import { parseZfpHeader, ZFP_LONG_HEADER_BITS, ZFP_SHORT_HEADER_BITS } from '../../zfp/header.ts';
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
 import { describeTransportError, RequestFailedError, StoreError } from './errors.ts';
@@ -29,6 +31,8 @@ export interface StoreLevel {
   rangesPath: string | null;
   /** Leading axes of length 1 (OME t, c) dropped from the array's shape. */
   leadingAxes: number;
+  /** Why this level cannot be shown (a limit it exceeds), or null. */
+  unusable: string | null;
 }
 
 export interface ZfpStore {
@@ -210,7 +214,12 @@ async function openLevel(
       `${name}: ${chunkGrid.join(' x ')} chunks of ${C}^3; this reader takes at most ${MAX_CHUNKS} per level (convert with a larger --chunk)`,
     );
   const chunkBytes = zfpChunkBytes(C, rate);
+  const unusable =
+    Math.max(x, y, z) > MAX_VERTEX_VOXELS
+      ? `${name} has ${Math.max(x, y, z)} voxels along an axis; vertices place their blocks with 12 bits per axis, so a level may have at most ${MAX_VERTEX_VOXELS}`
+      : null;
   return {
+    unusable,
     index,
     path,
     shardChunks,
@@ -297,10 +306,28 @@ export async function openZfpStore(store: AsyncReadable, name: string, options: 
       levels.push(await openLevel(mem, name, i, paths[i], typeof rp === 'string' ? rp : null));
     }
   }
+  const unusable = levels.filter((l) => l.unusable);
+  if (unusable.length === levels.length) throw new StoreError('layout', unusable[0].unusable!);
+  if (unusable.length > 0)
+    notes.push(`levels ${unusable.map((l) => l.index).join(', ')} cannot be shown (${unusable[0].unusable}); the finest shown is level ${unusable.at(-1)!.index + 1}`);
   if (levels.some((l) => !l.rangesPath))
     notes.push(
       'no per-chunk range arrays: the first surface of a level fetches every chunk of it (ranges are computed on the GPU as chunks arrive)',
     );
+  // A chunk absent from the store holds the array's fill value (Zarr): its stream is made once per level.
+  const fillChunks = new Map<number, Uint8Array>();
+  const fillChunk = (level: number, fill: unknown, where: string): Uint8Array => {
+    let bytes = fillChunks.get(level);
+    if (!bytes) {
+      const value = fill === null || fill === undefined ? 0 : Number(fill);
+      if (!Number.isFinite(value))
+        throw new StoreError('missing-chunk', `${where}: the chunk is absent, and the array's fill value ${String(fill)} is not a number zfp can hold`);
+      const L = levels[level].layout;
+      bytes = constantChunkStream(L.chunkEdge, L.rate, value);
+      fillChunks.set(level, bytes);
+    }
+    return bytes;
+  };
   const arrays = new Map<number, Promise<zarr.Array<zarr.DataType, MetadataMemo>>>();
   const arrayOf = (level: number) => {
     let a = arrays.get(level);
@@ -328,16 +355,17 @@ export async function openZfpStore(store: AsyncReadable, name: string, options: 
       const [x, y, z] = chunkCoords(L.layout, chunk);
       const where = `${L.layout.name} chunk (${x}, ${y}, ${z})`;
       let got;
+      let arr;
       try {
-        const arr = await arrayOf(level);
+        arr = await arrayOf(level);
         got = await arr.getChunk([...new Array<number>(L.leadingAxes).fill(0), z, y, x], opts);
       } catch (e) {
         if (zarr.isZarritaError(e, 'CodecPipelineError'))
           throw new StoreError('corrupt', `${where}: ${e.message} (a damaged shard index?)`, { cause: e });
         throw describeTransportError(e, where);
       }
-      if (!(got.data instanceof Uint8Array))
-        throw new StoreError('missing-chunk', `${where}: the chunk is missing (HTTP 404 or no file); a complete store has every chunk`);
+      // absent (HTTP 404, no file): the fill value, as Zarr defines it
+      if (!(got.data instanceof Uint8Array)) return fillChunk(level, arr.fillValue, where);
       checkChunk(L.layout, chunk, got.data);
       return got.data;
     },

@@ -312,7 +312,7 @@ describe('a chunked store level through the GPU chunk pool', () => {
       chunkBytes: tiny,
     };
     expect(() => ChunkedVolume.create(gpu, huge, { poolChunks: 1 })).toThrow(
-      /chunks need a \d+-byte page table, more than one storage binding/,
+      /chunks need \d+ bytes of tables \(chunk -> slot, slot -> chunk\), more than one storage binding/,
     );
     pool.destroy();
   });

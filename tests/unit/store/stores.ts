@@ -45,3 +45,79 @@ a[:] = v
   );
   return out;
 }
+
+export interface SparseStoreSpec {
+  /** Level-0 voxels per axis (x = y = z). */
+  size: number;
+  chunk: number;
+  rate: number;
+  levels: number;
+  /** Chunks per axis of the data box, at the far corner of level 0; everything else is absent (fill value 0). */
+  boxChunks: number;
+}
+
+/**
+ * A store laid out as the converter lays it out (OME-Zarr 0.5 group, zfpy
+ * levels, ranges/<L>, zfpzarr attributes), sparse: level 0 holds, in a box of
+ * chunks at its far corner, the field max(0, 100 - distance to the box's
+ * centre); every other chunk is absent, so it reads as the fill value 0 (the
+ * range arrays' fill value is 0 too: their absent entries say [0, 0]). A
+ * coarser level holds the same field sampled at its voxel centres. The
+ * written chunks' ranges come from zarr-python's decode of them. Quick to
+ * make at any size: only the box is written.
+ */
+export function sparseStore(out: string, spec: SparseStoreSpec): string {
+  converterPython(
+    `
+import sys, json, math, numpy as np, zarr
+sys.path.insert(0, sys.argv[3])
+from zarr.codecs.numcodecs import ZFPY
+from zfpzarr.store import ome_multiscales, ATTR, FORMAT_VERSION
+out, spec = sys.argv[1], json.loads(sys.argv[2])
+S, C, levels = spec['size'], spec['chunk'], spec['levels']
+box = spec['boxChunks'] * C
+centre = S - box / 2
+shapes = [tuple(-(-S // 2**L) for _ in range(3)) for L in range(levels)]
+attrs = {'ome': ome_multiscales('sparse', shapes, None, None),
+         ATTR: {'format': FORMAT_VERSION, 'complete': True, 'value_range': [0.0, 100.0],
+                'levels': [{'path': str(L), 'ranges': f'ranges/{L}'} for L in range(levels)]}}
+g = zarr.create_group(store=out, zarr_format=3, attributes=attrs, overwrite=True)
+for L, shape in enumerate(shapes):
+    a = g.create_array(name=str(L), shape=shape, chunks=(C,) * 3, dtype='float32',
+                       serializer=ZFPY(mode=2, rate=spec['rate']), compressors=None, filters=None, fill_value=0.0,
+                       dimension_names=['z', 'y', 'x'])
+    grid = tuple(-(-n // C) for n in shape)
+    r = g.create_array(name=f'ranges/{L}', shape=(*grid, 2), chunks=(*(min(n, 64) for n in grid), 2), dtype='float32',
+                       compressors=None, filters=None, fill_value=0.0, dimension_names=['z', 'y', 'x', 'minmax'])
+    f = 2**L
+    lo = int((S - box) // f)
+    n = shape[0] - lo
+    idx = (np.arange(lo, lo + n, dtype=np.float64) + 0.5) * f - 0.5
+    zz, yy, xx = np.meshgrid(idx, idx, idx, indexing='ij')
+    field = np.maximum(0.0, 100.0 - np.sqrt((xx - centre) ** 2 + (yy - centre) ** 2 + (zz - centre) ** 2)).astype(np.float32)
+    a[lo:, lo:, lo:] = field
+    back = a[lo:, lo:, lo:]
+    c0 = lo // C
+    for cz in range(c0, grid[0]):
+        for cy in range(c0, grid[1]):
+            for cx in range(c0, grid[2]):
+                part = a[cz * C:(cz + 1) * C, cy * C:(cy + 1) * C, cx * C:(cx + 1) * C]
+                r[cz, cy, cx] = [float(part.min()), float(part.max())]
+`,
+    [out, JSON.stringify(spec), join(repoRoot, 'converter')],
+  );
+  return out;
+}
+
+/** The level-0 region [lo, size) per axis of a store, decoded by zarr-python, written as raw float32 (x fastest) to `raw`. */
+export function decodeRegion(store: string, lo: number, raw: string): void {
+  converterPython(
+    `
+import sys, numpy as np, zarr
+a = zarr.open_array(sys.argv[1], path='0', mode='r')
+lo = int(sys.argv[2])
+np.ascontiguousarray(a[lo:, lo:, lo:], dtype=np.float32).tofile(sys.argv[3])
+`,
+    [store, String(lo), raw],
+  );
+}
