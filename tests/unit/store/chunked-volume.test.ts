@@ -15,7 +15,11 @@ import { afterAll, beforeAll, describe, expect } from 'vitest';
 import { Isosurface } from '../../../src/isosurface/isosurface.ts';
 import { ChunkedVolume, ChunkError, type ChunkLevelLayout } from '../../../src/zfp/chunked-volume.ts';
 
-import { planZfpStream } from '../../../src/zfp/format.ts';
+import { bitsPerBlockForRate, fixedRateStreamBytes, planZfpStream } from '../../../src/zfp/format.ts';
+import { decodeVolume as cpuDecodeVolume, encodeVolume as cpuEncodeVolume } from '../../../src/zfp/cpu/codec.ts';
+import { writeZfpHeader } from '../../../src/zfp/header.ts';
+import { decodeVertices } from '../../../src/isosurface/vertex-format.ts';
+import { marchingCubes } from '../../../src/mc/serial-mc.ts';
 import { loadZfpStream } from '../../../src/zfp/gpu-stream.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { readVertices } from '../../helpers/isosurface-readback.ts';
@@ -316,4 +320,72 @@ describe('a chunked store level through the GPU chunk pool', () => {
     );
     pool.destroy();
   });
+
+  gpuTest(
+    'a level past 32-bit bit offsets (16384 x 128 x 128 at rate 16: 2^32 bits), chunks only at the far corner: the serial MC surface, placed there',
+    async ({ gpu }) => {
+      // Made on the CPU (our zfp twin), so this runs where Python does not (the wgpu suite).
+      const C = 64;
+      const rate = 16;
+      const dims: [number, number, number] = [16384, 128, 128];
+      const chunkGrid: [number, number, number] = [256, 2, 2];
+      const bits = bitsPerBlockForRate(rate);
+      expect((dims[0] / 4) * (dims[1] / 4) * (dims[2] / 4) * bits).toBeGreaterThanOrEqual(2 ** 32);
+      const header = writeZfpHeader([C, C, C], bits);
+      const chunkBytesOf = fixedRateStreamBytes((C / 4) ** 3, bits, header.bits);
+      const layout: ChunkLevelLayout = { dims, chunkEdge: C, chunkGrid, rate, chunkBytes: chunkBytesOf, name: 'far.zarr level 0' };
+      // a ball at the far end of x: max(0, 40 - distance to (16320, 64, 64)), in the chunks x = 254, 255
+      const x0 = 16384 - 2 * C;
+      const region = new Float32Array(2 * C * 128 * 128);
+      const decoded = new Float32Array(region.length);
+      const pool = ChunkedVolume.create(gpu, layout, { poolChunks: 8 });
+      const chunk = new Float32Array(C * C * C);
+      for (let cz = 0; cz < 2; cz++)
+        for (let cy = 0; cy < 2; cy++)
+          for (let cx = 254; cx < 256; cx++) {
+            for (let z = 0; z < C; z++)
+              for (let y = 0; y < C; y++)
+                for (let x = 0; x < C; x++) {
+                  const d = Math.hypot(cx * C + x - 16320, cy * C + y - 64, cz * C + z - 64);
+                  chunk[x + C * (y + C * z)] = Math.max(0, 40 - d);
+                }
+            const bytes = new Uint8Array(chunkBytesOf);
+            bytes.set(header.bytes);
+            const words = new Uint32Array(bytes.buffer);
+            cpuEncodeVolume(chunk, [C, C, C], bits, words, header.bits);
+            pool.put(cx + 256 * (cy + 2 * cz), bytes);
+            const back = cpuDecodeVolume(words, [C, C, C], bits, header.bits);
+            for (let z = 0; z < C; z++)
+              for (let y = 0; y < C; y++)
+                for (let x = 0; x < C; x++)
+                  decoded[(cx * C - x0 + x) + 2 * C * (cy * C + y + 128 * (cz * C + z))] = back[x + C * (y + C * z)];
+          }
+      const iso = 10.37;
+      const surface = await Isosurface.create(gpu, pool);
+      const stats = await surface.compute(iso);
+      const reference = marchingCubes(decoded, [2 * C, 128, 128], iso);
+      expect(stats.triangles).toBeGreaterThan(1000);
+      expect(stats.triangles).toBe(reference.triangleCount);
+      const mesh = await surface.readMesh();
+      const p = decodeVertices(mesh.vertices, mesh.vertices.length / 3);
+      let minX = Infinity;
+      let maxX = -Infinity;
+      for (let i = 0; i < p.length; i += 3) {
+        minX = Math.min(minX, p[i]);
+        maxX = Math.max(maxX, p[i]);
+      }
+      let refMin = Infinity;
+      let refMax = -Infinity;
+      for (let i = 0; i < reference.positions.length; i += 3) {
+        refMin = Math.min(refMin, reference.positions[i] + x0);
+        refMax = Math.max(refMax, reference.positions[i] + x0);
+      }
+      // placed at the far corner: block coordinates near 4095 along x
+      expect(Math.abs(minX - refMin)).toBeLessThan(0.01);
+      expect(Math.abs(maxX - refMax)).toBeLessThan(0.01);
+      surface.destroy();
+      pool.destroy();
+    },
+    600_000,
+  );
 });
