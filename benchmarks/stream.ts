@@ -1,18 +1,23 @@
 // `npm run bench:stream [-- --size N --repeats R --iso-fraction F --budget-mb M --only bonsai|gen --faults F --links localhost,link]`:
-// a store served over HTTP on localhost (the dev server's /stores/
+// stores served over HTTP on localhost (the dev server's /stores/
 // middleware) and through a simulated link (100 Mbit/s, 20 ms per request,
-// in the fetch layer), for bonsai and a generated N^3 volume (default 256;
-// the issue's 1024^3 is 4 GiB of input: --size 1024). The path is the
-// stream controller's (the page's and the CLI's): the chunks the plan
-// needs, fetched into ChunkedVolume pools, coarsest level first. Per case:
-// time to the first surface (coarsest level) and to the full-resolution
-// one (level 0), bytes fetched / store size, level-0 chunks fetched against
-// the plan's count, requests and retries, GPU bytes held (counted where they
-// are made) and their peak; next to the in-core path (level 0 as one zfp
-// stream read from disk). With --faults F every case runs again through the
-// server's faulty prefix (scripts/store-faults.ts: a fraction F of requests
-// fail every way, a new seed per repeat). Median of the repeats after a
-// discarded first.
+// in the fetch layer). The path is the stream controller's (the page's and
+// the CLI's): the chunks the plan needs, fetched into ChunkedVolume pools,
+// coarsest level first.
+// - bonsai (256^3): time to the first surface (coarsest level) and to the
+//   full-resolution one (level 0), bytes fetched / store size, level-0
+//   chunks fetched against the plan's count, requests and retries, GPU bytes
+//   held (counted where they are made) and their peak; next to the in-core
+//   path (level 0 as one zfp stream read from disk). With --faults F every
+//   case runs again through the server's faulty prefix
+//   (scripts/store-faults.ts: a fraction F of requests fail every way, a new
+//   seed per repeat).
+// - scaling (stream-scale.ts): generated stores of 512^3, 1024^3, ... N^3
+//   (default N = 1024; --size 2048, 4096), made once into .cache/bench-stream
+//   (minutes for 2048^3, half an hour for 4096^3), within a 256 MB budget:
+//   store bytes, GPU bytes after opening, the first surface after the
+//   metadata, and three narrow isovalues refined as far as the budget goes.
+// Median of the repeats after a discarded first.
 import { existsSync, mkdirSync, readFileSync, writeFileSync } from 'node:fs';
 import { createServer } from 'node:http';
 import { join } from 'node:path';
@@ -32,6 +37,7 @@ import { MeteredStore, SimulatedLinkStore } from '../src/store/zarr/stores.ts';
 import { loadZfpStream } from '../src/zfp/gpu-stream.ts';
 import { printTable, summarize, writeJson } from './lib/report.ts';
 import { chunkedGpu, createChunkStream } from '../src/store/gpu-port.ts';
+import { SCALE_HEADER, scaleRun, scaleStoreName, scaleTable } from './stream-scale.ts';
 import { execFileSync } from 'node:child_process';
 
 const root = fileURLToPath(new URL('..', import.meta.url));
@@ -40,11 +46,11 @@ const opt = (name: string, def: string) => {
   const i = args.indexOf(`--${name}`);
   return i >= 0 ? args[i + 1] : def;
 };
-const size = Number(opt('size', '256'));
+const size = Number(opt('size', '1024'));
 const repeats = Number(opt('repeats', '3'));
 const isoFraction = Number(opt('iso-fraction', '0.3'));
-// the GPU memory of the whole stream: 512 MiB (the page's default on most GPUs) and level 0's per-level buffers (~48 B per block)
-const budgetBytes = Number(opt('budget-mb', String(512 + Math.ceil((48 * (size / 4) ** 3) / 2 ** 20)))) * 2 ** 20;
+// the GPU memory of the whole stream, everything it holds: 256 MB
+const budgetBytes = Number(opt('budget-mb', '256')) * 2 ** 20;
 const only = opt('only', '');
 const faultRate = Number(opt('faults', '0'));
 const links = opt('links', 'localhost,link')
@@ -67,7 +73,9 @@ function convert(input: string, name: string, extra: string[]): void {
 async function main() {
   const gpu = await requestNodeGpu({ label: 'bench.stream' });
   convert(join(root, '../shared/data/volumes/bonsai_256x256x256_float32.rate4.zfp'), 'bonsai.zarr', ['--rate', '4']);
-  convert(`gen:${size}x${size}x${size}`, `gen${size}.zarr`, ['--rate', '4']);
+  const sizes: number[] = [];
+  for (let n = 512; n <= size; n *= 2) sizes.push(n);
+  if (only !== 'bonsai') for (const n of sizes) convert(`gen:${n}x${n}x${n}`, scaleStoreName(n), ['--rate', '1', '--shard', '8']);
   const faults = new FaultInjector();
   const mw = storesMiddleware(folder, faults);
   const server = createServer((req, res) =>
@@ -80,7 +88,7 @@ async function main() {
   const port = (server.address() as { port: number }).port;
   const rows: (string | number)[][] = [];
   const records: Record<string, unknown>[] = [];
-  for (const name of ['bonsai.zarr', `gen${size}.zarr`].filter((n) => !only || n.startsWith(only))) {
+  for (const name of ['bonsai.zarr'].filter((n) => !only || n.startsWith(only))) {
     // the chunk pool (ChunkedVolume): only the planned chunks, coarsest level first
     for (const link of links) {
       for (const rate of faultRate > 0 ? [0, faultRate] : [0]) {
@@ -206,8 +214,15 @@ async function main() {
     rows.push([name, 'in-core (level 0 as one stream from disk)', '', NaN, t.median, NaN, '', NaN, NaN, '', '', NaN]);
     records.push({ store: name, link: 'in-core', fullSurfaceMs: t });
   }
+  const scale = only === 'bonsai' ? [] : await scaleRun(gpu, folder, `http://127.0.0.1:${port}/stores`, sizes, links, repeats, budgetBytes);
   server.closeAllConnections();
   server.close();
+  if (scale.length > 0)
+    printTable(
+      `bench:stream scaling, ${describeAdapter(gpu.adapter)}, median of ${repeats - 1} after a discarded first; the converter's gen: field, 64^3 chunks, rate 1, shards of 8^3; budget ${budgetBytes / 2 ** 20} MiB`,
+      SCALE_HEADER,
+      scaleTable(scale),
+    );
   printTable(
     `bench:stream, ${describeAdapter(gpu.adapter)}, median of ${repeats - 1} after a discarded first; gen size ${size}^3; the stream controller (the page's and the CLI's path): the planned chunks into ChunkedVolume pools, coarsest level first; budget ${budgetBytes / 2 ** 20} MiB`,
     [
@@ -237,6 +252,7 @@ async function main() {
     faultRate,
     faultsInjected: faults.injected,
     records,
+    scaling: scale,
   });
   gpu.device.destroy();
 }

@@ -31,7 +31,10 @@ export class StoreLevelIsosurface implements PageIsosurface {
     /** The user changed the GPU memory budget (the store view gives it to the controller). */
     private readonly onBudget: (bytes: number) => void = () => {},
   ) {
-    this.info = { ...shown.surface.info, valueRange };
+    // the level's blocks (the surface's own count is its pool's block ids: what is resident)
+    const { dims } = shown.volume.layout;
+    const blockGrid = dims.map((n) => Math.ceil(n / 4)) as [number, number, number];
+    this.info = { dims: [...dims], blockGrid, blockCount: blockGrid[0] * blockGrid[1] * blockGrid[2], valueRange };
     this.#detach.push(
       controller.onError((e) => {
         for (const l of this.#errors) l(e);
