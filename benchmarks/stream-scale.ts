@@ -44,7 +44,16 @@ export interface ScaleRow {
   gpuBytesAfterOpen: number;
   firstSurfaceMs: number;
   gpuBytesAfterFirst: number;
-  surfaces: { iso: number; level: number; ms: number; level0Chunks: number; chunkBytes: number; triangles: number; gpuBytes: number; reason: string }[];
+  surfaces: {
+    iso: number;
+    level: number;
+    ms: number;
+    level0Chunks: number;
+    chunkBytes: number;
+    triangles: number;
+    gpuBytes: number;
+    reason: string;
+  }[];
 }
 
 export async function scaleRun(
@@ -66,7 +75,9 @@ export async function scaleRun(
       for (let r = 0; r < repeats; r++) {
         const url = `${baseUrl}/${name}`;
         const inner = new HttpStore(url);
-        const metered = new MeteredStore(link === 'localhost' ? inner : new SimulatedLinkStore(inner, { mbitPerSecond: 100, latencyMs: 20 }));
+        const metered = new MeteredStore(
+          link === 'localhost' ? inner : new SimulatedLinkStore(inner, { mbitPerSecond: 100, latencyMs: 20 }),
+        );
         const t0 = performance.now();
         const store = await openZfpStore(metered, url);
         const fetcher = new ChunkFetcher(store);
@@ -123,7 +134,12 @@ export async function scaleRun(
         });
         console.log(
           `${name}, ${link}, run ${r}: open ${(t1 - t0).toFixed(0)} ms, first surface ${(t2 - t1).toFixed(0)} ms after the metadata, ` +
-            surfaces.map((s) => `iso ${s.iso}: level ${s.level} in ${s.ms.toFixed(0)} ms, ${s.level0Chunks} level-0 chunks, ${s.triangles} triangles`).join('; '),
+            surfaces
+              .map(
+                (s) =>
+                  `iso ${s.iso}: level ${s.level} in ${s.ms.toFixed(0)} ms, ${s.level0Chunks} level-0 chunks, ${s.triangles} triangles`,
+              )
+              .join('; '),
         );
       }
       // medians of the timed figures over the runs after the first; counts from the last run

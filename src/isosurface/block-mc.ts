@@ -132,7 +132,17 @@ export class BlockMarchingCubes {
     const layouts: Layouts = {
       common: bufferLayout(device, 'Isosurface.blockMc.layout', ['uniform', 'uniform', 'read', 'read', 'read']),
       classify: bufferLayout(device, 'Isosurface.classifyBlocks.layout', ['uniform', 'rw', 'rw', 'rw']),
-      expand: bufferLayout(device, 'Isosurface.expandCells.layout', ['uniform', 'uniform', 'rw', 'read', 'read', 'rw', 'read', 'read', 'uniform']),
+      expand: bufferLayout(device, 'Isosurface.expandCells.layout', [
+        'uniform',
+        'uniform',
+        'rw',
+        'read',
+        'read',
+        'rw',
+        'read',
+        'read',
+        'uniform',
+      ]),
       cells: bufferLayout(device, 'Isosurface.emitSurface.layout', ['read', 'read']),
       shard: bufferLayout(device, 'Isosurface.shard.layout', ['uniform', 'rw', 'rw']),
       plan: bufferLayout(device, 'Isosurface.planVertices.layout', ['rw', 'read', 'read', 'read', 'read', 'rw', 'rw']),
@@ -271,7 +281,12 @@ export class BlockMarchingCubes {
     const e = this.entries;
     const active = counters.count('activeGated');
     const scanOf = (k: number, total: 'vertices' | 'welded' | 'cells') =>
-      scan.encode(encoder, { input: region(e, e.counts, k), output: region(e, e.offsets, k), count: active, totalOut: counters.count(total) });
+      scan.encode(encoder, {
+        input: region(e, e.counts, k),
+        output: region(e, e.offsets, k),
+        count: active,
+        totalOut: counters.count(total),
+      });
     scanOf(INDICES, 'vertices');
     scanOf(WELDED, 'welded');
     scanOf(CELLS, 'cells');

@@ -20,99 +20,15 @@
 // chunk's cool-down has passed the onRetry listeners are told (the page asks
 // for the same isovalue again; the CLI reports the failure instead).
 import type { ChunkFetcher } from './fetch/chunk-fetcher.ts';
+import { allChunks, chunkCount, chunkRangesOfIds, estimateFixedBytes } from './level-state.ts';
 import { chunksNeeded, nearestFirst, neighbourhoodRanges } from './plan.ts';
+import type { LevelStats, LevelSurface, LevelVolume, ShownSurface, StreamGpu, StreamGpuBytes, StreamProgress } from './stream-port.ts';
 import type { ChunkIndex, ChunkLevelLayout } from './types.ts';
+
+export type { LevelStats, LevelSurface, LevelVolume, ShownSurface, StreamGpu, StreamGpuBytes, StreamProgress };
+export { chunkRangesOfIds, estimateFixedBytes };
 import { isAbort } from './zarr/errors.ts';
 import type { ZfpStore } from './zarr/open-store.ts';
-
-/** What the controller needs of a ChunkedVolume (src/zfp/chunked-volume.ts). */
-export interface LevelVolume {
-  readonly poolChunks: number;
-  /** GPU bytes the pool holds (slots, page table, parameters). */
-  readonly poolBytes: number;
-  readonly residentCount: number;
-  /** Slots neither holding a chunk nor set aside for one. */
-  readonly freeCount: number;
-  has(chunk: ChunkIndex): boolean;
-  put(chunk: ChunkIndex, bytes: Uint8Array): void;
-  evict(chunk: ChunkIndex): void;
-  /** Sets the capacity (at least the resident count), resident chunks kept. */
-  resize(poolChunks: number): void;
-  /** Sets slots aside for these chunks, in this order (others set aside are given back): slots follow the plan, not arrivals. */
-  reserve(chunks: readonly ChunkIndex[]): void;
-  /** Whether a slot is set aside for this chunk. */
-  isReserved(chunk: ChunkIndex): boolean;
-  /** The slot of a resident chunk (its blocks' ids start at slot x blocksPerChunk), or undefined. */
-  slotOfChunk(chunk: ChunkIndex): number | undefined;
-  readonly blocksPerChunk: number;
-  destroy(): void;
-}
-/** What it needs of the surface statistics. */
-export interface LevelStats {
-  triangles: number;
-  cacheBytes: number;
-  vertexBytes: number;
-  /** Per-volume buffers outside the surface's cap (the pool, ranges, masks, maps). */
-  fixedBytes?: number;
-}
-/** What it needs of an Isosurface over a LevelVolume. */
-export interface LevelSurface<S extends LevelStats = LevelStats> {
-  compute(iso: number): Promise<S>;
-  /** The cap for cache and vertex buffers (Isosurface.setMemoryBudget). */
-  setMemoryBudget(bytes: number): void;
-  /** What the cache and vertex buffers hold now (what the cap limits). */
-  readonly budgetedBytes: number;
-  /** [min, max] per block id (slot x blocksPerChunk + block in chunk): the ranges of a store without range arrays. */
-  readBlockRanges?(): Promise<Float32Array>;
-  destroy(): void;
-}
-/** The GPU side, injected (the real one: gpu-port.ts; tests: a CPU fake). */
-export interface StreamGpu<
-  V extends LevelVolume = LevelVolume,
-  S extends LevelStats = LevelStats,
-  F extends LevelSurface<S> = LevelSurface<S>,
-> {
-  createVolume(layout: ChunkLevelLayout, poolChunks: number): V;
-  createSurface(volume: V, memoryBudgetBytes: number): Promise<F>;
-  /** GPU bytes held now by everything made here (pools, surfaces and all their buffers). */
-  readonly allocatedBytes: number;
-  /** GPU bytes a pool of `poolChunks` chunks of this layout holds. */
-  poolBytesFor(layout: ChunkLevelLayout, poolChunks: number): number;
-}
-
-export interface StreamProgress {
-  iso: number;
-  level: number;
-  chunksDone: number;
-  chunksNeeded: number;
-  /** Chunk bytes fetched so far (all levels, this store). */
-  bytesFetched: number;
-  phase: 'fetching' | 'computing' | 'shown' | 'stopped';
-  /** Why refinement stopped above level 0 (phase 'stopped'). */
-  reason?: string;
-  /** Why it stopped: the memory budget, a chunk that could not be fetched or put, the GPU, or a limit of the level's layout. */
-  cause?: 'budget' | 'chunk' | 'gpu' | 'limit';
-  /** A stop for a failed chunk: when the refinement will be tried again (ms from now). */
-  retryInMs?: number;
-}
-
-export interface ShownSurface<V, S extends LevelStats, F extends LevelSurface<S> = LevelSurface<S>> {
-  level: number;
-  iso: number;
-  volume: V;
-  surface: F;
-  stats: S;
-}
-
-/** GPU bytes of the stream now: pools, surfaces (everything else: per-level buffers, cache, vertices, scratch), and both. */
-export interface StreamGpuBytes {
-  pools: number;
-  surfaces: number;
-  total: number;
-  /** Of the surfaces: cache and vertex buffers (the part the budget's remainder caps). */
-  cache: number;
-  vertices: number;
-}
 
 interface Waiting {
   level: number;
@@ -701,45 +617,4 @@ const RESERVE_BYTES = 1 << 20;
 /** Below this, a surface's cache and vertex buffers are too small to be worth creating. */
 const MIN_SURFACE_BYTES = 256 << 10;
 
-/**
- * The Isosurface's per-volume buffers outside its budget over a pool of
- * `poolChunks` slots (src/isosurface/README.md, "Buffers": per block id its
- * ranges, neighbourhood range, masks, lists and cache map, about 40 B; per
- * slot 20 B; scratch), rounded up. Block ids are the pool's slots x blocks
- * per chunk: nothing here grows with the level.
- */
-export function estimateFixedBytes(layout: ChunkLevelLayout, poolChunks: number): number {
-  const ids = poolChunks * (layout.chunkEdge / 4) ** 3;
-  return 48 * ids + 32 * poolChunks + (64 << 10);
-}
-
-const chunkCount = (layout: ChunkLevelLayout) => layout.chunkGrid[0] * layout.chunkGrid[1] * layout.chunkGrid[2];
-
-function allChunks(layout: ChunkLevelLayout): ChunkIndex[] {
-  return Array.from({ length: chunkCount(layout) }, (_, i) => i);
-}
-
-/** [min, max] per chunk from [min, max] per block id of the pool (resident chunks; the others get the empty range). */
-export function chunkRangesOfIds(
-  layout: ChunkLevelLayout,
-  idRanges: Float32Array,
-  pool: Pick<LevelVolume, 'slotOfChunk' | 'blocksPerChunk'>,
-): Float32Array {
-  const out = new Float32Array(2 * chunkCount(layout));
-  const per = pool.blocksPerChunk;
-  for (let c = 0; c < out.length / 2; c++) {
-    let lo = Infinity;
-    let hi = -Infinity;
-    const slot = pool.slotOfChunk(c);
-    if (slot !== undefined) {
-      for (let b = slot * per; b < (slot + 1) * per; b++) {
-        if (idRanges[2 * b] < lo) lo = idRanges[2 * b];
-        if (idRanges[2 * b + 1] > hi) hi = idRanges[2 * b + 1];
-      }
-    }
-    out[2 * c] = lo;
-    out[2 * c + 1] = hi;
-  }
-  return out;
-}
 const mib = (b: number) => (b / 2 ** 20).toFixed(1);

@@ -279,7 +279,16 @@ export class ChunkedVolume implements BlockSource {
     const made: PoolShard[] = shards.map((shard, i) => {
       // the level's block count is not used by the pool's kernels (blocks are named by pool id): clamped to a u32
       const count = Math.min(blockCount, 0xffffffff);
-      new Uint32Array(mapped, 2 * i * PARAMS_STRIDE, STREAM_PARAMS_BYTES / 4).set([...dims, this.bitsPerBlock, ...blockGrid, count, 0, count, 0, 0]);
+      new Uint32Array(mapped, 2 * i * PARAMS_STRIDE, STREAM_PARAMS_BYTES / 4).set([
+        ...dims,
+        this.bitsPerBlock,
+        ...blockGrid,
+        count,
+        0,
+        count,
+        0,
+        0,
+      ]);
       new Uint32Array(mapped, (2 * i + 1) * PARAMS_STRIDE, POOL_PARAMS_BYTES / 4).set([
         ...chunkGrid,
         this.chunkBlocks,
@@ -342,7 +351,7 @@ export class ChunkedVolume implements BlockSource {
       fail(
         `${chunks} chunks need ${chunks * 8} bytes of tables (chunk -> slot, slot -> chunk), more than one storage binding of this device (${binding} bytes: maxStorageBufferBindingSize); convert with larger chunks`,
       );
-    if ((opts.poolChunks > chunks ? chunks : opts.poolChunks) * (edge / 4) ** 3 >= 2 ** 32)
+    if (Math.min(opts.poolChunks, chunks) * (edge / 4) ** 3 >= 2 ** 32)
       fail(`a pool of ${opts.poolChunks} chunks of ${edge}^3 has more block ids than 32 bits hold`);
     if (chunkBytes * 8 >= 2 ** 32) fail(`a chunk of ${chunkBytes} bytes is too large to address in 32-bit bit offsets`);
     return new ChunkedVolume(gpu.device, layout, opts.poolChunks, opts.maxShardBytes ?? maxShardBytesFor(gpu.device));

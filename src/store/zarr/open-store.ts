@@ -309,7 +309,9 @@ export async function openZfpStore(store: AsyncReadable, name: string, options: 
   const unusable = levels.filter((l) => l.unusable);
   if (unusable.length === levels.length) throw new StoreError('layout', unusable[0].unusable!);
   if (unusable.length > 0)
-    notes.push(`levels ${unusable.map((l) => l.index).join(', ')} cannot be shown (${unusable[0].unusable}); the finest shown is level ${unusable.at(-1)!.index + 1}`);
+    notes.push(
+      `levels ${unusable.map((l) => l.index).join(', ')} cannot be shown (${unusable[0].unusable}); the finest shown is level ${unusable.at(-1)!.index + 1}`,
+    );
   if (levels.some((l) => !l.rangesPath))
     notes.push(
       'no per-chunk range arrays: the first surface of a level fetches every chunk of it (ranges are computed on the GPU as chunks arrive)',
@@ -321,7 +323,10 @@ export async function openZfpStore(store: AsyncReadable, name: string, options: 
     if (!bytes) {
       const value = fill === null || fill === undefined ? 0 : Number(fill);
       if (!Number.isFinite(value))
-        throw new StoreError('missing-chunk', `${where}: the chunk is absent, and the array's fill value ${String(fill)} is not a number zfp can hold`);
+        throw new StoreError(
+          'missing-chunk',
+          `${where}: the chunk is absent, and the array's fill value ${String(fill)} is not a number zfp can hold`,
+        );
       const L = levels[level].layout;
       bytes = constantChunkStream(L.chunkEdge, L.rate, value);
       fillChunks.set(level, bytes);

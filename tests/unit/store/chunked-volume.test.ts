@@ -358,7 +358,7 @@ describe('a chunked store level through the GPU chunk pool', () => {
             for (let z = 0; z < C; z++)
               for (let y = 0; y < C; y++)
                 for (let x = 0; x < C; x++)
-                  decoded[(cx * C - x0 + x) + 2 * C * (cy * C + y + 128 * (cz * C + z))] = back[x + C * (y + C * z)];
+                  decoded[cx * C - x0 + x + 2 * C * (cy * C + y + 128 * (cz * C + z))] = back[x + C * (y + C * z)];
           }
       const iso = 10.37;
       const surface = await Isosurface.create(gpu, pool);

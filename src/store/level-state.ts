@@ -1,0 +1,48 @@
+// What a level costs and knows, computed on the CPU for the stream
+// controller: the per-level GPU state a surface over a pool of a given
+// capacity takes (its budget's estimate before one is made), and the chunk
+// ranges of a level that was resident whole (a store without range arrays).
+import type { LevelVolume } from './stream-port.ts';
+import type { ChunkIndex, ChunkLevelLayout } from './types.ts';
+
+/**
+ * The Isosurface's per-volume buffers outside its budget over a pool of
+ * `poolChunks` slots (src/isosurface/README.md, "Buffers": per block id its
+ * ranges, neighbourhood range, masks, lists and cache map, about 40 B; per
+ * slot 20 B; scratch), rounded up. Block ids are the pool's slots x blocks
+ * per chunk: nothing here grows with the level.
+ */
+export function estimateFixedBytes(layout: ChunkLevelLayout, poolChunks: number): number {
+  const ids = poolChunks * (layout.chunkEdge / 4) ** 3;
+  return 48 * ids + 32 * poolChunks + (64 << 10);
+}
+
+export const chunkCount = (layout: ChunkLevelLayout) => layout.chunkGrid[0] * layout.chunkGrid[1] * layout.chunkGrid[2];
+
+export function allChunks(layout: ChunkLevelLayout): ChunkIndex[] {
+  return Array.from({ length: chunkCount(layout) }, (_, i) => i);
+}
+
+/** [min, max] per chunk from [min, max] per block id of the pool (resident chunks; the others get the empty range). */
+export function chunkRangesOfIds(
+  layout: ChunkLevelLayout,
+  idRanges: Float32Array,
+  pool: Pick<LevelVolume, 'slotOfChunk' | 'blocksPerChunk'>,
+): Float32Array {
+  const out = new Float32Array(2 * chunkCount(layout));
+  const per = pool.blocksPerChunk;
+  for (let c = 0; c < out.length / 2; c++) {
+    let lo = Infinity;
+    let hi = -Infinity;
+    const slot = pool.slotOfChunk(c);
+    if (slot !== undefined) {
+      for (let b = slot * per; b < (slot + 1) * per; b++) {
+        if (idRanges[2 * b] < lo) lo = idRanges[2 * b];
+        if (idRanges[2 * b + 1] > hi) hi = idRanges[2 * b + 1];
+      }
+    }
+    out[2 * c] = lo;
+    out[2 * c + 1] = hi;
+  }
+  return out;
+}
