@@ -93,7 +93,7 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
   const fetched = new Set<number>();
   let chunkBytes = 0;
   fetcher.onChunk((l, c, bytes, fromCache) => {
-    if (l !== L || fromCache || fetched.has(c)) return;
+    if (l !== L || fromCache || fetched.has(c) || store.isAbsent(bytes)) return;
     fetched.add(c);
     chunkBytes += bytes.byteLength;
   });

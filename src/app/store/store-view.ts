@@ -175,7 +175,8 @@ export class StoreView {
     for (const note of store.notes) this.d.onError(`${url}: ${note}`);
     const fetchedOnce = new Set<string>();
     f.onChunk((level, chunk, bytes, fromCache) => {
-      if (fromCache || fetchedOnce.has(`${level}:${chunk}`)) return;
+      // absent from the store (the fill value): nothing came over
+      if (fromCache || fetchedOnce.has(`${level}:${chunk}`) || store.isAbsent(bytes)) return;
       fetchedOnce.add(`${level}:${chunk}`);
       state.chunksFetched++;
       state.levels[level].chunksFetched++;

@@ -16,6 +16,8 @@ import { ByteLru } from './lru-bytes.ts';
 
 export interface ChunkSource {
   readChunk(level: number, chunk: ChunkIndex, options?: GetOptions): Promise<Uint8Array>;
+  /** Whether the bytes stand for a chunk absent from the store (not counted as fetched, not cached). */
+  isAbsent?(bytes: Uint8Array): boolean;
 }
 
 export interface FetcherOptions {
@@ -277,9 +279,11 @@ export class ChunkFetcher {
     if (this.#inFlight.get(k) !== ctl) return; // aborted (and counted) by want()
     this.#inFlight.delete(k);
     if (bytes && !ctl.signal.aborted) {
-      this.#counts.bytesFetched += bytes.length;
       this.#failed.delete(k);
-      this.#cache.set(k, bytes);
+      if (!this.source.isAbsent?.(bytes)) {
+        this.#counts.bytesFetched += bytes.length;
+        this.#cache.set(k, bytes);
+      }
       for (const l of this.#chunkListeners) l(level, chunk, bytes, false);
     } else if (error) {
       this.#counts.failed++;

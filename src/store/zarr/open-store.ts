@@ -51,8 +51,10 @@ export interface ZfpStore {
   retries: RetryCounters;
   /** Bytes read while opening (metadata). */
   metadataBytes: number;
-  /** The chunk's stored bytes, checked; rejects with StoreError (or an AbortError). */
+  /** The chunk's stored bytes, checked (an absent chunk: the fill value's stream); rejects with StoreError (or an AbortError). */
   readChunk(level: number, chunk: ChunkIndex, options?: GetOptions): Promise<Uint8Array>;
+  /** Whether readChunk's bytes stand for a chunk absent from the store (nothing was transferred for them). */
+  isAbsent(bytes: Uint8Array): boolean;
   /** [min, max] per chunk (chunk index order), or null when the store has no range arrays. */
   readRanges(level: number, options?: GetOptions): Promise<Float32Array | null>;
 }
@@ -355,6 +357,10 @@ export async function openZfpStore(store: AsyncReadable, name: string, options: 
     voxelSize: voxelSizeOf(attrs),
     unit: typeof ours?.unit === 'string' ? ours.unit : null,
     valueRange: Array.isArray(vr) && vr.length === 2 ? [Number(vr[0]), Number(vr[1])] : null,
+    isAbsent(bytes) {
+      for (const fill of fillChunks.values()) if (fill === bytes) return true;
+      return false;
+    },
     async readChunk(level, chunk, opts) {
       const L = levels[level];
       const [x, y, z] = chunkCoords(L.layout, chunk);

@@ -18,6 +18,7 @@ import type { GpuFailure } from '../../../src/gpu/device.ts';
 import { requestNodeGpu } from '../../../src/gpu/node-gpu.ts';
 import { decodeVertices } from '../../../src/isosurface/vertex-format.ts';
 import { openStoreInput } from '../../../src/store/cli-input.ts';
+import { zfpChunkBytes } from '../../../src/store/zarr/open-store.ts';
 import { countBuffers } from '../../helpers/gpu-memory.ts';
 import { finishTestGpu, pushTestScopes } from '../../helpers/gpu-scopes.ts';
 import { runPython } from '../../helpers/python.ts';
@@ -79,6 +80,9 @@ describe('a level of any size, on the GPU by what is resident', () => {
         const stats = await input.surface.compute(ISO);
         const r = input.record();
         expect(r.gpuBytes).toBe(count.live - before);
+        // only the box's chunks came over; the absent ones around it read as the fill value, nothing fetched
+        expect(r.chunks).toBe(BOX_CHUNKS ** 3);
+        expect(r.chunkBytesFetched).toBe(BOX_CHUNKS ** 3 * zfpChunkBytes(CHUNK, 8));
         expect(count.peak - before).toBeLessThanOrEqual(256 * MiB);
         after.push(r.gpuBytes);
         // every vertex in the box at the far corner
