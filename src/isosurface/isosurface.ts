@@ -403,6 +403,11 @@ export class Isosurface {
     return this.budget;
   }
 
+  /** Empties the cache to its first size, keeping the drawn surface (resetCache; a stream's surface that gives memory back). */
+  trimCache(): void {
+    this.resetCache();
+  }
+
   /** Bytes the cache and vertex buffers hold now (what the budget caps). */
   get budgetedBytes(): number {
     return this.pipeline.cacheBytes + this.pipeline.vertexBytes;

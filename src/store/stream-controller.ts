@@ -243,10 +243,23 @@ export class StreamController<
         break;
       }
     }
+    let shown = false;
     for (let L = start; L >= finest; L--) {
       if (gen !== this.#gen || this.#destroyed) return;
       const step = await this.#refine(L, iso, gen);
-      if (step !== 'shown' && step !== 'skipped') return;
+      if (step === 'shown') shown = true;
+      if (step !== 'shown' && step !== 'skipped') {
+        // A finer level that held the chunks could not show this isovalue (the budget): nothing on
+        // screen is of this isovalue yet, so go coarse to fine up to it, as for any new isovalue.
+        if (!shown && start < coarsest && this.#shown?.iso !== iso && gen === this.#gen && !this.#destroyed) {
+          for (let M = coarsest; M > start; M--) {
+            if (gen !== this.#gen || this.#destroyed) return;
+            const again = await this.#refine(M, iso, gen);
+            if (again !== 'shown' && again !== 'skipped') return;
+          }
+        }
+        return;
+      }
     }
   }
 
@@ -265,7 +278,13 @@ export class StreamController<
     return this.budgetBytes - RESERVE_BYTES - this.gpu.allocatedBytes;
   }
 
-  /** Lets pools (and surfaces) of levels outside `keep` go, finest first, until `bytes` are free; whether they are. */
+  /**
+   * Lets pools (and surfaces) of levels outside `keep` go, finest first,
+   * until `bytes` are free; then, if still short, empties the block caches of
+   * the surfaces that stay (a retired one first, then the others: their
+   * drawn meshes stay, a cache regrows as a surface needs it). Whether the
+   * bytes are free.
+   */
   #release(bytes: number, keep: ReadonlySet<number>): boolean {
     for (let L = 0; L < this.levels.length && this.#free() < bytes; L++) {
       if (keep.has(L)) continue;
@@ -281,6 +300,11 @@ export class StreamController<
         lv.volume = null;
         lv.lru.clear();
       }
+    }
+    const kept = [...(this.#retired ? [this.#retired] : []), ...this.#surfaces.values()];
+    for (const surface of kept) {
+      if (this.#free() >= bytes) break;
+      surface.trimCache();
     }
     return this.#free() >= bytes;
   }
@@ -310,7 +334,10 @@ export class StreamController<
     const n = Math.max(1, needed); // a pool holds one chunk at least (an isovalue outside the level needs none)
     const v = lv.volume;
     const have = v?.poolChunks ?? 0;
-    if (v && have > 2 * n + 8) {
+    // A surface is made for its pool's capacity: resizing the pool of a level that has one means a new
+    // surface (the old one drawn meanwhile), so such a pool is not shrunk, and grows with some slack.
+    const hasSurface = this.#surfaces.has(L) || this.#shown?.level === L;
+    if (v && !hasSurface && have > 2 * n + 8) {
       const target = n;
       for (const c of [...lv.lru.keys()]) {
         if (v.residentCount <= target) break;
@@ -321,8 +348,16 @@ export class StreamController<
       v.resize(Math.max(target, v.residentCount));
     }
     if (v && n <= v.poolChunks) return null;
-    const extra = this.gpu.poolBytesFor(lv.layout, n) - (v?.poolBytes ?? 0);
-    const surfaceNeeds = this.#surfaces.has(L) ? 0 : estimateFixedBytes(lv.layout, n) + MIN_SURFACE_BYTES;
+    const chunks = chunkCount(lv.layout);
+    const roomFor = (target: number) =>
+      this.gpu.poolBytesFor(lv.layout, target) - (v?.poolBytes ?? 0) + estimateFixedBytes(lv.layout, target) + MIN_SURFACE_BYTES;
+    let target = n;
+    if (v && hasSurface) {
+      const roomy = Math.min(chunks, Math.max(n, Math.ceil(have * 1.5)));
+      if (this.#release(roomFor(roomy), this.#keep(L))) target = roomy;
+    }
+    const extra = this.gpu.poolBytesFor(lv.layout, target) - (v?.poolBytes ?? 0);
+    const surfaceNeeds = estimateFixedBytes(lv.layout, target) + MIN_SURFACE_BYTES;
     if (!this.#release(extra + surfaceNeeds, this.#keep(L))) {
       const all = lv.nb ? '' : ' (no range arrays: every chunk)';
       return (
@@ -331,8 +366,8 @@ export class StreamController<
         `; the budget of ${mib(this.budgetBytes)} MiB has ${mib(Math.max(0, this.#free()))} MiB free${this.#shownNote(L)}`
       );
     }
-    if (v) v.resize(n);
-    else lv.volume = this.gpu.createVolume(lv.layout, n);
+    if (v) v.resize(target);
+    else lv.volume = this.gpu.createVolume(lv.layout, target);
     return null;
   }
 

@@ -42,6 +42,8 @@ export interface LevelSurface<S extends LevelStats = LevelStats> {
   setMemoryBudget(bytes: number): void;
   /** What the cache and vertex buffers hold now (what the cap limits). */
   readonly budgetedBytes: number;
+  /** Empties the block cache back to its first size (the drawn mesh stays): memory for another surface. */
+  trimCache(): void;
   /** [min, max] per block id (slot x blocksPerChunk + block in chunk): the ranges of a store without range arrays. */
   readBlockRanges?(): Promise<Float32Array>;
   destroy(): void;

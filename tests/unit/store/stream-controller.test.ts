@@ -97,6 +97,7 @@ function fakeGpu(store: ZfpStore, ranges: Float32Array[]) {
       let cap = Infinity;
       return {
         budgetedBytes: SURFACE_BUDGETED,
+        trimCache() {},
         setMemoryBudget(bytes: number) {
           cap = bytes;
         },
