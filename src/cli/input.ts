@@ -20,6 +20,7 @@ import {
   VolumeFileError,
 } from '../volume/open-volume.ts';
 import { ZfpFormatError } from '../zfp/format.ts';
+import { describeRateChoice, type RateChoice } from '../zfp/rate-choice.ts';
 import { InputError, UsageError } from './command.ts';
 
 /** What `extract` and `bench` use of a surface: an Isosurface, or a store level (PinnedLevelSurface). */
@@ -29,6 +30,8 @@ export interface OpenedInput {
   iso: InputSurface;
   how: string;
   rate: number;
+  /** Volumes compressed here: how the rate was found and its error (the record's `rateError`). */
+  rateChoice?: RateChoice;
   notes: string[];
   /** A store's figures (bytes fetched, chunks), for the JSON record. */
   store?: () => StoreRecord;
@@ -43,7 +46,7 @@ export async function openInputSurface(
   ctx: { log(m: string): void },
   gpu: GpuContext,
   path: string,
-  opts: { rate?: number; level?: number; budget?: number; deadlineMs?: number },
+  opts: { rate?: number; level?: number; budget?: number; deadlineMs?: number; maxStreamBytes?: number },
 ): Promise<OpenedInput> {
   if (isStoreInput(path)) {
     try {
@@ -72,13 +75,14 @@ export async function openInputSurface(
   let v;
   try {
     v = bytes
-      ? await openVolumeBytes(gpu.device, bytes, basename(path), { rate, reader: 'command' })
-      : await openDefaultVolume(gpu.device, rate === undefined ? {} : { rate });
+      ? await openVolumeBytes(gpu.device, bytes, basename(path), { rate, reader: 'command', maxStreamBytes: opts.maxStreamBytes })
+      : await openDefaultVolume(gpu.device, { ...(rate === undefined ? {} : { rate }), maxStreamBytes: opts.maxStreamBytes });
   } catch (e) {
     if (e instanceof VolumeFileError || e instanceof ZfpFormatError) throw new InputError(e.message, { cause: e });
     throw e;
   }
   for (const note of v.notes) ctx.log(`note: ${note}`);
+  if (v.rateChoice) ctx.log(`note: ${v.fileName}: ${describeRateChoice(v.rateChoice)}`);
   let iso: Isosurface | undefined;
   try {
     iso = await Isosurface.create(gpu, v.stream, opts.budget === undefined ? {} : { memoryBudgetBytes: opts.budget });
@@ -95,6 +99,7 @@ export async function openInputSurface(
     iso: made,
     how: describeOpenedVolume(v),
     rate: v.rate,
+    ...(v.rateChoice ? { rateChoice: v.rateChoice } : {}),
     notes: v.notes,
     destroy: () => {
       made.destroy();

@@ -5,10 +5,13 @@
 //
 //   zfp with header       -> validated and uploaded as is
 //   header-less .zfp       -> shape and rate from the name (or given), uploaded
-//   name_XxYxZ_dtype.raw   -> compressed on the GPU at the chosen rate
-//   .nrrd (raw or gzip)    -> compressed on the GPU at the chosen rate
+//   name_XxYxZ_dtype.raw   -> compressed on the GPU
+//   .nrrd (raw or gzip)    -> compressed on the GPU
 //   TIFF stack             -> read by libtiff (Wasm, src/loaders/tiff.ts), compressed likewise
-//   "default"              -> generated (procedural.ts), compressed at DEFAULT_VOLUME_RATE
+//   "default"              -> generated (procedural.ts), compressed likewise
+//
+// Volumes compressed here take the rate chosen from their data (src/zfp/
+// rate-choice.ts) unless one is given; either way the error is measured.
 //
 // inspectVolumeFile says what a file is and what is still missing (a raw
 // file without shape, a header-less stream without rate) so a caller can ask
@@ -19,6 +22,8 @@ import { baseDevice } from '../gpu/memory-meter.ts';
 import { ZfpFormatError } from '../zfp/header.ts';
 import { loadZfpStream, type ZfpGpuStream } from '../zfp/gpu-stream.ts';
 import { ZfpEncoder } from '../zfp/encoder.ts';
+import { chooseRate, type RateChoice } from '../zfp/rate-choice.ts';
+import { errorMeterFor } from '../zfp/stream-error.ts';
 import type { DType } from '../core/dtype.ts';
 import { formatDims, parseVolumeName, type Dims } from '../core/naming.ts';
 import {
@@ -51,7 +56,7 @@ export * from './inspect.ts';
 export interface OpenRequest {
   dims?: Dims;
   dtype?: DType;
-  /** Header-less zfp: the stream's rate. Raw/NRRD: the rate to compress at. */
+  /** Header-less zfp: the stream's rate. Raw/NRRD/TIFF: the rate to compress at (absent: chosen from the data, rate-choice.ts). */
   rate?: number;
 }
 
@@ -81,12 +86,16 @@ export interface OpenedVolume {
   notes: string[];
   /** Float volumes compressed here: NaN/Inf counts (replaced before compression, see non-finite.ts). */
   nonFinite?: NonFiniteCount;
+  /** Volumes compressed here: how the rate was found and the error it gives (sample and whole stream). */
+  rateChoice?: RateChoice;
 }
 
 export interface OpenOptions {
   /** Reused between calls (pipelines compile once); created when absent. */
   encoder?: ZfpEncoder;
   onPhase?: (phase: OpenPhase) => void;
+  /** Volumes compressed here: the largest stream (bytes) a rate chosen from the data may make. */
+  maxStreamBytes?: number;
 }
 
 const encoders = new WeakMap<GPUDevice, Promise<ZfpEncoder>>();
@@ -165,7 +174,7 @@ export async function openVolumeFile(
           `${fileName}: ${formatDims(dims)} ${dtype} is ${sizeOf(dims, dtype)} bytes, the file has ${data.byteLength}`,
         );
       }
-      const rate = checkRate(fileName, req.rate ?? DEFAULT_RAW_RATE);
+      if (req.rate !== undefined) checkRate(fileName, req.rate);
       const notes: string[] = [];
       const nonFinite = countNonFinite(data, dtype);
       if (nonFinite && nonFiniteTotal(nonFinite) > 0) {
@@ -176,13 +185,16 @@ export async function openVolumeFile(
       opts.onPhase?.('compress');
       const encoder = opts.encoder ?? (await encoderFor(device));
       let stream: ZfpGpuStream;
+      let rateChoice: RateChoice;
       try {
-        stream = await encoder.compressToStream(data, dtype, dims, rate, { header: true, fileName });
+        ({ stream, rateChoice } = await compressChosen(device, encoder, data, dtype, dims, fileName, req.rate, opts));
       } catch (e) {
         // The shape or rate cannot be written as a zfp stream: the reader's error, naming the file.
-        if (e instanceof ZfpFormatError) throw new VolumeFileError(e.message.includes(fileName) ? e.message : `${fileName}: ${e.message}`);
+        if (e instanceof ZfpFormatError || e instanceof RangeError)
+          throw new VolumeFileError(e.message.includes(fileName) ? e.message : `${fileName}: ${e.message}`);
         throw e;
       }
+      if (rateChoice.warning) notes.push(rateChoice.warning);
       const nf = nonFinite && nonFiniteTotal(nonFinite) > 0 ? { nonFinite } : {};
       return {
         ...common,
@@ -193,10 +205,45 @@ export async function openVolumeFile(
         rate: stream.info.rate,
         compressedHere: true,
         notes,
+        rateChoice,
         ...nf,
       };
     }
   }
+}
+
+/** The rate a volume held on the CPU would be compressed at, and why (no stream is kept): `cli info`. */
+export async function chooseVolumeRate(
+  device: GPUDevice,
+  data: Uint8Array,
+  dtype: DType,
+  dims: Dims,
+  opts: { rate?: number; maxStreamBytes?: number; fileName?: string } = {},
+): Promise<RateChoice> {
+  const encoder = await encoderFor(device);
+  return chooseRate(encoder, await errorMeterFor(device), data, dtype, dims, opts);
+}
+
+/**
+ * Chooses the rate (or measures the given one) on a sample, then compresses
+ * the whole volume at it with its error measured on the way.
+ */
+async function compressChosen(
+  device: GPUDevice,
+  encoder: ZfpEncoder,
+  data: Uint8Array,
+  dtype: DType,
+  dims: Dims,
+  fileName: string,
+  rate: number | undefined,
+  opts: OpenOptions,
+): Promise<{ stream: ZfpGpuStream; rateChoice: RateChoice }> {
+  const meter = await errorMeterFor(device);
+  const display = fileName.split(/[\\/]/).pop() ?? fileName;
+  const rateChoice = await chooseRate(encoder, meter, data, dtype, dims, { rate, maxStreamBytes: opts.maxStreamBytes, fileName: display });
+  const { stream, error } = await encoder.compressMeasured(data, dtype, dims, rateChoice.rate, meter, { header: true, fileName });
+  rateChoice.stream = error;
+  return { stream, rateChoice };
 }
 
 /** Compresses an uncompressed volume on the GPU (fixed rate, with header), with the device's shared encoder. */
@@ -273,15 +320,14 @@ export function describeOpenedVolume(v: OpenedVolume): string {
   return `${KIND_LABEL[v.kind]} ${formatDims(v.dims)} ${v.sourceDtype} compressed on the GPU at rate ${v.rate}`;
 }
 
-/** The built-in volume (procedural.ts), compressed on the GPU at DEFAULT_VOLUME_RATE. */
+/** The built-in volume (procedural.ts), compressed on the GPU at the rate chosen from its data (or opts.rate). */
 export async function openDefaultVolume(device: GPUDevice, opts: OpenOptions & { rate?: number } = {}): Promise<OpenedVolume> {
   const volume = generateDefaultVolume();
-  const rate = opts.rate ?? DEFAULT_VOLUME_RATE;
   opts.onPhase?.('compress');
   const encoder = opts.encoder ?? (await encoderFor(device));
   const bytes = new Uint8Array(volume.data.buffer, volume.data.byteOffset, volume.data.byteLength);
   const fileName = `${DEFAULT_VOLUME_NAME}_${formatDims(volume.dims)}_float32.raw`;
-  const stream = await encoder.compressToStream(bytes, 'float32', volume.dims, rate, { header: true, fileName });
+  const { stream, rateChoice } = await compressChosen(device, encoder, bytes, 'float32', volume.dims, fileName, opts.rate, opts);
   return {
     stream,
     name: volume.name,
@@ -294,7 +340,8 @@ export async function openDefaultVolume(device: GPUDevice, opts: OpenOptions & {
     rate: stream.info.rate,
     compressedHere: true,
     defaultIsovalue: volume.defaultIsovalue,
-    notes: [],
+    notes: rateChoice.warning ? [rateChoice.warning] : [],
+    rateChoice,
   };
 }
 

@@ -22,6 +22,7 @@ import { UniformSlots } from '../gpu/uniform-slots.ts';
 import { planZfpStream, ZfpFormatError, type ZfpStreamInfo } from './format.ts';
 import { maxShardBytesFor, planShards, ZfpGpuStream } from './gpu-stream.ts';
 import { writeZfpHeader } from './header.ts';
+import type { StreamError, ZfpErrorMeter } from './stream-error.ts';
 import { zfpWgsl } from './wgsl.ts';
 
 const DTYPE_CODE: Record<DType, number> = { uint8: 0, int8: 1, uint16: 2, int16: 3, float32: 4, float64: 5 };
@@ -191,6 +192,34 @@ export class ZfpEncoder {
    * it back with readBytes()). Uploads one input slab per shard.
    */
   async compressToStream(bytes: Uint8Array, dtype: DType, dims: Dims, rate: number, opts: CompressOptions = {}): Promise<ZfpGpuStream> {
+    return (await this.#compress(bytes, dtype, dims, rate, opts)).stream;
+  }
+
+  /**
+   * compressToStream, and the stream's error against `bytes` measured by
+   * `meter` while each input slab is still on the GPU (one more pass per
+   * shard, no readback but the error's).
+   */
+  async compressMeasured(
+    bytes: Uint8Array,
+    dtype: DType,
+    dims: Dims,
+    rate: number,
+    meter: ZfpErrorMeter,
+    opts: CompressOptions = {},
+  ): Promise<{ stream: ZfpGpuStream; error: StreamError }> {
+    const { stream, error } = await this.#compress(bytes, dtype, dims, rate, opts, meter);
+    return { stream, error: error! };
+  }
+
+  async #compress(
+    bytes: Uint8Array,
+    dtype: DType,
+    dims: Dims,
+    rate: number,
+    opts: CompressOptions,
+    meter?: ZfpErrorMeter,
+  ): Promise<{ stream: ZfpGpuStream; error?: StreamError }> {
     const fileName = opts.fileName ?? `volume_${formatDims(dims)}_${dtype}.raw`;
     const info = planZfpStream(fileName, dims, rate, opts.header ?? true);
     const expect = dims[0] * dims[1] * dims[2] * DTYPE_BYTES[dtype];
@@ -199,10 +228,13 @@ export class ZfpEncoder {
     }
     const { device } = this;
     await this.prepare(dtype);
+    if (meter) await meter.prepare(dtype);
     const stream = this.createStream(info, dtype, opts.maxShardBytes ?? maxShardBytesFor(device));
     const planeBytes = dims[0] * dims[1] * DTYPE_BYTES[dtype];
     let input: GPUBuffer | undefined;
+    let error: StreamError | undefined;
     try {
+      meter?.begin(stream);
       const slabs = stream.shards.map((_, s) => ZfpEncoder.shardPlanes(stream, s));
       const largest = Math.max(...slabs.map(([z0, z1]) => (z1 - z0) * planeBytes));
       input = device.createBuffer({
@@ -222,16 +254,18 @@ export class ZfpEncoder {
         }
         const encoder = device.createCommandEncoder({ label: 'ZfpEncoder.compress' });
         this.encode(encoder, { input, dtype, inputZPlane: z0, stream, shard: s });
+        meter?.encode(encoder, { input, dtype, inputZPlane: z0, stream, shard: s });
         device.queue.submit([encoder.finish()]);
       }
-      await device.queue.onSubmittedWorkDone();
+      if (meter) error = await meter.read();
+      else await device.queue.onSubmittedWorkDone();
     } catch (e) {
       stream.destroy();
       throw e;
     } finally {
       input?.destroy();
     }
-    return stream;
+    return { stream, error };
   }
 
   /** Compresses to zfp's file bytes (see compressToStream). */

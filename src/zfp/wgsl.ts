@@ -15,6 +15,8 @@ import decodeVolumeTiled from '../../shaders/zfp/decode_volume_tiled.wgsl?raw';
 import blockRanges from '../../shaders/zfp/block_ranges.wgsl?raw';
 import poolRanges from '../../shaders/zfp/pool_ranges.wgsl?raw';
 import encode from '../../shaders/zfp/encode.wgsl?raw';
+import sourceValues from '../../shaders/zfp/source_values.wgsl?raw';
+import streamError from '../../shaders/zfp/stream_error.wgsl?raw';
 
 const part = (name: string, code: string): WgslPart => ({ name: `shaders/zfp/${name}.wgsl`, code });
 
@@ -47,5 +49,14 @@ export const zfpWgsl = {
   // GPU path of decodeVolume (tiles of 32 blocks along x, coalesced voxel stores)
   decodeVolumeTiled: [...decoderBase, part('decode_volume_tiled', decodeVolumeTiled)],
   blockRanges: [...decoderBase, part('block_ranges', blockRanges)],
-  encode: [gridSnippet, part('u64', u64), part('codec', codec), part('f64', f64), part('encode', encode)],
+  encode: [
+    gridSnippet,
+    part('u64', u64),
+    part('codec', codec),
+    part('f64', f64),
+    part('source_values', sourceValues),
+    part('encode', encode),
+  ],
+  // decoded minus source, per block (rate choice and the reported error)
+  streamError: [...decoderBase, part('f64', f64), part('source_values', sourceValues), part('stream_error', streamError)],
 } satisfies Record<string, WgslPart[]>;

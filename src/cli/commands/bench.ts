@@ -9,7 +9,8 @@ import { runBenchmark } from '../../bench/harness.ts';
 import { BENCH_MODES, isBenchMode, type BenchMode } from '../../bench/sequences.ts';
 import { numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
 import { openInputSurface } from '../input.ts';
-import { budgetOption, deadlineOption } from './extract.ts';
+import { budgetOption, deadlineOption, streamBudgetOption } from './extract.ts';
+import { rateErrorRecord } from '../../zfp/rate-choice.ts';
 
 function modesOption(text: string | undefined): BenchMode[] {
   if (text === undefined) return [...BENCH_MODES];
@@ -26,7 +27,7 @@ export const benchCommand: CliCommand = {
   name: 'bench',
   summary: 'isosurface benchmark: random / sweep-up / sweep-down isovalues, GPU ms and hit rates per mode',
   usage:
-    'bench IN [--modes random,sweep-up,sweep-down] [--count N] [--seed S] [--range lo,hi] [--rate R] [--cache-budget MB] [--level L] [--deadline S] (--level, --deadline: IN a Zarr store URL or folder)',
+    'bench IN [--modes random,sweep-up,sweep-down] [--count N] [--seed S] [--range lo,hi] [--rate R | --stream-budget MB] [--cache-budget MB] [--level L] [--deadline S] (--level, --deadline: IN a Zarr store URL or folder)',
   options: {
     level: { type: 'string' },
     deadline: { type: 'string' },
@@ -35,6 +36,7 @@ export const benchCommand: CliCommand = {
     seed: { type: 'string' },
     range: { type: 'string' },
     rate: { type: 'string' },
+    'stream-budget': { type: 'string' },
     'cache-budget': { type: 'string' },
   },
   async run(ctx, args) {
@@ -53,6 +55,7 @@ export const benchCommand: CliCommand = {
       level: numberOption(args, 'level'),
       budget,
       deadlineMs: deadlineOption(args),
+      maxStreamBytes: streamBudgetOption(args),
     });
     ctx.log(`${input}: ${volume.how}`);
     const { iso } = volume;
@@ -95,6 +98,8 @@ export const benchCommand: CliCommand = {
         volume: { file: input, how: volume.how, dims: iso.info.dims, blockCount: iso.info.blockCount, valueRange: iso.info.valueRange },
         adapter: describeAdapter(gpu.adapter),
         options: { ...result.options, rate: volume.rate, memoryBudgetBytes: iso.memoryBudget },
+        rate: volume.rate,
+        rateError: volume.rateChoice ? rateErrorRecord(volume.rateChoice) : null,
         records: result.records,
         summaries: result.summaries,
         ...(volume.store ? { store: volume.store() } : {}),

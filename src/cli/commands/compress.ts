@@ -1,7 +1,9 @@
-// `compress IN --dims X,Y,Z --dtype T --rate R -o OUT.zfp`: compresses a raw
-// volume (x fastest, little endian; uint8/int8/uint16/int16/float32/float64,
-// converted to float32) to a fixed-rate zfp file on the GPU. Shape and type
-// come from the name (`name_XxYxZ_dtype.raw`) unless given.
+// `compress IN [--dims X,Y,Z] [--dtype T] [--rate R] -o OUT.zfp`: compresses a
+// raw volume (x fastest, little endian; uint8/int8/uint16/int16/float32/
+// float64, converted to float32) to a fixed-rate zfp file on the GPU. Shape
+// and type come from the name (`name_XxYxZ_dtype.raw`) unless given; the rate
+// is chosen from the data (src/zfp/rate-choice.ts) unless given. Either way
+// the stream's error against the input is measured and recorded.
 import { readFileSync, writeFileSync } from 'node:fs';
 import { basename } from 'node:path';
 import { DTYPE_BYTES, DTYPES, isDType, type DType } from '../../core/dtype.ts';
@@ -9,16 +11,20 @@ import { formatDims, parseVolumeName, type Dims } from '../../core/naming.ts';
 import { allNonFiniteMessage, countNonFinite, nonFiniteNotice, nonFiniteTotal, replaceNonFinite } from '../../volume/non-finite.ts';
 import { ZfpEncoder } from '../../zfp/encoder.ts';
 import { planZfpStream, ZfpFormatError } from '../../zfp/format.ts';
+import { chooseRate, describeRateChoice, rateErrorRecord, type RateChoice } from '../../zfp/rate-choice.ts';
+import { ZfpErrorMeter } from '../../zfp/stream-error.ts';
+import { streamBudgetOption } from './extract.ts';
 import { InputError, numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
 
 export const compressCommand: CliCommand = {
   name: 'compress',
   summary: 'raw volume -> fixed-rate zfp file (GPU encoder; zfpy reads the result)',
-  usage: 'compress IN [--dims X,Y,Z] [--dtype T] --rate R -o OUT.zfp [--headerless]',
+  usage: 'compress IN [--dims X,Y,Z] [--dtype T] [--rate R | --stream-budget MB] -o OUT.zfp [--headerless]',
   options: {
     dims: { type: 'string' },
     dtype: { type: 'string' },
     rate: { type: 'string' },
+    'stream-budget': { type: 'string' },
     out: { type: 'string', short: 'o' },
     headerless: { type: 'boolean' },
   },
@@ -27,7 +33,7 @@ export const compressCommand: CliCommand = {
     const output = stringOption(args, 'out');
     if (!output) throw new UsageError('give the output file with -o OUT.zfp');
     const rate = numberOption(args, 'rate');
-    if (rate === undefined) throw new UsageError('give the rate with --rate R (bits per value, e.g. 4; at least 0.1328125)');
+    const maxStreamBytes = streamBudgetOption(args);
     const name = parseVolumeName(basename(input));
     const dimList = numberListOption(args, 'dims');
     let dims: Dims | undefined = name.dims;
@@ -53,7 +59,7 @@ export const compressCommand: CliCommand = {
       throw new InputError(`${input}: ${formatDims(dims)} ${dtype} is ${expect} bytes, the file has ${bytes.byteLength}`);
 
     try {
-      planZfpStream(basename(input), dims, rate, !args.values.headerless); // user mistakes before any GPU work
+      if (rate !== undefined) planZfpStream(basename(input), dims, rate, !args.values.headerless); // user mistakes before any GPU work
     } catch (e) {
       if (e instanceof ZfpFormatError) throw new UsageError(e.message);
       throw e;
@@ -69,16 +75,38 @@ export const compressCommand: CliCommand = {
     }
     const { device } = await ctx.gpu();
     const encoder = await ZfpEncoder.create(device);
+    const meter = await ZfpErrorMeter.create(device);
     try {
+      let choice: RateChoice;
+      try {
+        choice = await chooseRate(encoder, meter, bytes, dtype, dims, { rate, maxStreamBytes, fileName: basename(input) });
+      } catch (e) {
+        if (e instanceof ZfpFormatError || e instanceof RangeError) throw new InputError(e.message);
+        throw e;
+      }
+      if (choice.warning) {
+        notes.push(choice.warning);
+        ctx.log(`note: ${choice.warning}`);
+      }
       const t0 = performance.now();
       let result;
       try {
-        result = await encoder.compress(bytes, dtype, dims, rate, { header: !args.values.headerless, fileName: basename(input) });
+        const made = await encoder.compressMeasured(bytes, dtype, dims, choice.rate, meter, {
+          header: !args.values.headerless,
+          fileName: basename(input),
+        });
+        choice.stream = made.error;
+        try {
+          result = { bytes: await made.stream.readBytes(), info: made.stream.info };
+        } finally {
+          made.stream.destroy();
+        }
       } catch (e) {
         if (e instanceof ZfpFormatError) throw new InputError(e.message);
         throw e;
       }
       const seconds = (performance.now() - t0) / 1000;
+      ctx.log(`note: ${basename(input)}: ${describeRateChoice(choice)}`);
       writeFileSync(output, result.bytes);
       const floatBytes = dims[0] * dims[1] * dims[2] * 4;
       const info = result.info;
@@ -88,7 +116,8 @@ export const compressCommand: CliCommand = {
         dims,
         dtype,
         rate: info.rate,
-        requestedRate: rate,
+        ...(rate !== undefined ? { requestedRate: rate } : {}),
+        rateError: rateErrorRecord(choice),
         bitsPerBlock: info.bitsPerBlock,
         header: info.hasHeader,
         blocks: info.blockCount,
@@ -98,7 +127,8 @@ export const compressCommand: CliCommand = {
         seconds,
         gbPerSecond: floatBytes / seconds / 1e9,
         notes,
-        timing: 'wall time of upload, GPU encode and read-back (file I/O excluded); GB/s of float32 data',
+        timing:
+          'wall time of upload, GPU encode, error measurement and read-back (file I/O and the rate choice, rateError.ms, excluded); GB/s of float32 data',
       };
       ctx.log(
         `${output}: ${formatDims(dims)} ${dtype} -> ${result.bytes.byteLength} bytes at rate ${info.rate} (${info.bitsPerBlock} bits/block${info.hasHeader ? ', zfp header' : ', no header'}), ` +
@@ -107,6 +137,7 @@ export const compressCommand: CliCommand = {
       return summary;
     } finally {
       encoder.destroy();
+      meter.destroy();
     }
   },
 };

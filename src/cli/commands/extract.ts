@@ -2,8 +2,10 @@
 // isosurfaces of a volume with the GPU pipeline (src/isosurface/), one after
 // the other with the block cache kept between them. IN is a zfp file or an
 // uncompressed volume (raw `name_XxYxZ_dtype.raw`, NRRD, TIFF stack),
-// compressed on the GPU at --rate (default 8) first, or `default`: the page's
-// built-in volume; opened as the page opens it (src/volume/open-volume.ts).
+// compressed on the GPU first (at --rate, or the rate chosen from the data:
+// src/zfp/rate-choice.ts; the record's `rate` and `rateError` say which and
+// what error it gives), or `default`: the page's built-in volume; opened as
+// the page opens it (src/volume/open-volume.ts).
 // Per isovalue: counts, cache behaviour, surface area and bounding box in
 // voxel index space (voxel (i, j, k) at (i, j, k), as VTK places them), GPU
 // time; --ply writes each soup. A surface over the memory budget is recorded
@@ -18,6 +20,7 @@ import { decodeVertices } from '../../isosurface/vertex-format.ts';
 import { meshMetrics } from '../../mc/mesh-metrics.ts';
 import { LevelStoppedError } from '../../store/pinned-level.ts';
 import { openInputSurface } from '../input.ts';
+import { rateErrorRecord } from '../../zfp/rate-choice.ts';
 import {
   CommandFailed,
   numberListOption,
@@ -55,6 +58,14 @@ export function deadlineOption(args: Parameters<typeof numberOption>[0]): number
   return s * 1000;
 }
 
+/** --stream-budget MB -> bytes: the largest stream a rate chosen from the data may make (shared with `bench`). */
+export function streamBudgetOption(args: Parameters<typeof numberOption>[0]): number | undefined {
+  const mb = numberOption(args, 'stream-budget');
+  if (mb === undefined) return undefined;
+  if (!(mb > 0)) throw new UsageError('--stream-budget must be a positive number of MB');
+  return mb * 2 ** 20;
+}
+
 /** --cache-budget MB -> bytes (shared with `bench`). */
 export function budgetOption(args: Parameters<typeof numberOption>[0]): number | undefined {
   const mb = numberOption(args, 'cache-budget');
@@ -67,12 +78,13 @@ export const extractCommand: CliCommand = {
   name: 'extract',
   summary: 'isosurfaces on the GPU (block cache kept between isovalues): counts, area, bbox, GPU time; --ply soups',
   usage:
-    'extract IN --iso a,b,c [--rate R] [--cache-budget MB] [--ply PREFIX] [--level L] [--deadline S] (--level, --deadline: IN a Zarr store URL or folder)',
+    'extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--level L] [--deadline S] (--level, --deadline: IN a Zarr store URL or folder)',
   options: {
     level: { type: 'string' },
     deadline: { type: 'string' },
     iso: { type: 'string' },
     rate: { type: 'string' },
+    'stream-budget': { type: 'string' },
     'cache-budget': { type: 'string' },
     ply: { type: 'string' },
   },
@@ -88,6 +100,7 @@ export const extractCommand: CliCommand = {
       level: numberOption(args, 'level'),
       budget,
       deadlineMs: deadlineOption(args),
+      maxStreamBytes: streamBudgetOption(args),
     });
     ctx.log(`${input}: ${volume.how}`);
     const { iso } = volume;
@@ -144,6 +157,8 @@ export const extractCommand: CliCommand = {
     const result = {
       input,
       how: volume.how,
+      rate: volume.rate,
+      rateError: volume.rateChoice ? rateErrorRecord(volume.rateChoice) : null,
       dims: iso.info.dims,
       blockGrid: iso.info.blockGrid,
       valueRange: iso.info.valueRange,
