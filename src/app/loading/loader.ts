@@ -47,7 +47,7 @@ export interface LoaderDeps {
 
 const PHASE_TEXT: Record<OpenPhase, string> = {
   upload: 'Uploading the stream to the GPU…',
-  compress: 'Compressing on the GPU…',
+  compress: 'Choosing the rate from the data and compressing on the GPU…',
 };
 
 type Produce = (signal: AbortSignal, progress: (text: string, f?: number) => void) => Promise<OpenedVolume | undefined>;
@@ -122,8 +122,14 @@ export class VolumeLoader {
   loadDefault(): Promise<void> {
     return this.run('Built-in volume', async (_signal, progress) => {
       progress('Generating and compressing on the GPU…', undefined);
-      return openDefaultVolume(this.deps.gpu().device);
+      return openDefaultVolume(this.deps.gpu().device, { maxStreamBytes: this.streamBudget() });
     });
+  }
+
+  /** A rate chosen from the data makes a stream of at most half the memory budget (the cache and the surface get the rest). */
+  private streamBudget(): number | undefined {
+    const budget = this.deps.memoryBudget();
+    return budget === undefined ? undefined : budget / 2;
   }
 
   /** Whether there is a last volume to open again. */
@@ -168,6 +174,7 @@ export class VolumeLoader {
     }
     return openVolumeFile(this.deps.gpu().device, facts, bytes, request, {
       onPhase: (phase) => progress(PHASE_TEXT[phase], undefined),
+      maxStreamBytes: this.streamBudget(),
     });
   }
 

@@ -25,12 +25,41 @@ export function volumeRows(v: Omit<OpenedVolume, 'stream'>, blockCount: number, 
     ['name', v.name],
     ['dims', `${nx} × ${ny} × ${nz}`],
     ['source', source],
-    ['rate', `${v.rate} bits/value`],
+    ['rate', rateText(v)],
+    ...(v.rateChoice?.stream
+      ? [
+          ['error', `RMS ${fmtError(v.rateChoice.stream.rms)}, max ${fmtError(v.rateChoice.stream.maxAbs)} (decoded − source)`] as [
+            string,
+            string,
+          ],
+        ]
+      : []),
     ['compressed', `${formatBytes(v.compressedBytes)} (${(decoded / v.compressedBytes).toFixed(1)} : 1)`],
     ['decompressed', `${formatBytes(decoded)} as float32`],
     ['blocks', `${formatCount(blockCount)} of 4³`],
     ['values', `${valueRange[0].toPrecision(5)} … ${valueRange[1].toPrecision(5)}`],
   ];
+}
+
+/** The rate and how it was found (volumes compressed here: chosen from the data, given, or lowered to fit). */
+function rateText(v: Omit<OpenedVolume, 'stream'>): string {
+  const c = v.rateChoice;
+  if (!c) return `${v.rate} bits/value`;
+  const bound = `bound ${fmtError(c.bound.rms)}: ${c.bound.rule}`;
+  switch (c.how) {
+    case 'chosen':
+      return `${v.rate} bits/value, chosen from the data (sampled RMS error ${fmtError(c.sample.rms)} ≤ ${bound})`;
+    case 'given':
+      return `${v.rate} bits/value, as given (sampled RMS error ${fmtError(c.sample.rms)}; ${bound})`;
+    case 'capped':
+      return `${v.rate} bits/value, lowered from ${c.faithfulRate} to fit the memory budget (sampled RMS error ${fmtError(c.sample.rms)} > ${bound})`;
+    case 'unmet':
+      return `${v.rate} bits/value (no rate meets the ${bound}; sampled RMS error ${fmtError(c.sample.rms)})`;
+  }
+}
+
+function fmtError(e: number): string {
+  return e === 0 ? '0' : e >= 0.01 && e < 1000 ? String(Number(e.toPrecision(3))) : e.toExponential(2);
 }
 
 export class StatsPanel {

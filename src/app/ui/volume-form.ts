@@ -5,7 +5,7 @@
 
 import { DTYPE_BYTES, isDType, type DType } from '../../core/dtype.ts';
 import type { Dims } from '../../core/naming.ts';
-import { DEFAULT_RAW_RATE, type OpenRequest, type VolumeFileFacts } from '../../volume/open-volume.ts';
+import type { OpenRequest, VolumeFileFacts } from '../../volume/open-volume.ts';
 import { blockGridOf, fixedRateStreamBytes } from '../../zfp/format.ts';
 import { formatBytes } from '../format.ts';
 
@@ -56,7 +56,10 @@ export class VolumeForm {
     dtype.disabled = !dtypeEditable;
     q<HTMLElement>('.field-dtype').hidden = !dtypeShown;
     const rate = f.elements.namedItem('rate') as HTMLInputElement;
-    rate.value = String(facts.compresses ? DEFAULT_RAW_RATE : (facts.rate ?? facts.fittingRates?.[0] ?? ''));
+    // Volumes compressed here: empty means the rate chosen from the data (src/zfp/rate-choice.ts).
+    rate.value = facts.compresses ? '' : String(facts.rate ?? facts.fittingRates?.[0] ?? '');
+    rate.placeholder = facts.compresses ? 'from the data' : '';
+    rate.required = !facts.compresses;
     q<HTMLElement>('.form-ok').textContent = facts.compresses ? 'Compress and open' : 'Open';
     this.check();
     this.dialog.showModal();
@@ -85,12 +88,12 @@ export class VolumeForm {
     let problem: string | undefined;
     let note = '';
     if (!dims) problem = 'Enter the three dimensions.';
-    else if (!rate) problem = 'Enter a rate (bits per value), e.g. 8.';
-    else if (rate < 0.25 || rate > 64) problem = 'The rate must be between 0.25 and 64 bits per value.';
+    else if (!rate && !facts.compresses) problem = 'Enter a rate (bits per value), e.g. 8.';
+    else if (rate !== undefined && (rate < 0.25 || rate > 64)) problem = 'The rate must be between 0.25 and 64 bits per value.';
     else {
       const g = blockGridOf(dims);
       const blocks = g[0] * g[1] * g[2];
-      const streamBytes = fixedRateStreamBytes(blocks, Math.floor(64 * rate + 0.5));
+      const streamBytes = rate === undefined ? 0 : fixedRateStreamBytes(blocks, Math.floor(64 * rate + 0.5));
       if (facts.compresses) {
         const t = dtype ?? 'uint8';
         const expect =
@@ -102,13 +105,16 @@ export class VolumeForm {
         if (facts.kind === 'raw' && expect !== facts.bytes) {
           problem = `${dims.join(' × ')} ${t} is ${expect.toLocaleString('en-US')} bytes; the file has ${facts.bytes.toLocaleString('en-US')}.`;
         } else {
-          note = `${formatBytes(expect)} → ${formatBytes(streamBytes)} on the GPU (${(expect / streamBytes).toFixed(1)} : 1)`;
+          note =
+            rate === undefined
+              ? `${formatBytes(expect)} → the GPU, at the smallest rate that keeps surfaces faithful (tried on a sample of the data)`
+              : `${formatBytes(expect)} → ${formatBytes(streamBytes)} on the GPU (${(expect / streamBytes).toFixed(1)} : 1)`;
         }
       } else if (streamBytes !== facts.bytes) {
         const fits = facts.fittingRates?.length ? ` The size fits rate ${facts.fittingRates.join(' or ')}.` : '';
         problem = `A ${dims.join(' × ')} stream at rate ${rate} is ${streamBytes.toLocaleString('en-US')} bytes; the file has ${facts.bytes.toLocaleString('en-US')}.${fits}`;
       } else {
-        note = `${dims.join(' × ')} float32, ${blocks.toLocaleString('en-US')} blocks of ${Math.floor(64 * rate + 0.5)} bits`;
+        note = `${dims.join(' × ')} float32, ${blocks.toLocaleString('en-US')} blocks of ${Math.floor(64 * (rate ?? 0) + 0.5)} bits`;
       }
     }
     out.textContent = problem ?? note;

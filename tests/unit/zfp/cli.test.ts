@@ -82,8 +82,22 @@ print(same, np.array_equal(dec.view(np.uint32), np.fromfile(out, '<u4').reshape(
     expect(bad.stderr).toMatch(
       /fuel_64x64x64_float8\.zfp: a header-less fixed-rate 8 stream of 64x64x64 float32 is 262144 bytes .* the file has 5008/,
     );
-    const noRate = cli('compress', raw, '-o', join(dir, 'y.zfp'));
-    expect(noRate.status).toBe(2);
-    expect(noRate.stderr).toMatch(/--rate R/);
+    // No --rate: chosen from the data (src/zfp/rate-choice.ts), said on stderr and in the record.
+    const noRate = cli('compress', raw, '-o', join(dir, 'y.zfp'), '--json', join(dir, 'y.json'));
+    expect(noRate.status, noRate.stderr).toBe(0);
+    expect(noRate.stderr).toMatch(
+      /note: neghip_66x66x66_uint8\.raw: rate 8 chosen from the data: sampled RMS error .* <= 0\.15 \(0\.15 of a source step \(uint8\)\)/,
+    );
+    const y = JSON.parse(readFileSync(join(dir, 'y.json'), 'utf8'));
+    expect(y).toMatchObject({ rate: 8, rateError: { how: 'chosen', bound: 0.15, sampleBlocks: 4096 } });
+    expect(y.rateError.rms).toBeGreaterThan(0);
+    expect(y.rateError.rms).toBeLessThanOrEqual(0.15);
+    // info on the raw file: the same choice, without compressing it
+    const info = cli('info', raw, '--json', join(dir, 'ri.json'));
+    expect(info.status, info.stderr).toBe(0);
+    expect(JSON.parse(readFileSync(join(dir, 'ri.json'), 'utf8'))).toMatchObject({ kind: 'raw', rate: 8, rateError: { how: 'chosen' } });
+    const badBudget = cli('compress', raw, '--stream-budget=-3', '-o', join(dir, 'z.zfp'));
+    expect(badBudget.status).toBe(2);
+    expect(badBudget.stderr).toMatch(/--stream-budget must be a positive number of MB/);
   });
 });
