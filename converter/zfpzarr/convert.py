@@ -27,6 +27,7 @@ from .chunks import unit_ranges, write_unit
 from .inputs import InputError, Volume, open_input
 from .layout import LevelLayout, level_path, level_shapes
 from .levels import downsample
+from .rate import NonFiniteSample, RateChoice, choose_rate
 from .store import create_store, finish_store, histogram_level, ome_multiscales, plan_store, write_ranges
 
 HISTOGRAM_BINS = 256
@@ -34,7 +35,7 @@ HISTOGRAM_BINS = 256
 
 @dataclass
 class Options:
-    rate: list[float] | None = None  # per level, the last one repeated; None: 8 (zfp inputs: their rate)
+    rate: list[float] | None = None  # per level, the last repeated; None: chosen from the data (zfp inputs: theirs)
     chunk: int = 64
     levels: int | None = None  # None: until the coarsest level fits one chunk
     shard: int | None = None  # chunks per shard edge
@@ -65,6 +66,7 @@ class Summary:
     bytes_out: int = 0
     seconds: float = 0.0
     value_range: tuple[float, float] | None = None
+    rate_choice: RateChoice | None = None  # when the rate was chosen from the data
 
     @property
     def ratio(self) -> float:
@@ -88,9 +90,18 @@ def check_options(opts: Options) -> None:
             raise InputError(f"--rate {r}: fixed rates from 0.140625 (9 bits per block) to 32 bits per value are supported")
 
 
-def level_rates(opts: Options, volume: Volume, count: int) -> list[float]:
-    rates = list(opts.rate or [volume.default_rate or 8.0])
+def level_rates(opts: Options, volume: Volume, count: int, chosen: RateChoice | None = None) -> list[float]:
+    """The given rates; else a zfp input's own rate; else the rate chosen from the data, for every level."""
+    rates = list(opts.rate or [volume.default_rate or chosen.rate])
     return [float(rates[min(i, len(rates) - 1)]) for i in range(count)]
+
+
+def choose_volume_rate(volume: Volume, client=None, workers: int | None = None) -> RateChoice:
+    """The rate rate-choice.ts's rule chooses for the input (level 0), read from a sample of its blocks."""
+    try:
+        return choose_rate(volume.array, compute=lambda arrays: compute(arrays, client, workers))
+    except NonFiniteSample as e:
+        raise InputError(f"{volume.source}: {e}") from None
 
 
 def unit_tasks(arr: da.Array, layout: LevelLayout, existing: set) -> da.Array:
@@ -161,19 +172,23 @@ def convert(spec: str, out: str, opts: Options | None = None, client=None, worke
 def _convert(volume: Volume, out, opts, client, workers, progress, start, work_dir) -> Summary:
     source = volume.array
     shapes = level_shapes(tuple(source.shape), opts.chunk, opts.levels)
-    rates = level_rates(opts, volume, len(shapes))
+    # Before the params: a resumed run must find the same rates (the sample is deterministic, so it does).
+    choice = None if opts.rate or volume.default_rate else choose_volume_rate(volume, client, workers)
+    rates = level_rates(opts, volume, len(shapes), choice)
     params = {
         "source": volume.source, "source_token": source.name, "shape": list(source.shape),
         "source_dtype": str(source.dtype), "chunk": opts.chunk, "shard": opts.shard,
         "levels": len(shapes), "rates": rates,
     }
     state = plan_store(out, params, opts.overwrite)
-    summary = Summary(out=out, source=volume.source, state=state, bytes_in=int(source.nbytes))
+    summary = Summary(out=out, source=volume.source, state=state, bytes_in=int(source.nbytes), rate_choice=choice)
     voxel = tuple(opts.voxel_size or volume.voxel_size or (1.0, 1.0, 1.0))
     unit = opts.unit or volume.unit
     if state == "create":
         name = os.path.basename(volume.source.rstrip("/"))
         extra = {"voxel_size": list(voxel), "unit": unit, "axes": "zyx"}
+        if choice is not None:
+            extra["rateChoice"] = {"rate": choice.rate, **choice.record()}
         create_store(out, params, shapes, rates, opts.chunk, opts.shard,
                      ome_multiscales(name, shapes, voxel, unit), extra)
     layouts = [LevelLayout(out, i, shapes[i], opts.chunk, rates[i], opts.shard) for i in range(len(shapes))]

@@ -10,10 +10,8 @@ import { formatDims, type Dims } from '../core/naming.ts';
 import { NrrdError, parseNrrd, type NrrdVolume } from './nrrd.ts';
 import type { TiffVolume } from '../loaders/tiff.ts';
 
-/** Rate (bits per value) raw volumes are compressed at unless the user picks another. */
+/** The example rate (bits per value) messages suggest; volumes compressed here take the rate chosen from their data (src/zfp/rate-choice.ts). */
 export const DEFAULT_RAW_RATE = 8;
-/** Rate of the built-in default volume (page and `cli ... default`). */
-export const DEFAULT_VOLUME_RATE = 8;
 /** The name that stands for the built-in volume on the command line. */
 export const DEFAULT_VOLUME_NAME = 'default';
 

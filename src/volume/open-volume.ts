@@ -36,8 +36,6 @@ import {
 } from './non-finite.ts';
 import { generateDefaultVolume } from './procedural.ts';
 import {
-  DEFAULT_RAW_RATE,
-  DEFAULT_VOLUME_RATE,
   DEFAULT_VOLUME_NAME,
   type VolumeFileKind,
   VolumeFileError,

@@ -234,7 +234,8 @@ gpuTest(
           `import sys, json, numpy as np, dask.array as da; sys.path.insert(0, ${JSON.stringify(join(repoRoot, 'converter'))})
 from zfpzarr.rate import choose_rate
 a = da.from_array(np.fromfile(sys.argv[1], np.int16).reshape(256, 128, 128), chunks=64)
-print(json.dumps(choose_rate(a)))`,
+c = choose_rate(a)
+print(json.dumps({'rate': c.rate, 'trials': c.trials, 'sampleBlocks': c.sample_blocks}))`,
           [path],
         ),
       ) as { rate: number; trials: { rate: number; rms: number }[]; sampleBlocks: number };
