@@ -36,20 +36,20 @@ def smallest_rate(values: np.ndarray, bound: float) -> int:
     return 32
 
 
-def test_neghip_samples_16_blocks_per_axis_and_chooses_rate_8():
+def test_neghip_is_its_own_sample_and_chooses_rate_8():
     values = neghip()
     grid = sample_grid((66, 66, 66))
-    assert not grid.whole and grid.blocks == SAMPLE_BLOCKS
-    assert grid.starts == ([4 * k for k in range(16)],) * 3  # the 16 complete blocks per axis
-    assert grid.dims == (64, 64, 64)
+    # 17^3 = 4913 blocks <= WHOLE_BLOCKS: the whole volume (a 16^3 sub-grid would skip its central planes)
+    assert grid.whole and grid.blocks == 17 ** 3 and grid.dims == (66, 66, 66)
+    assert sample_grid((100, 100, 100)).whole  # 25^3 = 15625 blocks
+    assert not sample_grid((128, 128, 128)).whole and sample_grid((128, 128, 128)).blocks == SAMPLE_BLOCKS
     c = choose_rate(da.from_array(values, chunks=32))
     assert c.rate == 8 and c.how == "chosen"
     assert c.bound == INTEGER_RMS_BOUND and c.rule == "0.15 of a source step (uint8)"
-    assert c.sample_blocks == 4096
-    sample = values[:64, :64, :64]
-    assert c.sample_rms == rms_at(sample, 8) <= 0.15 < rms_at(sample, 7)
+    assert c.sample_blocks == 17 ** 3
+    assert c.sample_rms == rms_at(values, 8) <= 0.15 < rms_at(values, 7)
     assert c.describe().startswith(f"rate 8 chosen from the data: sampled RMS error {fmt(c.sample_rms)} <= 0.15 "
-                                   "(0.15 of a source step (uint8)), 4096 sampled blocks, ")
+                                   "(0.15 of a source step (uint8)), 4913 sampled blocks, ")
 
 
 def test_the_sample_is_the_blocks_of_the_subgrid_side_by_side():
@@ -120,7 +120,7 @@ def test_converting_without_rate_uses_the_chosen_rate_for_every_level(tmp_path):
     assert attrs["params"]["rates"] == [8.0] * count
     assert [l["rate"] for l in attrs["levels"]] == [8.0] * count
     rc = attrs["rateChoice"]
-    assert rc["rate"] == 8 and rc["how"] == "chosen" and rc["bound"] == 0.15 and rc["sampleBlocks"] == 4096
+    assert rc["rate"] == 8 and rc["how"] == "chosen" and rc["bound"] == 0.15 and rc["sampleBlocks"] == 17 ** 3
     assert rc["trials"][-1]["rate"] in (7, 8) and {t["rate"] for t in rc["trials"]} >= {7, 8}
     # level 0 is zfp at rate 8 of each input chunk
     values = neghip()

@@ -5,7 +5,7 @@ benchmarks use it); this module implements exactly the same rule with zfpy,
 so a store converted here gets the rate the page would choose for the same
 volume:
 
-- sample: the volume itself when it has at most SAMPLE_BLOCKS 4x4x4 blocks;
+- sample: the volume itself when it has at most WHOLE_BLOCKS (16384) 4x4x4 blocks;
   otherwise whole blocks on a regular sub-grid of the volume's complete
   blocks, at most SAMPLE_BLOCKS of them (m per axis, the largest m with
   prod(min(full blocks on the axis, m)) <= SAMPLE_BLOCKS; the k-th of n picks
@@ -36,6 +36,7 @@ import numpy as np
 import zfpy
 
 SAMPLE_BLOCKS = 4096  # blocks in a sample, at most (262,144 voxels)
+WHOLE_BLOCKS = 16384  # volumes of at most this many blocks are their own sample
 INTEGER_RMS_BOUND = 0.15  # integer sources: RMS error allowed, in source steps
 FLOAT_RMS_BOUND = 1e-4  # float sources: RMS error allowed, as a fraction of the sample's value range
 MIN_RATE = 1
@@ -50,11 +51,11 @@ class SampleGrid:
     blocks: int
 
 
-def sample_grid(dims: Sequence[int], max_blocks: int = SAMPLE_BLOCKS) -> SampleGrid:
+def sample_grid(dims: Sequence[int], max_blocks: int = SAMPLE_BLOCKS, whole_blocks: int = WHOLE_BLOCKS) -> SampleGrid:
     """The sample of a volume of `dims` (x, y, z): rate-choice.ts's sampleGrid."""
     dims = tuple(int(n) for n in dims)
     grid = [-(-n // 4) for n in dims]
-    if grid[0] * grid[1] * grid[2] <= max_blocks:
+    if grid[0] * grid[1] * grid[2] <= max(max_blocks, whole_blocks):
         starts = tuple([4 * i for i in range(g)] for g in grid)
         return SampleGrid(starts, dims, True, grid[0] * grid[1] * grid[2])
     full = [max(1, n // 4) for n in dims]

@@ -23,50 +23,11 @@ import { converterPython } from '../store/stores.ts';
 
 let dir = '';
 
-// Test volumes, made with numpy (seeded): a CT-like int16 scan (air -1000, fat -90, organs 45 and 60,
-// bone 500-1300, sharp interfaces, noise sigma 1 HU as after denoising), uint16 microscopy-like blobs
-// (Poisson noise), uint16 values of exactly 10 random bits.
-const MAKE = `
-import numpy as np, sys
-d = sys.argv[1]
-rng = np.random.default_rng(2)
-Z, Y, X = 256, 128, 128
-z, y, x = np.mgrid[0:Z, 0:Y, 0:X].astype(np.float32)
-v = np.full((Z, Y, X), -1000, np.float32)
-v[((x - 64) / 56) ** 2 + ((y - 64) / 50) ** 2 < 1] = -90
-v[((x - 50) / 25) ** 2 + ((y - 60) / 20) ** 2 + ((z - 128) / 90) ** 2 < 1] = 45
-v[((x - 85) / 15) ** 2 + ((y - 70) / 18) ** 2 + ((z - 100) / 60) ** 2 < 1] = 60
-bone = ((x - 64) / 12) ** 2 + ((y - 100) / 10) ** 2 < 1
-v[bone] = 900 + 400 * np.sin(z[bone] / 15)
-v += rng.normal(0, 1.0, v.shape)
-np.round(v).astype(np.int16).tofile(d + '/ct_128x128x256_int16.raw')
-rng = np.random.default_rng(1)
-Z, Y, X = 128, 160, 160
-z, y, x = np.mgrid[0:Z, 0:Y, 0:X].astype(np.float32)
-v = np.full((Z, Y, X), 100, np.float32)
-for i in range(40):
-    c = rng.uniform([0, 0, 0], [Z, Y, X]); s = rng.uniform(2, 8); a = rng.uniform(500, 20000)
-    v += a * np.exp(-((z - c[0]) ** 2 + (y - c[1]) ** 2 + (x - c[2]) ** 2) / (2 * s * s))
-np.clip(rng.poisson(v), 0, 65535).astype(np.uint16).tofile(d + '/blobs_160x160x128_uint16.raw')
-rng = np.random.default_rng(3)
-rng.integers(0, 1 << 10, (32, 32, 32)).astype(np.uint16).tofile(d + '/bits10_32x32x32_uint16.raw')
-`;
+// Test volumes (tests/fixtures/rate-volumes.py): a CT-like int16 scan, uint16 blobs, 10-bit random uint16.
+const MAKE = readFileSync(join(repoRoot, 'tests/fixtures/rate-volumes.py'), 'utf8');
 
 // vtkMarchingCubes on the raw values (as float32): triangles and area per isovalue.
-const VTK = `
-import json, sys, numpy as np, vtk
-from vtk.util import numpy_support as ns
-path, dtype, nx, ny, nz = sys.argv[1], sys.argv[2], *map(int, sys.argv[3:6])
-a = np.fromfile(path, dtype).astype(np.float32)
-img = vtk.vtkImageData(); img.SetDimensions(nx, ny, nz)
-img.GetPointData().SetScalars(ns.numpy_to_vtk(a, deep=True))
-out = []
-for iso in map(float, sys.argv[6].split(',')):
-    m = vtk.vtkMarchingCubes(); m.SetInputData(img); m.SetValue(0, iso); m.ComputeNormalsOff(); m.ComputeScalarsOff(); m.Update()
-    p = vtk.vtkMassProperties(); p.SetInputData(m.GetOutput()); p.Update()
-    out.append([m.GetOutput().GetNumberOfCells(), p.GetSurfaceArea()])
-print(json.dumps(out))
-`;
+const VTK = readFileSync(join(repoRoot, 'tests/fixtures/vtk-surface.py'), 'utf8');
 
 // zfpy's decode of a stream file against the source: max and RMS of |decoded - source| (float32).
 const ZFPY_ERROR = `
