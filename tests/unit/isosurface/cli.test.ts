@@ -124,7 +124,7 @@ print(json.dumps({'faces': nf, 'vertices': nv, 'area': area}))
       return JSON.parse(readFileSync(out, 'utf8'));
     });
     const [a, b] = runs;
-    expect(Object.keys(a)).toEqual(['volume', 'adapter', 'options', 'records', 'summaries']);
+    expect(Object.keys(a)).toEqual(['volume', 'adapter', 'options', 'rate', 'rateError', 'records', 'summaries']);
     expect(a.options).toMatchObject({ modes: ['random', 'sweep-down'], count: 6, seed: 11, range: [10, 120] });
     expect(a.records).toHaveLength(12);
     expect(a.summaries.map((s: { mode: string; count: number }) => [s.mode, s.count])).toEqual([
