@@ -14,7 +14,7 @@ import type { GpuContext } from '../src/gpu/device.ts';
 import { ChunkFetcher } from '../src/store/fetch/chunk-fetcher.ts';
 import { chunkedGpu, createChunkStream } from '../src/store/gpu-port.ts';
 import { HttpStore } from '../src/store/zarr/http-store.ts';
-import { openZfpStore } from '../src/store/zarr/open-store.ts';
+import { openStore } from '../src/store/zarr/open-store.ts';
 import { MeteredStore, SimulatedLinkStore } from '../src/store/zarr/stores.ts';
 import { summarize } from './lib/report.ts';
 
@@ -79,7 +79,7 @@ export async function scaleRun(
           link === 'localhost' ? inner : new SimulatedLinkStore(inner, { mbitPerSecond: 100, latencyMs: 20 }),
         );
         const t0 = performance.now();
-        const store = await openZfpStore(metered, url);
+        const store = await openStore(metered, url);
         const fetcher = new ChunkFetcher(store);
         const port = chunkedGpu(gpu);
         const c = await createChunkStream(store, fetcher, port, budgetBytes);

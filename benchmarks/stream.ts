@@ -32,7 +32,7 @@ import { ChunkFetcher } from '../src/store/fetch/chunk-fetcher.ts';
 import { chunksNeeded, neighbourhoodRanges } from '../src/store/plan.ts';
 import { storeForLocation } from '../src/store/zarr/node-store.ts';
 import { HttpStore } from '../src/store/zarr/http-store.ts';
-import { openZfpStore } from '../src/store/zarr/open-store.ts';
+import { openStore } from '../src/store/zarr/open-store.ts';
 import { MeteredStore, SimulatedLinkStore } from '../src/store/zarr/stores.ts';
 import { loadZfpStream } from '../src/zfp/gpu-stream.ts';
 import { printTable, summarize, writeJson } from './lib/report.ts';
@@ -111,7 +111,7 @@ async function main() {
             link === 'localhost' ? inner : new SimulatedLinkStore(inner, { mbitPerSecond: 100, latencyMs: 20 }),
           );
           const t0 = performance.now();
-          const store = await openZfpStore(metered, url);
+          const store = await openStore(metered, url);
           const [lo, hi] = store.valueRange ?? [0, 1];
           iso = lo + isoFraction * (hi - lo);
           const fetcher = new ChunkFetcher(store);
@@ -190,7 +190,7 @@ async function main() {
     }
     // in-core: level 0 as one stream, from disk
     // read from the folder, not 4096 requests at once through the little server
-    const s = await openZfpStore(storeForLocation(join(folder, name)), name);
+    const s = await openStore(storeForLocation(join(folder, name)), name);
     const lv = s.levels[0];
     const chunks: Uint8Array[] = [];
     for (let i = 0; i < lv.chunkCount; i++) chunks.push(await s.readChunk(0, i));

@@ -16,7 +16,7 @@ struct EncodeParams {
   bit_base: u32,          // bit of first_block in out_words
   input_z: u32,           // first z plane held by input_words
   header_count: u32,      // header words to OR in (0 unless the shard starts the stream)
-  _pad0: u32,
+  header_word: u32,       // where the header goes in out_words (a pool slot's first word; 0 for a stream)
   _pad1: u32,
   _pad2: u32,
   header: array<vec4u, 2>,
@@ -82,7 +82,7 @@ fn encode_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg
   let g = grid_invocation_index(wid, nwg, lid, 64u);
   if (g == 0u) {
     for (var h = 0u; h < eparams.header_count; h++) {
-      atomicOr(&out_words[h], eparams.header[h >> 2u][h & 3u]);
+      atomicOr(&out_words[eparams.header_word + h], eparams.header[h >> 2u][h & 3u]);
     }
   }
   let b = eparams.first_block + g;

@@ -46,7 +46,15 @@ export async function openInputSurface(
   ctx: { log(m: string): void },
   gpu: GpuContext,
   path: string,
-  opts: { rate?: number; level?: number; budget?: number; deadlineMs?: number; maxStreamBytes?: number },
+  opts: {
+    rate?: number;
+    level?: number;
+    budget?: number;
+    deadlineMs?: number;
+    maxStreamBytes?: number;
+    time?: number;
+    channel?: number;
+  },
 ): Promise<OpenedInput> {
   if (isStoreInput(path)) {
     try {
@@ -60,6 +68,8 @@ export async function openInputSurface(
     }
   }
   if (opts.level !== undefined) throw new UsageError('--level is for a Zarr store (a URL or a folder with zarr.json)');
+  if (opts.time !== undefined || opts.channel !== undefined)
+    throw new UsageError('--time and --channel are for a Zarr store with such axes (a URL or a folder with zarr.json)');
   if (opts.deadlineMs !== undefined) throw new UsageError('--deadline is for a Zarr store (a URL or a folder with zarr.json)');
   const { rate } = opts;
   if (rate !== undefined && !(rate > 0)) throw new UsageError('--rate must be positive');

@@ -7,11 +7,12 @@ import { join } from 'node:path';
 import type { GpuContext } from '../gpu/device.ts';
 import { defaultMemoryBudget } from '../isosurface/budget.ts';
 import { ChunkFetcher } from './fetch/chunk-fetcher.ts';
-import { chunkedGpu, createChunkStream } from './gpu-port.ts';
+import { chunkedGpu, createChunkStream, storeEncoder } from './gpu-port.ts';
 import { PinnedLevelSurface } from './pinned-level.ts';
 import { StoreError } from './zarr/errors.ts';
 import { isStoreUrl, storeForLocation } from './zarr/node-store.ts';
-import { openZfpStore } from './zarr/open-store.ts';
+import { openStore } from './zarr/open-store.ts';
+import type { SourceInfo } from './zarr/source-store.ts';
 import { MeteredStore } from './zarr/stores.ts';
 
 /** --level names a level the store does not have (a wrong command line, not a data failure). */
@@ -22,9 +23,9 @@ export class NoSuchLevelError extends Error {
   }
 }
 
-/** A URL, or a folder with a zarr.json at its root. */
+/** A URL, or a folder with Zarr metadata at its root (v3 zarr.json, v2 .zgroup or .zarray). */
 export function isStoreInput(input: string): boolean {
-  return isStoreUrl(input) || existsSync(join(input, 'zarr.json'));
+  return isStoreUrl(input) || ['zarr.json', '.zgroup', '.zarray'].some((f) => existsSync(join(input, f)));
 }
 
 export interface StoreRecord {
@@ -34,9 +35,16 @@ export interface StoreRecord {
   dims: [number, number, number];
   chunkEdge: number;
   rate: number;
-  /** Distinct chunks fetched at the level / chunks of the level. */
+  /** Distinct chunks (bricks, for a store of lossless chunks) put at the level / chunks of the level. */
   chunks: number;
   levelChunks: number;
+  /** A store of lossless chunks: format, codecs, type, axes, rate (null for zfp stores). */
+  source: SourceInfo | null;
+  /** A store of lossless chunks: [min, max] of the source values of the level's bricks read (all of it once the level was read whole). */
+  sourceValueRange: [number, number] | null;
+  /** Level 0's voxel size (x, y, z) and unit, from the store's metadata. */
+  voxelSize: [number, number, number];
+  unit: string | null;
   /** Bytes through the store: chunk bytes, and everything (metadata, range arrays, shard indexes). */
   chunkBytesFetched: number;
   bytesFetched: number;
@@ -77,11 +85,22 @@ export interface StoreInputOptions {
   budget?: number;
   /** How long one request is tried (default 30 s; retrying-store.ts). */
   deadlineMs?: number;
+  /** Stores of lossless chunks: the GPU's zfp rate (default 8); time point and channel (default 0). */
+  rate?: number;
+  time?: number;
+  channel?: number;
 }
 
 export async function openStoreInput(gpu: GpuContext, input: string, opts: StoreInputOptions): Promise<StoreInput> {
   const metered = new MeteredStore(storeForLocation(input));
-  const store = await openZfpStore(metered, input, opts.deadlineMs === undefined ? {} : { retry: { deadlineMs: opts.deadlineMs } });
+  const store = await openStore(metered, input, {
+    ...(opts.deadlineMs === undefined ? {} : { retry: { deadlineMs: opts.deadlineMs } }),
+    rate: opts.rate,
+    time: opts.time,
+    channel: opts.channel,
+  });
+  if (!store.source && opts.rate !== undefined && opts.rate !== store.levels[0].layout.rate)
+    store.notes.push(`--rate ${opts.rate} is for stores of lossless chunks; this store's chunks are zfp at rate ${store.levels[0].layout.rate}, used as they are`);
   const { level } = opts;
   const L = level ?? 0;
   if (!Number.isInteger(L) || L < 0 || L >= store.levels.length) {
@@ -98,7 +117,7 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
     chunkBytes += bytes.byteLength;
   });
   const budgetBytes = opts.budget ?? defaultMemoryBudget(gpu.device.limits);
-  const port = chunkedGpu(gpu);
+  const port = chunkedGpu(gpu, undefined, await storeEncoder(gpu, store));
   const controller = await createChunkStream(store, fetcher, port, budgetBytes);
   const surface = new PinnedLevelSurface(controller, L);
   const record = (): StoreRecord => ({
@@ -109,8 +128,13 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
     chunkEdge: lv.layout.chunkEdge,
     rate: lv.layout.rate,
     chunks: fetched.size,
+    source: store.source,
+    sourceValueRange: store.sourceValueRange?.(L) ?? null,
+    voxelSize: store.voxelSize,
+    unit: store.unit,
     levelChunks: lv.chunkCount,
-    chunkBytesFetched: chunkBytes,
+    // a store of lossless chunks: what came over for the bricks (their source chunks), not the bricks' values
+    chunkBytesFetched: store.source ? metered.meter.bytes - store.metadataBytes : chunkBytes,
     bytesFetched: metered.meter.bytes,
     metadataBytes: store.metadataBytes,
     requests: metered.meter.requests,
@@ -125,8 +149,11 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
     failedRequests: store.retries.failed,
     faults: { ...store.retries.faults },
   });
+  const kind = store.source
+    ? `${store.source.format} store of ${store.source.dtype} (${store.source.codecs.join(' + ') || 'uncompressed'}), level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 bricks compressed on the GPU at rate ${lv.layout.rate})`
+    : `Zarr store, level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 chunks, rate ${lv.layout.rate})`;
   const how =
-    `Zarr store, level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 chunks, rate ${lv.layout.rate}), ` +
+    `${kind}, ` +
     `streamed: the chunks each surface needs, within ${(budgetBytes / 2 ** 20).toFixed(0)} MiB of GPU memory`;
   return { surface, how, rate: lv.layout.rate, notes: store.notes, fileName: `${input} level ${L}`, record };
 }

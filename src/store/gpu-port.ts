@@ -7,6 +7,7 @@ import { GpuMemoryMeter, meteredGpu } from '../gpu/memory-meter.ts';
 import { Isosurface } from '../isosurface/isosurface.ts';
 import type { IsosurfaceStats } from '../isosurface/types.ts';
 import { ChunkedVolume } from '../zfp/chunked-volume.ts';
+import { encoderFor, type ZfpEncoder } from '../zfp/encoder.ts';
 import { maxShardBytesFor } from '../zfp/gpu-stream.ts';
 import type { ChunkFetcher } from './fetch/chunk-fetcher.ts';
 import { StreamController, type StreamGpu } from './stream-controller.ts';
@@ -16,7 +17,11 @@ export interface ChunkedStreamGpu extends StreamGpu<ChunkedVolume, IsosurfaceSta
   readonly meter: GpuMemoryMeter;
 }
 
-export function chunkedGpu(gpu: GpuContext, meter = new GpuMemoryMeter()): ChunkedStreamGpu {
+/**
+ * The real GPU side. `encoder` (made on the same device) encodes the bricks
+ * of stores of lossless chunks into their slots; zfp stores need none.
+ */
+export function chunkedGpu(gpu: GpuContext, meter = new GpuMemoryMeter(), encoder?: ZfpEncoder): ChunkedStreamGpu {
   const view = meteredGpu(gpu, meter).gpu;
   const maxShardBytes = maxShardBytesFor(gpu.device);
   return {
@@ -26,18 +31,23 @@ export function chunkedGpu(gpu: GpuContext, meter = new GpuMemoryMeter()): Chunk
     },
     poolBytesFor: (layout, poolChunks) => ChunkedVolume.bytesFor(layout, poolChunks, maxShardBytes),
     createVolume: (layout, poolChunks) =>
-      ChunkedVolume.create(view, layout, { poolChunks: Math.min(poolChunks, ChunkedVolume.maxPoolChunks(view, layout)) }),
+      ChunkedVolume.create(view, layout, { poolChunks: Math.min(poolChunks, ChunkedVolume.maxPoolChunks(view, layout)), encoder }),
     createSurface: (volume, memoryBudgetBytes) => Isosurface.create(view, volume, { memoryBudgetBytes }),
   };
 }
 
+/** The encoder of a store of lossless chunks (float32 pipeline compiled), or undefined for a zfp store. */
+export async function storeEncoder(gpu: GpuContext, store: ZfpStore): Promise<ZfpEncoder | undefined> {
+  return store.source ? encoderFor(gpu.device) : undefined;
+}
+
 /** The controller over real GPU pools and surfaces, its port's meter counting what it holds. */
-export function createChunkStream(
+export async function createChunkStream(
   store: ZfpStore,
   fetcher: ChunkFetcher,
   gpu: GpuContext | ChunkedStreamGpu,
   budgetBytes: number,
 ): Promise<StreamController<ChunkedVolume, IsosurfaceStats, Isosurface>> {
-  const port = 'meter' in gpu ? gpu : chunkedGpu(gpu);
+  const port = 'meter' in gpu ? gpu : chunkedGpu(gpu, undefined, await storeEncoder(gpu, store));
   return StreamController.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budgetBytes);
 }

@@ -18,10 +18,9 @@
 // for it; openVolumeFile does the work. openVolumeBytes does both for callers
 // that cannot ask (the CLI: what is missing must come with the call).
 // Errors name the file.
-import { baseDevice } from '../gpu/memory-meter.ts';
 import { ZfpFormatError } from '../zfp/header.ts';
 import { loadZfpStream, type ZfpGpuStream } from '../zfp/gpu-stream.ts';
-import { ZfpEncoder } from '../zfp/encoder.ts';
+import { encoderFor, type ZfpEncoder } from '../zfp/encoder.ts';
 import { chooseRate, type RateChoice } from '../zfp/rate-choice.ts';
 import { errorMeterFor } from '../zfp/stream-error.ts';
 import type { DType } from '../core/dtype.ts';
@@ -96,19 +95,7 @@ export interface OpenOptions {
   maxStreamBytes?: number;
 }
 
-const encoders = new WeakMap<GPUDevice, Promise<ZfpEncoder>>();
-
-/** One encoder per device, created on first use. */
-export function encoderFor(device: GPUDevice): Promise<ZfpEncoder> {
-  const base = baseDevice(device); // shared by the device's metered views
-  let e = encoders.get(base);
-  if (!e) {
-    e = ZfpEncoder.create(base);
-    e.catch(() => encoders.delete(base));
-    encoders.set(base, e);
-  }
-  return e;
-}
+export { encoderFor } from '../zfp/encoder.ts';
 
 /** Rates (multiples of 1/64) whose header-less stream of `dims` is exactly `bytes` long. */
 /**

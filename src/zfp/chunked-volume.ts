@@ -31,7 +31,9 @@
 
 import { formatDims } from '../core/naming.ts';
 import { bufferLayout } from '../gpu/bindings.ts';
-import { openZfpStream, planZfpStream } from './format.ts';
+import { planZfpStream } from './format.ts';
+import type { ZfpEncoder } from './encoder.ts';
+import { openZfpStream, type ZfpStreamInfo } from './format.ts';
 import { maxShardBytesFor, type BlockSource } from './gpu-stream.ts';
 
 /** One level of a chunked zfp store, as the GPU side needs it (facts only, no UI wording). */
@@ -48,6 +50,13 @@ export interface ChunkLevelLayout {
   chunkBytes: number;
   /** For messages: the store and level, e.g. "http://host/bonsai.zarr level 1". */
   name: string;
+  /**
+   * What put() receives: 'zfp' (default) the chunk's stream as stored;
+   * 'float32' its C^3 values (x fastest), encoded on the GPU into the slot
+   * (stores of lossless chunks, src/store/zarr/source-store.ts). The slot
+   * holds the same zfp stream either way (chunkBytes).
+   */
+  arrivesAs?: 'zfp' | 'float32';
 }
 
 /** Chunk index = cx + gx * (cy + gy * cz) with (gx, gy, gz) = chunkGrid. */
@@ -92,6 +101,8 @@ interface PoolShard {
 export interface ChunkedVolumeOptions {
   /** Pool capacity in chunks. */
   poolChunks: number;
+  /** The encoder of chunks that arrive as values (layout.arrivesAs 'float32'), its float32 pipeline ready. */
+  encoder?: ZfpEncoder;
   /** Cap on one pool shard (default: the device's binding limit); tests use small values. */
   maxShardBytes?: number;
 }
@@ -125,15 +136,27 @@ export class ChunkedVolume implements BlockSource {
   private readonly slotsPerShard: number;
   private capacity = 0;
   private destroyed = false;
+  /** Chunks that arrive as values: their stream's plan, the encoder, and one upload buffer reused by every put (queue order keeps them apart). */
+  private readonly valuesIn: { info: ZfpStreamInfo; encoder: ZfpEncoder; input: GPUBuffer } | null = null;
 
   private constructor(
     readonly device: GPUDevice,
     readonly layout: ChunkLevelLayout,
     poolChunks: number,
     maxShardBytes: number,
+    encoder?: ZfpEncoder,
   ) {
     const { dims, chunkEdge: edge, chunkGrid, rate, chunkBytes, name } = layout;
     const planned = planZfpStream(`${name} chunk`, [edge, edge, edge], rate, true);
+    if (layout.arrivesAs === 'float32') {
+      if (!encoder) throw new ChunkError(`${name}: chunks that arrive as values need an encoder`);
+      const input = device.createBuffer({
+        label: `${name}.chunkValues`,
+        size: edge ** 3 * 4,
+        usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
+      });
+      this.valuesIn = { info: planned, encoder, input };
+    }
     this.chunkBlocks = edge / 4;
     this.headerBits = planned.payloadBitOffset;
     this.bitsPerBlock = planned.bitsPerBlock;
@@ -354,7 +377,7 @@ export class ChunkedVolume implements BlockSource {
     if (Math.min(opts.poolChunks, chunks) * (edge / 4) ** 3 >= 2 ** 32)
       fail(`a pool of ${opts.poolChunks} chunks of ${edge}^3 has more block ids than 32 bits hold`);
     if (chunkBytes * 8 >= 2 ** 32) fail(`a chunk of ${chunkBytes} bytes is too large to address in 32-bit bit offsets`);
-    return new ChunkedVolume(gpu.device, layout, opts.poolChunks, opts.maxShardBytes ?? maxShardBytesFor(gpu.device));
+    return new ChunkedVolume(gpu.device, layout, opts.poolChunks, opts.maxShardBytes ?? maxShardBytesFor(gpu.device), opts.encoder);
   }
 
   /**
@@ -368,7 +391,8 @@ export class ChunkedVolume implements BlockSource {
 
   /** Bytes of GPU memory held: the pool, the page table and the parameters. */
   get byteSize(): number {
-    return this.shards.reduce((n, s) => n + s.buffer.size, 0) + this.tables.size + (this.params?.size ?? 0);
+    const values = this.valuesIn?.input.size ?? 0;
+    return this.shards.reduce((n, s) => n + s.buffer.size, 0) + this.tables.size + (this.params?.size ?? 0) + values;
   }
 
   /** Bytes a pool of `poolChunks` chunks of this layout holds (the budget's estimate before one is made). */
@@ -376,7 +400,8 @@ export class ChunkedVolume implements BlockSource {
     const perShard = Math.max(1, Math.floor((maxShardBytes - 4) / layout.chunkBytes));
     const shards = Math.max(1, Math.ceil(poolChunks / perShard));
     const chunks = layout.chunkGrid[0] * layout.chunkGrid[1] * layout.chunkGrid[2];
-    return poolChunks * layout.chunkBytes + 4 * shards + 8 * chunks + PARAMS_STRIDE * (2 * shards - 1) + POOL_PARAMS_BYTES;
+    const values = layout.arrivesAs === 'float32' ? layout.chunkEdge ** 3 * 4 : 0;
+    return poolChunks * layout.chunkBytes + 4 * shards + 8 * chunks + PARAMS_STRIDE * (2 * shards - 1) + POOL_PARAMS_BYTES + values;
   }
 
   /** Same as byteSize (the name the store side uses for budget accounting). */
@@ -423,28 +448,11 @@ export class ChunkedVolume implements BlockSource {
     const at = this.chunkCoords(chunk);
     const where = `${this.layout.name} chunk (${at.join(', ')})`;
     const edge = this.layout.chunkEdge;
-    if (bytes.byteLength !== this.layout.chunkBytes) {
-      throw new ChunkError(
-        `${where}: ${bytes.byteLength} bytes, but a ${edge}^3 chunk at rate ${this.layout.rate} is ${this.layout.chunkBytes} bytes`,
-        at,
-      );
-    }
-    let info;
-    try {
-      info = openZfpStream(bytes, where);
-    } catch (e) {
-      throw new ChunkError((e as Error).message, at);
-    }
-    if (
-      !info.hasHeader ||
-      info.dims.some((n) => n !== edge) ||
-      info.bitsPerBlock !== this.info.bitsPerBlock ||
-      info.payloadBitOffset !== this.headerBits
-    ) {
-      throw new ChunkError(
-        `${where}: the chunk's zfp header says ${formatDims(info.dims)} at ${info.mode}; the level's chunks are ${edge}^3 at rate ${this.layout.rate}`,
-        at,
-      );
+    if (this.valuesIn) {
+      if (bytes.byteLength !== edge ** 3 * 4)
+        throw new ChunkError(`${where}: ${bytes.byteLength} bytes of values, a ${edge}^3 float32 chunk has ${edge ** 3 * 4}`, at);
+    } else {
+      this.checkStream(bytes, where, at);
     }
     // A store's chunks never change while it is open: different bytes under
     // a chunk index read before mean the store changed, and a surface would
@@ -470,15 +478,46 @@ export class ChunkedVolume implements BlockSource {
       this.slotOf.set(chunk, slot);
     }
     const shard = this.shards.find((s) => slot! >= s.firstSlot && slot! < s.endSlot)!;
-    this.device.queue.writeBuffer(
-      shard.buffer,
-      (slot - shard.firstSlot) * this.layout.chunkBytes,
-      bytes.buffer,
-      bytes.byteOffset,
-      bytes.byteLength,
-    );
+    const byteOffset = (slot - shard.firstSlot) * this.layout.chunkBytes;
+    if (this.valuesIn) {
+      const { info, encoder, input } = this.valuesIn;
+      this.device.queue.writeBuffer(input, 0, bytes.buffer, bytes.byteOffset, bytes.byteLength);
+      const commands = this.device.createCommandEncoder({ label: `${this.layout.name}.encodeChunk` });
+      encoder.encodeSlot(commands, { input, dtype: 'float32', info, target: shard.buffer, byteOffset });
+      this.device.queue.submit([commands.finish()]);
+    } else {
+      this.device.queue.writeBuffer(shard.buffer, byteOffset, bytes.buffer, bytes.byteOffset, bytes.byteLength);
+    }
     this.writeTables(chunk, slot);
     this.logChange(slot, chunk);
+  }
+
+  /** Throws a ChunkError unless `bytes` are a zfp fixed-rate stream of one chunk of this layout. */
+  private checkStream(bytes: Uint8Array, where: string, at: [number, number, number]): void {
+    const edge = this.layout.chunkEdge;
+    if (bytes.byteLength !== this.layout.chunkBytes) {
+      throw new ChunkError(
+        `${where}: ${bytes.byteLength} bytes, but a ${edge}^3 chunk at rate ${this.layout.rate} is ${this.layout.chunkBytes} bytes`,
+        at,
+      );
+    }
+    let info;
+    try {
+      info = openZfpStream(bytes, where);
+    } catch (e) {
+      throw new ChunkError((e as Error).message, at);
+    }
+    if (
+      !info.hasHeader ||
+      info.dims.some((n) => n !== edge) ||
+      info.bitsPerBlock !== this.info.bitsPerBlock ||
+      info.payloadBitOffset !== this.headerBits
+    ) {
+      throw new ChunkError(
+        `${where}: the chunk's zfp header says ${formatDims(info.dims)} at ${info.mode}; the level's chunks are ${edge}^3 at rate ${this.layout.rate}`,
+        at,
+      );
+    }
   }
 
   /** Page-table entry of `chunk` and slot-table entry of `slot` (each NONE to clear). */
@@ -575,6 +614,7 @@ export class ChunkedVolume implements BlockSource {
     for (const s of this.shards) s.buffer.destroy();
     this.tables.destroy();
     this.params?.destroy();
+    this.valuesIn?.input.destroy();
   }
 }
 

@@ -17,6 +17,7 @@ import { formatDims, type Dims } from '../core/naming.ts';
 import { BindGroupCache } from '../gpu/bind-group-cache.ts';
 import { binding, refSize, type GpuBufferRef } from '../gpu/buffer-ref.ts';
 import { dispatchWorkgroups } from '../gpu/dispatch.ts';
+import { baseDevice } from '../gpu/memory-meter.ts';
 import { bindGroupLayout, createComputePipeline } from '../gpu/pipeline-cache.ts';
 import { UniformSlots } from '../gpu/uniform-slots.ts';
 import { planZfpStream, ZfpFormatError, type ZfpStreamInfo } from './format.ts';
@@ -36,6 +37,34 @@ export interface EncodeArgs {
   /** Target stream from createStream(); `shard` is the one written. */
   stream: ZfpGpuStream;
   shard: number;
+  timestampWrites?: GPUComputePassTimestampWrites;
+}
+
+/** One chunk encoded into its slot of a larger buffer (encodeSlot). */
+export interface SlotEncodeArgs {
+  /** The chunk's values (little endian, x fastest), at least dims' count of `dtype`. STORAGE usage. */
+  input: GpuBufferRef;
+  dtype: DType;
+  /** The chunk's stream: planZfpStream(name, [C, C, C], rate, true). */
+  info: ZfpStreamInfo;
+  /** Where the stream goes: STORAGE | COPY_DST, the slot at `byteOffset` (a multiple of 8), info.paddedBytes long. */
+  target: GPUBuffer;
+  byteOffset: number;
+}
+
+interface DispatchRecord {
+  input: GpuBufferRef;
+  output: GPUBufferBinding;
+  dims: readonly number[];
+  dtype: DType;
+  blockGrid: readonly number[];
+  bitsPerBlock: number;
+  firstBlock: number;
+  endBlock: number;
+  bitBase: number;
+  inputZPlane: number;
+  header: { bits: number; bytes: Uint8Array } | null;
+  headerWord: number;
   timestampWrites?: GPUComputePassTimestampWrites;
 }
 
@@ -137,32 +166,94 @@ export class ZfpEncoder {
     if (refSize(a.input) < needBytes)
       throw new Error(`ZfpEncoder: the input has ${refSize(a.input)} bytes, shard ${a.shard} needs ${needBytes}`);
 
+    let header: { bits: number; bytes: Uint8Array } | null = null;
+    if (info.hasHeader && shard.firstBlock === 0) header = writeZfpHeader(info.dims, info.bitsPerBlock);
+    encoder.clearBuffer(shard.buffer);
+    this.#dispatch(encoder, pipeline, {
+      input: a.input,
+      output: { buffer: shard.buffer },
+      dims: info.dims,
+      dtype: a.dtype,
+      blockGrid: info.blockGrid,
+      bitsPerBlock: info.bitsPerBlock,
+      firstBlock: shard.firstBlock,
+      endBlock: shard.endBlock,
+      bitBase: shard.bitBase,
+      inputZPlane: a.inputZPlane,
+      header,
+      headerWord: 0,
+      timestampWrites: a.timestampWrites,
+    });
+  }
+
+  /**
+   * Records the encoding of one C^3 chunk into its place in a larger buffer
+   * (a pool slot of src/zfp/chunked-volume.ts): the slot's bytes are
+   * cleared, then the chunk is written there as the stream zfpy writes for
+   * it (header included), nothing else in `a.target` touched. The target is
+   * bound from the 256-byte boundary below the slot, so the bit offsets
+   * stay small whatever the slot's place. Needs the pipeline of `a.dtype`.
+   */
+  encodeSlot(encoder: GPUCommandEncoder, a: SlotEncodeArgs): void {
+    const pipeline = this.ready.get(a.dtype);
+    if (!pipeline) throw new Error(`ZfpEncoder: no pipeline for ${a.dtype} yet: await encoder.prepare('${a.dtype}') first`);
+    const { info, byteOffset } = a;
+    if (byteOffset % 8 !== 0 || info.paddedBytes % 8 !== 0 || byteOffset + info.paddedBytes > a.target.size)
+      throw new Error(`ZfpEncoder: a slot of ${info.paddedBytes} bytes at ${byteOffset} does not fit its buffer of ${a.target.size}`);
+    const blocks = info.blockGrid[0] * info.blockGrid[1] * info.blockGrid[2];
+    const values = info.dims[0] * info.dims[1] * info.dims[2];
+    if (refSize(a.input) < values * DTYPE_BYTES[a.dtype])
+      throw new Error(`ZfpEncoder: the input has ${refSize(a.input)} bytes, a ${formatDims(info.dims)} ${a.dtype} chunk needs more`);
+    const align = this.device.limits.minStorageBufferOffsetAlignment;
+    const bindOffset = Math.floor(byteOffset / align) * align;
+    const lead = byteOffset - bindOffset;
+    const header = info.hasHeader ? writeZfpHeader(info.dims, info.bitsPerBlock) : null;
+    encoder.clearBuffer(a.target, byteOffset, info.paddedBytes);
+    this.#dispatch(encoder, pipeline, {
+      input: a.input,
+      output: { buffer: a.target, offset: bindOffset, size: lead + info.paddedBytes },
+      dims: info.dims,
+      dtype: a.dtype,
+      blockGrid: info.blockGrid,
+      bitsPerBlock: info.bitsPerBlock,
+      firstBlock: 0,
+      endBlock: blocks,
+      bitBase: lead * 8 + info.payloadBitOffset,
+      inputZPlane: 0,
+      header,
+      headerWord: lead / 4,
+    });
+  }
+
+  #dispatch(encoder: GPUCommandEncoder, pipeline: GPUComputePipeline, d: DispatchRecord): void {
     const header = new Uint32Array(8);
     let headerWords = 0;
-    if (info.hasHeader && shard.firstBlock === 0) {
-      const h = writeZfpHeader(info.dims, info.bitsPerBlock);
-      headerWords = Math.ceil(h.bits / 32);
-      new Uint8Array(header.buffer).set(h.bytes);
+    if (d.header) {
+      headerWords = Math.ceil(d.header.bits / 32);
+      new Uint8Array(header.buffer).set(d.header.bytes);
     }
     const record = new Uint32Array([
-      ...info.dims,
-      DTYPE_CODE[a.dtype],
-      ...info.blockGrid,
-      info.bitsPerBlock,
-      shard.firstBlock,
-      shard.endBlock,
-      shard.bitBase,
-      a.inputZPlane,
+      ...d.dims,
+      DTYPE_CODE[d.dtype],
+      ...d.blockGrid,
+      d.bitsPerBlock,
+      d.firstBlock,
+      d.endBlock,
+      d.bitBase,
+      d.inputZPlane,
       headerWords,
-      0,
+      d.headerWord,
       0,
       0,
       ...header,
     ]);
     const params = this.uniforms.get(record);
+    const out = d.output;
     const group = this.groups
-      .ref(a.input)
-      .key(shard.buffer)
+      .ref(d.input)
+      .key(out.buffer)
+      .key(out.offset ?? 0)
+      .key(out.size ?? -1)
       .key(params.buffer)
       .key(params.offset!)
       .get(() =>
@@ -170,19 +261,18 @@ export class ZfpEncoder {
           label: 'ZfpEncoder.bindGroup',
           layout: this.groupLayout,
           entries: [
-            { binding: 0, resource: binding(a.input) },
-            { binding: 1, resource: { buffer: shard.buffer } },
+            { binding: 0, resource: binding(d.input) },
+            { binding: 1, resource: out },
             { binding: 2, resource: params },
           ],
         }),
       );
-    encoder.clearBuffer(shard.buffer);
     const desc: GPUComputePassDescriptor = { label: 'ZfpEncoder.encode' };
-    if (a.timestampWrites) desc.timestampWrites = a.timestampWrites;
+    if (d.timestampWrites) desc.timestampWrites = d.timestampWrites;
     const pass = encoder.beginComputePass(desc);
     pass.setPipeline(pipeline);
     pass.setBindGroup(0, group);
-    dispatchWorkgroups(pass, Math.ceil((shard.endBlock - shard.firstBlock) / 64));
+    dispatchWorkgroups(pass, Math.ceil((d.endBlock - d.firstBlock) / 64));
     pass.end();
   }
 
@@ -288,4 +378,18 @@ export class ZfpEncoder {
     this.uniforms.destroy();
     this.groups.clear();
   }
+}
+
+const encoders = new WeakMap<GPUDevice, Promise<ZfpEncoder>>();
+
+/** One encoder per device (shared by its metered views), created on first use. */
+export function encoderFor(device: GPUDevice): Promise<ZfpEncoder> {
+  const base = baseDevice(device);
+  let e = encoders.get(base);
+  if (!e) {
+    e = ZfpEncoder.create(base);
+    e.catch(() => encoders.delete(base));
+    encoders.set(base, e);
+  }
+  return e;
 }

@@ -92,7 +92,7 @@ function checkBitsPerBlock(fileName: string, bits: number, rateText: string): vo
   if (bits > 0x8000) fail(fileName, `${rateText} gives ${bits} bits per block; zfp allows at most 32768`);
 }
 
-function checkRate(fileName: string, rate: number, where: string): void {
+export function checkRate(fileName: string, rate: number, where: string): void {
   if (!Number.isFinite(rate) || rate <= 0) fail(fileName, `the rate ${where} (${rate}) is not a positive number of bits per value`);
 }
 

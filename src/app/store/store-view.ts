@@ -17,7 +17,7 @@ import type { ChunkStreamController } from '../../store/pinned-level.ts';
 import type { StreamProgress } from '../../store/stream-controller.ts';
 import { StoreError } from '../../store/zarr/errors.ts';
 import { HttpStore } from '../../store/zarr/http-store.ts';
-import { openZfpStore, type ZfpStore } from '../../store/zarr/open-store.ts';
+import { openStore, type ZfpStore } from '../../store/zarr/open-store.ts';
 import { MeteredStore } from '../../store/zarr/stores.ts';
 import { chooseIsovalue } from '../iso-choice.ts';
 import type { LoadedVolume } from '../loading/loader.ts';
@@ -117,7 +117,7 @@ export class StoreView {
     this.#line(`Opening ${url}…`);
     let f: ChunkFetcher;
     try {
-      store = await openZfpStore(metered, url);
+      store = await openStore(metered, url);
       f = new ChunkFetcher(store, { maxInFlight: 8 });
       controller = await createChunkStream(store, f, this.d.gpu(), this.d.budgetBytes());
     } catch (e) {

@@ -27,10 +27,12 @@ export const benchCommand: CliCommand = {
   name: 'bench',
   summary: 'isosurface benchmark: random / sweep-up / sweep-down isovalues, GPU ms and hit rates per mode',
   usage:
-    'bench IN [--modes random,sweep-up,sweep-down] [--count N] [--seed S] [--range lo,hi] [--rate R | --stream-budget MB] [--cache-budget MB] [--level L] [--deadline S] (--level, --deadline: IN a Zarr store URL or folder)',
+    'bench IN [--modes random,sweep-up,sweep-down] [--count N] [--seed S] [--range lo,hi] [--rate R | --stream-budget MB] [--cache-budget MB] [--level L] [--deadline S] [--time T] [--channel C] (--level, --deadline, --time, --channel: IN a Zarr store URL or folder; --rate for a store: its lossless chunks\' GPU rate, default 8)',
   options: {
     level: { type: 'string' },
     deadline: { type: 'string' },
+    time: { type: 'string' },
+    channel: { type: 'string' },
     modes: { type: 'string' },
     count: { type: 'string' },
     seed: { type: 'string' },
@@ -55,6 +57,8 @@ export const benchCommand: CliCommand = {
       level: numberOption(args, 'level'),
       budget,
       deadlineMs: deadlineOption(args),
+      time: numberOption(args, 'time'),
+      channel: numberOption(args, 'channel'),
       maxStreamBytes: streamBudgetOption(args),
     });
     ctx.log(`${input}: ${volume.how}`);

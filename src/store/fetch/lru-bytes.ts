@@ -1,17 +1,20 @@
-/** A least-recently-used map bounded in bytes (the CPU-side cache of compressed chunks). */
-export class ByteLru<K> {
-  #map = new Map<K, Uint8Array>();
+/** A least-recently-used map bounded in bytes (the CPU-side caches of compressed chunks and of decoded source chunks). */
+export class ByteLru<K, V = Uint8Array> {
+  #map = new Map<K, V>();
   #bytes = 0;
-  constructor(readonly capacityBytes: number) {}
+  constructor(
+    readonly capacityBytes: number,
+    private readonly sizeOf: (value: V) => number = (v) => (v as unknown as Uint8Array).length,
+  ) {}
   get bytes(): number {
     return this.#bytes;
   }
   get size(): number {
     return this.#map.size;
   }
-  get(key: K): Uint8Array | undefined {
+  get(key: K): V | undefined {
     const v = this.#map.get(key);
-    if (v) {
+    if (v !== undefined) {
       this.#map.delete(key);
       this.#map.set(key, v);
     }
@@ -20,19 +23,19 @@ export class ByteLru<K> {
   has(key: K): boolean {
     return this.#map.has(key);
   }
-  set(key: K, value: Uint8Array): void {
-    if (value.length > this.capacityBytes) return;
+  set(key: K, value: V): void {
+    if (this.sizeOf(value) > this.capacityBytes) return;
     const old = this.#map.get(key);
-    if (old) {
-      this.#bytes -= old.length;
+    if (old !== undefined) {
+      this.#bytes -= this.sizeOf(old);
       this.#map.delete(key);
     }
     this.#map.set(key, value);
-    this.#bytes += value.length;
+    this.#bytes += this.sizeOf(value);
     for (const [k, v] of this.#map) {
       if (this.#bytes <= this.capacityBytes) break;
       this.#map.delete(k);
-      this.#bytes -= v.length;
+      this.#bytes -= this.sizeOf(v);
     }
   }
   clear(): void {

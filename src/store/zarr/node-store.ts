@@ -1,6 +1,6 @@
 // The CLI's and tests' store for a location: an http(s) URL through our
 // HttpStore (failures in the words of what was observed; retried by
-// openZfpStore), anything else a folder through @zarrita/storage's
+// openStore), anything else a folder through @zarrita/storage's
 // FileSystemStore (Node only; the page uses stores.ts and HttpStore).
 import type { AsyncReadable } from '@zarrita/storage';
 import FileSystemStore from '@zarrita/storage/fs';

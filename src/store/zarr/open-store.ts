@@ -11,8 +11,12 @@ import { bitsPerBlockForRate, fixedRateStreamBytes } from '../../zfp/format.ts';
 import { MAX_VERTEX_VOXELS } from '../../isosurface/vertex-format.ts';
 import { parseZfpHeader, ZFP_LONG_HEADER_BITS, ZFP_SHORT_HEADER_BITS } from '../../zfp/header.ts';
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
+export { chunkCoords, zfpChunkBytes } from './metadata.ts';
 import { describeTransportError, RequestFailedError, StoreError } from './errors.ts';
 import { type RetryCounters, type RetryPolicy, RetryingStore } from './retrying-store.ts';
+import { chunkCoords, isObject, type Json, levelPaths, voxelSizeOf, zfpChunkBytes } from './metadata.ts';
+import { openSourceStore } from './open-source.ts';
+import type { SourceInfo } from './source-store.ts';
 import { MeteredStore, type StoreMeter } from './stores.ts';
 import { registerZfpyPassThrough, ZFPY_CODEC, ZFPY_FIXED_RATE_MODE } from './zfpy-passthrough.ts';
 
@@ -45,6 +49,8 @@ export interface ZfpStore {
   valueRange: [number, number] | null;
   /** Things a user should know (an unfinished store, no range arrays). */
   notes: string[];
+  /** A store of lossless chunks (compressed on the GPU as bricks arrive): its format, codecs, type, axes, rate; null for zfp stores. */
+  source: SourceInfo | null;
   /** Every byte and request through the store (metadata included; every try of a retried request counts). */
   meter: StoreMeter;
   /** Tries after failures, requests that failed for good, faults seen (retrying-store.ts). */
@@ -55,30 +61,18 @@ export interface ZfpStore {
   readChunk(level: number, chunk: ChunkIndex, options?: GetOptions): Promise<Uint8Array>;
   /** Whether readChunk's bytes stand for a chunk absent from the store (nothing was transferred for them). */
   isAbsent(bytes: Uint8Array): boolean;
+  /** A store of lossless chunks: [min, max] of the source values (as float32) of the level's bricks read so far, or null. */
+  sourceValueRange?(level: number): [number, number] | null;
   /** [min, max] per chunk (chunk index order), or null when the store has no range arrays. */
   readRanges(level: number, options?: GetOptions): Promise<Float32Array | null>;
 }
 
-type Json = Record<string, unknown>;
-const isObject = (v: unknown): v is Json => typeof v === 'object' && v !== null && !Array.isArray(v);
 /** Sane limits for sizes read from a store (hostile metadata must not allocate). */
 const MAX_EDGE = 2 ** 31;
 const MAX_CHUNK_EDGE = 1024;
 /** 2^26 chunks: 64^3 chunks of a 2^44-voxel (64 TiB float32) level; the range array is then 512 MiB. */
 const MAX_CHUNKS = 2 ** 26;
 const CONVERT_HINT = 'convert it with `npm run convert -- STORE --out new.zarr` (numcodecs.zfpy fixed rate)';
-
-export function chunkCoords(layout: ChunkLevelLayout, chunk: ChunkIndex): [number, number, number] {
-  const [gx, gy] = layout.chunkGrid;
-  return [chunk % gx, Math.floor(chunk / gx) % gy, Math.floor(chunk / (gx * gy))];
-}
-
-/** Bytes of one C^3 chunk as zfpy writes it at this rate (header + blocks, padded to 64 bits). */
-export function zfpChunkBytes(chunkEdge: number, rate: number): number {
-  const bits = bitsPerBlockForRate(rate);
-  const headerBits = bits > 2048 ? ZFP_LONG_HEADER_BITS : ZFP_SHORT_HEADER_BITS;
-  return fixedRateStreamBytes((chunkEdge / 4) ** 3, bits, headerBits);
-}
 
 function codecOf(name: string, meta: Json): { rate: number; shardChunks: number } {
   const codecs = meta.codecs as Json[] | undefined;
@@ -113,12 +107,12 @@ function codecOf(name: string, meta: Json): { rate: number; shardChunks: number 
   return { rate, shardChunks };
 }
 
-/** Caches JSON documents (zarr.json) so that zarrita and our checks read each once. */
-class MetadataMemo implements AsyncReadable {
+/** Caches JSON documents (zarr.json, .zarray, .zattrs, .zgroup) so that zarrita and our checks read each once. */
+export class MetadataMemo implements AsyncReadable {
   #memo = new Map<string, Promise<Uint8Array | undefined>>();
   constructor(readonly inner: RetryingStore) {}
   get(key: AbsolutePath, opts?: GetOptions): Promise<Uint8Array | undefined> {
-    if (!key.endsWith('zarr.json')) return this.inner.get(key, opts);
+    if (!/(zarr\.json|\.zarray|\.zattrs|\.zgroup)$/.test(key)) return this.inner.get(key, opts);
     let hit = this.#memo.get(key);
     if (!hit) {
       hit = this.inner.get(key, opts);
@@ -131,38 +125,19 @@ class MetadataMemo implements AsyncReadable {
     return this.inner.getRange(...args);
   }
   async json(key: AbsolutePath): Promise<Json> {
+    const got = await this.jsonOrNull(key);
+    if (!got) throw new StoreError('not-found', `${key} is missing`);
+    return got;
+  }
+  async jsonOrNull(key: AbsolutePath): Promise<Json | null> {
     const bytes = await this.get(key);
-    if (!bytes) throw new StoreError('not-found', `${key} is missing`);
+    if (!bytes) return null;
     try {
       return JSON.parse(new TextDecoder().decode(bytes)) as Json;
     } catch (e) {
       throw new StoreError('corrupt', `${key} is not JSON (${(e as Error).message})`);
     }
   }
-}
-
-function levelPaths(attrs: Json): string[] | null {
-  const ome = (isObject(attrs.ome) ? attrs.ome : attrs) as Json;
-  const ms = ome.multiscales as Json[] | undefined;
-  const datasets = Array.isArray(ms) && isObject(ms[0]) ? (ms[0].datasets as Json[]) : undefined;
-  if (Array.isArray(datasets) && datasets.length > 0) return datasets.map((d) => String(d.path));
-  const ours = attrs.zfpzarr as Json | undefined;
-  if (isObject(ours) && Array.isArray(ours.levels)) return (ours.levels as Json[]).map((l) => String(l.path));
-  return null;
-}
-
-function voxelSizeOf(attrs: Json): [number, number, number] {
-  const ours = attrs.zfpzarr as Json | undefined;
-  const v = isObject(ours) ? (ours.voxel_size as number[] | undefined) : undefined;
-  if (Array.isArray(v) && v.length === 3 && v.every((x) => Number.isFinite(x) && x > 0)) return [v[0], v[1], v[2]];
-  const ms = ((isObject(attrs.ome) ? attrs.ome : attrs) as Json).multiscales as Json[] | undefined;
-  const t = Array.isArray(ms) ? (((ms[0]?.datasets as Json[])?.[0]?.coordinateTransformations as Json[]) ?? []) : [];
-  const scale = t.find((x) => x.type === 'scale')?.scale as number[] | undefined;
-  if (Array.isArray(scale) && scale.length >= 3) {
-    const [z, y, x] = scale.slice(-3);
-    if ([x, y, z].every((s) => Number.isFinite(s) && s > 0)) return [x, y, z];
-  }
-  return [1, 1, 1];
 }
 
 async function openLevel(
@@ -268,28 +243,72 @@ export function checkChunk(layout: ChunkLevelLayout, chunk: ChunkIndex, bytes: U
 export interface OpenStoreOptions {
   /** How requests are tried again (retrying-store.ts; tests shorten the waits). */
   retry?: RetryPolicy;
+  /** Stores of lossless chunks: the GPU's zfp rate for their bricks (default DEFAULT_SOURCE_RATE, 8). zfp stores keep their own. */
+  rate?: number;
+  /** Stores with a time or channel axis: which one is shown (default 0). */
+  time?: number;
+  channel?: number;
+  /** Stores of lossless chunks: CPU bytes of decoded source chunks kept while neighbouring bricks need them (default 256 MiB). */
+  sourceCacheBytes?: number;
 }
 
-/** Opens the store; `name` is for messages (its URL or folder). Rejects with StoreError. */
-export async function openZfpStore(store: AsyncReadable, name: string, options: OpenStoreOptions = {}): Promise<ZfpStore> {
+/**
+ * Opens the store; `name` is for messages (its URL or folder). A Zarr v3
+ * store whose chunks are numcodecs.zfpy fixed-rate streams goes to the GPU
+ * as stored; any other Zarr v2 or v3 array or OME-Zarr multiscale group is
+ * read as a store of lossless chunks (source-store.ts), compressed on the
+ * GPU as bricks arrive. Rejects with StoreError.
+ */
+export async function openStore(store: AsyncReadable, name: string, options: OpenStoreOptions = {}): Promise<ZfpStore> {
   registerZfpyPassThrough();
   const metered = store instanceof MeteredStore ? store : new MeteredStore(store);
   const retrying = new RetryingStore(metered, options.retry);
   const mem = new MetadataMemo(retrying);
-  let rootJson: Json;
-  try {
-    rootJson = await mem.json('/zarr.json');
-  } catch (e) {
-    if (e instanceof StoreError && e.kind === 'not-found')
-      throw new StoreError('not-found', `${name}: no zarr.json at its root (HTTP 404 or no such folder): not a Zarr v3 store`);
-    if (e instanceof StoreError && e.kind === 'corrupt') throw new StoreError('corrupt', `${name}: ${e.message}`);
-    throw describeTransportError(e, name);
+  const named = async (key: AbsolutePath) => {
+    try {
+      return await mem.jsonOrNull(key);
+    } catch (e) {
+      if (e instanceof StoreError && e.kind === 'corrupt') throw new StoreError('corrupt', `${name}: ${e.message}`);
+      throw describeTransportError(e, name);
+    }
+  };
+  const rootJson = await named('/zarr.json');
+  if (!rootJson) {
+    const zarray = await named('/.zarray');
+    const zgroup = zarray ? null : await named('/.zgroup');
+    if (!zarray && !zgroup)
+      throw new StoreError('not-found', `${name}: no zarr.json, .zgroup or .zarray at its root (HTTP 404 or no such folder): not a Zarr store`);
+    const attrs = (await named('/.zattrs')) ?? {};
+    return openSourceStore({ mem, metered, retrying }, name, 2, zarray ? 'array' : 'group', attrs, options);
   }
   if (rootJson.zarr_format !== 3)
-    throw new StoreError(
-      'not-a-store',
-      `${name}: zarr_format ${String(rootJson.zarr_format)}; only Zarr v3 stores are read (convert a v2 store with npm run convert -- STORE --out new.zarr)`,
-    );
+    throw new StoreError('not-a-store', `${name}: its zarr.json says zarr_format ${String(rootJson.zarr_format)}, not 3`);
+  const attrs = (isObject(rootJson.attributes) ? rootJson.attributes : {}) as Json;
+  const kind = rootJson.node_type === 'array' ? 'array' : 'group';
+  const firstPath = kind === 'array' ? '' : levelPaths(attrs)?.[0];
+  if (firstPath === undefined) throw new StoreError('not-a-store', `${name}: a Zarr group without OME-Zarr multiscales or zfpzarr levels`);
+  const first = kind === 'array' ? rootJson : await named(`/${firstPath}/zarr.json` as AbsolutePath);
+  if (first && !isZfpArray(first)) return openSourceStore({ mem, metered, retrying }, name, 3, kind, attrs, options);
+  return openZfpLevels({ mem, metered, retrying }, name, rootJson);
+}
+
+/** Whether a v3 array's chunks are numcodecs.zfpy streams (inside shards or not). */
+function isZfpArray(meta: Json): boolean {
+  const codecs = (Array.isArray(meta.codecs) ? meta.codecs : []) as Json[];
+  return codecs.some(
+    (c) =>
+      c?.name === ZFPY_CODEC ||
+      (c?.name === 'sharding_indexed' && ((c.configuration as Json)?.codecs as Json[] | undefined)?.some((i) => i?.name === ZFPY_CODEC)),
+  );
+}
+
+interface StoreLayers {
+  mem: MetadataMemo;
+  metered: MeteredStore;
+  retrying: RetryingStore;
+}
+
+async function openZfpLevels({ mem, metered, retrying }: StoreLayers, name: string, rootJson: Json): Promise<ZfpStore> {
   const levels: StoreLevel[] = [];
   const notes: string[] = [];
   let attrs: Json = {};
@@ -351,6 +370,7 @@ export async function openZfpStore(store: AsyncReadable, name: string, options: 
     name,
     levels,
     notes,
+    source: null,
     meter: metered.meter,
     retries: retrying.counters,
     metadataBytes: metered.meter.bytes,

@@ -10,7 +10,7 @@ import { join } from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
 import { assembleLevelStream } from '../../../src/store/assemble.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
-import { openZfpStore } from '../../../src/store/zarr/open-store.ts';
+import { openStore } from '../../../src/store/zarr/open-store.ts';
 import { sharedData } from '../../helpers/python.ts';
 import { convert, converterPython } from './stores.ts';
 
@@ -25,7 +25,7 @@ describe('assembleLevelStream', () => {
   ])('rate %s, chunk %i: level 0 equals zfpy on the whole input', async (rate, chunk) => {
     const path = join(work, `neghip-${rate}-${chunk}.zarr`);
     convert('volumes/neghip_66x66x66_uint8.raw', path, ['--chunk', String(chunk), '--rate', rate, '--levels', '2']);
-    const s = await openZfpStore(storeForLocation(path), path);
+    const s = await openStore(storeForLocation(path), path);
     {
       const level = 0;
       const L = s.levels[level];

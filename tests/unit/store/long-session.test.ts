@@ -15,7 +15,7 @@ import { Isosurface } from '../../../src/isosurface/isosurface.ts';
 import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
 import { createChunkStream } from '../../../src/store/gpu-port.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
-import { openZfpStore } from '../../../src/store/zarr/open-store.ts';
+import { openStore } from '../../../src/store/zarr/open-store.ts';
 import { mulberry32 } from '../../../src/util/random.ts';
 import { openDefaultVolume } from '../../../src/volume/open-volume.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
@@ -36,7 +36,7 @@ beforeAll(() => {
 afterAll(() => rmSync(work, { recursive: true, force: true }));
 
 async function openStream(gpu: GpuContext, at: string) {
-  const store = await openZfpStore(storeForLocation(at), at);
+  const store = await openStore(storeForLocation(at), at);
   const fetcher = new ChunkFetcher(store, { maxInFlight: 4, cacheBytes: CPU_CACHE });
   const c = await createChunkStream(store, fetcher, gpu, BUDGET);
   const errors: string[] = [];

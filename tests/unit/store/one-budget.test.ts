@@ -17,7 +17,7 @@ import { IsosurfaceBudgetError } from '../../../src/isosurface/types.ts';
 import { assembleLevelStream } from '../../../src/store/assemble.ts';
 import { openStoreInput } from '../../../src/store/cli-input.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
-import { openZfpStore } from '../../../src/store/zarr/open-store.ts';
+import { openStore } from '../../../src/store/zarr/open-store.ts';
 import { loadZfpStream } from '../../../src/zfp/gpu-stream.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { countBuffers } from '../../helpers/gpu-memory.ts';
@@ -37,7 +37,7 @@ describe('one budget for a store and in-core', () => {
   gpuTest(
     'a store level holds at most 10% more than in-core for the same surfaces; 300 MB fits; gpuBytes = the wrapper',
     async ({ gpu }) => {
-      const store = await openZfpStore(storeForLocation(path), path);
+      const store = await openStore(storeForLocation(path), path);
       const L = store.levels[0];
       const chunks = await Promise.all(Array.from({ length: L.chunkCount }, (_, i) => store.readChunk(0, i)));
       const whole = assembleLevelStream(L.layout, (c) => chunks[c]);

@@ -9,13 +9,13 @@ import { HttpStore } from '../../../src/store/zarr/http-store.ts';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import { StoreError } from '../../../src/store/zarr/errors.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
-import { openZfpStore, type ZfpStore } from '../../../src/store/zarr/open-store.ts';
+import { openStore, type ZfpStore } from '../../../src/store/zarr/open-store.ts';
 import { converterPython, convert, zarrPythonStore } from './stores.ts';
 
 const work = mkdtempSync(join(tmpdir(), 'store-open-'));
 const plain = join(work, 'neghip.zarr');
 const sharded = join(work, 'neghip-shard.zarr');
-const open = async (path: string) => openZfpStore(storeForLocation(path), path);
+const open = async (path: string) => openStore(storeForLocation(path), path);
 
 async function refusal(p: Promise<unknown>): Promise<StoreError> {
   const e = await p.then(
@@ -32,7 +32,7 @@ beforeAll(() => {
 }, 900_000);
 afterAll(() => rmSync(work, { recursive: true, force: true }));
 
-describe('openZfpStore', () => {
+describe('openStore', () => {
   it('reads the levels of a converted store and every chunk as stored', async () => {
     const s = await open(plain);
     expect(s.levels.map((l) => l.layout.dims)).toEqual([
@@ -166,10 +166,10 @@ print(json.dumps(zarr.open_array(sys.argv[1], mode='r', path='ranges/1')[:].resh
 
     it('404, HTTP errors and an unreachable host are messages naming the store and what was observed', async () => {
       const url404 = `${base}/none.zarr`;
-      expect((await refusal(openZfpStore(new HttpStore(url404), url404))).message).toMatch(/none.zarr: no zarr.json at its root/);
+      expect((await refusal(openStore(new HttpStore(url404), url404))).message).toMatch(/none.zarr: no zarr.json at its root/);
       const url403 = `${base}/forbidden/a.zarr`;
       // a 403 is an answer: refused at once, not retried
-      const forbidden = await refusal(openZfpStore(new HttpStore(url403), url403));
+      const forbidden = await refusal(openStore(new HttpStore(url403), url403));
       expect(forbidden.message).toMatch(/a.zarr: GET \/zarr.json: HTTP 403 Forbidden$/);
       // a port nothing listens on: a host that never answered gets a few quick tries, then the cause
       const gone = createServer();
@@ -177,7 +177,7 @@ print(json.dumps(zarr.open_array(sys.argv[1], mode='r', path='ranges/1')[:].resh
       const port = (gone.address() as { port: number }).port;
       await new Promise<void>((r) => gone.close(() => r()));
       const closed = `http://127.0.0.1:${port}/x.zarr`;
-      const e = await refusal(openZfpStore(new HttpStore(closed), closed, { retry: { firstDelayMs: 1 } }));
+      const e = await refusal(openStore(new HttpStore(closed), closed, { retry: { firstDelayMs: 1 } }));
       expect(e.message).toMatch(/x.zarr: GET \/zarr.json: the connection was refused .*, 3 tries over/);
     });
   });

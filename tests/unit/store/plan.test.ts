@@ -9,7 +9,7 @@ import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import { chunksNeeded, nearestFirst, neighbourhoodRanges } from '../../../src/store/plan.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
-import { openZfpStore } from '../../../src/store/zarr/open-store.ts';
+import { openStore } from '../../../src/store/zarr/open-store.ts';
 import { convert, converterPython } from './stores.ts';
 
 const work = mkdtempSync(join(tmpdir(), 'store-plan-'));
@@ -57,7 +57,7 @@ afterAll(() => rmSync(work, { recursive: true, force: true }));
 
 describe('chunk plan', () => {
   it('equals the brute-force rule, covers every chunk an emitting cell touches, and is narrow for narrow surfaces', async () => {
-    const s = await openZfpStore(storeForLocation(store), store);
+    const s = await openStore(storeForLocation(store), store);
     const ranges = (await s.readRanges(0))!;
     expect(Array.from(ranges)).toEqual(reference.ranges.map(Math.fround));
     const nb = neighbourhoodRanges(s.levels[0].layout.chunkGrid, ranges);

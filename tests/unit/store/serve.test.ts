@@ -12,7 +12,7 @@ import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import { parseRange, storesMiddleware } from '../../../scripts/vite-stores.ts';
 import { HttpStore } from '../../../src/store/zarr/http-store.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
-import { openZfpStore } from '../../../src/store/zarr/open-store.ts';
+import { openStore } from '../../../src/store/zarr/open-store.ts';
 import { convert } from './stores.ts';
 
 const work = mkdtempSync(join(tmpdir(), 'store-serve-'));
@@ -41,8 +41,8 @@ afterAll(() => {
 describe('/stores/ on the dev and preview servers', () => {
   it('serves a sharded store to zarrita with the same chunk bytes as the folder', async () => {
     const url = `${base}/stores/neghip.zarr`;
-    const disk = await openZfpStore(storeForLocation(join(work, 'stores/neghip.zarr')), 'disk');
-    for (const http of [await openZfpStore(new HttpStore(url), url), await openZfpStore(new FetchStore(url), url)]) {
+    const disk = await openStore(storeForLocation(join(work, 'stores/neghip.zarr')), 'disk');
+    for (const http of [await openStore(new HttpStore(url), url), await openStore(new FetchStore(url), url)]) {
       expect(http.levels.map((l) => l.layout.dims)).toEqual(disk.levels.map((l) => l.layout.dims));
       for (const c of [0, 31, 62, 124])
         expect(Buffer.from(await http.readChunk(0, c)).equals(Buffer.from(await disk.readChunk(0, c)))).toBe(true);

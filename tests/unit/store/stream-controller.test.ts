@@ -19,7 +19,7 @@ import {
 } from '../../../src/store/stream-controller.ts';
 import type { ChunkLevelLayout } from '../../../src/store/types.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
-import { openZfpStore, type ZfpStore } from '../../../src/store/zarr/open-store.ts';
+import { openStore, type ZfpStore } from '../../../src/store/zarr/open-store.ts';
 import { convert } from './stores.ts';
 
 const work = mkdtempSync(join(tmpdir(), 'store-stream-'));
@@ -118,7 +118,7 @@ function fakeGpu(store: ZfpStore, ranges: Float32Array[]) {
 }
 
 async function setup(budget: number, maxInFlight = 8) {
-  const store = await openZfpStore(storeForLocation(path), path);
+  const store = await openStore(storeForLocation(path), path);
   const ranges = await Promise.all(store.levels.map((_, i) => store.readRanges(i).then((r) => r!)));
   const fetcher = new ChunkFetcher(store, { maxInFlight });
   const { gpu, volumes } = fakeGpu(store, ranges);

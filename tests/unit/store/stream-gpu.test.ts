@@ -16,7 +16,7 @@ import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
 import { createChunkStream } from '../../../src/store/gpu-port.ts';
 import { chunksNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
-import { openZfpStore } from '../../../src/store/zarr/open-store.ts';
+import { openStore } from '../../../src/store/zarr/open-store.ts';
 import { loadZfpStream } from '../../../src/zfp/gpu-stream.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { convert, converterPython, zarrPythonStore } from './stores.ts';
@@ -31,7 +31,7 @@ beforeAll(() => {
 afterAll(() => rmSync(work, { recursive: true, force: true }));
 
 async function inCore(gpu: GpuContext, isos: number[]): Promise<number[]> {
-  const s = await openZfpStore(storeForLocation(path), path);
+  const s = await openStore(storeForLocation(path), path);
   const L = s.levels[0];
   const chunks = await Promise.all(Array.from({ length: L.chunkCount }, (_, i) => s.readChunk(0, i)));
   const stream = loadZfpStream(
@@ -48,7 +48,7 @@ async function inCore(gpu: GpuContext, isos: number[]): Promise<number[]> {
 }
 
 async function controller(gpu: GpuContext, budget: number, maxInFlight = 8, at = path) {
-  const store = await openZfpStore(storeForLocation(at), at);
+  const store = await openStore(storeForLocation(at), at);
   const fetcher = new ChunkFetcher(store, { maxInFlight });
   const c = await createChunkStream(store, fetcher, gpu, budget);
   const errors: string[] = [];

@@ -1,0 +1,52 @@
+// What the store readers share: JSON helpers, OME-Zarr multiscales (level
+// paths, voxel size), and the sizes of zfp chunks.
+import { bitsPerBlockForRate, fixedRateStreamBytes } from '../../zfp/format.ts';
+import { ZFP_LONG_HEADER_BITS, ZFP_SHORT_HEADER_BITS } from '../../zfp/header.ts';
+import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
+
+export type Json = Record<string, unknown>;
+export const isObject = (v: unknown): v is Json => typeof v === 'object' && v !== null && !Array.isArray(v);
+
+export function chunkCoords(layout: ChunkLevelLayout, chunk: ChunkIndex): [number, number, number] {
+  const [gx, gy] = layout.chunkGrid;
+  return [chunk % gx, Math.floor(chunk / gx) % gy, Math.floor(chunk / (gx * gy))];
+}
+
+/** Bytes of one C^3 chunk as zfpy writes it at this rate (header + blocks, padded to 64 bits). */
+export function zfpChunkBytes(chunkEdge: number, rate: number): number {
+  const bits = bitsPerBlockForRate(rate);
+  const headerBits = bits > 2048 ? ZFP_LONG_HEADER_BITS : ZFP_SHORT_HEADER_BITS;
+  return fixedRateStreamBytes((chunkEdge / 4) ** 3, bits, headerBits);
+}
+
+/** The OME multiscale (0.4: in the attributes; 0.5: under "ome"), or null. */
+export function multiscaleOf(attrs: Json): Json | null {
+  const ome = (isObject(attrs.ome) ? attrs.ome : attrs) as Json;
+  const ms = ome.multiscales as Json[] | undefined;
+  return Array.isArray(ms) && isObject(ms[0]) ? ms[0] : null;
+}
+
+export function levelPaths(attrs: Json): string[] | null {
+  const ome = (isObject(attrs.ome) ? attrs.ome : attrs) as Json;
+  const ms = ome.multiscales as Json[] | undefined;
+  const datasets = Array.isArray(ms) && isObject(ms[0]) ? (ms[0].datasets as Json[]) : undefined;
+  if (Array.isArray(datasets) && datasets.length > 0) return datasets.map((d) => String(d.path));
+  const ours = attrs.zfpzarr as Json | undefined;
+  if (isObject(ours) && Array.isArray(ours.levels)) return (ours.levels as Json[]).map((l) => String(l.path));
+  return null;
+}
+
+export function voxelSizeOf(attrs: Json): [number, number, number] {
+  const ours = attrs.zfpzarr as Json | undefined;
+  const v = isObject(ours) ? (ours.voxel_size as number[] | undefined) : undefined;
+  if (Array.isArray(v) && v.length === 3 && v.every((x) => Number.isFinite(x) && x > 0)) return [v[0], v[1], v[2]];
+  const ms = ((isObject(attrs.ome) ? attrs.ome : attrs) as Json).multiscales as Json[] | undefined;
+  const t = Array.isArray(ms) ? (((ms[0]?.datasets as Json[])?.[0]?.coordinateTransformations as Json[]) ?? []) : [];
+  const scale = t.find((x) => x.type === 'scale')?.scale as number[] | undefined;
+  if (Array.isArray(scale) && scale.length >= 3) {
+    const [z, y, x] = scale.slice(-3);
+    if ([x, y, z].every((s) => Number.isFinite(s) && s > 0)) return [x, y, z];
+  }
+  return [1, 1, 1];
+}
+

@@ -1,0 +1,139 @@
+// Opens a store of lossless chunks (Zarr v2 or v3, a plain array or an
+// OME-Zarr multiscale group; source-store.ts reads its bricks) as the same
+// ZfpStore the stream controller reads: each level's layout is of bricks
+// that arrive as float32 values and are compressed on the GPU at `rate`.
+import type { AbsolutePath } from '@zarrita/storage';
+import * as zarr from 'zarrita';
+import { checkRate } from '../../zfp/format.ts';
+import { describeTransportError, StoreError } from './errors.ts';
+import { isObject, type Json, levelPaths, multiscaleOf, voxelSizeOf, zfpChunkBytes } from './metadata.ts';
+import type { MetadataMemo, OpenStoreOptions, StoreLevel, ZfpStore } from './open-store.ts';
+import type { RetryingStore } from './retrying-store.ts';
+import {
+  axesOf,
+  BrickReader,
+  checkSourceMeta,
+  codecNames,
+  DEFAULT_SOURCE_RATE,
+  type SourceLevel,
+  sourceBytesPerValue,
+  sourceLevel,
+  sourcePrecision,
+  unusableLevel,
+} from './source-store.ts';
+import type { MeteredStore } from './stores.ts';
+
+export async function openSourceStore(
+  layers: { mem: MetadataMemo; metered: MeteredStore; retrying: RetryingStore },
+  name: string,
+  format: 2 | 3,
+  kind: 'array' | 'group',
+  attrs: Json,
+  options: OpenStoreOptions,
+): Promise<ZfpStore> {
+  const { mem, metered, retrying } = layers;
+  const ms = multiscaleOf(attrs);
+  const paths = kind === 'array' ? [''] : levelPaths(attrs);
+  if (!paths) throw new StoreError('not-a-store', `${name}: a Zarr group without OME-Zarr multiscales (no levels to show)`);
+  const rate = options.rate ?? DEFAULT_SOURCE_RATE;
+  try {
+    checkRate(name, rate, 'asked for');
+  } catch (e) {
+    throw new StoreError('codec', (e as Error).message);
+  }
+  const axesJson = (isObject(ms) && Array.isArray(ms.axes) ? ms.axes : null) as Array<Json | string> | null;
+  const omeAxes = axesJson ? axesJson.map((a) => (typeof a === 'string' ? a : String(a?.name))) : null;
+  const sources: SourceLevel[] = [];
+  const levels: StoreLevel[] = [];
+  let firstMeta: Json | null = null;
+  let info: Pick<ZfpStore['source'] & object, 'time' | 'channel' | 'axes'> | null = null;
+  for (let i = 0; i < paths.length; i++) {
+    const path = paths[i];
+    const where = `${name} level ${i}${path === String(i) || path === '' ? '' : ` (${path})`}`;
+    const metaKey = (format === 3 ? `${path ? `/${path}` : ''}/zarr.json` : `${path ? `/${path}` : ''}/.zarray`) as AbsolutePath;
+    let meta: Json | null;
+    try {
+      meta = await mem.jsonOrNull(metaKey);
+    } catch (e) {
+      if (e instanceof StoreError) throw new StoreError(e.kind, `${where}: ${e.message}`);
+      throw describeTransportError(e, where);
+    }
+    if (!meta) throw new StoreError('not-found', `${where}: its ${format === 3 ? 'zarr.json' : '.zarray'} is missing`);
+    if (format === 3 && meta.node_type !== 'array') throw new StoreError('not-a-store', `${where}: not an array`);
+    checkSourceMeta(where, meta, format);
+    firstMeta ??= meta;
+    let array: zarr.Array<zarr.DataType, zarr.Readable>;
+    try {
+      const loc = zarr.root(mem).resolve(path || '/');
+      array = format === 3 ? await zarr.open.v3(loc, { kind: 'array' }) : await zarr.open.v2(loc, { kind: 'array', attrs: false });
+    } catch (e) {
+      if (zarr.isZarritaError(e)) throw new StoreError('corrupt', `${where}: ${(e as Error).message}`, { cause: e });
+      throw describeTransportError(e, where);
+    }
+    const axes = axesOf(where, array.shape, omeAxes, { time: options.time, channel: options.channel });
+    info ??= { time: axes.time, channel: axes.channel, axes: axes.names };
+    const level = sourceLevel(where, array, axes, rate, zfpChunkBytes);
+    sources.push(level);
+    const { chunkGrid } = level.layout;
+    levels.push({
+      index: i,
+      path,
+      layout: level.layout,
+      shardChunks: 1,
+      chunkCount: chunkGrid[0] * chunkGrid[1] * chunkGrid[2],
+      // what the level's values are decoded (the stored bytes are not known before fetching them)
+      storedBytes: level.layout.dims.reduce((a, b) => a * b, 1) * sourceBytesPerValue(array.dtype),
+      rangesPath: null,
+      leadingAxes: 0,
+      unusable: unusableLevel(level),
+    });
+  }
+  const unusable = levels.filter((l) => l.unusable);
+  if (unusable.length === levels.length) throw new StoreError('layout', unusable[0].unusable!);
+  const a0 = sources[0].array;
+  const codecs = codecNames(firstMeta!, format).shown;
+  const cube = sources[0].layout.chunkEdge === sources[0].chunkXYZ[0] && sources[0].chunkXYZ.every((c) => c === sources[0].chunkXYZ[0]);
+  const notes = [
+    `lossless chunks (${codecs.join(' + ') || 'uncompressed'}, ${a0.dtype}): each ${sources[0].layout.chunkEdge}^3 brick is compressed on the GPU at rate ${rate} as it arrives`,
+    'no per-chunk range arrays: the first surface of a level fetches all of it (ranges are computed on the GPU as bricks arrive)',
+  ];
+  if (unusable.length > 0)
+    notes.push(
+      `levels ${unusable.map((l) => l.index).join(', ')} cannot be shown (${unusable[0].unusable}); the finest shown is level ${unusable.at(-1)!.index + 1}`,
+    );
+  const reader = new BrickReader(sources, options.sourceCacheBytes);
+  const axisUnit = (axis: string) => {
+    const a = axesJson?.find((x) => typeof x !== 'string' && x?.name === axis) as Json | undefined;
+    return typeof a?.unit === 'string' ? a.unit : null;
+  };
+  return {
+    name,
+    levels,
+    notes,
+    source: {
+      format: format === 3 ? 'Zarr v3' : 'Zarr v2',
+      codecs,
+      dtype: a0.dtype,
+      chunkShape: [...a0.chunks],
+      axes: info!.axes,
+      time: info!.time,
+      channel: info!.channel,
+      bricks: cube ? 'chunks' : `bricks of ${sources[0].layout.chunkEdge}^3`,
+      rate,
+      precision: sourcePrecision(a0.dtype),
+    },
+    meter: metered.meter,
+    retries: retrying.counters,
+    metadataBytes: metered.meter.bytes,
+    voxelSize: voxelSizeOf(attrs),
+    unit: axisUnit('x'),
+    valueRange: null,
+    isAbsent: () => false,
+    readChunk: (level, brick, opts) => reader.read(level, brick, opts),
+    sourceValueRange: (level) => {
+      const r = reader.valueRanges[level];
+      return r && r[0] <= r[1] ? [r[0], r[1]] : null;
+    },
+    readRanges: async () => null,
+  };
+}
