@@ -355,6 +355,8 @@ async function start(): Promise<void> {
       return wanted !== undefined && wanted >= lo && wanted <= hi ? wanted : undefined;
     },
     linkLevel: () => initialView.level,
+    linkStoreChoice: () => ({ storeRate: initialView.storeRate, time: initialView.time, channel: initialView.channel }),
+    setStoreChoice: (choice) => link?.setStoreChoice(choice),
   });
   if (storeUrl) {
     await storeView.open(storeUrl);

@@ -1,6 +1,8 @@
 // The view in the URL hash, so a link reopens the same surface and camera:
 // #iso=0.5&cam=qx,qy,qz,qw,tx,ty,tz,d[&vox=sx,sy,sz] (vox: a voxel size the
-// user set, over the file's). The volume itself comes from ?url=... (same
+// user set, over the file's); for stores also level=L, and for stores of
+// lossless chunks rate=R (their bricks' GPU rate), t=T and c=C (time point
+// and channel). The volume itself comes from ?url=... (same
 // origin) or is the built-in default.
 import type { CameraState } from '../render/camera.ts';
 
@@ -11,6 +13,10 @@ export interface ViewState {
   spacing?: [number, number, number];
   /** The level of a store shown (src/app/store/): a link reopens that level. */
   level?: number;
+  /** A store of lossless chunks: the GPU rate of its bricks, the time point and channel shown. */
+  storeRate?: number;
+  time?: number;
+  channel?: number;
 }
 
 const round = (x: number) => Number(x.toPrecision(7));
@@ -24,6 +30,9 @@ export function encodeViewState(s: ViewState): string {
   }
   if (s.spacing) parts.push(`vox=${s.spacing.map(round).join(',')}`);
   if (s.level !== undefined) parts.push(`level=${s.level}`);
+  if (s.storeRate !== undefined) parts.push(`rate=${round(s.storeRate)}`);
+  if (s.time !== undefined) parts.push(`t=${s.time}`);
+  if (s.channel !== undefined) parts.push(`c=${s.channel}`);
   return parts.join('&');
 }
 
@@ -44,6 +53,15 @@ export function decodeViewState(hash: string): ViewState {
   if (vox && vox.length === 3 && vox.every((v) => Number.isFinite(v) && v > 0)) out.spacing = [vox[0], vox[1], vox[2]];
   const level = Number(params.get('level'));
   if (params.has('level') && Number.isInteger(level) && level >= 0 && level < 64) out.level = level;
+  const rate = Number(params.get('rate'));
+  if (params.has('rate') && rate > 0 && rate <= 32) out.storeRate = rate;
+  for (const [key, field] of [
+    ['t', 'time'],
+    ['c', 'channel'],
+  ] as const) {
+    const v = Number(params.get(key));
+    if (params.has(key) && Number.isInteger(v) && v >= 0 && v < 2 ** 31) out[field] = v;
+  }
   return out;
 }
 

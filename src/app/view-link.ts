@@ -10,6 +10,7 @@ export class ViewLink {
   private iso: number | undefined;
   private spacing: [number, number, number] | undefined;
   private level: number | undefined;
+  private storeChoice: Pick<ViewState, 'storeRate' | 'time' | 'channel'> = {};
 
   constructor(private readonly camera: ArcballCamera) {}
 
@@ -35,6 +36,12 @@ export class ViewLink {
     this.schedule();
   }
 
+  /** A store of lossless chunks: its bricks' rate, time point and channel (empty: not such a store). */
+  setStoreChoice(choice: Pick<ViewState, 'storeRate' | 'time' | 'channel'>): void {
+    this.storeChoice = { ...choice };
+    this.schedule();
+  }
+
   schedule(): void {
     if (this.timer !== undefined) return;
     this.timer = setTimeout(() => {
@@ -48,7 +55,7 @@ export class ViewLink {
   }
 
   state(): ViewState {
-    return { iso: this.iso, camera: this.camera.getState(), spacing: this.spacing, level: this.level };
+    return { iso: this.iso, camera: this.camera.getState(), spacing: this.spacing, level: this.level, ...this.storeChoice };
   }
 
   /** The full link to this view. */

@@ -5,6 +5,7 @@
 // StorePageState is also what the page tests read (window.zfpisoStore).
 import type { FetchCounters } from '../../store/fetch/chunk-fetcher.ts';
 import type { ZfpStore } from '../../store/zarr/open-store.ts';
+import type { StoreChoice } from './store-view.ts';
 
 export interface StorePageState {
   url: string;
@@ -39,7 +40,71 @@ export interface StorePageState {
 const mib = (b: number) => `${(b / 2 ** 20).toFixed(2)} MiB`;
 const escapeHtml = (s: string) => s.replace(/&/g, '&amp;').replace(/</g, '&lt;');
 
-export function renderStorePanel(panel: HTMLElement, store: ZfpStore, st: StorePageState, c: FetchCounters): void {
+/**
+ * A store of lossless chunks: what it is (format, codecs, type, chunks, how
+ * bricks are made, the GPU rate, what float32 does to the values) and the
+ * controls that reopen it another way (rate, time point, channel). Made once
+ * per store (the figures below it are redrawn on every change).
+ */
+function sourceBlock(store: ZfpStore, change: (next: StoreChoice) => void): HTMLElement | null {
+  const src = store.source;
+  if (!src) return null;
+  const box = document.createElement('div');
+  box.className = 'store-source';
+  const select = (key: 'time' | 'channel', label: string, v: { index: number; count: number }) =>
+    v.count > 1
+      ? `<label>${label} <select data-choice="${key}">${Array.from(
+          { length: Math.min(v.count, 4096) },
+          (_, i) => `<option value="${i}"${i === v.index ? ' selected' : ''}>${i}</option>`,
+        ).join('')}</select> of ${v.count}</label>`
+      : '';
+  box.innerHTML =
+    `<dl>` +
+    `<dt>format</dt><dd data-k="format">${escapeHtml(src.format)}</dd>` +
+    `<dt>codec</dt><dd data-k="codec">${escapeHtml(src.codecs.join(' + ') || 'none')}</dd>` +
+    `<dt>type</dt><dd data-k="dtype">${escapeHtml(src.dtype)} (${escapeHtml(src.precision)} as float32)</dd>` +
+    `<dt>chunks</dt><dd data-k="chunk-shape">${src.chunkShape.join('×')} (${escapeHtml(src.axes.join(''))}), read as ${escapeHtml(src.bricks)}</dd>` +
+    `<dt>ranges</dt><dd>none in the store: a level's first surface reads all of it</dd>` +
+    `</dl>` +
+    `<p class="store-choice"><label>GPU rate <input data-choice="storeRate" type="number" min="1" max="32" step="1" value="${src.rate}" title="zfp bits per value of the bricks compressed on the GPU"></label> ` +
+    select('time', 'time', src.time) +
+    ' ' +
+    select('channel', 'channel', src.channel) +
+    `</p>`;
+  box.addEventListener('change', (e) => {
+    const el = e.target as HTMLInputElement | HTMLSelectElement;
+    const key = el.dataset.choice as keyof StoreChoice | undefined;
+    const v = Number(el.value);
+    if (!key || !Number.isFinite(v)) return;
+    if (key === 'storeRate' && !(v >= 1 && v <= 32)) return;
+    change({ [key]: v });
+  });
+  return box;
+}
+
+const sourceBlocks = new WeakMap<HTMLElement, { store: ZfpStore; figures: HTMLElement }>();
+
+export function renderStorePanel(
+  panel: HTMLElement,
+  store: ZfpStore,
+  st: StorePageState,
+  c: FetchCounters,
+  change: (next: StoreChoice) => void = () => {},
+): void {
+  let made = sourceBlocks.get(panel);
+  if (!made || made.store !== store) {
+    panel.replaceChildren();
+    const figures = document.createElement('div');
+    const block = sourceBlock(store, change);
+    if (block) panel.append(block);
+    panel.append(figures);
+    made = { store, figures };
+    sourceBlocks.set(panel, made);
+  }
+  renderFigures(made.figures, panel, store, st, c);
+}
+
+function renderFigures(figures: HTMLElement, panel: HTMLElement, store: ZfpStore, st: StorePageState, c: FetchCounters): void {
   const rows = st.levels
     .map(
       (l) =>
@@ -47,9 +112,13 @@ export function renderStorePanel(panel: HTMLElement, store: ZfpStore, st: StoreP
     )
     .join('');
   panel.hidden = false;
-  panel.innerHTML =
-    `<h2>Store</h2><p class="store-name">${escapeHtml(store.name)}</p>` +
-    `<table class="store-levels"><thead><tr><th>level</th><th>dims</th><th>chunks fetched</th><th>stored</th></tr></thead><tbody>${rows}</tbody></table>` +
+  if (!panel.querySelector('h2')) {
+    const head = document.createElement('div');
+    head.innerHTML = `<h2>Store</h2><p class="store-name">${escapeHtml(store.name)}</p>`;
+    panel.prepend(...head.childNodes);
+  }
+  figures.innerHTML =
+    `<table class="store-levels"><thead><tr><th>level</th><th>dims</th><th>chunks fetched</th><th>${store.source ? 'values' : 'stored'}</th></tr></thead><tbody>${rows}</tbody></table>` +
     `<dl class="store-network">` +
     `<dt>fetched</dt><dd data-k="bytes">${mib(st.bytesFetched)}</dd>` +
     `<dt>requests</dt><dd data-k="requests">${st.requests}</dd>` +

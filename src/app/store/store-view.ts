@@ -38,6 +38,10 @@ export interface StoreViewDeps {
   onNotice(message: string): void;
   /** The finest level to show (a link's #level=), or undefined for level 0. */
   linkLevel(): number | undefined;
+  /** A store of lossless chunks: the link's rate, time point and channel (#rate=, t=, c=). */
+  linkStoreChoice(): StoreChoice;
+  /** What the link says about the store open now (empty for a zfp store or no store). */
+  setStoreChoice(choice: StoreChoice): void;
   /** Where the page tests read the figures (window.zfpisoStore). */
   publish(state: StorePageState): void;
   line: HTMLElement;
@@ -46,9 +50,17 @@ export interface StoreViewDeps {
 
 const mib = (b: number) => `${(b / 2 ** 20).toFixed(2)} MiB`;
 
+/** A store of lossless chunks: the GPU rate of its bricks, the time point and channel shown. */
+export interface StoreChoice {
+  storeRate?: number;
+  time?: number;
+  channel?: number;
+}
+
 interface OpenStore {
   url: string;
   source: AsyncReadable;
+  choice: StoreChoice;
   store: ZfpStore;
   metered: MeteredStore;
   fetcher: ChunkFetcher;
@@ -84,7 +96,7 @@ export class StoreView {
   reopener(): { iso: number; open: () => Promise<void> } | null {
     const o = this.#open;
     if (!o) return null;
-    return { iso: o.iso, open: () => this.openStore(o.source, o.url) };
+    return { iso: o.iso, open: () => this.openStore(o.source, o.url, o.choice) };
   }
 
   /**
@@ -108,8 +120,13 @@ export class StoreView {
     if (!o.current) o.controller.destroy();
   }
 
-  /** Any store (a dropped or picked folder: zarr/stores.ts); `url` names it in messages. Resolves when the first isovalue's refinement ends. */
-  async openStore(source: AsyncReadable, url: string): Promise<void> {
+  /**
+   * Any store (a dropped or picked folder: zarr/stores.ts); `url` names it in
+   * messages; `choice` (a store of lossless chunks: rate, time point,
+   * channel) defaults to the link's. Resolves when the first isovalue's
+   * refinement ends.
+   */
+  async openStore(source: AsyncReadable, url: string, choice: StoreChoice = this.d.linkStoreChoice()): Promise<void> {
     const gen = ++this.#gen;
     const metered = new MeteredStore(source);
     let store: ZfpStore;
@@ -117,7 +134,7 @@ export class StoreView {
     this.#line(`Opening ${url}…`);
     let f: ChunkFetcher;
     try {
-      store = await openStore(metered, url);
+      store = await openStore(metered, url, { rate: choice.storeRate, time: choice.time, channel: choice.channel });
       f = new ChunkFetcher(store, { maxInFlight: 8 });
       controller = await createChunkStream(store, f, this.d.gpu(), this.d.budgetBytes());
     } catch (e) {
@@ -157,9 +174,18 @@ export class StoreView {
       failedRequests: 0,
       gpu: { pools: 0, surfaces: 0, cache: 0, vertices: 0, total: 0, peak: 0, budget: controller.budgetBytes },
     };
+    const shownChoice: StoreChoice = store.source
+      ? {
+          storeRate: store.source.rate,
+          ...(store.source.time.count > 1 ? { time: store.source.time.index } : {}),
+          ...(store.source.channel.count > 1 ? { channel: store.source.channel.index } : {}),
+        }
+      : {};
+    this.d.setStoreChoice(shownChoice);
     const o: OpenStore = {
       url,
       source,
+      choice: shownChoice,
       store,
       metered,
       fetcher: f,
@@ -321,7 +347,9 @@ export class StoreView {
     st.gpu = { ...g, peak: Math.max(st.gpu.peak, g.total), budget: o.controller.budgetBytes };
     st.retries = o.store.retries.retries;
     st.failedRequests = o.store.retries.failed;
-    renderStorePanel(this.d.panel, o.store, st, o.fetcher.counters);
+    renderStorePanel(this.d.panel, o.store, st, o.fetcher.counters, (next) => {
+      if (this.#open === o) void this.openStore(o.source, o.url, { ...o.choice, ...next });
+    });
     this.d.publish({ ...st, levels: st.levels.map((l) => ({ ...l })), shownLevels: [...st.shownLevels] });
   }
 

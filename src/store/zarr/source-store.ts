@@ -104,7 +104,7 @@ export function checkSourceMeta(where: string, meta: Json, format: 2 | 3): void 
   const { names } = codecNames(meta, format);
   const unknown = names.filter((n) => !zarr.registry.has(n) && n !== 'sharding_indexed');
   if (unknown.length > 0) {
-    const known = [...new Set([...zarr.registry.keys()].map((k) => k.replace(/^numcodecs\./, '')))].join(', ');
+    const known = [...new Set([...zarr.registry.keys()].map((k) => k.replace(/^numcodecs\./, '')))].filter((k) => !['zfpy', 'vlen-utf8', 'json2'].includes(k)).join(', ');
     throw new StoreError(
       'codec',
       `${where}: its chunks use the codec ${unknown.map((n) => `"${n.replace(/^numcodecs\./, '')}"`).join(', ')}, which this reader does not have (it reads ${known}, and numcodecs.zfpy fixed rate)`,
