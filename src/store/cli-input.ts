@@ -100,7 +100,9 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
     channel: opts.channel,
   });
   if (!store.source && opts.rate !== undefined && opts.rate !== store.levels[0].layout.rate)
-    store.notes.push(`--rate ${opts.rate} is for stores of lossless chunks; this store's chunks are zfp at rate ${store.levels[0].layout.rate}, used as they are`);
+    store.notes.push(
+      `--rate ${opts.rate} is for stores of lossless chunks; this store's chunks are zfp at rate ${store.levels[0].layout.rate}, used as they are`,
+    );
   const { level } = opts;
   const L = level ?? 0;
   if (!Number.isInteger(L) || L < 0 || L >= store.levels.length) {
@@ -152,8 +154,6 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
   const kind = store.source
     ? `${store.source.format} store of ${store.source.dtype} (${store.source.codecs.join(' + ') || 'uncompressed'}), level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 bricks compressed on the GPU at rate ${lv.layout.rate})`
     : `Zarr store, level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 chunks, rate ${lv.layout.rate})`;
-  const how =
-    `${kind}, ` +
-    `streamed: the chunks each surface needs, within ${(budgetBytes / 2 ** 20).toFixed(0)} MiB of GPU memory`;
+  const how = `${kind}, ` + `streamed: the chunks each surface needs, within ${(budgetBytes / 2 ** 20).toFixed(0)} MiB of GPU memory`;
   return { surface, how, rate: lv.layout.rate, notes: store.notes, fileName: `${input} level ${L}`, record };
 }

@@ -80,7 +80,7 @@ test('?store= shows coarse to fine; panel figures equal the CLI records', async 
 
 test('an unknown store is a message naming it; the page stays usable', async ({ page }) => {
   await openApp(page, '/?store=/stores/none.zarr');
-  await expect(page.locator('#messages')).toContainText('/stores/none.zarr: no zarr.json at its root');
+  await expect(page.locator('#messages')).toContainText('/stores/none.zarr: no zarr.json, .zgroup or .zarray at its root');
 });
 
 test('a picked .zarr folder opens like the served store', async ({ page }) => {

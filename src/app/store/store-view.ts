@@ -220,7 +220,8 @@ export class StoreView {
     // The isovalue: the link's, else Otsu over the finest known chunk ranges. A
     // store without range arrays shows its coarsest level (fetched whole) first,
     // whose block ranges then give the value range and the choice.
-    let iso = this.d.linkIso(o.valueRange);
+    // (a store without ranges has no value range before its coarsest level is read: the link's isovalue waits for it)
+    let iso = controller.valueRange ? this.d.linkIso(o.valueRange) : undefined;
     if (iso === undefined) {
       let ranges: Float32Array | null = null;
       for (let L = finest; L < store.levels.length && !ranges; L++) ranges = controller.chunkRanges(L);
@@ -232,8 +233,9 @@ export class StoreView {
         ranges = controller.chunkRanges(controller.coarsest);
         o.valueRange = controller.valueRange ?? o.valueRange;
         if (o.current) (o.current.info as { valueRange: [number, number] }).valueRange = o.valueRange;
+        iso = this.d.linkIso(o.valueRange);
       }
-      iso = ranges ? chooseIsovalue(ranges, o.valueRange) : (o.valueRange[0] + o.valueRange[1]) / 2;
+      iso ??= ranges ? chooseIsovalue(ranges, o.valueRange) : (o.valueRange[0] + o.valueRange[1]) / 2;
     }
     await this.#refine(o, iso);
   }

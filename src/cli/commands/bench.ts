@@ -27,7 +27,7 @@ export const benchCommand: CliCommand = {
   name: 'bench',
   summary: 'isosurface benchmark: random / sweep-up / sweep-down isovalues, GPU ms and hit rates per mode',
   usage:
-    'bench IN [--modes random,sweep-up,sweep-down] [--count N] [--seed S] [--range lo,hi] [--rate R | --stream-budget MB] [--cache-budget MB] [--level L] [--deadline S] [--time T] [--channel C] (--level, --deadline, --time, --channel: IN a Zarr store URL or folder; --rate for a store: its lossless chunks\' GPU rate, default 8)',
+    "bench IN [--modes random,sweep-up,sweep-down] [--count N] [--seed S] [--range lo,hi] [--rate R | --stream-budget MB] [--cache-budget MB] [--level L] [--deadline S] [--time T] [--channel C] (--level, --deadline, --time, --channel: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8)",
   options: {
     level: { type: 'string' },
     deadline: { type: 'string' },

@@ -78,7 +78,7 @@ export const extractCommand: CliCommand = {
   name: 'extract',
   summary: 'isosurfaces on the GPU (block cache kept between isovalues): counts, area, bbox, GPU time; --ply soups',
   usage:
-    'extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--level L] [--deadline S] [--time T] [--channel C] (--level, --deadline, --time, --channel: IN a Zarr store URL or folder; --rate for a store: its lossless chunks\' GPU rate, default 8)',
+    "extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--level L] [--deadline S] [--time T] [--channel C] (--level, --deadline, --time, --channel: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8)",
   options: {
     level: { type: 'string' },
     deadline: { type: 'string' },

@@ -49,4 +49,3 @@ export function voxelSizeOf(attrs: Json): [number, number, number] {
   }
   return [1, 1, 1];
 }
-

@@ -7,9 +7,9 @@
 import type { AbsolutePath, AsyncReadable, GetOptions } from '@zarrita/storage';
 import * as zarr from 'zarrita';
 import { constantChunkStream } from '../../zfp/cpu/constant-stream.ts';
-import { bitsPerBlockForRate, fixedRateStreamBytes } from '../../zfp/format.ts';
+import { bitsPerBlockForRate } from '../../zfp/format.ts';
 import { MAX_VERTEX_VOXELS } from '../../isosurface/vertex-format.ts';
-import { parseZfpHeader, ZFP_LONG_HEADER_BITS, ZFP_SHORT_HEADER_BITS } from '../../zfp/header.ts';
+import { parseZfpHeader } from '../../zfp/header.ts';
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
 export { chunkCoords, zfpChunkBytes } from './metadata.ts';
 import { describeTransportError, RequestFailedError, StoreError } from './errors.ts';
@@ -277,7 +277,10 @@ export async function openStore(store: AsyncReadable, name: string, options: Ope
     const zarray = await named('/.zarray');
     const zgroup = zarray ? null : await named('/.zgroup');
     if (!zarray && !zgroup)
-      throw new StoreError('not-found', `${name}: no zarr.json, .zgroup or .zarray at its root (HTTP 404 or no such folder): not a Zarr store`);
+      throw new StoreError(
+        'not-found',
+        `${name}: no zarr.json, .zgroup or .zarray at its root (HTTP 404 or no such folder): not a Zarr store`,
+      );
     const attrs = (await named('/.zattrs')) ?? {};
     return openSourceStore({ mem, metered, retrying }, name, 2, zarray ? 'array' : 'group', attrs, options);
   }

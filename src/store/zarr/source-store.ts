@@ -104,7 +104,9 @@ export function checkSourceMeta(where: string, meta: Json, format: 2 | 3): void 
   const { names } = codecNames(meta, format);
   const unknown = names.filter((n) => !zarr.registry.has(n) && n !== 'sharding_indexed');
   if (unknown.length > 0) {
-    const known = [...new Set([...zarr.registry.keys()].map((k) => k.replace(/^numcodecs\./, '')))].filter((k) => !['zfpy', 'vlen-utf8', 'json2'].includes(k)).join(', ');
+    const known = [...new Set([...zarr.registry.keys()].map((k) => k.replace(/^numcodecs\./, '')))]
+      .filter((k) => !['zfpy', 'vlen-utf8', 'json2'].includes(k))
+      .join(', ');
     throw new StoreError(
       'codec',
       `${where}: its chunks use the codec ${unknown.map((n) => `"${n.replace(/^numcodecs\./, '')}"`).join(', ')}, which this reader does not have (it reads ${known}, and numcodecs.zfpy fixed rate)`,
@@ -146,8 +148,17 @@ export function axesOf(
   shape: readonly number[],
   omeAxes: string[] | null,
   choose: { time?: number; channel?: number },
-): { spatial: [number, number, number]; fixed: Map<number, number>; names: string[]; time: SourceInfo['time']; channel: SourceInfo['channel'] } {
-  const names = omeAxes && omeAxes.length === shape.length ? omeAxes : shape.map((_, i) => ['t', 'c', 'z', 'y', 'x'].slice(-shape.length)[i] ?? `dim${i}`);
+): {
+  spatial: [number, number, number];
+  fixed: Map<number, number>;
+  names: string[];
+  time: SourceInfo['time'];
+  channel: SourceInfo['channel'];
+} {
+  const names =
+    omeAxes && omeAxes.length === shape.length
+      ? omeAxes
+      : shape.map((_, i) => ['t', 'c', 'z', 'y', 'x'].slice(-shape.length)[i] ?? `dim${i}`);
   const find = (n: string) => names.indexOf(n);
   let [x, y, z] = [find('x'), find('y'), find('z')];
   if (x < 0 || y < 0 || z < 0 || shape.length < 3) {
@@ -168,7 +179,10 @@ export function axesOf(
     const asked = isTime ? choose.time : isChannel ? choose.channel : undefined;
     const index = asked ?? 0;
     if (!Number.isInteger(index) || index < 0 || index >= shape[i])
-      throw new StoreError('layout', `${where}: ${isTime ? 'time point' : isChannel ? 'channel' : `axis ${n} index`} ${index} is outside 0..${shape[i] - 1}`);
+      throw new StoreError(
+        'layout',
+        `${where}: ${isTime ? 'time point' : isChannel ? 'channel' : `axis ${n} index`} ${index} is outside 0..${shape[i] - 1}`,
+      );
     fixed.set(i, index);
     if (isTime) Object.assign(time, { index, count: shape[i] });
     if (isChannel) Object.assign(channel, { index, count: shape[i] });
@@ -190,20 +204,29 @@ export function sourceLevel(
   const dims: [number, number, number] = [shape[ix], shape[iy], shape[iz]];
   const chunkXYZ: [number, number, number] = [chunks[ix], chunks[iy], chunks[iz]];
   if (!dims.every((n) => Number.isInteger(n) && n >= 1 && n <= MAX_EDGE))
-    throw new StoreError('layout', `${where}: shape [${shape.join(', ')}] is not a volume this reader takes (1 to ${MAX_EDGE} voxels per axis)`);
+    throw new StoreError(
+      'layout',
+      `${where}: shape [${shape.join(', ')}] is not a volume this reader takes (1 to ${MAX_EDGE} voxels per axis)`,
+    );
   if (!chunks.every((n) => Number.isInteger(n) && n >= 1))
     throw new StoreError('layout', `${where}: chunk shape [${chunks.join(', ')}] is impossible`);
   const bytes = DTYPES[array.dtype]?.bytes ?? 8;
   const chunkValues = chunks.reduce((a, b) => a * b, 1);
   if (chunkValues * bytes > MAX_SOURCE_CHUNK_BYTES)
-    throw new StoreError('layout', `${where}: chunks of [${chunks.join(', ')}] ${array.dtype} are ${chunkValues * bytes} bytes decoded, more than ${MAX_SOURCE_CHUNK_BYTES} this reader decodes`);
+    throw new StoreError(
+      'layout',
+      `${where}: chunks of [${chunks.join(', ')}] ${array.dtype} are ${chunkValues * bytes} bytes decoded, more than ${MAX_SOURCE_CHUNK_BYTES} this reader decodes`,
+    );
   const [cx, cy, cz] = chunkXYZ;
   const cube = cx === cy && cy === cz && cx % 4 === 0 && cx >= 4 && cx <= 256;
   const edge = cube ? cx : BRICK_EDGE;
   const chunkGrid: [number, number, number] = [Math.ceil(dims[0] / edge), Math.ceil(dims[1] / edge), Math.ceil(dims[2] / edge)];
   const count = chunkGrid[0] * chunkGrid[1] * chunkGrid[2];
   if (count > MAX_BRICKS)
-    throw new StoreError('layout', `${where}: ${chunkGrid.join(' x ')} bricks of ${edge}^3; this reader takes at most ${MAX_BRICKS} per level`);
+    throw new StoreError(
+      'layout',
+      `${where}: ${chunkGrid.join(' x ')} bricks of ${edge}^3; this reader takes at most ${MAX_BRICKS} per level`,
+    );
   return {
     array,
     spatial: axes.spatial,
@@ -356,15 +379,7 @@ function causeOf(e: unknown): string {
 }
 
 /** Copies the part of a decoded source chunk (origin `o`, level voxels) that falls in the brick (origin `lo`, `n` valid voxels). */
-function copyInto(
-  out: Float32Array,
-  B: number,
-  lo: number[],
-  n: number[],
-  c: DecodedChunk,
-  o: number[],
-  L: SourceLevel,
-): void {
+function copyInto(out: Float32Array, B: number, lo: number[], n: number[], c: DecodedChunk, o: number[], L: SourceLevel): void {
   const [ix, iy, iz] = L.spatial;
   const sx = c.stride[ix];
   const sy = c.stride[iy];
@@ -382,7 +397,7 @@ function copyInto(
   for (let z = z0; z < z1; z++)
     for (let y = y0; y < y1; y++) {
       let src = base + (z - o[2]) * sz + (y - o[1]) * sy + (x0 - o[0]) * sx;
-      let dst = (x0 - lo[0]) + B * ((y - lo[1]) + B * (z - lo[2]));
+      let dst = x0 - lo[0] + B * (y - lo[1] + B * (z - lo[2]));
       if (big) {
         for (let x = x0; x < x1; x++, src += sx) out[dst++] = Number(data[src] as bigint);
       } else {

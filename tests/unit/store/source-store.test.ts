@@ -133,7 +133,9 @@ describe('stores of lossless chunks = the same array in core', () => {
     const e = manifest.errors;
     const bz2 = cli('extract', e.bz2, '--iso', '3');
     expect(bz2.status).toBe(1);
-    expect(bz2.stderr).toMatch(/bz2.zarr level 0: its chunks use the codec "bz2", which this reader does not have \(it reads blosc, lz4, zstd, gzip/);
+    expect(bz2.stderr).toMatch(
+      /bz2.zarr level 0: its chunks use the codec "bz2", which this reader does not have \(it reads blosc, lz4, zstd, gzip/,
+    );
     const cplx = cli('extract', e.complex, '--iso', '3');
     expect(cplx.status).toBe(1);
     expect(cplx.stderr).toMatch(/complex.zarr level 0: its values are complex numbers \(complex64\)/);

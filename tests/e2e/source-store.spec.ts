@@ -1,0 +1,104 @@
+// A store of lossless chunks (Zarr v3 + zstd, uint8, an OME-Zarr pyramid of
+// 3 levels written by zarr-python from neghip) served by the preview
+// server: `?store=` shows its levels coarse to fine, each brick compressed
+// on the GPU as it arrives; the panel names the codec and the type; level
+// 0's triangles equal the CLI's on the same store; the link keeps the GPU
+// rate; long main-thread tasks while chunks decode are recorded.
+import { execFileSync } from 'node:child_process';
+import { mkdirSync, rmSync } from 'node:fs';
+import { join } from 'node:path';
+import { expect, test } from '@playwright/test';
+import { E2E_STORES_DIR, runCli, SHARED_VOLUMES_DIR } from './cli.ts';
+import { openApp, watchErrors } from './page.ts';
+import { trianglesShown } from './volume-page.ts';
+
+const root = join(import.meta.dirname, '..', '..');
+let store = '';
+
+test.beforeAll(() => {
+  store = join(E2E_STORES_DIR, 'neghip-zstd.zarr');
+  rmSync(store, { recursive: true, force: true });
+  mkdirSync(E2E_STORES_DIR, { recursive: true });
+  execFileSync(
+    join(root, '.venv-converter/bin/python'),
+    [
+      '-c',
+      `
+import sys, numpy as np, zarr
+from zarr.codecs import ZstdCodec
+a = np.fromfile(sys.argv[1], dtype=np.uint8).reshape(66, 66, 66)
+g = zarr.open_group(sys.argv[2], mode='w', zarr_format=3)
+levels = [a]
+for _ in range(2):
+    p = levels[-1]; s = [n // 2 * 2 for n in p.shape]
+    levels.append(np.round(p[:s[0], :s[1], :s[2]].reshape(s[0] // 2, 2, s[1] // 2, 2, s[2] // 2, 2).mean(axis=(1, 3, 5))).astype(np.uint8))
+for i, lv in enumerate(levels):
+    g.create_array(str(i), shape=lv.shape, chunks=(16, 16, 16), dtype='uint8', compressors=ZstdCodec(level=3))[...] = lv
+axes = [{'name': n, 'type': 'space', 'unit': 'micrometer'} for n in 'zyx']
+g.attrs['ome'] = {'version': '0.5', 'multiscales': [{'axes': axes, 'datasets': [
+    {'path': str(i), 'coordinateTransformations': [{'type': 'scale', 'scale': [2.0 ** i] * 3}]} for i in range(3)]}]}
+`,
+      join(SHARED_VOLUMES_DIR, 'neghip_66x66x66_uint8.raw'),
+      store,
+    ],
+    { timeout: 300_000, stdio: 'ignore' },
+  );
+});
+
+test('?store= of a zstd store: levels coarse to fine, codec and type named, level 0 = the CLI', async ({ page }) => {
+  test.setTimeout(300_000);
+  // zarr-python leaves out chunks that are all fill value: their 404s are the store's way of saying so, not errors
+  const logged = watchErrors(page);
+  const errors = {
+    get list() {
+      return logged.filter((e) => !/Failed to load resource: the server responded with a status of 404/.test(e));
+    },
+  };
+  await page.addInitScript(() => {
+    const w = window as unknown as { longTasks: number[] };
+    w.longTasks = [];
+    new PerformanceObserver((list) => {
+      for (const e of list.getEntries()) w.longTasks.push(e.duration);
+    }).observe({ type: 'longtask', buffered: true });
+  });
+  await openApp(page, '/?store=/stores/neghip-zstd.zarr#iso=80');
+  const before = await page.evaluate(() => (window as unknown as { longTasks: number[] }).longTasks.length);
+  await page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, {
+    timeout: 240_000,
+  });
+  const st = (await page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore)) as {
+    shownLevels: number[];
+    reason: string | null;
+    gpu: { total: number; budget: number };
+  };
+  expect(st.reason).toBeNull();
+  expect(st.shownLevels).toEqual([2, 1, 0]);
+  expect(st.gpu.total).toBeLessThanOrEqual(st.gpu.budget);
+  await expect(page.locator('#store-section dd[data-k="codec"]')).toHaveText('bytes + zstd');
+  await expect(page.locator('#store-section dd[data-k="dtype"]')).toContainText('uint8');
+  await expect(page.locator('#store-section dd[data-k="format"]')).toHaveText('Zarr v3');
+  await expect(page.locator('#store-section input[data-choice="storeRate"]')).toHaveValue('8');
+  await expect(page.locator('#store-progress')).toContainText('level 0 (full resolution)');
+  const cli = await runCli<{ isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', '--iso', '80', '--rate', '8']);
+  expect(await trianglesShown(page)).toBe(cli.isosurfaces[0].triangles);
+  await expect.poll(() => new URL(page.url()).hash).toContain('rate=8');
+  const longTasks = await page.evaluate((n) => (window as unknown as { longTasks: number[] }).longTasks.slice(n), before);
+  console.log(`long main-thread tasks while the store streamed: ${longTasks.length}, longest ${Math.max(0, ...longTasks).toFixed(0)} ms`);
+  expect(errors.list).toEqual([]);
+
+  // another GPU rate from the panel: the store opens again at that rate, and the link says so
+  await page.locator('#store-section input[data-choice="storeRate"]').fill('4');
+  await page.locator('#store-section input[data-choice="storeRate"]').dispatchEvent('change');
+  await expect.poll(() => new URL(page.url()).hash, { timeout: 120_000 }).toContain('rate=4');
+  await page.waitForFunction(
+    () => {
+      const s = (window as unknown as { zfpisoStore?: { done: boolean; shownLevel: number } }).zfpisoStore;
+      return s?.done === true && s.shownLevel === 0;
+    },
+    null,
+    { timeout: 240_000 },
+  );
+  const cli4 = await runCli<{ isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', '--iso', '80', '--rate', '4']);
+  expect(await trianglesShown(page)).toBe(cli4.isosurfaces[0].triangles);
+  expect(errors.list).toEqual([]);
+});
