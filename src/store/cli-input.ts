@@ -42,6 +42,8 @@ export interface StoreRecord {
   source: SourceInfo | null;
   /** A store of lossless chunks: [min, max] of the source values of the level's bricks read (all of it once the level was read whole). */
   sourceValueRange: [number, number] | null;
+  /** A store of lossless chunks: source chunks decoded (count, decoded bytes, ms from request to decoded, summed over chunks). */
+  sourceDecode: { chunks: number; bytes: number; ms: number } | null;
   /** Level 0's voxel size (x, y, z) and unit, from the store's metadata. */
   voxelSize: [number, number, number];
   unit: string | null;
@@ -132,6 +134,7 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
     chunks: fetched.size,
     source: store.source,
     sourceValueRange: store.sourceValueRange?.(L) ?? null,
+    sourceDecode: store.sourceDecode?.() ?? null,
     voxelSize: store.voxelSize,
     unit: store.unit,
     levelChunks: lv.chunkCount,

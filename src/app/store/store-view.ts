@@ -80,6 +80,8 @@ export class StoreView {
   #open: OpenStore | null = null;
   /** True while this view installs another level of its store (the session then lets the previous one go). */
   #replacing = false;
+  /** The isovalue a store opened again another way (panel: rate, time, channel) keeps, over the link's. */
+  #keepIso: number | undefined;
 
   constructor(private readonly d: StoreViewDeps) {}
 
@@ -221,7 +223,12 @@ export class StoreView {
     // store without range arrays shows its coarsest level (fetched whole) first,
     // whose block ranges then give the value range and the choice.
     // (a store without ranges has no value range before its coarsest level is read: the link's isovalue waits for it)
-    let iso = controller.valueRange ? this.d.linkIso(o.valueRange) : undefined;
+    const linkIso = (range: [number, number]) => {
+      const kept = this.#keepIso;
+      this.#keepIso = undefined;
+      return kept !== undefined && kept >= range[0] && kept <= range[1] ? kept : this.d.linkIso(range);
+    };
+    let iso = controller.valueRange ? linkIso(o.valueRange) : undefined;
     if (iso === undefined) {
       let ranges: Float32Array | null = null;
       for (let L = finest; L < store.levels.length && !ranges; L++) ranges = controller.chunkRanges(L);
@@ -233,7 +240,7 @@ export class StoreView {
         ranges = controller.chunkRanges(controller.coarsest);
         o.valueRange = controller.valueRange ?? o.valueRange;
         if (o.current) (o.current.info as { valueRange: [number, number] }).valueRange = o.valueRange;
-        iso = this.d.linkIso(o.valueRange);
+        iso = linkIso(o.valueRange);
       }
       iso ??= ranges ? chooseIsovalue(ranges, o.valueRange) : (o.valueRange[0] + o.valueRange[1]) / 2;
     }
@@ -350,7 +357,9 @@ export class StoreView {
     st.retries = o.store.retries.retries;
     st.failedRequests = o.store.retries.failed;
     renderStorePanel(this.d.panel, o.store, st, o.fetcher.counters, (next) => {
-      if (this.#open === o) void this.openStore(o.source, o.url, { ...o.choice, ...next });
+      if (this.#open !== o) return;
+      this.#keepIso = Number.isFinite(o.iso) ? o.iso : undefined;
+      void this.openStore(o.source, o.url, { ...o.choice, ...next });
     });
     this.d.publish({ ...st, levels: st.levels.map((l) => ({ ...l })), shownLevels: [...st.shownLevels] });
   }

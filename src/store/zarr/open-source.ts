@@ -130,6 +130,7 @@ export async function openSourceStore(
     valueRange: null,
     isAbsent: () => false,
     readChunk: (level, brick, opts) => reader.read(level, brick, opts),
+    sourceDecode: () => ({ chunks: reader.counters.chunksDecoded, bytes: reader.counters.bytesDecoded, ms: reader.counters.decodeMs }),
     sourceValueRange: (level) => {
       const r = reader.valueRanges[level];
       return r && r[0] <= r[1] ? [r[0], r[1]] : null;
