@@ -167,7 +167,9 @@ print(json.dumps(zarr.open_array(sys.argv[1], mode='r', path='ranges/1')[:].resh
 
     it('404, HTTP errors and an unreachable host are messages naming the store and what was observed', async () => {
       const url404 = `${base}/none.zarr`;
-      expect((await refusal(openStore(new HttpStore(url404), url404))).message).toMatch(/none.zarr: no zarr.json, .zgroup or .zarray at its root/);
+      expect((await refusal(openStore(new HttpStore(url404), url404))).message).toMatch(
+        /none.zarr: no zarr.json, .zgroup or .zarray at its root/,
+      );
       const url403 = `${base}/forbidden/a.zarr`;
       // a 403 is an answer: refused at once, not retried
       const forbidden = await refusal(openStore(new HttpStore(url403), url403));
