@@ -1,17 +1,9 @@
-// `extract` and `bench` on stores. A bonsai store (from its rate-4 stream,
-// re-encoded at rate 4 by the converter, sharded) opened at level 0 gives
-// exactly the triangles of the in-core pipeline on the same volume
-// compressed by zfpy as one stream at the same rate, while fetching only
-// the chunks the surfaces need: the chunks whose 27-chunk neighbourhood
-// range (computed here with NumPy from zarr-python's decode) holds one of
-// the isovalues, each once; the store's own messages reach the user.
-import { spawnSync } from 'node:child_process';
 import { mkdtempSync, readdirSync, readFileSync, rmSync, statSync, truncateSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
-import { repoRoot, sharedData } from '../../helpers/python.ts';
-import { convert, converterPython } from './stores.ts';
+import { sharedData } from '../../helpers/python.ts';
+import { cli, convert, converterPython } from './stores.ts';
 
 const work = mkdtempSync(join(tmpdir(), 'store-cli-'));
 const store = join(work, 'bonsai.zarr');
@@ -28,15 +20,6 @@ function rangeBytes(root: string): number {
   };
   walk(join(root, 'ranges'));
   return total;
-}
-
-function cli(...args: string[]) {
-  const r = spawnSync(
-    process.execPath,
-    ['--import', join(repoRoot, 'scripts/register-node-loaders.mjs'), join(repoRoot, 'src/cli/main.ts'), ...args],
-    { encoding: 'utf8', timeout: 600_000 },
-  );
-  return { status: r.status, stderr: r.stderr, stdout: r.stdout };
 }
 
 beforeAll(() => {

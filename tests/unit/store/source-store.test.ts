@@ -9,13 +9,14 @@
 // as sets of vertex positions by NumPy over the two PLY files; the source
 // value range is NumPy's; the voxel size is the store's scale. Broken
 // stores are refused by name.
-import { execFileSync, spawnSync } from 'node:child_process';
+import { execFileSync } from 'node:child_process';
 import { mkdtempSync, rmSync } from 'node:fs';
 import { readFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import { repoRoot, runPython } from '../../helpers/python.ts';
+import { cli } from './stores.ts';
 
 const work = mkdtempSync(join(tmpdir(), 'source-stores-'));
 interface Entry {
@@ -29,15 +30,6 @@ interface Entry {
   isoT1C1?: number[];
 }
 let manifest: Record<string, Entry> & { errors: Record<string, string> };
-
-function cli(...args: string[]) {
-  const r = spawnSync(
-    process.execPath,
-    ['--import', join(repoRoot, 'scripts/register-node-loaders.mjs'), join(repoRoot, 'src/cli/main.ts'), ...args],
-    { encoding: 'utf8', timeout: 600_000 },
-  );
-  return { status: r.status, stderr: r.stderr, stdout: r.stdout };
-}
 
 /** Whether two PLY files hold the same triangles (each a set of three vertex positions), by NumPy. */
 function samePly(a: string, b: string): string {

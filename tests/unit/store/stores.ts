@@ -1,7 +1,7 @@
 // Test stores: made by the converter (scripts/convert.mjs, as `npm run
 // convert` does) and by zarr-python + numcodecs directly ("stores written by
 // others": no range arrays, no zfpzarr attributes), in a temporary folder.
-import { execFileSync } from 'node:child_process';
+import { execFileSync, spawnSync } from 'node:child_process';
 import { join } from 'node:path';
 import { repoRoot, sharedData } from '../../helpers/python.ts';
 
@@ -16,6 +16,16 @@ export function convert(input: string, out: string, args: string[]): string {
     },
   );
   return out;
+}
+
+/** Runs the CLI (src/cli/main.ts) as a user would; its exit status and output. */
+export function cli(...args: string[]): { status: number | null; stderr: string; stdout: string } {
+  const r = spawnSync(
+    process.execPath,
+    ['--import', join(repoRoot, 'scripts/register-node-loaders.mjs'), join(repoRoot, 'src/cli/main.ts'), ...args],
+    { encoding: 'utf8', timeout: 600_000 },
+  );
+  return { status: r.status, stderr: r.stderr, stdout: r.stdout };
 }
 
 /** Runs Python in the converter's environment (zarr-python, numcodecs, zfpy). */
