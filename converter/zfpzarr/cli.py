@@ -52,6 +52,11 @@ def parse_args(argv):
     p.add_argument("--unit", help="unit of the voxel size, e.g. micrometer")
     p.add_argument("--overwrite", action="store_true", help="replace a store made from another input or with other settings")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--ranges-only", action="store_true",
+                   help="INPUT is a store of lossless chunks: write only its per-brick value ranges at --rate (default 8) "
+                        "to --out, for the page's &ranges=URL and the CLI's --ranges")
+    p.add_argument("--time", type=int, default=0, help="with --ranges-only: the time point (default 0)")
+    p.add_argument("--channel", type=int, default=0, help="with --ranges-only: the channel (default 0)")
     a = p.parse_args(argv)
     try:
         rates = [float(r) for r in a.rate.split(",")] if a.rate else None
@@ -92,6 +97,20 @@ def format_summary(s: Summary) -> str:
 
 def main(argv=None) -> int:
     args, opts = parse_args(sys.argv[1:] if argv is None else argv)
+    if args.ranges_only:
+        from .ranges_only import ranges_only
+
+        if opts.rate is not None and len(opts.rate) != 1:
+            print("error: --ranges-only takes one --rate", file=sys.stderr)
+            return 2
+        try:
+            ranges_only(args.input, args.out, rate=opts.rate[0] if opts.rate else 8.0, time=args.time,
+                        channel=args.channel, workers=args.workers, progress=not args.quiet)
+            print(f"{args.out}: per-brick ranges of {args.input}")
+            return 0
+        except InputError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 1
     client = cluster = None
     try:
         if args.scheduler:

@@ -15,7 +15,7 @@ import { copyLink, savePly, savePng } from './exports.ts';
 import { setInfoList } from './info-list.ts';
 import { chooseIsovalue } from './iso-choice.ts';
 import { VolumeLoader } from './loading/loader.ts';
-import { mountStoreView, storeParameter } from './store/mount.ts';
+import { mountStoreView, rangesParameter, storeParameter } from './store/mount.ts';
 import type { StoreView } from './store/store-view.ts';
 import { Messages, showFatal } from './messages.ts';
 import { type PageState, publishPageState } from './page-state.ts';
@@ -359,7 +359,7 @@ async function start(): Promise<void> {
     setStoreChoice: (choice) => link?.setStoreChoice(choice),
   });
   if (storeUrl) {
-    await storeView.open(storeUrl);
+    await storeView.open(storeUrl, rangesParameter());
   } else if (url) {
     nextUrl = url;
     await loader.loadUrl(url);

@@ -54,6 +54,7 @@ export async function openInputSurface(
     maxStreamBytes?: number;
     time?: number;
     channel?: number;
+    ranges?: string;
   },
 ): Promise<OpenedInput> {
   if (isStoreInput(path)) {
@@ -68,8 +69,8 @@ export async function openInputSurface(
     }
   }
   if (opts.level !== undefined) throw new UsageError('--level is for a Zarr store (a URL or a folder with zarr.json)');
-  if (opts.time !== undefined || opts.channel !== undefined)
-    throw new UsageError('--time and --channel are for a Zarr store with such axes (a URL or a folder with zarr.json)');
+  if (opts.time !== undefined || opts.channel !== undefined || opts.ranges !== undefined)
+    throw new UsageError('--time, --channel and --ranges are for a Zarr store of lossless chunks (a URL or a folder with zarr.json)');
   if (opts.deadlineMs !== undefined) throw new UsageError('--deadline is for a Zarr store (a URL or a folder with zarr.json)');
   const { rate } = opts;
   if (rate !== undefined && !(rate > 0)) throw new UsageError('--rate must be positive');

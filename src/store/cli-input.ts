@@ -91,6 +91,8 @@ export interface StoreInputOptions {
   rate?: number;
   time?: number;
   channel?: number;
+  /** Per-brick ranges written apart (--ranges-only), a URL or folder. */
+  ranges?: string;
 }
 
 export async function openStoreInput(gpu: GpuContext, input: string, opts: StoreInputOptions): Promise<StoreInput> {
@@ -100,7 +102,10 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
     rate: opts.rate,
     time: opts.time,
     channel: opts.channel,
+    ...(opts.ranges === undefined ? {} : { ranges: { store: storeForLocation(opts.ranges), name: opts.ranges } }),
   });
+  if (!store.source && opts.ranges !== undefined)
+    store.notes.push(`--ranges is for stores of lossless chunks; this store's chunks are zfp, with their own ranges or none`);
   if (!store.source && opts.rate !== undefined && opts.rate !== store.levels[0].layout.rate)
     store.notes.push(
       `--rate ${opts.rate} is for stores of lossless chunks; this store's chunks are zfp at rate ${store.levels[0].layout.rate}, used as they are`,

@@ -8,6 +8,11 @@ export function storeParameter(): string | null {
   return new URLSearchParams(location.search).get('store');
 }
 
+/** `?store=URL&ranges=URL`: per-brick ranges of a store of lossless chunks, written apart (convert --ranges-only). */
+export function rangesParameter(): string | null {
+  return new URLSearchParams(location.search).get('ranges');
+}
+
 /** The page's side of the store view; mount adds the progress line, the panel and window.zfpisoStore. */
 export function mountStoreView(p: Omit<StoreViewDeps, 'publish' | 'line' | 'panel'>): StoreView {
   const line = document.createElement('div');

@@ -64,7 +64,7 @@ function sourceBlock(store: ZfpStore, change: (next: StoreChoice) => void): HTML
     `<dt>codec</dt><dd data-k="codec">${escapeHtml(src.codecs.join(' + ') || 'none')}</dd>` +
     `<dt>type</dt><dd data-k="dtype">${escapeHtml(src.dtype)} (${escapeHtml(src.precision)} as float32)</dd>` +
     `<dt>chunks</dt><dd data-k="chunk-shape">${src.chunkShape.join('×')} (${escapeHtml(src.axes.join(''))}), read as ${escapeHtml(src.bricks)}</dd>` +
-    `<dt>ranges</dt><dd>none in the store: a level's first surface reads all of it</dd>` +
+    `<dt>ranges</dt><dd data-k="ranges">${store.levels[0].rangesPath ? 'per brick, from the ranges sidecar' : "none: a level's first surface reads all of it (convert --ranges-only writes them; &amp;ranges=URL)"}</dd>` +
     `</dl>` +
     `<p class="store-choice"><label>GPU rate <input data-choice="storeRate" type="number" min="1" max="32" step="1" value="${src.rate}" title="zfp bits per value of the bricks compressed on the GPU"></label> ` +
     select('time', 'time', src.time) +

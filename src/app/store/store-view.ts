@@ -61,6 +61,7 @@ interface OpenStore {
   url: string;
   source: AsyncReadable;
   choice: StoreChoice;
+  ranges: { store: AsyncReadable; name: string } | undefined;
   store: ZfpStore;
   metered: MeteredStore;
   fetcher: ChunkFetcher;
@@ -85,9 +86,10 @@ export class StoreView {
 
   constructor(private readonly d: StoreViewDeps) {}
 
-  /** A store by URL (same origin, or another one with CORS). */
-  open(url: string): Promise<void> {
-    return this.openStore(new HttpStore(new URL(url, location.href).href), url);
+  /** A store by URL (same origin, or another one with CORS); `rangesUrl`: its per-brick ranges written apart (&ranges=). */
+  open(url: string, rangesUrl?: string | null): Promise<void> {
+    const ranges = rangesUrl ? { store: new HttpStore(new URL(rangesUrl, location.href).href), name: rangesUrl } : undefined;
+    return this.openStore(new HttpStore(new URL(url, location.href).href), url, undefined, ranges);
   }
 
   /**
@@ -98,7 +100,7 @@ export class StoreView {
   reopener(): { iso: number; open: () => Promise<void> } | null {
     const o = this.#open;
     if (!o) return null;
-    return { iso: o.iso, open: () => this.openStore(o.source, o.url, o.choice) };
+    return { iso: o.iso, open: () => this.openStore(o.source, o.url, o.choice, o.ranges) };
   }
 
   /**
@@ -128,7 +130,12 @@ export class StoreView {
    * channel) defaults to the link's. Resolves when the first isovalue's
    * refinement ends.
    */
-  async openStore(source: AsyncReadable, url: string, choice: StoreChoice = this.d.linkStoreChoice()): Promise<void> {
+  async openStore(
+    source: AsyncReadable,
+    url: string,
+    choice: StoreChoice = this.d.linkStoreChoice(),
+    ranges?: { store: AsyncReadable; name: string },
+  ): Promise<void> {
     const gen = ++this.#gen;
     const metered = new MeteredStore(source);
     let store: ZfpStore;
@@ -136,7 +143,7 @@ export class StoreView {
     this.#line(`Opening ${url}…`);
     let f: ChunkFetcher;
     try {
-      store = await openStore(metered, url, { rate: choice.storeRate, time: choice.time, channel: choice.channel });
+      store = await openStore(metered, url, { rate: choice.storeRate, time: choice.time, channel: choice.channel, ranges });
       f = new ChunkFetcher(store, { maxInFlight: 8 });
       controller = await createChunkStream(store, f, this.d.gpu(), this.d.budgetBytes());
     } catch (e) {
@@ -188,6 +195,7 @@ export class StoreView {
       url,
       source,
       choice: shownChoice,
+      ranges,
       store,
       metered,
       fetcher: f,
@@ -359,7 +367,7 @@ export class StoreView {
     renderStorePanel(this.d.panel, o.store, st, o.fetcher.counters, (next) => {
       if (this.#open !== o) return;
       this.#keepIso = Number.isFinite(o.iso) ? o.iso : undefined;
-      void this.openStore(o.source, o.url, { ...o.choice, ...next });
+      void this.openStore(o.source, o.url, { ...o.choice, ...next }, o.ranges);
     });
     this.d.publish({ ...st, levels: st.levels.map((l) => ({ ...l })), shownLevels: [...st.shownLevels] });
   }

@@ -27,12 +27,13 @@ export const benchCommand: CliCommand = {
   name: 'bench',
   summary: 'isosurface benchmark: random / sweep-up / sweep-down isovalues, GPU ms and hit rates per mode',
   usage:
-    "bench IN [--modes random,sweep-up,sweep-down] [--count N] [--seed S] [--range lo,hi] [--rate R | --stream-budget MB] [--cache-budget MB] [--level L] [--deadline S] [--time T] [--channel C] (--level, --deadline, --time, --channel: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8)",
+    "bench IN [--modes random,sweep-up,sweep-down] [--count N] [--seed S] [--range lo,hi] [--rate R | --stream-budget MB] [--cache-budget MB] [--level L] [--deadline S] [--time T] [--channel C] [--ranges RANGES.zarr] (--level, --deadline, --time, --channel, --ranges: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8)",
   options: {
     level: { type: 'string' },
     deadline: { type: 'string' },
     time: { type: 'string' },
     channel: { type: 'string' },
+    ranges: { type: 'string' },
     modes: { type: 'string' },
     count: { type: 'string' },
     seed: { type: 'string' },
@@ -59,6 +60,7 @@ export const benchCommand: CliCommand = {
       deadlineMs: deadlineOption(args),
       time: numberOption(args, 'time'),
       channel: numberOption(args, 'channel'),
+      ranges: stringOption(args, 'ranges'),
       maxStreamBytes: streamBudgetOption(args),
     });
     ctx.log(`${input}: ${volume.how}`);

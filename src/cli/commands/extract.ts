@@ -78,12 +78,13 @@ export const extractCommand: CliCommand = {
   name: 'extract',
   summary: 'isosurfaces on the GPU (block cache kept between isovalues): counts, area, bbox, GPU time; --ply soups',
   usage:
-    "extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--level L] [--deadline S] [--time T] [--channel C] (--level, --deadline, --time, --channel: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8)",
+    "extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--level L] [--deadline S] [--time T] [--channel C] [--ranges RANGES.zarr] (--level, --deadline, --time, --channel, --ranges: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8)",
   options: {
     level: { type: 'string' },
     deadline: { type: 'string' },
     time: { type: 'string' },
     channel: { type: 'string' },
+    ranges: { type: 'string' },
     iso: { type: 'string' },
     rate: { type: 'string' },
     'stream-budget': { type: 'string' },
@@ -104,6 +105,7 @@ export const extractCommand: CliCommand = {
       deadlineMs: deadlineOption(args),
       time: numberOption(args, 'time'),
       channel: numberOption(args, 'channel'),
+      ranges: stringOption(args, 'ranges'),
       maxStreamBytes: streamBudgetOption(args),
     });
     ctx.log(`${input}: ${volume.how}`);

@@ -2,7 +2,10 @@
 // paths, voxel size), and the sizes of zfp chunks.
 import { bitsPerBlockForRate, fixedRateStreamBytes } from '../../zfp/format.ts';
 import { ZFP_LONG_HEADER_BITS, ZFP_SHORT_HEADER_BITS } from '../../zfp/header.ts';
+import type { AbsolutePath, AsyncReadable, GetOptions } from '@zarrita/storage';
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
+import { StoreError } from './errors.ts';
+import type { RetryingStore } from './retrying-store.ts';
 
 export type Json = Record<string, unknown>;
 export const isObject = (v: unknown): v is Json => typeof v === 'object' && v !== null && !Array.isArray(v);
@@ -48,4 +51,37 @@ export function voxelSizeOf(attrs: Json): [number, number, number] {
     if ([x, y, z].every((s) => Number.isFinite(s) && s > 0)) return [x, y, z];
   }
   return [1, 1, 1];
+}
+
+/** Caches JSON documents (zarr.json, .zarray, .zattrs, .zgroup) so that zarrita and our checks read each once. */
+export class MetadataMemo implements AsyncReadable {
+  #memo = new Map<string, Promise<Uint8Array | undefined>>();
+  constructor(readonly inner: RetryingStore) {}
+  get(key: AbsolutePath, opts?: GetOptions): Promise<Uint8Array | undefined> {
+    if (!/(zarr\.json|\.zarray|\.zattrs|\.zgroup)$/.test(key)) return this.inner.get(key, opts);
+    let hit = this.#memo.get(key);
+    if (!hit) {
+      hit = this.inner.get(key, opts);
+      hit.catch(() => this.#memo.delete(key));
+      this.#memo.set(key, hit);
+    }
+    return hit;
+  }
+  getRange(...args: Parameters<RetryingStore['getRange']>) {
+    return this.inner.getRange(...args);
+  }
+  async json(key: AbsolutePath): Promise<Json> {
+    const got = await this.jsonOrNull(key);
+    if (!got) throw new StoreError('not-found', `${key} is missing`);
+    return got;
+  }
+  async jsonOrNull(key: AbsolutePath): Promise<Json | null> {
+    const bytes = await this.get(key);
+    if (!bytes) return null;
+    try {
+      return JSON.parse(new TextDecoder().decode(bytes)) as Json;
+    } catch (e) {
+      throw new StoreError('corrupt', `${key} is not JSON (${(e as Error).message})`);
+    }
+  }
 }

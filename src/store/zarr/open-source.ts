@@ -7,7 +7,9 @@ import * as zarr from 'zarrita';
 import { checkRate } from '../../zfp/format.ts';
 import { describeTransportError, StoreError } from './errors.ts';
 import { isObject, type Json, levelPaths, multiscaleOf, voxelSizeOf, zfpChunkBytes } from './metadata.ts';
-import type { MetadataMemo, OpenStoreOptions, StoreLevel, ZfpStore } from './open-store.ts';
+import type { MetadataMemo } from './metadata.ts';
+import type { OpenStoreOptions, StoreLevel, ZfpStore } from './open-store.ts';
+import { openRangesSidecar, type RangesSidecar } from './ranges-sidecar.ts';
 import type { RetryingStore } from './retrying-store.ts';
 import {
   axesOf,
@@ -18,10 +20,44 @@ import {
   type SourceLevel,
   sourceBytesPerValue,
   sourceLevel,
+  type SourceInfo,
   sourcePrecision,
   unusableLevel,
 } from './source-store.ts';
 import type { MeteredStore } from './stores.ts';
+
+/**
+ * True when the sidecar's bricks are this store's (levels, paths, brick
+ * edges and grids: else a StoreError, the user named the wrong file); a
+ * reason when they are for another rate, time point or channel (then the
+ * store opens without them).
+ */
+function sidecarFits(
+  sidecar: RangesSidecar,
+  levels: StoreLevel[],
+  rate: number,
+  info: { time: SourceInfo['time']; channel: SourceInfo['channel'] },
+): true | string {
+  const wrong = (what: string) => {
+    throw new StoreError(
+      'layout',
+      `${sidecar.name}: its ranges are not of this store's bricks (${what}); write them again with --ranges-only`,
+    );
+  };
+  if (sidecar.levels.length !== levels.length) wrong(`${sidecar.levels.length} levels, the store has ${levels.length}`);
+  levels.forEach((l, i) => {
+    const s = sidecar.levels[i];
+    if (s.path !== l.path) wrong(`level ${i} is ${s.path}, the store's is ${l.path}`);
+    if (s.brick !== l.layout.chunkEdge || s.grid.some((g, a) => g !== l.layout.chunkGrid[a]))
+      wrong(
+        `level ${i}: ${s.grid.join('x')} bricks of ${s.brick}^3, the page reads ${l.layout.chunkGrid.join('x')} of ${l.layout.chunkEdge}^3`,
+      );
+  });
+  if (sidecar.rate !== rate) return `its ranges are of the values at rate ${sidecar.rate}, the bricks are compressed at rate ${rate}`;
+  if (sidecar.time !== info.time.index || sidecar.channel !== info.channel.index)
+    return `its ranges are of time point ${sidecar.time}, channel ${sidecar.channel}; shown: ${info.time.index}, ${info.channel.index}`;
+  return true;
+}
 
 export async function openSourceStore(
   layers: { mem: MetadataMemo; metered: MeteredStore; retrying: RetryingStore },
@@ -35,7 +71,8 @@ export async function openSourceStore(
   const ms = multiscaleOf(attrs);
   const paths = kind === 'array' ? [''] : levelPaths(attrs);
   if (!paths) throw new StoreError('not-a-store', `${name}: a Zarr group without OME-Zarr multiscales (no levels to show)`);
-  const rate = options.rate ?? DEFAULT_SOURCE_RATE;
+  const sidecar = options.ranges ? await openRangesSidecar(options.ranges.store, options.ranges.name, metered.meter, options.retry) : null;
+  const rate = options.rate ?? sidecar?.rate ?? DEFAULT_SOURCE_RATE;
   try {
     checkRate(name, rate, 'asked for');
   } catch (e) {
@@ -95,8 +132,17 @@ export async function openSourceStore(
   const cube = sources[0].layout.chunkEdge === sources[0].chunkXYZ[0] && sources[0].chunkXYZ.every((c) => c === sources[0].chunkXYZ[0]);
   const notes = [
     `lossless chunks (${codecs.join(' + ') || 'uncompressed'}, ${a0.dtype}): each ${sources[0].layout.chunkEdge}^3 brick is compressed on the GPU at rate ${rate} as it arrives`,
-    'no per-chunk range arrays: the first surface of a level fetches all of it (ranges are computed on the GPU as bricks arrive)',
   ];
+  const usable = sidecar ? sidecarFits(sidecar, levels, rate, info!) : null;
+  if (sidecar && usable === true) {
+    for (const l of levels) l.rangesPath = `${sidecar.name} ranges/${l.index}`;
+    notes.push(`per-brick ranges from ${sidecar.name} (rate ${sidecar.rate}): a surface fetches only the bricks it needs`);
+  } else {
+    if (typeof usable === 'string') notes.push(`${sidecar!.name} is not used: ${usable}`);
+    notes.push(
+      'no per-chunk range arrays: the first surface of a level fetches all of it (ranges are computed on the GPU as bricks arrive; npm run convert -- --ranges-only STORE --out RANGES.zarr writes them, for &ranges=URL / --ranges)',
+    );
+  }
   if (unusable.length > 0)
     notes.push(
       `levels ${unusable.map((l) => l.index).join(', ')} cannot be shown (${unusable[0].unusable}); the finest shown is level ${unusable.at(-1)!.index + 1}`,
@@ -135,6 +181,6 @@ export async function openSourceStore(
       const r = reader.valueRanges[level];
       return r && r[0] <= r[1] ? [r[0], r[1]] : null;
     },
-    readRanges: async () => null,
+    readRanges: async (level, opts) => (levels[level].rangesPath && sidecar ? sidecar.read(level, opts) : null),
   };
 }

@@ -14,7 +14,8 @@ import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
 export { chunkCoords, zfpChunkBytes } from './metadata.ts';
 import { describeTransportError, RequestFailedError, StoreError } from './errors.ts';
 import { type RetryCounters, type RetryPolicy, RetryingStore } from './retrying-store.ts';
-import { chunkCoords, isObject, type Json, levelPaths, voxelSizeOf, zfpChunkBytes } from './metadata.ts';
+import { chunkCoords, isObject, type Json, levelPaths, MetadataMemo, voxelSizeOf, zfpChunkBytes } from './metadata.ts';
+export { MetadataMemo } from './metadata.ts';
 import { openSourceStore } from './open-source.ts';
 import type { SourceInfo } from './source-store.ts';
 import { MeteredStore, type StoreMeter } from './stores.ts';
@@ -107,39 +108,6 @@ function codecOf(name: string, meta: Json): { rate: number; shardChunks: number 
   const rate = Number(cfg.rate);
   if (!(rate >= 0.140625 && rate <= 32)) throw new StoreError('codec', `${name}: zfpy rate ${String(cfg.rate)} is outside 0.140625..32`);
   return { rate, shardChunks };
-}
-
-/** Caches JSON documents (zarr.json, .zarray, .zattrs, .zgroup) so that zarrita and our checks read each once. */
-export class MetadataMemo implements AsyncReadable {
-  #memo = new Map<string, Promise<Uint8Array | undefined>>();
-  constructor(readonly inner: RetryingStore) {}
-  get(key: AbsolutePath, opts?: GetOptions): Promise<Uint8Array | undefined> {
-    if (!/(zarr\.json|\.zarray|\.zattrs|\.zgroup)$/.test(key)) return this.inner.get(key, opts);
-    let hit = this.#memo.get(key);
-    if (!hit) {
-      hit = this.inner.get(key, opts);
-      hit.catch(() => this.#memo.delete(key));
-      this.#memo.set(key, hit);
-    }
-    return hit;
-  }
-  getRange(...args: Parameters<RetryingStore['getRange']>) {
-    return this.inner.getRange(...args);
-  }
-  async json(key: AbsolutePath): Promise<Json> {
-    const got = await this.jsonOrNull(key);
-    if (!got) throw new StoreError('not-found', `${key} is missing`);
-    return got;
-  }
-  async jsonOrNull(key: AbsolutePath): Promise<Json | null> {
-    const bytes = await this.get(key);
-    if (!bytes) return null;
-    try {
-      return JSON.parse(new TextDecoder().decode(bytes)) as Json;
-    } catch (e) {
-      throw new StoreError('corrupt', `${key} is not JSON (${(e as Error).message})`);
-    }
-  }
 }
 
 async function openLevel(
@@ -250,6 +218,8 @@ export interface OpenStoreOptions {
   /** Stores with a time or channel axis: which one is shown (default 0). */
   time?: number;
   channel?: number;
+  /** Stores of lossless chunks: per-brick ranges written apart (ranges-sidecar.ts), `name` for messages. */
+  ranges?: { store: AsyncReadable; name: string };
   /** Stores of lossless chunks: CPU bytes of decoded source chunks kept while neighbouring bricks need them (default 256 MiB). */
   sourceCacheBytes?: number;
 }

@@ -21,8 +21,11 @@ function aborted(signal: AbortSignal | undefined): void {
 
 /** Counts every byte and request that reaches the inner store. */
 export class MeteredStore implements AsyncReadable {
-  readonly meter: StoreMeter = { bytes: 0, requests: 0 };
-  constructor(readonly inner: AsyncReadable) {}
+  /** `meter`: counts shared with another store (a ranges sidecar counts with its store). */
+  constructor(
+    readonly inner: AsyncReadable,
+    readonly meter: StoreMeter = { bytes: 0, requests: 0 },
+  ) {}
   async get(key: AbsolutePath, opts?: GetOptions): Promise<Uint8Array | undefined> {
     this.meter.requests++;
     const bytes = await this.inner.get(key, opts);

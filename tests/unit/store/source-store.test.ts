@@ -121,6 +121,34 @@ describe('stores of lossless chunks = the same array in core', () => {
     expect(bad.stderr).toMatch(/idr.zarr level 0: time point 2 is outside 0..1/);
   }, 300_000);
 
+  it('a ranges sidecar (convert --ranges-only): only the bricks the surface needs are fetched, the same surface', () => {
+    const m = manifest.gzip64;
+    const ranges = join(work, 'gzip64-ranges.zarr');
+    execFileSync(process.execPath, [join(repoRoot, 'scripts/convert.mjs'), m.store, '--out', ranges, '--ranges-only', '--quiet'], {
+      timeout: 600_000,
+      stdio: 'pipe',
+    });
+    const iso = [2300.37];
+    const s = extract(m.store, iso, join(work, 'gzip64-ranged'), ['--level', '0', '--ranges', ranges]);
+    const c = extract(m.raw, iso, join(work, 'gzip64-ranged-raw'));
+    expect(s.stderr).toMatch(/per-brick ranges from .*gzip64-ranges.zarr \(rate 8\)/);
+    expect(s.record.isosurfaces[0].triangles).toBe(c.record.isosurfaces[0].triangles);
+    expect(s.record.isosurfaces[0].triangles).toBeGreaterThan(100);
+    const tag = `-iso${Math.fround(iso[0])}.ply`;
+    expect(samePly(join(work, `gzip64-ranged${tag}`), join(work, `gzip64-ranged-raw${tag}`))).toBe('same');
+    expect(s.record.store.chunks).toBeGreaterThan(0);
+    expect(s.record.store.chunks).toBeLessThan(s.record.store.levelChunks);
+    // ranges for another rate are not used (said), a sidecar of another store is refused by name
+    const other = cli('extract', m.store, '--level', '0', '--ranges', ranges, '--rate', '4', '--iso=2300.37');
+    expect(other.status, other.stderr).toBe(0);
+    expect(other.stderr).toMatch(
+      /gzip64-ranges.zarr is not used: its ranges are of the values at rate 8, the bricks are compressed at rate 4/,
+    );
+    const wrong = cli('extract', manifest.scivis.store, '--level', '0', '--ranges', ranges, '--iso', '100');
+    expect(wrong.status).toBe(1);
+    expect(wrong.stderr).toMatch(/gzip64-ranges.zarr: its ranges are not of this store's bricks/);
+  }, 300_000);
+
   it('refuses an unknown codec, complex values, a 2-D image and a corrupt chunk, naming them', () => {
     const e = manifest.errors;
     const bz2 = cli('extract', e.bz2, '--iso', '3');

@@ -1,0 +1,112 @@
+"""`--ranges-only STORE --out RANGES.zarr`: per-brick value ranges of a store
+of lossless chunks that cannot be rewritten (someone else's OME-Zarr), so the
+page (`&ranges=URL`) and the CLI (`--ranges PATH`) plan which bricks a surface
+needs before fetching any.
+
+The page reads such a store as bricks (src/store/zarr/source-store.ts): a
+level's chunk when it is a cube with an edge a multiple of 4 (4..256), else
+64^3 bricks; each brick is compressed on the GPU at a rate (default 8). The
+surface is made from the zfp-decoded values, so a brick's range here is the
+range of its values compressed at that rate by zfpy and decoded (a source
+range alone does not bound them): min and max over the brick's voxels inside
+the array. Written: a Zarr v3 group with `ranges/<L>` float32 [gz, gy, gx, 2]
+(the converter's layout) and attributes `zfpzarr_ranges` (the rate, the time
+point and channel, and per level its path, brick edge and grid) that the page
+checks against the store before using them.
+"""
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import zarr
+import zfpy
+
+from .chunks import padded_chunk
+from .inputs import InputError
+
+BRICK_EDGE = 64
+ATTR = "zfpzarr_ranges"
+
+
+def brick_edge(chunks_zyx: tuple[int, int, int]) -> int:
+    """The page's rule (source-store.ts sourceLevel)."""
+    cz, cy, cx = chunks_zyx
+    return cx if cx == cy == cz and cx % 4 == 0 and 4 <= cx <= 256 else BRICK_EDGE
+
+
+def _levels(node, path: str):
+    """(path in the store, array) per level, finest first."""
+    if isinstance(node, zarr.Array):
+        return [("", node)], None
+    attrs = dict(node.attrs)
+    ms = (attrs.get("ome") or {}).get("multiscales") or attrs.get("multiscales")
+    if not ms:
+        raise InputError(f"{path}: a Zarr group without OME-Zarr multiscales")
+    return [(d["path"], node[d["path"]]) for d in ms[0]["datasets"]], ms[0].get("axes")
+
+
+def _spatial(path: str, shape, axes, time: int, channel: int):
+    """Index tuple selecting the chosen time point / channel, and the spatial axes' positions (z, y, x)."""
+    names = [a if isinstance(a, str) else a.get("name") for a in axes] if axes and len(axes) == len(shape) else None
+    if names is None:
+        names = (["t", "c", "z", "y", "x"])[-len(shape):] if len(shape) <= 5 else [f"d{i}" for i in range(len(shape))]
+    if len(shape) < 3 or not all(n in names for n in "zyx"):
+        raise InputError(f"{path}: shape {list(shape)} is not a 3-D volume")
+    zyx = tuple(names.index(n) for n in "zyx")
+    index = []
+    for i, n in enumerate(names):
+        if i in zyx:
+            index.append(slice(None))
+            continue
+        v = time if n in ("t", "time") else channel if n in ("c", "channel") else 0
+        if not 0 <= v < shape[i]:
+            raise InputError(f"{path}: {n} index {v} is outside 0..{shape[i] - 1}")
+        index.append(v)
+    return index, zyx
+
+
+def brick_range(arr, index, zyx, lo, n, edge: int, rate: float) -> tuple[float, float]:
+    sel = list(index)
+    for a, axis in enumerate(zyx):
+        sel[axis] = slice(lo[a], lo[a] + n[a])
+    values = np.asarray(arr[tuple(sel)])
+    # the remaining axes are z, y, x in the array's order; bring them to z, y, x
+    order = np.argsort(np.argsort([zyx[0], zyx[1], zyx[2]]))
+    values = np.transpose(values, order).astype(np.float32)
+    decoded = zfpy.decompress_numpy(zfpy.compress_numpy(padded_chunk(values, edge), rate=rate, write_header=True))
+    valid = decoded[: n[0], : n[1], : n[2]]
+    return float(valid.min()), float(valid.max())
+
+
+def ranges_only(path: str, out: str, rate: float = 8.0, time: int = 0, channel: int = 0,
+                workers: int | None = None, progress: bool = True) -> dict:
+    try:
+        node = zarr.open(path, mode="r")
+    except Exception as e:  # zarr raises many kinds for stores it cannot open
+        raise InputError(f"{path}: not a readable Zarr store ({e})") from None
+    levels, axes = _levels(node, path)
+    root = zarr.open_group(out, mode="w", zarr_format=3)
+    meta = []
+    with ThreadPoolExecutor(max_workers=workers or os.cpu_count()) as pool:
+        for L, (p, arr) in enumerate(levels):
+            index, zyx = _spatial(f"{path} level {L}", arr.shape, axes, time, channel)
+            dims = [arr.shape[a] for a in zyx]
+            edge = brick_edge(tuple(arr.chunks[a] for a in zyx))
+            grid = [-(-d // edge) for d in dims]  # z, y, x
+            bricks = [(bz, by, bx) for bz in range(grid[0]) for by in range(grid[1]) for bx in range(grid[2])]
+
+            def one(b, arr=arr, index=index, zyx=zyx, dims=dims, edge=edge):
+                lo = [b[a] * edge for a in range(3)]
+                n = [min(edge, dims[a] - lo[a]) for a in range(3)]
+                return brick_range(arr, index, zyx, lo, n, edge, rate)
+
+            out_ranges = np.array(list(pool.map(one, bricks)), dtype=np.float32).reshape(*grid, 2)
+            root.create_array(f"ranges/{L}", data=out_ranges, chunks=out_ranges.shape)
+            meta.append({"path": p, "brick": edge, "grid": [grid[2], grid[1], grid[0]], "dims": [dims[2], dims[1], dims[0]]})
+            if progress:
+                print(f"level {L}: {len(bricks)} bricks of {edge}^3, range {out_ranges[..., 0].min():g} .. {out_ranges[..., 1].max():g}")
+    info = {"source": path, "rate": rate, "time": time, "channel": channel, "levels": meta}
+    root.attrs[ATTR] = info
+    return info
