@@ -126,7 +126,7 @@ describe('a store behind a misbehaving server', () => {
     expect(level.stderr).toMatch(/--level 9 does not exist \(levels 0 to \d\)[\s\S]*usage:/);
     const none = await cli('extract', `${base}/none.zarr`, '--iso', '20');
     expect(none.status).toBe(1);
-    expect(none.stderr).toMatch(/none\.zarr: no zarr\.json at its root/);
+    expect(none.stderr).toMatch(/none\.zarr: no zarr\.json, \.zgroup or \.zarray at its root/);
     expect(none.stderr).not.toMatch(/usage:/);
     const forbidden = await cli('extract', `${base}/${faultPrefix({ rate: 1, seed: 1, kinds: ['403'] })}/hydrogen.zarr`, '--iso', '20');
     expect(forbidden.status).toBe(1);
