@@ -19,6 +19,8 @@ export default defineConfig({
       },
     },
   },
+  // Module workers (src/store/decode/brick-worker.ts): zarrita loads its codecs with dynamic imports.
+  worker: { format: 'es' },
   server: { port: 5173 },
   preview: { port: 4173 },
 });

@@ -3,7 +3,8 @@
 // server: `?store=` shows its levels coarse to fine, each brick compressed
 // on the GPU as it arrives; the panel names the codec and the type; level
 // 0's triangles equal the CLI's on the same store; the link keeps the GPU
-// rate; long main-thread tasks while chunks decode are recorded.
+// rate; chunks are decoded in Web Workers, and long main-thread tasks while
+// they stream are recorded.
 import { execFileSync } from 'node:child_process';
 import { mkdirSync, rmSync } from 'node:fs';
 import { join } from 'node:path';
@@ -79,6 +80,7 @@ test('?store= of a zstd store: levels coarse to fine, codec and type named, leve
   await expect(page.locator('#store-section dd[data-k="format"]')).toHaveText('Zarr v3');
   await expect(page.locator('#store-section input[data-choice="storeRate"]')).toHaveValue('8');
   await expect(page.locator('#store-progress')).toContainText('level 0 (full resolution)');
+  await expect(page.locator('#messages')).toContainText(/chunks are decoded in \d Web Workers/);
   const cli = await runCli<{ isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', '--iso', '80', '--rate', '8']);
   expect(await trianglesShown(page)).toBe(cli.isosurfaces[0].triangles);
   await expect.poll(() => new URL(page.url()).hash).toContain('rate=8');
@@ -101,4 +103,24 @@ test('?store= of a zstd store: levels coarse to fine, codec and type named, leve
   const cli4 = await runCli<{ isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', '--iso', '80', '--rate', '4']);
   expect(await trianglesShown(page)).toBe(cli4.isosurfaces[0].triangles);
   expect(errors.list).toEqual([]);
+});
+
+test('a picked folder of lossless chunks opens the same way, decoded in workers from the picked files', async ({ page }) => {
+  test.setTimeout(300_000);
+  const logged = watchErrors(page);
+  await openApp(page, '/#iso=80');
+  await page.locator('input[webkitdirectory]').setInputFiles(store);
+  await page.waitForFunction(
+    () => {
+      const s = (window as unknown as { zfpisoStore?: { done: boolean; shownLevel: number } }).zfpisoStore;
+      return s?.done === true && s.shownLevel === 0;
+    },
+    null,
+    { timeout: 240_000 },
+  );
+  await expect(page.locator('#messages')).toContainText(/chunks are decoded in \d Web Workers/);
+  await expect(page.locator('#store-section dd[data-k="codec"]')).toHaveText('bytes + zstd');
+  const cli = await runCli<{ isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', '--iso', '80', '--rate', '8']);
+  expect(await trianglesShown(page)).toBe(cli.isosurfaces[0].triangles);
+  expect(logged).toEqual([]);
 });

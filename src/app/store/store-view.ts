@@ -121,6 +121,7 @@ export class StoreView {
   /** Stops a store: no more requests; its controller is destroyed unless one of its levels is still on screen. */
   #stop(o: OpenStore): void {
     o.fetcher.cancelAll();
+    o.store.close?.();
     if (!o.current) o.controller.destroy();
   }
 
@@ -143,7 +144,13 @@ export class StoreView {
     this.#line(`Opening ${url}…`);
     let f: ChunkFetcher;
     try {
-      store = await openStore(metered, url, { rate: choice.storeRate, time: choice.time, channel: choice.channel, ranges });
+      store = await openStore(metered, url, {
+        rate: choice.storeRate,
+        time: choice.time,
+        channel: choice.channel,
+        ranges,
+        decodeWorkers: true,
+      });
       f = new ChunkFetcher(store, { maxInFlight: 8 });
       controller = await createChunkStream(store, f, this.d.gpu(), this.d.budgetBytes());
     } catch (e) {

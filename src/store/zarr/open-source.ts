@@ -10,10 +10,13 @@ import { isObject, type Json, levelPaths, multiscaleOf, voxelSizeOf, zfpChunkByt
 import type { MetadataMemo } from './metadata.ts';
 import type { OpenStoreOptions, StoreLevel, ZfpStore } from './open-store.ts';
 import { openRangesSidecar, type RangesSidecar } from './ranges-sidecar.ts';
+import { BrickWorkerPool } from '../decode/brick-pool.ts';
+import { storeSpecOf } from '../decode/store-spec.ts';
 import type { RetryingStore } from './retrying-store.ts';
 import {
   axesOf,
   BrickReader,
+  type BrickSource,
   checkSourceMeta,
   codecNames,
   DEFAULT_SOURCE_RATE,
@@ -109,7 +112,7 @@ export async function openSourceStore(
     }
     const axes = axesOf(where, array.shape, omeAxes, { time: options.time, channel: options.channel });
     info ??= { time: axes.time, channel: axes.channel, axes: axes.names };
-    const level = sourceLevel(where, array, axes, rate, zfpChunkBytes);
+    const level = sourceLevel(path, where, array, axes, rate, zfpChunkBytes);
     sources.push(level);
     const { chunkGrid } = level.layout;
     levels.push({
@@ -147,7 +150,20 @@ export async function openSourceStore(
     notes.push(
       `levels ${unusable.map((l) => l.index).join(', ')} cannot be shown (${unusable[0].unusable}); the finest shown is level ${unusable.at(-1)!.index + 1}`,
     );
-  const reader = new BrickReader(sources, options.sourceCacheBytes);
+  // off the main thread where workers exist and can open the store again (the page); here otherwise (the CLI, tests)
+  const spec = options.decodeWorkers && typeof Worker !== 'undefined' ? storeSpecOf(metered) : null;
+  const reader: BrickSource = spec
+    ? new BrickWorkerPool(
+        sources,
+        spec,
+        format,
+        metered.meter,
+        retrying.counters,
+        typeof options.decodeWorkers === 'number' ? options.decodeWorkers : undefined,
+        options.sourceCacheBytes,
+      )
+    : new BrickReader(sources, options.sourceCacheBytes);
+  if (spec) notes.push(`chunks are decoded in ${(reader as BrickWorkerPool).workerCount} Web Workers`);
   const axisUnit = (axis: string) => {
     const a = axesJson?.find((x) => typeof x !== 'string' && x?.name === axis) as Json | undefined;
     return typeof a?.unit === 'string' ? a.unit : null;
@@ -175,6 +191,7 @@ export async function openSourceStore(
     unit: axisUnit('x'),
     valueRange: null,
     isAbsent: () => false,
+    close: () => reader.destroy?.(),
     readChunk: (level, brick, opts) => reader.read(level, brick, opts),
     sourceDecode: () => ({ chunks: reader.counters.chunksDecoded, bytes: reader.counters.bytesDecoded, ms: reader.counters.decodeMs }),
     sourceValueRange: (level) => {

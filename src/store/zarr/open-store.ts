@@ -60,6 +60,8 @@ export interface ZfpStore {
   metadataBytes: number;
   /** The chunk's stored bytes, checked (an absent chunk: the fill value's stream); rejects with StoreError (or an AbortError). */
   readChunk(level: number, chunk: ChunkIndex, options?: GetOptions): Promise<Uint8Array>;
+  /** Stops what the store runs for its reads (decode workers); reads after it fail. */
+  close?(): void;
   /** Whether readChunk's bytes stand for a chunk absent from the store (nothing was transferred for them). */
   isAbsent(bytes: Uint8Array): boolean;
   /** A store of lossless chunks: [min, max] of the source values (as float32) of the level's bricks read so far, or null. */
@@ -218,6 +220,8 @@ export interface OpenStoreOptions {
   /** Stores with a time or channel axis: which one is shown (default 0). */
   time?: number;
   channel?: number;
+  /** Stores of lossless chunks: decode in Web Workers (true: as many as the machine suggests), where they exist (the page). */
+  decodeWorkers?: boolean | number;
   /** Stores of lossless chunks: per-brick ranges written apart (ranges-sidecar.ts), `name` for messages. */
   ranges?: { store: AsyncReadable; name: string };
   /** Stores of lossless chunks: CPU bytes of decoded source chunks kept while neighbouring bricks need them (default 256 MiB). */

@@ -65,6 +65,8 @@ export interface SourceInfo {
 
 /** One level: its source array and how bricks map onto its chunks. */
 export interface SourceLevel {
+  /** The array's path in the store ("" for a store that is one array). */
+  path: string;
   array: zarr.Array<zarr.DataType, zarr.Readable>;
   /** Axis positions of x, y, z in the array's shape. */
   spatial: [number, number, number];
@@ -192,6 +194,7 @@ export function axesOf(
 
 /** The level's layout of bricks and its source array's axes; throws StoreError on what cannot be read. */
 export function sourceLevel(
+  path: string,
   where: string,
   array: zarr.Array<zarr.DataType, zarr.Readable>,
   axes: ReturnType<typeof axesOf>,
@@ -228,6 +231,7 @@ export function sourceLevel(
       `${where}: ${chunkGrid.join(' x ')} bricks of ${edge}^3; this reader takes at most ${MAX_BRICKS} per level`,
     );
   return {
+    path,
     array,
     spatial: axes.spatial,
     fixed: axes.fixed,
@@ -259,12 +263,22 @@ interface DecodedChunk {
   bytes: number;
 }
 
+/** Where bricks come from: a BrickReader here, or a pool of workers running one each (src/store/decode/). */
+export interface BrickSource {
+  /** Brick `brick` of level `level`: C^3 float32 values (x fastest) as bytes, padded as zfp pads. */
+  read(level: number, brick: ChunkIndex, options?: GetOptions): Promise<Uint8Array>;
+  readonly counters: { chunksDecoded: number; bytesDecoded: number; decodeMs: number };
+  /** Per level, [min, max] of the source values of the bricks read so far. */
+  readonly valueRanges: Array<[number, number]>;
+  destroy?(): void;
+}
+
 /**
  * Reads bricks of source levels: the chunks a brick overlaps, each fetched
  * and decoded once while neighbours need it (an LRU of decoded chunks
  * bounded in bytes; requests of several bricks for one chunk share it).
  */
-export class BrickReader {
+export class BrickReader implements BrickSource {
   readonly #decoded: ByteLru<string, DecodedChunk>;
   readonly #inFlight = new Map<string, Promise<DecodedChunk>>();
   /** Decoded (not stored) bytes of source chunks read, and how many. */

@@ -94,7 +94,7 @@ export class SimulatedLinkStore implements AsyncReadable {
 }
 
 /** Something with the bytes of a file, read in parts (a DOM File or Blob). */
-interface BlobLike {
+export interface BlobLike {
   readonly size: number;
   slice(start?: number, end?: number): { arrayBuffer(): Promise<ArrayBuffer> };
 }
