@@ -1,4 +1,5 @@
-// `npm run bench:stream [-- --size N --repeats R --iso-fraction F --budget-mb M --only bonsai|gen --faults F --links localhost,link]`:
+// `npm run bench:stream [-- --size N --repeats R --iso-fraction F --budget-mb M --only bonsai|gen --faults F --links localhost,link]`
+// (`-- --codec zstd,blosc,gzip`: stores of lossless chunks, stream-codec.ts):
 // stores served over HTTP on localhost (the dev server's /stores/
 // middleware) and through a simulated link (100 Mbit/s, 20 ms per request,
 // in the fetch layer). The path is the stream controller's (the page's and
@@ -39,6 +40,7 @@ import { printTable, summarize, writeJson } from './lib/report.ts';
 import { chunkedGpu, createChunkStream } from '../src/store/gpu-port.ts';
 import { SCALE_HEADER, scaleRun, scaleStoreName, scaleTable } from './stream-scale.ts';
 import { execFileSync } from 'node:child_process';
+import { codecBench } from './stream-codec.ts';
 
 const root = fileURLToPath(new URL('..', import.meta.url));
 const args = process.argv.slice(2);
@@ -70,13 +72,7 @@ function convert(input: string, name: string, extra: string[]): void {
   );
 }
 
-async function main() {
-  const gpu = await requestNodeGpu({ label: 'bench.stream' });
-  convert(join(root, '../shared/data/volumes/bonsai_256x256x256_float32.rate4.zfp'), 'bonsai.zarr', ['--rate', '4']);
-  const sizes: number[] = [];
-  for (let n = 512; n <= size; n *= 2) sizes.push(n);
-  if (only !== 'bonsai') for (const n of sizes) convert(`gen:${n}x${n}x${n}`, scaleStoreName(n), ['--rate', '1', '--shard', '8']);
-  const faults = new FaultInjector();
+async function serve(faults: FaultInjector) {
   const mw = storesMiddleware(folder, faults);
   const server = createServer((req, res) =>
     mw(req, res, () => {
@@ -85,7 +81,36 @@ async function main() {
     }),
   );
   await new Promise<void>((r) => server.listen(0, '127.0.0.1', () => r()));
-  const port = (server.address() as { port: number }).port;
+  return { server, port: (server.address() as { port: number }).port };
+}
+
+/** --codec zstd,blosc,gzip: stores of lossless chunks against the zfp store (stream-codec.ts). */
+async function codecMain(codecs: string[]) {
+  const gpu = await requestNodeGpu({ label: 'bench.stream.codec' });
+  const { server, port } = await serve(new FaultInjector());
+  const codecSize = args.includes('--size') ? size : 256;
+  const records = await codecBench(gpu, { root, folder, port, server, size: codecSize, repeats, codecs, links, budgetBytes });
+  server.closeAllConnections();
+  server.close();
+  writeJson(opt('json', join(root, 'benchmarks/results/stream-codec-swiftshader.json')), {
+    date: new Date().toISOString(),
+    adapter: describeAdapter(gpu.adapter),
+    size: codecSize,
+    repeats,
+    budgetBytes,
+    records,
+  });
+  gpu.device.destroy();
+}
+
+async function main() {
+  const gpu = await requestNodeGpu({ label: 'bench.stream' });
+  convert(join(root, '../shared/data/volumes/bonsai_256x256x256_float32.rate4.zfp'), 'bonsai.zarr', ['--rate', '4']);
+  const sizes: number[] = [];
+  for (let n = 512; n <= size; n *= 2) sizes.push(n);
+  if (only !== 'bonsai') for (const n of sizes) convert(`gen:${n}x${n}x${n}`, scaleStoreName(n), ['--rate', '1', '--shard', '8']);
+  const faults = new FaultInjector();
+  const { server, port } = await serve(faults);
   const rows: (string | number)[][] = [];
   const records: Record<string, unknown>[] = [];
   for (const name of ['bonsai.zarr'].filter((n) => !only || n.startsWith(only))) {
@@ -256,4 +281,6 @@ async function main() {
   });
   gpu.device.destroy();
 }
-await main();
+const codecs = opt('codec', '');
+if (codecs) await codecMain(codecs.split(','));
+else await main();
