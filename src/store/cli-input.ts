@@ -9,6 +9,7 @@ import { defaultMemoryBudget } from '../isosurface/budget.ts';
 import { ChunkFetcher } from './fetch/chunk-fetcher.ts';
 import { chunkedGpu, createChunkStream, storeEncoder } from './gpu-port.ts';
 import { PinnedLevelSurface } from './pinned-level.ts';
+import { storeRateChooser } from './rate.ts';
 import { StoreError } from './zarr/errors.ts';
 import { isStoreUrl, storeForLocation } from './zarr/node-store.ts';
 import { openStore } from './zarr/open-store.ts';
@@ -100,6 +101,7 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
   const store = await openStore(metered, input, {
     ...(opts.deadlineMs === undefined ? {} : { retry: { deadlineMs: opts.deadlineMs } }),
     rate: opts.rate,
+    chooseRate: storeRateChooser(gpu),
     time: opts.time,
     channel: opts.channel,
     ...(opts.ranges === undefined ? {} : { ranges: { store: storeForLocation(opts.ranges), name: opts.ranges } }),

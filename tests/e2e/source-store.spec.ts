@@ -2,8 +2,8 @@
 // 3 levels written by zarr-python from neghip) served by the preview
 // server: `?store=` shows its levels coarse to fine, each brick compressed
 // on the GPU as it arrives; the panel names the codec and the type; level
-// 0's triangles equal the CLI's on the same store; the link keeps the GPU
-// rate; chunks are decoded in Web Workers, and long main-thread tasks while
+// 0's triangles equal the CLI's on the same store (the rate chosen from the
+// data by both); the link keeps the GPU rate; chunks are decoded in Web Workers, and long main-thread tasks while
 // they stream are recorded.
 import { execFileSync } from 'node:child_process';
 import { mkdirSync, rmSync } from 'node:fs';
@@ -78,17 +78,20 @@ test('?store= of a zstd store: levels coarse to fine, codec and type named, leve
   await expect(page.locator('#store-section dd[data-k="codec"]')).toHaveText('bytes + zstd');
   await expect(page.locator('#store-section dd[data-k="dtype"]')).toContainText('uint8');
   await expect(page.locator('#store-section dd[data-k="format"]')).toHaveText('Zarr v3');
-  await expect(page.locator('#store-section input[data-choice="storeRate"]')).toHaveValue('8');
   await expect(page.locator('#store-progress')).toContainText('level 0 (full resolution)');
   await expect(page.locator('#messages')).toContainText(/chunks are decoded in \d Web Workers/);
-  const cli = await runCli<{ isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', '--iso', '80', '--rate', '8']);
+  // no rate asked for: chosen from the data (issue 30's rule), as the CLI chooses it
+  await expect(page.locator('#messages')).toContainText(/rate \d+ chosen from the data/);
+  const cli = await runCli<{ rate: number; isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', '--iso', '80']);
+  await expect(page.locator('#store-section input[data-choice="storeRate"]')).toHaveValue(String(cli.rate));
   expect(await trianglesShown(page)).toBe(cli.isosurfaces[0].triangles);
-  await expect.poll(() => new URL(page.url()).hash).toContain('rate=8');
+  await expect.poll(() => new URL(page.url()).hash).toContain(`rate=${cli.rate}`);
   const longTasks = await page.evaluate((n) => (window as unknown as { longTasks: number[] }).longTasks.slice(n), before);
   console.log(`long main-thread tasks while the store streamed: ${longTasks.length}, longest ${Math.max(0, ...longTasks).toFixed(0)} ms`);
   expect(errors.list).toEqual([]);
 
   // another GPU rate from the panel: the store opens again at that rate, and the link says so
+  expect(cli.rate).not.toBe(4);
   await page.locator('#store-section input[data-choice="storeRate"]').fill('4');
   await page.locator('#store-section input[data-choice="storeRate"]').dispatchEvent('change');
   await expect.poll(() => new URL(page.url()).hash, { timeout: 120_000 }).toContain('rate=4');
@@ -122,7 +125,7 @@ test('a picked folder of lossless chunks opens the same way, decoded in workers 
   await expect(page.locator('#store-section dd[data-k="codec"]')).toHaveText('bytes + zstd');
   // the isovalue the page chose for the store (the link's went to the built-in volume shown first)
   const iso = await page.evaluate(() => (window as unknown as { zfpiso: { stats: { isovalue: number } } }).zfpiso.stats.isovalue);
-  const cli = await runCli<{ isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', `--iso=${iso}`, '--rate', '8']);
+  const cli = await runCli<{ isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', `--iso=${iso}`]);
   expect(await trianglesShown(page)).toBe(cli.isosurfaces[0].triangles);
   expect(logged).toEqual([]);
 });

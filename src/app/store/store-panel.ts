@@ -5,7 +5,13 @@
 // StorePageState is also what the page tests read (window.zfpisoStore).
 import type { FetchCounters } from '../../store/fetch/chunk-fetcher.ts';
 import type { ZfpStore } from '../../store/zarr/open-store.ts';
-import type { StoreChoice } from './store-view.ts';
+
+/** A store of lossless chunks: the GPU rate of its bricks, the time point and channel shown. */
+export interface StoreChoice {
+  storeRate?: number;
+  time?: number;
+  channel?: number;
+}
 
 export interface StorePageState {
   url: string;

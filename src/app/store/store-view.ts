@@ -13,6 +13,7 @@ import type { AsyncReadable } from '@zarrita/storage';
 import type { GpuContext } from '../../gpu/device.ts';
 import { ChunkFetcher } from '../../store/fetch/chunk-fetcher.ts';
 import { createChunkStream } from '../../store/gpu-port.ts';
+import { storeRateChooser } from '../../store/rate.ts';
 import type { ChunkStreamController } from '../../store/pinned-level.ts';
 import type { StreamProgress } from '../../store/stream-controller.ts';
 import { StoreError } from '../../store/zarr/errors.ts';
@@ -21,7 +22,7 @@ import { openStore, type ZfpStore } from '../../store/zarr/open-store.ts';
 import { MeteredStore } from '../../store/zarr/stores.ts';
 import { chooseIsovalue } from '../iso-choice.ts';
 import type { LoadedVolume } from '../loading/loader.ts';
-import { renderStorePanel, type StorePageState } from './store-panel.ts';
+import { renderStorePanel, type StoreChoice, type StorePageState } from './store-panel.ts';
 import { type ShownLevel, StoreLevelIsosurface } from './store-surface.ts';
 
 export type { StorePageState };
@@ -50,12 +51,7 @@ export interface StoreViewDeps {
 
 const mib = (b: number) => `${(b / 2 ** 20).toFixed(2)} MiB`;
 
-/** A store of lossless chunks: the GPU rate of its bricks, the time point and channel shown. */
-export interface StoreChoice {
-  storeRate?: number;
-  time?: number;
-  channel?: number;
-}
+export type { StoreChoice };
 
 interface OpenStore {
   url: string;
@@ -146,6 +142,7 @@ export class StoreView {
     try {
       store = await openStore(metered, url, {
         rate: choice.storeRate,
+        chooseRate: storeRateChooser(this.d.gpu()),
         time: choice.time,
         channel: choice.channel,
         ranges,

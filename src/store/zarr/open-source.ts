@@ -8,7 +8,7 @@ import { checkRate } from '../../zfp/format.ts';
 import { describeTransportError, StoreError } from './errors.ts';
 import { isObject, type Json, levelPaths, multiscaleOf, voxelSizeOf, zfpChunkBytes } from './metadata.ts';
 import type { MetadataMemo } from './metadata.ts';
-import type { OpenStoreOptions, StoreLevel, ZfpStore } from './open-store.ts';
+import type { OpenStoreOptions, StoreLevel, ZfpStore } from './store.ts';
 import { openRangesSidecar, type RangesSidecar } from './ranges-sidecar.ts';
 import { BrickWorkerPool } from '../decode/brick-pool.ts';
 import { storeSpecOf } from '../decode/store-spec.ts';
@@ -23,11 +23,26 @@ import {
   type SourceLevel,
   sourceBytesPerValue,
   sourceLevel,
+  type RateSample,
+  sampleAs,
   type SourceInfo,
   sourcePrecision,
   unusableLevel,
 } from './source-store.ts';
 import type { MeteredStore } from './stores.ts';
+
+/** Up to 8 bricks of a level, spread over it, side by side along z: what the rate is chosen from. */
+async function sampleBricks(sources: SourceLevel[], level: number, cacheBytes?: number): Promise<RateSample> {
+  const reader = new BrickReader(sources, cacheBytes);
+  const { chunkEdge: B, chunkGrid, name } = sources[level].layout;
+  const count = chunkGrid[0] * chunkGrid[1] * chunkGrid[2];
+  const k = Math.min(count, 8);
+  const picks = [...new Set(Array.from({ length: k }, (_, i) => Math.floor(((i + 0.5) * count) / k)))];
+  const values = new Float32Array(B ** 3 * picks.length);
+  const bricks = await Promise.all(picks.map((b) => reader.read(level, b)));
+  bricks.forEach((b, i) => values.set(new Float32Array(b.buffer, b.byteOffset, B ** 3), i * B ** 3));
+  return { ...sampleAs(values, sources[level].array.dtype), dims: [B, B, B * picks.length], name };
+}
 
 /**
  * True when the sidecar's bricks are this store's (levels, paths, brick
@@ -75,7 +90,9 @@ export async function openSourceStore(
   const paths = kind === 'array' ? [''] : levelPaths(attrs);
   if (!paths) throw new StoreError('not-a-store', `${name}: a Zarr group without OME-Zarr multiscales (no levels to show)`);
   const sidecar = options.ranges ? await openRangesSidecar(options.ranges.store, options.ranges.name, metered.meter, options.retry) : null;
-  const rate = options.rate ?? sidecar?.rate ?? DEFAULT_SOURCE_RATE;
+  let rate = options.rate ?? sidecar?.rate ?? DEFAULT_SOURCE_RATE;
+  const rateHow: SourceInfo['rateHow'] =
+    options.rate !== undefined ? 'given' : sidecar ? 'sidecar' : options.chooseRate ? 'chosen' : 'default';
   try {
     checkRate(name, rate, 'asked for');
   } catch (e) {
@@ -130,12 +147,27 @@ export async function openSourceStore(
   }
   const unusable = levels.filter((l) => l.unusable);
   if (unusable.length === levels.length) throw new StoreError('layout', unusable[0].unusable!);
+  let rateNote: string | null = null;
+  if (rateHow === 'chosen') {
+    // The finest level whose bricks are its chunks of at most 64^3 (8 chunks fetched: cheap), else the coarsest:
+    // coarse levels are means, smoother than the data, and may ask for a lower rate than full resolution needs.
+    const shown = levels.filter((l) => !l.unusable).map((l) => sources[l.index]);
+    const from = shown.find((l) => l.layout.chunkEdge <= 64 && l.chunkXYZ.every((c) => c === l.layout.chunkEdge)) ?? shown.at(-1)!;
+    const chosen = await options.chooseRate!(await sampleBricks(sources, sources.indexOf(from), options.sourceCacheBytes));
+    rate = chosen.rate;
+    rateNote = `${chosen.description} (${from.layout.name})`;
+    for (const l of sources) {
+      l.layout.rate = rate;
+      l.layout.chunkBytes = zfpChunkBytes(l.layout.chunkEdge, rate);
+    }
+  }
   const a0 = sources[0].array;
   const codecs = codecNames(firstMeta!, format).shown;
   const cube = sources[0].layout.chunkEdge === sources[0].chunkXYZ[0] && sources[0].chunkXYZ.every((c) => c === sources[0].chunkXYZ[0]);
   const notes = [
     `lossless chunks (${codecs.join(' + ') || 'uncompressed'}, ${a0.dtype}): each ${sources[0].layout.chunkEdge}^3 brick is compressed on the GPU at rate ${rate} as it arrives`,
   ];
+  if (rateNote) notes.push(rateNote);
   const usable = sidecar ? sidecarFits(sidecar, levels, rate, info!) : null;
   if (sidecar && usable === true) {
     for (const l of levels) l.rangesPath = `${sidecar.name} ranges/${l.index}`;
@@ -182,6 +214,8 @@ export async function openSourceStore(
       channel: info!.channel,
       bricks: cube ? 'chunks' : `bricks of ${sources[0].layout.chunkEdge}^3`,
       rate,
+      rateHow,
+      rateNote,
       precision: sourcePrecision(a0.dtype),
     },
     meter: metered.meter,

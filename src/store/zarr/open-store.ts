@@ -4,7 +4,7 @@
 // chunk bytes as stored (zfpy-passthrough.ts). Everything a level needs is
 // checked before any chunk is fetched; each chunk is checked as it arrives
 // (size and zfp header), so the GPU only ever sees well-formed streams.
-import type { AbsolutePath, AsyncReadable, GetOptions } from '@zarrita/storage';
+import type { AbsolutePath, AsyncReadable } from '@zarrita/storage';
 import * as zarr from 'zarrita';
 import { constantChunkStream } from '../../zfp/cpu/constant-stream.ts';
 import { bitsPerBlockForRate } from '../../zfp/format.ts';
@@ -13,64 +13,14 @@ import { parseZfpHeader } from '../../zfp/header.ts';
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
 export { chunkCoords, zfpChunkBytes } from './metadata.ts';
 import { describeTransportError, RequestFailedError, StoreError } from './errors.ts';
-import { type RetryCounters, type RetryPolicy, RetryingStore } from './retrying-store.ts';
+import { RetryingStore } from './retrying-store.ts';
 import { chunkCoords, isObject, type Json, levelPaths, MetadataMemo, voxelSizeOf, zfpChunkBytes } from './metadata.ts';
 export { MetadataMemo } from './metadata.ts';
 import { openSourceStore } from './open-source.ts';
-import type { SourceInfo } from './source-store.ts';
-import { MeteredStore, type StoreMeter } from './stores.ts';
+import type { OpenStoreOptions, StoreLevel, ZfpStore } from './store.ts';
+export type { OpenStoreOptions, StoreLevel, ZfpStore } from './store.ts';
+import { MeteredStore } from './stores.ts';
 import { registerZfpyPassThrough, ZFPY_CODEC, ZFPY_FIXED_RATE_MODE } from './zfpy-passthrough.ts';
-
-export interface StoreLevel {
-  /** 0 = finest. */
-  index: number;
-  /** The array's path in the store ("0", "1", ...; "" for a store that is one array). */
-  path: string;
-  layout: ChunkLevelLayout;
-  /** Inner chunks per shard edge, 1 when unsharded. */
-  shardChunks: number;
-  chunkCount: number;
-  /** chunkCount x chunkBytes: what fetching the whole level costs. */
-  storedBytes: number;
-  /** Path of the per-chunk [min, max] array, or null (ranges come from the GPU as chunks arrive). */
-  rangesPath: string | null;
-  /** Leading axes of length 1 (OME t, c) dropped from the array's shape. */
-  leadingAxes: number;
-  /** Why this level cannot be shown (a limit it exceeds), or null. */
-  unusable: string | null;
-}
-
-export interface ZfpStore {
-  name: string;
-  levels: StoreLevel[];
-  /** x, y, z of level 0 (1, 1, 1 when the store does not say). */
-  voxelSize: [number, number, number];
-  unit: string | null;
-  /** Decoded level-0 [min, max] from our attributes, else null. */
-  valueRange: [number, number] | null;
-  /** Things a user should know (an unfinished store, no range arrays). */
-  notes: string[];
-  /** A store of lossless chunks (compressed on the GPU as bricks arrive): its format, codecs, type, axes, rate; null for zfp stores. */
-  source: SourceInfo | null;
-  /** Every byte and request through the store (metadata included; every try of a retried request counts). */
-  meter: StoreMeter;
-  /** Tries after failures, requests that failed for good, faults seen (retrying-store.ts). */
-  retries: RetryCounters;
-  /** Bytes read while opening (metadata). */
-  metadataBytes: number;
-  /** The chunk's stored bytes, checked (an absent chunk: the fill value's stream); rejects with StoreError (or an AbortError). */
-  readChunk(level: number, chunk: ChunkIndex, options?: GetOptions): Promise<Uint8Array>;
-  /** Stops what the store runs for its reads (decode workers); reads after it fail. */
-  close?(): void;
-  /** Whether readChunk's bytes stand for a chunk absent from the store (nothing was transferred for them). */
-  isAbsent(bytes: Uint8Array): boolean;
-  /** A store of lossless chunks: [min, max] of the source values (as float32) of the level's bricks read so far, or null. */
-  sourceValueRange?(level: number): [number, number] | null;
-  /** A store of lossless chunks: source chunks decoded, their decoded bytes and the CPU time it took (ms, fetch waits included). */
-  sourceDecode?(): { chunks: number; bytes: number; ms: number };
-  /** [min, max] per chunk (chunk index order), or null when the store has no range arrays. */
-  readRanges(level: number, options?: GetOptions): Promise<Float32Array | null>;
-}
 
 /** Sane limits for sizes read from a store (hostile metadata must not allocate). */
 const MAX_EDGE = 2 ** 31;
@@ -210,22 +160,6 @@ export function checkChunk(layout: ChunkLevelLayout, chunk: ChunkIndex, bytes: U
       `${where}: its zfp header says ${header.mode.kind} with ${header.mode.maxBits} bits per block, the level is fixed rate ${layout.rate}`,
     );
   }
-}
-
-export interface OpenStoreOptions {
-  /** How requests are tried again (retrying-store.ts; tests shorten the waits). */
-  retry?: RetryPolicy;
-  /** Stores of lossless chunks: the GPU's zfp rate for their bricks (default DEFAULT_SOURCE_RATE, 8). zfp stores keep their own. */
-  rate?: number;
-  /** Stores with a time or channel axis: which one is shown (default 0). */
-  time?: number;
-  channel?: number;
-  /** Stores of lossless chunks: decode in Web Workers (true: as many as the machine suggests), where they exist (the page). */
-  decodeWorkers?: boolean | number;
-  /** Stores of lossless chunks: per-brick ranges written apart (ranges-sidecar.ts), `name` for messages. */
-  ranges?: { store: AsyncReadable; name: string };
-  /** Stores of lossless chunks: CPU bytes of decoded source chunks kept while neighbouring bricks need them (default 256 MiB). */
-  sourceCacheBytes?: number;
 }
 
 /**

@@ -42,6 +42,23 @@ const DTYPES: Record<string, { bytes: number; exact: string }> = {
   float64: { bytes: 8, exact: 'rounded to float32 (24 significant bits, range ±3.4e38)' },
 };
 
+/** Bricks of a level side by side along z, as the rate chooser takes a volume. */
+export interface RateSample {
+  bytes: Uint8Array;
+  /** The source's type when float32 holds it exactly and the encoder reads it (8/16-bit integers, float32), else float32. */
+  dtype: 'uint8' | 'int8' | 'uint16' | 'int16' | 'float32';
+  dims: [number, number, number];
+  name: string;
+}
+
+/** The sample's bytes in `dtype` (exact: the values came from it). */
+export function sampleAs(values: Float32Array, source: string): Pick<RateSample, 'bytes' | 'dtype'> {
+  const ctor = { uint8: Uint8Array, int8: Int8Array, uint16: Uint16Array, int16: Int16Array }[source];
+  if (!ctor) return { bytes: new Uint8Array(values.buffer, values.byteOffset, values.byteLength), dtype: 'float32' };
+  const typed = ctor.from(values);
+  return { bytes: new Uint8Array(typed.buffer), dtype: source as RateSample['dtype'] };
+}
+
 /** What the Store panel and the record say about a store of lossless chunks. */
 export interface SourceInfo {
   /** 'Zarr v2' or 'Zarr v3'. */
@@ -59,6 +76,10 @@ export interface SourceInfo {
   bricks: string;
   /** The GPU's rate for the bricks (bits per value). */
   rate: number;
+  /** How it was set: asked for (link, panel, --rate), the ranges sidecar's, chosen from the data, or the default. */
+  rateHow: 'given' | 'sidecar' | 'chosen' | 'default';
+  /** The choice in words (chosen only). */
+  rateNote: string | null;
   /** How converting to float32 treats the values. */
   precision: string;
 }
