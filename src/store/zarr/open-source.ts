@@ -31,12 +31,16 @@ import {
 } from './source-store.ts';
 import type { MeteredStore } from './stores.ts';
 
-/** Up to 8 bricks of a level, spread over it, side by side along z: what the rate is chosen from. */
+/**
+ * Bricks of a level spread over it, side by side along z: what the rate is
+ * chosen from. As many as 8 Mi voxels hold (64 at most, at least one): a few
+ * small bricks can all fall in empty space and ask for too low a rate.
+ */
 async function sampleBricks(sources: SourceLevel[], level: number, cacheBytes?: number): Promise<RateSample> {
   const reader = new BrickReader(sources, cacheBytes);
   const { chunkEdge: B, chunkGrid, name } = sources[level].layout;
   const count = chunkGrid[0] * chunkGrid[1] * chunkGrid[2];
-  const k = Math.min(count, 8);
+  const k = Math.min(count, 64, Math.max(1, Math.floor(2 ** 23 / B ** 3)));
   const picks = [...new Set(Array.from({ length: k }, (_, i) => Math.floor(((i + 0.5) * count) / k)))];
   const values = new Float32Array(B ** 3 * picks.length);
   const bricks = await Promise.all(picks.map((b) => reader.read(level, b)));
@@ -149,7 +153,7 @@ export async function openSourceStore(
   if (unusable.length === levels.length) throw new StoreError('layout', unusable[0].unusable!);
   let rateNote: string | null = null;
   if (rateHow === 'chosen') {
-    // The finest level whose bricks are its chunks of at most 64^3 (8 chunks fetched: cheap), else the coarsest:
+    // The finest level whose bricks are its chunks of at most 64^3 (a few chunks fetched: cheap), else the coarsest:
     // coarse levels are means, smoother than the data, and may ask for a lower rate than full resolution needs.
     const shown = levels.filter((l) => !l.unusable).map((l) => sources[l.index]);
     const from = shown.find((l) => l.layout.chunkEdge <= 64 && l.chunkXYZ.every((c) => c === l.layout.chunkEdge)) ?? shown.at(-1)!;
