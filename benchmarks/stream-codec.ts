@@ -25,10 +25,10 @@ import { ChunkFetcher } from '../src/store/fetch/chunk-fetcher.ts';
 import { createChunkStream } from '../src/store/gpu-port.ts';
 import { HttpStore } from '../src/store/zarr/http-store.ts';
 import { openStore } from '../src/store/zarr/open-store.ts';
-import { MeteredStore, SimulatedLinkStore } from '../src/store/zarr/stores.ts';
 import { ChunkedVolume } from '../src/zfp/chunked-volume.ts';
 import { encoderFor } from '../src/zfp/encoder.ts';
 import { printTable, summarize } from './lib/report.ts';
+import { linkStore } from './stream-scale.ts';
 
 const MAKE_STORES = `
 import sys, numpy as np, dask.array as da, zarr, numcodecs
@@ -137,10 +137,7 @@ export async function codecBench(gpu: GpuContext, o: CodecBenchOptions): Promise
       let bytes = 0;
       let triangles = 0;
       for (let r = 0; r < o.repeats; r++) {
-        const inner = new HttpStore(url);
-        const metered = new MeteredStore(
-          link === 'localhost' ? inner : new SimulatedLinkStore(inner, { mbitPerSecond: 100, latencyMs: 20 }),
-        );
+        const metered = linkStore(url, link);
         const t0 = performance.now();
         const store = await openStore(metered, url);
         const fetcher = new ChunkFetcher(store);

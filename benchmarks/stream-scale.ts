@@ -74,10 +74,7 @@ export async function scaleRun(
       const runs: ScaleRow[] = [];
       for (let r = 0; r < repeats; r++) {
         const url = `${baseUrl}/${name}`;
-        const inner = new HttpStore(url);
-        const metered = new MeteredStore(
-          link === 'localhost' ? inner : new SimulatedLinkStore(inner, { mbitPerSecond: 100, latencyMs: 20 }),
-        );
+        const metered = linkStore(url, link);
         const t0 = performance.now();
         const store = await openStore(metered, url);
         const fetcher = new ChunkFetcher(store);
@@ -181,6 +178,12 @@ export function scaleTable(rows: ScaleRow[]): (string | number)[][] {
     }
   }
   return out;
+}
+
+/** The store at `url` over localhost, or through the simulated link (100 Mbit/s, 20 ms per request), metered. */
+export function linkStore(url: string, link: string): MeteredStore {
+  const inner = new HttpStore(url);
+  return new MeteredStore(link === 'localhost' ? inner : new SimulatedLinkStore(inner, { mbitPerSecond: 100, latencyMs: 20 }));
 }
 
 export const SCALE_HEADER = [

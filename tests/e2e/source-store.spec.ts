@@ -8,13 +8,24 @@
 import { execFileSync } from 'node:child_process';
 import { mkdirSync, rmSync } from 'node:fs';
 import { join } from 'node:path';
-import { expect, test } from '@playwright/test';
+import { expect, type Page, test } from '@playwright/test';
 import { E2E_STORES_DIR, runCli, SHARED_VOLUMES_DIR } from './cli.ts';
 import { openApp, watchErrors } from './page.ts';
 import { trianglesShown } from './volume-page.ts';
 
 const root = join(import.meta.dirname, '..', '..');
 let store = '';
+
+/** Waits until the store's refinement has ended with level 0 on screen. */
+const level0Shown = (page: Page) =>
+  page.waitForFunction(
+    () => {
+      const s = (window as unknown as { zfpisoStore?: { done: boolean; shownLevel: number } }).zfpisoStore;
+      return s?.done === true && s.shownLevel === 0;
+    },
+    null,
+    { timeout: 240_000 },
+  );
 
 test.beforeAll(() => {
   store = join(E2E_STORES_DIR, 'neghip-zstd.zarr');
@@ -95,14 +106,7 @@ test('?store= of a zstd store: levels coarse to fine, codec and type named, leve
   await page.locator('#store-section input[data-choice="storeRate"]').fill('4');
   await page.locator('#store-section input[data-choice="storeRate"]').dispatchEvent('change');
   await expect.poll(() => new URL(page.url()).hash, { timeout: 120_000 }).toContain('rate=4');
-  await page.waitForFunction(
-    () => {
-      const s = (window as unknown as { zfpisoStore?: { done: boolean; shownLevel: number } }).zfpisoStore;
-      return s?.done === true && s.shownLevel === 0;
-    },
-    null,
-    { timeout: 240_000 },
-  );
+  await level0Shown(page);
   const cli4 = await runCli<{ isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', '--iso', '80', '--rate', '4']);
   expect(await trianglesShown(page)).toBe(cli4.isosurfaces[0].triangles);
   expect(errors.list).toEqual([]);
@@ -113,14 +117,7 @@ test('a picked folder of lossless chunks opens the same way, decoded in workers 
   const logged = watchErrors(page);
   await openApp(page, '/');
   await page.locator('input[webkitdirectory]').setInputFiles(store);
-  await page.waitForFunction(
-    () => {
-      const s = (window as unknown as { zfpisoStore?: { done: boolean; shownLevel: number } }).zfpisoStore;
-      return s?.done === true && s.shownLevel === 0;
-    },
-    null,
-    { timeout: 240_000 },
-  );
+  await level0Shown(page);
   await expect(page.locator('#messages')).toContainText(/chunks are decoded in \d Web Workers/);
   await expect(page.locator('#store-section dd[data-k="codec"]')).toHaveText('bytes + zstd');
   // the isovalue the page chose for the store (the link's went to the built-in volume shown first)
