@@ -44,7 +44,7 @@ export interface StoreRecord {
   /** A store of lossless chunks: [min, max] of the source values of the level's bricks read (all of it once the level was read whole). */
   sourceValueRange: [number, number] | null;
   /** A store of lossless chunks: source chunks decoded (count, decoded bytes, ms from request to decoded, summed over chunks). */
-  sourceDecode: { chunks: number; bytes: number; ms: number } | null;
+  sourceDecode: { chunks: number; bytes: number; ms: number; nonFinite: number } | null;
   /** Level 0's voxel size (x, y, z) and unit, from the store's metadata. */
   voxelSize: [number, number, number];
   unit: string | null;

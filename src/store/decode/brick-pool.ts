@@ -20,7 +20,7 @@ export function brickWorkerCount(): number {
 }
 
 export class BrickWorkerPool implements BrickSource {
-  readonly counters = { chunksDecoded: 0, bytesDecoded: 0, decodeMs: 0 };
+  readonly counters = { chunksDecoded: 0, bytesDecoded: 0, decodeMs: 0, nonFinite: 0 };
   readonly valueRanges: Array<[number, number]>;
   readonly #workers: Worker[];
   readonly #decodeByWorker: BrickSource['counters'][];
@@ -58,7 +58,7 @@ export class BrickWorkerPool implements BrickSource {
     this.#decodeByWorker = [];
     this.#workers = Array.from({ length: count }, (_, i) => {
       const w = new Worker(new URL('./brick-worker.ts', import.meta.url), { type: 'module', name: `bricks ${i}` });
-      this.#decodeByWorker.push({ chunksDecoded: 0, bytesDecoded: 0, decodeMs: 0 });
+      this.#decodeByWorker.push({ chunksDecoded: 0, bytesDecoded: 0, decodeMs: 0, nonFinite: 0 });
       w.onmessage = (e: MessageEvent<BrickReply>) => this.#reply(i, e.data);
       w.onerror = (e) => this.#failAll(new StoreError('corrupt', `a brick worker stopped: ${e.message}`));
       w.postMessage(init);
@@ -114,7 +114,7 @@ export class BrickWorkerPool implements BrickSource {
     this.#pending.delete(m.id);
     if (m.type === 'done') {
       this.#decodeByWorker[worker] = m.decode;
-      for (const k of ['chunksDecoded', 'bytesDecoded', 'decodeMs'] as const)
+      for (const k of ['chunksDecoded', 'bytesDecoded', 'decodeMs', 'nonFinite'] as const)
         this.counters[k] = this.#decodeByWorker.reduce((a, c) => a + c[k], 0);
       if (p) {
         const r = this.valueRanges[p.level];

@@ -40,7 +40,7 @@ export type BrickReply =
       /** The worker's [min, max] of source values over the level's bricks it read. */
       range: [number, number];
       /** The worker's decode counters (totals). */
-      decode: { chunksDecoded: number; bytesDecoded: number; decodeMs: number };
+      decode: { chunksDecoded: number; bytesDecoded: number; decodeMs: number; nonFinite: number };
       meter: MeterDelta;
     }
   | { type: 'fail'; id: number; error: { name: string; kind: string | null; message: string }; meter: MeterDelta };

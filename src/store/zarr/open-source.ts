@@ -231,7 +231,12 @@ export async function openSourceStore(
     isAbsent: () => false,
     close: () => reader.destroy?.(),
     readChunk: (level, brick, opts) => reader.read(level, brick, opts),
-    sourceDecode: () => ({ chunks: reader.counters.chunksDecoded, bytes: reader.counters.bytesDecoded, ms: reader.counters.decodeMs }),
+    sourceDecode: () => ({
+      chunks: reader.counters.chunksDecoded,
+      bytes: reader.counters.bytesDecoded,
+      ms: reader.counters.decodeMs,
+      nonFinite: reader.counters.nonFinite,
+    }),
     sourceValueRange: (level) => {
       const r = reader.valueRanges[level];
       return r && r[0] <= r[1] ? [r[0], r[1]] : null;

@@ -288,7 +288,8 @@ interface DecodedChunk {
 export interface BrickSource {
   /** Brick `brick` of level `level`: C^3 float32 values (x fastest) as bytes, padded as zfp pads. */
   read(level: number, brick: ChunkIndex, options?: GetOptions): Promise<Uint8Array>;
-  readonly counters: { chunksDecoded: number; bytesDecoded: number; decodeMs: number };
+  /** Source chunks decoded, their decoded bytes, ms from request to decoded; NaN / Inf values replaced (bricks' voxels, padding included). */
+  readonly counters: { chunksDecoded: number; bytesDecoded: number; decodeMs: number; nonFinite: number };
   /** Per level, [min, max] of the source values of the bricks read so far. */
   readonly valueRanges: Array<[number, number]>;
   destroy?(): void;
@@ -303,7 +304,7 @@ export class BrickReader implements BrickSource {
   readonly #decoded: ByteLru<string, DecodedChunk>;
   readonly #inFlight = new Map<string, Promise<DecodedChunk>>();
   /** Decoded (not stored) bytes of source chunks read, and how many. */
-  readonly counters = { chunksDecoded: 0, bytesDecoded: 0, decodeMs: 0 };
+  readonly counters = { chunksDecoded: 0, bytesDecoded: 0, decodeMs: 0, nonFinite: 0 };
   /** Per level, [min, max] of the source values (as float32) of the bricks read so far; NaN values are skipped. */
   readonly valueRanges: Array<[number, number]>;
 
@@ -335,12 +336,29 @@ export class BrickReader implements BrickSource {
         }
     await abortable(Promise.all(jobs), options?.signal);
     padLikeZfp(out, B, n);
-    const range = this.valueRanges[level];
+    // zfp cannot hold NaN or Inf: NaN and -Inf become the brick's smallest finite value, +Inf its largest
+    // (in core they become the volume's, which a stream does not know before it has read everything);
+    // the range is of the finite values
+    let min = Infinity;
+    let max = -Infinity;
+    let nonFinite = 0;
     for (let i = 0; i < out.length; i++) {
       const v = out[i];
-      if (v < range[0]) range[0] = v;
-      if (v > range[1]) range[1] = v;
+      if (v - v !== 0) nonFinite++;
+      else {
+        if (v < min) min = v;
+        if (v > max) max = v;
+      }
     }
+    const range = this.valueRanges[level];
+    if (nonFinite > 0) {
+      // nothing finite: the level's smallest value read so far (0 before any), a constant brick
+      const fill = min > max ? (Number.isFinite(range[0]) ? range[0] : 0) : null;
+      for (let i = 0; i < out.length; i++) if (out[i] - out[i] !== 0) out[i] = fill ?? (out[i] === Infinity ? max : min);
+      this.counters.nonFinite += nonFinite;
+    }
+    if (min < range[0]) range[0] = min;
+    if (max > range[1]) range[1] = max;
     return new Uint8Array(out.buffer);
   }
 

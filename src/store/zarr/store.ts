@@ -53,7 +53,7 @@ export interface ZfpStore {
   /** A store of lossless chunks: [min, max] of the source values (as float32) of the level's bricks read so far, or null. */
   sourceValueRange?(level: number): [number, number] | null;
   /** A store of lossless chunks: source chunks decoded, their decoded bytes and the CPU time it took (ms, fetch waits included). */
-  sourceDecode?(): { chunks: number; bytes: number; ms: number };
+  sourceDecode?(): { chunks: number; bytes: number; ms: number; nonFinite: number };
   /** [min, max] per chunk (chunk index order), or null when the store has no range arrays. */
   readRanges(level: number, options?: GetOptions): Promise<Float32Array | null>;
 }

@@ -149,6 +149,18 @@ describe('stores of lossless chunks = the same array in core', () => {
     expect(wrong.stderr).toMatch(/gzip64-ranges.zarr: its ranges are not of this store's bricks/);
   }, 300_000);
 
+  it("NaN (voxels, and the fill value of chunks left out) becomes the brick's smallest finite value; counted, never encoded", () => {
+    const m = manifest.nan;
+    const json = join(work, 'nan.json');
+    const r = cli('extract', m.store, '--level', '0', '--rate', '8', '--iso', '5', '--json', json);
+    expect(r.status, r.stderr).toBe(0);
+    const rec = JSON.parse(readFileSync(json, 'utf8'));
+    expect(rec.store.sourceDecode.nonFinite).toBeGreaterThan(0);
+    expect(rec.store.sourceValueRange).toEqual(m.range.map((v) => Math.fround(v)));
+    expect(rec.isosurfaces[0].triangles).toBeGreaterThan(1000);
+    expect(rec.valueRange.every(Number.isFinite)).toBe(true);
+  }, 300_000);
+
   it('refuses an unknown codec, complex values, a 2-D image and a corrupt chunk, naming them', () => {
     const e = manifest.errors;
     const bz2 = cli('extract', e.bz2, '--iso', '3');
