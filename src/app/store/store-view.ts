@@ -362,7 +362,8 @@ export class StoreView {
     const g = o.controller.gpuBytes;
     Object.assign(st, {
       bytesFetched: o.metered.meter.bytes,
-      chunkBytesFetched: o.fetcher.counters.bytesFetched,
+      // a store of lossless chunks: what came over for the bricks, not the bricks' values (as the CLI's record)
+      chunkBytesFetched: o.store.source ? o.metered.meter.bytes - o.store.metadataBytes : o.fetcher.counters.bytesFetched,
       requests: o.metered.meter.requests,
     });
     st.gpu = { ...g, peak: Math.max(st.gpu.peak, g.total), budget: o.controller.budgetBytes };

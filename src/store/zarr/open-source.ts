@@ -199,7 +199,10 @@ export async function openSourceStore(
         options.sourceCacheBytes,
       )
     : new BrickReader(sources, options.sourceCacheBytes);
-  if (spec) notes.push(`chunks are decoded in ${(reader as BrickWorkerPool).workerCount} Web Workers`);
+  if (spec)
+    notes.push(
+      `chunks are decoded in ${(reader as BrickWorkerPool).workerCount} Web Worker${(reader as BrickWorkerPool).workerCount === 1 ? '' : 's'}`,
+    );
   const axisUnit = (axis: string) => {
     const a = axesJson?.find((x) => typeof x !== 'string' && x?.name === axis) as Json | undefined;
     return typeof a?.unit === 'string' ? a.unit : null;
