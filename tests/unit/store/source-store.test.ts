@@ -161,6 +161,24 @@ describe('stores of lossless chunks = the same array in core', () => {
     expect(rec.valueRange.every(Number.isFinite)).toBe(true);
   }, 300_000);
 
+  it('info STORE: levels, codecs, type, axes, bricks, voxel size; a folder that is no store is named', () => {
+    const json = join(work, 'info.json');
+    const r = cli('info', manifest.idr.store, '--rate', '8', '--json', json);
+    expect(r.status, r.stderr).toBe(0);
+    const rec = JSON.parse(readFileSync(json, 'utf8'));
+    expect(rec.kind).toBe('zarr-store');
+    expect(rec.source).toMatchObject({ format: 'Zarr v2', codecs: ['blosc'], dtype: 'uint16', axes: ['t', 'c', 'z', 'y', 'x'], rate: 8 });
+    expect(rec.levels.map((l: { dims: number[] }) => l.dims)).toEqual([
+      [90, 70, 40],
+      [45, 35, 20],
+      [22, 17, 10],
+    ]);
+    expect(rec.voxelSize).toEqual(manifest.idr.voxelSize);
+    const folder = cli('info', work);
+    expect(folder.status).toBe(1);
+    expect(folder.stderr).toMatch(/a folder, but not a Zarr store \(no zarr.json, .zgroup or .zarray at its root\)/);
+  }, 300_000);
+
   it('refuses an unknown codec, complex values, a 2-D image and a corrupt chunk, naming them', () => {
     const e = manifest.errors;
     const bz2 = cli('extract', e.bz2, '--iso', '3');
