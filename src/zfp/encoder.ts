@@ -17,16 +17,15 @@ import { formatDims, type Dims } from '../core/naming.ts';
 import { BindGroupCache } from '../gpu/bind-group-cache.ts';
 import { binding, refSize, type GpuBufferRef } from '../gpu/buffer-ref.ts';
 import { dispatchWorkgroups } from '../gpu/dispatch.ts';
-import { baseDevice } from '../gpu/memory-meter.ts';
-import { bindGroupLayout, createComputePipeline } from '../gpu/pipeline-cache.ts';
+import { perDevice } from '../gpu/per-device.ts';
+import { bindGroupLayout } from '../gpu/pipeline-cache.ts';
 import { UniformSlots } from '../gpu/uniform-slots.ts';
+import { DTYPE_CODE, DtypePipelines } from './dtype-pipelines.ts';
 import { planZfpStream, ZfpFormatError, type ZfpStreamInfo } from './format.ts';
 import { maxShardBytesFor, planShards, ZfpGpuStream } from './gpu-stream.ts';
 import { writeZfpHeader } from './header.ts';
 import type { StreamError, ZfpErrorMeter } from './stream-error.ts';
 import { zfpWgsl } from './wgsl.ts';
-
-const DTYPE_CODE: Record<DType, number> = { uint8: 0, int8: 1, uint16: 2, int16: 3, float32: 4, float64: 5 };
 
 export interface EncodeArgs {
   /** Input values (little endian, x fastest) holding z planes from `inputZPlane` on. STORAGE usage. */
@@ -80,15 +79,15 @@ export interface CompressOptions {
 export class ZfpEncoder {
   private readonly groups = new BindGroupCache();
   private readonly uniforms: UniformSlots;
-  /** One pipeline per input type (the type is an override constant: no per-value switch); compiled once per device. */
-  private readonly pipelines = new Map<DType, Promise<GPUComputePipeline>>();
-  private readonly ready = new Map<DType, GPUComputePipeline>();
+  /** One pipeline per input type (an override constant: no per-value switch). */
+  private readonly pipelines: DtypePipelines;
 
   private constructor(
     readonly device: GPUDevice,
     private readonly groupLayout: GPUBindGroupLayout,
   ) {
     this.uniforms = new UniformSlots(device, 'ZfpEncoder');
+    this.pipelines = new DtypePipelines(device, 'ZfpEncoder.encode', zfpWgsl.encode, 'encode_blocks', [groupLayout]);
   }
 
   /** Compiles the pipelines for `dtypes` now (others are compiled on first use by compress*(), or by prepare()). */
@@ -105,19 +104,7 @@ export class ZfpEncoder {
 
   /** Compiles the pipeline for input type `dtype` (once). */
   prepare(dtype: DType): Promise<GPUComputePipeline> {
-    let p = this.pipelines.get(dtype);
-    if (!p) {
-      p = createComputePipeline(this.device, `ZfpEncoder.encode.${dtype}`, zfpWgsl.encode, 'encode_blocks', {
-        layout: [this.groupLayout],
-        constants: { DTYPE: DTYPE_CODE[dtype] },
-      }).then((pipeline) => {
-        this.ready.set(dtype, pipeline);
-        return pipeline;
-      });
-      p.catch(() => this.pipelines.delete(dtype));
-      this.pipelines.set(dtype, p);
-    }
-    return p;
+    return this.pipelines.prepare(dtype);
   }
 
   /**
@@ -153,7 +140,7 @@ export class ZfpEncoder {
    */
   encode(encoder: GPUCommandEncoder, a: EncodeArgs): void {
     const { stream } = a;
-    const pipeline = this.ready.get(a.dtype);
+    const pipeline = this.pipelines.get(a.dtype);
     if (!pipeline) throw new Error(`ZfpEncoder: no pipeline for ${a.dtype} yet: await encoder.prepare('${a.dtype}') first`);
     if (stream.isDestroyed) throw new Error('ZfpEncoder: the target stream was destroyed');
     const info = stream.info;
@@ -195,7 +182,7 @@ export class ZfpEncoder {
    * stay small whatever the slot's place. Needs the pipeline of `a.dtype`.
    */
   encodeSlot(encoder: GPUCommandEncoder, a: SlotEncodeArgs): void {
-    const pipeline = this.ready.get(a.dtype);
+    const pipeline = this.pipelines.get(a.dtype);
     if (!pipeline) throw new Error(`ZfpEncoder: no pipeline for ${a.dtype} yet: await encoder.prepare('${a.dtype}') first`);
     const { info, byteOffset } = a;
     if (byteOffset % 8 !== 0 || info.paddedBytes % 8 !== 0 || byteOffset + info.paddedBytes > a.target.size)
@@ -380,16 +367,5 @@ export class ZfpEncoder {
   }
 }
 
-const encoders = new WeakMap<GPUDevice, Promise<ZfpEncoder>>();
-
 /** One encoder per device (shared by its metered views), created on first use. */
-export function encoderFor(device: GPUDevice): Promise<ZfpEncoder> {
-  const base = baseDevice(device);
-  let e = encoders.get(base);
-  if (!e) {
-    e = ZfpEncoder.create(base);
-    e.catch(() => encoders.delete(base));
-    encoders.set(base, e);
-  }
-  return e;
-}
+export const encoderFor = perDevice((device) => ZfpEncoder.create(device));

@@ -15,15 +15,15 @@
 // input type, its sums buffer grows to the largest stream measured.
 import type { DType } from '../core/dtype.ts';
 import { BindGroupCache } from '../gpu/bind-group-cache.ts';
-import { baseDevice } from '../gpu/memory-meter.ts';
+import { perDevice } from '../gpu/per-device.ts';
 import { binding, type GpuBufferRef } from '../gpu/buffer-ref.ts';
 import { dispatchWorkgroups } from '../gpu/dispatch.ts';
-import { bindGroupLayout, createComputePipeline } from '../gpu/pipeline-cache.ts';
+import { bindGroupLayout } from '../gpu/pipeline-cache.ts';
 import { UniformSlots } from '../gpu/uniform-slots.ts';
+import { DtypePipelines } from './dtype-pipelines.ts';
 import { streamBindGroupLayout, type ZfpGpuStream } from './gpu-stream.ts';
 import { zfpWgsl } from './wgsl.ts';
 
-const DTYPE_CODE: Record<DType, number> = { uint8: 0, int8: 1, uint16: 2, int16: 3, float32: 4, float64: 5 };
 const WORKGROUP = 64;
 
 export interface StreamError {
@@ -47,8 +47,8 @@ export interface ErrorArgs {
 export class ZfpErrorMeter {
   private readonly groups = new BindGroupCache();
   private readonly uniforms: UniformSlots;
-  private readonly pipelines = new Map<DType, Promise<GPUComputePipeline>>();
-  private readonly ready = new Map<DType, GPUComputePipeline>();
+  /** One pipeline per input type (an override constant: no per-value switch). */
+  private readonly pipelines: DtypePipelines;
   private readonly maxBuffer: GPUBuffer;
   private sums?: GPUBuffer;
   /** Workgroup sums of the stream being measured: where each shard's start. */
@@ -61,6 +61,10 @@ export class ZfpErrorMeter {
     private readonly layout: GPUBindGroupLayout,
   ) {
     this.uniforms = new UniformSlots(device, 'ZfpErrorMeter');
+    this.pipelines = new DtypePipelines(device, 'ZfpErrorMeter', zfpWgsl.streamError, 'stream_error', [
+      streamBindGroupLayout(device),
+      layout,
+    ]);
     this.maxBuffer = device.createBuffer({
       label: 'ZfpErrorMeter.max',
       size: 4,
@@ -82,19 +86,7 @@ export class ZfpErrorMeter {
 
   /** Compiles the pipeline for source type `dtype` (once). */
   prepare(dtype: DType): Promise<GPUComputePipeline> {
-    let p = this.pipelines.get(dtype);
-    if (!p) {
-      p = createComputePipeline(this.device, `ZfpErrorMeter.${dtype}`, zfpWgsl.streamError, 'stream_error', {
-        layout: [streamBindGroupLayout(this.device), this.layout],
-        constants: { DTYPE: DTYPE_CODE[dtype] },
-      }).then((pipeline) => {
-        this.ready.set(dtype, pipeline);
-        return pipeline;
-      });
-      p.catch(() => this.pipelines.delete(dtype));
-      this.pipelines.set(dtype, p);
-    }
-    return p;
+    return this.pipelines.prepare(dtype);
   }
 
   /** Starts measuring `stream` (its shards are then encoded one by one, in any order). */
@@ -122,7 +114,7 @@ export class ZfpErrorMeter {
   /** Records the comparison of shard `a.shard` with its source values (pipeline of `a.dtype` prepared first). */
   encode(encoder: GPUCommandEncoder, a: ErrorArgs): void {
     if (a.stream !== this.measuring || !this.sums) throw new Error('ZfpErrorMeter: begin(stream) first');
-    const pipeline = this.ready.get(a.dtype);
+    const pipeline = this.pipelines.get(a.dtype);
     if (!pipeline) throw new Error(`ZfpErrorMeter: no pipeline for ${a.dtype} yet: await meter.prepare('${a.dtype}') first`);
     const shard = a.stream.shards[a.shard];
     const params = this.uniforms.get(new Uint32Array([a.inputZPlane, this.sumBase[a.shard], 0, 0]));
@@ -188,16 +180,5 @@ export class ZfpErrorMeter {
   }
 }
 
-const meters = new WeakMap<GPUDevice, Promise<ZfpErrorMeter>>();
-
-/** One meter per device, created on first use. */
-export function errorMeterFor(device: GPUDevice): Promise<ZfpErrorMeter> {
-  const base = baseDevice(device);
-  let m = meters.get(base);
-  if (!m) {
-    m = ZfpErrorMeter.create(base);
-    m.catch(() => meters.delete(base));
-    meters.set(base, m);
-  }
-  return m;
-}
+/** One meter per device (shared by its metered views), created on first use. */
+export const errorMeterFor = perDevice((device) => ZfpErrorMeter.create(device));

@@ -14,6 +14,7 @@ import { storeFromSpec } from './store-spec.ts';
 
 declare const self: { postMessage(m: unknown, transfer?: Transferable[]): void; onmessage: ((e: MessageEvent) => void) | null };
 
+let initMessage: BrickInit | null = null;
 let ready: Promise<{ reader: BrickReader; metered: MeteredStore; retrying: RetryingStore }> | null = null;
 const reported = { bytes: 0, requests: 0, retries: 0, failed: 0 };
 
@@ -33,8 +34,7 @@ async function init(m: BrickInit) {
 self.onmessage = (e: MessageEvent) => {
   const m = e.data as BrickInit | BrickRequest;
   if (m.type === 'init') {
-    ready = init(m);
-    ready.catch(() => {}); // reported with the first read
+    initMessage = m;
     return;
   }
   void read(m);
@@ -45,7 +45,14 @@ async function read(m: BrickRequest) {
   const transfer: Transferable[] = [];
   let w: Awaited<NonNullable<typeof ready>> | null = null;
   try {
-    if (!ready) throw new Error('the brick worker was not initialised');
+    if (!initMessage) throw new Error('the brick worker was not initialised');
+    // opened on first use; an open that failed (the network) is tried again by the next read
+    if (!ready) {
+      ready = init(initMessage);
+      ready.catch(() => {
+        ready = null;
+      });
+    }
     w = await ready;
     const bytes = await w.reader.read(m.level, m.brick);
     transfer.push(bytes.buffer as ArrayBuffer);
