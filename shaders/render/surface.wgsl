@@ -7,7 +7,7 @@
 // ComputeNormals gives) and stored per vertex, octahedral-encoded, in a
 // buffer parallel to the vertices: the vertex shader only decodes it.
 //
-// World space: voxel (i, j, k) sits at (i, j, k) * voxel_size (1 on the main
+// World space: voxel (i, j, k) sits at ((i, j, k) + origin) * voxel_size (1 on the main
 // page; a microscope stack's spacing on the neuron page, where the surface
 // shares the space of the volume rendering and the traces).
 struct Surface {
@@ -17,6 +17,7 @@ struct Surface {
   back: vec4f,         // back (inside) colour;  a: specular strength
   extra: vec4f,        // x: rim strength, y: depth cue, z: near, w: far (eye distance)
   voxel_size: vec4f,   // xyz: world size of a voxel
+  origin: vec4f,       // xyz: where voxel (0, 0, 0) sits, in voxels (a store level's OME translation)
 };
 @group(1) @binding(0) var<uniform> surface: Surface;
 
@@ -30,7 +31,7 @@ struct VsOut {
 };
 
 fn world_of(p: vec3f) -> vec3f {
-  return p * surface.voxel_size.xyz;
+  return (p + surface.origin.xyz) * surface.voxel_size.xyz;
 }
 
 @vertex

@@ -45,16 +45,17 @@ export async function savePly(session: Session, messages: Messages): Promise<voi
     const mesh = { positions: decodeVertices(surface.vertices, surface.vertices.length / 3), indices: surface.indices };
     // What is on screen: voxel (i, j, k) at (i, j, k) * voxel size (1 unless the file or the user gave one).
     const size = session.spacing;
-    const isotropicUnit = size.every((s) => s === 1);
+    const origin = v.opened.origin ?? [0, 0, 0];
+    const isotropicUnit = size.every((s) => s === 1) && origin.every((o) => o === 0);
     if (!isotropicUnit) {
-      for (let i = 0; i < mesh.positions.length; i++) mesh.positions[i] *= size[i % 3];
+      for (let i = 0; i < mesh.positions.length; i++) mesh.positions[i] = (mesh.positions[i] + origin[i % 3]) * size[i % 3];
     }
     const iso = session.drawnIsovalue ?? NaN;
     const ply = encodePly(mesh, [
       `isosurface of ${v.opened.name} at isovalue ${iso}`,
       isotropicUnit
         ? `voxel index coordinates: voxel (i, j, k) at (i, j, k); volume ${v.iso.info.dims.join(' x ')}`
-        : `world coordinates: voxel (i, j, k) at (i * ${size[0]}, j * ${size[1]}, k * ${size[2]}); volume ${v.iso.info.dims.join(' x ')}`,
+        : `world coordinates: voxel (i, j, k) at ((i + ${origin[0]}) * ${size[0]}, (j + ${origin[1]}) * ${size[1]}, (k + ${origin[2]}) * ${size[2]}); volume ${v.iso.info.dims.join(' x ')}`,
       'made by zfp-isosurface-webgpu (marching cubes on the GPU, zfp fixed-rate blocks)',
     ]);
     download(new Blob([ply as BlobPart], { type: 'application/octet-stream' }), `${baseName(session)}${isoTag(session)}.ply`);

@@ -136,12 +136,15 @@ export class Session {
     return this.p.spacing.value;
   }
 
-  /** Voxel (i, j, k) at (i, j, k) * spacing: surface, box and the fitted view. */
+  /** Voxel (i, j, k) at ((i, j, k) + origin) * spacing: surface, box and the fitted view. */
   private applySpacing(v: LoadedVolume, spacing: Spacing): void {
     const { p } = this;
     p.surface.voxelSize = [...spacing];
-    const max = v.iso.info.dims.map((n, a) => (n - 1) * spacing[a]) as [number, number, number];
-    const bounds = { min: [0, 0, 0] as [number, number, number], max };
+    const origin = v.opened.origin ?? [0, 0, 0];
+    p.surface.origin = [...origin];
+    const min = origin.map((o, a) => o * spacing[a]) as [number, number, number];
+    const max = v.iso.info.dims.map((n, a) => (n - 1 + origin[a]) * spacing[a]) as [number, number, number];
+    const bounds = { min, max };
     p.box.setBounds(bounds);
     p.viewer.fitTo(bounds);
   }

@@ -10,6 +10,8 @@ import { basename } from 'node:path';
 import type { GpuContext } from '../gpu/device.ts';
 import { Isosurface } from '../isosurface/isosurface.ts';
 import { isStoreInput, NoSuchLevelError, openStoreInput, type StoreRecord } from '../store/cli-input.ts';
+import type { ViewRequest } from '../store/view/view-request.ts';
+import type { CutChunkRecord } from '../store/view/view-surface.ts';
 import { StoreError } from '../store/zarr/errors.ts';
 import {
   checkValueRange,
@@ -23,8 +25,20 @@ import { ZfpFormatError } from '../zfp/format.ts';
 import { describeRateChoice, type RateChoice } from '../zfp/rate-choice.ts';
 import { InputError, UsageError } from './command.ts';
 
-/** What `extract` and `bench` use of a surface: an Isosurface, or a store level (PinnedLevelSurface). */
-export type InputSurface = Pick<Isosurface, 'info' | 'compute' | 'readMesh' | 'resetCache' | 'memoryBudget' | 'destroy'>;
+/**
+ * What `extract` and `bench` use of a surface: an Isosurface, a store level
+ * (PinnedLevelSurface), or a store refined by a view (ViewCutSurface: several
+ * levels, so no one packed mesh; its positions come in level-0 voxels, with
+ * the cut).
+ */
+export type InputSurface = Pick<Isosurface, 'info' | 'compute' | 'resetCache' | 'memoryBudget' | 'destroy'> &
+  (
+    | Pick<Isosurface, 'readMesh'>
+    | {
+        readPositions(): Promise<{ positions: Float32Array; indices: Uint32Array }>;
+        cutRecord(): Promise<CutChunkRecord[]>;
+      }
+  );
 
 export interface OpenedInput {
   iso: InputSurface;
@@ -55,6 +69,7 @@ export async function openInputSurface(
     time?: number;
     channel?: number;
     ranges?: string;
+    view?: ViewRequest;
   },
 ): Promise<OpenedInput> {
   if (isStoreInput(path)) {
@@ -69,6 +84,7 @@ export async function openInputSurface(
     }
   }
   if (opts.level !== undefined) throw new UsageError('--level is for a Zarr store (a URL or a folder with zarr.json)');
+  if (opts.view !== undefined) throw new UsageError('--view and --view-box are for a Zarr store (a URL or a folder with zarr.json)');
   if (opts.time !== undefined || opts.channel !== undefined || opts.ranges !== undefined)
     throw new UsageError('--time, --channel and --ranges are for a Zarr store of lossless chunks (a URL or a folder with zarr.json)');
   if (opts.deadlineMs !== undefined) throw new UsageError('--deadline is for a Zarr store (a URL or a folder with zarr.json)');

@@ -167,6 +167,11 @@ export class BlockMarchingCubes {
     return new BlockMarchingCubes(device, parts, layouts, classify, expand, emit, plan, capacity, vertexCapacity);
   }
 
+  /** The per-entry counts of the last surface (region 0: triangle corners per active entry; readback only). */
+  get blockCounts(): GPUBuffer {
+    return this.entries.counts;
+  }
+
   private allocateEntries(capacity: number): EntryBuffers {
     const words = (label: string, perEntry = 1) => storageBuffer(this.device, `Isosurface.${label}`, capacity * 4 * perEntry);
     const stride = countStride(capacity);

@@ -426,6 +426,11 @@ export class Isosurface {
     return this.pipeline.readBlockRanges();
   }
 
+  /** Active block ids of the drawn surface and the triangles of each (waits for the GPU). */
+  readBlockTriangles(): Promise<{ ids: Uint32Array; triangles: Uint32Array }> {
+    return this.pipeline.readBlockTriangles();
+  }
+
   destroy(): void {
     if (this.destroyed) return;
     this.destroyed = true;

@@ -442,6 +442,24 @@ export class IsosurfacePipeline {
     return this.parts.active.readBlockRanges();
   }
 
+  /**
+   * The drawn surface's triangles per block: the active block ids and, for
+   * each, the triangles of the cells whose lowest corner lies in it (the
+   * classify pass's counts). A pool's ids name their slot (id / blocks per
+   * chunk), so the stream sums them per chunk (the view cut's record).
+   */
+  async readBlockTriangles(): Promise<{ ids: Uint32Array; triangles: Uint32Array }> {
+    const { device } = this;
+    const c = await readU32(device, this.parts.counters.buffer, 0, COUNTER_WORDS);
+    const n = c[C.activeGated];
+    if (n === 0) return { ids: new Uint32Array(0), triangles: new Uint32Array(0) };
+    const [ids, corners] = await Promise.all([
+      readU32(device, this.parts.active.activeIds, 0, n),
+      readU32(device, this.parts.mc.blockCounts, 0, n),
+    ]);
+    return { ids, triangles: corners.map((k) => k / 3) };
+  }
+
   destroy(): void {
     const p = this.parts;
     p.shards.destroy();

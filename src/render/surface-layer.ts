@@ -3,7 +3,7 @@
 // (each with a GPU-written drawIndexedIndirect record), lit with smooth normals from the volume gradient
 // (computed once per surface by the pipeline; see shaders/render/surface.wgsl),
 // two-sided, with a headlight. Nothing is allocated per frame. Voxel
-// (i, j, k) is drawn at (i, j, k) * voxelSize; with `depthPrepass` it also
+// (i, j, k) is drawn at ((i, j, k) + origin) * voxelSize; with `depthPrepass` it also
 // draws its depth alone, for a volume renderer that stops its rays there.
 
 import { vec3 } from 'gl-matrix';
@@ -48,7 +48,7 @@ export const DEFAULT_SURFACE_STYLE: SurfaceStyle = {
   depthCue: 0.35,
 };
 
-const UNIFORM_BYTES = 96;
+const UNIFORM_BYTES = 112;
 
 export interface SurfaceLayerOptions {
   /** Also build the depth-only pipeline (drawDepth), for a depth pre-pass of opaque layers. */
@@ -60,6 +60,13 @@ export class SurfaceLayer implements RenderLayer {
   style: SurfaceStyle = { ...DEFAULT_SURFACE_STYLE };
   /** World size of a voxel (a microscope stack's spacing); the main page draws in voxel units. */
   voxelSize: [number, number, number] = [1, 1, 1];
+  /**
+   * Where voxel (0, 0, 0) sits, in voxels of this surface: (i, j, k) is drawn
+   * at ((i, j, k) + origin) * voxelSize. A store's coarse level sits at the
+   * centre of the finer voxels it averages (its OME translation), e.g. 1.5 /
+   * 4 = 0.375 of its own voxels for level 2.
+   */
+  origin: [number, number, number] = [0, 0, 0];
   private data: IsosurfaceDrawData | undefined;
   private bindGroup: GPUBindGroup | undefined;
   private boundVersion = -1;
@@ -173,7 +180,7 @@ export class SurfaceLayer implements RenderLayer {
     let r2 = 0;
     for (let a = 0; a < 3; a++) {
       const extent = (info.dims[a] - 1) * this.voxelSize[a];
-      this.centre[a] = extent / 2;
+      this.centre[a] = extent / 2 + this.origin[a] * this.voxelSize[a];
       r2 += extent * extent;
     }
     const radius = 0.5 * Math.sqrt(r2);
@@ -186,6 +193,10 @@ export class SurfaceLayer implements RenderLayer {
     f32[21] = this.voxelSize[1];
     f32[22] = this.voxelSize[2];
     f32[23] = 0;
+    f32[24] = this.origin[0];
+    f32[25] = this.origin[1];
+    f32[26] = this.origin[2];
+    f32[27] = 0;
     this.target.device.queue.writeBuffer(this.uniforms, 0, this.scratch);
   }
 

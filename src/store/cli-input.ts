@@ -15,6 +15,10 @@ import { isStoreUrl, storeForLocation } from './zarr/node-store.ts';
 import { openStore } from './zarr/open-store.ts';
 import type { SourceInfo } from './zarr/source-store.ts';
 import { MeteredStore } from './zarr/stores.ts';
+import type { ZfpStore } from './zarr/store.ts';
+import type { ChunkedStreamGpu } from './gpu-port.ts';
+import { ViewStream, type ViewSpec } from './view/view-stream.ts';
+import { ViewCutSurface } from './view/view-surface.ts';
 
 /** --level names a level the store does not have (a wrong command line, not a data failure). */
 export class NoSuchLevelError extends Error {
@@ -72,7 +76,7 @@ export interface StoreRecord {
 }
 
 export interface StoreInput {
-  surface: PinnedLevelSurface;
+  surface: PinnedLevelSurface | ViewCutSurface;
   how: string;
   rate: number;
   notes: string[];
@@ -94,6 +98,8 @@ export interface StoreInputOptions {
   channel?: number;
   /** Per-brick ranges written apart (--ranges-only), a URL or folder. */
   ranges?: string;
+  /** Refine by this view instead of streaming one level (--view-box, --view): a mixed-level surface (src/store/view/). */
+  view?: ViewSpec;
 }
 
 export async function openStoreInput(gpu: GpuContext, input: string, opts: StoreInputOptions): Promise<StoreInput> {
@@ -129,6 +135,7 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
   });
   const budgetBytes = opts.budget ?? defaultMemoryBudget(gpu.device.limits);
   const port = chunkedGpu(gpu, undefined, await storeEncoder(gpu, store));
+  if (opts.view) return viewInput(input, store, metered, fetcher, port, budgetBytes, opts.view);
   const controller = await createChunkStream(store, fetcher, port, budgetBytes);
   const surface = new PinnedLevelSurface(controller, L);
   const record = (): StoreRecord => ({
@@ -166,4 +173,68 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
     : `Zarr store, level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 chunks, rate ${lv.layout.rate})`;
   const how = `${kind}, ` + `streamed: the chunks each surface needs, within ${(budgetBytes / 2 ** 20).toFixed(0)} MiB of GPU memory`;
   return { surface, how, rate: lv.layout.rate, notes: store.notes, fileName: `${input} level ${L}`, record };
+}
+
+/**
+ * A store refined by a view (--view-box, --view): every level the cut uses,
+ * each region at the level the view needs; the record's `level` is the
+ * finest level drawn, `chunks` the distinct chunks put at any level.
+ */
+async function viewInput(
+  input: string,
+  store: ZfpStore,
+  metered: MeteredStore,
+  fetcher: ChunkFetcher,
+  port: ChunkedStreamGpu,
+  budgetBytes: number,
+  view: ViewSpec,
+): Promise<StoreInput> {
+  const fetched = new Set<number>();
+  let chunkBytes = 0;
+  fetcher.onChunk((l, c, bytes, fromCache) => {
+    const k = l * 2 ** 32 + c;
+    if (fromCache || fetched.has(k) || store.isAbsent(bytes)) return;
+    fetched.add(k);
+    chunkBytes += bytes.byteLength;
+  });
+  const stream = await ViewStream.create(store, fetcher, port, budgetBytes);
+  await stream.setView(view);
+  const surface = new ViewCutSurface(stream);
+  const lv0 = store.levels[0];
+  const record = (): StoreRecord => {
+    const finest = Math.min(...(stream.shown?.levels.map((l) => l.level) ?? [0]));
+    return {
+      store: input,
+      level: finest,
+      levels: store.levels.length,
+      dims: lv0.layout.dims,
+      chunkEdge: lv0.layout.chunkEdge,
+      rate: lv0.layout.rate,
+      chunks: fetched.size,
+      source: store.source,
+      sourceValueRange: store.sourceValueRange?.(0) ?? null,
+      sourceDecode: store.sourceDecode?.() ?? null,
+      voxelSize: store.voxelSize,
+      unit: store.unit,
+      levelChunks: lv0.chunkCount,
+      chunkBytesFetched: store.source ? metered.meter.bytes - store.metadataBytes : chunkBytes,
+      bytesFetched: metered.meter.bytes,
+      metadataBytes: store.metadataBytes,
+      requests: metered.meter.requests,
+      storeChunkBytes: store.levels.reduce((a, l) => a + l.storedBytes, 0),
+      budgetBytes,
+      gpuBytes: stream.gpuBytes.total,
+      gpuPoolBytes: stream.gpuBytes.pools,
+      gpuCacheBytes: (stream.shown?.levels ?? []).reduce((a, l) => a + l.stats.cacheBytes, 0),
+      gpuVertexBytes: (stream.shown?.levels ?? []).reduce((a, l) => a + l.stats.vertexBytes, 0),
+      gpuPeakBytes: port.meter.peak,
+      retries: store.retries.retries,
+      failedRequests: store.retries.failed,
+      faults: { ...store.retries.faults },
+    };
+  };
+  const how =
+    `Zarr store of ${store.levels.length} levels (level 0 ${lv0.layout.dims.join('x')}, ${lv0.layout.chunkEdge}^3 chunks, rate ${lv0.layout.rate}), ` +
+    `refined by the view (each region at the level whose voxels project to at most ${view.tolerancePx} px), within ${(budgetBytes / 2 ** 20).toFixed(0)} MiB of GPU memory`;
+  return { surface, how, rate: lv0.layout.rate, notes: store.notes, fileName: `${input} (view)`, record };
 }

@@ -79,6 +79,8 @@ export interface OpenedVolume {
   defaultIsovalue?: number;
   /** World size of a voxel along x, y, z, when the file gives it. */
   spacing?: [number, number, number];
+  /** Where voxel (0, 0, 0) sits, in this volume's voxels (a store level's OME translation); 0 when absent. */
+  origin?: [number, number, number];
   /** What the user should know about the file (non-finite values replaced, bytes ignored), one sentence each. */
   notes: string[];
   /** Float volumes compressed here: NaN/Inf counts (replaced before compression, see non-finite.ts). */

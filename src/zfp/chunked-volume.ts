@@ -28,6 +28,22 @@
 // block ranges of just those slots on the GPU and forgets what it had
 // decoded from them (changeLog: one per surface, so a surface made later
 // starts from every resident chunk).
+//
+// Roles (setRoles, view-dependent refinement): a level's surface may be
+// drawn in some of its resident chunks only. A 'drawn' chunk's cells make
+// triangles; a 'ghost' chunk only lends its voxels to the drawn ones (the
+// +x/+y/+z and diagonal neighbours of a drawn chunk, so that the drawn
+// chunk's cells on its upper faces are complete, exactly the level's cells):
+// its blocks stay active, its cells make no triangles, and only its cells on
+// the chunk's three lower faces keep the vertices they own, the only ones a
+// drawn neighbour's triangles can use; an 'idle' chunk is kept in the pool
+// but unused (never active, its voxels never read). The role rides in the
+// top 2 bits of the chunk's slot-table word, chunk | role << 30 (drawn 0,
+// ghost 1, idle 2; an empty slot stays 0xffffffff), so the tables keep
+// their 8 bytes per chunk and the kernels their bindings
+// (shaders/isosurface/blocks_pool.wgsl); a pool that never sets roles
+// writes the words it always did. Role changes write only the words that
+// change and log no slot change: nothing decoded depends on a role.
 
 import { formatDims } from '../core/naming.ts';
 import { bufferLayout } from '../gpu/bindings.ts';
@@ -61,6 +77,19 @@ export interface ChunkLevelLayout {
 
 /** Chunk index = cx + gx * (cy + gy * cz) with (gx, gy, gz) = chunkGrid. */
 export type ChunkIndex = number;
+
+/**
+ * What a chunk does for the level's surface (setRoles): 'drawn' its cells
+ * make triangles; 'ghost' it lends its voxels (and the vertices its cells on
+ * its lower faces own) to drawn neighbours, no triangles; 'idle' resident
+ * but unused.
+ */
+export type ChunkRole = 'drawn' | 'ghost' | 'idle';
+
+/** A role's code in the top bits of a slot-table word (ROLE_* in shaders/isosurface/common.wgsl). */
+export const CHUNK_ROLE_CODES: Readonly<Record<ChunkRole, number>> = { drawn: 0, ghost: 1, idle: 2 };
+/** Slot-table word = chunk + role code * 2^ROLE_SHIFT: chunk indices stay below 2^30. */
+const ROLE_SHIFT = 30;
 
 /** A chunk that cannot go into the pool (wrong bytes, pool full), or a layout that cannot be pooled. */
 export class ChunkError extends Error {
@@ -119,11 +148,15 @@ export class ChunkedVolume implements BlockSource {
   readonly headerBits: number;
   /**
    * The level's tables: words [0, chunkCount) chunk -> slot (NONE: not
-   * resident), words [chunkCount, 2 chunkCount) slot -> chunk (NONE: empty).
+   * resident), words [chunkCount, 2 chunkCount) slot -> chunk | role << 30
+   * (NONE: empty).
    */
   readonly tables: GPUBuffer;
   private params: GPUBuffer | null = null;
   private readonly slotOf = new Map<ChunkIndex, number>();
+  /** setRoles: the drawn chunks (null: all), and the ghosts. */
+  private drawnChunks: ReadonlySet<ChunkIndex> | null = null;
+  private ghostChunks: ReadonlySet<ChunkIndex> = new Set();
   private freeSlots: number[] = [];
   /** Slots set aside for chunks on their way (reserve()). */
   private readonly reservedSlot = new Map<ChunkIndex, number>();
@@ -374,6 +407,9 @@ export class ChunkedVolume implements BlockSource {
       fail(
         `${chunks} chunks need ${chunks * 8} bytes of tables (chunk -> slot, slot -> chunk), more than one storage binding of this device (${binding} bytes: maxStorageBufferBindingSize); convert with larger chunks`,
       );
+    // the slot table keeps a chunk's role in the top 2 bits of its word; one
+    // binding (at most 4 GiB) holds fewer than 2^29 chunks, so this never fails
+    if (chunks >= 2 ** ROLE_SHIFT) fail(`${chunks} chunks: the slot table holds chunk indices below 2^${ROLE_SHIFT}`);
     if (Math.min(opts.poolChunks, chunks) * (edge / 4) ** 3 >= 2 ** 32)
       fail(`a pool of ${opts.poolChunks} chunks of ${edge}^3 has more block ids than 32 bits hold`);
     if (chunkBytes * 8 >= 2 ** 32) fail(`a chunk of ${chunkBytes} bytes is too large to address in 32-bit bit offsets`);
@@ -527,9 +563,38 @@ export class ChunkedVolume implements BlockSource {
     if (slot !== NONE) this.writeSlot(slot, chunk);
   }
 
+  /** Slot-table entry of `slot`: `chunk` with its role, or NONE (empty). */
   private writeSlot(slot: number, chunk: ChunkIndex): void {
-    this.word[0] = chunk;
+    this.word[0] = chunk === NONE ? NONE : chunk + CHUNK_ROLE_CODES[this.roleOf(chunk)] * 2 ** ROLE_SHIFT;
     this.device.queue.writeBuffer(this.tables, (this.chunkCount + slot) * 4, this.word);
+  }
+
+  /**
+   * Which chunks the surface is drawn in. `drawn` null (the default): every
+   * chunk. Otherwise a chunk in `drawn` is drawn, one in `ghosts` (and not
+   * in `drawn`) a ghost, any other idle (ChunkRole). Applies to the chunks
+   * resident now and to those put later (the sets are copied); the slot-table
+   * words of resident chunks whose role changes are written (queue order:
+   * the next surface submitted sees them). A drawn chunk's cells on its
+   * upper faces are complete when its +x, +y, +z and diagonal neighbours
+   * (those of the level) are resident and drawn or ghosts; otherwise those
+   * cells make no triangles.
+   */
+  setRoles(drawn: ReadonlySet<ChunkIndex> | null, ghosts: ReadonlySet<ChunkIndex>): void {
+    if (this.destroyed) throw new ChunkError(`${this.layout.name}: the chunk pool was destroyed`);
+    const before = new Map<ChunkIndex, ChunkRole>();
+    for (const chunk of this.slotOf.keys()) before.set(chunk, this.roleOf(chunk));
+    this.drawnChunks = drawn ? new Set(drawn) : null;
+    this.ghostChunks = drawn ? new Set(ghosts) : new Set();
+    for (const [chunk, slot] of this.slotOf) {
+      if (this.roleOf(chunk) !== before.get(chunk)) this.writeSlot(slot, chunk);
+    }
+  }
+
+  /** The role `chunk` has (or will have when put), from the last setRoles. */
+  roleOf(chunk: ChunkIndex): ChunkRole {
+    if (this.drawnChunks === null || this.drawnChunks.has(chunk)) return 'drawn';
+    return this.ghostChunks.has(chunk) ? 'ghost' : 'idle';
   }
 
   private logChange(slot: number, chunk: ChunkIndex): void {

@@ -335,6 +335,8 @@ export class StoreView {
           rate: lv.layout.rate,
           compressedHere: false,
           spacing: [o.store.voxelSize[0] * k, o.store.voxelSize[1] * k, o.store.voxelSize[2] * k],
+          // the level where its metadata puts it: a coarse voxel at the centre of the finer ones it averages
+          origin: (o.store.levelOffsets[s.level] ?? [0, 0, 0]).map((off) => off / k) as [number, number, number],
           notes: [],
         },
         iso,

@@ -20,6 +20,8 @@ import { decodeVertices } from '../../isosurface/vertex-format.ts';
 import { meshMetrics } from '../../mc/mesh-metrics.ts';
 import { LevelStoppedError } from '../../store/pinned-level.ts';
 import { openInputSurface } from '../input.ts';
+import { type ViewRequest, parseViewBox } from '../../store/view/view-request.ts';
+import type { CutChunkRecord } from '../../store/view/view-surface.ts';
 import { rateErrorRecord } from '../../zfp/rate-choice.ts';
 import {
   CommandFailed,
@@ -48,6 +50,10 @@ export interface ExtractRecord {
   cacheSlots: number;
   grew: boolean;
   ply?: string;
+  /** A store refined by a view: the chunks drawn per level, with the triangles of each (stitching geometry, if any, apart). */
+  cut?: CutChunkRecord[];
+  /** A store refined by a view: GPU bytes held with this surface. */
+  gpuBytes?: number;
 }
 
 /** --deadline S (a store's per-request retry deadline) -> ms (shared with `bench`). */
@@ -66,6 +72,26 @@ export function streamBudgetOption(args: Parameters<typeof numberOption>[0]): nu
   return mb * 2 ** 20;
 }
 
+/** --view-box / --view [--tolerance PX] -> the view a store is refined by (shared with `bench`). */
+export function viewOption(args: Parameters<typeof numberOption>[0]): ViewRequest | undefined {
+  const box = stringOption(args, 'view-box');
+  const link = stringOption(args, 'view');
+  const tolerancePx = numberOption(args, 'tolerance');
+  if (box !== undefined && link !== undefined) throw new UsageError('give --view-box or --view, not both');
+  if (tolerancePx !== undefined && !(tolerancePx > 0)) throw new UsageError('--tolerance must be a positive number of pixels');
+  if (box === undefined && link === undefined) {
+    if (tolerancePx !== undefined) throw new UsageError('--tolerance is for --view-box or --view');
+    return undefined;
+  }
+  if (numberOption(args, 'level') !== undefined) throw new UsageError('--level pins one level; --view-box and --view refine by the view');
+  if (box !== undefined) {
+    const parsed = parseViewBox(box);
+    if (typeof parsed === 'string') throw new UsageError(`--view-box ${box}: ${parsed}`);
+    return { box: parsed, tolerancePx };
+  }
+  return { link, tolerancePx };
+}
+
 /** --cache-budget MB -> bytes (shared with `bench`). */
 export function budgetOption(args: Parameters<typeof numberOption>[0]): number | undefined {
   const mb = numberOption(args, 'cache-budget');
@@ -78,13 +104,16 @@ export const extractCommand: CliCommand = {
   name: 'extract',
   summary: 'isosurfaces on the GPU (block cache kept between isovalues): counts, area, bbox, GPU time; --ply soups',
   usage:
-    "extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--level L] [--deadline S] [--time T] [--channel C] [--ranges RANGES.zarr] (--level, --deadline, --time, --channel, --ranges: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8)",
+    "extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--level L] [--deadline S] [--time T] [--channel C] [--ranges RANGES.zarr] [--view-box x0,y0,z0,x1,y1,z1 | --view '#iso=..&cam=..'] [--tolerance PX] (--level, --view-box, --view, --deadline, --time, --channel, --ranges: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8)",
   options: {
     level: { type: 'string' },
     deadline: { type: 'string' },
     time: { type: 'string' },
     channel: { type: 'string' },
     ranges: { type: 'string' },
+    view: { type: 'string' },
+    'view-box': { type: 'string' },
+    tolerance: { type: 'string' },
     iso: { type: 'string' },
     rate: { type: 'string' },
     'stream-budget': { type: 'string' },
@@ -107,6 +136,7 @@ export const extractCommand: CliCommand = {
       channel: numberOption(args, 'channel'),
       ranges: stringOption(args, 'ranges'),
       maxStreamBytes: streamBudgetOption(args),
+      view: viewOption(args),
     });
     ctx.log(`${input}: ${volume.how}`);
     const { iso } = volume;
@@ -124,9 +154,19 @@ export const extractCommand: CliCommand = {
           records.push({ iso: Math.fround(value), error: e.message, ...(budget ? { overBudget: true } : {}) });
           continue;
         }
-        const surface = await iso.readMesh();
-        const welded = decodeVertices(surface.vertices, surface.vertices.length / 3);
-        const m = meshMetrics(soupOf(welded, surface.indices));
+        let welded: Float32Array;
+        let indices: Uint32Array;
+        let cut: CutChunkRecord[] | undefined;
+        if ('readPositions' in iso) {
+          // several levels: positions in level-0 voxels (each level placed by its metadata), and the cut
+          ({ positions: welded, indices } = await iso.readPositions());
+          cut = await iso.cutRecord();
+        } else {
+          const surface = await iso.readMesh();
+          welded = decodeVertices(surface.vertices, surface.vertices.length / 3);
+          indices = surface.indices;
+        }
+        const m = meshMetrics(soupOf(welded, indices));
         const record: ExtractRecord = {
           iso: stats.isovalue,
           triangles: stats.triangles,
@@ -142,12 +182,15 @@ export const extractCommand: CliCommand = {
           stages: stats.stages,
           cacheSlots: stats.cacheSlots,
           grew: stats.grew,
+          ...(cut ? { cut, gpuBytes: volume.store?.().gpuBytes } : {}),
         };
         if (plyPrefix) {
           record.ply = `${plyPrefix}-iso${stats.isovalue}.ply`;
           writeFileSync(
             record.ply,
-            encodePly({ positions: welded, indices: surface.indices }, [`iso ${stats.isovalue} of ${basename(input)}, voxel index space`]),
+            encodePly({ positions: welded, indices }, [
+              `iso ${stats.isovalue} of ${basename(input)}, ${cut ? 'level-0 voxel index space (levels placed by their OME translation)' : 'voxel index space'}`,
+            ]),
           );
         }
         records.push(record);

@@ -145,7 +145,12 @@ export class ChunkFetcher {
    * error is reported again (on a microtask).
    */
   want(level: number, chunks: readonly ChunkIndex[]): void {
-    this.#wanted = new Set(chunks.map((c) => key(level, c)));
+    this.wantAll(chunks.map((chunk) => ({ level, chunk })));
+  }
+
+  /** As want, for chunks of several levels at once (the view cut: each region at its level), most urgent first. */
+  wantAll(items: readonly { level: number; chunk: ChunkIndex }[]): void {
+    this.#wanted = new Set(items.map(({ level, chunk }) => key(level, chunk)));
     for (const [k, ctl] of this.#inFlight) {
       if (!this.#wanted.has(k)) {
         ctl.abort(new DOMException('no longer needed', 'AbortError'));
@@ -155,8 +160,8 @@ export class ChunkFetcher {
     }
     this.#queue = [];
     const now = this.#now();
-    const stillFailed: Array<[ChunkIndex, StoreError]> = [];
-    for (const chunk of chunks) {
+    const stillFailed: Array<[number, ChunkIndex, StoreError]> = [];
+    for (const { level, chunk } of items) {
       const k = key(level, chunk);
       const hit = this.#cache.get(k);
       const failed = this.#failed.get(k);
@@ -164,7 +169,7 @@ export class ChunkFetcher {
         this.#counts.cacheHits++;
         for (const l of this.#chunkListeners) l(level, chunk, hit, true);
       } else if (failed && failed.retryAt > now) {
-        stillFailed.push([chunk, failed.error]);
+        stillFailed.push([level, chunk, failed.error]);
       } else if (!this.#inFlight.has(k)) {
         this.#queue.push({ level, chunk });
       }
@@ -174,7 +179,7 @@ export class ChunkFetcher {
     if (stillFailed.length > 0) {
       const wanted = this.#wanted;
       queueMicrotask(() => {
-        for (const [chunk, error] of stillFailed) {
+        for (const [level, chunk, error] of stillFailed) {
           if (this.#wanted !== wanted) return; // a newer list replaced this one
           for (const l of this.#errorListeners) l(level, chunk, error, true);
         }

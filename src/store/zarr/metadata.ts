@@ -53,6 +53,39 @@ export function voxelSizeOf(attrs: Json): [number, number, number] {
   return [1, 1, 1];
 }
 
+/**
+ * Where each level sits, in level-0 voxels (x, y, z): level L's voxel j at
+ * level-0 index j * 2^L + offset. From the OME `translation` of each dataset
+ * (relative to level 0's, divided by level 0's `scale`): a coarse voxel of a
+ * mean pyramid is the mean of 2^L finer ones and sits at their centre,
+ * (2^L - 1) / 2 (the converter writes that); a store that gives no
+ * translation places its levels at 0 (nearest-neighbour pyramids). Levels
+ * beyond the datasets listed (a plain array) get 0.
+ */
+export function levelOffsetsOf(attrs: Json, count: number): [number, number, number][] {
+  const ms = multiscaleOf(attrs);
+  const datasets = ms && Array.isArray(ms.datasets) ? (ms.datasets as Json[]) : [];
+  const transformOf = (d: Json | undefined, type: string): [number, number, number] | null => {
+    const list = d && Array.isArray(d.coordinateTransformations) ? (d.coordinateTransformations as Json[]) : [];
+    const v = list.find((x) => isObject(x) && x.type === type)?.[type] as number[] | undefined;
+    if (!Array.isArray(v) || v.length < 3) return null;
+    const [z, y, x] = v.slice(-3).map(Number);
+    return [x, y, z].every(Number.isFinite) ? [x, y, z] : null;
+  };
+  const scale0 = transformOf(datasets[0], 'scale') ?? [1, 1, 1];
+  const t0 = transformOf(datasets[0], 'translation') ?? [0, 0, 0];
+  const out: [number, number, number][] = [];
+  for (let L = 0; L < count; L++) {
+    const t = transformOf(datasets[L], 'translation');
+    out.push(
+      t && scale0.every((s) => s > 0)
+        ? [(t[0] - t0[0]) / scale0[0], (t[1] - t0[1]) / scale0[1], (t[2] - t0[2]) / scale0[2]]
+        : [0, 0, 0],
+    );
+  }
+  return out;
+}
+
 /** Caches JSON documents (zarr.json, .zarray, .zattrs, .zgroup) so that zarrita and our checks read each once. */
 export class MetadataMemo implements AsyncReadable {
   #memo = new Map<string, Promise<Uint8Array | undefined>>();

@@ -6,7 +6,7 @@ import type { AbsolutePath } from '@zarrita/storage';
 import * as zarr from 'zarrita';
 import { checkRate } from '../../zfp/format.ts';
 import { describeTransportError, StoreError } from './errors.ts';
-import { isObject, type Json, levelPaths, multiscaleOf, voxelSizeOf, zfpChunkBytes } from './metadata.ts';
+import { isObject, type Json, levelPaths, multiscaleOf, voxelSizeOf, levelOffsetsOf, zfpChunkBytes } from './metadata.ts';
 import type { MetadataMemo } from './metadata.ts';
 import type { OpenStoreOptions, StoreLevel, ZfpStore } from './store.ts';
 import { openRangesSidecar, type RangesSidecar } from './ranges-sidecar.ts';
@@ -229,6 +229,7 @@ export async function openSourceStore(
     retries: retrying.counters,
     metadataBytes: metered.meter.bytes,
     voxelSize: voxelSizeOf(attrs),
+    levelOffsets: levelOffsetsOf(attrs, levels.length),
     unit: axisUnit('x'),
     valueRange: null,
     isAbsent: () => false,

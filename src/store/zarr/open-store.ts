@@ -14,7 +14,7 @@ import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
 export { chunkCoords, zfpChunkBytes } from './metadata.ts';
 import { describeTransportError, RequestFailedError, StoreError } from './errors.ts';
 import { RetryingStore } from './retrying-store.ts';
-import { chunkCoords, isObject, type Json, levelPaths, MetadataMemo, voxelSizeOf, zfpChunkBytes } from './metadata.ts';
+import { chunkCoords, isObject, type Json, levelPaths, MetadataMemo, voxelSizeOf, levelOffsetsOf, zfpChunkBytes } from './metadata.ts';
 export { MetadataMemo } from './metadata.ts';
 import { openSourceStore } from './open-source.ts';
 import type { OpenStoreOptions, StoreLevel, ZfpStore } from './store.ts';
@@ -288,6 +288,7 @@ async function openZfpLevels({ mem, metered, retrying }: StoreLayers, name: stri
     retries: retrying.counters,
     metadataBytes: metered.meter.bytes,
     voxelSize: voxelSizeOf(attrs),
+    levelOffsets: levelOffsetsOf(attrs, levels.length),
     unit: typeof ours?.unit === 'string' ? ours.unit : null,
     valueRange: Array.isArray(vr) && vr.length === 2 ? [Number(vr[0]), Number(vr[1])] : null,
     isAbsent(bytes) {

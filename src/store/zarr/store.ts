@@ -31,6 +31,8 @@ export interface ZfpStore {
   levels: StoreLevel[];
   /** x, y, z of level 0 (1, 1, 1 when the store does not say). */
   voxelSize: [number, number, number];
+  /** Per level, where its voxel 0 sits in level-0 voxels (OME translation; metadata.ts levelOffsetsOf). */
+  levelOffsets: [number, number, number][];
   unit: string | null;
   /** Decoded level-0 [min, max] from our attributes, else null. */
   valueRange: [number, number] | null;

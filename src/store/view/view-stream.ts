@@ -1,0 +1,591 @@
+// View-dependent streaming (issue 27): each region of the volume at the
+// level the camera needs, one surface made of several levels.
+//
+// For the isovalue and the view, the cut (cut.ts) says which chunk of which
+// level draws each region (a 2:1 balanced octree cut by screen-space error,
+// within the budget). Each level used has its pool (ChunkedVolume) holding
+// the cut's chunks the surface needs there and their ghosts (the +x/+y/+z
+// neighbours whose voxels complete the drawn chunks' upper cells), and its
+// Isosurface restricted to the drawn chunks by the pool's chunk roles: so a
+// drawn chunk's cells are exactly the level's regular cells, whatever its
+// neighbours are drawn at.
+//
+// Refinement goes coarse to fine as today, but only where the view needs it:
+// step k shows the cut coarsened to levels >= k (a region whose target is
+// finer than k is drawn by its ancestor at level k; still balanced, still
+// covering every region once), so the first surface comes from the coarsest
+// level at once and each finer step replaces its parents when its chunks are
+// resident. A new isovalue or a new view starts at the finest step already
+// resident (scrubbing and orbiting stay at full detail where they can); the
+// newest request wins and requests no longer needed are aborted.
+//
+// Within a step the finer level is computed first, then the coarser ones
+// (each surface is updated in place: for the frame between, a region may be
+// drawn twice, never missing).
+import type { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
+import { chunkCount, estimateFixedBytes } from '../level-state.ts';
+import { chunksNeeded, neighbourhoodRanges } from '../plan.ts';
+import type { LevelStats, LevelSurface, LevelVolume, StreamGpu, StreamProgress } from '../stream-port.ts';
+import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
+import { isAbort } from '../zarr/errors.ts';
+import type { ZfpStore } from '../zarr/store.ts';
+import { type CutCamera, type ViewCut, viewCut } from './cut.ts';
+
+/** A pool whose chunks can be drawn, ghosts or idle (ChunkedVolume.setRoles). */
+export interface RoleVolume extends LevelVolume {
+  setRoles(drawn: ReadonlySet<ChunkIndex> | null, ghosts: ReadonlySet<ChunkIndex>): void;
+}
+
+export interface ViewSpec {
+  camera: CutCamera;
+  /** A region is refined while one of its voxels projects to more than this many pixels. */
+  tolerancePx: number;
+}
+
+/** One level of the surface on screen. */
+export interface CutLevelShown<V, S, F> {
+  level: number;
+  volume: V;
+  surface: F;
+  stats: S;
+  /** Chunks drawn at this level that hold part of the surface (the others have none). */
+  drawn: ChunkIndex[];
+  ghosts: ChunkIndex[];
+}
+
+export interface ShownCut<V, S, F> {
+  iso: number;
+  /** The finest level of this step; `final` when it is the view's whole cut. */
+  step: number;
+  final: boolean;
+  levels: CutLevelShown<V, S, F>[];
+  /** The view's cut this step leads to. */
+  cut: ViewCut;
+  /** Leaves drawn per level in this step (needed or not): the regions each level covers. */
+  leaves: ChunkIndex[][];
+}
+
+interface LevelState<V> {
+  index: number;
+  layout: ChunkLevelLayout;
+  ranges: Float32Array | null;
+  nb: Float32Array | null;
+  reading: Promise<void> | null;
+  volume: V | null;
+  /** Resident chunks, least recently wanted first. */
+  lru: Map<ChunkIndex, true>;
+}
+
+/** One step of the refinement: per level, its leaves, drawn (needed) chunks, ghosts and wanted chunks. */
+interface Step {
+  finest: number;
+  leaves: ChunkIndex[][];
+  drawn: Set<ChunkIndex>[];
+  ghosts: Set<ChunkIndex>[];
+  wanted: ChunkIndex[][];
+}
+
+/** Chunks a step waits for (keys level * 2^32 + chunk), and per level what must stay resident meanwhile. */
+interface Waiting {
+  missing: Set<number>;
+  done: () => void;
+  keep: Set<number>[];
+}
+
+const key = (level: number, chunk: ChunkIndex) => level * 2 ** 32 + chunk;
+
+/** Default screen-space tolerance in pixels. */
+export const DEFAULT_TOLERANCE_PX = 1.5;
+
+export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends LevelSurface<S>> {
+  readonly levels: LevelState<V>[];
+  budgetBytes: number;
+  finest = 0;
+  coarsest: number;
+  #view: ViewSpec | null = null;
+  #iso = Number.NaN;
+  #gen = 0;
+  #destroyed = false;
+  #shown: ShownCut<V, S, F> | null = null;
+  #surfaces = new Map<number, { surface: F; capacity: number }>();
+  #waiting: Waiting | null = null;
+  /** Surfaces made for a pool's old capacity, destroyed when the next step shows. */
+  #retired: F[] = [];
+  #progress = new Set<(p: StreamProgress) => void>();
+  #shownListeners = new Set<(s: ShownCut<V, S, F>) => void>();
+  #errors = new Set<(e: Error) => void>();
+
+  private constructor(
+    readonly store: ZfpStore,
+    readonly fetcher: ChunkFetcher,
+    readonly gpu: StreamGpu<V, S, F>,
+    budgetBytes: number,
+  ) {
+    this.budgetBytes = budgetBytes;
+    this.levels = store.levels.map((l, i) => ({
+      index: i,
+      layout: l.layout,
+      ranges: null,
+      nb: null,
+      reading: null,
+      volume: null,
+      lru: new Map(),
+    }));
+    this.coarsest = this.levels.length - 1;
+    while (this.coarsest > 0 && store.levels[this.coarsest].unusable) this.coarsest--;
+    fetcher.onChunk((level, chunk, bytes) => this.#arrived(level, chunk, bytes));
+    fetcher.onError((level, chunk, e, repeated) => {
+      if (!repeated) for (const l of this.#errors) l(e);
+      const w = this.#waiting;
+      if (!w?.missing.has(key(level, chunk))) return;
+      this.#stop(level, e.message, 'chunk');
+    });
+  }
+
+  static async create<V extends RoleVolume, S extends LevelStats, F extends LevelSurface<S>>(
+    store: ZfpStore,
+    fetcher: ChunkFetcher,
+    gpu: StreamGpu<V, S, F>,
+    budgetBytes: number,
+  ): Promise<ViewStream<V, S, F>> {
+    const v = new ViewStream(store, fetcher, gpu, budgetBytes);
+    await v.#readRanges(v.levels[v.coarsest]);
+    return v;
+  }
+
+  onProgress(l: (p: StreamProgress) => void): () => void {
+    this.#progress.add(l);
+    return () => this.#progress.delete(l);
+  }
+  onShown(l: (s: ShownCut<V, S, F>) => void): () => void {
+    this.#shownListeners.add(l);
+    return () => this.#shownListeners.delete(l);
+  }
+  onError(l: (e: Error) => void): () => void {
+    this.#errors.add(l);
+    return () => this.#errors.delete(l);
+  }
+
+  get shown(): ShownCut<V, S, F> | null {
+    return this.#shown;
+  }
+
+  get view(): ViewSpec | null {
+    return this.#view;
+  }
+
+  /** GPU bytes held now, pools and everything else. */
+  get gpuBytes(): { pools: number; total: number } {
+    let pools = 0;
+    for (const l of this.levels) pools += l.volume?.poolBytes ?? 0;
+    return { pools, total: this.gpu.allocatedBytes };
+  }
+
+  /** [min, max] of the store's values: its metadata, else the coarsest level's chunk ranges. */
+  get valueRange(): [number, number] | null {
+    if (this.store.valueRange) return this.store.valueRange;
+    for (const l of [...this.levels].reverse()) {
+      if (!l.ranges) continue;
+      let lo = Infinity;
+      let hi = -Infinity;
+      for (let i = 0; i < l.ranges.length; i += 2) {
+        if (l.ranges[i] < lo) lo = l.ranges[i];
+        if (l.ranges[i + 1] > hi) hi = l.ranges[i + 1];
+      }
+      if (lo <= hi) return [lo, hi];
+    }
+    return null;
+  }
+
+  /** A new camera (or tolerance): the cut is planned again at the current isovalue; resolves when that refinement ends. */
+  setView(view: ViewSpec): Promise<void> {
+    this.#view = view;
+    return Number.isFinite(this.#iso) ? this.setIsovalue(this.#iso) : Promise.resolve();
+  }
+
+  /** Newest wins: resolves when this isovalue's refinement for the current view ends (the whole cut shown, stopped, or superseded). */
+  async setIsovalue(iso: number): Promise<void> {
+    const gen = ++this.#gen;
+    this.#iso = iso;
+    this.#waiting?.done();
+    this.#waiting = null;
+    const view = this.#view;
+    if (!view) throw new Error('ViewStream: setView before setIsovalue');
+    let cut: ViewCut;
+    for (;;) {
+      cut = this.#cut(iso, view);
+      if (cut.wantsRanges.length === 0) break;
+      try {
+        await Promise.all(cut.wantsRanges.map((L) => this.#readRanges(this.levels[L])));
+      } catch (e) {
+        if (gen !== this.#gen || this.#destroyed) return;
+        for (const l of this.#errors) l(e as Error);
+        this.#stop(cut.wantsRanges[0], (e as Error).message, 'chunk');
+        return;
+      }
+      if (gen !== this.#gen || this.#destroyed) return;
+    }
+    const used = cut.levels.map((l, L) => (l.drawn.length > 0 ? L : Infinity));
+    const finestUsed = Math.min(...used);
+    const top = Math.max(...cut.levels.map((l, L) => (l.drawn.length > 0 ? L : -1)));
+    const steps: Step[] = [];
+    for (let k = top; k >= finestUsed; k--) steps.push(this.#step(cut, k));
+    // the finest step already resident: no fetching before it is shown
+    let first = 0;
+    for (let i = steps.length - 1; i > 0; i--) {
+      if (this.#resident(steps[i])) {
+        first = i;
+        break;
+      }
+    }
+    for (let i = first; i < steps.length; i++) {
+      if (gen !== this.#gen || this.#destroyed) return;
+      const ok = await this.#show(steps[i], cut, iso, gen, i === steps.length - 1);
+      if (!ok) return;
+    }
+  }
+
+  /** The view's cut at `iso` with the store's levels, ranges and budget. */
+  #cut(iso: number, view: ViewSpec): ViewCut {
+    const needs = new Map<number, ((c: ChunkIndex) => boolean) | null>();
+    return viewCut({
+      levels: this.levels.map((l) => ({ dims: l.layout.dims, chunkEdge: l.layout.chunkEdge, chunkGrid: l.layout.chunkGrid })),
+      voxelSize: this.store.voxelSize,
+      camera: view.camera,
+      tolerancePx: view.tolerancePx,
+      finest: Math.max(0, Math.min(this.finest, this.coarsest)),
+      coarsest: this.coarsest,
+      needs: (L) => {
+        if (!needs.has(L)) needs.set(L, this.#needs(L, iso));
+        return needs.get(L)!;
+      },
+      chunkBytes: (L) => this.#chunkCost(this.levels[L].layout),
+      // some room for the surfaces being replaced while a step is computed
+      budgetBytes: this.budgetBytes * 0.8,
+    });
+  }
+
+  /** Which chunks of level L the surface at `iso` needs, or null while its range array is unread. */
+  #needs(L: number, iso: number): ((c: ChunkIndex) => boolean) | null {
+    const lv = this.levels[L];
+    if (this.store.levels[L].unusable) return null;
+    if (lv.nb) {
+      const set = new Uint8Array(chunkCount(lv.layout));
+      for (const c of chunksNeeded(lv.nb, iso)) set[c] = 1;
+      return (c) => set[c] === 1;
+    }
+    if (!this.store.levels[L].rangesPath) return () => true; // no range arrays: every chunk may hold the surface
+    return null;
+  }
+
+  /**
+   * GPU bytes one wanted chunk of a level costs: its pool slot, the
+   * surface's per-block state, and a share of the cache of decoded blocks
+   * and vertices (about half its blocks active: a chunk the surface crosses).
+   */
+  #chunkCost(layout: ChunkLevelLayout): number {
+    const blocks = (layout.chunkEdge / 4) ** 3;
+    return layout.chunkBytes + estimateFixedBytes(layout, 1) - (64 << 10) + blocks * 0.5 * 384;
+  }
+
+  #readRanges(lv: LevelState<V>): Promise<void> {
+    if (lv.ranges || !this.store.levels[lv.index].rangesPath) return Promise.resolve();
+    lv.reading ??= this.store.readRanges(lv.index).then(
+      (r) => {
+        if (r && !lv.ranges) {
+          lv.ranges = r;
+          lv.nb = neighbourhoodRanges(lv.layout.chunkGrid, r);
+        }
+      },
+      (e) => {
+        lv.reading = null;
+        throw e;
+      },
+    );
+    return lv.reading;
+  }
+
+  /** The cut coarsened to levels >= k: leaves finer than k drawn by their ancestor at k. */
+  #step(cut: ViewCut, k: number): Step {
+    const n = this.levels.length;
+    const leaves: Set<ChunkIndex>[] = Array.from({ length: n }, () => new Set());
+    const edge0 = (L: number) => this.levels[L].layout.chunkEdge * 2 ** L;
+    for (const node of cut.nodes) {
+      if (node.level >= k) {
+        leaves[node.level].add(node.chunk);
+        continue;
+      }
+      const [gx, gy] = this.levels[k].layout.chunkGrid;
+      const e = edge0(node.level);
+      const a = node.coords.map((c) => Math.floor((c * e) / edge0(k)));
+      leaves[k].add(a[0] + gx * (a[1] + gy * a[2]));
+    }
+    const drawn: Set<ChunkIndex>[] = [];
+    const ghosts: Set<ChunkIndex>[] = [];
+    const wanted: ChunkIndex[][] = [];
+    const eye = this.#view!.camera.eye;
+    for (let L = 0; L < n; L++) {
+      const need = leaves[L].size > 0 ? this.#needs(L, this.#iso) ?? (() => true) : () => false;
+      const { chunkGrid: g } = this.levels[L].layout;
+      const d = new Set<ChunkIndex>();
+      const gh = new Set<ChunkIndex>();
+      for (const c of leaves[L]) {
+        if (need(c)) d.add(c);
+        const x = c % g[0];
+        const y = Math.floor(c / g[0]) % g[1];
+        const z = Math.floor(c / (g[0] * g[1]));
+        for (let o = 1; o < 8; o++) {
+          const ux = x + (o & 1);
+          const uy = y + ((o >> 1) & 1);
+          const uz = z + ((o >> 2) & 1);
+          if (ux >= g[0] || uy >= g[1] || uz >= g[2]) continue;
+          const u = ux + g[0] * (uy + g[1] * uz);
+          if (!leaves[L].has(u) && need(u)) gh.add(u);
+        }
+      }
+      drawn.push(d);
+      ghosts.push(gh);
+      wanted.push(this.#nearestFirst(L, [...d, ...gh], eye));
+    }
+    return { finest: k, leaves: leaves.map((s) => [...s]), drawn, ghosts, wanted };
+  }
+
+  #nearestFirst(L: number, chunks: ChunkIndex[], eye: [number, number, number]): ChunkIndex[] {
+    const { chunkGrid: g, chunkEdge } = this.levels[L].layout;
+    const s = this.store.voxelSize;
+    const e = chunkEdge * 2 ** L;
+    const dist = (c: ChunkIndex) => {
+      const p = [c % g[0], Math.floor(c / g[0]) % g[1], Math.floor(c / (g[0] * g[1]))];
+      let d = 0;
+      for (let a = 0; a < 3; a++) d += ((p[a] + 0.5) * e * s[a] - eye[a]) ** 2;
+      return d;
+    };
+    return chunks
+      .map((c) => [dist(c), c] as const)
+      .sort((a, b) => a[0] - b[0] || a[1] - b[1])
+      .map(([, c]) => c);
+  }
+
+  #resident(step: Step): boolean {
+    return step.wanted.every((w, L) => w.length === 0 || (this.levels[L].volume !== null && w.every((c) => this.levels[L].volume!.has(c))));
+  }
+
+  /** Fetches what the step needs, computes its levels' surfaces (finest first), then shows it. Whether it was shown. */
+  async #show(step: Step, cut: ViewCut, iso: number, gen: number, final: boolean): Promise<boolean> {
+    const stale = () => gen !== this.#gen || this.#destroyed;
+    const shownWanted = this.#shownWanted();
+    // pools: room for what the step wants and what is on screen now
+    for (let L = 0; L < this.levels.length; L++) {
+      const keep = new Set([...step.wanted[L], ...(shownWanted[L] ?? [])]);
+      if (step.wanted[L].length === 0) continue;
+      const refused = this.#fitPool(this.levels[L], keep);
+      if (refused) {
+        this.#stop(L, refused, 'budget');
+        return false;
+      }
+    }
+    const missing = new Set<number>();
+    const order: { level: number; chunk: ChunkIndex }[] = [];
+    for (let L = this.levels.length - 1; L >= 0; L--) {
+      const lv = this.levels[L];
+      for (const c of step.wanted[L]) {
+        if (lv.lru.has(c)) {
+          lv.lru.delete(c);
+          lv.lru.set(c, true);
+        }
+        if (!lv.volume!.has(c)) {
+          missing.add(key(L, c));
+          order.push({ level: L, chunk: c });
+        }
+      }
+    }
+    const total = step.wanted.reduce((a, w) => a + w.length, 0);
+    const progress = (phase: StreamProgress['phase']) =>
+      this.#emit({
+        iso,
+        level: step.finest,
+        chunksDone: total - missing.size,
+        chunksNeeded: total,
+        bytesFetched: this.fetcher.counters.bytesFetched,
+        phase,
+      });
+    if (missing.size > 0) {
+      const keep = step.wanted.map((w, L) => new Set([...w, ...(shownWanted[L] ?? [])].map((c) => key(L, c))));
+      let mine: Waiting | null = null;
+      await new Promise<void>((resolve) => {
+        mine = this.#waiting = { missing, done: resolve, keep };
+        for (let L = 0; L < this.levels.length; L++) {
+          const v = this.levels[L].volume;
+          if (v && step.wanted[L].length > 0) v.reserve(step.wanted[L].filter((c) => missing.has(key(L, c))));
+        }
+        progress('fetching');
+        this.fetcher.wantAll(order);
+        if (missing.size === 0) resolve();
+      });
+      if (this.#waiting === mine) this.#waiting = null;
+      if (stale()) return false;
+      if (missing.size > 0) return false; // a chunk failed
+    }
+    progress('computing');
+    const levels: CutLevelShown<V, S, F>[] = [];
+    const used = step.drawn.map((d, L) => (d.size > 0 ? L : -1)).filter((L) => L >= 0);
+    try {
+      for (const L of used) {
+        const lv = this.levels[L];
+        const pool = lv.volume!;
+        pool.setRoles(step.drawn[L], step.ghosts[L]);
+        let entry = this.#surfaces.get(L);
+        if (entry && entry.capacity !== pool.poolChunks) {
+          // made for the pool's old capacity (block ids are slot-relative): made again, the old one let go when this step shows
+          this.#retired.push(entry.surface);
+          this.#surfaces.delete(L);
+          entry = undefined;
+        }
+        if (!entry) {
+          const surface = await this.gpu.createSurface(pool, Math.max(256 << 10, this.#free()));
+          if (stale() || lv.volume !== pool) {
+            surface.destroy();
+            return false;
+          }
+          entry = { surface, capacity: pool.poolChunks };
+          this.#surfaces.set(L, entry);
+        }
+        entry.surface.setMemoryBudget(Math.max(1, this.budgetBytes - RESERVE_BYTES - (this.gpu.allocatedBytes - entry.surface.budgetedBytes)));
+        const stats = await entry.surface.compute(iso);
+        if (stale()) return false;
+        levels.push({ level: L, volume: pool, surface: entry.surface, stats, drawn: [...step.drawn[L]], ghosts: [...step.ghosts[L]] });
+      }
+    } catch (e) {
+      if (stale()) return false;
+      if (isAbort(e) || (e as Error).name === 'IsosurfaceSupersededError') return false;
+      const budget = (e as Error).name === 'IsosurfaceBudgetError';
+      if (!budget) for (const l of this.#errors) l(e as Error);
+      this.#stop(step.finest, (e as Error).message, budget ? 'budget' : 'gpu');
+      return false;
+    }
+    // levels this step does not draw: their surfaces go, their pools' chunks become idle
+    for (const [L, entry] of this.#surfaces) {
+      if (used.includes(L)) continue;
+      entry.surface.destroy();
+      this.#surfaces.delete(L);
+      this.levels[L].volume?.setRoles(new Set(), new Set());
+    }
+    for (const s of this.#retired) s.destroy();
+    this.#retired = [];
+    this.#shown = { iso, step: step.finest, final, levels, cut, leaves: step.leaves };
+    for (const l of this.#shownListeners) l(this.#shown);
+    progress('shown');
+    return true;
+  }
+
+  /** Per level, the chunks the surface on screen reads (drawn and ghosts). */
+  #shownWanted(): ChunkIndex[][] {
+    const out: ChunkIndex[][] = this.levels.map(() => []);
+    for (const l of this.#shown?.levels ?? []) out[l.level] = [...l.drawn, ...l.ghosts];
+    return out;
+  }
+
+  #free(): number {
+    return this.budgetBytes - RESERVE_BYTES - this.gpu.allocatedBytes;
+  }
+
+  /**
+   * Gives a level's pool room for `keep` (what the step wants and what is on
+   * screen): idle chunks are evicted first (least recently wanted), then the
+   * pool grows. Returns why it cannot, or null.
+   */
+  #fitPool(lv: LevelState<V>, keep: ReadonlySet<ChunkIndex>): string | null {
+    const n = Math.max(1, keep.size);
+    const v = lv.volume;
+    if (v && v.poolChunks >= n) return null;
+    const target = Math.min(chunkCount(lv.layout), Math.max(n, Math.ceil((v?.poolChunks ?? 0) * 1.25)));
+    const extra = this.gpu.poolBytesFor(lv.layout, target) - (v?.poolBytes ?? 0) + estimateFixedBytes(lv.layout, target);
+    if (extra > this.#free()) {
+      // pools of levels the step does not use give their room back
+      for (const other of this.levels) {
+        if (other === lv || !other.volume || this.#surfaces.has(other.index)) continue;
+        other.volume.destroy();
+        other.volume = null;
+        other.lru.clear();
+      }
+    }
+    if (extra > this.#free())
+      return (
+        `level ${lv.index} needs ${n} chunks (${mib(n * lv.layout.chunkBytes)} MiB) for this view; ` +
+        `the budget of ${mib(this.budgetBytes)} MiB has ${mib(Math.max(0, this.#free()))} MiB free`
+      );
+    if (v) v.resize(Math.max(target, v.residentCount));
+    else lv.volume = this.gpu.createVolume(lv.layout, target);
+    return null;
+  }
+
+  #arrived(level: number, chunk: ChunkIndex, bytes: Uint8Array): void {
+    const w = this.#waiting;
+    const lv = this.levels[level];
+    if (!w || !lv?.volume || !w.missing.has(key(level, chunk))) return;
+    const v = lv.volume;
+    if (!v.has(chunk)) {
+      if (v.freeCount === 0 && !v.isReserved(chunk)) {
+        for (const c of lv.lru.keys()) {
+          if (w.keep[level]?.has(key(level, c))) continue;
+          v.evict(c);
+          lv.lru.delete(c);
+          break;
+        }
+      }
+      try {
+        v.put(chunk, bytes);
+      } catch (e) {
+        for (const l of this.#errors) l(e as Error);
+        this.#stop(level, (e as Error).message, 'chunk');
+        return;
+      }
+    }
+    lv.lru.set(chunk, true);
+    w.missing.delete(key(level, chunk));
+    if (w.missing.size === 0) w.done();
+  }
+
+  #stop(level: number, reason: string, cause: NonNullable<StreamProgress['cause']>): void {
+    const w = this.#waiting;
+    this.#waiting = null;
+    if (w) {
+      this.fetcher.wantAll([]);
+      w.done();
+    }
+    this.#emit({
+      iso: this.#shown?.iso ?? Number.NaN,
+      level,
+      chunksDone: 0,
+      chunksNeeded: 0,
+      bytesFetched: this.fetcher.counters.bytesFetched,
+      phase: 'stopped',
+      reason,
+      cause,
+    });
+  }
+
+  #emit(p: StreamProgress): void {
+    for (const l of this.#progress) l(p);
+  }
+
+  destroy(): void {
+    this.#destroyed = true;
+    this.#gen++;
+    this.fetcher.cancelAll();
+    this.#waiting?.done();
+    for (const e of this.#surfaces.values()) e.surface.destroy();
+    this.#surfaces.clear();
+    for (const s of this.#retired) s.destroy();
+    this.#retired = [];
+    for (const l of this.levels) {
+      l.volume?.destroy();
+      l.volume = null;
+    }
+    this.#shown = null;
+  }
+}
+
+/** Kept free within the budget for short-lived buffers (statistics and readback staging, uniforms). */
+const RESERVE_BYTES = 1 << 20;
+const mib = (b: number) => (b / 2 ** 20).toFixed(1);
