@@ -101,6 +101,8 @@ fn group_range_chunks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups
 }
 
 // ---- per isovalue, pass 1: one compare per group
+// A pool's idle chunks (ChunkedVolume.setRoles) are never active: their
+// blocks cost nothing per isovalue and no cell reads their voxels.
 @group(1) @binding(2) var<storage, read> mark_group_ranges: array<vec2f>;
 @group(1) @binding(3) var<storage, read_write> group_mask: array<u32>;
 
@@ -112,7 +114,7 @@ fn mark_active_groups(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups
     return;
   }
   let r = mark_group_ranges[g];
-  group_mask[g] = select(0u, 1u, r.x < volume.iso && volume.iso <= r.y);
+  group_mask[g] = select(0u, 1u, r.x < volume.iso && volume.iso <= r.y && group_role(g) != ROLE_IDLE);
 }
 
 // ---- per isovalue, pass 2: one compare per block of the active groups

@@ -34,12 +34,6 @@ fn row_bits(slots: ptr<function, array<u32, 8>>, y: u32, z: u32, shift: u32) -> 
   return bits << shift;
 }
 
-// The blocks d (bits, d = dx + 2dy + 4dz) that cells on the +faces r reach:
-// the non-empty subsets of r; byte r of (0x0e040200, 0xfe543210).
-fn blocks_reached(r: u32) -> u32 {
-  return (select(0x0e040200u, 0xfe543210u, r >= 4u) >> (8u * (r & 3u))) & 255u;
-}
-
 // Bits x, x+1 of a 5-bit row into byte x, for x = 0..3.
 fn spread_pairs(v: u32) -> u32 {
   return (v & 3u) | ((v & 6u) << 7u) | ((v & 12u) << 14u) | ((v & 24u) << 21u);
@@ -60,12 +54,19 @@ fn classify_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) n
   }
   let b = active_ids[i];
   let c = block_coords(b, volume.grid);
+  // A ghost chunk's block (block_mc_common.wgsl): no indices; it keeps the
+  // cells on its chunk's lower faces that own a cut edge, for their vertices.
+  let ghost = block_role(b) == ROLE_GHOST;
+  let first_in_chunk = block_first_in_chunk(c);
+  // Neighbours in chunks not resident or idle: never read, and the cells
+  // whose edges' owners may touch them make no triangle (cells_without_indices).
+  let unavailable = unavailable_blocks(c, volume.grid);
   // The 8 blocks the cells of b touch (d = dx + 2dy + 4dz); `missing` has bit d
-  // set for those not cached (or outside the grid).
+  // set for those not cached (or outside the grid, or unavailable).
   var slots: array<u32, 8>;
   var missing = 0u;
   for (var d = 0u; d < 8u; d++) {
-    let s = neighbour_slot(c, mc_corner_offset(d));
+    let s = select(neighbour_slot(c, mc_corner_offset(d)), NONE, ((unavailable >> d) & 1u) != 0u);
     slots[d] = s;
     missing |= select(0u, 1u << d, s == NONE);
   }
@@ -113,9 +114,21 @@ fn classify_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) n
         word &= columns & unblocked;
         // every case but 0 and 255 has triangles: clear the 255 bytes
         word &= ~(zero_bytes(~word) * 255u);
+        if (ghost) {
+          // the whole row on the chunk's lower y or z face, else its cell x = 0 on the lower x face
+          let on_face = (first_in_chunk.y && y == 0u) || (first_in_chunk.z && z == 0u);
+          word &= select(select(0u, 255u, first_in_chunk.x), 0xffffffffu, on_face);
+        }
+        // Cells without indices (a ghost's, or next to an unavailable chunk)
+        // stay only when they own a cut edge (the others would write nothing).
+        let without = select(cells_without_indices(unavailable, y, z), 0xffffffffu, ghost);
+        if (without != 0u) {
+          word &= ~(without & (zero_bytes(owned_cut_per_cell(word, c * 4u + vec3u(0u, y, z), volume.dims)) * 255u));
+        }
         if (word != 0u) {
+          let with_indices = word & ~without;
           for (var x = 0u; x < 4u; x++) {
-            indices += case_vertex_count((word >> (8u * x)) & 255u);
+            indices += case_vertex_count((with_indices >> (8u * x)) & 255u);
           }
           cells += 4u - countOneBits(zero_bytes(word));
         }
@@ -130,7 +143,7 @@ fn classify_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) n
   block_counts[i] = indices;
   block_counts[stride + i] = vertices;
   block_counts[2u * stride + i] = cells;
-  if (cells > 0u) {
+  if (indices > 0u) {
     atomicAdd(&occupied_count, 1u);
   }
 }

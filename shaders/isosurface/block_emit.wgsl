@@ -4,7 +4,7 @@
 // The slot data voxel by voxel: voxel (x, y, z) of slot s is s * 64 + x + 4y + 16z (the
 // same buffer classify reads as rows; scalar reads measured about 3% faster here on SwiftShader).
 @group(0) @binding(2) var<storage, read> slot_voxels: array<f32>;
-@group(1) @binding(0) var<storage, read> cell_list: array<vec2u>;   // (entry << 6 | cell, first index)
+@group(1) @binding(0) var<storage, read> cell_list: array<vec2u>;   // (entry << 6 | cell | CELL_NO_INDICES?, first index)
 @group(1) @binding(1) var<storage, read> slot_mc: array<vec2u>;     // per slot and row: (4 case bytes, row base)
 @group(2) @binding(0) var<uniform> shard: array<vec4u, 2>;          // this shard's record (plan.wgsl): first, count, base
 @group(2) @binding(1) var<storage, read_write> shard_indices: array<u32>;
@@ -60,7 +60,7 @@ fn emit_surface(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
   }
   let entry = cell_list[record[S_FIRST] + k];
   let first = entry.y;
-  let b = active_ids[entry.x >> 6u];
+  let b = active_ids[(entry.x & ~CELL_NO_INDICES) >> 6u];
   let l = cell_of(entry.x & 63u);
   let c = block_coords(b, volume.grid);
   let own = block_to_slot[b];
@@ -81,16 +81,19 @@ fn emit_surface(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
   let own_row = slot_mc[16u * own + l.y + 4u * l.z];
   let code = (own_row.x >> (8u * l.x)) & 255u;
   let words = case_words(code);
-  let n = 3u * mc_case_triangles(words);
+  // a cell without indices writes its owned vertices only (block_mc_common.wgsl)
+  let n = select(3u * mc_case_triangles(words), 0u, (entry.x & CELL_NO_INDICES) != 0u);
   let g = c * 4u + l;
   let last = last_cell_axes(g, volume.dims);
   let cut = mc_cut_edges(code);
   let base = record[S_BASE];
 
-  // The vertices this cell owns, written once: by the shard holding its first index.
+  // The vertices this cell owns, written once: by the shard whose vertex
+  // range holds its first index (plan_vertices: the shard holding that index,
+  // or the last shard in use for a cell without indices at the surface's end).
   let size = arrayLength(&shard_indices);
   var owned = owned_edges(last) & cut;
-  if (first >= base && first - base < size && owned != 0u) {
+  if (first >= base && first < record[S_VERTEX_END] && owned != 0u) {
     var vertex = own_row.y +
       owned_vertices_before(own_row.x, l.x, 0u, g - vec3u(l.x, 0u, 0u), volume.dims);
     let capacity = arrayLength(&vertex_data) / 3u;

@@ -23,7 +23,13 @@ fn expand_cells(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
   }
   let b = expand_active_ids[i];
   let slot = expand_block_to_slot[b];
-  let origin = block_coords(b, expand_volume.grid) * 4u;
+  let c = block_coords(b, expand_volume.grid);
+  let origin = c * 4u;
+  // Cells without indices, as classify_blocks found them (a ghost chunk's;
+  // those next to an unavailable chunk): listed with CELL_NO_INDICES, as
+  // they write the vertices they own, adding no index.
+  let ghost = block_role(b) == ROLE_GHOST;
+  let unavailable = unavailable_blocks(c, expand_volume.grid);
   let stride = count_stride(expand_counters[C_SLOTS >> 2u][C_SLOTS & 3u]);
   var first = expand_offsets[i];
   var vertex = expand_offsets[stride + i];
@@ -36,15 +42,18 @@ fn expand_cells(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
       continue;
     }
     vertex += owned_vertices_of_row(word, origin + vec3u(0u, w & 3u, w >> 2u), expand_volume.dims);
+    let without = select(cells_without_indices(unavailable, w & 3u, w >> 2u), 0xffffffffu, ghost);
     for (var x = 0u; x < 4u; x++) {
       let code = (word >> (8u * x)) & 255u;
       if (code != 0u) {
         let t = expand_case_table[code >> 1u];
         let words = select(t.xy, t.zw, (code & 1u) == 1u);
-        // (entry << 6) | cell: entries < 2^26 (the slot data is one binding of 256 B per slot)
-        expand_cell_list[at] = vec2u((i << 6u) | (4u * w + x), first);
+        let no_indices = ((without >> (8u * x)) & 1u) != 0u;
+        // (entry << 6) | cell, and the flag in bit 31: entries < 2^25 slots
+        // (maxCacheSlots, budget.ts)
+        expand_cell_list[at] = vec2u((i << 6u) | (4u * w + x) | select(0u, CELL_NO_INDICES, no_indices), first);
         at += 1u;
-        first += 3u * mc_case_triangles(words);
+        first += select(3u * mc_case_triangles(words), 0u, no_indices);
       }
     }
   }

@@ -24,6 +24,30 @@
 // has no sign change and emits nothing anyway. Voxels of uncached neighbours
 // are never read.
 //
+// A pool's chunks (ChunkedVolume; a stream has every block, all drawn): a
+// cell belongs to the chunk holding its lowest corner. A neighbour block in a
+// chunk that is not resident or is idle (setRoles) is "unavailable"
+// (unavailable_blocks in blocks_*.wgsl): never read, and a cell touching one
+// is blocked as if it were not cached. A cell's edges are numbered by their
+// owners (edge_owner.wgsl), the cells at its corners, which may touch one
+// block more along each axis (grid points g + 2) than the cell does; when
+// such a block is unavailable the owner is blocked, so the cell keeps its
+// case and the vertices it owns but makes no triangle
+// (cells_without_indices). Without this, a chunk resident without its
+// +x/+y/+z neighbours would index vertices nobody wrote.
+// Roles: a drawn chunk's cells are as above; an idle chunk's blocks are
+// never active (mark_active_groups); a ghost chunk's blocks are active by
+// the usual rule (drawn cells read their voxels), but its cells make no
+// triangle, and classify keeps the case only of those on the chunk's three
+// lower faces (chunk-local coordinate 0 on some axis): the only ghost-owned
+// vertices a drawn cell can index (a drawn cell's edge owned by a cell of
+// another chunk has its lower end on that chunk's lower face).
+// A cell without indices is kept only when it owns a cut edge; every other
+// case byte is cleared in classify, so expand and emit, which read the
+// stored bytes, number the vertices as classify counted them. Such cells
+// are in the cell list flagged CELL_NO_INDICES, with the first index of the
+// cell after them (plan_vertices gives each to exactly one shard).
+//
 // This file: the bindings and helpers classify_blocks (block_classify.wgsl)
 // and emit_surface (block_emit.wgsl) share. Each kernel is its own module, so
 // no two resource variables of a module share a binding.
@@ -67,4 +91,3 @@ fn cached_slot_at(n: vec3u) -> u32 {
 fn neighbour_slot(c: vec3u, d: vec3u) -> u32 {
   return cached_slot_at(c + d);
 }
-

@@ -5,6 +5,10 @@
 // resident only. The page table (chunk -> slot) finds the block at given
 // coordinates, the slot table (slot -> chunk) the coordinates of an id. The
 // groups of the active-block selection are the slots (the resident chunks).
+// A slot-table word also holds its chunk's role (ChunkedVolume.setRoles) in
+// its top 2 bits, chunk | role << 30 (ROLE_* in common.wgsl); an empty slot
+// is NONE. Every reader of the slot table goes through pool_slot_chunk
+// (masks the role off) or pool_slot_role.
 // Needs common.wgsl. Bind group 3 of every kernel that composes it.
 
 struct PoolBlocks {
@@ -18,12 +22,38 @@ struct PoolBlocks {
 
 @group(3) @binding(0) var<uniform> pool_blocks: PoolBlocks;
 // The level's tables (ChunkedVolume.tables): the page table (chunk -> slot),
-// then the slot table (slot -> chunk). One binding: the kernels that use it
-// stay within WebGPU's default of 8 storage buffers per stage.
+// then the slot table (slot -> chunk | role << 30). One binding: the kernels
+// that use it stay within WebGPU's default of 8 storage buffers per stage.
 @group(3) @binding(1) var<storage, read> pool_tables: array<u32>;
 
+const POOL_CHUNK_MASK: u32 = 0x3fffffffu;
+
+// The chunk in `slot`, NONE when the slot is empty.
 fn pool_slot_chunk(slot: u32) -> u32 {
-  return pool_tables[pool_blocks.slot_table + slot];
+  let word = pool_tables[pool_blocks.slot_table + slot];
+  return select(word & POOL_CHUNK_MASK, NONE, word == NONE);
+}
+
+// The role (ROLE_*) of the chunk in `slot` (3 when the slot is empty).
+fn pool_slot_role(slot: u32) -> u32 {
+  return pool_tables[pool_blocks.slot_table + slot] >> 30u;
+}
+
+// The role of block b's chunk (blocks_stream.wgsl: always ROLE_DRAWN).
+fn block_role(b: u32) -> u32 {
+  let cb = pool_blocks.chunk_blocks;
+  return pool_slot_role(b / (cb * cb * cb));
+}
+
+// The role of group g's chunk (the group is its slot).
+fn group_role(g: u32) -> u32 {
+  return pool_slot_role(g);
+}
+
+// The axes on which block coordinates c are their chunk's first: the block's
+// cells of local coordinate 0 on such an axis lie on the chunk's lower face.
+fn block_first_in_chunk(c: vec3u) -> vec3<bool> {
+  return c % pool_blocks.chunk_blocks == vec3u(0u);
 }
 
 // Block coordinates of id b (its slot holds a chunk).
@@ -48,6 +78,29 @@ fn block_at(c: vec3u, grid: vec3u) -> u32 {
   }
   let l = c % cb;
   return slot * cb * cb * cb + l.x + cb * (l.y + cb * l.z);
+}
+
+// Bits d (d = dx + 2dy + 4dz, d in {0, 1}^3) of the blocks c + d inside the
+// grid whose chunk is not resident or idle: no voxel of theirs is part of
+// this surface (block_mc_common.wgsl). Block c itself is active, so
+// available; only a block on its chunk's upper faces has neighbours in
+// other chunks.
+fn unavailable_blocks(c: vec3u, grid: vec3u) -> u32 {
+  let cb = pool_blocks.chunk_blocks;
+  if (all(c % cb != vec3u(cb - 1u))) {
+    return 0u;
+  }
+  var bits = 0u;
+  for (var d = 1u; d < 8u; d++) {
+    let n = c + vec3u(d & 1u, (d >> 1u) & 1u, d >> 2u);
+    if (all(n < grid)) {
+      let b = block_at(n, grid);
+      if (b == NONE || block_role(b) == ROLE_IDLE) {
+        bits |= 1u << d;
+      }
+    }
+  }
+  return bits;
 }
 
 // Block `local` of group g (group = pool slot), NONE when the slot is empty or the block outside the volume.

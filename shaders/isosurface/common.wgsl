@@ -6,6 +6,17 @@
 // "No slot" / "no block" in blockToSlot, slotToBlock and the LRU log.
 const NONE: u32 = 0xffffffffu;
 
+// Roles of a pool's chunks (ChunkedVolume.setRoles, CHUNK_ROLE_CODES), from
+// the top 2 bits of their slot-table words (block_role, group_role in
+// blocks_pool.wgsl); a whole stream's blocks are all drawn (blocks_stream.wgsl).
+const ROLE_DRAWN: u32 = 0u;  // its cells make triangles
+const ROLE_GHOST: u32 = 1u;  // lends its voxels to drawn chunks: active, no triangles
+const ROLE_IDLE: u32 = 2u;   // resident but unused: never active, never read
+
+// Flag of an emitting-cell record (expand_cells): the cell writes the
+// vertices it owns but no index (block_mc_common.wgsl).
+const CELL_NO_INDICES: u32 = 0x80000000u;
+
 // Words of the counters buffer. 0-7 are written by the host (at creation and
 // after growth), the rest by the kernels and primitives of one computation.
 const C_BLOCKS: u32 = 0u;          // blocks in the volume
@@ -54,6 +65,7 @@ const STATUS_VERTEX_OVERFLOW: u32 = 2u;  // more vertices than capacity: nothing
 const S_FIRST: u32 = 0u;      // first entry of the cell list whose vertices reach this shard
 const S_COUNT: u32 = 1u;      // cell-list entries to process for this shard
 const S_BASE: u32 = 2u;       // global index of the shard's first vertex
+const S_VERTEX_END: u32 = 3u; // cells whose first index is in [S_BASE, S_VERTEX_END) write their welded vertices here
 const S_ARGS: u32 = 4u;       // dispatch arguments (x, y, z) of the vertex pass for this shard
 const SHARD_STRIDE: u32 = 64u;
 

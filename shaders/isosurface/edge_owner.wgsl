@@ -61,27 +61,54 @@ fn row_cut(word: u32, a: u32, b: u32) -> u32 {
 // per-cell loop for rows on the upper faces) cost about 5% of a surface on
 // SwiftShader even where no lane took it.
 fn owned_vertices_before(word: u32, upto: u32, edge_bits: u32, g0: vec3u, dims: vec3u) -> u32 {
+  let per_cell = owned_cut_per_cell(word, g0, dims);
+  let x_last = dims.x - 2u - g0.x;
+  let below = select((1u << (8u * upto)) - 1u, 0xffffffffu, upto >= 4u);
+  // cell `upto` itself (edge_bits is 0 when upto is 4)
+  let last = select(0u, 1u, upto == x_last) | select(0u, 2u, g0.y + 2u == dims.y) | select(0u, 4u, g0.z + 2u == dims.z);
+  let own = countOneBits(owned_edges(last) & mc_cut_edges((word >> ((8u * upto) & 31u)) & 255u) & edge_bits);
+  return (((per_cell & below) * 0x01010101u) >> 24u) + own;
+}
+
+// Owned cut edges per cell of a row (4 case bytes in `word`, cell x = 0 at
+// global grid point g0), in byte x: at most 12 per byte, so no carries.
+// Every cell owns edges 0, 4, 8; cells on the upper faces more
+// (owned_edges): edges 1, 10 on the last y, 2, 6 on the last z, 3 on both;
+// the last x adds 5, 9, then 11 with the last y, 7 with the last z.
+fn owned_cut_per_cell(word: u32, g0: vec3u, dims: vec3u) -> u32 {
   let y = select(0u, 0xffffffffu, g0.y + 2u == dims.y);
   let z = select(0u, 0xffffffffu, g0.z + 2u == dims.z);
   // the byte of the cell on the volume's last x (none when it is not in this row)
   let x_last = dims.x - 2u - g0.x;
   let x = select(0u, 255u << ((8u * x_last) & 31u), x_last < 4u);
-  // Owned cut edges per cell, summed byte-wise (at most 12 per byte: no
-  // carries). Every cell owns edges 0, 4, 8; cells on the upper faces more
-  // (owned_edges): edges 1, 10 on the last y, 2, 6 on the last z, 3 on both;
-  // the last x adds 5, 9, then 11 with the last y, 7 with the last z.
-  var per_cell = row_cut(word, 0u, 1u) + row_cut(word, 0u, 2u) + row_cut(word, 0u, 4u) +
+  let per_cell = row_cut(word, 0u, 1u) + row_cut(word, 0u, 2u) + row_cut(word, 0u, 4u) +
     (y & (row_cut(word, 2u, 3u) + row_cut(word, 2u, 6u))) + (z & (row_cut(word, 4u, 5u) + row_cut(word, 4u, 6u))) +
     (y & z & row_cut(word, 6u, 7u));
-  per_cell += x & (row_cut(word, 1u, 3u) + row_cut(word, 1u, 5u) + (y & row_cut(word, 3u, 7u)) + (z & row_cut(word, 5u, 7u)));
-  let below = select((1u << (8u * upto)) - 1u, 0xffffffffu, upto >= 4u);
-  // cell `upto` itself (edge_bits is 0 when upto is 4)
-  let last = select(0u, 1u, upto == x_last) | (y & 2u) | (z & 4u);
-  let own = countOneBits(owned_edges(last) & mc_cut_edges((word >> ((8u * upto) & 31u)) & 255u) & edge_bits);
-  return (((per_cell & below) * 0x01010101u) >> 24u) + own;
+  return per_cell + (x & (row_cut(word, 1u, 3u) + row_cut(word, 1u, 5u) + (y & row_cut(word, 3u, 7u)) + (z & row_cut(word, 5u, 7u))));
 }
 
 // Vertices a row of cells owns (the row's share of its block's count).
 fn owned_vertices_of_row(word: u32, g0: vec3u, dims: vec3u) -> u32 {
   return owned_vertices_before(word, 4u, 0u, g0, dims);
+}
+
+// The blocks d (bits, d = dx + 2dy + 4dz) that cells on the +faces r reach:
+// the non-empty subsets of r; byte r of (0x0e040200, 0xfe543210).
+fn blocks_reached(r: u32) -> u32 {
+  return (select(0x0e040200u, 0xfe543210u, r >= 4u) >> (8u * (r & 3u))) & 255u;
+}
+
+// The cells of row (y, z) of a block (byte x: 255) whose triangles could use
+// a vertex owned by a cell touching one of the neighbour blocks `unavailable`
+// (unavailable_blocks: not resident, or idle). Such an owner is not meshed,
+// so these cells make no triangle; they keep the vertices they own (a cell
+// whose own blocks are all there may own a vertex other cells use). The
+// owners of a cell's edges (its corners' cells) touch the grid points
+// g + {0, 1, 2} of its lowest corner g, so the blocks of the axes where the
+// cell's block-local coordinate is 2 or 3.
+fn cells_without_indices(unavailable: u32, y: u32, z: u32) -> u32 {
+  let r = select(0u, 2u, y >= 2u) | select(0u, 4u, z >= 2u);
+  let low = select(0u, 0x0000ffffu, (unavailable & blocks_reached(r)) != 0u);
+  let high = select(0u, 0xffff0000u, (unavailable & blocks_reached(r | 1u)) != 0u);
+  return low | high;
 }

@@ -67,12 +67,17 @@ fn plan_update() {
 }
 
 // After the block counts are scanned: do the vertices (and the cell list)
-// fit? Then the cell list is expanded, and each shard gets the range of
-// emitting cells whose vertices reach it (binary searches over the active
-// entries' output ranges, which increase along the list; entries without
-// vertices have empty ranges), its dispatch arguments and its draw
-// arguments. Otherwise the expansion and the shards' dispatches are empty
-// and the draw arguments keep the previous surface.
+// fit? Then the cell list is expanded, and each shard in use gets the range
+// of emitting cells that reach it (binary searches over the active entries'
+// index ranges, whose offsets increase along the list), its dispatch
+// arguments and its draw arguments. Otherwise the expansion and the shards'
+// dispatches are empty and the draw arguments keep the previous surface.
+// A cell writes its welded vertices in the shard whose vertex range
+// [S_BASE, S_VERTEX_END) holds its first index: shard k's indices, the last
+// shard in use to the end. The cells of a pool's ghost chunks have no indices
+// (block_mc_common.wgsl): an entry of them (index range [o, o)) belongs to
+// the shard whose vertex range holds o, and at least one shard is in use
+// whenever the list may hold cells, so each such cell runs exactly once.
 @group(0) @binding(1) var<storage, read> vertex_offsets: array<u32>;
 @group(0) @binding(2) var<storage, read> vertex_counts: array<u32>;
 @group(0) @binding(3) var<storage, read> cell_offsets: array<u32>;
@@ -80,13 +85,31 @@ fn plan_update() {
 @group(0) @binding(5) var<storage, read_write> shard_info: array<u32>;
 @group(0) @binding(6) var<storage, read_write> draw_args: array<u32>;
 
-// First active entry i in [0, n) whose output range ends after `vertex`.
-fn first_ending_after(vertex: u32, n: u32) -> u32 {
+// First active entry i in [0, n) whose closed index range [offset, offset +
+// count] reaches `vertex` or lies past it (offset + count >= vertex): a cell
+// without indices has the first index of the cell after it, up to offset +
+// count; an entry ending at a shard's base may hold such cells for it.
+fn first_reaching(vertex: u32, n: u32) -> u32 {
   var lo = 0u;
   var hi = n;
   while (lo < hi) {
     let mid = lo + (hi - lo) / 2u;
-    if (vertex_offsets[mid] + vertex_counts[mid] > vertex) {
+    if (vertex_offsets[mid] + vertex_counts[mid] >= vertex) {
+      hi = mid;
+    } else {
+      lo = mid + 1u;
+    }
+  }
+  return lo;
+}
+
+// First active entry i in [0, n) whose index range starts at or after `vertex`.
+fn first_starting_at(vertex: u32, n: u32) -> u32 {
+  var lo = 0u;
+  var hi = n;
+  while (lo < hi) {
+    let mid = lo + (hi - lo) / 2u;
+    if (vertex_offsets[mid] >= vertex) {
       hi = mid;
     } else {
       lo = mid + 1u;
@@ -106,21 +129,34 @@ fn plan_vertices() {
   }
   let ok = status == 0u;
   let entries = counters[C_ACTIVE_GATED];
+  let cells = counters[C_CELLS];
   write_dispatch_args(A_EXPAND, select(0u, ceil_div(entries, 64u), ok));
   let per_shard = counters[C_PER_SHARD];
   let shards = counters[C_SHARDS];
+  // the shards holding indices, at least one (for cells without indices)
+  let used = clamp(ceil_div(total, per_shard), 1u, shards);
   for (var k = 0u; k < shards; k++) {
     let r = k * SHARD_STRIDE;
     let base = k * per_shard;
     var first = 0u;
     var count = 0u;
-    if (ok && total > base) {
-      let first_entry = first_ending_after(base, entries);
-      // the last entry reaching the shard is the first one ending after its
-      // last vertex, unless the surface ends inside the shard
-      let last_entry = min(first_ending_after(base + per_shard - 1u, entries), entries - 1u);
-      first = cell_offsets[first_entry];
-      count = cell_offsets[last_entry] + cell_counts[last_entry] - first;
+    var vertex_end = base;
+    if (ok && k < used) {
+      let last = k + 1u == used;
+      vertex_end = select(base + per_shard, NONE, last);
+      // cells > 0 implies entries > 0; the first entry reaching the shard
+      // starts at or before its base (k > 0: base < total)
+      if (cells > 0u) {
+        let first_entry = first_reaching(base, entries);
+        first = cell_offsets[first_entry];
+        var end = cells;
+        if (!last) {
+          // the last entry reaching the shard: the one before the first starting after it
+          let last_entry = first_starting_at(base + per_shard, entries) - 1u;
+          end = cell_offsets[last_entry] + cell_counts[last_entry];
+        }
+        count = end - first;
+      }
       draw_args[5u * k] = min(total - base, per_shard);
     } else if (ok) {
       draw_args[5u * k] = 0u;
@@ -128,6 +164,7 @@ fn plan_vertices() {
     shard_info[r + S_FIRST] = first;
     shard_info[r + S_COUNT] = count;
     shard_info[r + S_BASE] = base;
+    shard_info[r + S_VERTEX_END] = vertex_end;
     let g = dispatch_grid(ceil_div(count, 64u));
     shard_info[r + S_ARGS] = g.x;
     shard_info[r + S_ARGS + 1u] = g.y;

@@ -5,8 +5,9 @@
 // + the block's index within its chunk (shaders/isosurface/blocks_pool.wgsl),
 // so finding a block needs no table. The level's tables (one buffer: the
 // page table, chunk -> slot, 0xffffffff when not resident, then from word
-// slot_table the slot table, slot -> chunk) serve the passes that start
-// from chunks or need coordinates. A pool shard holds
+// slot_table the slot table, slot -> chunk with the chunk's role in the top
+// 2 bits, 0xffffffff when empty: slot_table_chunk) serve the passes that
+// start from chunks or need coordinates. A pool shard holds
 // slots [first_slot, end_slot) back to back, slot_words 32-bit words each.
 // The stream uniform still gives the level's dims, block grid and bits per
 // block; a chunk's blocks are those of the whole level compressed as one
@@ -29,6 +30,13 @@ struct PoolParams {
 @group(0) @binding(3) var<uniform> pool: PoolParams;
 
 const POOL_NONE = 0xffffffffu;
+
+// The chunk in `slot` (the slot-table word without its role bits,
+// ChunkedVolume.setRoles), POOL_NONE when the slot is empty.
+fn slot_table_chunk(slot: u32) -> u32 {
+  let word = tables[pool.slot_table + slot];
+  return select(word & 0x3fffffffu, POOL_NONE, word == POOL_NONE);
+}
 
 fn blocks_per_chunk() -> u32 {
   return pool.chunk_blocks * pool.chunk_blocks * pool.chunk_blocks;

@@ -27,7 +27,7 @@ fn chunk_block_ranges(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups
   let slot = entry.x;
   let chunk = entry.y;
   if (slot < pool.first_slot || slot >= pool.end_slot) { return; }  // another shard's dispatch
-  let now = tables[pool.slot_table + slot];
+  let now = slot_table_chunk(slot);
   if (now != chunk && now != POOL_NONE) { return; }  // the slot holds another chunk now: its own entry
   let local = i % chunk_params.blocks_per_chunk;
   let b = slot * chunk_params.blocks_per_chunk + local;

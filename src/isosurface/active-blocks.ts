@@ -100,7 +100,7 @@ export class ActiveBlocks {
     this.blockMask = storageBuffer(device, 'Isosurface.groupBlockMask', entries * 4);
     this.blockOffsets = storageBuffer(device, 'Isosurface.groupBlockOffsets', entries * 4);
     this.blockIds = storageBuffer(device, 'Isosurface.groupBlockIds', entries * 4);
-    this.activeIds = storageBuffer(device, 'Isosurface.activeIds', blockCount * 4);
+    this.activeIds = storageBuffer(device, 'Isosurface.activeIds', blockCount * 4, GPUBufferUsage.COPY_SRC); // read back for the view cut's per-chunk triangles
     this.groupParams = device.createBuffer({
       label: 'Isosurface.groupParams',
       size: 32,
@@ -260,7 +260,8 @@ export class ActiveBlocks {
             constants,
           }),
       createComputePipeline(device, 'Isosurface.markActiveGroups', groups, 'mark_active_groups', {
-        layout: [layouts.common, layouts.markGroups],
+        // a pool's tables: the groups of idle chunks are never active
+        layout: ids.layouts([layouts.common, layouts.markGroups]),
         constants,
       }),
       createComputePipeline(device, 'Isosurface.markGroupBlocks', groups, 'mark_group_blocks', {
@@ -326,6 +327,7 @@ export class ActiveBlocks {
     pass.setPipeline(this.markGroups);
     pass.setBindGroup(0, this.common);
     pass.setBindGroup(1, this.markGroupsGroup);
+    this.parts.ids.bind(pass, 2);
     dispatchWorkgroups(pass, Math.ceil(this.groupCount / 64), maxWorkgroupsPerDimension);
     pass.end();
     const groups = counters.count('groups');

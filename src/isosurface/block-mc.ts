@@ -54,9 +54,18 @@ function region(e: { capacity: number; stride: number }, buffer: GPUBuffer, k: n
   return { buffer, offset: k * e.stride * 4, size: Math.max(4, e.capacity * 4) };
 }
 
-/** Entries of the emitting-cell list for `vertices` vertices (every emitting cell has >= 3). */
+/** Entries of the emitting-cell list for `vertices` vertices (every emitting cell has >= 3, but a ghost chunk's: indicesForCells). */
 export function cellCapacityFor(vertices: number, maxBindingBytes = Infinity): number {
   return Math.max(1, Math.min(Math.floor(vertices / 3) + 1, Math.floor(maxBindingBytes / 4)));
+}
+
+/**
+ * The index capacity whose cell list holds `cells` entries (cellCapacityFor).
+ * A pool's ghost chunks (ChunkedVolume.setRoles) list cells that write
+ * vertices but no index, so the cell list may overflow while the indices fit.
+ */
+export function indicesForCells(cells: number): number {
+  return 3 * Math.max(0, cells - 1);
 }
 
 /** Bytes of the emitting-cell list for a vertex capacity (counted with the vertex output). */
@@ -78,7 +87,7 @@ interface EntryBuffers {
 
 interface CellBuffers {
   capacity: number;
-  /** Per emitting cell: (entry << 6 | cell, first index). */
+  /** Per emitting cell: (entry << 6 | cell, with CELL_NO_INDICES for a cell that writes only its vertices; first index). */
   list: GPUBuffer;
 }
 
@@ -178,7 +187,7 @@ export class BlockMarchingCubes {
     return {
       capacity,
       slotMc: words('slotMc', 32),
-      counts: storageBuffer(this.device, 'Isosurface.blockCounts', 3 * stride * 4),
+      counts: storageBuffer(this.device, 'Isosurface.blockCounts', 3 * stride * 4, GPUBufferUsage.COPY_SRC),
       offsets: storageBuffer(this.device, 'Isosurface.blockOffsets', 3 * stride * 4),
       stride,
     };

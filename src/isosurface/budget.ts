@@ -50,11 +50,13 @@ export function formatMB(bytes: number): string {
  * Most cache slots on a device: the slot data (256 B per slot) is bound
  * whole by the decoder, classification and vertex passes, so it must fit one
  * storage binding (and one buffer). The other per-slot buffers are 64 B per
- * slot or less.
+ * slot or less. At most 2^25 slots.
  */
 export function maxCacheSlots(limits: GPUSupportedLimits, maxStorageBindingBytes = Infinity): number {
   const bytes = Math.min(maxStorageBindingBytes, limits.maxStorageBufferBindingSize, limits.maxBufferSize);
   const slots = Math.floor(bytes / SLOT_BYTES);
   if (slots < 1) throw new RangeError(`maxStorageBindingBytes must hold at least one cache slot (${SLOT_BYTES} bytes)`);
-  return slots;
+  // An emitting-cell record keeps its active entry (< slots) in bits 6-30,
+  // bit 31 being CELL_NO_INDICES (block_expand.wgsl): 8 GiB of slot data.
+  return Math.min(slots, 2 ** 25);
 }

@@ -63,7 +63,7 @@ export const DEFAULT_GROUP_EDGE_BLOCKS = 4;
 
 /** Vertex shard records in shard_info: 64 words apart (a storage offset alignment). */
 export const SHARD_RECORD_BYTES = 256;
-export const S = { first: 0, count: 1, base: 2, args: 4 } as const;
+export const S = { first: 0, count: 1, base: 2, vertexEnd: 3, args: 4 } as const;
 /** Bytes of one shard record bound by the vertex pass. */
 export const SHARD_RECORD_BINDING = 32;
 /** drawIndexedIndirect arguments per index shard: [indexCount, instanceCount, firstIndex, baseVertex, firstInstance]. */
@@ -75,7 +75,7 @@ export const SLOT_BYTES = 256;
 export const VERTEX_BYTES = 12;
 /** Bytes of one index (a triangle corner). */
 export const INDEX_BYTES = 4;
-/** Bytes of one entry of the emitting-cell list: (entry << 6 | cell) and its first vertex. */
+/** Bytes of one entry of the emitting-cell list: (entry << 6 | cell, bit 31 CELL_NO_INDICES in common.wgsl) and its first index. */
 export const CELL_RECORD_BYTES = 8;
 
 /** Positions of the LRU log for `slots` slots: a power of two >= 2 x slots (at least 64). */

@@ -16,7 +16,7 @@ import { ZfpDecoder } from '../zfp/decoder.ts';
 import type { BlockSource } from '../zfp/gpu-stream.ts';
 import { blockIdsOf, type BlockIds } from './block-ids.ts';
 import { ActiveBlocks, groupGrid } from './active-blocks.ts';
-import { BlockMarchingCubes } from './block-mc.ts';
+import { BlockMarchingCubes, indicesForCells } from './block-mc.ts';
 import { cacheBytesFor, formatMB, grownCapacity, maxCacheSlots, vertexBytesFor, weldedFor } from './budget.ts';
 import { Counters } from './counters.ts';
 import {
@@ -348,10 +348,11 @@ export class IsosurfacePipeline {
       slots = grownCapacity(slots, minSlots, Math.min(blocks, this.maxSlots));
     }
     if (status & STATUS_VERTEX_OVERFLOW) {
-      minIndices = Math.max(indices, c[C.vertices]);
+      // the cell list follows the index capacity; cells without indices (a pool's chunk roles, block_mc_common.wgsl) may overflow it alone
+      minIndices = Math.max(indices, c[C.vertices], indicesForCells(c[C.cells]));
       minWelded = Math.max(welded, c[C.welded]);
       if (minWelded > this.maxWelded) throw this.vertexBindingError(iso, minWelded);
-      if (c[C.vertices] > indices) indices = grownCapacity(indices, minIndices);
+      if (minIndices > indices) indices = grownCapacity(indices, minIndices);
       if (c[C.welded] > welded) welded = grownCapacity(welded, minWelded);
       // at least the quarter of the indices a new output starts with
       welded = Math.min(this.maxWelded, Math.max(welded, weldedFor(indices)));

@@ -73,12 +73,18 @@ export interface IsosurfaceStats {
   activeBlocks: number;
   /** Blocks decompressed into the cache for this surface. */
   newBlocks: number;
+  /** Active blocks with triangles. */
   occupiedBlocks: number;
   /** 1 - newBlocks / activeBlocks (1 when nothing is active). */
   hitRate: number;
-  /** Welded vertices: one per cut grid edge (VTK's merged point count). */
+  /**
+   * Welded vertices: one per cut grid edge (VTK's merged point count). Over a
+   * chunk pool with roles (ChunkedVolume.setRoles) it includes the vertices
+   * owned by ghost chunks' cells on their lower faces, some of which no
+   * drawn triangle uses.
+   */
   vertices: number;
-  /** Triangle corners: indices into the vertices, 3 per triangle. */
+  /** Triangle corners: indices into the vertices, 3 per triangle (of drawn chunks only, over a pool with roles). */
   indices: number;
   triangles: number;
   cacheSlots: number;

@@ -5,6 +5,9 @@
 import { existsSync } from 'node:fs';
 import { join } from 'node:path';
 import type { GpuContext } from '../gpu/device.ts';
+import type { Isosurface } from '../isosurface/isosurface.ts';
+import type { IsosurfaceStats } from '../isosurface/types.ts';
+import type { ChunkedVolume } from '../zfp/chunked-volume.ts';
 import { defaultMemoryBudget } from '../isosurface/budget.ts';
 import { ChunkFetcher } from './fetch/chunk-fetcher.ts';
 import { chunkedGpu, createChunkStream, storeEncoder } from './gpu-port.ts';
@@ -17,7 +20,8 @@ import type { SourceInfo } from './zarr/source-store.ts';
 import { MeteredStore } from './zarr/stores.ts';
 import type { ZfpStore } from './zarr/store.ts';
 import type { ChunkedStreamGpu } from './gpu-port.ts';
-import { ViewStream, type ViewSpec } from './view/view-stream.ts';
+import { type ViewRequest, viewSpecFor } from './view/view-request.ts';
+import { ViewStream } from './view/view-stream.ts';
 import { ViewCutSurface } from './view/view-surface.ts';
 
 /** --level names a level the store does not have (a wrong command line, not a data failure). */
@@ -99,7 +103,7 @@ export interface StoreInputOptions {
   /** Per-brick ranges written apart (--ranges-only), a URL or folder. */
   ranges?: string;
   /** Refine by this view instead of streaming one level (--view-box, --view): a mixed-level surface (src/store/view/). */
-  view?: ViewSpec;
+  view?: ViewRequest;
 }
 
 export async function openStoreInput(gpu: GpuContext, input: string, opts: StoreInputOptions): Promise<StoreInput> {
@@ -187,8 +191,14 @@ async function viewInput(
   fetcher: ChunkFetcher,
   port: ChunkedStreamGpu,
   budgetBytes: number,
-  view: ViewSpec,
+  request: ViewRequest,
 ): Promise<StoreInput> {
+  let view;
+  try {
+    view = viewSpecFor(request, store.levels.map((l) => l.layout), store.voxelSize);
+  } catch (e) {
+    throw new StoreError('layout', `${input}: ${(e as Error).message}`);
+  }
   const fetched = new Set<number>();
   let chunkBytes = 0;
   fetcher.onChunk((l, c, bytes, fromCache) => {
@@ -197,7 +207,7 @@ async function viewInput(
     fetched.add(k);
     chunkBytes += bytes.byteLength;
   });
-  const stream = await ViewStream.create(store, fetcher, port, budgetBytes);
+  const stream = await ViewStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budgetBytes);
   await stream.setView(view);
   const surface = new ViewCutSurface(stream);
   const lv0 = store.levels[0];

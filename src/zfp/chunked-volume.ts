@@ -577,8 +577,9 @@ export class ChunkedVolume implements BlockSource {
    * words of resident chunks whose role changes are written (queue order:
    * the next surface submitted sees them). A drawn chunk's cells on its
    * upper faces are complete when its +x, +y, +z and diagonal neighbours
-   * (those of the level) are resident and drawn or ghosts; otherwise those
-   * cells make no triangles.
+   * (those of the level) are resident and drawn or ghosts; next to one that
+   * is not resident or idle, its cells within two cells of that face make
+   * no triangle (their edges' owners would read it).
    */
   setRoles(drawn: ReadonlySet<ChunkIndex> | null, ghosts: ReadonlySet<ChunkIndex>): void {
     if (this.destroyed) throw new ChunkError(`${this.layout.name}: the chunk pool was destroyed`);

@@ -20,6 +20,7 @@ import { decodeVertices } from '../../isosurface/vertex-format.ts';
 import { meshMetrics } from '../../mc/mesh-metrics.ts';
 import { LevelStoppedError } from '../../store/pinned-level.ts';
 import { openInputSurface } from '../input.ts';
+import { parseCam } from '../../store/view/cut.ts';
 import { type ViewRequest, parseViewBox } from '../../store/view/view-request.ts';
 import type { CutChunkRecord } from '../../store/view/view-surface.ts';
 import { rateErrorRecord } from '../../zfp/rate-choice.ts';
@@ -89,6 +90,8 @@ export function viewOption(args: Parameters<typeof numberOption>[0]): ViewReques
     if (typeof parsed === 'string') throw new UsageError(`--view-box ${box}: ${parsed}`);
     return { box: parsed, tolerancePx };
   }
+  if (!parseCam(new URLSearchParams(link!.replace(/^.*#/, '')).get('cam') ?? ''))
+    throw new UsageError(`--view ${link}: the page's link, with its camera (#iso=..&cam=qx,qy,qz,qw,tx,ty,tz,d[&px=W,H][&tol=T])`);
   return { link, tolerancePx };
 }
 

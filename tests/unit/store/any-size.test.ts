@@ -21,6 +21,7 @@ import { openStoreInput } from '../../../src/store/cli-input.ts';
 import { zfpChunkBytes } from '../../../src/store/zarr/open-store.ts';
 import { countBuffers } from '../../helpers/gpu-memory.ts';
 import { finishTestGpu, pushTestScopes } from '../../helpers/gpu-scopes.ts';
+import type { PinnedLevelSurface } from '../../../src/store/pinned-level.ts';
 import { runPython } from '../../helpers/python.ts';
 import { decodeRegion, sparseStore } from './stores.ts';
 
@@ -86,7 +87,7 @@ describe('a level of any size, on the GPU by what is resident', () => {
         expect(count.peak - before).toBeLessThanOrEqual(256 * MiB);
         after.push(r.gpuBytes);
         // every vertex in the box at the far corner
-        const mesh = await input.surface.readMesh();
+        const mesh = await (input.surface as PinnedLevelSurface).readMesh();
         const p = decodeVertices(mesh.vertices, mesh.vertices.length / 3);
         let lo = Infinity;
         let hi = -Infinity;

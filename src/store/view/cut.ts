@@ -1,0 +1,723 @@
+// The view cut of a multi-level store: which level to draw where, for a
+// camera, so that no voxel of the drawn level projects to more than
+// `tolerancePx` pixels where a finer level is allowed, within a byte budget.
+//
+// Coordinates.
+// - Level-0 voxel space: level 0's voxel (i, j, k), i in [0, dims0[0]) and so
+//   on (x fastest). A level-L voxel covers 2^L level-0 voxels per axis.
+// - The octree: level L's chunk (cx, cy, cz) (ChunkIndex c = cx + gx * (cy +
+//   gy * cz), src/zfp/chunked-volume.ts) is the node (L, c) covering the
+//   half-open level-0 box [c * E_L, (c + 1) * E_L) per axis, E_L = chunkEdge_L *
+//   2^L, clipped to level 0's dims. Chunks whose box starts at or past level
+//   0's dims cover nothing and are left out of the tree.
+// - World: level-0 voxel (i, j, k) at (i * sx, j * sy, k * sz), voxelSize =
+//   [sx, sy, sz]. It is the page's world: the page draws level L's voxel
+//   (i, j, k) at (i, j, k) * voxelSize * 2^L (src/app/store/store-view.ts gives
+//   level L the spacing voxelSize * 2^L; src/app/session.ts draws voxel v at
+//   v * spacing), i.e. level-0 voxel index * voxelSize. (A voxel size the user
+//   types in the panel or gives with the link's vox= is the size of the shown
+//   level's voxel: pass it divided by 2^L as the level-0 voxelSize.) A node's
+//   world box is [lo * s, hi * s] with [lo, hi) its clipped level-0 box.
+// - Camera: the page's arcball camera (src/render/camera.ts, which this layer
+//   may not import: the math is repeated here and checked against it in
+//   tests/unit/store/view-cut.test.ts). Its state (the link's cam=qx,qy,qz,qw,
+//   tx,ty,tz,d) is a rotation (world -> eye), a target and a distance: eye =
+//   R^-1 (0, 0, d) + target, view = T(0, 0, -d) R T(-target), projection =
+//   perspectiveZO(fovY = 40°, width / height, near, far) with near = max(d -
+//   1.5 r, 0.01 d, 1e-4), far = d + 1.5 r, r the radius of the box the page
+//   last fitted (half its diagonal). WebGPU clip space: x, y in [-w, w], z in
+//   [0, w]. The page fits the box min 0, max (dims_L - 1) * spacing_L of the
+//   shown level L, i.e. level-0 voxels [0, (dims_L - 1) * 2^L] (`fitBox0`).
+//   Pixels are device pixels (the canvas' width and height).
+//
+// The rule (viewCut). Node (L, c) is split into its children (level L-1's
+// chunks inside it) when L > finest, level L-1 nests in level L (E_L a
+// multiple of E_{L-1}; else level L is final and a note says so), needs(L-1)
+// is known, the node's world box meets the view frustum (a conservative
+// box-vs-6-planes test), its error 2^L * max(voxelSize) * pixelsPerUnit /
+// distance (distance from the eye to the box, 0 inside it: error Infinity)
+// exceeds tolerancePx, and the budget allows it. Splits go by a max-priority
+// queue on the error (ties: nearer first, then level, then chunk). The cut is
+// 2:1 balanced (leaves whose closed boxes touch differ by at most one level):
+// before a node is split, the coarser leaves around it are split first
+// (forced splits, which ignore error and frustum). A split with its forced
+// splits that would make the wanted chunks cost more than the budget is undone
+// whole, and the queue goes on.
+
+import { mat3, mat4, quat, vec3 } from 'gl-matrix';
+import { DEFAULT_VIEW_DIRECTION } from '../../core/view.ts';
+import type { ChunkIndex } from '../types.ts';
+
+/** One level of the store, as the cut needs it. */
+export interface CutLevel {
+  /** Voxels of this level, x, y, z. */
+  dims: [number, number, number];
+  /** Chunk edge in this level's voxels (chunks are cubes). */
+  chunkEdge: number;
+  /** ceil(dims / chunkEdge) per axis. */
+  chunkGrid: [number, number, number];
+}
+
+/** The camera the cut sees. */
+export interface CutCamera {
+  /**
+   * World -> clip, column-major 4x4 (gl-matrix mat4), WebGPU clip space (x, y
+   * in [-w, w], z in [0, w]). World: level-0 voxel (i, j, k) at (i*sx, j*sy,
+   * k*sz), voxelSize = [sx, sy, sz] (the page's world, see the top of cut.ts).
+   */
+  viewProj: ArrayLike<number>;
+  /** The eye in world coordinates. */
+  eye: [number, number, number];
+  /** Pixels per world unit at distance 1 along the view: viewportHeightPx / (2 tan(fovY / 2)) (perspective). */
+  pixelsPerUnit: number;
+}
+
+export interface CutInput {
+  /** Every level of the store, 0 (finest) first. */
+  levels: CutLevel[];
+  /** World size of a level-0 voxel. */
+  voxelSize: [number, number, number];
+  camera: CutCamera;
+  /** A region is refined while one of its voxels projects to more than this many pixels (callers: about 1.5). */
+  tolerancePx: number;
+  /** The finest level the cut may use. */
+  finest: number;
+  /** The coarsest level the cut may use: its chunks are the roots. */
+  coarsest: number;
+  /**
+   * Per level, which of its chunks the surface needs (the isovalue's plan), or
+   * null when that level's chunk ranges are not known yet: the cut then does
+   * not refine into that level and lists it in `wantsRanges`. (When the
+   * coarsest level's is null, all its drawn and ghost chunks count as wanted,
+   * and it is listed too.) Called once per level.
+   */
+  needs: (level: number) => ((chunk: ChunkIndex) => boolean) | null;
+  /** GPU bytes one wanted chunk of level L costs (pool slot + per-block state + a share of the surface). Called once per level. */
+  chunkBytes: (level: number) => number;
+  /** What the wanted chunks of all levels may cost together (Infinity: no limit). */
+  budgetBytes: number;
+}
+
+/** A leaf of the cut: one chunk drawn at its level. */
+export interface CutNode {
+  level: number;
+  chunk: ChunkIndex;
+  /** The chunk's coordinates in its level's chunk grid. */
+  coords: [number, number, number];
+  /** Projected size of one of its voxels at its nearest point, in pixels (Infinity with the eye inside). */
+  errorPx: number;
+  /** World distance from the eye to its box (0 inside). */
+  distance: number;
+  /** Whether its box meets the view frustum (conservative test). */
+  inView: boolean;
+}
+
+export interface CutLevelSets {
+  /** Leaf chunks at this level (needed or not), ascending. */
+  drawn: ChunkIndex[];
+  /**
+   * Chunks the surface needs that are not drawn but have a drawn chunk among
+   * their 7 lower neighbours (c - {0,1}^3 minus c: the drawn chunk's cells on
+   * its upper faces read their voxels), ascending.
+   */
+  ghosts: ChunkIndex[];
+  /** needed ∩ (drawn ∪ ghosts), nearest to the eye first (ties: ascending chunk). */
+  wanted: ChunkIndex[];
+}
+
+export interface ViewCut {
+  /** The leaves, nearest to the eye first (ties: level, chunk): every region of the volume at exactly one level. */
+  nodes: CutNode[];
+  /** Per level (index = level; empty outside finest..coarsest). */
+  levels: CutLevelSets[];
+  /** Σ over levels of wanted.length * chunkBytes(level). */
+  bytes: number;
+  /** True when some region would have been refined but the budget refused it (or the coarsest level alone is over it). */
+  limitedByBudget: boolean;
+  /** Levels the cut would have refined into but whose `needs` is null (and the coarsest when its needs is null), ascending. */
+  wantsRanges: number[];
+  /** Facts worth telling: levels that cannot be refined (chunks that do not nest), a budget the coarsest level alone exceeds. */
+  notes: string[];
+}
+
+const ABSENT = 0;
+const LEAF = 1;
+const SPLIT = 2;
+
+interface LevelState {
+  gx: number;
+  gy: number;
+  gz: number;
+  /** ABSENT / LEAF / SPLIT per chunk. */
+  state: Uint8Array;
+  /** Per chunk, how many of c - {0,1}^3 (itself included) are drawn: wanted iff needed and > 0. */
+  cover: Uint8Array;
+  need: ((chunk: ChunkIndex) => boolean) | null;
+  bytes: number;
+  /** Drawn chunks. */
+  leaves: number;
+}
+
+/** The view cut (see the top of this file for the rule and the coordinates). */
+export function viewCut(input: CutInput): ViewCut {
+  const { levels, voxelSize, camera, tolerancePx, finest, coarsest, budgetBytes } = input;
+  const n = levels.length;
+  if (n === 0) throw new RangeError('viewCut: no levels');
+  if (!(Number.isInteger(finest) && Number.isInteger(coarsest) && finest >= 0 && finest <= coarsest && coarsest < n)) {
+    throw new RangeError(`viewCut: levels ${finest}..${coarsest} are not within 0..${n - 1}`);
+  }
+  const [Dx, Dy, Dz] = levels[0].dims;
+  const [sx, sy, sz] = voxelSize;
+  const maxVoxel = Math.max(sx, sy, sz);
+  const [ex, ey, ez] = camera.eye;
+  const ppu = camera.pixelsPerUnit;
+  const E = levels.map((l, L) => l.chunkEdge * 2 ** L);
+  const notes: string[] = [];
+
+  // k[L]: children per axis when level L splits into L-1 (0: level L is final)
+  const k = new Int32Array(n);
+  for (let L = finest + 1; L <= coarsest; L++) {
+    if (E[L] % E[L - 1] === 0) k[L] = E[L] / E[L - 1];
+    else
+      notes.push(
+        `level ${L} is final: its chunks (${E[L]} level-0 voxels) are not made of level ${L - 1}'s (${E[L - 1]} level-0 voxels), so it cannot be refined`,
+      );
+  }
+
+  const planes = frustumPlanes(camera.viewProj);
+  const lv: (LevelState | undefined)[] = new Array(n);
+  const needsAsked = new Uint8Array(n);
+  const needs: (((chunk: ChunkIndex) => boolean) | null)[] = new Array(n).fill(null);
+  const needsOf = (L: number) => {
+    if (!needsAsked[L]) {
+      needsAsked[L] = 1;
+      needs[L] = input.needs(L);
+    }
+    return needs[L];
+  };
+  const levelState = (L: number): LevelState => {
+    let s = lv[L];
+    if (!s) {
+      const [gx, gy, gz] = levels[L].chunkGrid;
+      s = {
+        gx,
+        gy,
+        gz,
+        state: new Uint8Array(gx * gy * gz),
+        cover: new Uint8Array(gx * gy * gz),
+        need: needsOf(L),
+        bytes: input.chunkBytes(L),
+        leaves: 0,
+      };
+      lv[L] = s;
+    }
+    return s;
+  };
+
+  let bytes = 0;
+  // --- wanted bookkeeping: a drawn change of c touches c + {0,1}^3
+  const changeDrawn = (s: LevelState, c: number, delta: 1 | -1): void => {
+    const { gx, gy, gz, cover, need } = s;
+    s.leaves += delta;
+    const cx = c % gx;
+    const cy = Math.floor(c / gx) % gy;
+    const cz = Math.floor(c / (gx * gy));
+    const sxy = gx * gy;
+    for (let dz = 0; dz < 2; dz++) {
+      if (cz + dz >= gz) break;
+      for (let dy = 0; dy < 2; dy++) {
+        if (cy + dy >= gy) break;
+        for (let dx = 0; dx < 2; dx++) {
+          if (cx + dx >= gx) break;
+          const u = c + dx + dy * gx + dz * sxy;
+          if (delta > 0) {
+            if (cover[u]++ === 0 && (need === null || need(u))) bytes += s.bytes;
+          } else if (--cover[u] === 0 && (need === null || need(u))) bytes -= s.bytes;
+        }
+      }
+    }
+  };
+
+  // --- node geometry (written to these by evalNode)
+  let nInView = false;
+  let nDist = 0;
+  let nErr = 0;
+  const evalNode = (L: number, cx: number, cy: number, cz: number): void => {
+    const e = E[L];
+    const x0 = cx * e * sx;
+    const y0 = cy * e * sy;
+    const z0 = cz * e * sz;
+    const x1 = Math.min((cx + 1) * e, Dx) * sx;
+    const y1 = Math.min((cy + 1) * e, Dy) * sy;
+    const z1 = Math.min((cz + 1) * e, Dz) * sz;
+    nInView = boxInFrustum(planes, x0, y0, z0, x1, y1, z1);
+    const dx = Math.max(x0 - ex, 0, ex - x1);
+    const dy = Math.max(y0 - ey, 0, ey - y1);
+    const dz = Math.max(z0 - ez, 0, ez - z1);
+    nDist = Math.sqrt(dx * dx + dy * dy + dz * dz);
+    nErr = nDist > 0 ? (2 ** L * maxVoxel * ppu) / nDist : Infinity;
+  };
+
+  // --- the tree
+  const canSplit = (L: number, cx: number, cy: number, cz: number): boolean => {
+    if (L <= finest || k[L] === 0 || needsOf(L - 1) === null) return false;
+    const [gx, gy, gz] = levels[L - 1].chunkGrid;
+    return k[L] * cx < gx && k[L] * cy < gy && k[L] * cz < gz;
+  };
+  const logL: number[] = [];
+  const logC: number[] = [];
+  /** Calls fn(childChunk) for each child of (L, c) (chunks of L-1 inside it, within L-1's grid and level 0's dims). */
+  const forChildren = (L: number, c: number, fn: (s: LevelState, child: number) => void): void => {
+    const p = lv[L]!;
+    const cx = c % p.gx;
+    const cy = Math.floor(c / p.gx) % p.gy;
+    const cz = Math.floor(c / (p.gx * p.gy));
+    const s = levelState(L - 1);
+    const kk = k[L];
+    const e = E[L - 1];
+    const xEnd = Math.min(kk * cx + kk, s.gx, Math.ceil(Dx / e));
+    const yEnd = Math.min(kk * cy + kk, s.gy, Math.ceil(Dy / e));
+    const zEnd = Math.min(kk * cz + kk, s.gz, Math.ceil(Dz / e));
+    for (let z = kk * cz; z < zEnd; z++)
+      for (let y = kk * cy; y < yEnd; y++) for (let x = kk * cx; x < xEnd; x++) fn(s, x + s.gx * (y + s.gy * z));
+  };
+  const drawChild = (s: LevelState, child: number): void => {
+    s.state[child] = LEAF;
+    changeDrawn(s, child, 1);
+  };
+  const undrawChild = (s: LevelState, child: number): void => {
+    s.state[child] = ABSENT;
+    changeDrawn(s, child, -1);
+  };
+  const split = (L: number, c: number): void => {
+    const s = lv[L]!;
+    s.state[c] = SPLIT;
+    changeDrawn(s, c, -1);
+    forChildren(L, c, drawChild);
+    logL.push(L);
+    logC.push(c);
+  };
+  const undoTo = (mark: number): void => {
+    while (logL.length > mark) {
+      const L = logL.pop()!;
+      const c = logC.pop()!;
+      forChildren(L, c, undrawChild);
+      const s = lv[L]!;
+      s.state[c] = LEAF;
+      changeDrawn(s, c, 1);
+    }
+  };
+
+  // the leaf holding a level-0 voxel (written to locL / locC)
+  let locL = 0;
+  let locC = 0;
+  const locate = (px: number, py: number, pz: number): boolean => {
+    for (let L = coarsest; L >= finest; L--) {
+      const s = lv[L];
+      if (!s) return false;
+      const x = Math.floor(px / E[L]);
+      const y = Math.floor(py / E[L]);
+      const z = Math.floor(pz / E[L]);
+      if (x >= s.gx || y >= s.gy || z >= s.gz) return false;
+      const c = x + s.gx * (y + s.gy * z);
+      const st = s.state[c];
+      if (st === LEAF) {
+        locL = L;
+        locC = c;
+        return true;
+      }
+      if (st !== SPLIT) return false;
+    }
+    return false;
+  };
+
+  /** Splits every leaf at level >= L + 1 touching node (L; cx, cy, cz): each contains one of its 26 same-size neighbours. */
+  const balanceAround = (L: number, cx: number, cy: number, cz: number): void => {
+    const e = E[L];
+    for (let dz = -1; dz <= 1; dz++) {
+      const pz = (cz + dz) * e;
+      if (pz < 0 || pz >= Dz) continue;
+      for (let dy = -1; dy <= 1; dy++) {
+        const py = (cy + dy) * e;
+        if (py < 0 || py >= Dy) continue;
+        for (let dx = -1; dx <= 1; dx++) {
+          if (dx === 0 && dy === 0 && dz === 0) continue;
+          const px = (cx + dx) * e;
+          if (px < 0 || px >= Dx) continue;
+          while (locate(px, py, pz) && locL > L) {
+            if (!forceSplit(locL, locC)) break;
+          }
+        }
+      }
+    }
+  };
+  const forceSplit = (L: number, c: number): boolean => {
+    const s = lv[L]!;
+    const cx = c % s.gx;
+    const cy = Math.floor(c / s.gx) % s.gy;
+    const cz = Math.floor(c / (s.gx * s.gy));
+    if (!canSplit(L, cx, cy, cz)) return false;
+    balanceAround(L, cx, cy, cz);
+    split(L, c);
+    return true;
+  };
+
+  // --- the queue: max error, then nearer, then level, then chunk
+  const qErr: number[] = [];
+  const qDist: number[] = [];
+  const qL: number[] = [];
+  const qC: number[] = [];
+  const heap: number[] = [];
+  const before = (a: number, b: number): boolean =>
+    qErr[a] !== qErr[b] ? qErr[a] > qErr[b] : qDist[a] !== qDist[b] ? qDist[a] < qDist[b] : qL[a] !== qL[b] ? qL[a] < qL[b] : qC[a] < qC[b];
+  const push = (id: number): void => {
+    let i = heap.length;
+    heap.push(id);
+    while (i > 0) {
+      const p = (i - 1) >> 1;
+      if (!before(id, heap[p])) break;
+      heap[i] = heap[p];
+      i = p;
+    }
+    heap[i] = id;
+  };
+  const pop = (): number => {
+    const top = heap[0];
+    const last = heap.pop()!;
+    if (heap.length > 0) {
+      let i = 0;
+      const len = heap.length;
+      for (;;) {
+        const l = 2 * i + 1;
+        if (l >= len) break;
+        const r = l + 1;
+        const m = r < len && before(heap[r], heap[l]) ? r : l;
+        if (!before(heap[m], last)) break;
+        heap[i] = heap[m];
+        i = m;
+      }
+      heap[i] = last;
+    }
+    return top;
+  };
+
+  const wantsRanges = new Set<number>();
+  /** Queues leaf (L, c) if it asks to be split. */
+  const consider = (L: number, c: number): void => {
+    if (L <= finest || k[L] === 0) return;
+    const s = lv[L]!;
+    const cx = c % s.gx;
+    const cy = Math.floor(c / s.gx) % s.gy;
+    const cz = Math.floor(c / (s.gx * s.gy));
+    evalNode(L, cx, cy, cz);
+    if (!nInView || !(nErr > tolerancePx)) return;
+    if (needsOf(L - 1) === null) {
+      wantsRanges.add(L - 1);
+      return;
+    }
+    if (!canSplit(L, cx, cy, cz)) return;
+    const id = qErr.length;
+    qErr.push(nErr);
+    qDist.push(nDist);
+    qL.push(L);
+    qC.push(c);
+    push(id);
+  };
+
+  // --- roots
+  const root = levelState(coarsest);
+  if (root.need === null) wantsRanges.add(coarsest);
+  const eR = E[coarsest];
+  for (let z = 0; z < Math.min(root.gz, Math.ceil(Dz / eR)); z++)
+    for (let y = 0; y < Math.min(root.gy, Math.ceil(Dy / eR)); y++)
+      for (let x = 0; x < Math.min(root.gx, Math.ceil(Dx / eR)); x++) drawChild(root, x + root.gx * (y + root.gy * z));
+  let limitedByBudget = false;
+  if (bytes > budgetBytes) {
+    limitedByBudget = true;
+    notes.push(`the coarsest level's wanted chunks alone cost ${bytes} bytes, over the budget of ${budgetBytes}`);
+  }
+  for (let z = 0; z < root.gz; z++)
+    for (let y = 0; y < root.gy; y++)
+      for (let x = 0; x < root.gx; x++) {
+        const c = x + root.gx * (y + root.gy * z);
+        if (root.state[c] === LEAF) consider(coarsest, c);
+      }
+
+  // --- refine
+  while (heap.length > 0) {
+    const id = pop();
+    const L = qL[id];
+    const c = qC[id];
+    const s = lv[L]!;
+    if (s.state[c] !== LEAF) continue; // split already, by force (its children were considered then)
+    const mark = logL.length;
+    forceSplit(L, c);
+    if (bytes > budgetBytes) {
+      undoTo(mark);
+      limitedByBudget = true;
+      continue;
+    }
+    for (let i = mark; i < logL.length; i++) {
+      const pl = logL[i];
+      const cs = lv[pl - 1]!;
+      forChildren(pl, logC[i], (_, child) => {
+        if (cs.state[child] === LEAF) consider(pl - 1, child);
+      });
+    }
+  }
+
+  // --- the result: leaves level by level in chunk order, then nearest first (a stable sort keeps level, chunk)
+  const sets: CutLevelSets[] = levels.map(() => ({ drawn: [], ghosts: [], wanted: [] }));
+  for (let L = finest; L <= coarsest; L++) {
+    const s = lv[L];
+    if (!s || s.leaves === 0) continue;
+    const { state } = s;
+    const drawn = sets[L].drawn;
+    for (let c = 0; c < state.length; c++) if (state[c] === LEAF) drawn.push(c);
+  }
+  const unsorted: CutNode[] = [];
+  const dist: number[] = [];
+  for (let L = finest; L <= coarsest; L++) {
+    const s = lv[L];
+    if (!s) continue;
+    for (const c of sets[L].drawn) {
+      const coords: [number, number, number] = [c % s.gx, Math.floor(c / s.gx) % s.gy, Math.floor(c / (s.gx * s.gy))];
+      evalNode(L, coords[0], coords[1], coords[2]);
+      unsorted.push({ level: L, chunk: c, coords, errorPx: nErr, distance: nDist, inView: nInView });
+      dist.push(nDist);
+    }
+  }
+  const order = unsorted.map((_, i) => i).sort((a, b) => dist[a] - dist[b]);
+  const nodes = order.map((i) => unsorted[i]);
+
+  let total = 0;
+  for (let L = finest; L <= coarsest; L++) {
+    const s = lv[L];
+    const set = sets[L];
+    if (!s || set.drawn.length === 0) continue;
+    const { gx, gy, gz, state, need } = s;
+    const seen = new Uint8Array(state.length);
+    const sxy = gx * gy;
+    const wanted: number[] = [];
+    const wd: number[] = [];
+    for (const d of set.drawn) {
+      const cx = d % gx;
+      const cy = Math.floor(d / gx) % gy;
+      const cz = Math.floor(d / sxy);
+      for (let dz = 0; dz < 2 && cz + dz < gz; dz++)
+        for (let dy = 0; dy < 2 && cy + dy < gy; dy++)
+          for (let dx = 0; dx < 2 && cx + dx < gx; dx++) {
+            const u = d + dx + dy * gx + dz * sxy;
+            if (seen[u]) continue;
+            seen[u] = 1;
+            if (need !== null && !need(u)) continue;
+            wanted.push(u);
+            evalNode(L, cx + dx, cy + dy, cz + dz);
+            wd.push(nDist);
+            if (state[u] !== LEAF) set.ghosts.push(u);
+          }
+    }
+    set.ghosts.sort((a, b) => a - b);
+    set.wanted = wanted
+      .map((_, i) => i)
+      .sort((a, b) => wd[a] - wd[b] || wanted[a] - wanted[b])
+      .map((i) => wanted[i]);
+    total += wanted.length * s.bytes;
+  }
+
+  return {
+    nodes,
+    levels: sets,
+    bytes: total,
+    limitedByBudget,
+    wantsRanges: [...wantsRanges].sort((a, b) => a - b),
+    notes,
+  };
+}
+
+/** The 6 planes (a, b, c, d: a x + b y + c z + d >= 0 inside) of a WebGPU world -> clip matrix. */
+function frustumPlanes(m: ArrayLike<number>): Float64Array {
+  const row = (r: number) => [m[r], m[4 + r], m[8 + r], m[12 + r]];
+  const [r0, r1, r2, r3] = [row(0), row(1), row(2), row(3)];
+  const out = new Float64Array(24);
+  const rows = [
+    r3.map((v, i) => v + r0[i]), // x >= -w
+    r3.map((v, i) => v - r0[i]), // x <= w
+    r3.map((v, i) => v + r1[i]), // y >= -w
+    r3.map((v, i) => v - r1[i]), // y <= w
+    r2, // z >= 0
+    r3.map((v, i) => v - r2[i]), // z <= w
+  ];
+  rows.forEach((p, i) => out.set(p, 4 * i));
+  return out;
+}
+
+/** False only when the box lies wholly outside one plane (conservative: some boxes outside pass). */
+function boxInFrustum(p: Float64Array, x0: number, y0: number, z0: number, x1: number, y1: number, z1: number): boolean {
+  for (let i = 0; i < 24; i += 4) {
+    const a = p[i];
+    const b = p[i + 1];
+    const c = p[i + 2];
+    if (a * (a >= 0 ? x1 : x0) + b * (b >= 0 ? y1 : y0) + c * (c >= 0 ? z1 : z0) + p[i + 3] < 0) return false;
+  }
+  return true;
+}
+
+// --- the page's camera -------------------------------------------------------
+
+/** The page's vertical field of view (src/render/camera.ts, ArcballCamera.fovY). */
+export const PAGE_FOV_Y_RAD = (40 * Math.PI) / 180;
+
+/** The axis shown pointing up by the page's fit (its Display section; 'y' by default). */
+export type UpAxis = 'x' | 'y' | 'z';
+
+/** The page's camera state, as src/render/camera.ts's CameraState and the link's cam=qx,qy,qz,qw,tx,ty,tz,d. */
+export interface ViewCameraState {
+  /** Rotation from world to eye orientation, [x, y, z, w]. */
+  rotation: [number, number, number, number];
+  /** The point the camera orbits, in world units. */
+  target: [number, number, number];
+  /** From the target to the eye, in world units. */
+  distance: number;
+}
+
+/** A viewport in device pixels (the canvas' width and height). */
+export interface Viewport {
+  width: number;
+  height: number;
+}
+
+/** A box in level-0 voxel coordinates: [x0, y0, z0, x1, y1, z1] (world = these * voxelSize). */
+export type Box0 = [number, number, number, number, number, number];
+
+/** A CutCamera with the page camera it stands for. */
+export interface ViewCamera extends CutCamera {
+  /** The page's camera state (what the link's cam= holds). */
+  state: ViewCameraState;
+  target: [number, number, number];
+  /** The eye's up direction in world units (unit length). */
+  up: [number, number, number];
+  fovYRad: number;
+  /** The page's near and far planes (they follow sceneRadius). */
+  near: number;
+  far: number;
+  /** Half the diagonal of the box the page last fitted: near and far follow it. */
+  sceneRadius: number;
+  viewport: Viewport;
+  /** World -> eye. */
+  view: Float64Array;
+  /** Eye -> clip. */
+  projection: Float64Array;
+}
+
+/**
+ * The level-0 voxel box the page fits when it shows level `index` of a store:
+ * min 0, max (dims_L - 1) * 2^L (the page's bounds (dims_L - 1) * spacing_L
+ * with spacing_L = voxelSize * 2^L). For a single volume, index 0.
+ */
+export function fitBox0(level: Pick<CutLevel, 'dims'>, index: number): Box0 {
+  const f = 2 ** index;
+  return [0, 0, 0, (level.dims[0] - 1) * f, (level.dims[1] - 1) * f, (level.dims[2] - 1) * f];
+}
+
+/** The page's sceneRadius for a fitted box: half its world diagonal (at least 1e-6), in float32 as the page computes it. */
+export function sceneRadiusOf(box0: Box0, voxelSize: [number, number, number]): number {
+  const [sx, sy, sz] = voxelSize;
+  const r =
+    0.5 *
+    vec3.distance(vec3.fromValues(box0[0] * sx, box0[1] * sy, box0[2] * sz), vec3.fromValues(box0[3] * sx, box0[4] * sy, box0[5] * sz));
+  return Math.max(r, 1e-6);
+}
+
+/** The page fit's rotation (ArcballCamera.fit), in float32 like the page's. */
+function fitRotation(up: UpAxis): [number, number, number, number] {
+  const rotation = quat.create();
+  if (up === 'z') {
+    const q = quat.create();
+    quat.setAxisAngle(q, [1, 0, 0], (-62 * Math.PI) / 180);
+    const yaw = quat.create();
+    quat.setAxisAngle(yaw, [0, 0, 1], (35 * Math.PI) / 180);
+    quat.multiply(rotation, q, yaw);
+  } else {
+    const d = DEFAULT_VIEW_DIRECTION;
+    const dir = up === 'y' ? vec3.fromValues(d[0], d[1], d[2]) : vec3.fromValues(d[2], d[0], d[1]);
+    const upVec = up === 'y' ? vec3.fromValues(0, 1, 0) : vec3.fromValues(1, 0, 0);
+    const look = mat4.lookAt(mat4.create(), vec3.normalize(dir, dir), [0, 0, 0], upVec);
+    quat.fromMat3(rotation, mat3.fromMat4(mat3.create(), look));
+    quat.normalize(rotation, rotation);
+  }
+  return [rotation[0], rotation[1], rotation[2], rotation[3]];
+}
+
+/**
+ * The camera the page's Fit gives a box: ArcballCamera.fit(bounds, up) with
+ * bounds = box0 * voxelSize: it looks at the box centre from the up axis'
+ * three-quarter direction (y up, the page's default: from +z, right and a
+ * little above, DEFAULT_VIEW_DIRECTION; z up: from -x, -y, above), at
+ * distance 1.05 r / sin(fovY / 2) (r = half the box diagonal), near and far
+ * from r. Pass fitBox0(level, L) to get the page's view of level L.
+ */
+export function cameraForBox(
+  box0: Box0,
+  voxelSize: [number, number, number],
+  viewport: Viewport,
+  fovYRad = PAGE_FOV_Y_RAD,
+  up: UpAxis = 'y',
+): ViewCamera {
+  const [sx, sy, sz] = voxelSize;
+  // the page's target is a float32 vec3
+  const t = vec3.fromValues(((box0[0] + box0[3]) * sx) / 2, ((box0[1] + box0[4]) * sy) / 2, ((box0[2] + box0[5]) * sz) / 2);
+  const sceneRadius = sceneRadiusOf(box0, voxelSize);
+  const state: ViewCameraState = {
+    rotation: fitRotation(up),
+    target: [t[0], t[1], t[2]],
+    distance: (sceneRadius / Math.sin(fovYRad / 2)) * 1.05,
+  };
+  return cameraFromView(state, viewport, sceneRadius, fovYRad);
+}
+
+/**
+ * The CutCamera of the page's camera state (ArcballCamera.getState(), or the
+ * link's cam= through parseCam) on a viewport: the same view, projection
+ * (near/far from `sceneRadius`: sceneRadiusOf(fitBox0(shown level...))) and
+ * eye as the page's, in float64.
+ */
+export function cameraFromView(state: ViewCameraState, viewport: Viewport, sceneRadius: number, fovYRad = PAGE_FOV_Y_RAD): ViewCamera {
+  const d = state.distance;
+  const q = quat.normalize(new Float64Array(4), Float64Array.from(state.rotation));
+  const [tx, ty, tz] = state.target;
+  const view = new Float64Array(16);
+  mat4.fromTranslation(view, [0, 0, -d]);
+  mat4.multiply(view, view, mat4.fromQuat(new Float64Array(16), q));
+  mat4.translate(view, view, [-tx, -ty, -tz]);
+  const near = Math.max(d - sceneRadius * 1.5, d * 0.01, 1e-4);
+  const far = d + sceneRadius * 1.5;
+  const projection = new Float64Array(16);
+  mat4.perspectiveZO(projection, fovYRad, viewport.width / viewport.height, near, far);
+  const viewProj = mat4.multiply(new Float64Array(16), projection, view) as Float64Array;
+  const inv = quat.invert(new Float64Array(4), q);
+  const eye = vec3.transformQuat(new Float64Array(3), [0, 0, d], inv);
+  const up = vec3.transformQuat(new Float64Array(3), [0, 1, 0], inv);
+  return {
+    viewProj,
+    eye: [eye[0] + tx, eye[1] + ty, eye[2] + tz],
+    pixelsPerUnit: viewport.height / (2 * Math.tan(fovYRad / 2)),
+    state: { rotation: [...state.rotation], target: [tx, ty, tz], distance: d },
+    target: [tx, ty, tz],
+    up: [up[0], up[1], up[2]],
+    fovYRad,
+    near,
+    far,
+    sceneRadius,
+    viewport: { width: viewport.width, height: viewport.height },
+    view,
+    projection,
+  };
+}
+
+/** The link's cam=qx,qy,qz,qw,tx,ty,tz,d (as src/app/url-state.ts reads it), or null when it is not one. */
+export function parseCam(text: string): ViewCameraState | null {
+  const cam = text.split(',').map(Number);
+  if (cam.length !== 8 || !cam.every(Number.isFinite) || !(cam[7] > 0)) return null;
+  return { rotation: [cam[0], cam[1], cam[2], cam[3]], target: [cam[4], cam[5], cam[6]], distance: cam[7] };
+}
