@@ -195,7 +195,11 @@ async function viewInput(
 ): Promise<StoreInput> {
   let view;
   try {
-    view = viewSpecFor(request, store.levels.map((l) => l.layout), store.voxelSize);
+    view = viewSpecFor(
+      request,
+      store.levels.map((l) => l.layout),
+      store.voxelSize,
+    );
   } catch (e) {
     throw new StoreError('layout', `${input}: ${(e as Error).message}`);
   }

@@ -48,8 +48,15 @@ export function viewSpecFor(
   levels: readonly { dims: [number, number, number] }[],
   voxelSize: [number, number, number],
 ): ViewSpec {
+  // near and far as the page's while it shows this store: from the volume's radius (level 0's box)
+  const sceneRadius = sceneRadiusOf(fitBox0(levels[0], 0), voxelSize);
   if (req.box) {
-    return { camera: cameraForBox(req.box, voxelSize, DEFAULT_VIEWPORT), tolerancePx: req.tolerancePx ?? DEFAULT_TOLERANCE_PX };
+    // framed as Fit frames a box (its direction and distance), in the page's scene of the whole volume
+    const framed = cameraForBox(req.box, voxelSize, DEFAULT_VIEWPORT);
+    return {
+      camera: cameraFromView(framed.state, DEFAULT_VIEWPORT, sceneRadius),
+      tolerancePx: req.tolerancePx ?? DEFAULT_TOLERANCE_PX,
+    };
   }
   const hash = req.link ?? '';
   const cam = new URLSearchParams(hash.replace(/^#/, '').replace(/^.*#/, '')).get('cam');
@@ -57,7 +64,6 @@ export function viewSpecFor(
   if (!state) throw new RangeError(`the view link has no camera (cam=qx,qy,qz,qw,tx,ty,tz,d): ${hash}`);
   const fields = linkViewFields(hash.replace(/^.*#/, ''));
   const viewport = fields.viewport ?? DEFAULT_VIEWPORT;
-  const sceneRadius = sceneRadiusOf(fitBox0(levels[0], 0), voxelSize);
   return {
     camera: cameraFromView(state, viewport, sceneRadius),
     tolerancePx: req.tolerancePx ?? fields.tolerancePx ?? DEFAULT_TOLERANCE_PX,

@@ -325,7 +325,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     const wanted: ChunkIndex[][] = [];
     const eye = this.#view!.camera.eye;
     for (let L = 0; L < n; L++) {
-      const need = leaves[L].size > 0 ? this.#needs(L, this.#iso) ?? (() => true) : () => false;
+      const need = leaves[L].size > 0 ? (this.#needs(L, this.#iso) ?? (() => true)) : () => false;
       const { chunkGrid: g } = this.levels[L].layout;
       const d = new Set<ChunkIndex>();
       const gh = new Set<ChunkIndex>();
@@ -450,7 +450,9 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
           entry = { surface, capacity: pool.poolChunks };
           this.#surfaces.set(L, entry);
         }
-        entry.surface.setMemoryBudget(Math.max(1, this.budgetBytes - RESERVE_BYTES - (this.gpu.allocatedBytes - entry.surface.budgetedBytes)));
+        entry.surface.setMemoryBudget(
+          Math.max(1, this.budgetBytes - RESERVE_BYTES - (this.gpu.allocatedBytes - entry.surface.budgetedBytes)),
+        );
         const stats = await entry.surface.compute(iso);
         if (stale()) return false;
         levels.push({ level: L, volume: pool, surface: entry.surface, stats, drawn: [...step.drawn[L]], ghosts: [...step.ghosts[L]] });

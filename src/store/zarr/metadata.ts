@@ -78,9 +78,7 @@ export function levelOffsetsOf(attrs: Json, count: number): [number, number, num
   for (let L = 0; L < count; L++) {
     const t = transformOf(datasets[L], 'translation');
     out.push(
-      t && scale0.every((s) => s > 0)
-        ? [(t[0] - t0[0]) / scale0[0], (t[1] - t0[1]) / scale0[1], (t[2] - t0[2]) / scale0[2]]
-        : [0, 0, 0],
+      t && scale0.every((s) => s > 0) ? [(t[0] - t0[0]) / scale0[0], (t[1] - t0[1]) / scale0[1], (t[2] - t0[2]) / scale0[2]] : [0, 0, 0],
     );
   }
   return out;
