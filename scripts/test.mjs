@@ -38,6 +38,8 @@ const LIMITS_TESTS = [
   'tests/unit/store/chunked-volume.test.ts',
   // the stream controller's surfaces over chunk pools
   'tests/unit/store/stream-gpu.test.ts',
+  // chunk roles (drawn, ghost, idle): the view cut's surfaces restricted to some chunks of a pool
+  'tests/unit/store/chunk-roles.test.ts',
 ];
 const LIMITS_EXCLUDE = ['tests/unit/isosurface/cli.test.ts'];
 // The `gpukernels` suite: on SwiftShader every kernel family is chosen as the
@@ -52,6 +54,7 @@ const GPU_KERNEL_TESTS = [
   'tests/unit/isosurface/block-mc.test.ts',
   'tests/unit/isosurface/lru-cache.test.ts',
   'tests/unit/isosurface/pipeline.test.ts',
+  'tests/unit/store/chunk-roles.test.ts',
 ];
 
 function run(cmd, args, env = {}) {

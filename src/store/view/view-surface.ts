@@ -57,7 +57,7 @@ export class ViewCutSurface {
     this.#reason = null;
     await this.stream.setIsovalue(iso);
     const shown = this.stream.shown;
-    if (!shown || !shown.final || shown.iso !== iso)
+    if (!shown?.final || shown.iso !== iso)
       throw new LevelStoppedError(this.#reason ?? `the view's cut at isovalue ${iso} was not reached`, this.#overBudget);
     const all = shown.levels.map((l) => l.stats);
     const sum = (f: (s: IsosurfaceStats) => number) => all.reduce((a, s) => a + f(s), 0);
