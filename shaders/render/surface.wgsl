@@ -18,6 +18,7 @@ struct Surface {
   extra: vec4f,        // x: rim strength, y: depth cue, z: near, w: far (eye distance)
   voxel_size: vec4f,   // xyz: world size of a voxel
   origin: vec4f,       // xyz: where voxel (0, 0, 0) sits, in voxels (a store level's OME translation)
+  tint: vec4f,         // rgb: multiplies the base colours (a store refined by the view: the level tint; 1 otherwise)
 };
 @group(1) @binding(0) var<uniform> surface: Surface;
 
@@ -73,6 +74,7 @@ fn fs(in: VsOut, @builtin(front_facing) front_facing: bool) -> @location(0) vec4
   if (!front_facing) {
     base = surface.back.rgb;
   }
+  base *= surface.tint.rgb;
   // The triangle's own normal (derivatives must be taken in uniform control flow).
   let face = cross(dpdx(in.world), dpdy(in.world));
   var n: vec3f;

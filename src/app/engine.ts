@@ -1,5 +1,6 @@
 // What the page needs from the isosurface pipeline (src/isosurface/): the
 // `Isosurface` class satisfies this; the page only talks to this interface.
+import type { SurfacePart } from '../render/surface-layer.ts';
 import type { GpuContext } from '../gpu/device.ts';
 import { Isosurface } from '../isosurface/isosurface.ts';
 import type { IsosurfaceDrawData, IsosurfaceOptions, IsosurfaceStats, SurfaceMesh, VolumeInfo } from '../isosurface/types.ts';
@@ -22,6 +23,10 @@ export interface PageIsosurface {
   readMesh(): Promise<SurfaceMesh>;
   /** [min, max] per block. */
   readBlockRanges(): Promise<Float32Array>;
+  /** A surface of several pieces (a store refined by the view: one per level): what the layer draws instead of drawData. */
+  drawParts?(): SurfacePart[];
+  /** Such a surface's mesh as one, in its voxel index space (voxel (i, j, k) at (i, j, k)), for exports. */
+  readPositions?(): Promise<{ positions: Float32Array; indices: Uint32Array }>;
   destroy(): void;
 }
 

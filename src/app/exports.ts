@@ -36,13 +36,18 @@ export async function savePly(session: Session, messages: Messages): Promise<voi
   const v = session.current;
   if (!v) return;
   try {
-    const surface = await v.iso.readMesh();
-    if (surface.indices.length === 0) {
+    // a store refined by the view: every level's piece, in level-0 voxels
+    let mesh: { positions: Float32Array; indices: Uint32Array };
+    if (v.iso.readPositions) mesh = await v.iso.readPositions();
+    else {
+      const surface = await v.iso.readMesh();
+      // Welded on the GPU: one vertex per cut grid edge, as VTK's merged points.
+      mesh = { positions: decodeVertices(surface.vertices, surface.vertices.length / 3), indices: surface.indices };
+    }
+    if (mesh.indices.length === 0) {
       messages.show('The surface is empty at this isovalue: nothing to export.', 'info', 4000);
       return;
     }
-    // Welded on the GPU: one vertex per cut grid edge, as VTK's merged points.
-    const mesh = { positions: decodeVertices(surface.vertices, surface.vertices.length / 3), indices: surface.indices };
     // What is on screen: voxel (i, j, k) at (i, j, k) * voxel size (1 unless the file or the user gave one).
     const size = session.spacing;
     const origin = v.opened.origin ?? [0, 0, 0];

@@ -73,11 +73,19 @@ async function start(): Promise<void> {
   let surface!: SurfaceLayer;
   let box!: BoxLayer;
   let boxVisible = true;
+  /** Told after every camera change (the store view re-plans its cut). */
+  const cameraListeners = new Set<() => void>();
   /** The viewer and its layers on `g` (again after a lost device: same camera, up axis, style, box). */
   const mountGraphics = async (g: GpuContext): Promise<void> => {
     const old = viewer ? { up: viewer.upAxis, style: surface.style, voxelSize: surface.voxelSize } : null;
     viewer?.destroy();
-    viewer = new Viewer(g.device, canvas, { camera, onCameraChange: () => link?.schedule() });
+    viewer = new Viewer(g.device, canvas, {
+      camera,
+      onCameraChange: () => {
+        link?.schedule();
+        for (const l of cameraListeners) l();
+      },
+    });
     // Y up, as in ParaView and vtk.js (and CT scans like the bonsai); the Display section changes it.
     viewer.upAxis = old?.up ?? 'y';
     [box, surface] = await Promise.all([BoxLayer.create(viewer), SurfaceLayer.create(viewer)]);
@@ -96,7 +104,7 @@ async function start(): Promise<void> {
     ]);
   };
   await mountGraphics(gpu);
-  link = new ViewLink(camera);
+  link = new ViewLink(camera, () => ({ width: canvas.width, height: canvas.height }));
   state.framesDrawn = () => viewer.framesDrawn;
   state.camera = () => camera.getState();
   state.loseDevice = () => gpu.device.destroy();
@@ -355,6 +363,14 @@ async function start(): Promise<void> {
       return wanted !== undefined && wanted >= lo && wanted <= hi ? wanted : undefined;
     },
     linkLevel: () => initialView.level,
+    camera: () => ({ state: camera.getState(), viewport: { width: canvas.width, height: canvas.height } }),
+    onCameraChange: (l) => {
+      cameraListeners.add(l);
+      return () => cameraListeners.delete(l);
+    },
+    linkCut: () => ({ cut: initialView.cut, tolerancePx: initialView.tolerancePx, tint: initialView.tint }),
+    setCut: (cut) => link?.setCut(cut),
+    requestFrame: () => viewer.requestFrame(),
     linkStoreChoice: () => ({ storeRate: initialView.storeRate, time: initialView.time, channel: initialView.channel }),
     setStoreChoice: (choice) => link?.setStoreChoice(choice),
   });

@@ -47,7 +47,10 @@ export class Session {
   private lastLatency: number | undefined;
 
   constructor(private readonly p: SessionParts) {
-    p.viewer.addBeforeFrame(() => p.surface.setDrawData(this.current?.iso.drawData));
+    p.viewer.addBeforeFrame(() => {
+      p.surface.setDrawData(this.current?.iso.drawData);
+      p.surface.setParts(this.current?.iso.drawParts?.());
+    });
   }
 
   install(v: LoadedVolume): void {

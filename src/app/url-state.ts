@@ -2,7 +2,8 @@
 // #iso=0.5&cam=qx,qy,qz,qw,tx,ty,tz,d[&vox=sx,sy,sz] (vox: a voxel size the
 // user set, over the file's); for stores also level=L, and for stores of
 // lossless chunks rate=R (their bricks' GPU rate), t=T and c=C (time point
-// and channel). The volume itself comes from ?url=... (same
+// and channel), cut=1|0 (refine by the view or level by level) with px=W,H
+// (the canvas) and tol=T (pixels), tint=1 (tint by level). The volume itself comes from ?url=... (same
 // origin) or is the built-in default.
 import type { CameraState } from '../render/camera.ts';
 
@@ -17,6 +18,12 @@ export interface ViewState {
   storeRate?: number;
   time?: number;
   channel?: number;
+  /** A store refined by the view (cut=1) or level by level (cut=0); absent: the page decides. */
+  cut?: boolean;
+  /** With cut: the canvas in device pixels (px=W,H) and the pixel tolerance (tol=T), so a link (and the CLI's --view) refines the same cut; tint=1 tints by level. */
+  viewport?: { width: number; height: number };
+  tolerancePx?: number;
+  tint?: boolean;
 }
 
 const round = (x: number) => Number(x.toPrecision(7));
@@ -33,6 +40,10 @@ export function encodeViewState(s: ViewState): string {
   if (s.storeRate !== undefined) parts.push(`rate=${round(s.storeRate)}`);
   if (s.time !== undefined) parts.push(`t=${s.time}`);
   if (s.channel !== undefined) parts.push(`c=${s.channel}`);
+  if (s.cut !== undefined) parts.push(`cut=${s.cut ? 1 : 0}`);
+  if (s.viewport) parts.push(`px=${s.viewport.width},${s.viewport.height}`);
+  if (s.tolerancePx !== undefined) parts.push(`tol=${round(s.tolerancePx)}`);
+  if (s.tint) parts.push('tint=1');
   return parts.join('&');
 }
 
@@ -62,6 +73,13 @@ export function decodeViewState(hash: string): ViewState {
     const v = Number(params.get(key));
     if (params.has(key) && Number.isInteger(v) && v >= 0 && v < 2 ** 31) out[field] = v;
   }
+  if (params.get('cut') === '1') out.cut = true;
+  else if (params.get('cut') === '0') out.cut = false;
+  const px = params.get('px')?.split(',').map(Number);
+  if (px && px.length === 2 && px.every((n) => Number.isInteger(n) && n > 0 && n <= 16384)) out.viewport = { width: px[0], height: px[1] };
+  const tol = Number(params.get('tol'));
+  if (params.has('tol') && tol > 0 && tol <= 1000) out.tolerancePx = tol;
+  if (params.get('tint') === '1') out.tint = true;
   return out;
 }
 

@@ -11,8 +11,19 @@ export class ViewLink {
   private spacing: [number, number, number] | undefined;
   private level: number | undefined;
   private storeChoice: Pick<ViewState, 'storeRate' | 'time' | 'channel'> = {};
+  private cut: Pick<ViewState, 'cut' | 'tolerancePx' | 'tint'> = {};
 
-  constructor(private readonly camera: ArcballCamera) {}
+  constructor(
+    private readonly camera: ArcballCamera,
+    /** The canvas in device pixels (written with a store refined by the view: px=W,H). */
+    private readonly viewport: () => { width: number; height: number } = () => ({ width: 0, height: 0 }),
+  ) {}
+
+  /** A store's refinement: by the view (with its tolerance and tint) or level by level; empty: not a store. */
+  setCut(cut: Pick<ViewState, 'cut' | 'tolerancePx' | 'tint'>): void {
+    this.cut = { ...cut };
+    this.schedule();
+  }
 
   /** What the page was opened with. */
   static initial(): ViewState {
@@ -55,7 +66,16 @@ export class ViewLink {
   }
 
   state(): ViewState {
-    return { iso: this.iso, camera: this.camera.getState(), spacing: this.spacing, level: this.level, ...this.storeChoice };
+    const vp = this.viewport();
+    return {
+      iso: this.iso,
+      camera: this.camera.getState(),
+      spacing: this.spacing,
+      level: this.level,
+      ...this.storeChoice,
+      ...this.cut,
+      ...(this.cut.cut && vp.width > 0 ? { viewport: { width: vp.width, height: vp.height } } : {}),
+    };
   }
 
   /** The full link to this view. */

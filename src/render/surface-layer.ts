@@ -48,7 +48,20 @@ export const DEFAULT_SURFACE_STYLE: SurfaceStyle = {
   depthCue: 0.35,
 };
 
-const UNIFORM_BYTES = 112;
+const UNIFORM_BYTES = 128;
+
+/**
+ * One piece of a surface made of several (a store refined by the view: one
+ * per level): its draw data, drawn at `scale` times the layer's voxel size
+ * from `origin` (in its own voxels), tinted by `tint` (linear multiplier; the
+ * level tint) when given.
+ */
+export interface SurfacePart {
+  data: IsosurfaceDrawData;
+  scale: number;
+  origin: [number, number, number];
+  tint?: Rgb;
+}
 
 export interface SurfaceLayerOptions {
   /** Also build the depth-only pipeline (drawDepth), for a depth pre-pass of opaque layers. */
@@ -68,6 +81,9 @@ export class SurfaceLayer implements RenderLayer {
    */
   origin: [number, number, number] = [0, 0, 0];
   private data: IsosurfaceDrawData | undefined;
+  /** Several pieces instead of `data` (setParts): each with its own uniforms and bind group. */
+  private parts: readonly SurfacePart[] | undefined;
+  private readonly partUniforms: { buffer: GPUBuffer; bindGroup: GPUBindGroup }[] = [];
   private bindGroup: GPUBindGroup | undefined;
   private boundVersion = -1;
   private readonly uniforms: GPUBuffer;
@@ -144,6 +160,28 @@ export class SurfaceLayer implements RenderLayer {
     return this.data;
   }
 
+  /** Draws these pieces instead of the draw data (undefined: back to setDrawData's). */
+  setParts(parts: readonly SurfacePart[] | undefined): void {
+    this.parts = parts && parts.length > 0 ? parts : undefined;
+  }
+
+  private partUniform(i: number): { buffer: GPUBuffer; bindGroup: GPUBindGroup } {
+    while (this.partUniforms.length <= i) {
+      const buffer = this.target.device.createBuffer({
+        label: `SurfaceLayer.part${this.partUniforms.length}.uniforms`,
+        size: UNIFORM_BYTES,
+        usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
+      });
+      const bindGroup = this.target.device.createBindGroup({
+        label: `SurfaceLayer.part${this.partUniforms.length}.bindGroup`,
+        layout: this.layout,
+        entries: [{ binding: 0, resource: { buffer } }],
+      });
+      this.partUniforms.push({ buffer, bindGroup });
+    }
+    return this.partUniforms[i];
+  }
+
   private ensureBindGroup(data: IsosurfaceDrawData): GPUBindGroup {
     if (!this.bindGroup || this.boundVersion !== data.version) {
       this.bindGroup = this.target.device.createBindGroup({
@@ -156,17 +194,27 @@ export class SurfaceLayer implements RenderLayer {
     return this.bindGroup;
   }
 
-  private writeUniforms(data: IsosurfaceDrawData): void {
-    const { info } = data;
+  private writeUniforms(
+    data: IsosurfaceDrawData,
+    into: GPUBuffer = this.uniforms,
+    part: { scale: number; origin: [number, number, number]; tint?: Rgb; scene?: IsosurfaceDrawData['info'] } = {
+      scale: 1,
+      origin: this.origin,
+    },
+  ): void {
+    const info = part.scene ?? data.info;
+    const voxel = [this.voxelSize[0] * part.scale, this.voxelSize[1] * part.scale, this.voxelSize[2] * part.scale];
+    const sceneScale = part.scene ? 1 : part.scale;
+    const sceneOrigin = part.scene ? [0, 0, 0] : part.origin;
     const s = this.style;
     const { u32, i32, f32 } = this.views;
     u32[0] = 0;
     u32[1] = 0;
     u32[2] = 0;
     u32[3] = s.smooth ? 1 : 0;
-    i32[4] = info.dims[0];
-    i32[5] = info.dims[1];
-    i32[6] = info.dims[2];
+    i32[4] = data.info.dims[0];
+    i32[5] = data.info.dims[1];
+    i32[6] = data.info.dims[2];
     i32[7] = 0;
     f32[8] = s.front[0];
     f32[9] = s.front[1];
@@ -179,8 +227,8 @@ export class SurfaceLayer implements RenderLayer {
     // Depth-cue range: the eye distance to the volume's bounding sphere (world space).
     let r2 = 0;
     for (let a = 0; a < 3; a++) {
-      const extent = (info.dims[a] - 1) * this.voxelSize[a];
-      this.centre[a] = extent / 2 + this.origin[a] * this.voxelSize[a];
+      const extent = (info.dims[a] - 1) * this.voxelSize[a] * sceneScale;
+      this.centre[a] = extent / 2 + sceneOrigin[a] * this.voxelSize[a] * sceneScale;
       r2 += extent * extent;
     }
     const radius = 0.5 * Math.sqrt(r2);
@@ -189,23 +237,50 @@ export class SurfaceLayer implements RenderLayer {
     f32[17] = s.depthCue;
     f32[18] = Math.max(0, eyeDist - radius);
     f32[19] = eyeDist + radius;
-    f32[20] = this.voxelSize[0];
-    f32[21] = this.voxelSize[1];
-    f32[22] = this.voxelSize[2];
+    f32[20] = voxel[0];
+    f32[21] = voxel[1];
+    f32[22] = voxel[2];
     f32[23] = 0;
-    f32[24] = this.origin[0];
-    f32[25] = this.origin[1];
-    f32[26] = this.origin[2];
+    f32[24] = part.origin[0];
+    f32[25] = part.origin[1];
+    f32[26] = part.origin[2];
     f32[27] = 0;
-    this.target.device.queue.writeBuffer(this.uniforms, 0, this.scratch);
+    const tint = part.tint ?? [1, 1, 1];
+    f32[28] = tint[0];
+    f32[29] = tint[1];
+    f32[30] = tint[2];
+    f32[31] = 1;
+    this.target.device.queue.writeBuffer(into, 0, this.scratch);
   }
 
   /** Whether there is a surface to draw (DepthDrawer of a depth pre-pass). */
   get hasDepth(): boolean {
-    return this.visible && this.data !== undefined && this.data.shards.length > 0;
+    return this.visible && ((this.data !== undefined && this.data.shards.length > 0) || this.parts !== undefined);
   }
 
   private drawWith(pass: GPURenderPassEncoder, pipeline: GPURenderPipeline): void {
+    if (this.parts) {
+      if (!this.visible) return;
+      // the depth cue spans the whole scene: the piece of the largest extent (the coarsest level covers the volume)
+      const scene = this.parts.reduce((a, p) => (p.scale > a.scale ? p : a));
+      const sceneInfo = {
+        ...scene.data.info,
+        dims: scene.data.info.dims.map((n) => (n - 1) * scene.scale + 1) as [number, number, number],
+      };
+      pass.setPipeline(pipeline);
+      this.parts.forEach((part, i) => {
+        if (part.data.shards.length === 0) return;
+        const u = this.partUniform(i);
+        this.writeUniforms(part.data, u.buffer, { ...part, scene: sceneInfo });
+        pass.setBindGroup(1, u.bindGroup);
+        pass.setVertexBuffer(0, part.data.vertices);
+        for (const shard of part.data.shards) {
+          pass.setIndexBuffer(shard.indices, 'uint32');
+          pass.drawIndexedIndirect(shard.drawArgs, shard.drawArgsOffset);
+        }
+      });
+      return;
+    }
     const data = this.data;
     if (!this.visible || !data || data.shards.length === 0) return;
     // Written at every draw (the camera moves); the pre-pass and the frame see the same values.
@@ -231,6 +306,9 @@ export class SurfaceLayer implements RenderLayer {
 
   destroy(): void {
     this.uniforms.destroy();
+    for (const u of this.partUniforms) u.buffer.destroy();
+    this.partUniforms.length = 0;
+    this.parts = undefined;
     this.data = undefined;
     this.bindGroup = undefined;
   }

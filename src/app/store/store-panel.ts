@@ -41,6 +41,48 @@ export interface StorePageState {
   failedRequests: number;
   /** GPU bytes held (counted where they are made): pools of compressed chunks, surfaces (of which cache and vertices), against the budget. */
   gpu: { pools: number; surfaces: number; cache: number; vertices: number; total: number; peak: number; budget: number };
+  /**
+   * Refined by the view (null: level by level): the pixel tolerance, the
+   * level tint, and per level the chunks on screen that hold surface
+   * (`drawn`), the regions it covers (`regions`, with or without surface) and
+   * its triangles; `final` when the view's whole cut is on screen.
+   */
+  cut: {
+    tolerancePx: number;
+    tint: boolean;
+    levels: { level: number; drawn: number; regions: number; triangles: number }[];
+    final: boolean;
+  } | null;
+}
+
+/** The refinement controls' changes: by view or level by level, the pixel tolerance, the level tint. */
+export interface CutChoice {
+  cut?: boolean;
+  tolerancePx?: number;
+  tint?: boolean;
+}
+
+/** The refinement controls (made once per store and mode, so typing in them is not interrupted by the figures). */
+function cutBlock(st: StorePageState, change: (next: CutChoice) => void): HTMLElement {
+  const box = document.createElement('p');
+  box.className = 'store-cut';
+  const on = st.cut !== null;
+  box.innerHTML =
+    `<label title="each region at the level whose voxels project to at most the tolerance; the rest coarser"><input data-cut="cut" type="checkbox"${on ? ' checked' : ''}> refine by view</label> ` +
+    (on
+      ? `<label>tolerance <input data-cut="tolerancePx" type="number" min="0.25" max="64" step="0.25" value="${st.cut!.tolerancePx}"> px</label> ` +
+        `<label><input data-cut="tint" type="checkbox"${st.cut!.tint ? ' checked' : ''}> tint by level</label>`
+      : '');
+  box.addEventListener('change', (e) => {
+    const el = e.target as HTMLInputElement;
+    const key = el.dataset.cut as keyof CutChoice | undefined;
+    if (key === 'cut' || key === 'tint') change({ [key]: el.checked });
+    else if (key === 'tolerancePx') {
+      const v = Number(el.value);
+      if (v >= 0.25 && v <= 64) change({ tolerancePx: v });
+    }
+  });
+  return box;
 }
 
 const mib = (b: number) => `${(b / 2 ** 20).toFixed(2)} MiB`;
@@ -88,7 +130,7 @@ function sourceBlock(store: ZfpStore, change: (next: StoreChoice) => void): HTML
   return box;
 }
 
-const sourceBlocks = new WeakMap<HTMLElement, { store: ZfpStore; figures: HTMLElement }>();
+const sourceBlocks = new WeakMap<HTMLElement, { store: ZfpStore; figures: HTMLElement; cutOn: boolean; cut: HTMLElement }>();
 
 export function renderStorePanel(
   panel: HTMLElement,
@@ -96,6 +138,7 @@ export function renderStorePanel(
   st: StorePageState,
   c: FetchCounters,
   change: (next: StoreChoice) => void = () => {},
+  changeCut: (next: CutChoice) => void = () => {},
 ): void {
   let made = sourceBlocks.get(panel);
   if (!made || made.store !== store) {
@@ -103,19 +146,28 @@ export function renderStorePanel(
     const figures = document.createElement('div');
     const block = sourceBlock(store, change);
     if (block) panel.append(block);
-    panel.append(figures);
-    made = { store, figures };
+    const cut = cutBlock(st, changeCut);
+    panel.append(cut, figures);
+    made = { store, figures, cutOn: st.cut !== null, cut };
     sourceBlocks.set(panel, made);
+  } else if (made.cutOn !== (st.cut !== null)) {
+    const cut = cutBlock(st, changeCut);
+    made.cut.replaceWith(cut);
+    made.cut = cut;
+    made.cutOn = st.cut !== null;
   }
   renderFigures(made.figures, panel, store, st, c);
 }
 
 function renderFigures(figures: HTMLElement, panel: HTMLElement, store: ZfpStore, st: StorePageState, c: FetchCounters): void {
+  const cut = st.cut;
   const rows = st.levels
-    .map(
-      (l) =>
-        `<tr${st.shownLevel === l.level ? ' class="shown"' : ''}><td>${l.level}</td><td>${l.dims.join('×')}</td><td>${l.chunksFetched} / ${l.chunks}</td><td>${mib(l.storedBytes)}</td></tr>`,
-    )
+    .map((l) => {
+      const on = cut?.levels[l.level];
+      const shown = cut ? (on?.regions ?? 0) > 0 : st.shownLevel === l.level;
+      const onScreen = cut ? `<td data-k="on-screen">${on?.drawn ?? 0}</td>` : '';
+      return `<tr${shown ? ' class="shown"' : ''}><td>${l.level}</td><td>${l.dims.join('×')}</td><td>${l.chunksFetched} / ${l.chunks}</td>${onScreen}<td>${mib(l.storedBytes)}</td></tr>`;
+    })
     .join('');
   panel.hidden = false;
   if (!panel.querySelector('h2')) {
@@ -124,7 +176,7 @@ function renderFigures(figures: HTMLElement, panel: HTMLElement, store: ZfpStore
     panel.prepend(...head.childNodes);
   }
   figures.innerHTML =
-    `<table class="store-levels"><thead><tr><th>level</th><th>dims</th><th>chunks fetched</th><th>${store.source ? 'values' : 'stored'}</th></tr></thead><tbody>${rows}</tbody></table>` +
+    `<table class="store-levels"><thead><tr><th>level</th><th>dims</th><th>chunks fetched</th>${cut ? '<th title="chunks of the view\'s cut at this level that hold surface">on screen</th>' : ''}<th>${store.source ? 'values' : 'stored'}</th></tr></thead><tbody>${rows}</tbody></table>` +
     `<dl class="store-network">` +
     `<dt>fetched</dt><dd data-k="bytes">${mib(st.bytesFetched)}</dd>` +
     `<dt>requests</dt><dd data-k="requests">${st.requests}</dd>` +

@@ -12,7 +12,7 @@
 import type { AsyncReadable } from '@zarrita/storage';
 import type { GpuContext } from '../../gpu/device.ts';
 import { ChunkFetcher } from '../../store/fetch/chunk-fetcher.ts';
-import { createChunkStream } from '../../store/gpu-port.ts';
+import { chunkedGpu, createChunkStream, storeEncoder } from '../../store/gpu-port.ts';
 import { storeRateChooser } from '../../store/rate.ts';
 import type { ChunkStreamController } from '../../store/pinned-level.ts';
 import type { StreamProgress } from '../../store/stream-controller.ts';
@@ -20,6 +20,15 @@ import { StoreError } from '../../store/zarr/errors.ts';
 import { HttpStore } from '../../store/zarr/http-store.ts';
 import { openStore, type ZfpStore } from '../../store/zarr/open-store.ts';
 import { MeteredStore } from '../../store/zarr/stores.ts';
+import type { Isosurface } from '../../isosurface/isosurface.ts';
+import type { IsosurfaceStats } from '../../isosurface/types.ts';
+import type { CameraState } from '../../render/camera.ts';
+import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf, type Viewport } from '../../store/view/cut.ts';
+import { estimateFixedBytes } from '../../store/level-state.ts';
+import { DEFAULT_TOLERANCE_PX, type ViewSpec, ViewStream } from '../../store/view/view-stream.ts';
+import type { ChunkViewStream } from '../../store/view/view-surface.ts';
+import type { ChunkedVolume } from '../../zfp/chunked-volume.ts';
+import { type ShownCutOfPage, StoreCutIsosurface } from './store-cut.ts';
 import { chooseIsovalue } from '../iso-choice.ts';
 import type { LoadedVolume } from '../loading/loader.ts';
 import { renderStorePanel, type StoreChoice, type StorePageState } from './store-panel.ts';
@@ -31,7 +40,7 @@ export interface StoreViewDeps {
   /** The device to stream to (the page's current one). */
   gpu: () => GpuContext;
   /** Puts a level on screen as the current volume (Session.install); `first` for the store's first level. */
-  install(volume: LoadedVolume, level: number, first: boolean): void;
+  install(volume: LoadedVolume, level: number | undefined, first: boolean): void;
   /** The isovalue to open at when the page's link gives one inside the value range. */
   linkIso(valueRange: [number, number]): number | undefined;
   budgetBytes(): number;
@@ -45,6 +54,15 @@ export interface StoreViewDeps {
   setStoreChoice(choice: StoreChoice): void;
   /** Where the page tests read the figures (window.zfpisoStore). */
   publish(state: StorePageState): void;
+  /** The page's camera now and its canvas in device pixels (a store refined by the view plans its cut from them). */
+  camera(): { state: CameraState; viewport: Viewport };
+  /** Called after every camera change; returns an unsubscribe function. */
+  onCameraChange(listener: () => void): () => void;
+  /** The link's refinement (cut=1|0, tol=, tint=) and camera. */
+  linkCut(): { cut?: boolean; tolerancePx?: number; tint?: boolean; camera?: CameraState };
+  /** What the link says of the refinement of the store open now. */
+  setCut(cut: { cut?: boolean; tolerancePx?: number; tint?: boolean }): void;
+  requestFrame(): void;
   line: HTMLElement;
   panel: HTMLElement;
 }
@@ -61,10 +79,16 @@ interface OpenStore {
   store: ZfpStore;
   metered: MeteredStore;
   fetcher: ChunkFetcher;
-  controller: ChunkStreamController;
+  /** Level by level (StreamController), or refined by the view (ViewStream). */
+  controller: ChunkStreamController | ChunkViewStream;
+  /** Refined by the view: its tolerance and tint; null when level by level. */
+  cut: { tolerancePx: number; tint: boolean } | null;
+  /** A camera change waits this timer (throttled re-planning), and unsubscribes with this. */
+  replanTimer: ReturnType<typeof setTimeout> | null;
+  detachCamera: () => void;
   valueRange: [number, number];
   state: StorePageState;
-  current: StoreLevelIsosurface | null;
+  current: StoreLevelIsosurface | StoreCutIsosurface | null;
   /** Refinements started and not yet ended (the isovalue changed meanwhile). */
   running: number;
   lastProgress: StreamProgress | null;
@@ -79,6 +103,8 @@ export class StoreView {
   #replacing = false;
   /** The isovalue a store opened again another way (panel: rate, time, channel) keeps, over the link's. */
   #keepIso: number | undefined;
+  /** The panel's refinement choice, over the link's and the default, for the stores opened from now on. */
+  #cutChoice: { cut?: boolean; tolerancePx?: number; tint?: boolean } = {};
 
   constructor(private readonly d: StoreViewDeps) {}
 
@@ -116,6 +142,8 @@ export class StoreView {
 
   /** Stops a store: no more requests; its controller is destroyed unless one of its levels is still on screen. */
   #stop(o: OpenStore): void {
+    o.detachCamera();
+    if (o.replanTimer !== null) clearTimeout(o.replanTimer);
     o.fetcher.cancelAll();
     o.store.close?.();
     if (!o.current) o.controller.destroy();
@@ -136,7 +164,8 @@ export class StoreView {
     const gen = ++this.#gen;
     const metered = new MeteredStore(source);
     let store: ZfpStore;
-    let controller: ChunkStreamController;
+    let controller: ChunkStreamController | ChunkViewStream;
+    let cut: OpenStore['cut'] = null;
     this.#line(`Opening ${url}…`);
     let f: ChunkFetcher;
     try {
@@ -149,7 +178,22 @@ export class StoreView {
         decodeWorkers: true,
       });
       f = new ChunkFetcher(store, { maxInFlight: 8 });
-      controller = await createChunkStream(store, f, this.d.gpu(), this.d.budgetBytes());
+      const asked = { ...this.d.linkCut(), ...this.#cutChoice };
+      if (asked.cut ?? this.#levelZeroIsLarge(store)) {
+        // refined by the view: each region at the level the camera needs
+        const gpu = this.d.gpu();
+        const view = await ViewStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(
+          store,
+          f,
+          chunkedGpu(gpu, undefined, await storeEncoder(gpu, store)),
+          this.d.budgetBytes(),
+        );
+        cut = { tolerancePx: asked.tolerancePx ?? DEFAULT_TOLERANCE_PX, tint: asked.tint ?? false };
+        controller = view;
+        await view.setView(this.#viewSpec(store, cut.tolerancePx, asked.camera));
+      } else {
+        controller = await createChunkStream(store, f, this.d.gpu(), this.d.budgetBytes());
+      }
     } catch (e) {
       if (gen === this.#gen) this.#line('');
       this.d.onError(e instanceof StoreError ? e.message : `${url}: ${(e as Error).message}`);
@@ -186,6 +230,7 @@ export class StoreView {
       retries: 0,
       failedRequests: 0,
       gpu: { pools: 0, surfaces: 0, cache: 0, vertices: 0, total: 0, peak: 0, budget: controller.budgetBytes },
+      cut: cut ? { tolerancePx: cut.tolerancePx, tint: cut.tint, levels: [], final: false } : null,
     };
     const shownChoice: StoreChoice = store.source
       ? {
@@ -204,6 +249,9 @@ export class StoreView {
       metered,
       fetcher: f,
       controller,
+      cut,
+      replanTimer: null,
+      detachCamera: () => {},
       valueRange: controller.valueRange ?? [0, 0],
       state,
       current: null,
@@ -212,6 +260,8 @@ export class StoreView {
       iso: NaN,
     };
     this.#open = o;
+    this.d.setCut(cut ? { cut: true, tolerancePx: cut.tolerancePx, ...(cut.tint ? { tint: true } : {}) } : {});
+    if (cut) o.detachCamera = this.d.onCameraChange(() => this.#scheduleReplan(o));
     for (const note of store.notes) this.d.onError(`${url}: ${note}`);
     const fetchedOnce = new Set<string>();
     f.onChunk((level, chunk, bytes, fromCache) => {
@@ -223,12 +273,15 @@ export class StoreView {
       state.levels[level].chunkBytesFetched += bytes.byteLength;
     });
     controller.onProgress((p) => this.#progress(o, p));
-    controller.onShown((s) => this.#shown(o, s));
+    if (controller instanceof ViewStream) controller.onShown((s) => this.#shownCut(o, s));
+    else {
+      controller.onShown((s) => this.#shown(o, s));
+      // a chunk that failed has cooled down: the same isovalue again (the coarser surface stayed meanwhile)
+      controller.onRetry((value) => {
+        if (this.#open === o && value === o.iso) void this.#refine(o, value);
+      });
+    }
     controller.onError((e) => this.d.onError(e.message));
-    // a chunk that failed has cooled down: the same isovalue again (the coarser surface stayed meanwhile)
-    controller.onRetry((value) => {
-      if (this.#open === o && value === o.iso) void this.#refine(o, value);
-    });
     this.#publish(o);
 
     // The isovalue: the link's, else Otsu over the finest known chunk ranges. A
@@ -273,6 +326,11 @@ export class StoreView {
     }
     if (this.#open !== o || o.running > 0) return;
     o.state.done = true;
+    if (o.cut) {
+      this.#cutLine(o);
+      this.#publish(o);
+      return;
+    }
     const shown = o.state.shownLevel;
     const p = o.lastProgress;
     if (p?.phase === 'stopped' && p.reason)
@@ -296,12 +354,12 @@ export class StoreView {
   #shown(o: OpenStore, s: ShownLevel): void {
     if (this.#open !== o) return;
     if (o.state.reason && o.state.reason !== `the link asks for level ${o.controller.finest}`) o.state.reason = null;
-    if (o.current && o.current.level === s.level) {
+    if (o.current instanceof StoreLevelIsosurface && o.current.level === s.level) {
       o.current.showAgain(s);
     } else {
       const first = o.current === null;
       const iso = new StoreLevelIsosurface(
-        o.controller,
+        o.controller as ChunkStreamController,
         s,
         o.valueRange,
         (value) => this.#refine(o, value),
@@ -371,12 +429,171 @@ export class StoreView {
     st.gpu = { ...g, peak: Math.max(st.gpu.peak, g.total), budget: o.controller.budgetBytes };
     st.retries = o.store.retries.retries;
     st.failedRequests = o.store.retries.failed;
-    renderStorePanel(this.d.panel, o.store, st, o.fetcher.counters, (next) => {
-      if (this.#open !== o) return;
-      this.#keepIso = Number.isFinite(o.iso) ? o.iso : undefined;
-      void this.openStore(o.source, o.url, { ...o.choice, ...next }, o.ranges);
-    });
+    renderStorePanel(
+      this.d.panel,
+      o.store,
+      st,
+      o.fetcher.counters,
+      (next) => {
+        if (this.#open !== o) return;
+        this.#keepIso = Number.isFinite(o.iso) ? o.iso : undefined;
+        void this.openStore(o.source, o.url, { ...o.choice, ...next }, o.ranges);
+      },
+      (next) => this.#changeCut(o, next),
+    );
     this.d.publish({ ...st, levels: st.levels.map((l) => ({ ...l })), shownLevels: [...st.shownLevels] });
+  }
+
+  /**
+   * Refine by the view when a store's level 0 is large: its chunks, at what
+   * the GPU keeps per resident chunk, would take more than a quarter of the
+   * budget (level by level it would stop coarse everywhere). Smaller stores
+   * go level by level to full resolution, as before; the panel and the
+   * link's cut= choose either way.
+   */
+  #levelZeroIsLarge(store: ZfpStore): boolean {
+    const L = store.levels.find((l) => !l.unusable);
+    if (!L) return false;
+    const perChunk = L.layout.chunkBytes + estimateFixedBytes(L.layout, 1);
+    return L.chunkCount * perChunk > this.d.budgetBytes() / 4;
+  }
+
+  /** The view spec of the page's camera now, or (before the store's first surface) the link's camera or Fit of level 0. */
+  #viewSpec(store: ZfpStore, tolerancePx: number, linkCamera?: CameraState, current = false): ViewSpec {
+    const { state, viewport } = this.d.camera();
+    const vp = viewport.width > 0 && viewport.height > 0 ? viewport : { width: 1280, height: 800 };
+    const level0 = fitBox0(store.levels[0].layout, 0);
+    const sceneRadius = sceneRadiusOf(level0, store.voxelSize);
+    const camState = current ? state : linkCamera;
+    const camera = camState ? cameraFromView(camState, vp, sceneRadius) : cameraForBox(level0, store.voxelSize, vp);
+    return { camera, tolerancePx };
+  }
+
+  /** The camera moved: the cut is planned again at most every 150 ms (newest wins; the stream aborts what is no longer needed). */
+  #scheduleReplan(o: OpenStore): void {
+    if (o.replanTimer !== null || this.#open !== o || !o.cut) return;
+    o.replanTimer = setTimeout(() => {
+      o.replanTimer = null;
+      if (this.#open !== o || !o.cut || !o.current) return;
+      void this.#refineView(o);
+    }, 150);
+  }
+
+  /** The current isovalue refined for the page's camera now. */
+  async #refineView(o: OpenStore): Promise<void> {
+    const stream = o.controller as ChunkViewStream;
+    o.running++;
+    o.state.done = false;
+    this.#publish(o);
+    try {
+      await stream.setView(this.#viewSpec(o.store, o.cut!.tolerancePx, undefined, true));
+    } finally {
+      o.running--;
+    }
+    if (this.#open !== o || o.running > 0) return;
+    o.state.done = true;
+    this.#cutLine(o);
+    this.#publish(o);
+  }
+
+  /** The line once a view's refinement ended: what is on screen, or why it stopped. */
+  #cutLine(o: OpenStore): void {
+    const c = o.state.cut;
+    const p = o.lastProgress;
+    if (p?.phase === 'stopped' && p.reason) o.state.reason = p.reason;
+    const on = c?.levels.filter((l) => l.drawn > 0).map((l) => `level ${l.level}: ${l.drawn}`) ?? [];
+    this.#line(
+      `${o.url}: ${on.length > 0 ? `chunks on screen ${on.join(', ')}` : 'no surface in view'}, ${mib(o.metered.meter.bytes)} fetched` +
+        (o.state.reason ? `; ${o.state.reason}` : ''),
+    );
+  }
+
+  /** The panel's refinement controls: by view or level by level (the store opens again), the tolerance, the tint. */
+  #changeCut(o: OpenStore, next: { cut?: boolean; tolerancePx?: number; tint?: boolean }): void {
+    if (this.#open !== o) return;
+    this.#cutChoice = { ...this.#cutChoice, ...next };
+    if (next.cut !== undefined && next.cut !== (o.cut !== null)) {
+      this.#keepIso = Number.isFinite(o.iso) ? o.iso : undefined;
+      void this.openStore(o.source, o.url, o.choice, o.ranges);
+      return;
+    }
+    if (!o.cut) return;
+    if (next.tint !== undefined) {
+      o.cut.tint = next.tint;
+      if (o.current instanceof StoreCutIsosurface) o.current.tint = next.tint;
+      this.d.requestFrame();
+    }
+    if (next.tolerancePx !== undefined && next.tolerancePx > 0) {
+      o.cut.tolerancePx = next.tolerancePx;
+      void this.#refineView(o);
+    }
+    this.d.setCut({ cut: true, tolerancePx: o.cut.tolerancePx, ...(o.cut.tint ? { tint: true } : {}) });
+    if (o.state.cut) Object.assign(o.state.cut, { tolerancePx: o.cut.tolerancePx, tint: o.cut.tint });
+    this.#publish(o);
+  }
+
+  /** The view stream shows a step of its cut: the first becomes the volume on screen (level 0's dims), later ones update it. */
+  #shownCut(o: OpenStore, s: ShownCutOfPage): void {
+    if (this.#open !== o) return;
+    const finest = s.levels[0]?.level ?? s.step;
+    const levels = o.store.levels.map((_, L) => {
+      const l = s.levels.find((x) => x.level === L);
+      return { level: L, drawn: l ? l.drawn.length : 0, regions: s.leaves[L]?.length ?? 0, triangles: l?.stats.triangles ?? 0 };
+    });
+    o.state.cut = { tolerancePx: o.cut!.tolerancePx, tint: o.cut!.tint, levels, final: s.final };
+    if (o.state.reason && !o.state.reason.startsWith('the link')) o.state.reason = null;
+    if (o.current instanceof StoreCutIsosurface) {
+      o.current.showAgain(s);
+    } else if (s.levels.length > 0) {
+      const stream = o.controller as ChunkViewStream;
+      const iso = new StoreCutIsosurface(
+        stream,
+        s,
+        o.valueRange,
+        (value) => this.#refine(o, value),
+        () => {
+          if (this.#open === o) this.close();
+          stream.destroy();
+        },
+        (bytes) => {
+          if (bytes === stream.budgetBytes) return;
+          stream.budgetBytes = bytes;
+          o.state.gpu.budget = bytes;
+          if (this.#open === o && Number.isFinite(o.iso)) void this.#refine(o, o.iso);
+        },
+      );
+      iso.tint = o.cut!.tint;
+      const lv = o.store.levels[0];
+      const volume: LoadedVolume = {
+        opened: {
+          stream: { destroy() {} }, // the view stream owns the pools
+          name: o.url,
+          fileName: o.url,
+          kind: 'zfp',
+          dims: [...lv.layout.dims],
+          sourceDtype: 'float32',
+          sourceBytes: lv.storedBytes,
+          compressedBytes: lv.storedBytes,
+          rate: lv.layout.rate,
+          compressedHere: false,
+          spacing: [...o.store.voxelSize],
+          notes: [],
+        },
+        iso,
+        ranges: o.controller.chunkRanges(o.controller.coarsest) ?? new Float32Array(0),
+        initialIso: s.iso,
+        firstStats: iso.stats,
+        loadMs: 0,
+      };
+      this.d.install(volume, undefined, true); // no level= in the link: the view decides
+      o.current = iso;
+      // the page's camera now (the link's, or Fit of the volume): plan for it
+      this.#scheduleReplan(o);
+    }
+    if (o.state.shownLevel !== finest) o.state.shownLevels.push(finest);
+    o.state.shownLevel = finest;
+    this.d.requestFrame();
+    this.#publish(o);
   }
 
   #line(text: string): void {

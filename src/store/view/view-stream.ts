@@ -25,7 +25,7 @@
 import type { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
 import { chunkCount, estimateFixedBytes } from '../level-state.ts';
 import { chunksNeeded, neighbourhoodRanges } from '../plan.ts';
-import type { LevelStats, LevelSurface, LevelVolume, StreamGpu, StreamProgress } from '../stream-port.ts';
+import type { LevelStats, LevelSurface, LevelVolume, StreamGpu, StreamGpuBytes, StreamProgress } from '../stream-port.ts';
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
 import { isAbort } from '../zarr/errors.ts';
 import type { ZfpStore } from '../zarr/store.ts';
@@ -174,11 +174,24 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     return this.#view;
   }
 
-  /** GPU bytes held now, pools and everything else. */
-  get gpuBytes(): { pools: number; total: number } {
+  /** GPU bytes held now (counted where they are made): pools, surfaces, and of these the cache and vertex buffers. */
+  get gpuBytes(): StreamGpuBytes {
     let pools = 0;
     for (const l of this.levels) pools += l.volume?.poolBytes ?? 0;
-    return { pools, total: this.gpu.allocatedBytes };
+    const total = this.gpu.allocatedBytes;
+    const shown = this.#shown?.levels ?? [];
+    return {
+      pools,
+      surfaces: total - pools,
+      total,
+      cache: shown.reduce((a, l) => a + l.stats.cacheBytes, 0),
+      vertices: shown.reduce((a, l) => a + l.stats.vertexBytes, 0),
+    };
+  }
+
+  /** [min, max] per chunk of a level, when read. */
+  chunkRanges(level: number): Float32Array | null {
+    return this.levels[level]?.ranges ?? null;
   }
 
   /** [min, max] of the store's values: its metadata, else the coarsest level's chunk ranges. */

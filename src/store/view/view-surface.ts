@@ -59,52 +59,15 @@ export class ViewCutSurface {
     const shown = this.stream.shown;
     if (!shown?.final || shown.iso !== iso)
       throw new LevelStoppedError(this.#reason ?? `the view's cut at isovalue ${iso} was not reached`, this.#overBudget);
-    const all = shown.levels.map((l) => l.stats);
-    const sum = (f: (s: IsosurfaceStats) => number) => all.reduce((a, s) => a + f(s), 0);
-    const active = sum((s) => s.activeBlocks);
-    return {
-      isovalue: Math.fround(iso),
-      activeBlocks: active,
-      newBlocks: sum((s) => s.newBlocks),
-      occupiedBlocks: sum((s) => s.occupiedBlocks),
-      hitRate: active > 0 ? sum((s) => s.hitRate * s.activeBlocks) / active : 1,
-      vertices: sum((s) => s.vertices),
-      indices: sum((s) => s.indices),
-      triangles: sum((s) => s.triangles),
-      cacheSlots: sum((s) => s.cacheSlots),
-      cacheSlotsUsed: sum((s) => s.cacheSlotsUsed),
-      cacheBytes: sum((s) => s.cacheBytes),
-      vertexBytes: sum((s) => s.vertexBytes),
-      gpuMs: sum((s) => s.gpuMs),
-      stages: all.flatMap((s) => s.stages),
-      timingSource: all[0]?.timingSource ?? 'none',
-      grew: all.some((s) => s.grew),
-    } as IsosurfaceStats;
+    return sumStats(
+      iso,
+      shown.levels.map((l) => l.stats),
+    );
   }
 
   /** The shown levels' meshes as one, positions in level-0 voxel index space. */
-  async readPositions(): Promise<{ positions: Float32Array; indices: Uint32Array }> {
-    const shown = this.stream.shown;
-    const parts: { positions: Float32Array; indices: Uint32Array }[] = [];
-    for (const l of shown?.levels ?? []) {
-      const mesh = await l.surface.readMesh();
-      const positions = decodeVertices(mesh.vertices, mesh.vertices.length / 3);
-      const k = 2 ** l.level;
-      const off = this.stream.store.levelOffsets[l.level] ?? [0, 0, 0];
-      for (let i = 0; i < positions.length; i++) positions[i] = positions[i] * k + off[i % 3];
-      parts.push({ positions, indices: mesh.indices });
-    }
-    const positions = new Float32Array(parts.reduce((a, p) => a + p.positions.length, 0));
-    const indices = new Uint32Array(parts.reduce((a, p) => a + p.indices.length, 0));
-    let pv = 0;
-    let pi = 0;
-    for (const p of parts) {
-      positions.set(p.positions, pv);
-      for (let i = 0; i < p.indices.length; i++) indices[pi + i] = p.indices[i] + pv / 3;
-      pv += p.positions.length;
-      pi += p.indices.length;
-    }
-    return { positions, indices };
+  readPositions(): Promise<{ positions: Float32Array; indices: Uint32Array }> {
+    return joinLevelMeshes(this.stream.shown?.levels ?? [], this.stream.store.levelOffsets);
   }
 
   /** The cut on screen: per drawn chunk that holds part of the surface, its triangles (from the GPU's per-block counts). */
@@ -135,4 +98,55 @@ export class ViewCutSurface {
   destroy(): void {
     this.stream.destroy();
   }
+}
+
+/** The statistics of a surface made of several levels' surfaces: counts summed, the hit rate weighted by active blocks. */
+export function sumStats(iso: number, all: readonly IsosurfaceStats[]): IsosurfaceStats {
+  const sum = (f: (s: IsosurfaceStats) => number) => all.reduce((a, s) => a + f(s), 0);
+  const active = sum((s) => s.activeBlocks);
+  return {
+    isovalue: Math.fround(iso),
+    activeBlocks: active,
+    newBlocks: sum((s) => s.newBlocks),
+    occupiedBlocks: sum((s) => s.occupiedBlocks),
+    hitRate: active > 0 ? sum((s) => s.hitRate * s.activeBlocks) / active : 1,
+    vertices: sum((s) => s.vertices),
+    indices: sum((s) => s.indices),
+    triangles: sum((s) => s.triangles),
+    cacheSlots: sum((s) => s.cacheSlots),
+    cacheSlotsUsed: sum((s) => s.cacheSlotsUsed),
+    cacheBytes: sum((s) => s.cacheBytes),
+    vertexBytes: sum((s) => s.vertexBytes),
+    gpuMs: sum((s) => s.gpuMs),
+    stages: all.flatMap((s) => s.stages),
+    timingSource: all[0]?.timingSource ?? 'none',
+    grew: all.some((s) => s.grew),
+  } as IsosurfaceStats;
+}
+
+/** Several levels' meshes as one, positions in level-0 voxel index space (level L's voxel j at j * 2^L + its offset). */
+export async function joinLevelMeshes(
+  levels: readonly { level: number; surface: Pick<Isosurface, 'readMesh'> }[],
+  levelOffsets: readonly [number, number, number][],
+): Promise<{ positions: Float32Array; indices: Uint32Array }> {
+  const parts: { positions: Float32Array; indices: Uint32Array }[] = [];
+  for (const l of levels) {
+    const mesh = await l.surface.readMesh();
+    const positions = decodeVertices(mesh.vertices, mesh.vertices.length / 3);
+    const k = 2 ** l.level;
+    const off = levelOffsets[l.level] ?? [0, 0, 0];
+    for (let i = 0; i < positions.length; i++) positions[i] = positions[i] * k + off[i % 3];
+    parts.push({ positions, indices: mesh.indices });
+  }
+  const positions = new Float32Array(parts.reduce((a, p) => a + p.positions.length, 0));
+  const indices = new Uint32Array(parts.reduce((a, p) => a + p.indices.length, 0));
+  let pv = 0;
+  let pi = 0;
+  for (const p of parts) {
+    positions.set(p.positions, pv);
+    for (let i = 0; i < p.indices.length; i++) indices[pi + i] = p.indices[i] + pv / 3;
+    pv += p.positions.length;
+    pi += p.indices.length;
+  }
+  return { positions, indices };
 }
