@@ -1,5 +1,6 @@
 // `npm run bench:stream [-- --size N --repeats R --iso-fraction F --budget-mb M --only bonsai|gen --faults F --links localhost,link]`
-// (`-- --codec zstd,blosc,gzip`: stores of lossless chunks, stream-codec.ts):
+// (`-- --codec zstd,blosc,gzip`: stores of lossless chunks, stream-codec.ts;
+// `-- --flight [--size N]`: a fly-through refined by the view, stream-flight.ts):
 // stores served over HTTP on localhost (the dev server's /stores/
 // middleware) and through a simulated link (100 Mbit/s, 20 ms per request,
 // in the fetch layer). The path is the stream controller's (the page's and
@@ -41,6 +42,7 @@ import { chunkedGpu, createChunkStream } from '../src/store/gpu-port.ts';
 import { SCALE_HEADER, scaleRun, scaleStoreName, scaleTable } from './stream-scale.ts';
 import { execFileSync } from 'node:child_process';
 import { codecBench } from './stream-codec.ts';
+import { type FlightRun, flightRun, medianRun, printFlight } from './stream-flight.ts';
 
 const root = fileURLToPath(new URL('..', import.meta.url));
 const args = process.argv.slice(2);
@@ -281,6 +283,43 @@ async function main() {
   });
   gpu.device.destroy();
 }
+/** --flight: a scripted fly-through of a generated store refined by the view (stream-flight.ts). */
+async function flightMain() {
+  const gpu = await requestNodeGpu({ label: 'bench.stream.flight' });
+  const n = args.includes('--size') ? size : 512;
+  const name = scaleStoreName(n);
+  convert(`gen:${n}x${n}x${n}`, name, ['--rate', '1', '--shard', '8']);
+  const { server, port } = await serve(new FaultInjector());
+  const iso = Number(opt('iso', '2.5'));
+  const tolerance = Number(opt('tolerance', '1.5'));
+  const flightRepeats = args.includes('--repeats') ? repeats : 2;
+  const runs: FlightRun[] = [];
+  for (const link of links) {
+    const all: FlightRun[] = [];
+    for (let r = 0; r <= flightRepeats; r++) {
+      const run = await flightRun(gpu, `http://127.0.0.1:${port}/stores`, name, n, link, budgetBytes, iso, tolerance);
+      if (r > 0) all.push(run); // the first is discarded (compilation, the server's disk cache)
+    }
+    const m = medianRun(all);
+    printFlight(m);
+    runs.push(m);
+  }
+  server.closeAllConnections();
+  server.close();
+  writeJson(opt('json', join(root, 'benchmarks/results/stream-flight-swiftshader.json')), {
+    date: new Date().toISOString(),
+    adapter: describeAdapter(gpu.adapter),
+    size: n,
+    iso,
+    tolerancePx: tolerance,
+    repeats: flightRepeats,
+    budgetBytes,
+    runs,
+  });
+  gpu.device.destroy();
+}
+
 const codecs = opt('codec', '');
 if (codecs) await codecMain(codecs.split(','));
+else if (args.includes('--flight')) await flightMain();
 else await main();
