@@ -111,6 +111,10 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
   #waiting: Waiting | null = null;
   /** Surfaces made for a pool's old capacity, destroyed when the next step shows. */
   #retired: F[] = [];
+  /** A refinement stopped by a failed chunk is tried again when the chunk has cooled down. */
+  #retryTimer: ReturnType<typeof setTimeout> | null = null;
+  /** Whether failed chunks are tried again on their own (the page; the CLI reports the failure instead). */
+  retryFailed = true;
   #progress = new Set<(p: StreamProgress) => void>();
   #shownListeners = new Set<(s: ShownCut<V, S, F>) => void>();
   #errors = new Set<(e: Error) => void>();
@@ -138,7 +142,11 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
       if (!repeated) for (const l of this.#errors) l(e);
       const w = this.#waiting;
       if (!w?.missing.has(key(level, chunk))) return;
-      this.#stop(level, e.message, 'chunk');
+      const at = fetcher.retryAt(level, chunk);
+      const inMs = at === undefined ? undefined : Math.max(0, at - performance.now());
+      this.#stop(level, e.message, 'chunk', inMs);
+      // the coarser surface stays; once the chunk has cooled down, the same isovalue and view again
+      if (inMs !== undefined && this.retryFailed) this.#scheduleRetry(inMs);
     });
   }
 
@@ -561,7 +569,17 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     if (w.missing.size === 0) w.done();
   }
 
-  #stop(level: number, reason: string, cause: NonNullable<StreamProgress['cause']>): void {
+  #scheduleRetry(inMs: number): void {
+    if (this.#retryTimer !== null) clearTimeout(this.#retryTimer);
+    const gen = this.#gen;
+    this.#retryTimer = setTimeout(() => {
+      this.#retryTimer = null;
+      if (gen !== this.#gen || this.#destroyed || !Number.isFinite(this.#iso)) return;
+      void this.setIsovalue(this.#iso);
+    }, inMs + 50);
+  }
+
+  #stop(level: number, reason: string, cause: NonNullable<StreamProgress['cause']>, retryInMs?: number): void {
     const w = this.#waiting;
     this.#waiting = null;
     if (w) {
@@ -577,6 +595,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
       phase: 'stopped',
       reason,
       cause,
+      ...(retryInMs !== undefined ? { retryInMs } : {}),
     });
   }
 
@@ -587,6 +606,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
   destroy(): void {
     this.#destroyed = true;
     this.#gen++;
+    if (this.#retryTimer !== null) clearTimeout(this.#retryTimer);
     this.fetcher.cancelAll();
     this.#waiting?.done();
     for (const e of this.#surfaces.values()) e.surface.destroy();
