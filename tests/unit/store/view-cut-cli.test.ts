@@ -14,6 +14,8 @@ import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../../src/store/view/cut.ts';
 import { DEFAULT_VIEWPORT } from '../../../src/store/view/view-request.ts';
+import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
+import { openStore } from '../../../src/store/zarr/open-store.ts';
 import { runPython } from '../../helpers/python.ts';
 import { cli, convert, converterPython } from './stores.ts';
 
@@ -124,6 +126,11 @@ print(int(inner.sum()))
 }
 
 describe('extract STORE --view-box: one surface from several levels', () => {
+  it("levels are placed by their OME translation: the converter's (2^L - 1) / 2 level-0 voxels", async () => {
+    const s = await openStore(storeForLocation(store), store);
+    expect(s.levelOffsets).toEqual([0, 0.5, 1.5, 3.5].map((o) => [o, o, o]));
+  });
+
   it('zoomed into a corner within a budget a third of level 0: level 0 there, every chunk of the cut = VTK over its cells, within the budget', () => {
     const whole = extract('--level', '0', '--cache-budget', '512', '--ply', join(work, 'level0'));
     const levelPeak = whole.store.gpuPeakBytes;
