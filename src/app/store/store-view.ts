@@ -454,7 +454,8 @@ export class StoreView {
   #levelZeroIsLarge(store: ZfpStore): boolean {
     const L = store.levels.find((l) => !l.unusable);
     if (!L) return false;
-    const perChunk = L.layout.chunkBytes + estimateFixedBytes(L.layout, 1);
+    // a resident chunk: its slot and the surface's per-block state (the 64 KiB of a pool's scratch are not per chunk)
+    const perChunk = L.layout.chunkBytes + estimateFixedBytes(L.layout, 1) - (64 << 10);
     return L.chunkCount * perChunk > this.d.budgetBytes() / 4;
   }
 
