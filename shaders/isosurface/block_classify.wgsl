@@ -54,10 +54,18 @@ fn classify_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) n
   }
   let b = active_ids[i];
   let c = block_coords(b, volume.grid);
-  // A ghost chunk's block (block_mc_common.wgsl): no indices; it keeps the
-  // cells on its chunk's lower faces that own a cut edge, for their vertices.
-  let ghost = block_role(b) == ROLE_GHOST;
+  // A ghost or skirt chunk's block (block_mc_common.wgsl): it keeps the
+  // cells on its chunk's lower faces (and a skirt's layers 0 and 1 on its
+  // axes next to a drawn chunk) that own a cut edge, for their vertices; a
+  // ghost's make no triangle, a skirt's only those of layer 0 on such axes.
+  let role = block_role(b);
+  let lent = role == ROLE_GHOST || role == ROLE_SKIRT;
   let first_in_chunk = block_first_in_chunk(c);
+  // (a branch, not select: select evaluates both, and most blocks are not a skirt's)
+  var skirt = vec3<bool>(false);
+  if (role == ROLE_SKIRT) {
+    skirt = skirt_axes(c);
+  }
   // Neighbours in chunks not resident or idle: never read, and the cells
   // whose edges' owners may touch them make no triangle (cells_without_indices).
   let unavailable = unavailable_blocks(c, volume.grid);
@@ -114,14 +122,13 @@ fn classify_blocks(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) n
         word &= columns & unblocked;
         // every case but 0 and 255 has triangles: clear the 255 bytes
         word &= ~(zero_bytes(~word) * 255u);
-        if (ghost) {
-          // the whole row on the chunk's lower y or z face, else its cell x = 0 on the lower x face
-          let on_face = (first_in_chunk.y && y == 0u) || (first_in_chunk.z && z == 0u);
-          word &= select(select(0u, 255u, first_in_chunk.x), 0xffffffffu, on_face);
+        if (lent) {
+          word &= lent_cells_kept(first_in_chunk, skirt, y, z);
         }
-        // Cells without indices (a ghost's, or next to an unavailable chunk)
-        // stay only when they own a cut edge (the others would write nothing).
-        let without = select(cells_without_indices(unavailable, y, z), 0xffffffffu, ghost);
+        // Cells without indices (a ghost's, a skirt's but its layer next to a
+        // drawn chunk, or next to an unavailable chunk) stay only when they
+        // own a cut edge (the others would write nothing).
+        let without = row_without_indices(role, skirt, unavailable, y, z);
         if (without != 0u) {
           word &= ~(without & (zero_bytes(owned_cut_per_cell(word, c * 4u + vec3u(0u, y, z), volume.dims)) * 255u));
         }

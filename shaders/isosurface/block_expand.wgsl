@@ -25,10 +25,16 @@ fn expand_cells(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
   let slot = expand_block_to_slot[b];
   let c = block_coords(b, expand_volume.grid);
   let origin = c * 4u;
-  // Cells without indices, as classify_blocks found them (a ghost chunk's;
-  // those next to an unavailable chunk): listed with CELL_NO_INDICES, as
-  // they write the vertices they own, adding no index.
-  let ghost = block_role(b) == ROLE_GHOST;
+  // Cells without indices, as classify_blocks found them (a ghost chunk's,
+  // a skirt chunk's but its layer next to a drawn chunk; those next to an
+  // unavailable chunk): listed with CELL_NO_INDICES, as they write the
+  // vertices they own, adding no index.
+  let role = block_role(b);
+  // (a branch, not select: select evaluates both, and most blocks are not a skirt's)
+  var skirt = vec3<bool>(false);
+  if (role == ROLE_SKIRT) {
+    skirt = skirt_axes(c);
+  }
   let unavailable = unavailable_blocks(c, expand_volume.grid);
   let stride = count_stride(expand_counters[C_SLOTS >> 2u][C_SLOTS & 3u]);
   var first = expand_offsets[i];
@@ -42,7 +48,7 @@ fn expand_cells(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
       continue;
     }
     vertex += owned_vertices_of_row(word, origin + vec3u(0u, w & 3u, w >> 2u), expand_volume.dims);
-    let without = select(cells_without_indices(unavailable, w & 3u, w >> 2u), 0xffffffffu, ghost);
+    let without = row_without_indices(role, skirt, unavailable, w & 3u, w >> 2u);
     for (var x = 0u; x < 4u; x++) {
       let code = (word >> (8u * x)) & 255u;
       if (code != 0u) {

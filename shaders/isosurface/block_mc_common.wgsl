@@ -41,7 +41,14 @@
 // triangle, and classify keeps the case only of those on the chunk's three
 // lower faces (chunk-local coordinate 0 on some axis): the only ghost-owned
 // vertices a drawn cell can index (a drawn cell's edge owned by a cell of
-// another chunk has its lower end on that chunk's lower face).
+// another chunk has its lower end on that chunk's lower face). A skirt
+// chunk G is a ghost whose cells of chunk-local coordinate 0 on an axis a
+// whose G - e_a is resident and drawn (skirt_axes, once per block) make
+// triangles too, as a drawn chunk's; it keeps the cases of its layers 0
+// and 1 on such an axis as well (the owners of those cells' edges inside
+// G; the others lie on the lower faces of G's neighbours above). Its other
+// cells are a ghost's (lent_cells_kept, row_without_indices in
+// edge_owner.wgsl).
 // A cell without indices is kept only when it owns a cut edge; every other
 // case byte is cleared in classify, so expand and emit, which read the
 // stored bytes, number the vertices as classify counted them. Such cells

@@ -34,7 +34,8 @@ fn pool_slot_chunk(slot: u32) -> u32 {
   return select(word & POOL_CHUNK_MASK, NONE, word == NONE);
 }
 
-// The role (ROLE_*) of the chunk in `slot` (3 when the slot is empty).
+// The role (ROLE_*) of the chunk in `slot` (3 when the slot is empty: ask
+// for occupied slots only, or where 3 and not ROLE_IDLE mean the same).
 fn pool_slot_role(slot: u32) -> u32 {
   return pool_tables[pool_blocks.slot_table + slot] >> 30u;
 }
@@ -54,6 +55,25 @@ fn group_role(g: u32) -> u32 {
 // cells of local coordinate 0 on such an axis lie on the chunk's lower face.
 fn block_first_in_chunk(c: vec3u) -> vec3<bool> {
   return c % pool_blocks.chunk_blocks == vec3u(0u);
+}
+
+// Whether the chunk below chunk coordinates cc on `axis` is resident and drawn.
+fn pool_drawn_below(cc: vec3u, axis: u32) -> bool {
+  let g = pool_blocks.chunk_grid;
+  var n = cc;
+  n[axis] -= 1u;
+  let slot = pool_tables[n.x + g.x * (n.y + g.y * n.z)];
+  return slot != NONE && pool_slot_role(slot) == ROLE_DRAWN;
+}
+
+// The axes a on which block c (of a skirt chunk G, ROLE_SKIRT) is its
+// chunk's first and G - e_a is resident and drawn: the block's cells of
+// chunk-local coordinate 0 on a make triangles (block_mc_common.wgsl).
+// Once per block: a few page-table words.
+fn skirt_axes(c: vec3u) -> vec3<bool> {
+  let cc = c / pool_blocks.chunk_blocks;
+  let first = block_first_in_chunk(c) & (cc > vec3u(0u));
+  return vec3<bool>(first.x && pool_drawn_below(cc, 0u), first.y && pool_drawn_below(cc, 1u), first.z && pool_drawn_below(cc, 2u));
 }
 
 // Block coordinates of id b (its slot holds a chunk).

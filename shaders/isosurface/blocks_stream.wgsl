@@ -43,6 +43,11 @@ fn block_first_in_chunk(c: vec3u) -> vec3<bool> {
   return c == vec3u(0u);
 }
 
+// A stream has no skirt (blocks_pool.wgsl).
+fn skirt_axes(c: vec3u) -> vec3<bool> {
+  return vec3<bool>(false);
+}
+
 // Neighbours of block c not part of the surface (blocks_pool.wgsl): none, every block is present.
 fn unavailable_blocks(c: vec3u, grid: vec3u) -> u32 {
   return 0u;

@@ -12,6 +12,10 @@ const NONE: u32 = 0xffffffffu;
 const ROLE_DRAWN: u32 = 0u;  // its cells make triangles
 const ROLE_GHOST: u32 = 1u;  // lends its voxels to drawn chunks: active, no triangles
 const ROLE_IDLE: u32 = 2u;   // resident but unused: never active, never read
+// A ghost whose cells of chunk-local coordinate 0 on an axis whose chunk
+// below is drawn make triangles too (skirt_axes in blocks_*.wgsl). An empty
+// slot's word (NONE) also reads as 3: only occupied slots are asked.
+const ROLE_SKIRT: u32 = 3u;
 
 // Flag of an emitting-cell record (expand_cells): the cell writes the
 // vertices it owns but no index (block_mc_common.wgsl).

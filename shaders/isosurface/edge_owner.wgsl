@@ -112,3 +112,24 @@ fn cells_without_indices(unavailable: u32, y: u32, z: u32) -> u32 {
   let high = select(0u, 0xffff0000u, (unavailable & blocks_reached(r | 1u)) != 0u);
   return low | high;
 }
+
+// Chunk roles (block_mc_common.wgsl), per row (y, z) of a block, byte x 255
+// for cell x. The cells of a ghost or skirt chunk's block whose case stays:
+// those on the chunk's lower faces (first: block_first_in_chunk), the only
+// ones a drawn neighbour's cells index, and a skirt's layers 0 and 1 on its
+// axes `skirt` (skirt_axes): the owners of its emitting cells' edges there
+// (the others are on the lower faces of its neighbours above).
+fn lent_cells_kept(first: vec3<bool>, skirt: vec3<bool>, y: u32, z: u32) -> u32 {
+  let rows = (first.y && y == 0u) || (first.z && z == 0u) || (skirt.y && y <= 1u) || (skirt.z && z <= 1u);
+  return select(select(0u, 255u, first.x) | select(0u, 0xffffu, skirt.x), 0xffffffffu, rows);
+}
+
+// The cells of row (y, z) of a block of a chunk with role `role` that make
+// no triangle: every cell of a ghost's; a skirt's but those of chunk-local
+// coordinate 0 on its axes `skirt`; and of the rest, those whose edges'
+// owners may touch an unavailable neighbour (cells_without_indices).
+fn row_without_indices(role: u32, skirt: vec3<bool>, unavailable: u32, y: u32, z: u32) -> u32 {
+  let skirt_emits = select(select(0u, 255u, skirt.x), 0xffffffffu, (skirt.y && y == 0u) || (skirt.z && z == 0u));
+  let emits = select(select(0u, skirt_emits, role == ROLE_SKIRT), 0xffffffffu, role == ROLE_DRAWN);
+  return ~emits | cells_without_indices(unavailable, y, z);
+}

@@ -74,10 +74,11 @@ fn plan_update() {
 // dispatches are empty and the draw arguments keep the previous surface.
 // A cell writes its welded vertices in the shard whose vertex range
 // [S_BASE, S_VERTEX_END) holds its first index: shard k's indices, the last
-// shard in use to the end. The cells of a pool's ghost chunks have no indices
-// (block_mc_common.wgsl): an entry of them (index range [o, o)) belongs to
-// the shard whose vertex range holds o, and at least one shard is in use
-// whenever the list may hold cells, so each such cell runs exactly once.
+// shard in use to the end. The cells of a pool's ghost chunks (and most of
+// a skirt chunk's) have no indices (block_mc_common.wgsl): an entry of them
+// (index range [o, o)) belongs to the shard whose vertex range holds o, and
+// at least one shard is in use whenever the list may hold cells, so each
+// such cell runs exactly once.
 @group(0) @binding(1) var<storage, read> vertex_offsets: array<u32>;
 @group(0) @binding(2) var<storage, read> vertex_counts: array<u32>;
 @group(0) @binding(3) var<storage, read> cell_offsets: array<u32>;

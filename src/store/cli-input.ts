@@ -213,6 +213,7 @@ async function viewInput(
   });
   const stream = await ViewStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budgetBytes);
   stream.retryFailed = false; // the CLI reports a chunk that failed (after the store's own retries)
+  stream.skirts = request.skirts ?? true;
   await stream.setView(view);
   const surface = new ViewCutSurface(stream);
   const lv0 = store.levels[0];

@@ -37,10 +37,18 @@
 // its blocks stay active, its cells make no triangles, and only its cells on
 // the chunk's three lower faces keep the vertices they own, the only ones a
 // drawn neighbour's triangles can use; an 'idle' chunk is kept in the pool
-// but unused (never active, its voxels never read). The role rides in the
-// top 2 bits of the chunk's slot-table word, chunk | role << 30 (drawn 0,
-// ghost 1, idle 2; an empty slot stays 0xffffffff), so the tables keep
-// their 8 bytes per chunk and the kernels their bindings
+// but unused (never active, its voxels never read). A 'skirt' (setRoles
+// with { skirts: true }: every ghost is one) is a ghost whose cells next to
+// a drawn chunk also make triangles: for each axis a whose lower neighbour
+// G - e_a is drawn, the skirt G's one layer of cells of chunk-local
+// coordinate 0 on a (a one-cell overlap of a drawn region into its +side
+// neighbour, drawn at another level, that covers the crack between levels);
+// it keeps the cases of its layers 0 and 1 on such an axis too, for the
+// vertices those cells index. The role rides in the top 2 bits of the
+// chunk's slot-table word, chunk | role << 30 (drawn 0, ghost 1, idle 2,
+// skirt 3; an empty slot stays 0xffffffff, never a skirt's word as chunk
+// indices stay below 2^30 - 1), so the tables keep their 8 bytes per chunk
+// and the kernels their bindings
 // (shaders/isosurface/blocks_pool.wgsl); a pool that never sets roles
 // writes the words it always did. Role changes write only the words that
 // change and log no slot change: nothing decoded depends on a role.
@@ -82,13 +90,31 @@ export type ChunkIndex = number;
  * What a chunk does for the level's surface (setRoles): 'drawn' its cells
  * make triangles; 'ghost' it lends its voxels (and the vertices its cells on
  * its lower faces own) to drawn neighbours, no triangles; 'idle' resident
- * but unused.
+ * but unused; 'skirt' a ghost whose cells of chunk-local coordinate 0 on an
+ * axis whose lower neighbour is drawn also make triangles (setRoles'
+ * `skirts`).
  */
-export type ChunkRole = 'drawn' | 'ghost' | 'idle';
+export type ChunkRole = 'drawn' | 'ghost' | 'idle' | 'skirt';
 
 /** A role's code in the top bits of a slot-table word (ROLE_* in shaders/isosurface/common.wgsl). */
-export const CHUNK_ROLE_CODES: Readonly<Record<ChunkRole, number>> = { drawn: 0, ghost: 1, idle: 2 };
-/** Slot-table word = chunk + role code * 2^ROLE_SHIFT: chunk indices stay below 2^30. */
+export const CHUNK_ROLE_CODES: Readonly<Record<ChunkRole, number>> = { drawn: 0, ghost: 1, idle: 2, skirt: 3 };
+
+/** setRoles' options. */
+export interface ChunkRoleOptions {
+  /**
+   * Every ghost a 'skirt' (default false): a ghost chunk G whose lower
+   * neighbour G - e_a on an axis a is drawn also makes the triangles of
+   * its cells of chunk-local coordinate 0 on a (the level's own triangles
+   * of those cells), a one-cell overlap of the drawn region into its
+   * +side neighbour, which is drawn at another level.
+   */
+  skirts?: boolean;
+}
+/**
+ * Slot-table word = chunk + role code * 2^ROLE_SHIFT: chunk indices stay
+ * below 2^30 - 1 (create), so a skirt's word (code 3) is never an empty
+ * slot's 0xffffffff.
+ */
 const ROLE_SHIFT = 30;
 
 /** A chunk that cannot go into the pool (wrong bytes, pool full), or a layout that cannot be pooled. */
@@ -157,6 +183,8 @@ export class ChunkedVolume implements BlockSource {
   /** setRoles: the drawn chunks (null: all), and the ghosts. */
   private drawnChunks: ReadonlySet<ChunkIndex> | null = null;
   private ghostChunks: ReadonlySet<ChunkIndex> = new Set();
+  /** setRoles: the ghosts are skirts. */
+  private skirts = false;
   private freeSlots: number[] = [];
   /** Slots set aside for chunks on their way (reserve()). */
   private readonly reservedSlot = new Map<ChunkIndex, number>();
@@ -408,7 +436,9 @@ export class ChunkedVolume implements BlockSource {
         `${chunks} chunks need ${chunks * 8} bytes of tables (chunk -> slot, slot -> chunk), more than one storage binding of this device (${binding} bytes: maxStorageBufferBindingSize); convert with larger chunks`,
       );
     // the slot table keeps a chunk's role in the top 2 bits of its word; one
-    // binding (at most 4 GiB) holds fewer than 2^29 chunks, so this never fails
+    // binding (at most 4 GiB) holds fewer than 2^29 chunks, so this never fails.
+    // Chunk indices then stay below 2^30 - 1: a skirt's word, chunk + 3 * 2^30,
+    // is never NONE (0xffffffff, an empty slot)
     if (chunks >= 2 ** ROLE_SHIFT) fail(`${chunks} chunks: the slot table holds chunk indices below 2^${ROLE_SHIFT}`);
     if (Math.min(opts.poolChunks, chunks) * (edge / 4) ** 3 >= 2 ** 32)
       fail(`a pool of ${opts.poolChunks} chunks of ${edge}^3 has more block ids than 32 bits hold`);
@@ -580,13 +610,24 @@ export class ChunkedVolume implements BlockSource {
    * (those of the level) are resident and drawn or ghosts; next to one that
    * is not resident or idle, its cells within two cells of that face make
    * no triangle (their edges' owners would read it).
+   *
+   * With `options.skirts` every ghost is a 'skirt' instead: its cells of
+   * chunk-local coordinate 0 on an axis a whose chunk below on a (G - e_a)
+   * is drawn make triangles too (the level's triangles of those cells: the
+   * statistics and readBlockTriangles count them, in the skirt's blocks);
+   * such a cell is complete when the skirt's +b, +c and diagonal (b, c)
+   * neighbours are resident and not idle, as they are when the ghosts are
+   * the drawn chunks' neighbours above; next to one that is not, the cell
+   * makes no triangle, as a drawn cell. A skirt with no drawn chunk below
+   * it is a ghost. Not sticky: each call says.
    */
-  setRoles(drawn: ReadonlySet<ChunkIndex> | null, ghosts: ReadonlySet<ChunkIndex>): void {
+  setRoles(drawn: ReadonlySet<ChunkIndex> | null, ghosts: ReadonlySet<ChunkIndex>, options: ChunkRoleOptions = {}): void {
     if (this.destroyed) throw new ChunkError(`${this.layout.name}: the chunk pool was destroyed`);
     const before = new Map<ChunkIndex, ChunkRole>();
     for (const chunk of this.slotOf.keys()) before.set(chunk, this.roleOf(chunk));
     this.drawnChunks = drawn ? new Set(drawn) : null;
     this.ghostChunks = drawn ? new Set(ghosts) : new Set();
+    this.skirts = options.skirts ?? false;
     for (const [chunk, slot] of this.slotOf) {
       if (this.roleOf(chunk) !== before.get(chunk)) this.writeSlot(slot, chunk);
     }
@@ -595,7 +636,8 @@ export class ChunkedVolume implements BlockSource {
   /** The role `chunk` has (or will have when put), from the last setRoles. */
   roleOf(chunk: ChunkIndex): ChunkRole {
     if (this.drawnChunks === null || this.drawnChunks.has(chunk)) return 'drawn';
-    return this.ghostChunks.has(chunk) ? 'ghost' : 'idle';
+    if (!this.ghostChunks.has(chunk)) return 'idle';
+    return this.skirts ? 'skirt' : 'ghost';
   }
 
   private logChange(slot: number, chunk: ChunkIndex): void {

@@ -53,7 +53,8 @@ export interface ExtractRecord {
   ply?: string;
   /** A store refined by a view: the chunks drawn per level, with the triangles of each (stitching geometry, if any, apart). */
   cut?: CutChunkRecord[];
-  /** A store refined by a view: GPU bytes held with this surface. */
+  /** A store refined by a view: triangles besides the cut's regular cells (skirts over level seams), and GPU bytes held with this surface. */
+  stitchTriangles?: number;
   gpuBytes?: number;
 }
 
@@ -78,6 +79,7 @@ export function viewOption(args: Parameters<typeof numberOption>[0]): ViewReques
   const box = stringOption(args, 'view-box');
   const link = stringOption(args, 'view');
   const tolerancePx = numberOption(args, 'tolerance');
+  const skirts = args.values['no-skirts'] === true ? false : undefined;
   if (box !== undefined && link !== undefined) throw new UsageError('give --view-box or --view, not both');
   if (tolerancePx !== undefined && !(tolerancePx > 0)) throw new UsageError('--tolerance must be a positive number of pixels');
   if (box === undefined && link === undefined) {
@@ -88,11 +90,11 @@ export function viewOption(args: Parameters<typeof numberOption>[0]): ViewReques
   if (box !== undefined) {
     const parsed = parseViewBox(box);
     if (typeof parsed === 'string') throw new UsageError(`--view-box ${box}: ${parsed}`);
-    return { box: parsed, tolerancePx };
+    return { box: parsed, tolerancePx, skirts };
   }
   if (!parseCam(new URLSearchParams(link!.replace(/^.*#/, '')).get('cam') ?? ''))
     throw new UsageError(`--view ${link}: the page's link, with its camera (#iso=..&cam=qx,qy,qz,qw,tx,ty,tz,d[&px=W,H][&tol=T])`);
-  return { link, tolerancePx };
+  return { link, tolerancePx, skirts };
 }
 
 /** --cache-budget MB -> bytes (shared with `bench`). */
@@ -107,7 +109,7 @@ export const extractCommand: CliCommand = {
   name: 'extract',
   summary: 'isosurfaces on the GPU (block cache kept between isovalues): counts, area, bbox, GPU time; --ply soups',
   usage:
-    "extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--level L] [--deadline S] [--time T] [--channel C] [--ranges RANGES.zarr] [--view-box x0,y0,z0,x1,y1,z1 | --view '#iso=..&cam=..'] [--tolerance PX] (--level, --view-box, --view, --deadline, --time, --channel, --ranges: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8)",
+    "extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--level L] [--deadline S] [--time T] [--channel C] [--ranges RANGES.zarr] [--view-box x0,y0,z0,x1,y1,z1 | --view '#iso=..&cam=..'] [--tolerance PX] [--no-skirts] (--level, --view-box, --view, --deadline, --time, --channel, --ranges: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8)",
   options: {
     level: { type: 'string' },
     deadline: { type: 'string' },
@@ -117,6 +119,7 @@ export const extractCommand: CliCommand = {
     view: { type: 'string' },
     'view-box': { type: 'string' },
     tolerance: { type: 'string' },
+    'no-skirts': { type: 'boolean' },
     iso: { type: 'string' },
     rate: { type: 'string' },
     'stream-budget': { type: 'string' },
@@ -185,7 +188,9 @@ export const extractCommand: CliCommand = {
           stages: stats.stages,
           cacheSlots: stats.cacheSlots,
           grew: stats.grew,
-          ...(cut ? { cut, gpuBytes: volume.store?.().gpuBytes } : {}),
+          ...(cut
+            ? { cut, stitchTriangles: stats.triangles - cut.reduce((a, e) => a + e.triangles, 0), gpuBytes: volume.store?.().gpuBytes }
+            : {}),
         };
         if (plyPrefix) {
           record.ply = `${plyPrefix}-iso${stats.isovalue}.ply`;

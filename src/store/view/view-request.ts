@@ -13,6 +13,8 @@ export interface ViewRequest {
   link?: string;
   /** Pixels (over the link's tol=, over the default 1.5). */
   tolerancePx?: number;
+  /** Cover level seams with skirts (default true; --no-skirts). */
+  skirts?: boolean;
 }
 
 /** The view's canvas when neither the request nor the link says: 1280x800 at device pixel ratio 1. */

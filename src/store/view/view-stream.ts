@@ -26,6 +26,7 @@ import type { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
 import { chunkCount, estimateFixedBytes } from '../level-state.ts';
 import { chunksNeeded, neighbourhoodRanges } from '../plan.ts';
 import type { LevelStats, LevelSurface, LevelVolume, StreamGpu, StreamGpuBytes, StreamProgress } from '../stream-port.ts';
+import type { ChunkRoleOptions } from '../../zfp/chunked-volume.ts';
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
 import { isAbort } from '../zarr/errors.ts';
 import type { ZfpStore } from '../zarr/store.ts';
@@ -33,7 +34,7 @@ import { type CutCamera, type ViewCut, viewCut } from './cut.ts';
 
 /** A pool whose chunks can be drawn, ghosts or idle (ChunkedVolume.setRoles). */
 export interface RoleVolume extends LevelVolume {
-  setRoles(drawn: ReadonlySet<ChunkIndex> | null, ghosts: ReadonlySet<ChunkIndex>): void;
+  setRoles(drawn: ReadonlySet<ChunkIndex> | null, ghosts: ReadonlySet<ChunkIndex>, options?: ChunkRoleOptions): void;
 }
 
 export interface ViewSpec {
@@ -113,6 +114,8 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
   #retired: F[] = [];
   /** A refinement stopped by a failed chunk is tried again when the chunk has cooled down. */
   #retryTimer: ReturnType<typeof setTimeout> | null = null;
+  /** Ghosts as skirts (ChunkedVolume's 'skirt' role): level seams covered by a one-cell overlap. */
+  skirts = true;
   /** Whether failed chunks are tried again on their own (the page; the CLI reports the failure instead). */
   retryFailed = true;
   #progress = new Set<(p: StreamProgress) => void>();
@@ -454,7 +457,9 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
       for (const L of used) {
         const lv = this.levels[L];
         const pool = lv.volume!;
-        pool.setRoles(step.drawn[L], step.ghosts[L]);
+        // ghosts as skirts: the one cell layer next to a drawn chunk emits too, an overlap into the neighbouring
+        // region at another level that covers the crack between the two (counted apart from the cut's triangles)
+        pool.setRoles(step.drawn[L], step.ghosts[L], { skirts: this.skirts });
         let entry = this.#surfaces.get(L);
         if (entry && entry.capacity !== pool.poolChunks) {
           // made for the pool's old capacity (block ids are slot-relative): made again, the old one let go when this step shows

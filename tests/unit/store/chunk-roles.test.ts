@@ -1,6 +1,7 @@
 // Chunk roles in a GPU chunk pool (ChunkedVolume.setRoles): a level's surface
 // drawn only in some chunks ('drawn'), other resident chunks lending their
-// voxels to them ('ghost') or unused ('idle'). The reference is the same
+// voxels to them ('ghost'), also drawing their layer of cells next to a drawn
+// chunk ('skirt') or unused ('idle'). The reference is the same
 // pool with every chunk drawn, which chunked-volume.test.ts checks against
 // the in-core pipeline. Stores are written by our converter (numcodecs zfpy,
 // fixed rate) from volumes whose edge chunks are partial (66^3 in 16^3
@@ -77,7 +78,9 @@ function level(key: string) {
     return out;
   };
   const all = Array.from({ length: count }, (_, i) => i);
-  return { layout, count, all, coords, bytes, ghostsOf };
+  /** Chunk index steps of the axes x, y, z. */
+  const steps = [1, gx, gx * gy];
+  return { layout, count, all, coords, bytes, ghostsOf, steps };
 }
 
 /** A pool of `capacity` slots holding `chunks` (in this order). */
@@ -89,10 +92,11 @@ function poolOf(gpu: { device: GPUDevice }, key: string, chunks: Iterable<ChunkI
   return pool;
 }
 
-/** The surface's triangles: per triangle its key (the 6 position words) and the chunk holding its cell's lowest corner. */
+/** The surface's triangles: per triangle its key (the 6 position words), the chunk holding its cell's lowest corner, and that corner. */
 interface Triangles {
   keys: string[];
   chunks: ChunkIndex[];
+  cells: number[][];
 }
 
 async function trianglesOf(surface: Isosurface, layout: ChunkLevelLayout): Promise<Triangles> {
@@ -101,6 +105,7 @@ async function trianglesOf(surface: Isosurface, layout: ChunkLevelLayout): Promi
   const [gx, gy] = layout.chunkGrid;
   const keys: string[] = [];
   const chunks: ChunkIndex[] = [];
+  const cells: number[][] = [];
   for (let t = 0; 6 * t < words.length; t++) {
     const w = words.subarray(6 * t, 6 * t + 6);
     keys.push(w.join(','));
@@ -115,8 +120,9 @@ async function trianglesOf(surface: Isosurface, layout: ChunkLevelLayout): Promi
     }
     const [cx, cy, cz] = low.map((g) => Math.floor(g / C));
     chunks.push(cx + gx * (cy + gy * cz));
+    cells.push(low);
   }
-  return { keys, chunks };
+  return { keys, chunks, cells };
 }
 
 /** The triangles of `all` whose cell lies in `chunks`, as sorted keys. */
@@ -125,6 +131,33 @@ function partOf(all: Triangles, chunks: ReadonlySet<ChunkIndex>): string[] {
 }
 
 const sorted = (t: Triangles) => [...t.keys].sort();
+
+/**
+ * The triangles of `all` that skirts make: those whose cell lies in a chunk G
+ * of `skirts` at chunk-local coordinate 0 on an axis a whose G - e_a is in
+ * `drawn`, as sorted keys.
+ */
+function skirtPartOf(
+  all: Triangles,
+  L: ReturnType<typeof level>,
+  drawn: ReadonlySet<ChunkIndex>,
+  skirts: ReadonlySet<ChunkIndex>,
+): string[] {
+  const C = L.layout.chunkEdge;
+  return all.keys
+    .filter((_, i) => {
+      const g = all.chunks[i];
+      if (!skirts.has(g)) return false;
+      const cc = L.coords(g);
+      return [0, 1, 2].some((a) => all.cells[i][a] % C === 0 && cc[a] > 0 && drawn.has(g - L.steps[a]));
+    })
+    .sort();
+}
+
+/** The chunks of `chunks` with a drawn chunk below them on some axis. */
+function nextToDrawn(L: ReturnType<typeof level>, drawn: ReadonlySet<ChunkIndex>, chunks: Iterable<ChunkIndex>): Set<ChunkIndex> {
+  return new Set([...chunks].filter((g) => [0, 1, 2].some((a) => L.coords(g)[a] > 0 && drawn.has(g - L.steps[a]))));
+}
 
 /** mulberry32: the same "random" sets every run. */
 function random(seed: number): () => number {
@@ -315,6 +348,109 @@ describe('chunk roles in a GPU chunk pool: drawn, ghost, idle', () => {
           const againMesh = await meshBytes(surface);
           expect(Buffer.from(againMesh.positions.buffer).equals(Buffer.from(allMesh.positions.buffer)), `${at}: vertices`).toBe(true);
           expect(Buffer.from(againMesh.indices.buffer).equals(Buffer.from(allMesh.indices.buffer)), `${at}: indices`).toBe(true);
+        }
+        surface.destroy();
+        pool.destroy();
+      },
+      900_000,
+    );
+  }
+
+  // Skirts: every ghost a 'skirt', whose cells of chunk-local coordinate 0 on an axis whose chunk
+  // below is drawn make the level's triangles of those cells; the drawn chunks' triangles unchanged.
+  for (const [c, [output, options]] of cases.flatMap((c) => outputs.map((o) => [c, o] as const))) {
+    gpuTest(
+      `${c.key} (${c.dims.join('x')} in ${c.chunk}^3 chunks, ${output}): skirts add exactly the level's triangles of their layer next to a drawn chunk, the drawn part unchanged`,
+      async ({ gpu }) => {
+        const L = level(c.key);
+        const pool = poolOf(gpu, c.key, L.all);
+        const surface = await Isosurface.create(gpu, pool, options);
+        const rnd = random(28);
+        /** The surface with roles (drawn, skirts) and its checks: the drawn part, the skirts' part, the counts; its stats. */
+        const check = async (at: string, drawn: Set<ChunkIndex>, skirts: Set<ChunkIndex>, all: Triangles, iso: number) => {
+          pool.setRoles(drawn, skirts);
+          const ghostStats = await surface.compute(iso);
+          pool.setRoles(drawn, skirts, { skirts: true });
+          for (const k of skirts) if (!drawn.has(k)) expect(pool.roleOf(k), `${at}: chunk ${k}`).toBe('skirt');
+          for (const k of drawn) expect(pool.roleOf(k), `${at}: chunk ${k}`).toBe('drawn');
+          const stats = await surface.compute(iso);
+          // readMesh checks that no index points past the welded vertices
+          const mesh = await surface.readMesh();
+          expect(mesh.indices.length, at).toBe(3 * stats.triangles);
+          const got = await trianglesOf(surface, L.layout);
+          expect(got.keys.length).toBe(stats.triangles);
+          expect(partOf(got, drawn), `${at}: the drawn chunks' triangles`).toEqual(partOf(all, drawn));
+          const skirtPart = skirtPartOf(all, L, drawn, skirts);
+          const outside = got.keys.filter((_, i) => !drawn.has(got.chunks[i])).sort();
+          expect(outside, `${at}: the skirts' triangles = the level's of their layers next to a drawn chunk`).toEqual(skirtPart);
+          // so a skirt with no drawn chunk below it makes none
+          const lower = nextToDrawn(L, drawn, skirts);
+          expect(
+            got.chunks.filter((k) => skirts.has(k) && !lower.has(k)),
+            `${at}: triangles of skirts with no drawn chunk below`,
+          ).toEqual([]);
+          expect(stats.triangles).toBe(ghostStats.triangles + skirtPart.length);
+          expect(stats.vertices, `${at}: a skirt keeps at least a ghost's vertices`).toBeGreaterThanOrEqual(ghostStats.vertices);
+          expect(stats.activeBlocks).toBe(ghostStats.activeBlocks);
+          // per-block triangle counts (the cut's figures): per chunk, the triangles whose cell is in it, skirts included
+          const { ids, triangles } = await surface.readBlockTriangles();
+          const chunkInSlot = new Map(L.all.map((k) => [pool.slotOfChunk(k)!, k]));
+          const perChunk = new Map<ChunkIndex, number>();
+          for (let i = 0; i < ids.length; i++) {
+            if (triangles[i] === 0) continue;
+            const k = chunkInSlot.get(Math.floor(ids[i] / pool.blocksPerChunk))!;
+            perChunk.set(k, (perChunk.get(k) ?? 0) + triangles[i]);
+          }
+          const expected = new Map<ChunkIndex, number>();
+          for (const k of got.chunks) expected.set(k, (expected.get(k) ?? 0) + 1);
+          expect(
+            [...perChunk].sort((a, b) => a[0] - b[0]),
+            `${at}: readBlockTriangles per chunk`,
+          ).toEqual([...expected].sort((a, b) => a[0] - b[0]));
+          return { stats, ghostStats, skirtPart };
+        };
+        for (const iso of c.isovalues) {
+          const at = `${c.key} iso ${iso}`;
+          pool.setRoles(null, none);
+          const allStats = await surface.compute(iso);
+          const all = await trianglesOf(surface, L.layout);
+          expect(allStats.triangles, at).toBeGreaterThan(500);
+
+          // S drawn, every other chunk a skirt; then just the skirts S needs, the rest idle
+          const S = new Set(L.all.filter(() => rnd() < 0.4));
+          const rest = new Set(L.all.filter((k) => !S.has(k)));
+          const r = await check(`${at}, S drawn, the rest skirts`, S, rest, all, iso);
+          expect(r.skirtPart.length, `${at}: S's skirts draw`).toBeGreaterThan(0);
+          await check(`${at}, S drawn with the skirts it needs, the rest idle`, S, L.ghostsOf(S), all, iso);
+
+          // a single drawn chunk (the one with the most triangles; chunk 0), the rest skirts
+          const counts = new Map<ChunkIndex, number>();
+          for (const k of all.chunks) counts.set(k, (counts.get(k) ?? 0) + 1);
+          const busiest = [...counts.entries()].reduce((a, b) => (b[1] > a[1] ? b : a))[0];
+          for (const one of new Set([busiest, 0])) {
+            const drawn = new Set([one]);
+            const one_ = await check(`${at}, chunk ${one} alone drawn`, drawn, new Set(L.all.filter((k) => k !== one)), all, iso);
+            await check(`${at}, chunk ${one} alone drawn with its skirts`, drawn, L.ghostsOf(drawn), all, iso);
+            if (one === busiest) expect(one_.skirtPart.length, `${at}: chunk ${one}'s skirts draw`).toBeGreaterThan(0);
+          }
+
+          // every chunk a skirt (none drawn): as every chunk a ghost, no triangle
+          pool.setRoles(none, new Set(L.all));
+          const ghosts = await surface.compute(iso);
+          pool.setRoles(none, new Set(L.all), { skirts: true });
+          expect(L.all.every((k) => pool.roleOf(k) === 'skirt')).toBe(true);
+          const skirts = await surface.compute(iso);
+          expect(skirts.triangles, `${at}: all skirts`).toBe(0);
+          expect(skirts.occupiedBlocks).toBe(0);
+          expect(skirts.vertices).toBe(ghosts.vertices);
+          expect((await surface.readMesh()).indices.length).toBe(0);
+
+          // back to every chunk drawn; skirts are not sticky
+          pool.setRoles(S, rest);
+          expect(L.all.map((k) => pool.roleOf(k))).toEqual(L.all.map((k) => (S.has(k) ? 'drawn' : 'ghost')));
+          pool.setRoles(null, rest, { skirts: true });
+          expect(L.all.every((k) => pool.roleOf(k) === 'drawn')).toBe(true);
+          expect((await surface.compute(iso)).triangles).toBe(allStats.triangles);
         }
         surface.destroy();
         pool.destroy();

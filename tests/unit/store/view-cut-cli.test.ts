@@ -90,38 +90,98 @@ print(json.dumps(counts))
 }
 
 /**
- * Edges used by exactly one triangle (positions compared exactly) that do not
- * lie on the volume's faces (0 or 255 on an axis): the openings of a surface
- * inside the volume (a single level's has none; a mixed one's are its seams).
+ * Seams of a mixed surface: its edges with one triangle away from the
+ * volume's faces (a single level has none; the coarsest level here sits 3.5
+ * voxels inside them), and for each, how far its midpoint is from the
+ * nearest triangle of another piece of the surface (another connected
+ * component: another level) away from that piece's own open edges (capped
+ * at 3 voxels): what the crack leaves uncovered. Skirts overlap the
+ * neighbouring region by one cell, so the open edges stay but lie over the
+ * other level's surface.
  */
-function boundaryEdges(ply: string): number {
-  return Number(
+function seams(ply: string): { open: number; medianGap: number; p95Gap: number; over1: number; over2: number } {
+  return JSON.parse(
     runPython(
       `
-import sys, numpy as np
-b = open(sys.argv[1], 'rb').read()
-head = b[:b.index(b'end_header\\n') + 11].decode()
-nv = int(head.split('element vertex ')[1].split()[0]); nf = int(head.split('element face ')[1].split()[0])
-body = b[len(head):]
-props = head.split('element face')[0].count('property float')
-v = np.frombuffer(body[:nv * 4 * props], np.float32).reshape(nv, props)[:, :3]
-f = np.frombuffer(body[nv * 4 * props:], dtype=np.dtype([('n', 'u1'), ('i', '<u4', 3)]), count=nf)['i']
+import sys, json, numpy as np
+def read(path):
+    b = open(path, 'rb').read()
+    head = b[:b.index(b'end_header\\n') + 11].decode()
+    nv = int(head.split('element vertex ')[1].split()[0]); nf = int(head.split('element face ')[1].split()[0])
+    body = b[len(head):]
+    v = np.frombuffer(body[:nv * 12], np.float32).reshape(nv, 3)
+    f = np.frombuffer(body[nv * 12:], dtype=np.dtype([('n', 'u1'), ('i', '<u4', 3)]), count=nf)['i']
+    return v, f
+def seg_dist(p, a, b, c):
+    # closest point on triangles (a,b,c) to p (vectorized over triangles), Ericson's method
+    ab = b - a; ac = c - a; ap = p - a
+    d1 = (ab * ap).sum(1); d2 = (ac * ap).sum(1)
+    bp = p - b; d3 = (ab * bp).sum(1); d4 = (ac * bp).sum(1)
+    cp = p - c; d5 = (ab * cp).sum(1); d6 = (ac * cp).sum(1)
+    va = d3 * d6 - d5 * d4; vb = d5 * d2 - d1 * d6; vc = d1 * d4 - d3 * d2
+    denom = va + vb + vc
+    denom = np.where(np.abs(denom) < 1e-30, 1e-30, denom)
+    v = vb / denom; w = vc / denom
+    q = a + ab * v[:, None] + ac * w[:, None]
+    # fall back to edges/vertices where outside
+    out = (va < 0) | (vb < 0) | (vc < 0)
+    if out.any():
+        def on_seg(x, y):
+            d = y - x; t = np.clip(((p - x) * d).sum(1) / np.maximum((d * d).sum(1), 1e-30), 0, 1)
+            return x + d * t[:, None]
+        cands = np.stack([on_seg(a, b), on_seg(b, c), on_seg(c, a)])
+        dd = ((cands - p) ** 2).sum(2)
+        best = cands[dd.argmin(0), np.arange(len(p))]
+        q = np.where(out[:, None], best, q)
+    return np.sqrt(((q - p) ** 2).sum(1))
+v, f = read(sys.argv[1])
 points, ids = np.unique(v, axis=0, return_inverse=True)
-ids = ids.reshape(-1)
-t = ids[f]
-e = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
-e.sort(axis=1)
-u, counts = np.unique(e, axis=0, return_counts=True)
-open_ = u[counts == 1]
+t = ids.reshape(-1)[f]
+# components (union-find over welded vertices)
+parent = np.arange(len(points))
+def find(x):
+    r = x
+    while parent[r] != r: r = parent[r]
+    while parent[x] != r: parent[x], x = r, parent[x]
+    return r
+for a, b, c in t:
+    ra, rb, rc = find(a), find(b), find(c)
+    parent[rb] = ra; parent[find(rc)] = ra
+comp = np.array([find(i) for i in range(len(points))])
+tcomp = comp[t[:, 0]]
+e = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]); e.sort(axis=1)
+u, inv, counts = np.unique(e, axis=0, return_inverse=True, return_counts=True)
+o = u[counts == 1]
+# triangles with an open edge: the boundary strip of each piece (coverage is measured away from it)
+nt = len(t)
+edge_open = (counts == 1)[inv.reshape(-1)]
+boundary = edge_open.reshape(3, nt).any(0)
 p = points.astype(np.float64)
-def on_face(i):
-    q = p[i]
-    return ((q <= 0) | (q >= 255)).any(axis=1)
-inner = ~(on_face(open_[:, 0]) & on_face(open_[:, 1]))
-print(int(inner.sum()))
+face = lambda q: ((q <= 3.5) | (q >= 251.5)).any(axis=1)
+o = o[~(face(p[o[:, 0]]) & face(p[o[:, 1]]))]
+mid = (p[o[:, 0]] + p[o[:, 1]]) / 2
+ocomp = comp[o[:, 0]]
+tri = p[t]
+cent = tri.mean(1)
+R = 3.0
+cell = np.floor(cent / R).astype(np.int64)
+from collections import defaultdict
+buckets = defaultdict(list)
+for i, k in enumerate(map(tuple, cell)): buckets[k].append(i)
+gaps = []
+for m, c in zip(mid, ocomp):
+    k = np.floor(m / R).astype(np.int64)
+    cand = [i for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1) for i in buckets.get((k[0] + dx, k[1] + dy, k[2] + dz), [])]
+    cand = np.array([i for i in cand if tcomp[i] != c and not boundary[i]], dtype=np.int64)
+    if len(cand) == 0:
+        gaps.append(R); continue
+    d = seg_dist(np.repeat(m[None], len(cand), 0), tri[cand, 0], tri[cand, 1], tri[cand, 2])
+    gaps.append(min(float(d.min()), R))
+g = np.array(gaps) if gaps else np.zeros(1)
+print(json.dumps({'open': int(len(o)), 'medianGap': float(np.median(g)), 'p95Gap': float(np.percentile(g, 95)), 'over1': int((g > 1).sum()), 'over2': int((g > 2).sum())}))
 `,
       [ply],
-    ).trim(),
+    ),
   );
 }
 
@@ -142,8 +202,10 @@ describe('extract STORE --view-box: one surface from several levels', () => {
     // the corner at full resolution, coarser levels elsewhere
     expect(cut.some((e) => e.level === 0 && e.chunk.every((c) => c === 7))).toBe(true);
     expect(new Set(cut.map((e) => e.level)).size).toBeGreaterThan(1);
-    // the cut's triangles are the surface's
-    expect(cut.reduce((a, e) => a + e.triangles, 0)).toBe(surface.triangles);
+    // the cut's triangles are the surface's, besides the skirts' (counted apart)
+    const cutTriangles = cut.reduce((a, e) => a + e.triangles, 0);
+    expect(surface.stitchTriangles).toBe(surface.triangles - cutTriangles);
+    expect(surface.stitchTriangles).toBeGreaterThan(0);
     // within the budget, a fraction of level 0 fetched
     expect(r.store.gpuPeakBytes).toBeLessThanOrEqual(budgetMb * 2 ** 20);
     expect(surface.gpuBytes).toBeLessThanOrEqual(budgetMb * 2 ** 20);
@@ -153,15 +215,21 @@ describe('extract STORE --view-box: one surface from several levels', () => {
     const mismatches = cut.map((e, i) => ({ ...e, vtk: vtk[i] })).filter((e) => e.triangles !== e.vtk);
     expect(mismatches).toEqual([]);
     expect(cut.filter((e) => e.triangles > 0).length).toBeGreaterThan(20);
-    // seams: edges with one triangle inside the volume, against the single-level surface's (none)
-    const seams = boundaryEdges(surface.ply);
-    const single = boundaryEdges(whole.isosurfaces[0].ply);
-    expect(single).toBe(0);
+    // seams against the level-0 surface, with skirts and without
+    const withSkirts = seams(surface.ply);
+    const bare = extract('--view-box', BOX, '--cache-budget', String(budgetMb), '--no-skirts', '--ply', join(work, 'bare'));
+    expect(bare.isosurfaces[0].stitchTriangles).toBe(0);
+    expect(bare.isosurfaces[0].cut).toEqual(cut);
+    const without = seams(bare.isosurfaces[0].ply);
+    expect(seams(whole.isosurfaces[0].ply).open).toBe(0);
+    expect(withSkirts.over1).toBeLessThan(without.over1);
     console.log(
       `view cut: ${cut.length} chunks (${[0, 1, 2, 3].map((L) => `level ${L}: ${cut.filter((e) => e.level === L).length}`).join(', ')}), ` +
         `${surface.triangles} triangles (level 0 whole: ${whole.isosurfaces[0].triangles}); GPU peak ${(r.store.gpuPeakBytes / 2 ** 20).toFixed(1)} MiB ` +
         `(level 0 whole: ${(levelPeak / 2 ** 20).toFixed(1)} MiB); fetched ${(r.store.chunkBytesFetched / 2 ** 20).toFixed(2)} of ${(whole.store.chunkBytesFetched / 2 ** 20).toFixed(2)} MiB; ` +
-        `one-triangle edges inside the volume (seams) ${seams} (level 0 whole: ${single})`,
+        `stitching (skirt) triangles ${surface.stitchTriangles}; seams (one-triangle edges inside the volume; the gap each leaves to another level's surface, voxels): ` +
+        `with skirts ${withSkirts.open}, median ${withSkirts.medianGap.toFixed(2)}, p95 ${withSkirts.p95Gap.toFixed(2)}, ${withSkirts.over1} over 1, ${withSkirts.over2} over 2; ` +
+        `without ${without.open}, median ${without.medianGap.toFixed(2)}, p95 ${without.p95Gap.toFixed(2)}, ${without.over1} over 1, ${without.over2} over 2`,
     );
   }, 600_000);
 
