@@ -368,7 +368,7 @@ async function start(): Promise<void> {
       cameraListeners.add(l);
       return () => cameraListeners.delete(l);
     },
-    linkCut: () => ({ cut: initialView.cut, tolerancePx: initialView.tolerancePx, tint: initialView.tint }),
+    linkCut: () => ({ cut: initialView.cut, tolerancePx: initialView.tolerancePx, tint: initialView.tint, camera: initialView.camera }),
     setCut: (cut) => link?.setCut(cut),
     requestFrame: () => viewer.requestFrame(),
     linkStoreChoice: () => ({ storeRate: initialView.storeRate, time: initialView.time, channel: initialView.channel }),
