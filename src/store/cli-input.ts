@@ -19,6 +19,7 @@ import { openStore } from './zarr/open-store.ts';
 import type { SourceInfo } from './zarr/source-store.ts';
 import { MeteredStore } from './zarr/stores.ts';
 import type { ZfpStore } from './zarr/store.ts';
+import type { StreamGpuBytes } from './stream-port.ts';
 import type { ChunkedStreamGpu } from './gpu-port.ts';
 import { type ViewRequest, viewSpecFor } from './view/view-request.ts';
 import { ViewStream } from './view/view-stream.ts';
@@ -142,36 +143,14 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
   if (opts.view) return viewInput(input, store, metered, fetcher, port, budgetBytes, opts.view);
   const controller = await createChunkStream(store, fetcher, port, budgetBytes);
   const surface = new PinnedLevelSurface(controller, L);
-  const record = (): StoreRecord => ({
-    store: input,
-    level: L,
-    levels: store.levels.length,
-    dims: lv.layout.dims,
-    chunkEdge: lv.layout.chunkEdge,
-    rate: lv.layout.rate,
-    chunks: fetched.size,
-    source: store.source,
-    sourceValueRange: store.sourceValueRange?.(L) ?? null,
-    sourceDecode: store.sourceDecode?.() ?? null,
-    voxelSize: store.voxelSize,
-    unit: store.unit,
-    levelChunks: lv.chunkCount,
-    // a store of lossless chunks: what came over for the bricks (their source chunks), not the bricks' values
-    chunkBytesFetched: store.source ? metered.meter.bytes - store.metadataBytes : chunkBytes,
-    bytesFetched: metered.meter.bytes,
-    metadataBytes: store.metadataBytes,
-    requests: metered.meter.requests,
-    storeChunkBytes: store.levels.reduce((a, l) => a + l.storedBytes, 0),
-    budgetBytes,
-    gpuBytes: controller.gpuBytes.total,
-    gpuPoolBytes: controller.gpuBytes.pools,
-    gpuCacheBytes: controller.gpuBytes.cache,
-    gpuVertexBytes: controller.gpuBytes.vertices,
-    gpuPeakBytes: port.meter.peak,
-    retries: store.retries.retries,
-    failedRequests: store.retries.failed,
-    faults: { ...store.retries.faults },
-  });
+  const record = (): StoreRecord =>
+    storeRecord(input, store, metered, L, L, {
+      chunks: fetched.size,
+      chunkBytes,
+      budgetBytes,
+      gpu: controller.gpuBytes,
+      peak: port.meter.peak,
+    });
   const kind = store.source
     ? `${store.source.format} store of ${store.source.dtype} (${store.source.codecs.join(' + ') || 'uncompressed'}), level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 bricks compressed on the GPU at rate ${lv.layout.rate})`
     : `Zarr store, level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 chunks, rate ${lv.layout.rate})`;
@@ -217,40 +196,61 @@ async function viewInput(
   await stream.setView(view);
   const surface = new ViewCutSurface(stream);
   const lv0 = store.levels[0];
-  const record = (): StoreRecord => {
-    const finest = Math.min(...(stream.shown?.levels.map((l) => l.level) ?? [0]));
-    return {
-      store: input,
-      level: finest,
-      levels: store.levels.length,
-      dims: lv0.layout.dims,
-      chunkEdge: lv0.layout.chunkEdge,
-      rate: lv0.layout.rate,
+  const record = (): StoreRecord =>
+    storeRecord(input, store, metered, Math.min(...(stream.shown?.levels.map((l) => l.level) ?? [0])), 0, {
       chunks: fetched.size,
-      source: store.source,
-      sourceValueRange: store.sourceValueRange?.(0) ?? null,
-      sourceDecode: store.sourceDecode?.() ?? null,
-      voxelSize: store.voxelSize,
-      unit: store.unit,
-      levelChunks: lv0.chunkCount,
-      chunkBytesFetched: store.source ? metered.meter.bytes - store.metadataBytes : chunkBytes,
-      bytesFetched: metered.meter.bytes,
-      metadataBytes: store.metadataBytes,
-      requests: metered.meter.requests,
-      storeChunkBytes: store.levels.reduce((a, l) => a + l.storedBytes, 0),
+      chunkBytes,
       budgetBytes,
-      gpuBytes: stream.gpuBytes.total,
-      gpuPoolBytes: stream.gpuBytes.pools,
-      gpuCacheBytes: (stream.shown?.levels ?? []).reduce((a, l) => a + l.stats.cacheBytes, 0),
-      gpuVertexBytes: (stream.shown?.levels ?? []).reduce((a, l) => a + l.stats.vertexBytes, 0),
-      gpuPeakBytes: port.meter.peak,
-      retries: store.retries.retries,
-      failedRequests: store.retries.failed,
-      faults: { ...store.retries.faults },
-    };
-  };
+      gpu: stream.gpuBytes,
+      peak: port.meter.peak,
+    });
   const how =
     `Zarr store of ${store.levels.length} levels (level 0 ${lv0.layout.dims.join('x')}, ${lv0.layout.chunkEdge}^3 chunks, rate ${lv0.layout.rate}), ` +
     `refined by the view (each region at the level whose voxels project to at most ${view.tolerancePx} px), within ${(budgetBytes / 2 ** 20).toFixed(0)} MiB of GPU memory`;
   return { surface, how, rate: lv0.layout.rate, notes: store.notes, fileName: `${input} (view)`, record };
+}
+
+/**
+ * The record of a store input: `level` the level streamed (or the finest a
+ * view drew), `layoutLevel` whose dims, chunks and rate it gives.
+ */
+function storeRecord(
+  input: string,
+  store: ZfpStore,
+  metered: MeteredStore,
+  level: number,
+  layoutLevel: number,
+  got: { chunks: number; chunkBytes: number; budgetBytes: number; gpu: StreamGpuBytes; peak: number },
+): StoreRecord {
+  const lv = store.levels[layoutLevel];
+  return {
+    store: input,
+    level,
+    levels: store.levels.length,
+    dims: lv.layout.dims,
+    chunkEdge: lv.layout.chunkEdge,
+    rate: lv.layout.rate,
+    chunks: got.chunks,
+    source: store.source,
+    sourceValueRange: store.sourceValueRange?.(layoutLevel) ?? null,
+    sourceDecode: store.sourceDecode?.() ?? null,
+    voxelSize: store.voxelSize,
+    unit: store.unit,
+    levelChunks: lv.chunkCount,
+    // a store of lossless chunks: what came over for the bricks (their source chunks), not the bricks' values
+    chunkBytesFetched: store.source ? metered.meter.bytes - store.metadataBytes : got.chunkBytes,
+    bytesFetched: metered.meter.bytes,
+    metadataBytes: store.metadataBytes,
+    requests: metered.meter.requests,
+    storeChunkBytes: store.levels.reduce((a, l) => a + l.storedBytes, 0),
+    budgetBytes: got.budgetBytes,
+    gpuBytes: got.gpu.total,
+    gpuPoolBytes: got.gpu.pools,
+    gpuCacheBytes: got.gpu.cache,
+    gpuVertexBytes: got.gpu.vertices,
+    gpuPeakBytes: got.peak,
+    retries: store.retries.retries,
+    failedRequests: store.retries.failed,
+    faults: { ...store.retries.faults },
+  };
 }

@@ -2,7 +2,9 @@
 // controller: the per-level GPU state a surface over a pool of a given
 // capacity takes (its budget's estimate before one is made), and the chunk
 // ranges of a level that was resident whole (a store without range arrays).
+import { neighbourhoodRanges } from './plan.ts';
 import type { LevelVolume } from './stream-port.ts';
+import type { ZfpStore } from './zarr/store.ts';
 import type { ChunkIndex, ChunkLevelLayout } from './types.ts';
 
 /**
@@ -45,4 +47,50 @@ export function chunkRangesOfIds(
     out[2 * c + 1] = hi;
   }
   return out;
+}
+
+/** What a stream knows of a level's chunk ranges: the range array (read once) and the neighbourhood ranges the plan uses. */
+export interface LevelRanges {
+  index: number;
+  layout: ChunkLevelLayout;
+  /** [min, max] per chunk, or null while unknown. */
+  ranges: Float32Array | null;
+  /** Neighbourhood ranges per chunk, or null while unknown (every chunk needed). */
+  nb: Float32Array | null;
+  /** The range array being read. */
+  reading: Promise<void> | null;
+}
+
+/** Reads a level's range array once (a failed read is tried again next time; rejects with its StoreError). */
+export function readLevelRanges(store: ZfpStore, lv: LevelRanges): Promise<void> {
+  if (lv.ranges || !store.levels[lv.index].rangesPath) return Promise.resolve();
+  lv.reading ??= store.readRanges(lv.index).then(
+    (r) => {
+      if (r && !lv.ranges) {
+        lv.ranges = r;
+        lv.nb = neighbourhoodRanges(lv.layout.chunkGrid, r);
+      }
+    },
+    (e) => {
+      lv.reading = null;
+      throw e;
+    },
+  );
+  return lv.reading;
+}
+
+/** The store's value range: its metadata, else the first of these levels whose chunk ranges are known; null when none is. */
+export function storeValueRange(store: ZfpStore, levels: readonly Pick<LevelRanges, 'ranges'>[]): [number, number] | null {
+  if (store.valueRange) return store.valueRange;
+  for (const l of levels) {
+    if (!l.ranges) continue;
+    let lo = Infinity;
+    let hi = -Infinity;
+    for (let i = 0; i < l.ranges.length; i += 2) {
+      if (l.ranges[i] < lo) lo = l.ranges[i];
+      if (l.ranges[i + 1] > hi) hi = l.ranges[i + 1];
+    }
+    if (lo <= hi) return [lo, hi];
+  }
+  return null;
 }

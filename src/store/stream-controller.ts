@@ -20,7 +20,7 @@
 // chunk's cool-down has passed the onRetry listeners are told (the page asks
 // for the same isovalue again; the CLI reports the failure instead).
 import type { ChunkFetcher } from './fetch/chunk-fetcher.ts';
-import { allChunks, chunkCount, chunkRangesOfIds, estimateFixedBytes } from './level-state.ts';
+import { allChunks, chunkCount, chunkRangesOfIds, estimateFixedBytes, readLevelRanges, storeValueRange } from './level-state.ts';
 import { chunksNeeded, nearestFirst, neighbourhoodRanges } from './plan.ts';
 import type { LevelStats, LevelSurface, LevelVolume, ShownSurface, StreamGpu, StreamGpuBytes, StreamProgress } from './stream-port.ts';
 import type { ChunkIndex, ChunkLevelLayout } from './types.ts';
@@ -138,20 +138,7 @@ export class StreamController<
 
   /** The level's range array, read once (a failed read is tried again next time; rejects with its StoreError). */
   #readRanges(lv: Level<V>): Promise<void> {
-    if (lv.ranges || !this.store.levels[lv.index].rangesPath) return Promise.resolve();
-    lv.reading ??= this.store.readRanges(lv.index).then(
-      (r) => {
-        if (r && !lv.ranges) {
-          lv.ranges = r;
-          lv.nb = neighbourhoodRanges(lv.layout.chunkGrid, r);
-        }
-      },
-      (e) => {
-        lv.reading = null;
-        throw e;
-      },
-    );
-    return lv.reading;
+    return readLevelRanges(this.store, lv);
   }
 
   onProgress(l: (p: StreamProgress) => void): () => void {
@@ -184,18 +171,7 @@ export class StreamController<
 
   /** The store's value range: its metadata, else the finest level whose chunk ranges are known; null when none is. */
   get valueRange(): [number, number] | null {
-    if (this.store.valueRange) return this.store.valueRange;
-    for (const l of this.levels) {
-      if (!l.ranges) continue;
-      let lo = Infinity,
-        hi = -Infinity;
-      for (let i = 0; i < l.ranges.length; i += 2) {
-        if (l.ranges[i] < lo) lo = l.ranges[i];
-        if (l.ranges[i + 1] > hi) hi = l.ranges[i + 1];
-      }
-      if (lo <= hi) return [lo, hi];
-    }
-    return null;
+    return storeValueRange(this.store, this.levels);
   }
 
   /** GPU bytes held now (counted where they are made), split into pools and surfaces. */

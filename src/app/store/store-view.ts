@@ -377,32 +377,10 @@ export class StoreView {
           if (this.#open === o && Number.isFinite(o.iso)) void this.#refine(o, o.iso);
         },
       );
-      const lv = o.store.levels[s.level];
       const k = 2 ** s.level;
       const name = `${o.url} level ${s.level}`;
-      const volume: LoadedVolume = {
-        opened: {
-          stream: { destroy() {} }, // the controller owns the pools
-          name,
-          fileName: name,
-          kind: 'zfp',
-          dims: [...lv.layout.dims],
-          sourceDtype: 'float32',
-          sourceBytes: lv.storedBytes,
-          compressedBytes: lv.storedBytes,
-          rate: lv.layout.rate,
-          compressedHere: false,
-          spacing: [o.store.voxelSize[0] * k, o.store.voxelSize[1] * k, o.store.voxelSize[2] * k],
-          // the level where its metadata puts it: a coarse voxel at the centre of the finer ones it averages
-          origin: (o.store.levelOffsets[s.level] ?? [0, 0, 0]).map((off) => off / k) as [number, number, number],
-          notes: [],
-        },
-        iso,
-        ranges: o.controller.chunkRanges(s.level) ?? new Float32Array(0),
-        initialIso: s.iso,
-        firstStats: s.stats,
-        loadMs: 0,
-      };
+      // the level where its metadata puts it: a coarse voxel at the centre of the finer ones it averages
+      const volume = storeVolume(o, name, s.level, k, iso, s.iso, s.stats, o.controller.chunkRanges(s.level));
       // installed at once: the controller frees the coarser surface right after this returns
       this.#replacing = !first;
       try {
@@ -564,28 +542,8 @@ export class StoreView {
         },
       );
       iso.tint = o.cut!.tint;
-      const lv = o.store.levels[0];
-      const volume: LoadedVolume = {
-        opened: {
-          stream: { destroy() {} }, // the view stream owns the pools
-          name: o.url,
-          fileName: o.url,
-          kind: 'zfp',
-          dims: [...lv.layout.dims],
-          sourceDtype: 'float32',
-          sourceBytes: lv.storedBytes,
-          compressedBytes: lv.storedBytes,
-          rate: lv.layout.rate,
-          compressedHere: false,
-          spacing: [...o.store.voxelSize],
-          notes: [],
-        },
-        iso,
-        ranges: o.controller.chunkRanges(o.controller.coarsest) ?? new Float32Array(0),
-        initialIso: s.iso,
-        firstStats: iso.stats,
-        loadMs: 0,
-      };
+      // level 0's volume: the pieces of coarser levels are drawn at their own scale and place (store-cut.ts)
+      const volume = storeVolume(o, o.url, 0, 1, iso, s.iso, iso.stats, o.controller.chunkRanges(o.controller.coarsest));
       this.d.install(volume, undefined, true); // no level= in the link: the view decides
       o.current = iso;
       // the page's camera now (the link's, or Fit of the volume): plan for it
@@ -601,4 +559,45 @@ export class StoreView {
     this.d.line.hidden = text === '';
     this.d.line.textContent = text;
   }
+}
+
+/**
+ * A store shown as the session's volume: level `level`'s dims at `scale` times
+ * the store's voxel size, placed by its OME translation; the stream owns the
+ * pools (the volume's own stream is nothing to destroy).
+ */
+function storeVolume(
+  o: OpenStore,
+  name: string,
+  level: number,
+  scale: number,
+  iso: LoadedVolume['iso'],
+  initialIso: number,
+  firstStats: LoadedVolume['firstStats'],
+  ranges: Float32Array | null,
+): LoadedVolume {
+  const lv = o.store.levels[level];
+  const off = o.store.levelOffsets[level] ?? [0, 0, 0];
+  return {
+    opened: {
+      stream: { destroy() {} },
+      name,
+      fileName: name,
+      kind: 'zfp',
+      dims: [...lv.layout.dims],
+      sourceDtype: 'float32',
+      sourceBytes: lv.storedBytes,
+      compressedBytes: lv.storedBytes,
+      rate: lv.layout.rate,
+      compressedHere: false,
+      spacing: [o.store.voxelSize[0] * scale, o.store.voxelSize[1] * scale, o.store.voxelSize[2] * scale],
+      origin: [off[0] / scale, off[1] / scale, off[2] / scale],
+      notes: [],
+    },
+    iso,
+    ranges: ranges ?? new Float32Array(0),
+    initialIso,
+    firstStats,
+    loadMs: 0,
+  };
 }

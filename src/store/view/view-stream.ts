@@ -23,8 +23,8 @@
 // (each surface is updated in place: for the frame between, a region may be
 // drawn twice, never missing).
 import type { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
-import { chunkCount, estimateFixedBytes } from '../level-state.ts';
-import { chunksNeeded, neighbourhoodRanges } from '../plan.ts';
+import { chunkCount, estimateFixedBytes, readLevelRanges, storeValueRange } from '../level-state.ts';
+import { chunksNeeded } from '../plan.ts';
 import type { LevelStats, LevelSurface, LevelVolume, StreamGpu, StreamGpuBytes, StreamProgress } from '../stream-port.ts';
 import type { ChunkRoleOptions } from '../../zfp/chunked-volume.ts';
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
@@ -207,18 +207,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
 
   /** [min, max] of the store's values: its metadata, else the coarsest level's chunk ranges. */
   get valueRange(): [number, number] | null {
-    if (this.store.valueRange) return this.store.valueRange;
-    for (const l of [...this.levels].reverse()) {
-      if (!l.ranges) continue;
-      let lo = Infinity;
-      let hi = -Infinity;
-      for (let i = 0; i < l.ranges.length; i += 2) {
-        if (l.ranges[i] < lo) lo = l.ranges[i];
-        if (l.ranges[i + 1] > hi) hi = l.ranges[i + 1];
-      }
-      if (lo <= hi) return [lo, hi];
-    }
-    return null;
+    return storeValueRange(this.store, [...this.levels].reverse());
   }
 
   /** A new camera (or tolerance): the cut is planned again at the current isovalue; resolves when that refinement ends. */
@@ -313,20 +302,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
   }
 
   #readRanges(lv: LevelState<V>): Promise<void> {
-    if (lv.ranges || !this.store.levels[lv.index].rangesPath) return Promise.resolve();
-    lv.reading ??= this.store.readRanges(lv.index).then(
-      (r) => {
-        if (r && !lv.ranges) {
-          lv.ranges = r;
-          lv.nb = neighbourhoodRanges(lv.layout.chunkGrid, r);
-        }
-      },
-      (e) => {
-        lv.reading = null;
-        throw e;
-      },
-    );
-    return lv.reading;
+    return readLevelRanges(this.store, lv);
   }
 
   /** The cut coarsened to levels >= k: leaves finer than k drawn by their ancestor at k. */

@@ -9,6 +9,7 @@
 // vertices' position words (edge and fraction; block coordinates), exact;
 // a triangle's cell is the lowest of its vertices' edge ends (no
 // marching-cubes triangle lies in a cell's upper face).
+import { mulberry32 } from '../../../src/util/random.ts';
 import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
@@ -159,17 +160,8 @@ function nextToDrawn(L: ReturnType<typeof level>, drawn: ReadonlySet<ChunkIndex>
   return new Set([...chunks].filter((g) => [0, 1, 2].some((a) => L.coords(g)[a] > 0 && drawn.has(g - L.steps[a]))));
 }
 
-/** mulberry32: the same "random" sets every run. */
-function random(seed: number): () => number {
-  let a = seed >>> 0;
-  return () => {
-    a = (a + 0x6d2b79f5) >>> 0;
-    let t = a;
-    t = Math.imul(t ^ (t >>> 15), t | 1);
-    t ^= t + Math.imul(t ^ (t >>> 7), t | 61);
-    return ((t ^ (t >>> 14)) >>> 0) / 4294967296;
-  };
-}
+/** The same "random" sets every run. */
+const random = mulberry32;
 
 /** The mesh's position words and indices (the normals may follow the cache's history: left out). */
 async function meshBytes(surface: Isosurface): Promise<{ positions: Uint32Array; indices: Uint32Array }> {
