@@ -274,7 +274,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
       },
       chunkBytes: (L) => this.#chunkCost(this.levels[L].layout),
       // some room for the surfaces being replaced while a step is computed
-      budgetBytes: this.budgetBytes * 0.8,
+      budgetBytes: Math.max(0, this.budgetBytes - RESERVE_BYTES) * 0.8,
     });
   }
 

@@ -1,0 +1,212 @@
+// The view stream's decisions (src/store/view/view-stream.ts), on a real
+// converted store through the real fetcher, with a CPU stand-in for the GPU
+// (a pool is a set of resident chunks with their roles; a surface that
+// fails unless every drawn chunk and ghost the isovalue needs is resident).
+// Truth from outside the stream: the cut module's own rule (view-cut.test.ts
+// checks it against a brute-force reference) and the store's range arrays.
+import { mkdtempSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+import { afterAll, beforeAll, describe, expect, it } from 'vitest';
+import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
+import { chunksNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
+import type { LevelStats, StreamGpu } from '../../../src/store/stream-port.ts';
+import type { ChunkIndex, ChunkLevelLayout } from '../../../src/store/types.ts';
+import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../../src/store/view/cut.ts';
+import { DEFAULT_VIEWPORT } from '../../../src/store/view/view-request.ts';
+import { type RoleVolume, type ShownCut, ViewStream } from '../../../src/store/view/view-stream.ts';
+import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
+import { openStore, type ZfpStore } from '../../../src/store/zarr/open-store.ts';
+import { convert } from './stores.ts';
+
+const work = mkdtempSync(join(tmpdir(), 'view-stream-'));
+const path = join(work, 'gen128.zarr');
+const ISO = 0.437;
+beforeAll(() => {
+  convert('gen:128x128x128', path, ['--chunk', '16', '--rate', '4', '--levels', '4']);
+}, 600_000);
+afterAll(() => rmSync(work, { recursive: true, force: true }));
+
+class FakePool implements RoleVolume {
+  resident = new Set<ChunkIndex>();
+  drawn: ReadonlySet<ChunkIndex> | null = null;
+  ghosts: ReadonlySet<ChunkIndex> = new Set();
+  destroyed = false;
+  constructor(
+    readonly layout: ChunkLevelLayout,
+    public poolChunks: number,
+  ) {}
+  get poolBytes() {
+    return this.poolChunks * this.layout.chunkBytes;
+  }
+  get residentCount() {
+    return this.resident.size;
+  }
+  get freeCount() {
+    return this.poolChunks - this.resident.size;
+  }
+  has(c: ChunkIndex) {
+    return this.resident.has(c);
+  }
+  put(c: ChunkIndex) {
+    if (this.resident.size >= this.poolChunks) throw new Error(`${this.layout.name}: pool full`);
+    this.resident.add(c);
+  }
+  evict(c: ChunkIndex) {
+    this.resident.delete(c);
+  }
+  resize(n: number) {
+    if (n < this.resident.size) throw new Error('shrinks below the resident chunks');
+    this.poolChunks = n;
+  }
+  setRoles(drawn: ReadonlySet<ChunkIndex> | null, ghosts: ReadonlySet<ChunkIndex>) {
+    this.drawn = drawn && new Set(drawn);
+    this.ghosts = new Set(ghosts);
+  }
+  slotOfChunk() {
+    return undefined;
+  }
+  reserve() {}
+  isReserved() {
+    return false;
+  }
+  readonly blocksPerChunk = 64;
+  destroy() {
+    this.destroyed = true;
+  }
+}
+
+interface FakeStats extends LevelStats {
+  drawn: number;
+}
+
+function fakeGpu(store: ZfpStore, ranges: Float32Array[]) {
+  const pools: FakePool[] = [];
+  const surfaces = new Set<object>();
+  let peak = 0;
+  const gpu: StreamGpu<FakePool, FakeStats> = {
+    get allocatedBytes() {
+      let n = 0;
+      for (const p of pools) if (!p.destroyed) n += p.poolBytes;
+      n += surfaces.size * 4000;
+      peak = Math.max(peak, n);
+      return n;
+    },
+    poolBytesFor: (layout, n) => n * layout.chunkBytes,
+    createVolume: (layout, n) => {
+      const p = new FakePool(layout, n);
+      pools.push(p);
+      return p;
+    },
+    async createSurface(pool) {
+      const level = store.levels.findIndex((l) => l.layout === pool.layout);
+      const nb = neighbourhoodRanges(pool.layout.chunkGrid, ranges[level]);
+      const me = {};
+      surfaces.add(me);
+      return {
+        budgetedBytes: 2000,
+        trimCache() {},
+        setMemoryBudget() {},
+        async compute(iso: number) {
+          const needed = new Set(chunksNeeded(nb, iso));
+          // every drawn chunk and ghost the surface needs is resident: the drawn chunks' cells are complete
+          for (const c of [...(pool.drawn ?? []), ...pool.ghosts])
+            if (needed.has(c) && !pool.has(c)) throw new Error(`level ${level}: chunk ${c} computed while absent`);
+          return { triangles: 0, cacheBytes: 1000, vertexBytes: 1000, drawn: pool.drawn?.size ?? 0 };
+        },
+        destroy() {
+          surfaces.delete(me);
+        },
+      };
+    },
+  };
+  return { gpu, pools, peak: () => peak };
+}
+
+async function setup(budget = 2 ** 30) {
+  const store = await openStore(storeForLocation(path), path);
+  const ranges = await Promise.all(store.levels.map((_, i) => store.readRanges(i).then((r) => r!)));
+  const fetcher = new ChunkFetcher(store, { maxInFlight: 4 });
+  const fake = fakeGpu(store, ranges);
+  const stream = await ViewStream.create(store, fetcher, fake.gpu, budget);
+  const shown: ShownCut<FakePool, FakeStats, unknown>[] = [];
+  stream.onShown((s) => shown.push(s as ShownCut<FakePool, FakeStats, unknown>));
+  const sceneRadius = sceneRadiusOf(fitBox0(store.levels[0].layout, 0), store.voxelSize);
+  const view = (box: [number, number, number, number, number, number], tolerancePx = 1.5) => ({
+    camera: cameraFromView(cameraForBox(box, store.voxelSize, DEFAULT_VIEWPORT).state, DEFAULT_VIEWPORT, sceneRadius),
+    tolerancePx,
+  });
+  return { store, ranges, fetcher, stream, shown, fake, view };
+}
+
+/** Level-0 voxels covered by the leaves of a step, each counted per leaf. */
+function coverage(store: ZfpStore, leaves: ChunkIndex[][]): Uint8Array {
+  const d = store.levels[0].layout.dims;
+  const out = new Uint8Array(d[0] * d[1] * d[2]);
+  leaves.forEach((chunks, L) => {
+    const { chunkEdge, chunkGrid: g } = store.levels[L].layout;
+    const e = chunkEdge * 2 ** L;
+    for (const c of chunks) {
+      const x0 = (c % g[0]) * e;
+      const y0 = (Math.floor(c / g[0]) % g[1]) * e;
+      const z0 = Math.floor(c / (g[0] * g[1])) * e;
+      for (let z = z0; z < Math.min(z0 + e, d[2]); z++)
+        for (let y = y0; y < Math.min(y0 + e, d[1]); y++)
+          for (let x = x0; x < Math.min(x0 + e, d[0]); x++) out[x + d[0] * (y + d[1] * z)]++;
+    }
+  });
+  return out;
+}
+
+describe('ViewStream', () => {
+  it('coarse to fine: each step covers every voxel once, ends at the cut, and draws and ghosts every needed chunk resident', async () => {
+    const { store, stream, shown, view } = await setup();
+    await stream.setView(view([100, 100, 100, 127, 127, 127]));
+    await stream.setIsovalue(ISO);
+    expect(shown.length).toBeGreaterThan(1);
+    const finest = shown.map((s) => s.step);
+    // steps go from the coarsest level used to the finest, one level at a time
+    expect(finest).toEqual([...finest].sort((a, b) => b - a));
+    for (const s of shown) expect(coverage(store, s.leaves).every((n) => n === 1)).toBe(true);
+    const last = shown.at(-1)!;
+    expect(last.final).toBe(true);
+    // the final step is the cut itself
+    last.cut.levels.forEach((l, L) => expect(new Set(last.leaves[L])).toEqual(new Set(l.drawn)));
+    expect(last.levels.some((l) => l.level === 0)).toBe(true);
+    stream.destroy();
+  });
+
+  it("two camera moves in a row: newest wins, both refinements end, the last cut shown is the second view's", async () => {
+    const { stream, shown, view } = await setup();
+    await stream.setView(view([0, 0, 0, 127, 127, 127], 6));
+    await stream.setIsovalue(ISO);
+    const first = stream.setView(view([100, 100, 100, 127, 127, 127]));
+    const second = stream.setView(view([0, 0, 0, 27, 27, 27]));
+    await Promise.all([first, second]);
+    const last = shown.at(-1)!;
+    expect(last.final).toBe(true);
+    // the last step shown is the second view's cut
+    const again = await setup();
+    await again.stream.setView(again.view([0, 0, 0, 27, 27, 27]));
+    await again.stream.setIsovalue(ISO);
+    const ref = again.shown.at(-1)!;
+    last.cut.levels.forEach((l, L) => expect(new Set(l.drawn)).toEqual(new Set(ref.cut.levels[L].drawn)));
+    stream.destroy();
+    again.stream.destroy();
+  });
+
+  it('within the budget: GPU bytes never exceed it, the cut says the budget binds', async () => {
+    const budget = 1536 << 10;
+    const { stream, shown, fake, view } = await setup(budget);
+    const stops: string[] = [];
+    stream.onProgress((p) => {
+      if (p.phase === 'stopped') stops.push(p.reason ?? '');
+    });
+    await stream.setView(view([100, 100, 100, 127, 127, 127]));
+    await stream.setIsovalue(ISO);
+    expect(fake.peak()).toBeLessThanOrEqual(budget);
+    expect(stops).toEqual([]);
+    expect(shown.at(-1)!.cut.limitedByBudget).toBe(true);
+    stream.destroy();
+  });
+});
