@@ -22,7 +22,7 @@ import { DEFAULT_VIEWPORT } from '../src/store/view/view-request.ts';
 import { DEFAULT_TOLERANCE_PX, ViewStream } from '../src/store/view/view-stream.ts';
 import { openStore } from '../src/store/zarr/open-store.ts';
 import type { ChunkedVolume } from '../src/zfp/chunked-volume.ts';
-import { printTable } from './lib/report.ts';
+import { printTable, summarize } from './lib/report.ts';
 import { linkStore } from './stream-scale.ts';
 
 const MiB = 2 ** 20;
@@ -158,10 +158,7 @@ export async function flightRun(
 
 /** Median per stop over the runs (each figure on its own). */
 export function medianRun(runs: FlightRun[]): FlightRun {
-  const med = (xs: number[]) => {
-    const s = [...xs].sort((a, b) => a - b);
-    return s[Math.floor((s.length - 1) / 2)];
-  };
+  const med = (xs: number[]) => summarize(xs, false).median;
   const base = runs[0];
   return {
     ...base,

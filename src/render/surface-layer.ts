@@ -81,6 +81,12 @@ export class SurfaceLayer implements RenderLayer {
    */
   origin: [number, number, number] = [0, 0, 0];
   private data: IsosurfaceDrawData | undefined;
+  /** The single surface as its own scene for the depth cue (one object, reused: a frame allocates nothing). */
+  private readonly singleScene: { data: IsosurfaceDrawData | undefined; scale: number; origin: readonly number[] } = {
+    data: undefined,
+    scale: 1,
+    origin: [0, 0, 0],
+  };
   /** Several pieces instead of `data` (setParts): each with its own uniforms and bind group. */
   private parts: readonly SurfacePart[] | undefined;
   private readonly partUniforms: { buffer: GPUBuffer; bindGroup: GPUBindGroup }[] = [];
@@ -194,18 +200,21 @@ export class SurfaceLayer implements RenderLayer {
     return this.bindGroup;
   }
 
+  /**
+   * The uniforms of one piece (`scale` times the voxel size, from `origin`,
+   * `tint`); the depth cue spans `scene`, the piece whose extent is the
+   * volume's (the piece itself when it is the only one). Nothing allocated:
+   * this runs for every piece at every frame.
+   */
   private writeUniforms(
     data: IsosurfaceDrawData,
-    into: GPUBuffer = this.uniforms,
-    part: { scale: number; origin: [number, number, number]; tint?: Rgb; scene?: IsosurfaceDrawData['info'] } = {
-      scale: 1,
-      origin: this.origin,
-    },
+    into: GPUBuffer,
+    scale: number,
+    origin: readonly number[],
+    tint: Rgb | undefined,
+    scene: { data?: IsosurfaceDrawData; scale: number; origin: readonly number[] },
   ): void {
-    const info = part.scene ?? data.info;
-    const voxel = [this.voxelSize[0] * part.scale, this.voxelSize[1] * part.scale, this.voxelSize[2] * part.scale];
-    const sceneScale = part.scene ? 1 : part.scale;
-    const sceneOrigin = part.scene ? [0, 0, 0] : part.origin;
+    const sceneDims = (scene.data ?? data).info.dims;
     const s = this.style;
     const { u32, i32, f32 } = this.views;
     u32[0] = 0;
@@ -227,8 +236,9 @@ export class SurfaceLayer implements RenderLayer {
     // Depth-cue range: the eye distance to the volume's bounding sphere (world space).
     let r2 = 0;
     for (let a = 0; a < 3; a++) {
-      const extent = (info.dims[a] - 1) * this.voxelSize[a] * sceneScale;
-      this.centre[a] = extent / 2 + sceneOrigin[a] * this.voxelSize[a] * sceneScale;
+      const size = this.voxelSize[a] * scene.scale;
+      const extent = (sceneDims[a] - 1) * size;
+      this.centre[a] = extent / 2 + scene.origin[a] * size;
       r2 += extent * extent;
     }
     const radius = 0.5 * Math.sqrt(r2);
@@ -237,18 +247,17 @@ export class SurfaceLayer implements RenderLayer {
     f32[17] = s.depthCue;
     f32[18] = Math.max(0, eyeDist - radius);
     f32[19] = eyeDist + radius;
-    f32[20] = voxel[0];
-    f32[21] = voxel[1];
-    f32[22] = voxel[2];
+    f32[20] = this.voxelSize[0] * scale;
+    f32[21] = this.voxelSize[1] * scale;
+    f32[22] = this.voxelSize[2] * scale;
     f32[23] = 0;
-    f32[24] = part.origin[0];
-    f32[25] = part.origin[1];
-    f32[26] = part.origin[2];
+    f32[24] = origin[0];
+    f32[25] = origin[1];
+    f32[26] = origin[2];
     f32[27] = 0;
-    const tint = part.tint ?? [1, 1, 1];
-    f32[28] = tint[0];
-    f32[29] = tint[1];
-    f32[30] = tint[2];
+    f32[28] = tint ? tint[0] : 1;
+    f32[29] = tint ? tint[1] : 1;
+    f32[30] = tint ? tint[2] : 1;
     f32[31] = 1;
     this.target.device.queue.writeBuffer(into, 0, this.scratch);
   }
@@ -261,30 +270,30 @@ export class SurfaceLayer implements RenderLayer {
   private drawWith(pass: GPURenderPassEncoder, pipeline: GPURenderPipeline): void {
     if (this.parts) {
       if (!this.visible) return;
-      // the depth cue spans the whole scene: the piece of the largest extent (the coarsest level covers the volume)
-      const scene = this.parts.reduce((a, p) => (p.scale > a.scale ? p : a));
-      const sceneInfo = {
-        ...scene.data.info,
-        dims: scene.data.info.dims.map((n) => (n - 1) * scene.scale + 1) as [number, number, number],
-      };
+      // the depth cue spans the whole scene: the piece of the largest scale (the coarsest level covers the volume)
+      let scene = this.parts[0];
+      for (const part of this.parts) if (part.scale > scene.scale) scene = part;
       pass.setPipeline(pipeline);
-      this.parts.forEach((part, i) => {
-        if (part.data.shards.length === 0) return;
+      for (let i = 0; i < this.parts.length; i++) {
+        const part = this.parts[i];
+        if (part.data.shards.length === 0) continue;
         const u = this.partUniform(i);
-        this.writeUniforms(part.data, u.buffer, { ...part, scene: sceneInfo });
+        this.writeUniforms(part.data, u.buffer, part.scale, part.origin, part.tint, scene);
         pass.setBindGroup(1, u.bindGroup);
         pass.setVertexBuffer(0, part.data.vertices);
         for (const shard of part.data.shards) {
           pass.setIndexBuffer(shard.indices, 'uint32');
           pass.drawIndexedIndirect(shard.drawArgs, shard.drawArgsOffset);
         }
-      });
+      }
       return;
     }
     const data = this.data;
     if (!this.visible || !data || data.shards.length === 0) return;
     // Written at every draw (the camera moves); the pre-pass and the frame see the same values.
-    this.writeUniforms(data);
+    this.singleScene.data = data;
+    this.singleScene.origin = this.origin;
+    this.writeUniforms(data, this.uniforms, 1, this.origin, undefined, this.singleScene);
     pass.setPipeline(pipeline);
     pass.setBindGroup(1, this.ensureBindGroup(data));
     pass.setVertexBuffer(0, data.vertices);

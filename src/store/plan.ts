@@ -60,11 +60,16 @@ export function neighbourhoodRanges(grid: Grid, ranges: Float32Array): Float32Ar
   return out;
 }
 
+/** Whether a chunk's neighbourhood range satisfies lo < iso <= hi (the surface needs it). */
+export function chunkNeeded(neighbourhood: Float32Array, iso: number, chunk: ChunkIndex): boolean {
+  return neighbourhood[2 * chunk] < iso && iso <= neighbourhood[2 * chunk + 1];
+}
+
 /** The chunks whose neighbourhood range satisfies lo < iso <= hi, in index order. */
 export function chunksNeeded(neighbourhood: Float32Array, iso: number): ChunkIndex[] {
   const out: ChunkIndex[] = [];
   for (let i = 0; i < neighbourhood.length / 2; i++) {
-    if (neighbourhood[2 * i] < iso && iso <= neighbourhood[2 * i + 1]) out.push(i);
+    if (chunkNeeded(neighbourhood, iso, i)) out.push(i);
   }
   return out;
 }

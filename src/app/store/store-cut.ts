@@ -26,8 +26,9 @@ export const LEVEL_TINTS: readonly Rgb[] = [
 
 export class StoreCutIsosurface implements PageIsosurface {
   readonly info: VolumeInfo;
-  /** Tint the surface by level (the panel's toggle). */
-  tint = false;
+  #tint = false;
+  /** The pieces drawn, made when the shown cut or the tint changes (the layer asks every frame). */
+  #parts: SurfacePart[] = [];
   #stats = new Set<(s: IsosurfaceStats) => void>();
   #errors = new Set<(e: Error) => void>();
   #submits = new Set<(iso: number) => void>();
@@ -46,6 +47,7 @@ export class StoreCutIsosurface implements PageIsosurface {
     private readonly onBudget: (bytes: number) => void = () => {},
   ) {
     this.#shown = shown;
+    this.#parts = this.#makeParts();
     const { dims } = stream.levels[0].layout;
     const blockGrid = dims.map((n) => Math.ceil(n / 4)) as [number, number, number];
     this.info = { dims: [...dims], blockGrid, blockCount: blockGrid[0] * blockGrid[1] * blockGrid[2], valueRange };
@@ -59,6 +61,7 @@ export class StoreCutIsosurface implements PageIsosurface {
   /** The view stream showed another step (a new isovalue, a new view, a finer step): statistics, and a frame. */
   showAgain(s: ShownCutOfPage): void {
     this.#shown = s;
+    this.#parts = this.#makeParts();
     const stats = this.stats;
     for (const l of this.#stats) l(stats);
     for (const l of this.#submits) l(s.iso);
@@ -80,7 +83,20 @@ export class StoreCutIsosurface implements PageIsosurface {
     return this.#shown.levels[0].surface.drawData;
   }
 
+  /** Tint the surface by level (the panel's toggle). */
+  get tint(): boolean {
+    return this.#tint;
+  }
+  set tint(on: boolean) {
+    this.#tint = on;
+    this.#parts = this.#makeParts();
+  }
+
   drawParts(): SurfacePart[] {
+    return this.#parts;
+  }
+
+  #makeParts(): SurfacePart[] {
     const offsets = this.stream.store.levelOffsets;
     return this.#shown.levels.map((l) => {
       const k = 2 ** l.level;
@@ -89,7 +105,7 @@ export class StoreCutIsosurface implements PageIsosurface {
         data: l.surface.drawData,
         scale: k,
         origin: [off[0] / k, off[1] / k, off[2] / k],
-        ...(this.tint ? { tint: LEVEL_TINTS[l.level % LEVEL_TINTS.length] } : {}),
+        ...(this.#tint ? { tint: LEVEL_TINTS[l.level % LEVEL_TINTS.length] } : {}),
       };
     });
   }

@@ -24,7 +24,7 @@
 // drawn twice, never missing).
 import type { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
 import { chunkCount, estimateFixedBytes, readLevelRanges, storeValueRange } from '../level-state.ts';
-import { chunksNeeded } from '../plan.ts';
+import { chunkNeeded } from '../plan.ts';
 import type { LevelStats, LevelSurface, LevelVolume, StreamGpu, StreamGpuBytes, StreamProgress } from '../stream-port.ts';
 import type { ChunkRoleOptions } from '../../zfp/chunked-volume.ts';
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
@@ -282,11 +282,9 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
   #needs(L: number, iso: number): ((c: ChunkIndex) => boolean) | null {
     const lv = this.levels[L];
     if (this.store.levels[L].unusable) return null;
-    if (lv.nb) {
-      const set = new Uint8Array(chunkCount(lv.layout));
-      for (const c of chunksNeeded(lv.nb, iso)) set[c] = 1;
-      return (c) => set[c] === 1;
-    }
+    // read from the neighbourhood ranges per chunk asked: nothing made per level (a level may have 2^24 chunks)
+    const nb = lv.nb;
+    if (nb) return (c) => chunkNeeded(nb, iso, c);
     if (!this.store.levels[L].rangesPath) return () => true; // no range arrays: every chunk may hold the surface
     return null;
   }
