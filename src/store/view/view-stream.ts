@@ -243,6 +243,11 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     const top = Math.max(...cut.levels.map((l, L) => (l.drawn.length > 0 ? L : -1)));
     const steps: Step[] = [];
     for (let k = top; k >= finestUsed; k--) steps.push(this.#step(cut, k));
+    // a camera move that leaves the cut as it is on screen: nothing to fetch or compute
+    if (this.#isShown(steps[steps.length - 1], iso)) {
+      this.#shown = { ...this.#shown!, cut };
+      return;
+    }
     // the finest step already resident: no fetching before it is shown
     let first = 0;
     for (let i = steps.length - 1; i > 0; i--) {
@@ -362,6 +367,19 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
       .map((c) => [dist(c), c] as const)
       .sort((a, b) => a[0] - b[0] || a[1] - b[1])
       .map(([, c]) => c);
+  }
+
+  /** Whether the whole cut on screen is this step at this isovalue (the same drawn chunks and ghosts per level). */
+  #isShown(step: Step, iso: number): boolean {
+    const s = this.#shown;
+    if (!s?.final || s.iso !== iso || s.levels.length !== step.drawn.filter((d) => d.size > 0).length) return false;
+    return s.levels.every(
+      (l) =>
+        l.drawn.length === step.drawn[l.level].size &&
+        l.ghosts.length === step.ghosts[l.level].size &&
+        l.drawn.every((c) => step.drawn[l.level].has(c)) &&
+        l.ghosts.every((c) => step.ghosts[l.level].has(c)),
+    );
   }
 
   #resident(step: Step): boolean {

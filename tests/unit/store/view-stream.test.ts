@@ -195,6 +195,21 @@ describe('ViewStream', () => {
     again.stream.destroy();
   });
 
+  it('a camera move that leaves the cut as it is shows nothing again (no fetch, no surface computed)', async () => {
+    const { stream, shown, fetcher, view } = await setup();
+    await stream.setView(view([100, 100, 100, 127, 127, 127]));
+    await stream.setIsovalue(ISO);
+    const steps = shown.length;
+    const requests = fetcher.counters.requests;
+    await stream.setView(view([100, 100, 100, 127, 127, 127]));
+    expect(shown.length).toBe(steps);
+    expect(fetcher.counters.requests).toBe(requests);
+    // a new isovalue is computed again
+    await stream.setIsovalue(ISO + 0.1);
+    expect(shown.length).toBeGreaterThan(steps);
+    stream.destroy();
+  });
+
   it('within the budget: GPU bytes never exceed it, the cut says the budget binds', async () => {
     const budget = 1536 << 10;
     const { stream, shown, fake, view } = await setup(budget);
