@@ -53,7 +53,7 @@ export interface FlightRun {
 }
 
 /** The flight's cameras: page states over a volume of `size`^3 voxels of size 1. */
-function flightCameras(size: number): { name: string; state: ViewCameraState }[] {
+export function flightCameras(size: number): { name: string; state: ViewCameraState }[] {
   const dims: [number, number, number] = [size, size, size];
   const fit = cameraForBox(fitBox0({ dims }, 0), [1, 1, 1], DEFAULT_VIEWPORT).state;
   const corner = (size - 1) * 0.85;
@@ -94,6 +94,8 @@ export async function flightRun(
   budgetBytes: number,
   iso: number,
   tolerancePx = DEFAULT_TOLERANCE_PX,
+  /** Only these stops (by name), in the flight's order; all when absent. */
+  onlyStops?: readonly string[],
 ): Promise<FlightRun> {
   const url = `${baseUrl}/${name}`;
   const metered = linkStore(url, link);
@@ -108,7 +110,7 @@ export async function flightRun(
   const sceneRadius = sceneRadiusOf(fitBox0(store.levels[0].layout, 0), store.voxelSize);
   const stops: FlightStop[] = [];
   let first = true;
-  for (const cam of flightCameras(size)) {
+  for (const cam of flightCameras(size).filter((c) => !onlyStops || onlyStops.includes(c.name))) {
     stopped = null;
     const spec = { camera: cameraFromView(cam.state, DEFAULT_VIEWPORT, sceneRadius), tolerancePx };
     const bytes0 = metered.meter.bytes;
