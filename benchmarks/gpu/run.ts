@@ -81,6 +81,8 @@ async function main(): Promise<number> {
     if (!(SECTIONS as readonly string[]).includes(s)) throw new Error(`--only: unknown section ${s} (${SECTIONS.join(', ')})`);
   const maxSeconds = Number(opts['max-seconds'] ?? (smoke ? 110 : 480));
 
+  // GPU timestamps as the GPU counts them: Dawn rounds them to 65.5 microseconds by default
+  process.env.ZFPISO_DAWN_FLAGS ??= 'disable-dawn-features=timestamp_quantization';
   const failures: GpuFailure[] = [];
   const gpu = await requestNodeGpu({ label: 'bench.gpu', onFailure: (f) => failures.push(f) });
   console.log(`bench:gpu${smoke ? ' --smoke' : ''} on ${describeAdapter(gpu.adapter)}; data ${data}; at most ${maxSeconds} s`);

@@ -43,6 +43,15 @@ function hasGpuDeviceNodes(): boolean {
   }
 }
 
+/**
+ * Dawn's instance flags from `ZFPISO_DAWN_FLAGS` (space-separated, e.g.
+ * `disable-dawn-features=timestamp_quantization`, which bench:gpu sets so
+ * that GPU timestamps are not rounded to 65.5 microseconds); none by default.
+ */
+export function dawnFlagsFromEnv(): string[] {
+  return (process.env.ZFPISO_DAWN_FLAGS ?? '').split(/\s+/).filter(Boolean);
+}
+
 export type NodeAdapterChoice = 'auto' | 'gpu' | 'swiftshader';
 
 /** Which adapter to use: `ZFPISO_ADAPTER` = auto (default) | gpu | swiftshader. */
@@ -106,14 +115,14 @@ async function requestNodeGpuOrFail(options: RequestGpuOptions, choice: NodeAdap
     useSwiftShader();
   }
   try {
-    instance ??= create([]);
+    instance ??= create(dawnFlagsFromEnv());
     return await requestGpu(instance, options);
   } catch (e) {
     // No adapter from the system's drivers: fall back to SwiftShader, since the
     // Vulkan loader reads VK_ICD_FILENAMES again for each new instance.
     if (!(e instanceof WebGpuUnavailableError) || choice !== 'auto' || process.env.VK_ICD_FILENAMES === SWIFTSHADER_ICD) throw e;
     useSwiftShader();
-    instance = create([]);
+    instance = create(dawnFlagsFromEnv());
     return requestGpu(instance, options);
   }
 }

@@ -22,9 +22,7 @@ let output = '';
 
 beforeAll(async () => {
   mkdirSync(bundleDir, { recursive: true });
-  const { bundleBenchGpu } = (await import('../../../benchmarks/gpu/bundle.mjs')) as {
-    bundleBenchGpu: (out: string) => Promise<unknown[]>;
-  };
+  const { bundleBenchGpu } = await import('../../../benchmarks/gpu/bundle.mjs');
   await bundleBenchGpu(join(bundleDir, 'bench-gpu.mjs'));
   const out = join(work, 'out');
   const r = spawnSync(
