@@ -8,8 +8,8 @@ import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
 
 export interface PageIsosurface {
   readonly info: VolumeInfo;
-  /** What to draw now (the newest surface computed so far). */
-  readonly drawData: IsosurfaceDrawData;
+  /** What to draw now (the newest surface computed so far); none for a surface of pieces that holds none (drawParts). */
+  readonly drawData: IsosurfaceDrawData | undefined;
   /** Requests the surface at `iso`; newer requests replace older ones that have not started. */
   setIsovalue(iso: number): void;
   compute(iso: number): Promise<IsosurfaceStats>;

@@ -7,8 +7,8 @@
 /** Voxels per quantization step along an edge: 1 / 65535. */
 export const VERTEX_QUANTUM = 1 / 65535;
 
-/** Block coordinates have 12 bits per axis: at most this many voxels per axis. */
-export const MAX_VERTEX_VOXELS = 4 * 4096;
+/** Block coordinates have 12 bits per axis: at most this many voxels per axis (core/limits.ts, so that opening can check it). */
+export { MAX_VERTEX_VOXELS } from '../core/limits.ts';
 
 /** The two position words of the vertex on the edge from `corner` (0..4 per axis, block-relative) along `axis` at fraction `t`, in `block`. */
 export function encodeVertexEdge(

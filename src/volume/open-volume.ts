@@ -18,6 +18,7 @@
 // for it; openVolumeFile does the work. openVolumeBytes does both for callers
 // that cannot ask (the CLI: what is missing must come with the call).
 // Errors name the file.
+import { surfaceDimsProblem } from '../core/limits.ts';
 import { ZfpFormatError } from '../zfp/header.ts';
 import { loadZfpStream, type ZfpGpuStream } from '../zfp/gpu-stream.ts';
 import { encoderFor, type ZfpEncoder } from '../zfp/encoder.ts';
@@ -116,6 +117,10 @@ export async function openVolumeFile(
   const display = fileName.split(/[\\/]/).pop() ?? fileName;
   const common = { name: display, fileName, kind: facts.kind, sourceBytes: facts.bytes, spacing: facts.spacing };
   if (req.dims) checkNamedDims(fileName, req.dims, 'given');
+  // refused before any upload, rate choice or compression (seconds for a big file)
+  const known = req.dims ?? facts.dims;
+  const tooWide = known ? surfaceDimsProblem(known) : null;
+  if (tooWide) throw new VolumeFileError(`${fileName}: ${tooWide}`);
   switch (facts.kind) {
     case 'zfp':
     case 'zfp-headerless': {

@@ -83,5 +83,19 @@ test('cut=1: wheel zoom brings level 0 where the camera looks; frames go on whil
   expect(hash).toContain('cut=1');
   expect(hash).toContain('tol=6');
   expect(hash).toMatch(/px=\d+,\d+/);
+
+  // the slider at its minimum (issue 36: the page threw and stopped drawing when no chunk held the surface):
+  // the cut settles, nothing at that isovalue is drawn from a stale surface, frames go on, no page error
+  await page.locator('#iso-slider').focus();
+  await page.keyboard.press('Home');
+  await settled(page);
+  const framesAtMin = await page.evaluate(() => window.zfpiso!.framesDrawn());
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  await page.mouse.wheel(0, 120);
+  await page.waitForFunction((n) => window.zfpiso!.framesDrawn() > n + 3, framesAtMin, { timeout: 60_000 });
+  // and back to a surface
+  await page.locator('#iso-value').fill('0.437');
+  await page.locator('#iso-value').press('Enter');
+  await settled(page);
   expect(errors).toEqual([]);
 });

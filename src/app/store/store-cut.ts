@@ -78,9 +78,9 @@ export class StoreCutIsosurface implements PageIsosurface {
     );
   }
 
-  /** The finest level's surface (what a single draw would take); the layer draws drawParts. */
-  get drawData(): IsosurfaceDrawData {
-    return this.#shown.levels[0].surface.drawData;
+  /** The finest level's surface (what a single draw would take; none when the cut holds no surface); the layer draws drawParts. */
+  get drawData(): IsosurfaceDrawData | undefined {
+    return this.#shown.levels[0]?.surface.drawData;
   }
 
   /** Tint the surface by level (the panel's toggle). */
@@ -147,7 +147,9 @@ export class StoreCutIsosurface implements PageIsosurface {
 
   /** The finest level's mesh in its own voxels (callers that can, use readPositions: every level, in level-0 voxels). */
   readMesh(): Promise<SurfaceMesh> {
-    return this.#shown.levels[0].surface.readMesh();
+    const finest = this.#shown.levels[0];
+    // an empty cut (no chunk in view holds the isovalue): no triangles
+    return finest ? finest.surface.readMesh() : Promise.resolve({ vertices: new Uint32Array(0), indices: new Uint32Array(0) });
   }
 
   /** Every level's mesh as one, in level-0 voxel index space (the PLY export). */
@@ -157,7 +159,8 @@ export class StoreCutIsosurface implements PageIsosurface {
 
   /** The coarsest level's block ranges (the slider's block profile). */
   readBlockRanges(): Promise<Float32Array> {
-    return this.#shown.levels.at(-1)!.surface.readBlockRanges();
+    const coarsest = this.#shown.levels.at(-1);
+    return coarsest ? coarsest.surface.readBlockRanges() : Promise.resolve(new Float32Array(0));
   }
 
   destroy(): void {

@@ -103,6 +103,8 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
   budgetBytes: number;
   finest = 0;
   coarsest: number;
+  /** The finest level the cut may use: levels below it, or one between, cannot be drawn. */
+  #finestUsable = 0;
   #view: ViewSpec | null = null;
   #iso = Number.NaN;
   #gen = 0;
@@ -140,6 +142,10 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     }));
     this.coarsest = this.levels.length - 1;
     while (this.coarsest > 0 && store.levels[this.coarsest].unusable) this.coarsest--;
+    // levels finer than a level that cannot be drawn (wider than a surface can be) are never split into:
+    // the cut stops there (the store's notes say which levels cannot be shown)
+    this.#finestUsable = this.coarsest;
+    while (this.#finestUsable > 0 && !store.levels[this.#finestUsable - 1].unusable) this.#finestUsable--;
     fetcher.onChunk((level, chunk, bytes) => this.#arrived(level, chunk, bytes));
     fetcher.onError((level, chunk, e, repeated) => {
       if (!repeated) for (const l of this.#errors) l(e);
@@ -243,6 +249,8 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     const top = Math.max(...cut.levels.map((l, L) => (l.drawn.length > 0 ? L : -1)));
     const steps: Step[] = [];
     for (let k = top; k >= finestUsed; k--) steps.push(this.#step(cut, k));
+    // a cut that draws no chunk: one empty step, shown, so the page draws nothing at this isovalue
+    if (steps.length === 0) steps.push(this.#step(cut, this.coarsest));
     // a camera move that leaves the cut as it is on screen: nothing to fetch or compute
     if (this.#isShown(steps[steps.length - 1], iso)) {
       this.#shown = { ...this.#shown!, cut };
@@ -271,7 +279,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
       voxelSize: this.store.voxelSize,
       camera: view.camera,
       tolerancePx: view.tolerancePx,
-      finest: Math.max(0, Math.min(this.finest, this.coarsest)),
+      finest: Math.max(this.#finestUsable, Math.min(this.finest, this.coarsest)),
       coarsest: this.coarsest,
       needs: (L) => {
         if (!needs.has(L)) needs.set(L, this.#needs(L, iso));

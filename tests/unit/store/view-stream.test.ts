@@ -210,6 +210,28 @@ describe('ViewStream', () => {
     stream.destroy();
   });
 
+  it('an isovalue no chunk holds: an empty final step is shown (nothing drawn, no error), and the next isovalue draws again', async () => {
+    const { stream, shown, view, ranges } = await setup();
+    const errors: Error[] = [];
+    stream.onError((e) => errors.push(e));
+    await stream.setView(view([0, 0, 0, 127, 127, 127], 6));
+    await stream.setIsovalue(ISO);
+    expect(shown.at(-1)!.levels.length).toBeGreaterThan(0);
+    // below every chunk's range (the store's own range arrays say so)
+    let lo = Infinity;
+    for (const r of ranges) for (let i = 0; i < r.length; i += 2) lo = Math.min(lo, r[i]);
+    await stream.setIsovalue(lo - 1);
+    const empty = shown.at(-1)!;
+    expect(empty.iso).toBe(lo - 1);
+    expect(empty.final).toBe(true);
+    expect(empty.levels).toEqual([]);
+    expect(coverage(stream.store, empty.leaves).every((n) => n === 1)).toBe(true);
+    await stream.setIsovalue(ISO);
+    expect(shown.at(-1)!.levels.length).toBeGreaterThan(0);
+    expect(errors).toEqual([]);
+    stream.destroy();
+  });
+
   it('within the budget: GPU bytes never exceed it, the cut says the budget binds', async () => {
     const budget = 1536 << 10;
     const { stream, shown, fake, view } = await setup(budget);
@@ -222,6 +244,45 @@ describe('ViewStream', () => {
     expect(fake.peak()).toBeLessThanOrEqual(budget);
     expect(stops).toEqual([]);
     expect(shown.at(-1)!.cut.limitedByBudget).toBe(true);
+    stream.destroy();
+  });
+});
+
+describe('ViewStream over a level wider than a surface can be', () => {
+  // gen:16400x8x8 in 16^3 chunks: level 0 is 16400 voxels wide (past 16384, MAX_VERTEX_VOXELS), level 1 is 8200
+  const wide = join(work, 'wide.zarr');
+  beforeAll(() => {
+    convert('gen:16400x8x8', wide, ['--chunk', '16', '--rate', '2']);
+  }, 600_000);
+
+  it('zoomed into it, the cut stops at the finest level that can be drawn, and every camera move ends', async () => {
+    const store = await openStore(storeForLocation(wide), wide);
+    expect(store.levels[0].unusable).toBeTruthy();
+    expect(store.levels[1].unusable).toBeFalsy();
+    expect(store.notes.join(' ')).toMatch(/levels 0 cannot be shown/);
+    const ranges = await Promise.all(store.levels.map((_, i) => store.readRanges(i).then((r) => r!)));
+    const stream = await ViewStream.create(store, new ChunkFetcher(store, { maxInFlight: 4 }), fakeGpu(store, ranges).gpu, 2 ** 30);
+    const shown: ShownCut<FakePool, FakeStats, unknown>[] = [];
+    stream.onShown((s) => shown.push(s as ShownCut<FakePool, FakeStats, unknown>));
+    const sceneRadius = sceneRadiusOf(fitBox0(store.levels[0].layout, 0), store.voxelSize);
+    let [lo, hi] = [Infinity, -Infinity];
+    for (let i = 0; i < ranges[1].length; i += 2) [lo, hi] = [Math.min(lo, ranges[1][i]), Math.max(hi, ranges[1][i + 1])];
+    // the whole volume, then ever closer to its far end (where the page's wheel took the tab down)
+    for (const x0 of [0, 8192, 15000, 16300, 16380]) {
+      const box: [number, number, number, number, number, number] = [x0, 0, 0, 16399, 7, 7];
+      const camera = cameraFromView(cameraForBox(box, store.voxelSize, DEFAULT_VIEWPORT).state, DEFAULT_VIEWPORT, sceneRadius);
+      const done = stream.setView({ camera, tolerancePx: 1.5 });
+      if (x0 === 0) await stream.setIsovalue((lo + hi) / 2);
+      await Promise.race([
+        done,
+        new Promise((_, reject) => setTimeout(() => reject(new Error(`the view at x0 = ${x0} did not end`)), 30_000)),
+      ]);
+      const last = shown.at(-1)!;
+      expect(last.final).toBe(true);
+      expect(last.levels.every((l) => l.level >= 1)).toBe(true);
+    }
+    // zoomed in, level 1 is drawn where the camera looks
+    expect(shown.at(-1)!.levels.some((l) => l.level === 1)).toBe(true);
     stream.destroy();
   });
 });

@@ -199,3 +199,20 @@ describe('openVolumeBytes (the CLI: what the file does not say comes with the ca
     for (const v of [given, page, cli, pageTiff]) v.stream.destroy();
   });
 });
+
+describe('a volume wider than a surface can be (issue 36)', () => {
+  gpuTest('is refused at open, before its rate is chosen or anything is compressed, with the limit named', async ({ gpu }) => {
+    // 1 x 1 x 26730 float32: the page once chose a rate for seconds, then failed in the vertex format
+    const name = 'thin_1x1x26730_float32.raw';
+    const bytes = new Uint8Array(26730 * 4);
+    const t0 = performance.now();
+    await expect(openVolumeBytes(gpu.device, bytes, name)).rejects.toThrow(
+      /^thin_1x1x26730_float32\.raw: 1x1x26730 voxels: 26730 along an axis.* at most 16384 voxels along an axis$/,
+    );
+    expect(performance.now() - t0).toBeLessThan(1000);
+    // at the limit it opens
+    const edge = await openVolumeBytes(gpu.device, new Uint8Array(16384 * 4 * 4), 'edge_1x4x16384_float32.raw', { rate: 8 });
+    expect(edge.dims).toEqual([1, 4, 16384]);
+    edge.stream.destroy();
+  });
+});
