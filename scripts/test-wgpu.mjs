@@ -148,7 +148,9 @@ export async function runWgpuTests(files = WGPU_TESTS) {
   );
   let passed = 0;
   let failed = 0;
+  const times = [];
   for (const { file, bundle: b } of bundles) {
+    const started = Date.now();
     const r = spawnSync(deno, ['run', '--allow-all', '--no-config', '--unstable-webgpu', b], {
       cwd: root,
       env,
@@ -156,6 +158,7 @@ export async function runWgpuTests(files = WGPU_TESTS) {
       maxBuffer: 1 << 28,
       timeout: 1_200_000,
     });
+    times.push({ file: relative(root, file), seconds: (Date.now() - started) / 1000 });
     const output = `${r.stdout ?? ''}${r.stderr ?? ''}`;
     const m = /WGPU-RESULT (\{.*\})/.exec(r.stdout ?? '');
     process.stdout.write((r.stdout ?? '').replace(/WGPU-RESULT .*\n?/, ''));
@@ -176,7 +179,7 @@ export async function runWgpuTests(files = WGPU_TESTS) {
     passed += counts.passed;
     failed += counts.failed;
   }
-  return { passed, failed };
+  return { passed, failed, files: times };
 }
 
 if (import.meta.url === pathToFileURL(process.argv[1] ?? '').href) {

@@ -14,7 +14,7 @@
 // that suite; other arguments after a suite name go to its runner (e.g. `npm test -- unit tests/unit/zfp`).
 import { spawnSync } from 'node:child_process';
 import { existsSync, mkdirSync, readFileSync, rmSync } from 'node:fs';
-import { join } from 'node:path';
+import { join, relative } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { chromiumWebGpuLaunch } from './setup/chromium-flags.mjs';
 import { ensureNodeModules } from './setup/npm-deps.mjs';
@@ -86,7 +86,8 @@ function unit(extra, { reportName = 'vitest.json', env = {} } = {}) {
   if (!report) return { passed: 0, failed: 1, note: `vitest exited with ${status} and wrote no report` };
   // A crashed worker or an error outside tests fails the suite even if every test passed.
   const extraFail = status !== 0 && report.numFailedTests === 0 ? 1 : 0;
-  return { passed: report.numPassedTests, failed: report.numFailedTests + extraFail };
+  const files = (report.testResults ?? []).map((t) => ({ file: relative(root, t.name), seconds: (t.endTime - t.startTime) / 1000 }));
+  return { passed: report.numPassedTests, failed: report.numFailedTests + extraFail, files };
 }
 
 function limits(extra) {
@@ -127,7 +128,17 @@ async function e2e(extra) {
   if (!report?.stats) return { passed: 0, failed: 1, note: `playwright exited with ${status} and wrote no report` };
   const { expected = 0, unexpected = 0, flaky = 0 } = report.stats;
   const extraFail = status !== 0 && unexpected === 0 ? 1 : 0;
-  return { passed: expected + flaky, failed: unexpected + extraFail };
+  // per spec file: the sum of its tests' run times (retries included)
+  const perFile = new Map();
+  const walk = (suite) => {
+    for (const spec of suite.specs ?? [])
+      for (const t of spec.tests ?? [])
+        for (const r of t.results ?? []) perFile.set(suite.file, (perFile.get(suite.file) ?? 0) + (r.duration ?? 0) / 1000);
+    for (const child of suite.suites ?? []) walk({ ...child, file: child.file ?? suite.file });
+  };
+  for (const suite of report.suites ?? []) walk(suite);
+  const files = [...perFile].map(([file, seconds]) => ({ file: join('tests/e2e', file), seconds }));
+  return { passed: expected + flaky, failed: unexpected + extraFail, files };
 }
 
 async function main() {
@@ -153,6 +164,7 @@ async function main() {
 
   const totals = { passed: 0, failed: 0 };
   const lines = [];
+  const fileTimes = [];
   for (const suite of chosen) {
     const started = Date.now();
     const r =
@@ -171,11 +183,18 @@ async function main() {
                   : await e2e(extra);
     totals.passed += r.passed;
     totals.failed += r.failed;
+    for (const f of r.files ?? []) fileTimes.push({ ...f, suite });
     const minutes = ((Date.now() - started) / 60_000).toFixed(1);
     lines.push(`${suite.padEnd(10)} ${r.passed} passed, ${r.failed} failed${r.note ? ` (${r.note})` : ''}, ${minutes} min`);
   }
-  console.log('\nsummary');
+  console.log('\nsummary (minutes per suite)');
   for (const l of lines) console.log(`  ${l}`);
+  if (fileTimes.length > 0) {
+    // files run side by side in a suite: their times add up to more than the suite's wall time
+    console.log('\nthe ten slowest files (seconds; vitest files run two at a time)');
+    for (const f of fileTimes.sort((a, b) => b.seconds - a.seconds).slice(0, 10))
+      console.log(`  ${f.seconds.toFixed(0).padStart(5)}  ${f.suite.padEnd(10)} ${f.file}`);
+  }
   console.log(`\n${totals.passed} passed, ${totals.failed} failed`);
   process.exit(totals.failed > 0 ? 1 : 0);
 }
