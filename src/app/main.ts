@@ -357,10 +357,11 @@ async function start(): Promise<void> {
         };
       }
     },
-    linkIso: ([lo, hi]) => {
+    // a store's range is often provisional (its coarsest level's): the link's isovalue is used as given
+    linkIso: () => {
       const wanted = pendingIso;
       pendingIso = undefined;
-      return wanted !== undefined && wanted >= lo && wanted <= hi ? wanted : undefined;
+      return wanted !== undefined && Number.isFinite(wanted) ? wanted : undefined;
     },
     linkLevel: () => initialView.level,
     camera: () => ({ state: camera.getState(), viewport: { width: canvas.width, height: canvas.height } }),

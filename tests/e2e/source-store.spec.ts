@@ -126,3 +126,22 @@ test('a picked folder of lossless chunks opens the same way, decoded in workers 
   expect(await trianglesShown(page)).toBe(cli.isosurfaces[0].triangles);
   expect(logged).toEqual([]);
 });
+
+test("a store with no value range in its metadata: the coarsest level read at open gives the slider's range (provisional); the link's isovalue is kept as given", async ({
+  page,
+}) => {
+  test.setTimeout(300_000);
+  const logged = watchErrors(page);
+  // above every value (uint8): the link's isovalue must not be clamped or replaced (the surface is empty)
+  await openApp(page, '/?store=/stores/neghip-zstd.zarr#iso=300');
+  await level0Shown(page);
+  const range = page.locator('#store-section dd[data-k="value-range"]');
+  await expect(range).toContainText('provisional');
+  const [lo, hi] = ((await range.textContent()) ?? '').split(' (')[0].split(' .. ').map(Number);
+  expect(lo).toBeLessThan(hi);
+  expect(hi).toBeLessThanOrEqual(255);
+  const iso = await page.evaluate(() => (window as unknown as { zfpiso: { stats: { isovalue: number } } }).zfpiso.stats.isovalue);
+  expect(iso).toBe(300);
+  await expect(page.locator('#iso-value')).toHaveValue(/^300/);
+  expect(logged.filter((e) => !/status of 404/.test(e))).toEqual([]);
+});

@@ -53,6 +53,12 @@ export interface StorePageState {
     levels: { level: number; drawn: number; regions: number; triangles: number }[];
     final: boolean;
   } | null;
+  /**
+   * The slider's value range and where it comes from: the store's metadata
+   * or range arrays, or (provisional) the coarsest level read whole at open,
+   * which finer levels may exceed.
+   */
+  valueRange?: { lo: number; hi: number; provisional: boolean; from: string };
 }
 
 /** The refinement controls' changes: by view or level by level, the pixel tolerance, the level tint. */
@@ -190,6 +196,9 @@ function renderFigures(figures: HTMLElement, panel: HTMLElement, store: ZfpStore
     `<dt>GPU vertices</dt><dd data-k="vertices">${mib(st.gpu.vertices)}</dd>` +
     `<dt>GPU per level</dt><dd data-k="level-state">${mib(Math.max(0, st.gpu.surfaces - st.gpu.cache - st.gpu.vertices))}</dd>` +
     `<dt>GPU total</dt><dd data-k="gpu">${mib(st.gpu.total)} of ${mib(st.gpu.budget)}</dd>` +
+    (st.valueRange
+      ? `<dt>value range</dt><dd data-k="value-range" title="${escapeHtml(st.valueRange.from)}">${Number(st.valueRange.lo.toPrecision(6))} .. ${Number(st.valueRange.hi.toPrecision(6))}${st.valueRange.provisional ? ' (provisional: the coarsest level; finer levels may reach further)' : ''}</dd>`
+      : '') +
     (st.reason ? `<dt>note</dt><dd data-k="reason">${escapeHtml(st.reason)}</dd>` : '') +
     `</dl>`;
 }

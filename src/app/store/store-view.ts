@@ -25,6 +25,7 @@ import type { IsosurfaceStats } from '../../isosurface/types.ts';
 import type { CameraState } from '../../render/camera.ts';
 import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf, type Viewport } from '../../store/view/cut.ts';
 import { estimateFixedBytes } from '../../store/level-state.ts';
+import { type LevelValues, readLevelValues } from '../../store/level-values.ts';
 import { DEFAULT_TOLERANCE_PX, type ViewSpec, ViewStream } from '../../store/view/view-stream.ts';
 import type { ChunkViewStream } from '../../store/view/view-surface.ts';
 import type { ChunkedVolume } from '../../zfp/chunked-volume.ts';
@@ -87,6 +88,8 @@ interface OpenStore {
   replanTimer: ReturnType<typeof setTimeout> | null;
   detachCamera: () => void;
   valueRange: [number, number];
+  /** The coarsest level read whole at open when the store gives no value range (level-values.ts): the slider's range and profile until finer ones are known. */
+  coarse: LevelValues | null;
   state: StorePageState;
   current: StoreLevelIsosurface | StoreCutIsosurface | null;
   /** Refinements started and not yet ended (the isovalue changed meanwhile). */
@@ -163,8 +166,8 @@ export class StoreView {
   ): Promise<void> {
     const gen = ++this.#gen;
     const metered = new MeteredStore(source);
-    let store: ZfpStore;
-    let controller: ChunkStreamController | ChunkViewStream;
+    let store: ZfpStore | undefined;
+    let controller: ChunkStreamController | ChunkViewStream | undefined;
     let cut: OpenStore['cut'] = null;
     this.#line(`Opening ${url}…`);
     let f: ChunkFetcher;
@@ -195,12 +198,28 @@ export class StoreView {
         controller = await createChunkStream(store, f, this.d.gpu(), this.d.budgetBytes());
       }
     } catch (e) {
+      // a failed open lets its store go (decode workers, requests)
+      controller?.destroy();
+      store?.close?.();
       if (gen === this.#gen) this.#line('');
       this.d.onError(e instanceof StoreError ? e.message : `${url}: ${(e as Error).message}`);
       return;
     }
+    // no value range in the metadata nor from range arrays: the coarsest level, read whole now, gives one (provisional)
+    let coarse: LevelValues | null = null;
+    if (!controller.valueRange && gen === this.#gen) {
+      this.#line(`${url}: reading level ${controller.coarsest} for the value range…`);
+      try {
+        coarse = await readLevelValues(store, controller.coarsest);
+      } catch {
+        // the surface's own path reports a chunk that cannot be read; the range then comes from the first surface
+        coarse = null;
+      }
+    }
     if (gen !== this.#gen) {
+      // superseded by another open: this one lets its store go
       controller.destroy();
+      store.close?.();
       return;
     }
     // the previous store (if any) stops here; its level stays on screen until this one's first level replaces it
@@ -252,7 +271,8 @@ export class StoreView {
       cut,
       replanTimer: null,
       detachCamera: () => {},
-      valueRange: controller.valueRange ?? [0, 0],
+      valueRange: controller.valueRange ?? coarse?.valueRange ?? [0, 0],
+      coarse,
       state,
       current: null,
       running: 0,
@@ -260,6 +280,14 @@ export class StoreView {
       iso: NaN,
     };
     this.#open = o;
+    if (controller.valueRange) state.valueRange = { lo: o.valueRange[0], hi: o.valueRange[1], provisional: false, from: 'the store' };
+    else if (coarse?.valueRange)
+      state.valueRange = {
+        lo: o.valueRange[0],
+        hi: o.valueRange[1],
+        provisional: true,
+        from: `level ${coarse.level} (${coarse.dims.join('×')}) read whole at open, ${mib(coarse.bytes)}`,
+      };
     this.d.setCut(cut ? { cut: true, tolerancePx: cut.tolerancePx, ...(cut.tint ? { tint: true } : {}) } : {});
     if (cut) o.detachCamera = this.d.onCameraChange(() => this.#scheduleReplan(o));
     for (const note of store.notes) this.d.onError(`${url}: ${note}`);
@@ -288,12 +316,14 @@ export class StoreView {
     // store without range arrays shows its coarsest level (fetched whole) first,
     // whose block ranges then give the value range and the choice.
     // (a store without ranges has no value range before its coarsest level is read: the link's isovalue waits for it)
+    // the link's isovalue (or the one kept over a reopen) is used as given, even outside a provisional range
     const linkIso = (range: [number, number]) => {
       const kept = this.#keepIso;
       this.#keepIso = undefined;
-      return kept !== undefined && kept >= range[0] && kept <= range[1] ? kept : this.d.linkIso(range);
+      return kept !== undefined && Number.isFinite(kept) ? kept : this.d.linkIso(range);
     };
-    let iso = controller.valueRange ? linkIso(o.valueRange) : undefined;
+    let iso = controller.valueRange || coarse?.valueRange ? linkIso(o.valueRange) : undefined;
+    if (iso === undefined && coarse?.valueRange) iso = chooseIsovalue(coarse.blockRanges, o.valueRange);
     if (iso === undefined) {
       let ranges: Float32Array | null = null;
       for (let L = finest; L < store.levels.length && !ranges; L++) ranges = controller.chunkRanges(L);
@@ -380,7 +410,16 @@ export class StoreView {
       const k = 2 ** s.level;
       const name = `${o.url} level ${s.level}`;
       // the level where its metadata puts it: a coarse voxel at the centre of the finer ones it averages
-      const volume = storeVolume(o, name, s.level, k, iso, s.iso, s.stats, o.controller.chunkRanges(s.level));
+      const volume = storeVolume(
+        o,
+        name,
+        s.level,
+        k,
+        iso,
+        s.iso,
+        s.stats,
+        o.controller.chunkRanges(s.level) ?? o.coarse?.blockRanges ?? null,
+      );
       // installed at once: the controller frees the coarser surface right after this returns
       this.#replacing = !first;
       try {
@@ -543,7 +582,16 @@ export class StoreView {
       );
       iso.tint = o.cut!.tint;
       // level 0's volume: the pieces of coarser levels are drawn at their own scale and place (store-cut.ts)
-      const volume = storeVolume(o, o.url, 0, 1, iso, s.iso, iso.stats, o.controller.chunkRanges(o.controller.coarsest));
+      const volume = storeVolume(
+        o,
+        o.url,
+        0,
+        1,
+        iso,
+        s.iso,
+        iso.stats,
+        o.controller.chunkRanges(o.controller.coarsest) ?? o.coarse?.blockRanges ?? null,
+      );
       this.d.install(volume, undefined, true); // no level= in the link: the view decides
       o.current = iso;
       // the page's camera now (the link's, or Fit of the volume): plan for it

@@ -98,9 +98,14 @@ export class IsoControl {
     this.setValue(iso);
   }
 
-  /** Sets the value without calling onInput (e.g. while a benchmark drives the surface). */
+  /**
+   * Sets the value without calling onInput (e.g. while a benchmark drives the
+   * surface). A value outside the range is kept as it is (a link's isovalue
+   * over a store's provisional range): the number shows it, the slider sits
+   * at the end.
+   */
   setValue(iso: number): void {
-    this.iso = Math.min(this.hi, Math.max(this.lo, iso));
+    this.iso = iso;
     this.sync();
   }
 
