@@ -90,9 +90,11 @@ test('?store= of a zstd store: levels coarse to fine, codec and type named, leve
   await expect(page.locator('#store-section dd[data-k="dtype"]')).toContainText('uint8');
   await expect(page.locator('#store-section dd[data-k="format"]')).toHaveText('Zarr v3');
   await expect(page.locator('#store-progress')).toContainText('level 0 (full resolution)');
-  await expect(page.locator('#messages')).toContainText(/chunks are decoded in \d Web Workers?/);
+  // information about the store goes to the panel, not to notices over the view (issue 37)
+  await expect(page.locator('#store-section dd[data-k="notes"]')).toContainText(/chunks are decoded in \d Web Workers?/);
   // no rate asked for: chosen from the data (issue 30's rule), as the CLI chooses it
-  await expect(page.locator('#messages')).toContainText(/rate \d+ chosen from the data/);
+  await expect(page.locator('#store-section dd[data-k="notes"]')).toContainText(/rate \d+ chosen from the data/);
+  await expect(page.locator('#messages .message.error')).toHaveCount(0);
   const cli = await runCli<{ rate: number; isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', '--iso', '80']);
   await expect(page.locator('#store-section input[data-choice="storeRate"]')).toHaveValue(String(cli.rate));
   expect(await trianglesShown(page)).toBe(cli.isosurfaces[0].triangles);
@@ -118,7 +120,7 @@ test('a picked folder of lossless chunks opens the same way, decoded in workers 
   await openApp(page, '/');
   await page.locator('input[webkitdirectory]').setInputFiles(store);
   await level0Shown(page);
-  await expect(page.locator('#messages')).toContainText(/chunks are decoded in \d Web Workers?/);
+  await expect(page.locator('#store-section dd[data-k="notes"]')).toContainText(/chunks are decoded in \d Web Workers?/);
   await expect(page.locator('#store-section dd[data-k="codec"]')).toHaveText('bytes + zstd');
   // the isovalue the page chose for the store (the link's went to the built-in volume shown first)
   const iso = await page.evaluate(() => (window as unknown as { zfpiso: { stats: { isovalue: number } } }).zfpiso.stats.isovalue);

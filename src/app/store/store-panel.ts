@@ -59,6 +59,8 @@ export interface StorePageState {
    * which finer levels may exceed.
    */
   valueRange?: { lo: number; hi: number; provisional: boolean; from: string };
+  /** What the store is and how it is read (lossless chunks, the rate chosen, no range arrays, decode workers): information, not errors. */
+  notes?: string[];
 }
 
 /** The refinement controls' changes: by view or level by level, the pixel tolerance, the level tint. */
@@ -199,6 +201,7 @@ function renderFigures(figures: HTMLElement, panel: HTMLElement, store: ZfpStore
     (st.valueRange
       ? `<dt>value range</dt><dd data-k="value-range" title="${escapeHtml(st.valueRange.from)}">${Number(st.valueRange.lo.toPrecision(6))} .. ${Number(st.valueRange.hi.toPrecision(6))}${st.valueRange.provisional ? ' (provisional: the coarsest level; finer levels may reach further)' : ''}</dd>`
       : '') +
+    (st.notes?.length ? `<dt>about</dt><dd data-k="notes">${st.notes.map((n) => `<p>${escapeHtml(n)}</p>`).join('')}</dd>` : '') +
     (st.reason ? `<dt>note</dt><dd data-k="reason">${escapeHtml(st.reason)}</dd>` : '') +
     `</dl>`;
 }

@@ -68,6 +68,9 @@ export interface StoreViewDeps {
   panel: HTMLElement;
 }
 
+/** Store notes a user should act on (the rest only go to the panel). */
+const WARNING_NOTE = /unfinished|is not used|cannot be shown/;
+
 const mib = (b: number) => `${(b / 2 ** 20).toFixed(2)} MiB`;
 
 export type { StoreChoice };
@@ -290,7 +293,9 @@ export class StoreView {
       };
     this.d.setCut(cut ? { cut: true, tolerancePx: cut.tolerancePx, ...(cut.tint ? { tint: true } : {}) } : {});
     if (cut) o.detachCamera = this.d.onCameraChange(() => this.#scheduleReplan(o));
-    for (const note of store.notes) this.d.onError(`${url}: ${note}`);
+    // what the store is and how it is read goes to the panel; what a user should act on is also a (dismissable) notice
+    state.notes = [...store.notes];
+    for (const note of store.notes) if (WARNING_NOTE.test(note)) this.d.onNotice(`${url}: ${note}`);
     const fetchedOnce = new Set<string>();
     f.onChunk((level, chunk, bytes, fromCache) => {
       // absent from the store (the fill value): nothing came over
