@@ -12,7 +12,7 @@ import zarr
 from conftest import read_raw, shared_volume, zfp_roundtrip
 from zfpzarr import Options, convert
 from zfpzarr.cli import format_summary
-from zfpzarr.rate import (FLOAT_RMS_BOUND, INTEGER_RMS_BOUND, SAMPLE_BLOCKS, choose_rate, fmt, gather_sample,
+from zfpzarr.rate import (CANDIDATE_BLOCKS, FLOAT_RMS_BOUND, INTEGER_RMS_BOUND, SAMPLE_BLOCKS, choose_rate, fmt, gather_sample,
                           sample_grid)
 
 NEGHIP = "neghip_66x66x66_uint8.raw"
@@ -42,24 +42,41 @@ def test_neghip_is_its_own_sample_and_chooses_rate_8():
     # 17^3 = 4913 blocks <= WHOLE_BLOCKS: the whole volume (a 16^3 sub-grid would skip its central planes)
     assert grid.whole and grid.blocks == 17 ** 3 and grid.dims == (66, 66, 66)
     assert sample_grid((100, 100, 100)).whole  # 25^3 = 15625 blocks
-    assert not sample_grid((128, 128, 128)).whole and sample_grid((128, 128, 128)).blocks == SAMPLE_BLOCKS
+    assert sample_grid((128, 128, 128)).whole  # 32^3 = 32768 blocks
+    assert not sample_grid((256, 256, 256)).whole and sample_grid((256, 256, 256)).blocks == CANDIDATE_BLOCKS
     c = choose_rate(da.from_array(values, chunks=32))
     assert c.rate == 8 and c.how == "chosen"
     assert c.bound == INTEGER_RMS_BOUND and c.rule == "0.15 of a source step (uint8)"
-    assert c.sample_blocks == 17 ** 3
-    assert c.sample_rms == rms_at(values, 8) <= 0.15 < rms_at(values, 7)
+    # the error is measured on the complete blocks that are not constant (the empty space around the molecule is exact)
+    complete = [values[z:z + 4, y:y + 4, x:x + 4] for z in range(0, 64, 4) for y in range(0, 64, 4) for x in range(0, 64, 4)]
+    structured = [b for b in complete if b.min() != b.max()]
+    assert 0 < len(structured) < 16 ** 3
+    assert c.structured and c.candidate_blocks == 17 ** 3 and c.sample_blocks == len(structured)
+    side_by_side = np.concatenate(structured, axis=2)
+    assert c.sample_rms == rms_at(side_by_side, 8) <= 0.15 < rms_at(side_by_side, 7)
     assert c.describe().startswith(f"rate 8 chosen from the data: sampled RMS error {fmt(c.sample_rms)} <= 0.15 "
-                                   "(0.15 of a source step (uint8)), 4913 sampled blocks, ")
+                                   f"(0.15 of a source step (uint8)), {len(structured)} structured of 4913 sampled blocks, ")
+
+
+def test_empty_space_around_the_content_does_not_lower_the_rate():
+    # neghip inside a volume of zeros 4^3 times its size, at offsets that are not whole blocks: the sampled
+    # blocks are mostly empty, and the rate is neghip's own
+    values = neghip()
+    padded = np.zeros((256, 256, 256), np.uint8)
+    padded[101:167, 50:116, 23:89] = values
+    c = choose_rate(da.from_array(padded, chunks=64))
+    assert c.candidate_blocks == CANDIDATE_BLOCKS and 0 < c.sample_blocks < CANDIDATE_BLOCKS // 20
+    assert c.rate == choose_rate(values).rate == 8
 
 
 def test_the_sample_is_the_blocks_of_the_subgrid_side_by_side():
-    # x: 2000 voxels (500 complete blocks), y: 3 (shorter than a block: whole), z: 130 (32 complete, 2 voxels left)
+    # x: 12000 voxels (3000 complete blocks), y: 3 (shorter than a block: whole), z: 130 (32 complete, 2 voxels left)
     rng = np.random.default_rng(1)
-    values = rng.integers(0, 60000, size=(130, 3, 2000), dtype=np.uint16)
-    grid = sample_grid((2000, 3, 130))
-    assert not grid.whole and grid.blocks <= SAMPLE_BLOCKS
-    full = (500, 1, 32)
-    m = max(k for k in range(1, 501) if np.prod([min(f, k) for f in full]) <= SAMPLE_BLOCKS)
+    values = rng.integers(0, 60000, size=(130, 3, 12000), dtype=np.uint16)
+    grid = sample_grid((12000, 3, 130))
+    assert not grid.whole and grid.blocks <= CANDIDATE_BLOCKS
+    full = (3000, 1, 32)
+    m = max(k for k in range(1, 3001) if np.prod([min(f, k) for f in full]) <= CANDIDATE_BLOCKS)
     assert [len(s) for s in grid.starts] == [min(f, m) for f in full]
     expected = np.empty((4 * len(grid.starts[2]), 3, 4 * len(grid.starts[0])), np.uint16)
     for kz, z0 in enumerate(grid.starts[2]):
@@ -81,7 +98,7 @@ def test_uint16_noise_chooses_the_smallest_rate_meeting_the_bound():
     expected = smallest_rate(values, INTEGER_RMS_BOUND)
     assert 1 < expected < 32
     assert c.rate == expected and c.how == "chosen"
-    assert c.sample_blocks == 512
+    assert c.sample_blocks == 512 and c.structured  # random values: every block has structure
     assert c.sample_rms == rms_at(values, expected)
     assert len(c.trials) <= 6 and {t["rate"] for t in c.trials} >= {16, expected}
 
@@ -104,7 +121,7 @@ def test_when_no_rate_meets_the_bound_32_is_used():
     assert c.how == "unmet" and c.rate == 32 and c.sample_rms > c.bound == INTEGER_RMS_BOUND
     assert c.trials[-1]["rate"] == 32 and "faithfulRate" not in c.record()
     assert c.describe().startswith(f"rate 32: no rate meets 0.15 (0.15 of a source step (uint32)); "
-                                   f"sampled RMS error {fmt(c.sample_rms)}, 8 sampled blocks, 6 rates tried in ")
+                                   f"sampled RMS error {fmt(c.sample_rms)}, 8 structured of 8 sampled blocks, 6 rates tried in ")
 
 
 def test_converting_without_rate_uses_the_chosen_rate_for_every_level(tmp_path):
@@ -120,7 +137,8 @@ def test_converting_without_rate_uses_the_chosen_rate_for_every_level(tmp_path):
     assert attrs["params"]["rates"] == [8.0] * count
     assert [l["rate"] for l in attrs["levels"]] == [8.0] * count
     rc = attrs["rateChoice"]
-    assert rc["rate"] == 8 and rc["how"] == "chosen" and rc["bound"] == 0.15 and rc["sampleBlocks"] == 17 ** 3
+    assert rc["rate"] == 8 and rc["how"] == "chosen" and rc["bound"] == 0.15 and rc["candidateBlocks"] == 17 ** 3
+    assert rc["structured"] and 0 < rc["sampleBlocks"] < 17 ** 3
     assert rc["trials"][-1]["rate"] in (7, 8) and {t["rate"] for t in rc["trials"]} >= {7, 8}
     # level 0 is zfp at rate 8 of each input chunk
     values = neghip()

@@ -5,18 +5,24 @@ benchmarks use it); this module implements exactly the same rule with zfpy,
 so a store converted here gets the rate the page would choose for the same
 volume:
 
-- sample: the volume itself when it has at most WHOLE_BLOCKS (16384) 4x4x4 blocks;
+- sample: the volume itself when it has at most CANDIDATE_BLOCKS (32768) 4x4x4 blocks;
   otherwise whole blocks on a regular sub-grid of the volume's complete
-  blocks, at most SAMPLE_BLOCKS of them (m per axis, the largest m with
-  prod(min(full blocks on the axis, m)) <= SAMPLE_BLOCKS; the k-th of n picks
+  blocks, at most CANDIDATE_BLOCKS of them (m per axis, the largest m with
+  prod(min(full blocks on the axis, m)) <= CANDIDATE_BLOCKS; the k-th of n picks
   block floor((k + 1/2) * full / n)), put side by side into a small volume.
   An axis shorter than a block is taken whole. zfp encodes blocks
   independently, so each sampled block has exactly the error it has in the
   whole stream;
+- measured blocks: the sample's complete blocks whose values are not all
+  equal (structure); constant blocks (air around a scan, empty space) are
+  exact at any rate and would dilute the error. They are put side by side
+  along x (4k x 4 x 4 voxels), at most SAMPLE_BLOCKS of them (the j-th picks
+  structured block floor((j + 1/2) * k / SAMPLE_BLOCKS)); a sample with no
+  such block is measured whole;
 - error: root mean square of decoded - source (float32 values) over the
-  sample's voxels;
+  measured blocks' voxels;
 - bound: integer sources: 0.15 of one source step; float sources: 1e-4 of the
-  sample's value range (max - min);
+  sample's value range (max - min, over every sampled block);
 - rates: 1, 2, ..., 32 bits per value, bisected (the error falls as the rate
   grows); when 32 does not meet the bound, 32.
 
@@ -35,8 +41,9 @@ from typing import Callable, Sequence
 import numpy as np
 import zfpy
 
-SAMPLE_BLOCKS = 4096  # blocks in a sample, at most (262,144 voxels)
-WHOLE_BLOCKS = 16384  # volumes of at most this many blocks are their own sample
+SAMPLE_BLOCKS = 4096  # structured blocks measured, at most (262,144 voxels)
+CANDIDATE_BLOCKS = 32768  # blocks scanned for structure, at most; volumes of at most this many are their own sample
+WHOLE_BLOCKS = 16384  # volumes of at most this many blocks are their own sample whatever the sub-grid's size
 INTEGER_RMS_BOUND = 0.15  # integer sources: RMS error allowed, in source steps
 FLOAT_RMS_BOUND = 1e-4  # float sources: RMS error allowed, as a fraction of the sample's value range
 MIN_RATE = 1
@@ -51,7 +58,7 @@ class SampleGrid:
     blocks: int
 
 
-def sample_grid(dims: Sequence[int], max_blocks: int = SAMPLE_BLOCKS, whole_blocks: int = WHOLE_BLOCKS) -> SampleGrid:
+def sample_grid(dims: Sequence[int], max_blocks: int = CANDIDATE_BLOCKS, whole_blocks: int = WHOLE_BLOCKS) -> SampleGrid:
     """The sample of a volume of `dims` (x, y, z): rate-choice.ts's sampleGrid."""
     dims = tuple(int(n) for n in dims)
     grid = [-(-n // 4) for n in dims]
@@ -141,6 +148,26 @@ def error_bound(dtype, sample32: np.ndarray) -> tuple[float, str]:
             f"{js_number(FLOAT_RMS_BOUND)} of the sampled value range {fmt(lo)} .. {fmt(hi)} ({name})")
 
 
+def structured_blocks(sample32: np.ndarray, max_blocks: int = SAMPLE_BLOCKS) -> np.ndarray | None:
+    """rate-choice.ts's structuredBlocks: the complete 4x4x4 blocks of a (z, y, x) sample whose
+    values are not all equal, in raster order (x fastest), side by side along x; None when none is."""
+    Z, Y, X = sample32.shape
+    bz, by, bx = Z // 4, Y // 4, X // 4
+    if bz * by * bx == 0:
+        return None
+    blocks = sample32[:4 * bz, :4 * by, :4 * bx].reshape(bz, 4, by, 4, bx, 4).transpose(0, 2, 4, 1, 3, 5).reshape(-1, 4, 4, 4)
+    flat = blocks.reshape(len(blocks), 64)
+    keep = (flat != flat[:, :1]).any(axis=1)
+    if not keep.any():
+        return None
+    picked = blocks[keep]  # (k, z, y, x)
+    k = min(len(picked), max_blocks)
+    if k < len(picked):
+        # Math.floor(((j + 0.5) * n) / k) in double precision, as the page computes it
+        picked = picked[[math.floor(((j + 0.5) * len(picked)) / k) for j in range(k)]]
+    return np.ascontiguousarray(picked.transpose(1, 2, 0, 3).reshape(4, 4, 4 * len(picked)))
+
+
 def rate_error(sample32: np.ndarray, rate: float) -> dict:
     """{rate, rms, maxAbs} of zfp at `rate` on the sample (compressed as one stream)."""
     decoded = zfpy.decompress_numpy(zfpy.compress_numpy(sample32, rate=rate))
@@ -156,7 +183,9 @@ class RateChoice:
     rule: str
     sample_rms: float
     sample_max: float
-    sample_blocks: int
+    sample_blocks: int  # blocks measured: the structured ones, or all sampled when none is
+    candidate_blocks: int = 0  # blocks sampled
+    structured: bool = False  # only the structured blocks were measured
     trials: list[dict] = field(default_factory=list)  # {rate, rms, maxAbs}, in the order tried
     ms: float = 0.0
 
@@ -164,7 +193,8 @@ class RateChoice:
         """rate-choice.ts's rateErrorRecord, without the time (so that a store's attributes
         are the same on every run); the store keeps it as `rateChoice`, with `rate`."""
         out = {"how": self.how, "bound": self.bound, "rule": self.rule, "sampleRms": self.sample_rms,
-               "sampleMax": self.sample_max, "sampleBlocks": self.sample_blocks}
+               "sampleMax": self.sample_max, "sampleBlocks": self.sample_blocks,
+               "candidateBlocks": self.candidate_blocks, "structured": self.structured}
         if self.how == "chosen":
             out["faithfulRate"] = self.rate
         out["trials"] = [dict(t) for t in self.trials]
@@ -174,7 +204,9 @@ class RateChoice:
         """rate-choice.ts's describeRateChoice, e.g. "rate 10 chosen from the data: sampled RMS
         error 0.144 <= 0.15 (0.15 of a source step (int16)), 4096 sampled blocks, 6 rates tried in 41 ms"."""
         n = len(self.trials)
-        sampled = f"{self.sample_blocks} sampled blocks, {n} rate{'' if n == 1 else 's'} tried in {self.ms:.0f} ms"
+        blocks = (f"{self.sample_blocks} structured of {self.candidate_blocks} sampled blocks" if self.structured
+                  else f"{self.sample_blocks} sampled blocks")
+        sampled = f"{blocks}, {n} rate{'' if n == 1 else 's'} tried in {self.ms:.0f} ms"
         if self.how == "chosen":
             return (f"rate {self.rate} chosen from the data: sampled RMS error {fmt(self.sample_rms)} <= "
                     f"{fmt(self.bound)} ({self.rule}), {sampled}")
@@ -193,13 +225,15 @@ def choose_rate_of_sample(sample: np.ndarray, dtype, blocks: int) -> RateChoice:
     if not np.isfinite(sample32).all():
         raise NonFiniteSample("the input has NaN or infinite values (after conversion to float32); zfp cannot encode them")
     bound, rule = error_bound(dtype, sample32)
+    structured = structured_blocks(sample32)
+    measured = sample32 if structured is None else structured
     trials: list[dict] = []
 
     def trial(rate: int) -> dict:
         for t in trials:
             if t["rate"] == rate:
                 return t
-        t = rate_error(sample32, rate)
+        t = rate_error(measured, rate)
         trials.append(t)
         return t
 
@@ -213,7 +247,8 @@ def choose_rate_of_sample(sample: np.ndarray, dtype, blocks: int) -> RateChoice:
     chosen = trial(hi)
     how = "unmet" if hi == MAX_RATE and not chosen["rms"] <= bound else "chosen"
     return RateChoice(rate=hi, how=how, bound=bound, rule=rule, sample_rms=chosen["rms"], sample_max=chosen["maxAbs"],
-                      sample_blocks=blocks, trials=trials, ms=(time.perf_counter() - t0) * 1000)
+                      sample_blocks=blocks if structured is None else structured.shape[2] // 4, candidate_blocks=blocks,
+                      structured=structured is not None, trials=trials, ms=(time.perf_counter() - t0) * 1000)
 
 
 def choose_rate(array, compute: Callable | None = None) -> RateChoice:

@@ -5,19 +5,31 @@
 // zfpy; tests/unit/zfp/rate-choice.test.ts checks they agree).
 //
 // The rule (measured: src/zfp/README.md "Rate from the data"):
-//  - sample: the volume itself when it has at most WHOLE_BLOCKS (16384)
+//  - sample: the volume itself when it has at most CANDIDATE_BLOCKS (32768)
 //    blocks (a sub-grid of barely fewer blocks than the volume skips whole
 //    planes: ironProt's 17^3 blocks sampled 16^3 missed its centre, RMS 0.14
 //    instead of 0.18); otherwise whole 4x4x4 blocks on a regular sub-grid of the volume's
-//    complete blocks, at most SAMPLE_BLOCKS of them (m per axis, the largest
-//    m with prod(min(full blocks on the axis, m)) <= SAMPLE_BLOCKS; the k-th
+//    complete blocks, at most CANDIDATE_BLOCKS of them (m per axis, the largest
+//    m with prod(min(full blocks on the axis, m)) <= CANDIDATE_BLOCKS; the k-th
 //    of n picks block floor((k + 1/2) * full / n)), put side by side into a
 //    small volume. zfp encodes blocks independently, so each sampled block
 //    has exactly the error it has in the whole stream;
+//  - measured blocks: the sample's complete blocks whose values are not all
+//    equal (structure): constant blocks (the air around a scan, empty
+//    space) are exact at any rate and would dilute the error, so a volume
+//    padded with empty space gets the rate of its content (issue 37). They
+//    are put side by side along x (4k x 4 x 4 voxels), at most SAMPLE_BLOCKS
+//    of them (the j-th of SAMPLE_BLOCKS picks structured block
+//    floor((j + 1/2) * k / SAMPLE_BLOCKS)). So many candidates are scanned
+//    because a scan with 1% of structure leaves ~40 structured blocks of
+//    4096, too few to measure (neghip in 256^3 of zeros: rate 9 instead of its
+//    own 8; with 32768 candidates, 338 blocks give 8). A sample with no such
+//    block is measured whole (nothing there needs a higher rate);
 //  - error: root mean square of decoded - source (float32 values) over the
-//    sample's voxels;
+//    measured blocks' voxels;
 //  - bound: integer sources (uint8, int8, uint16, int16): 0.15 of one source
-//    step (1); float sources: 1e-4 of the sample's value range (max - min);
+//    step (1); float sources: 1e-4 of the sample's value range (max - min,
+//    over every sampled block, constant ones included);
 //  - rates: 1, 2, ..., 32 bits per value, bisected (the error falls as the
 //    rate grows); when 32 does not meet the bound, 32;
 //  - cap: with a stream budget, the largest whole rate whose stream fits it,
@@ -29,9 +41,11 @@ import type { ZfpEncoder } from './encoder.ts';
 import { planZfpStream } from './format.ts';
 import type { StreamError, ZfpErrorMeter } from './stream-error.ts';
 
-/** Blocks in a sample, at most (262,144 voxels). */
+/** Structured blocks measured, at most (262,144 voxels encoded per trial). */
 export const SAMPLE_BLOCKS = 4096;
-/** Volumes of at most this many blocks (1 M voxels) are their own sample. */
+/** Blocks scanned for structure, at most (2 M voxels); volumes of at most this many blocks are their own sample. */
+export const CANDIDATE_BLOCKS = 32768;
+/** Volumes of at most this many blocks (1 M voxels) are their own sample whatever the sub-grid's size. */
 export const WHOLE_BLOCKS = 16384;
 /** Integer sources: the RMS error allowed, in source steps. */
 export const INTEGER_RMS_BOUND = 0.15;
@@ -56,7 +70,7 @@ export interface SampleGrid {
 }
 
 /** The sample of a volume of `dims` (see the rule above). */
-export function sampleGrid(dims: Dims, maxBlocks = SAMPLE_BLOCKS, wholeBlocks = WHOLE_BLOCKS): SampleGrid {
+export function sampleGrid(dims: Dims, maxBlocks = CANDIDATE_BLOCKS, wholeBlocks = WHOLE_BLOCKS): SampleGrid {
   const grid = dims.map((n) => Math.ceil(n / 4));
   if (grid[0] * grid[1] * grid[2] <= Math.max(maxBlocks, wholeBlocks)) {
     const starts = dims.map((n) => Array.from({ length: Math.ceil(n / 4) }, (_, i) => 4 * i)) as SampleGrid['starts'];
@@ -96,6 +110,76 @@ export function gatherSample(bytes: Uint8Array, dtype: DType, dims: Dims, grid: 
           }
         }
   return out;
+}
+
+/** The sample's values as float32 (numpy's astype; float64 rounded), x fastest. */
+function valuesOf(bytes: Uint8Array, dtype: DType): Float32Array {
+  if (dtype === 'float32' && bytes.byteOffset % 4 === 0) return new Float32Array(bytes.buffer, bytes.byteOffset, bytes.byteLength / 4);
+  const view = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
+  const n = bytes.byteLength / DTYPE_BYTES[dtype];
+  const out = new Float32Array(n);
+  for (let i = 0; i < n; i++) out[i] = readValue(view, dtype, i);
+  return out;
+}
+
+function readValue(view: DataView, dtype: DType, i: number): number {
+  switch (dtype) {
+    case 'uint8':
+      return view.getUint8(i);
+    case 'int8':
+      return view.getInt8(i);
+    case 'uint16':
+      return view.getUint16(2 * i, true);
+    case 'int16':
+      return view.getInt16(2 * i, true);
+    case 'float32':
+      return view.getFloat32(4 * i, true);
+    default:
+      return Math.fround(view.getFloat64(8 * i, true));
+  }
+}
+
+/** The blocks the rule measures: the sample's complete blocks whose values are not all equal, side by side along x. */
+export interface MeasuredBlocks {
+  /** Their values in the sample's type, a volume of `dims`. */
+  bytes: Uint8Array;
+  dims: Dims;
+  blocks: number;
+}
+
+/** The sample's structured blocks (see the rule above), or null when it has none. */
+export function structuredBlocks(sample: Uint8Array, dtype: DType, dims: Dims, maxBlocks = SAMPLE_BLOCKS): MeasuredBlocks | null {
+  const [X, Y, Z] = dims;
+  const values = valuesOf(sample, dtype);
+  const size = DTYPE_BYTES[dtype];
+  const picked: number[] = [];
+  for (let bz = 0; bz + 4 <= Z; bz += 4)
+    for (let by = 0; by + 4 <= Y; by += 4)
+      for (let bx = 0; bx + 4 <= X; bx += 4) {
+        const first = values[bx + X * (by + Y * bz)];
+        let constant = true;
+        for (let z = 0; z < 4 && constant; z++)
+          for (let y = 0; y < 4 && constant; y++)
+            for (let x = 0; x < 4; x++)
+              if (values[bx + x + X * (by + y + Y * (bz + z))] !== first) {
+                constant = false;
+                break;
+              }
+        if (!constant) picked.push(bx + X * (by + Y * bz));
+      }
+  if (picked.length === 0) return null;
+  const k = Math.min(picked.length, maxBlocks);
+  const kept = k === picked.length ? picked : Array.from({ length: k }, (_, j) => picked[Math.floor(((j + 0.5) * picked.length) / k)]);
+  const out = new Uint8Array(64 * k * size);
+  const W = 4 * k;
+  kept.forEach((origin, j) => {
+    for (let z = 0; z < 4; z++)
+      for (let y = 0; y < 4; y++) {
+        const from = (origin + X * (y + Y * z)) * size;
+        out.set(sample.subarray(from, from + 4 * size), (4 * j + W * (y + 4 * z)) * size);
+      }
+  });
+  return { bytes: out, dims: [W, 4, 4], blocks: k };
 }
 
 /** The sample's value range as float32 values (the encoder's view of them). */
@@ -166,7 +250,11 @@ export interface RateChoice {
   faithfulRate?: number;
   /** The sample's error at `rate` (what the choice used). */
   sample: RateTrial;
+  /** Blocks the error was measured on: the sample's structured blocks (or all of them when none is). */
   sampleBlocks: number;
+  /** Blocks sampled; `structured`: whether only the structured ones were measured. */
+  candidateBlocks: number;
+  structured: boolean;
   /** Every rate tried, in order. */
   trials: RateTrial[];
   /** Wall time of the choice (sample gathering and GPU trials). */
@@ -203,13 +291,15 @@ export async function chooseRate(
   const grid = sampleGrid(dims);
   const sample = gatherSample(bytes, dtype, dims, grid);
   const bound = errorBound(dtype, sample);
+  const structured = structuredBlocks(sample, dtype, grid.dims);
+  const measured: MeasuredBlocks = structured ?? { bytes: sample, dims: grid.dims, blocks: grid.blocks };
   const trials: RateTrial[] = [];
   const trial = async (rate: number): Promise<RateTrial> => {
     const known = trials.find((t) => t.rate === rate);
     if (known) return known;
-    const { stream, error } = await encoder.compressMeasured(sample, dtype, grid.dims, rate, meter, {
+    const { stream, error } = await encoder.compressMeasured(measured.bytes, dtype, measured.dims, rate, meter, {
       header: false,
-      fileName: `${opts.fileName ?? 'sample'}_${formatDims(grid.dims)}_${dtype}.raw`,
+      fileName: `${opts.fileName ?? 'sample'}_${formatDims(measured.dims)}_${dtype}.raw`,
     });
     stream.destroy();
     const t = { rate, rms: error.rms, maxAbs: error.maxAbs };
@@ -223,7 +313,9 @@ export async function chooseRate(
     bound,
     ...(faithfulRate !== undefined ? { faithfulRate } : {}),
     sample: trials.find((t) => t.rate === rate)!,
-    sampleBlocks: grid.blocks,
+    sampleBlocks: measured.blocks,
+    candidateBlocks: grid.blocks,
+    structured: structured !== null,
     trials,
     ms: performance.now() - t0,
     ...(warning ? { warning } : {}),
@@ -272,7 +364,8 @@ export async function chooseRate(
 /** One line on the choice, e.g. "rate 10 chosen from the data: RMS error 0.12 <= 0.15 of a source step (int16), 4096 sampled blocks, 6 rates tried in 41 ms". */
 export function describeRateChoice(c: RateChoice): string {
   const whole = c.stream ? `; whole stream: RMS ${fmt(c.stream.rms)}, max ${fmt(c.stream.maxAbs)}` : '';
-  const sampled = `${c.sampleBlocks} sampled blocks, ${c.trials.length} rate${c.trials.length === 1 ? '' : 's'} tried in ${c.ms.toFixed(0)} ms`;
+  const blocks = c.structured ? `${c.sampleBlocks} structured of ${c.candidateBlocks} sampled blocks` : `${c.sampleBlocks} sampled blocks`;
+  const sampled = `${blocks}, ${c.trials.length} rate${c.trials.length === 1 ? '' : 's'} tried in ${c.ms.toFixed(0)} ms`;
   switch (c.how) {
     case 'given':
       return `rate ${c.rate} as given: sampled RMS error ${fmt(c.sample.rms)} (bound for faithful surfaces ${fmt(c.bound.rms)}: ${c.bound.rule})${whole}`;
@@ -294,6 +387,8 @@ export function rateErrorRecord(c: RateChoice): Record<string, unknown> {
     sampleRms: c.sample.rms,
     sampleMax: c.sample.maxAbs,
     sampleBlocks: c.sampleBlocks,
+    candidateBlocks: c.candidateBlocks,
+    structured: c.structured,
     ...(c.stream ? { rms: c.stream.rms, max: c.stream.maxAbs } : {}),
     ...(c.faithfulRate !== undefined ? { faithfulRate: c.faithfulRate } : {}),
     trials: c.trials,

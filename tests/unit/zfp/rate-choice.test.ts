@@ -183,7 +183,8 @@ gpuTest(
     const opened = await openVolumeBytes(gpu.device, new Uint8Array(readFileSync(path)), 'ct_128x128x256_int16.raw');
     try {
       const c = opened.rateChoice!;
-      expect(c.sampleBlocks).toBe(4096);
+      expect(c.candidateBlocks).toBe(32768);
+      expect(c.sampleBlocks).toBeLessThanOrEqual(4096);
       const file = join(dir, 'ct.zfp');
       writeFileSync(file, await opened.stream.readBytes());
       const [max, rms] = JSON.parse(runPython(ZFPY_ERROR, [file, path, 'int16'])) as [number, number];
@@ -232,6 +233,49 @@ gpuTest(
         /ct_128x128x256_int16\.raw: rate \d+ .* over the stream budget of .*: compressed at rate 6 instead, RMS error .*spurious/,
       );
     } finally {
+      opened.stream.destroy();
+    }
+  },
+  120_000,
+);
+
+gpuTest(
+  "empty space around the content (neghip inside zeros 4^3 its size): the rate of the content in core, and the converter's choice",
+  async ({ gpu }) => {
+    const src = new Uint8Array(readFileSync(join(sharedData, 'volumes/neghip_66x66x66_uint8.raw')));
+    const N = 256;
+    const padded = new Uint8Array(N ** 3);
+    // offsets that are not whole blocks (x 23, y 50, z 101)
+    for (let z = 0; z < 66; z++)
+      for (let y = 0; y < 66; y++) padded.set(src.subarray(66 * (y + 66 * z), 66 * (y + 66 * z) + 66), 23 + N * (50 + y + N * (101 + z)));
+    const path = join(dir, `padded_${N}x${N}x${N}_uint8.raw`);
+    writeFileSync(path, padded);
+    const inCore = await openVolumeBytes(gpu.device, src, 'neghip_66x66x66_uint8.raw');
+    const opened = await openVolumeBytes(gpu.device, padded, `padded_${N}x${N}x${N}_uint8.raw`);
+    try {
+      const c = opened.rateChoice!;
+      expect(c.candidateBlocks).toBe(32768);
+      expect(c.structured).toBe(true);
+      expect(c.sampleBlocks).toBeLessThan(1638);
+      expect(opened.rate).toBe(inCore.rate);
+      expect(opened.rate).toBe(8);
+      const py = JSON.parse(
+        converterPython(
+          `import sys, json, numpy as np; sys.path.insert(0, ${JSON.stringify(join(repoRoot, 'converter'))})
+from zfpzarr.rate import choose_rate
+c = choose_rate(np.fromfile(sys.argv[1], np.uint8).reshape(${N}, ${N}, ${N}))
+print(json.dumps({'rate': c.rate, 'sampleBlocks': c.sample_blocks, 'trials': c.trials}))`,
+          [path],
+        ),
+      ) as { rate: number; sampleBlocks: number; trials: { rate: number; rms: number }[] };
+      expect(py.rate).toBe(opened.rate);
+      expect(py.sampleBlocks).toBe(c.sampleBlocks);
+      for (const t of c.trials) {
+        const p = py.trials.find((x) => x.rate === t.rate);
+        if (p) expect(Math.abs(t.rms / p.rms - 1), `rate ${t.rate}`).toBeLessThan(1e-5);
+      }
+    } finally {
+      inCore.stream.destroy();
       opened.stream.destroy();
     }
   },
