@@ -251,8 +251,10 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     for (let k = top; k >= finestUsed; k--) steps.push(this.#step(cut, k));
     // a cut that draws no chunk: one empty step, shown, so the page draws nothing at this isovalue
     if (steps.length === 0) steps.push(this.#step(cut, this.coarsest));
-    // a camera move that leaves the cut as it is on screen: nothing to fetch or compute
+    // a camera move that leaves the cut as it is on screen: nothing to fetch or compute, and
+    // what a superseded step was still fetching is aborted (its chunks are no longer needed)
     if (this.#isShown(steps[steps.length - 1], iso)) {
+      this.fetcher.wantAll([]);
       this.#shown = { ...this.#shown!, cut };
       return;
     }
@@ -449,6 +451,9 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
       if (this.#waiting === mine) this.#waiting = null;
       if (stale()) return false;
       if (missing.size > 0) return false; // a chunk failed
+    } else {
+      // everything resident: what a superseded step was still fetching is no longer needed
+      this.fetcher.wantAll([]);
     }
     progress('computing');
     const levels: CutLevelShown<V, S, F>[] = [];

@@ -17,6 +17,7 @@ import { DEFAULT_VIEWPORT } from '../../../src/store/view/view-request.ts';
 import { type RoleVolume, type ShownCut, ViewStream } from '../../../src/store/view/view-stream.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
 import { openStore, type ZfpStore } from '../../../src/store/zarr/open-store.ts';
+import { SimulatedLinkStore } from '../../../src/store/zarr/stores.ts';
 import { convert } from './stores.ts';
 
 const work = mkdtempSync(join(tmpdir(), 'view-stream-'));
@@ -123,8 +124,9 @@ function fakeGpu(store: ZfpStore, ranges: Float32Array[]) {
   return { gpu, pools, peak: () => peak };
 }
 
-async function setup(budget = 2 ** 30) {
-  const store = await openStore(storeForLocation(path), path);
+async function setup(budget = 2 ** 30, link?: { mbitPerSecond: number; latencyMs: number }) {
+  const files = storeForLocation(path);
+  const store = await openStore(link ? new SimulatedLinkStore(files, link) : files, path);
   const ranges = await Promise.all(store.levels.map((_, i) => store.readRanges(i).then((r) => r!)));
   const fetcher = new ChunkFetcher(store, { maxInFlight: 4 });
   const fake = fakeGpu(store, ranges);
@@ -229,6 +231,27 @@ describe('ViewStream', () => {
     await stream.setIsovalue(ISO);
     expect(shown.at(-1)!.levels.length).toBeGreaterThan(0);
     expect(errors).toEqual([]);
+    stream.destroy();
+  });
+
+  it('a camera move back to the cut on screen while a finer step is fetching: its requests are aborted, none stays in flight', async () => {
+    // a slow link: the zoomed view's chunks are still on their way when the camera goes back
+    const { stream, shown, fetcher, view } = await setup(2 ** 30, { mbitPerSecond: 20, latencyMs: 60 });
+    await stream.setView(view([0, 0, 0, 127, 127, 127], 6));
+    await stream.setIsovalue(ISO);
+    const steps = shown.length;
+    const zooming = stream.setView(view([100, 100, 100, 127, 127, 127]));
+    while (fetcher.counters.inFlight === 0) await new Promise((r) => setTimeout(r, 5));
+    const aborted = fetcher.counters.aborted;
+    await stream.setView(view([0, 0, 0, 127, 127, 127], 6));
+    await zooming;
+    expect(fetcher.counters.aborted).toBeGreaterThan(aborted);
+    expect(fetcher.counters.inFlight).toBe(0);
+    // the coarse cut stayed on screen, whole
+    const last = shown.at(-1)!;
+    expect(last.final).toBe(true);
+    expect(coverage(stream.store, last.leaves).every((n) => n === 1)).toBe(true);
+    expect(shown.length).toBeGreaterThanOrEqual(steps);
     stream.destroy();
   });
 
