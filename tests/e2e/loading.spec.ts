@@ -230,7 +230,9 @@ test('the form asks what a name does not say; Escape cancels and keeps the volum
   await expect(form.locator('[name="nz"]')).toHaveValue('114');
   await form.locator('.form-ok').click();
   await waitForLoad(page, before);
-  expect((await pageState(page)).volume).toMatchObject({ kind: 'tiff', dims: [121, 154, 114], rate: 8 });
+  // a binary stack (0 and 255): the rate rule measures the blocks with structure, the 0-255 edges, which zfpy
+  // decodes with an RMS error of 0.54 steps at rate 8 and 0.11 at 11 (issue 37's rule; 8 before, diluted by the empty blocks)
+  expect((await pageState(page)).volume).toMatchObject({ kind: 'tiff', dims: [121, 154, 114], rate: 11 });
   await expect(page.locator('#volume-info dd[data-key="source"]')).toContainText('uint8 TIFF');
   expect(await trianglesShown(page)).toBeGreaterThan(1000);
 });
