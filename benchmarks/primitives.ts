@@ -23,6 +23,7 @@ import { ExclusiveScan } from '../src/primitives/scan.ts';
 import { RadixSortByKey } from '../src/primitives/sort.ts';
 import { printTable, repeat, writeJson, type Stats } from './lib/report.ts';
 import { BracketTimer } from './primitives-timing.ts';
+import { xorshiftWords } from './lib/random.ts';
 
 function arg(name: string, fallback: string): string {
   const i = process.argv.indexOf(`--${name}`);
@@ -59,18 +60,6 @@ const variants = (pathsArg || Object.keys(VARIANTS).join(',')).split(',').filter
 // What path: 'auto' picks here (subgroups are then used wherever the device has them).
 const autoVariant = choosePath(device, {}) === 'emulator' ? 'emulator' : gpu.features.subgroups ? 'gpu+subgroups' : 'gpu';
 
-function random(n: number, seed: number, modulo = 0): Uint32Array<ArrayBuffer> {
-  let s = seed >>> 0 || 1;
-  const a = new Uint32Array(n);
-  for (let i = 0; i < n; i++) {
-    s ^= s << 13;
-    s ^= s >>> 17;
-    s ^= s << 5;
-    a[i] = modulo ? (s >>> 0) % modulo : s >>> 0;
-  }
-  return a;
-}
-
 function buffer(label: string, data: Uint32Array<ArrayBuffer> | number): GPUBuffer {
   const size = typeof data === 'number' ? data * 4 : data.byteLength;
   const b = device.createBuffer({
@@ -83,7 +72,7 @@ function buffer(label: string, data: Uint32Array<ArrayBuffer> | number): GPUBuff
 }
 
 // Inputs at the largest size; smaller sizes use their prefixes via the count.
-const mask = random(maxN, 1, 2);
+const mask = xorshiftWords(maxN, 1, 2);
 const offsets = new Uint32Array(maxN);
 let ones = 0;
 for (let i = 0; i < maxN; i++) {
@@ -91,8 +80,8 @@ for (let i = 0; i < maxN; i++) {
   ones += mask[i];
 }
 const bufs = {
-  a: buffer('bench.a', random(maxN, 2)),
-  b: buffer('bench.b', random(maxN, 3)),
+  a: buffer('bench.a', xorshiftWords(maxN, 2)),
+  b: buffer('bench.b', xorshiftWords(maxN, 3)),
   c: buffer('bench.c', maxN),
   d: buffer('bench.d', maxN),
   mask: buffer('bench.mask', mask),

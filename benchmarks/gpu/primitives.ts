@@ -16,20 +16,9 @@ import { RadixSortByKey } from '../../src/primitives/sort.ts';
 import { repeat } from '../lib/report.ts';
 import { BracketTimer } from '../primitives-timing.ts';
 import type { BenchRun } from './context.ts';
+import { xorshiftWords } from '../lib/random.ts';
 
 const SECTION = 'primitives';
-
-function xorshift(n: number, seed: number, modulo = 0): Uint32Array<ArrayBuffer> {
-  let s = seed >>> 0 || 1;
-  const a = new Uint32Array(n);
-  for (let i = 0; i < n; i++) {
-    s ^= s << 13;
-    s ^= s >>> 17;
-    s ^= s << 5;
-    a[i] = modulo ? (s >>> 0) % modulo : s >>> 0;
-  }
-  return a;
-}
 
 export async function primitivesSection(run: BenchRun): Promise<unknown> {
   const { device, features } = run.gpu;
@@ -44,9 +33,9 @@ export async function primitivesSection(run: BenchRun): Promise<unknown> {
     made.push(b);
     return b;
   };
-  const keys = xorshift(maxN, 2);
+  const keys = xorshiftWords(maxN, 2);
   const iota = Uint32Array.from({ length: maxN }, (_, i) => i);
-  const mask = xorshift(maxN, 1, 2);
+  const mask = xorshiftWords(maxN, 1, 2);
   const offsets = new Uint32Array(maxN);
   for (let i = 0, ones = 0; i < maxN; i++) {
     offsets[i] = ones;
