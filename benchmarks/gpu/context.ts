@@ -128,6 +128,24 @@ export class BenchRun {
     return this.maxSeconds - this.elapsedSeconds;
   }
 
+  /**
+   * Runs `record`'s work untimed for a while before it is measured: a GPU
+   * that idled (while the CPU made the next volume) runs at a fraction of its
+   * clock for the first milliseconds, and a sub-millisecond kernel timed
+   * then reads several times slower (bonsai's decode: 53 against 255 GB/s
+   * between two runs on an H200). 150 ms on a GPU; one pass in a smoke run.
+   */
+  async warmUp(record: (encoder: GPUCommandEncoder) => void): Promise<void> {
+    const { device } = this.gpu;
+    const until = performance.now() + (this.plan.smoke ? 0 : 150);
+    do {
+      const encoder = device.createCommandEncoder({ label: 'benchGpu.warmUp' });
+      record(encoder);
+      device.queue.submit([encoder.finish()]);
+      await device.queue.onSubmittedWorkDone();
+    } while (performance.now() < until);
+  }
+
   figure(section: string, name: string, value: number, unit: string): void {
     this.figures.push({ section, name, value, unit });
   }

@@ -84,6 +84,7 @@ export async function primitivesSection(run: BenchRun): Promise<unknown> {
       ];
       for (const b of benches) {
         for (const n of sizes) {
+          await run.warmUp((e) => b.record(e, n));
           const ms = await repeat(run.plan.primitiveRepeats + 1, () => timer.time((e) => b.record(e, n)));
           const geps = n / (ms.median / 1e3) / 1e9;
           run.figure(SECTION, `${b.name}, ${v.name}, 2^${Math.log2(n)}: G elements/s`, geps, 'G elements/s');

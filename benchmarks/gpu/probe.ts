@@ -69,6 +69,7 @@ export async function probeSection(run: BenchRun): Promise<ProbeData> {
   const a = gpu.device.createBuffer({ label: 'benchGpu.copyA', size: bytes, usage });
   const b = gpu.device.createBuffer({ label: 'benchGpu.copyB', size: bytes, usage });
   const timer = new BracketTimer(gpu.device);
+  await run.warmUp((e) => e.copyBufferToBuffer(a, 0, b, 0, bytes));
   let ms = await repeat(9, () => timer.time((e) => e.copyBufferToBuffer(a, 0, b, 0, bytes)));
   let source: string = timer.source;
   if (!(ms.median > 0)) {

@@ -97,6 +97,7 @@ export async function zfpDecodeSection(run: BenchRun): Promise<unknown> {
   const rows: (string | number)[][] = [];
   const records: unknown[] = [];
   const timed = async (label: string, record: (enc: GPUCommandEncoder, tw: GPUComputePassTimestampWrites | undefined) => void) => {
+    await run.warmUp((enc) => record(enc, undefined));
     const all: number[] = [];
     for (let i = 0; i < repeats; i++) {
       const frame = timer.begin();
