@@ -12,7 +12,7 @@ import zarr
 from conftest import read_raw, shared_volume, zfp_roundtrip
 from zfpzarr import Options, convert
 from zfpzarr.cli import format_summary
-from zfpzarr.rate import (CANDIDATE_BLOCKS, FLOAT_RMS_BOUND, INTEGER_RMS_BOUND, SAMPLE_BLOCKS, choose_rate, fmt, gather_sample,
+from zfpzarr.rate import (CANDIDATE_BLOCKS, FLOAT_RMS_BOUND, INTEGER_RMS_BOUND, choose_rate, fmt, gather_sample,
                           sample_grid)
 
 NEGHIP = "neghip_66x66x66_uint8.raw"

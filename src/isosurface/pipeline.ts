@@ -35,7 +35,7 @@ import { BlockCache } from './lru-cache.ts';
 import type { StatsReadback } from './stats-readback.ts';
 import { IsosurfaceBudgetError, type IsosurfaceDrawData, type IsosurfaceOptions, type SurfaceMesh, type VolumeInfo } from './types.ts';
 import { SurfaceOutput } from './vertex-output.ts';
-import { MAX_VERTEX_VOXELS } from './vertex-format.ts';
+import { surfaceDimsProblem } from '../core/limits.ts';
 
 /** The parts of one volume's pipeline (owned: destroy() frees them, except the stream). */
 export interface PipelineParts {
@@ -108,10 +108,8 @@ export class IsosurfacePipeline {
     const limits = device.limits;
     const maxWg = options.maxWorkgroupsPerDimension ?? limits.maxComputeWorkgroupsPerDimension;
     const { blockGrid, dims } = stream.info;
-    if (dims.some((n) => n > MAX_VERTEX_VOXELS))
-      throw new RangeError(
-        `${stream.info.fileName}: ${dims.join('x')} voxels; vertices place their blocks with 12 bits per axis, so a volume may have at most ${MAX_VERTEX_VOXELS} voxels along an axis`,
-      );
+    const tooWide = surfaceDimsProblem(dims);
+    if (tooWide) throw new RangeError(`${stream.info.fileName}: ${tooWide}`);
     // Per-block buffers hold one entry per block id: a stream's blocks, a pool's slots x blocks per chunk (block-ids.ts).
     const ids = blockIdsOf(device, stream);
     const blockCount = ids.count;

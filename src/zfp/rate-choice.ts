@@ -189,26 +189,7 @@ export function valueRange(bytes: Uint8Array, dtype: DType): [number, number] {
   let lo = Infinity;
   let hi = -Infinity;
   for (let i = 0; i < n; i++) {
-    let v: number;
-    switch (dtype) {
-      case 'uint8':
-        v = view.getUint8(i);
-        break;
-      case 'int8':
-        v = view.getInt8(i);
-        break;
-      case 'uint16':
-        v = view.getUint16(2 * i, true);
-        break;
-      case 'int16':
-        v = view.getInt16(2 * i, true);
-        break;
-      case 'float32':
-        v = view.getFloat32(4 * i, true);
-        break;
-      default:
-        v = Math.fround(view.getFloat64(8 * i, true));
-    }
+    const v = readValue(view, dtype, i);
     if (v < lo) lo = v;
     if (v > hi) hi = v;
   }

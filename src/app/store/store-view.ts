@@ -42,7 +42,7 @@ export interface StoreViewDeps {
   gpu: () => GpuContext;
   /** Puts a level on screen as the current volume (Session.install); `first` for the store's first level. */
   install(volume: LoadedVolume, level: number | undefined, first: boolean): void;
-  /** The isovalue to open at when the page's link gives one inside the value range. */
+  /** The isovalue to open at when the page's link gives one (used as given, even outside a provisional range). */
   linkIso(valueRange: [number, number]): number | undefined;
   budgetBytes(): number;
   onError(message: string): void;

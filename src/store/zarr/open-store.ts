@@ -8,7 +8,7 @@ import type { AbsolutePath, AsyncReadable } from '@zarrita/storage';
 import * as zarr from 'zarrita';
 import { constantChunkStream } from '../../zfp/cpu/constant-stream.ts';
 import { bitsPerBlockForRate } from '../../zfp/format.ts';
-import { MAX_VERTEX_VOXELS } from '../../isosurface/vertex-format.ts';
+import { surfaceDimsProblem } from '../../core/limits.ts';
 import { parseZfpHeader } from '../../zfp/header.ts';
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
 export { chunkCoords, zfpChunkBytes } from './metadata.ts';
@@ -113,10 +113,8 @@ async function openLevel(
       `${name}: ${chunkGrid.join(' x ')} chunks of ${C}^3; this reader takes at most ${MAX_CHUNKS} per level (convert with a larger --chunk)`,
     );
   const chunkBytes = zfpChunkBytes(C, rate);
-  const unusable =
-    Math.max(x, y, z) > MAX_VERTEX_VOXELS
-      ? `${name} has ${Math.max(x, y, z)} voxels along an axis; vertices place their blocks with 12 bits per axis, so a level may have at most ${MAX_VERTEX_VOXELS}`
-      : null;
+  const tooWide = surfaceDimsProblem([x, y, z]);
+  const unusable = tooWide ? `${name}: ${tooWide}` : null;
   return {
     unusable,
     index,

@@ -11,7 +11,7 @@
 // 'float32'): everything downstream is the zfp store's pipeline.
 import type { GetOptions } from '@zarrita/storage';
 import * as zarr from 'zarrita';
-import { MAX_VERTEX_VOXELS } from '../../isosurface/vertex-format.ts';
+import { surfaceDimsProblem } from '../../core/limits.ts';
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
 import { ByteLru } from '../fetch/lru-bytes.ts';
 import { describeTransportError, StoreError } from './errors.ts';
@@ -262,10 +262,8 @@ export function sourceLevel(
 }
 
 export function unusableLevel(level: SourceLevel): string | null {
-  const d = level.layout.dims;
-  return Math.max(...d) > MAX_VERTEX_VOXELS
-    ? `${level.layout.name} has ${Math.max(...d)} voxels along an axis; vertices place their blocks with 12 bits per axis, so a level may have at most ${MAX_VERTEX_VOXELS}`
-    : null;
+  const tooWide = surfaceDimsProblem(level.layout.dims);
+  return tooWide ? `${level.layout.name}: ${tooWide}` : null;
 }
 
 export function sourcePrecision(dtype: string): string {
