@@ -357,6 +357,44 @@ export class ActiveBlocks {
     return readF32(this.device, this.blockRanges);
   }
 
+  /**
+   * A pool's chunk ranges: [min, max] per listed slot over its blocks' ranges
+   * (the decoded values inside the volume, as the surface reads them; the
+   * empty range [FLT_MAX, -FLT_MAX] for a slot without a finite value). The
+   * copies are submitted before this returns; the reduction waits for the GPU.
+   */
+  async readSlotRanges(slots: readonly number[]): Promise<Float32Array> {
+    const pool = this.parts.ids.pool;
+    const out = new Float32Array(2 * slots.length);
+    if (!pool || slots.length === 0) return out;
+    const per = pool.chunkBlocks ** 3;
+    const staging = this.device.createBuffer({
+      label: 'Isosurface.slotRanges.staging',
+      size: slots.length * per * 8,
+      usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST,
+    });
+    try {
+      const encoder = this.device.createCommandEncoder({ label: 'Isosurface.slotRanges' });
+      slots.forEach((slot, i) => encoder.copyBufferToBuffer(this.blockRanges, slot * per * 8, staging, i * per * 8, per * 8));
+      this.device.queue.submit([encoder.finish()]);
+      await staging.mapAsync(GPUMapMode.READ);
+      const f = new Float32Array(staging.getMappedRange());
+      for (let i = 0; i < slots.length; i++) {
+        let lo = 3.4028234663852886e38;
+        let hi = -3.4028234663852886e38;
+        for (let b = i * per; b < (i + 1) * per; b++) {
+          if (f[2 * b] < lo) lo = f[2 * b];
+          if (f[2 * b + 1] > hi) hi = f[2 * b + 1];
+        }
+        out[2 * i] = lo;
+        out[2 * i + 1] = hi;
+      }
+      return out;
+    } finally {
+      staging.destroy();
+    }
+  }
+
   /** Bytes held (fixed per volume). */
   get byteSize(): number {
     return this.buffers().reduce((n, b) => n + b.size, 0);

@@ -426,6 +426,16 @@ export class Isosurface {
     return this.pipeline.readBlockRanges();
   }
 
+  /**
+   * Over a chunk pool: [min, max] per listed slot of the values its chunk
+   * decodes to (padding left out), as of the last computed surface: the
+   * ranges a stream learns as chunks arrive. The copies are submitted before
+   * this returns (the surface may be destroyed once it has).
+   */
+  readSlotRanges(slots: readonly number[]): Promise<Float32Array> {
+    return this.pipeline.readSlotRanges(slots);
+  }
+
   /** Active block ids of the drawn surface and the triangles of each (waits for the GPU). */
   readBlockTriangles(): Promise<{ ids: Uint32Array; triangles: Uint32Array }> {
     return this.pipeline.readBlockTriangles();

@@ -441,6 +441,11 @@ export class IsosurfacePipeline {
     return this.parts.active.readBlockRanges();
   }
 
+  /** A pool's [min, max] per listed slot (ActiveBlocks.readSlotRanges). */
+  readSlotRanges(slots: readonly number[]): Promise<Float32Array> {
+    return this.parts.active.readSlotRanges(slots);
+  }
+
   /**
    * The drawn surface's triangles per block: the active block ids and, for
    * each, the triangles of the cells whose lowest corner lies in it (the

@@ -46,6 +46,8 @@ export interface LevelSurface<S extends LevelStats = LevelStats> {
   trimCache(): void;
   /** [min, max] per block id (slot x blocksPerChunk + block in chunk): the ranges of a store without range arrays. */
   readBlockRanges?(): Promise<Float32Array>;
+  /** [min, max] per listed slot of its chunk's decoded values (Isosurface.readSlotRanges): ranges learnt as chunks arrive. */
+  readSlotRanges?(slots: readonly number[]): Promise<Float32Array>;
   destroy(): void;
 }
 /** The GPU side, injected (the real one: gpu-port.ts; tests: a CPU fake). */

@@ -15,6 +15,14 @@ export { finishTestGpu, type TestGpu };
  */
 export const testLimits: 'adapter' | 'default' = process.env.ZFPISO_TEST_LIMITS === 'default' ? 'default' : 'adapter';
 
+/**
+ * Whether this run is one of the suites that run a file again to change the
+ * code path (`limits`: WebGPU's default limits; `gpukernels`: the GPU-shaped
+ * kernels forced), not the data: a file may take its smallest case there,
+ * since the `unit` suite has already run every case (tests/README.md).
+ */
+export const codePathRerun: boolean = testLimits === 'default' || (process.env.ZFPISO_KERNEL_PATH ?? '') === 'gpu';
+
 /** Creates a device and starts error scopes; `finishTestGpu` checks them. */
 export async function createTestGpu(): Promise<TestGpu> {
   const failures: GpuFailure[] = [];

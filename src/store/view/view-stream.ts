@@ -23,6 +23,7 @@
 // (each surface is updated in place: for the frame between, a region may be
 // drawn twice, never missing).
 import type { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
+import { LearntRanges } from '../learnt-ranges.ts';
 import { chunkCount, estimateFixedBytes, readLevelRanges, storeValueRange } from '../level-state.ts';
 import { chunkNeeded } from '../plan.ts';
 import type { LevelStats, LevelSurface, LevelVolume, StreamGpu, StreamGpuBytes, StreamProgress } from '../stream-port.ts';
@@ -100,6 +101,12 @@ export const DEFAULT_TOLERANCE_PX = 1.5;
 
 export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends LevelSurface<S>> {
   readonly levels: LevelState<V>[];
+  /** Chunk ranges learnt as chunks arrive, for the levels without range arrays (learnt-ranges.ts). */
+  readonly learnt: LearntRanges;
+  /** The readbacks of learnt ranges in flight (learnSettled). */
+  #learning: Promise<void> = Promise.resolve();
+  /** Chunks put into or evicted from any pool so far: a surface's block ranges are its slots' chunks' while this is unchanged. */
+  #poolChanges = 0;
   budgetBytes: number;
   finest = 0;
   coarsest: number;
@@ -140,6 +147,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
       volume: null,
       lru: new Map(),
     }));
+    this.learnt = new LearntRanges(store.levels.map((l) => l.layout.chunkGrid));
     this.coarsest = this.levels.length - 1;
     while (this.coarsest > 0 && store.levels[this.coarsest].unusable) this.coarsest--;
     // levels finer than a level that cannot be drawn (wider than a surface can be) are never split into:
@@ -300,7 +308,8 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     // read from the neighbourhood ranges per chunk asked: nothing made per level (a level may have 2^24 chunks)
     const nb = lv.nb;
     if (nb) return (c) => chunkNeeded(nb, iso, c);
-    if (!this.store.levels[L].rangesPath) return () => true; // no range arrays: every chunk may hold the surface
+    // no range arrays: the ranges learnt so far, every chunk with an unknown neighbour may hold the surface
+    if (!this.store.levels[L].rangesPath) return this.learnt.learns(L) ? (c) => this.learnt.needs(L, iso, c) : () => true;
     return null;
   }
 
@@ -508,7 +517,44 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     this.#shown = { iso, step: step.finest, final, levels, cut, leaves: step.leaves };
     for (const l of this.#shownListeners) l(this.#shown);
     progress('shown');
+    this.#learn(levels);
     return true;
+  }
+
+  /**
+   * Learns the ranges of the chunks these surfaces read whose range is not
+   * known (levels without range arrays), from the block ranges the surfaces
+   * were just computed with: valid while no chunk has been put or evicted
+   * since (#poolChanges) and the surface is still the level's. In batches of
+   * at most LEARN_SLOTS_BYTES of block ranges, one after the other; recorded
+   * as they arrive (learnSettled).
+   */
+  #learn(levels: readonly CutLevelShown<V, S, F>[]): void {
+    const changes = this.#poolChanges;
+    const valid = (l: CutLevelShown<V, S, F>) =>
+      !this.#destroyed && this.#poolChanges === changes && this.#surfaces.get(l.level)?.surface === l.surface;
+    for (const l of levels) {
+      const L = l.level;
+      if (this.store.levels[L].rangesPath || !this.learnt.learns(L) || !l.surface.readSlotRanges) continue;
+      const todo = [...l.drawn, ...l.ghosts].filter((c) => !this.learnt.has(L, c));
+      const batch = Math.max(1, Math.floor(LEARN_SLOTS_BYTES / (8 * l.volume.blocksPerChunk)));
+      this.#learning = this.#learning.then(async () => {
+        for (let i = 0; i < todo.length; i += batch) {
+          if (!valid(l)) return;
+          const chunks = todo.slice(i, i + batch).filter((c) => l.volume.has(c));
+          const slots = chunks.map((c) => l.volume.slotOfChunk(c)!);
+          // the copies are submitted by this call, while the surface's buffers live; the wait may outlast them
+          const r = await l.surface.readSlotRanges!(slots).catch(() => null);
+          if (!r) return;
+          chunks.forEach((c, k) => this.learnt.record(L, c, r[2 * k], r[2 * k + 1]));
+        }
+      });
+    }
+  }
+
+  /** Resolves when the learnt ranges asked for so far are recorded. */
+  learnSettled(): Promise<void> {
+    return this.#learning;
   }
 
   /** Per level, the chunks the surface on screen reads (drawn and ghosts). */
@@ -537,6 +583,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
       // pools of levels the step does not use give their room back
       for (const other of this.levels) {
         if (other === lv || !other.volume || this.#surfaces.has(other.index)) continue;
+        this.#poolChanges++;
         other.volume.destroy();
         other.volume = null;
         other.lru.clear();
@@ -547,6 +594,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
         `level ${lv.index} needs ${n} chunks (${mib(n * lv.layout.chunkBytes)} MiB) for this view; ` +
         `the budget of ${mib(this.budgetBytes)} MiB has ${mib(Math.max(0, this.#free()))} MiB free`
       );
+    this.#poolChanges++;
     if (v) v.resize(Math.max(target, v.residentCount));
     else lv.volume = this.gpu.createVolume(lv.layout, target);
     return null;
@@ -561,12 +609,14 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
       if (v.freeCount === 0 && !v.isReserved(chunk)) {
         for (const c of lv.lru.keys()) {
           if (w.keep[level]?.has(key(level, c))) continue;
+          this.#poolChanges++;
           v.evict(c);
           lv.lru.delete(c);
           break;
         }
       }
       try {
+        this.#poolChanges++;
         v.put(chunk, bytes);
       } catch (e) {
         for (const l of this.#errors) l(e as Error);
@@ -633,4 +683,6 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
 
 /** Kept free within the budget for short-lived buffers (statistics and readback staging, uniforms). */
 const RESERVE_BYTES = 1 << 20;
+/** The most block ranges read back at once to learn chunk ranges (a short-lived staging buffer, the reserve's size). */
+const LEARN_SLOTS_BYTES = 1 << 20;
 const mib = (b: number) => (b / 2 ** 20).toFixed(1);

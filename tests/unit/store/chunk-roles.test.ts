@@ -17,7 +17,7 @@ import { afterAll, beforeAll, describe, expect, test } from 'vitest';
 import { Isosurface } from '../../../src/isosurface/isosurface.ts';
 import type { IsosurfaceOptions } from '../../../src/isosurface/types.ts';
 import { CHUNK_ROLE_CODES, type ChunkIndex, ChunkedVolume, type ChunkLevelLayout } from '../../../src/zfp/chunked-volume.ts';
-import { gpuTest } from '../../helpers/gpu.ts';
+import { codePathRerun, gpuTest } from '../../helpers/gpu.ts';
 import { readCacheState, readVertices } from '../../helpers/isosurface-readback.ts';
 import { convert } from './stores.ts';
 
@@ -30,15 +30,19 @@ interface Case {
   dims: [number, number, number];
   chunk: number;
   rate: number;
-  isovalues: [number, number];
+  isovalues: number[];
 }
 
-const cases: Case[] = [
+const allCases: Case[] = [
   // 5^3 chunks, the last of 2 voxels along each axis (a partial block)
   { key: 'neghip', input: 'volumes/neghip_66x66x66_uint8.raw', dims: [66, 66, 66], chunk: 16, rate: 4, isovalues: [40.37, 133.37] },
   // 3^3 chunks, the last of 4 voxels along each axis
   { key: 'ironProt', input: 'volumes/ironProt_68x68x68_uint8.raw', dims: [68, 68, 68], chunk: 32, rate: 6, isovalues: [20.37, 90.37] },
 ];
+// The suites that rerun this file for another code path (default limits, the GPU kernels) take the
+// neghip pool (partial blocks at the edges) at one isovalue: the roles' logic is data-independent
+// and the unit suite has run both pools at both isovalues.
+const cases: Case[] = codePathRerun ? [{ ...allCases[0], isovalues: allCases[0].isovalues.slice(0, 1) }] : allCases;
 
 const layouts = new Map<string, { store: string; layout: ChunkLevelLayout }>();
 

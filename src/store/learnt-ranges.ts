@@ -1,0 +1,119 @@
+// Chunk ranges learnt as chunks arrive (issue 37): for a store without range
+// arrays (lossless chunks with no sidecar, zfp stores written by others),
+// each resident chunk's [min, max] of the values the surface is made from,
+// as the GPU decoded them at the store's rate, is recorded once a surface
+// over its pool has been computed. The plan then treats a chunk as a range
+// array would (plan.ts: needed iff lo < iso <= hi over its 27-chunk
+// neighbourhood), with an unknown chunk anywhere in the neighbourhood
+// making it needed: so a later isovalue or camera neither fetches nor keeps
+// a chunk known to hold no surface, and never misses one that may.
+//
+// Kept per opened store for the session; bounded: a level's ranges are an
+// array of 2 f32 per chunk, made when its first range arrives, for levels
+// of at most MAX_LEARNT_CHUNKS chunks (the finer levels of a vast store are
+// not learnt: their chunks stay needed, as before).
+import type { ChunkIndex } from './types.ts';
+
+/** The most chunks a level may have for its ranges to be learnt (2 f32 each: 32 MiB at most). */
+export const MAX_LEARNT_CHUNKS = 2 ** 22;
+
+type Grid = readonly [number, number, number];
+
+export class LearntRanges {
+  readonly #levels: (Float32Array | null)[];
+  readonly #known: number[];
+  #lo = Infinity;
+  #hi = -Infinity;
+
+  constructor(readonly grids: readonly Grid[]) {
+    this.#levels = grids.map(() => null);
+    this.#known = grids.map(() => 0);
+  }
+
+  /** Whether level L's ranges can be learnt (not too many chunks). */
+  learns(L: number): boolean {
+    const g = this.grids[L];
+    return g !== undefined && g[0] * g[1] * g[2] <= MAX_LEARNT_CHUNKS;
+  }
+
+  /** Chunks of level L whose range is known. */
+  knownCount(L: number): number {
+    return this.#known[L] ?? 0;
+  }
+
+  /** Whether chunk c of level L has a learnt range. */
+  has(L: number, c: ChunkIndex): boolean {
+    const r = this.#levels[L];
+    return r !== null && r !== undefined && !Number.isNaN(r[2 * c]);
+  }
+
+  /** [min, max] of chunk c of level L, or null while unknown. */
+  get(L: number, c: ChunkIndex): [number, number] | null {
+    if (!this.has(L, c)) return null;
+    const r = this.#levels[L]!;
+    return [r[2 * c], r[2 * c + 1]];
+  }
+
+  /** Records chunk c's range (min > max: no finite value); a level that is not learnt ignores it. */
+  record(L: number, c: ChunkIndex, lo: number, hi: number): void {
+    if (!this.learns(L) || Number.isNaN(lo) || Number.isNaN(hi)) return;
+    const g = this.grids[L];
+    if (!Number.isInteger(c) || c < 0 || c >= g[0] * g[1] * g[2]) throw new RangeError(`LearntRanges: chunk ${c} outside level ${L}`);
+    let r = this.#levels[L];
+    if (!r) {
+      r = new Float32Array(2 * g[0] * g[1] * g[2]).fill(Number.NaN);
+      this.#levels[L] = r;
+    }
+    if (Number.isNaN(r[2 * c])) this.#known[L]++;
+    r[2 * c] = lo;
+    r[2 * c + 1] = hi;
+    if (lo <= hi) {
+      this.#lo = Math.min(this.#lo, lo);
+      this.#hi = Math.max(this.#hi, hi);
+    }
+  }
+
+  /**
+   * Whether the surface at `iso` needs chunk c of level L: lo < iso <= hi
+   * over the chunk and its 26 neighbours (plan.ts's rule), true while any of
+   * them is unknown. Reads only those 27 entries: nothing is made per level.
+   */
+  needs(L: number, iso: number, c: ChunkIndex): boolean {
+    const r = this.#levels[L];
+    if (!r) return true;
+    const [gx, gy, gz] = this.grids[L];
+    const x = c % gx;
+    const y = Math.floor(c / gx) % gy;
+    const z = Math.floor(c / (gx * gy));
+    let lo = Infinity;
+    let hi = -Infinity;
+    for (let dz = -1; dz <= 1; dz++) {
+      const w = z + dz;
+      if (w < 0 || w >= gz) continue;
+      for (let dy = -1; dy <= 1; dy++) {
+        const v = y + dy;
+        if (v < 0 || v >= gy) continue;
+        for (let dx = -1; dx <= 1; dx++) {
+          const u = x + dx;
+          if (u < 0 || u >= gx) continue;
+          const n = u + gx * (v + gy * w);
+          const a = r[2 * n];
+          if (Number.isNaN(a)) return true;
+          if (a < lo) lo = a;
+          if (r[2 * n + 1] > hi) hi = r[2 * n + 1];
+        }
+      }
+    }
+    return lo < iso && iso <= hi;
+  }
+
+  /** Level L's ranges as a range array would hold them ([min, max] per chunk, NaN where unknown), or null if none is known. */
+  level(L: number): Float32Array | null {
+    return this.#levels[L] ?? null;
+  }
+
+  /** [min, max] over every learnt range of every level, or null when none is finite. */
+  valueRange(): [number, number] | null {
+    return this.#lo <= this.#hi ? [this.#lo, this.#hi] : null;
+  }
+}

@@ -1,0 +1,162 @@
+// Chunk ranges learnt as chunks arrive (src/store/learnt-ranges.ts, issue
+// 37). The rule against plan.ts's range-array rule on random ranges with
+// unknown chunks; then a store of lossless chunks written by zarr-python
+// (uint8, structure in the middle, empty space around, partial edge
+// chunks), streamed by the view on the GPU: every learnt range equals the
+// ranges sidecar that `convert --ranges-only` writes (zfpy's decode of each
+// brick at the store's rate), and a second isovalue fetches no brick whose
+// learnt neighbourhood excludes it.
+import { execFileSync } from 'node:child_process';
+import { mkdtempSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+import { afterAll, beforeAll, describe, expect, it } from 'vitest';
+import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
+import { chunkedGpu, storeEncoder } from '../../../src/store/gpu-port.ts';
+import { LearntRanges, MAX_LEARNT_CHUNKS } from '../../../src/store/learnt-ranges.ts';
+import { chunkNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
+import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../../src/store/view/cut.ts';
+import { DEFAULT_VIEWPORT } from '../../../src/store/view/view-request.ts';
+import { ViewStream } from '../../../src/store/view/view-stream.ts';
+import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
+import { openStore } from '../../../src/store/zarr/open-store.ts';
+import { openRangesSidecar } from '../../../src/store/zarr/ranges-sidecar.ts';
+import type { ChunkedVolume } from '../../../src/zfp/chunked-volume.ts';
+import type { Isosurface } from '../../../src/isosurface/isosurface.ts';
+import type { IsosurfaceStats } from '../../../src/isosurface/types.ts';
+import { mulberry32 } from '../../../src/util/random.ts';
+import { repoRoot } from '../../helpers/python.ts';
+import { gpuTest } from '../../helpers/gpu.ts';
+import { converterPython } from './stores.ts';
+
+const work = mkdtempSync(join(tmpdir(), 'learnt-ranges-'));
+const storePath = join(work, 'blob.zarr');
+const sidecarPath = join(work, 'blob-ranges.zarr');
+const DIMS: [number, number, number] = [120, 104, 90]; // x, y, z: partial 16^3 chunks on every axis
+beforeAll(() => {
+  // uint8, zstd, 16^3 chunks: a noisy ball of radius 16 at the centre, zeros around it
+  converterPython(
+    `
+import sys, numpy as np, zarr
+from zarr.codecs import ZstdCodec
+x, y, z = ${JSON.stringify(DIMS)}
+g = np.mgrid[0:z, 0:y, 0:x].astype('float64')
+r = np.sqrt((g[0] - z / 2) ** 2 + (g[1] - y / 2) ** 2 + (g[2] - x / 2) ** 2)
+rng = np.random.default_rng(5)
+v = np.where(r < 16, 120 + 100 * np.cos(r / 4) + rng.uniform(-20, 20, r.shape), 0).clip(0, 255).astype('uint8')
+a = zarr.create_array(sys.argv[1], shape=v.shape, chunks=(16, 16, 16), dtype='uint8', compressors=[ZstdCodec()], overwrite=True)
+a[:] = v
+`,
+    [storePath],
+  );
+  execFileSync(
+    process.execPath,
+    [join(repoRoot, 'scripts/convert.mjs'), storePath, '--out', sidecarPath, '--ranges-only', '--rate', '8', '--quiet'],
+    {
+      timeout: 600_000,
+      stdio: 'pipe',
+    },
+  );
+}, 600_000);
+afterAll(() => rmSync(work, { recursive: true, force: true }));
+
+describe('LearntRanges', () => {
+  it("needs = plan.ts's rule over the same ranges, unknown chunks (NaN) making their neighbourhood needed", () => {
+    const rnd = mulberry32(11);
+    for (const grid of [
+      [1, 1, 1],
+      [5, 1, 1],
+      [4, 3, 2],
+      [7, 6, 5],
+    ] as [number, number, number][]) {
+      const n = grid[0] * grid[1] * grid[2];
+      const learnt = new LearntRanges([grid]);
+      const ranges = new Float32Array(2 * n).fill(Number.NaN);
+      for (let c = 0; c < n; c++) {
+        const u = rnd();
+        if (u < 0.25) continue; // unknown
+        // some empty chunks (no finite value: min > max), the rest random
+        const [lo, hi] = u < 0.35 ? [3.4028234663852886e38, -3.4028234663852886e38] : [10 * rnd(), 10 + 10 * rnd()].sort((a, b) => a - b);
+        learnt.record(0, c, lo, hi);
+        ranges[2 * c] = lo;
+        ranges[2 * c + 1] = hi;
+      }
+      const nb = neighbourhoodRanges(grid, ranges);
+      for (const iso of [-1, 0, 5, 9.99, 10, 12.5, 20, 30])
+        for (let c = 0; c < n; c++) expect(learnt.needs(0, iso, c), `grid ${grid} iso ${iso} chunk ${c}`).toBe(chunkNeeded(nb, iso, c));
+      expect(learnt.knownCount(0)).toBe(ranges.filter((v, i) => i % 2 === 0 && !Number.isNaN(v)).length);
+    }
+  });
+
+  it('a level with more chunks than MAX_LEARNT_CHUNKS is not learnt (every chunk needed); a chunk outside its level is refused', () => {
+    const big = new LearntRanges([
+      [2, 2, 2],
+      [MAX_LEARNT_CHUNKS, 2, 1],
+    ]);
+    expect(big.learns(0)).toBe(true);
+    expect(big.learns(1)).toBe(false);
+    big.record(1, 5, 0, 1);
+    expect(big.has(1, 5)).toBe(false);
+    expect(big.needs(1, 100, 5)).toBe(true);
+    expect(() => big.record(0, 8, 0, 1)).toThrow(/chunk 8 outside level 0/);
+    big.record(0, 3, -2, 7);
+    expect(big.valueRange()).toEqual([-2, 7]);
+  });
+});
+
+describe('ranges learnt by the view stream on the GPU', () => {
+  gpuTest(
+    "a store of lossless chunks: each learnt range = the sidecar's (zfpy at the store's rate); a second isovalue skips what they exclude",
+    async ({ gpu }) => {
+      const store = await openStore(storeForLocation(storePath), storePath, { rate: 8 });
+      expect(store.source).toBeTruthy();
+      expect(store.levels.length).toBe(1);
+      const sidecar = await openRangesSidecar(storeForLocation(sidecarPath), sidecarPath, { bytes: 0, requests: 0 });
+      expect(sidecar.rate).toBe(8);
+      const truth = await sidecar.read(0);
+      const port = chunkedGpu(gpu, undefined, await storeEncoder(gpu, store));
+      const fetcher = new ChunkFetcher(store, { maxInFlight: 4 });
+      const fetched: number[] = [];
+      // every chunk handed to the stream, fetched or from the fetcher's cache of bytes
+      fetcher.onChunk((_L, c) => fetched.push(c));
+      const stream = await ViewStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, 64 << 20);
+      const layout = store.levels[0].layout;
+      const box = fitBox0(layout, 0);
+      const camera = cameraFromView(
+        cameraForBox(box, store.voxelSize, DEFAULT_VIEWPORT).state,
+        DEFAULT_VIEWPORT,
+        sceneRadiusOf(box, store.voxelSize),
+      );
+      await stream.setView({ camera, tolerancePx: 1.5 });
+
+      // the first isovalue: every brick is unknown, so every brick in view is fetched
+      await stream.setIsovalue(60.5);
+      await stream.learnSettled();
+      const chunks = layout.chunkGrid[0] * layout.chunkGrid[1] * layout.chunkGrid[2];
+      expect(stream.shown?.final).toBe(true);
+      expect(new Set(fetched).size).toBe(chunks);
+      expect(stream.learnt.knownCount(0)).toBe(chunks);
+      for (let c = 0; c < chunks; c++) {
+        const got = stream.learnt.get(0, c)!;
+        // a brick of zeros: the sidecar says [0, 0] like the GPU's decode
+        expect(got, `brick ${c}`).toEqual([truth[2 * c], truth[2 * c + 1]]);
+      }
+
+      // a second isovalue inside the ball only: the bricks of empty space around it are neither drawn nor fetched again
+      fetched.length = 0;
+      const pool = stream.levels[0].volume!;
+      for (let c = 0; c < chunks; c++) pool.evict(c);
+      const iso2 = 180.5;
+      await stream.setIsovalue(iso2);
+      const nb = neighbourhoodRanges(layout.chunkGrid, truth);
+      const expected = Array.from({ length: chunks }, (_, c) => c).filter((c) => chunkNeeded(nb, iso2, c));
+      expect(expected.length).toBeGreaterThan(0);
+      expect(expected.length).toBeLessThan(chunks / 2);
+      expect([...new Set(fetched)].sort((a, b) => a - b)).toEqual(expected);
+      expect(stream.shown?.levels[0].stats.triangles).toBeGreaterThan(100);
+      stream.destroy();
+      store.close?.();
+    },
+    300_000,
+  );
+});
