@@ -363,6 +363,7 @@ async function start(): Promise<void> {
       pendingIso = undefined;
       return wanted !== undefined && Number.isFinite(wanted) ? wanted : undefined;
     },
+    widenValueRange: (v, range) => session.widenValueRange(v, range),
     linkLevel: () => initialView.level,
     camera: () => ({ state: camera.getState(), viewport: { width: canvas.width, height: canvas.height } }),
     onCameraChange: (l) => {

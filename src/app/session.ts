@@ -117,6 +117,24 @@ export class Session {
     p.viewer.requestFrame();
   }
 
+  /**
+   * The volume on screen reaches further than its value range said (a
+   * store's provisional range, widened as its bricks report theirs): the
+   * slider, its block profile and the panel span the new range; the
+   * isovalue stays.
+   */
+  widenValueRange(v: LoadedVolume, range: [number, number]): void {
+    if (this.current !== v) return;
+    const { p } = this;
+    const info = v.iso.info as { valueRange: [number, number]; blockCount: number };
+    info.valueRange = range;
+    const [lo, hi] = range;
+    p.isoControl.setVolume(range, computeBlockProfile(v.ranges, lo, hi), p.isoControl.value);
+    setInfoList(p.volumeInfo, volumeRows(v.opened, info.blockCount, range));
+    p.bench.setVolume(range);
+    if (p.state.volume) p.state.volume.valueRange = range;
+  }
+
   /** The isovalue of the surface on screen (as the user gave it, else the GPU's float32). */
   get drawnIsovalue(): number | undefined {
     const { state } = this.p;

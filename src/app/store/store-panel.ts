@@ -199,7 +199,7 @@ function renderFigures(figures: HTMLElement, panel: HTMLElement, store: ZfpStore
     `<dt>GPU per level</dt><dd data-k="level-state">${mib(Math.max(0, st.gpu.surfaces - st.gpu.cache - st.gpu.vertices))}</dd>` +
     `<dt>GPU total</dt><dd data-k="gpu">${mib(st.gpu.total)} of ${mib(st.gpu.budget)}</dd>` +
     (st.valueRange
-      ? `<dt>value range</dt><dd data-k="value-range" title="${escapeHtml(st.valueRange.from)}">${Number(st.valueRange.lo.toPrecision(6))} .. ${Number(st.valueRange.hi.toPrecision(6))}${st.valueRange.provisional ? ' (provisional: the coarsest level; finer levels may reach further)' : ''}</dd>`
+      ? `<dt>value range</dt><dd data-k="value-range" title="${escapeHtml(st.valueRange.from)}">${Number(st.valueRange.lo.toPrecision(6))} .. ${Number(st.valueRange.hi.toPrecision(6))}${st.valueRange.provisional ? ' (provisional: bricks not yet read may reach further)' : ''}</dd>`
       : '') +
     (st.notes?.length ? `<dt>about</dt><dd data-k="notes">${st.notes.map((n) => `<p>${escapeHtml(n)}</p>`).join('')}</dd>` : '') +
     (st.reason ? `<dt>note</dt><dd data-k="reason">${escapeHtml(st.reason)}</dd>` : '') +

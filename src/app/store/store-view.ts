@@ -44,6 +44,8 @@ export interface StoreViewDeps {
   install(volume: LoadedVolume, level: number | undefined, first: boolean): void;
   /** The isovalue to open at when the page's link gives one (used as given, even outside a provisional range). */
   linkIso(valueRange: [number, number]): number | undefined;
+  /** The volume installed reaches further than its value range said: the slider spans `range` (Session.widenValueRange). */
+  widenValueRange(volume: LoadedVolume, range: [number, number]): void;
   budgetBytes(): number;
   onError(message: string): void;
   onNotice(message: string): void;
@@ -95,6 +97,8 @@ interface OpenStore {
   coarse: LevelValues | null;
   state: StorePageState;
   current: StoreLevelIsosurface | StoreCutIsosurface | null;
+  /** The volume installed on the page for `current`. */
+  installed: LoadedVolume | null;
   /** Refinements started and not yet ended (the isovalue changed meanwhile). */
   running: number;
   lastProgress: StreamProgress | null;
@@ -278,6 +282,7 @@ export class StoreView {
       coarse,
       state,
       current: null,
+      installed: null,
       running: 0,
       lastProgress: null,
       iso: NaN,
@@ -433,9 +438,50 @@ export class StoreView {
         this.#replacing = false;
       }
       o.current = iso;
+      o.installed = volume;
       o.state.shownLevels.push(s.level);
     }
     o.state.shownLevel = s.level;
+    this.#widen(o);
+    this.#publish(o);
+  }
+
+  /**
+   * A provisional value range (the coarsest level's, read at open) widened
+   * by what the stream has learnt since: chunk ranges as bricks arrive (the
+   * view), or a level's once resident whole (level by level). Final once
+   * every brick of level 0 is known.
+   */
+  #widen(o: OpenStore): void {
+    const vr = o.state.valueRange;
+    if (this.#open !== o || !vr?.provisional) return;
+    const c = o.controller;
+    let learnt: [number, number] | null;
+    let complete: boolean;
+    let bricks: number;
+    if (c instanceof ViewStream) {
+      learnt = c.learnt.valueRange();
+      bricks = o.store.levels.reduce((a, _, L) => a + c.learnt.knownCount(L), 0);
+      complete = c.learnt.knownCount(0) === o.store.levels[0].chunkCount;
+    } else {
+      learnt = c.valueRange;
+      complete = c.chunkRanges(0) !== null;
+      bricks = o.store.levels.reduce((a, l, L) => a + (c.chunkRanges(L) ? l.chunkCount : 0), 0);
+    }
+    if (!learnt) return;
+    const lo = Math.min(vr.lo, learnt[0]);
+    const hi = Math.max(vr.hi, learnt[1]);
+    if (lo === vr.lo && hi === vr.hi && !complete) return;
+    o.valueRange = [lo, hi];
+    o.state.valueRange = {
+      lo,
+      hi,
+      provisional: !complete,
+      from: complete
+        ? `every brick of level 0, as decoded at rate ${o.store.levels[0].layout.rate}`
+        : `${vr.from.split('; ')[0]}; widened by ${bricks} bricks learnt as they arrived`,
+    };
+    if (o.installed) this.d.widenValueRange(o.installed, o.valueRange);
     this.#publish(o);
   }
 
@@ -599,6 +645,7 @@ export class StoreView {
       );
       this.d.install(volume, undefined, true); // no level= in the link: the view decides
       o.current = iso;
+      o.installed = volume;
       // the page's camera now (the link's, or Fit of the volume): plan for it
       this.#scheduleReplan(o);
     }
@@ -606,6 +653,8 @@ export class StoreView {
     o.state.shownLevel = finest;
     this.d.requestFrame();
     this.#publish(o);
+    // the ranges of the bricks this step read are recorded once their readback arrives
+    void (o.controller as ChunkViewStream).learnSettled().then(() => this.#widen(o));
   }
 
   #line(text: string): void {
