@@ -49,6 +49,8 @@ export interface OpenedInput {
   notes: string[];
   /** A store's figures (bytes fetched, chunks), for the JSON record. */
   store?: () => StoreRecord;
+  /** A store of lossless chunks: writes the brick ranges known now as a ranges sidecar (--save-ranges). */
+  saveRanges?: (dir: string) => Promise<{ known: number; bricks: number }>;
   destroy(): void;
 }
 
@@ -76,7 +78,15 @@ export async function openInputSurface(
     try {
       const s = await openStoreInput(gpu, path, opts);
       for (const note of s.notes) ctx.log(`note: ${note}`);
-      return { iso: s.surface, how: s.how, rate: s.rate, notes: s.notes, store: s.record, destroy: () => s.surface.destroy() };
+      return {
+        iso: s.surface,
+        how: s.how,
+        rate: s.rate,
+        notes: s.notes,
+        store: s.record,
+        ...(s.saveRanges ? { saveRanges: s.saveRanges } : {}),
+        destroy: () => s.surface.destroy(),
+      };
     } catch (e) {
       if (e instanceof NoSuchLevelError) throw new UsageError(e.message);
       if (e instanceof StoreError || e instanceof ZfpFormatError) throw new InputError(e.message, { cause: e });

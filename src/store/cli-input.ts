@@ -2,8 +2,8 @@
 // or folder, streamed at level L only (pinned-level.ts): each isovalue
 // fetches the chunks its surface needs (8 requests in flight) into the
 // level's GPU pool of compressed chunks; the record says how much came over.
-import { existsSync } from 'node:fs';
-import { join } from 'node:path';
+import { existsSync, mkdirSync, readFileSync, rmSync, statSync, writeFileSync } from 'node:fs';
+import { dirname, join } from 'node:path';
 import type { GpuContext } from '../gpu/device.ts';
 import type { Isosurface } from '../isosurface/isosurface.ts';
 import type { IsosurfaceStats } from '../isosurface/types.ts';
@@ -18,6 +18,7 @@ import { isStoreUrl, storeForLocation } from './zarr/node-store.ts';
 import { openStore } from './zarr/open-store.ts';
 import type { SourceInfo } from './zarr/source-store.ts';
 import { MeteredStore } from './zarr/stores.ts';
+import { rangesSidecarFiles } from './zarr/ranges-sidecar-files.ts';
 import type { ZfpStore } from './zarr/store.ts';
 import type { StreamGpuBytes } from './stream-port.ts';
 import type { ChunkedStreamGpu } from './gpu-port.ts';
@@ -88,6 +89,12 @@ export interface StoreInput {
   fileName: string;
   /** The store's figures so far. */
   record(): StoreRecord;
+  /**
+   * A store of lossless chunks: writes the brick ranges known now (learnt
+   * as bricks arrived, or a level's once resident whole) as a ranges sidecar
+   * folder (--save-ranges); absent for a zfp store.
+   */
+  saveRanges?(dir: string): Promise<{ known: number; bricks: number }>;
 }
 
 export interface StoreInputOptions {
@@ -155,7 +162,35 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
     ? `${store.source.format} store of ${store.source.dtype} (${store.source.codecs.join(' + ') || 'uncompressed'}), level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 bricks compressed on the GPU at rate ${lv.layout.rate})`
     : `Zarr store, level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 chunks, rate ${lv.layout.rate})`;
   const how = `${kind}, ` + `streamed: the chunks each surface needs, within ${(budgetBytes / 2 ** 20).toFixed(0)} MiB of GPU memory`;
-  return { surface, how, rate: lv.layout.rate, notes: store.notes, fileName: `${input} level ${L}`, record };
+  return {
+    surface,
+    how,
+    rate: lv.layout.rate,
+    notes: store.notes,
+    fileName: `${input} level ${L}`,
+    record,
+    ...(store.source ? { saveRanges: async (dir: string) => writeSidecar(store, dir, (l) => controller.chunkRanges(l)) } : {}),
+  };
+}
+
+/** Writes a ranges sidecar folder (ranges-sidecar-files.ts); an existing folder is replaced only when it is a ranges sidecar. */
+function writeSidecar(store: ZfpStore, dir: string, ranges: (level: number) => Float32Array | null): { known: number; bricks: number } {
+  const sidecar = rangesSidecarFiles(store, ranges);
+  if (existsSync(dir)) {
+    let isSidecar = false;
+    try {
+      isSidecar = statSync(dir).isDirectory() && readFileSync(join(dir, 'zarr.json'), 'utf8').includes('"zfpzarr_ranges"');
+    } catch {
+      // not a folder with a zarr.json
+    }
+    if (!isSidecar) throw new StoreError('layout', `${dir}: exists and is not a ranges sidecar; give a new folder to --save-ranges`);
+    rmSync(dir, { recursive: true, force: true });
+  }
+  for (const [path, bytes] of sidecar.files) {
+    mkdirSync(dirname(join(dir, path)), { recursive: true });
+    writeFileSync(join(dir, path), bytes);
+  }
+  return { known: sidecar.known, bricks: sidecar.bricks };
 }
 
 /**
@@ -207,7 +242,20 @@ async function viewInput(
   const how =
     `Zarr store of ${store.levels.length} levels (level 0 ${lv0.layout.dims.join('x')}, ${lv0.layout.chunkEdge}^3 chunks, rate ${lv0.layout.rate}), ` +
     `refined by the view (each region at the level whose voxels project to at most ${view.tolerancePx} px), within ${(budgetBytes / 2 ** 20).toFixed(0)} MiB of GPU memory`;
-  return { surface, how, rate: lv0.layout.rate, notes: store.notes, fileName: `${input} (view)`, record };
+  // levels with range arrays (a sidecar given): those; the others: what the stream learnt as bricks arrived
+  const saveRanges = async (dir: string) => {
+    await stream.learnSettled();
+    return writeSidecar(store, dir, (l) => (store.levels[l].rangesPath ? stream.chunkRanges(l) : stream.learnt.level(l)));
+  };
+  return {
+    surface,
+    how,
+    rate: lv0.layout.rate,
+    notes: store.notes,
+    fileName: `${input} (view)`,
+    record,
+    ...(store.source ? { saveRanges } : {}),
+  };
 }
 
 /**

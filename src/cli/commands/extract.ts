@@ -26,6 +26,7 @@ import type { CutChunkRecord } from '../../store/view/view-surface.ts';
 import { rateErrorRecord } from '../../zfp/rate-choice.ts';
 import {
   CommandFailed,
+  InputError,
   numberListOption,
   numberOption,
   requiredPositional,
@@ -109,7 +110,7 @@ export const extractCommand: CliCommand = {
   name: 'extract',
   summary: 'isosurfaces on the GPU (block cache kept between isovalues): counts, area, bbox, GPU time; --ply soups',
   usage:
-    "extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--level L] [--deadline S] [--time T] [--channel C] [--ranges RANGES.zarr] [--view-box x0,y0,z0,x1,y1,z1 | --view '#iso=..&cam=..'] [--tolerance PX] [--no-skirts] (--level, --view-box, --view, --deadline, --time, --channel, --ranges: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8)",
+    "extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--level L] [--deadline S] [--time T] [--channel C] [--ranges RANGES.zarr] [--view-box x0,y0,z0,x1,y1,z1 | --view '#iso=..&cam=..'] [--tolerance PX] [--no-skirts] [--save-ranges OUT.zarr] (--level, --view-box, --view, --deadline, --time, --channel, --ranges: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8; --save-ranges: a store of lossless chunks, the brick ranges learnt by these surfaces written as a ranges sidecar)",
   options: {
     level: { type: 'string' },
     deadline: { type: 'string' },
@@ -125,6 +126,7 @@ export const extractCommand: CliCommand = {
     'stream-budget': { type: 'string' },
     'cache-budget': { type: 'string' },
     ply: { type: 'string' },
+    'save-ranges': { type: 'string' },
   },
   async run(ctx, args) {
     const input = requiredPositional(args, 0, 'IN (a zfp file or a raw volume)');
@@ -132,6 +134,7 @@ export const extractCommand: CliCommand = {
     if (!isovalues || isovalues.length === 0) throw new UsageError('give the isovalues with --iso a,b,c');
     const budget = budgetOption(args);
     const plyPrefix = stringOption(args, 'ply');
+    const saveRanges = stringOption(args, 'save-ranges');
     const gpu = await ctx.gpu();
     const volume = await openInputSurface(ctx, gpu, input, {
       rate: numberOption(args, 'rate'),
@@ -145,9 +148,14 @@ export const extractCommand: CliCommand = {
       view: viewOption(args),
     });
     ctx.log(`${input}: ${volume.how}`);
+    if (saveRanges !== undefined && !volume.saveRanges) {
+      volume.destroy();
+      throw new UsageError('--save-ranges is for a Zarr store of lossless chunks (a zfp store has its own range arrays or none)');
+    }
     const { iso } = volume;
     const records: (ExtractRecord | { iso: number; error: string; overBudget?: boolean })[] = [];
     let storeRecord: ReturnType<NonNullable<typeof volume.store>> | undefined;
+    let savedRanges: { path: string; known: number; bricks: number } | undefined;
     try {
       for (const value of isovalues) {
         let stats;
@@ -208,6 +216,14 @@ export const extractCommand: CliCommand = {
         );
       }
       storeRecord = volume.store?.(); // before destroy: the GPU bytes held with the last surface
+      if (saveRanges !== undefined && volume.saveRanges) {
+        try {
+          savedRanges = { path: saveRanges, ...(await volume.saveRanges(saveRanges)) };
+        } catch (e) {
+          throw new InputError(`--save-ranges ${saveRanges}: ${(e as Error).message}`, { cause: e });
+        }
+        ctx.log(`${saveRanges}: the ranges of ${savedRanges.known} of ${savedRanges.bricks} bricks (the others unknown: NaN)`);
+      }
     } finally {
       volume.destroy();
     }
@@ -224,6 +240,7 @@ export const extractCommand: CliCommand = {
       memoryBudgetBytes: iso.memoryBudget,
       isosurfaces: records,
       ...(storeRecord ? { store: storeRecord } : {}),
+      ...(savedRanges ? { savedRanges } : {}),
     };
     // Surfaces that did not fit or could not be fetched are failures: the JSON still gets every record, then the exit status says so.
     const failed = records.filter((r): r is { iso: number; error: string; overBudget?: boolean } => 'error' in r);

@@ -7,7 +7,7 @@
 // brick at the store's rate), and a second isovalue fetches no brick whose
 // learnt neighbourhood excludes it.
 import { execFileSync } from 'node:child_process';
-import { mkdtempSync, rmSync } from 'node:fs';
+import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
@@ -27,7 +27,7 @@ import type { IsosurfaceStats } from '../../../src/isosurface/types.ts';
 import { mulberry32 } from '../../../src/util/random.ts';
 import { repoRoot } from '../../helpers/python.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
-import { converterPython } from './stores.ts';
+import { cli, converterPython } from './stores.ts';
 
 const work = mkdtempSync(join(tmpdir(), 'learnt-ranges-'));
 const storePath = join(work, 'blob.zarr');
@@ -159,4 +159,58 @@ describe('ranges learnt by the view stream on the GPU', () => {
     },
     300_000,
   );
+});
+
+describe('extract --save-ranges: what the surfaces learnt, as a ranges sidecar', () => {
+  it("written by a view's surfaces: zarr-python reads it; every known brick = zfpy's; a later run with it fetches only the bricks its isovalue needs", () => {
+    const saved = join(work, 'learnt.zarr');
+    const json = join(work, 'learn.json');
+    const box = `0,0,0,${DIMS.map((n) => n - 1).join(',')}`;
+    const r = cli('extract', storePath, '--rate', '8', '--iso', '60.5', '--view-box', box, '--save-ranges', saved, '--json', json);
+    expect(r.status, r.stderr).toBe(0);
+    const rec = JSON.parse(readFileSync(json, 'utf8'));
+    const bricks = DIMS.reduce((a, n) => a * Math.ceil(n / 16), 1);
+    expect(rec.savedRanges).toEqual({ path: saved, known: bricks, bricks });
+    // read back by zarr-python, compared with the converter's sidecar (zfpy at rate 8)
+    const compared = converterPython(
+      `
+import sys, json, numpy as np, zarr
+a = zarr.open_group(sys.argv[1], mode='r')
+b = zarr.open_group(sys.argv[2], mode='r')
+x, y = a['ranges/0'][...], b['ranges/0'][...]
+known = ~np.isnan(x[..., 0])
+info = dict(a.attrs)['zfpzarr_ranges']
+print(json.dumps({'shape': list(x.shape), 'known': int(known.sum()), 'equal': bool((x[known] == y[known]).all()), 'rate': info['rate'], 'levels': info['levels']}))
+`,
+      [saved, sidecarPath],
+    );
+    const c = JSON.parse(compared);
+    expect(c.shape).toEqual([...DIMS.map((n) => Math.ceil(n / 16)).reverse(), 2]);
+    expect(c.known).toBe(bricks);
+    expect(c.equal).toBe(true);
+    expect(c.rate).toBe(8);
+    expect(c.levels).toEqual([{ path: '', brick: 16, grid: DIMS.map((n) => Math.ceil(n / 16)), dims: DIMS }]);
+
+    // used as --ranges: the bricks the isovalue needs and no other, the same triangles as without it
+    const withRanges = join(work, 'with.json');
+    const without = join(work, 'without.json');
+    const a = cli('extract', storePath, '--rate', '8', '--iso', '180.5', '--level', '0', '--ranges', saved, '--json', withRanges);
+    expect(a.status, a.stderr).toBe(0);
+    expect(a.stderr).toMatch(/per-brick ranges from .*learnt.zarr \(rate 8\)/);
+    const b = cli('extract', storePath, '--rate', '8', '--iso', '180.5', '--level', '0', '--json', without);
+    expect(b.status, b.stderr).toBe(0);
+    const ra = JSON.parse(readFileSync(withRanges, 'utf8'));
+    const rb = JSON.parse(readFileSync(without, 'utf8'));
+    expect(ra.isosurfaces[0].triangles).toBe(rb.isosurfaces[0].triangles);
+    expect(ra.isosurfaces[0].triangles).toBeGreaterThan(100);
+    expect(ra.store.chunks).toBeLessThan(rb.store.chunks / 2);
+
+    // a zfp store has no sidecar to save; a folder that is not a sidecar is not overwritten
+    const zfp = cli('extract', 'default', '--iso', '0.5', '--save-ranges', join(work, 'x.zarr'));
+    expect(zfp.status).toBe(2);
+    expect(zfp.stderr).toMatch(/--save-ranges is for a Zarr store of lossless chunks/);
+    const clash = cli('extract', storePath, '--rate', '8', '--iso', '60.5', '--level', '0', '--save-ranges', storePath);
+    expect(clash.status).toBe(1);
+    expect(clash.stderr).toMatch(/exists and is not a ranges sidecar/);
+  }, 300_000);
 });
