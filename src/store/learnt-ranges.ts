@@ -30,6 +30,11 @@ export class LearntRanges {
     this.#known = grids.map(() => 0);
   }
 
+  /** Whether these are ranges of levels with these chunk grids. */
+  fits(grids: readonly Grid[]): boolean {
+    return grids.length === this.grids.length && grids.every((g, L) => g.every((n, a) => n === this.grids[L][a]));
+  }
+
   /** Whether level L's ranges can be learnt (not too many chunks). */
   learns(L: number): boolean {
     const g = this.grids[L];
@@ -117,3 +122,21 @@ export class LearntRanges {
     return this.#lo <= this.#hi ? [this.#lo, this.#hi] : null;
   }
 }
+
+/**
+ * The ranges learnt for a store in this session, by a key naming the store
+ * and what its values are (URL, rate, time point, channel): a store opened
+ * again (a new rate and back, the refinement switched) keeps what it learnt.
+ * The last STORES_KEPT stores are kept.
+ */
+export function sessionRanges(key: string, grids: readonly Grid[]): LearntRanges {
+  const kept = session.get(key);
+  session.delete(key);
+  const r = kept?.fits(grids) ? kept : new LearntRanges(grids);
+  session.set(key, r);
+  while (session.size > STORES_KEPT) session.delete(session.keys().next().value!);
+  return r;
+}
+
+const STORES_KEPT = 4;
+const session = new Map<string, LearntRanges>();

@@ -13,6 +13,7 @@ import type { AsyncReadable } from '@zarrita/storage';
 import type { GpuContext } from '../../gpu/device.ts';
 import { ChunkFetcher } from '../../store/fetch/chunk-fetcher.ts';
 import { chunkedGpu, createChunkStream, storeEncoder } from '../../store/gpu-port.ts';
+import { sessionRanges } from '../../store/learnt-ranges.ts';
 import { storeRateChooser } from '../../store/rate.ts';
 import type { ChunkStreamController } from '../../store/pinned-level.ts';
 import type { StreamProgress } from '../../store/stream-controller.ts';
@@ -192,11 +193,21 @@ export class StoreView {
       if (asked.cut ?? this.#levelZeroIsLarge(store)) {
         // refined by the view: each region at the level the camera needs
         const gpu = this.d.gpu();
+        // what was learnt of this store's bricks at this rate, time point and channel earlier in the session
+        const values = store.source
+          ? `${store.source.rate}|${store.source.time.index}|${store.source.channel.index}`
+          : String(store.levels[0].layout.rate);
         const view = await ViewStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(
           store,
           f,
           chunkedGpu(gpu, undefined, await storeEncoder(gpu, store)),
           this.d.budgetBytes(),
+          {
+            learnt: sessionRanges(
+              `${url}|${values}`,
+              store.levels.map((l) => l.layout.chunkGrid),
+            ),
+          },
         );
         cut = { tolerancePx: asked.tolerancePx ?? DEFAULT_TOLERANCE_PX, tint: asked.tint ?? false };
         controller = view;

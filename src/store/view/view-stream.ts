@@ -136,6 +136,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     readonly fetcher: ChunkFetcher,
     readonly gpu: StreamGpu<V, S, F>,
     budgetBytes: number,
+    learnt?: LearntRanges,
   ) {
     this.budgetBytes = budgetBytes;
     this.levels = store.levels.map((l, i) => ({
@@ -147,7 +148,9 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
       volume: null,
       lru: new Map(),
     }));
-    this.learnt = new LearntRanges(store.levels.map((l) => l.layout.chunkGrid));
+    // ranges learnt earlier in the session (the same store reopened at the same rate) carry over
+    const grids = store.levels.map((l) => l.layout.chunkGrid);
+    this.learnt = learnt?.fits(grids) ? learnt : new LearntRanges(grids);
     this.coarsest = this.levels.length - 1;
     while (this.coarsest > 0 && store.levels[this.coarsest].unusable) this.coarsest--;
     // levels finer than a level that cannot be drawn (wider than a surface can be) are never split into:
@@ -172,8 +175,9 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     fetcher: ChunkFetcher,
     gpu: StreamGpu<V, S, F>,
     budgetBytes: number,
+    options: { learnt?: LearntRanges } = {},
   ): Promise<ViewStream<V, S, F>> {
-    const v = new ViewStream(store, fetcher, gpu, budgetBytes);
+    const v = new ViewStream(store, fetcher, gpu, budgetBytes, options.learnt);
     await v.#readRanges(v.levels[v.coarsest]);
     return v;
   }

@@ -13,7 +13,7 @@ import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
 import { chunkedGpu, storeEncoder } from '../../../src/store/gpu-port.ts';
-import { LearntRanges, MAX_LEARNT_CHUNKS } from '../../../src/store/learnt-ranges.ts';
+import { LearntRanges, MAX_LEARNT_CHUNKS, sessionRanges } from '../../../src/store/learnt-ranges.ts';
 import { chunkNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
 import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../../src/store/view/cut.ts';
 import { DEFAULT_VIEWPORT } from '../../../src/store/view/view-request.ts';
@@ -101,6 +101,22 @@ describe('LearntRanges', () => {
     expect(() => big.record(0, 8, 0, 1)).toThrow(/chunk 8 outside level 0/);
     big.record(0, 3, -2, 7);
     expect(big.valueRange()).toEqual([-2, 7]);
+  });
+});
+
+describe('sessionRanges', () => {
+  it('the same store and values get the ranges learnt before; other chunk grids start afresh; the last 4 stores are kept', () => {
+    const grids: [number, number, number][] = [[3, 2, 1]];
+    const a = sessionRanges('s.zarr|8|0|0', grids);
+    a.record(0, 4, 1, 2);
+    expect(sessionRanges('s.zarr|8|0|0', grids)).toBe(a);
+    expect(sessionRanges('s.zarr|8|0|0', grids).get(0, 4)).toEqual([1, 2]);
+    expect(sessionRanges('s.zarr|6|0|0', grids)).not.toBe(a);
+    const other = sessionRanges('s.zarr|8|0|0', [[3, 2, 2]]);
+    expect(other).not.toBe(a);
+    expect(other.has(0, 4)).toBe(false);
+    for (const k of ['b', 'c', 'd', 'e']) sessionRanges(k, grids);
+    expect(sessionRanges('s.zarr|8|0|0', [[3, 2, 2]])).not.toBe(other);
   });
 });
 
