@@ -105,6 +105,8 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
   readonly learnt: LearntRanges;
   /** The readbacks of learnt ranges in flight (learnSettled). */
   #learning: Promise<void> = Promise.resolve();
+  /** Per level, the cache and vertex bytes its last surface took (or needed, when it did not fit) per wanted chunk: the cut's cost model. */
+  #surfaceCost: (number | undefined)[] = [];
   /** Chunks put into or evicted from any pool so far: a surface's block ranges are its slots' chunks' while this is unchanged. */
   #poolChanges = 0;
   budgetBytes: number;
@@ -242,19 +244,40 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     this.#waiting = null;
     const view = this.#view;
     if (!view) throw new Error('ViewStream: setView before setIsovalue');
+    // A step that does not fit (a pool that cannot grow, a surface over its cap) makes the cut
+    // coarser: what the surfaces really took is learnt (#surfaceCost) and the cut planned again
+    // with it, and with less of the budget each time, until it fits; the coarser step stays on
+    // screen meanwhile. Only a cut that cannot be made coarser is refused.
+    let share = PLAN_SHARE;
+    for (let attempt = 0; ; attempt++) {
+      const r = await this.#refine(iso, view, gen, share);
+      if (r === 'done' || gen !== this.#gen || this.#destroyed) return;
+      if (r.coarser && attempt < MAX_COARSENINGS) {
+        // what the step that did not fit made goes; what is on screen stays
+        this.#releaseUnshown();
+        share *= 0.85;
+        continue;
+      }
+      this.#stop(r.level, r.reason, 'budget');
+      return;
+    }
+  }
+
+  /** Plans the cut with `share` of the budget and shows its steps; 'done', or a step that did not fit. */
+  async #refine(iso: number, view: ViewSpec, gen: number, share: number): Promise<'done' | BudgetStop> {
     let cut: ViewCut;
     for (;;) {
-      cut = this.#cut(iso, view);
+      cut = this.#cut(iso, view, share);
       if (cut.wantsRanges.length === 0) break;
       try {
         await Promise.all(cut.wantsRanges.map((L) => this.#readRanges(this.levels[L])));
       } catch (e) {
-        if (gen !== this.#gen || this.#destroyed) return;
+        if (gen !== this.#gen || this.#destroyed) return 'done';
         for (const l of this.#errors) l(e as Error);
         this.#stop(cut.wantsRanges[0], (e as Error).message, 'chunk');
-        return;
+        return 'done';
       }
-      if (gen !== this.#gen || this.#destroyed) return;
+      if (gen !== this.#gen || this.#destroyed) return 'done';
     }
     const used = cut.levels.map((l, L) => (l.drawn.length > 0 ? L : Infinity));
     const finestUsed = Math.min(...used);
@@ -268,7 +291,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     if (this.#isShown(steps[steps.length - 1], iso)) {
       this.fetcher.wantAll([]);
       this.#shown = { ...this.#shown!, cut };
-      return;
+      return 'done';
     }
     // the finest step already resident: no fetching before it is shown
     let first = 0;
@@ -279,14 +302,18 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
       }
     }
     for (let i = first; i < steps.length; i++) {
-      if (gen !== this.#gen || this.#destroyed) return;
-      const ok = await this.#show(steps[i], cut, iso, gen, i === steps.length - 1);
-      if (!ok) return;
+      if (gen !== this.#gen || this.#destroyed) return 'done';
+      const r = await this.#show(steps[i], cut, iso, gen, i === steps.length - 1);
+      if (r === true) continue;
+      if (r === false) return 'done';
+      // the cut can be made coarser while some region is drawn finer than the coarsest level
+      return { ...r, coarser: finestUsed < this.coarsest };
     }
+    return 'done';
   }
 
   /** The view's cut at `iso` with the store's levels, ranges and budget. */
-  #cut(iso: number, view: ViewSpec): ViewCut {
+  #cut(iso: number, view: ViewSpec, share = PLAN_SHARE): ViewCut {
     const needs = new Map<number, ((c: ChunkIndex) => boolean) | null>();
     return viewCut({
       levels: this.levels.map((l) => ({ dims: l.layout.dims, chunkEdge: l.layout.chunkEdge, chunkGrid: l.layout.chunkGrid })),
@@ -299,9 +326,9 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
         if (!needs.has(L)) needs.set(L, this.#needs(L, iso));
         return needs.get(L)!;
       },
-      chunkBytes: (L) => this.#chunkCost(this.levels[L].layout),
+      chunkBytes: (L) => this.#chunkCost(L),
       // some room for the surfaces being replaced while a step is computed
-      budgetBytes: Math.max(0, this.budgetBytes - RESERVE_BYTES) * 0.8,
+      budgetBytes: Math.max(0, this.budgetBytes - RESERVE_BYTES) * share,
     });
   }
 
@@ -318,13 +345,16 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
   }
 
   /**
-   * GPU bytes one wanted chunk of a level costs: its pool slot, the
-   * surface's per-block state, and a share of the cache of decoded blocks
-   * and vertices (about half its blocks active: a chunk the surface crosses).
+   * GPU bytes one wanted chunk of level L costs: its pool slot, the
+   * surface's per-block state, and its share of the surface's cache and
+   * vertex buffers: what the level's last surface took per wanted chunk
+   * (#surfaceCost), or before one was made, a guess (half its blocks active,
+   * a chunk the surface crosses).
    */
-  #chunkCost(layout: ChunkLevelLayout): number {
+  #chunkCost(L: number): number {
+    const layout = this.levels[L].layout;
     const blocks = (layout.chunkEdge / 4) ** 3;
-    return layout.chunkBytes + estimateFixedBytes(layout, 1) - (64 << 10) + blocks * 0.5 * 384;
+    return layout.chunkBytes + estimateFixedBytes(layout, 1) - (64 << 10) + (this.#surfaceCost[L] ?? blocks * 0.5 * 384);
   }
 
   #readRanges(lv: LevelState<V>): Promise<void> {
@@ -409,8 +439,12 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     return step.wanted.every((w, L) => w.length === 0 || (this.levels[L].volume !== null && w.every((c) => this.levels[L].volume!.has(c))));
   }
 
-  /** Fetches what the step needs, computes its levels' surfaces (finest first), then shows it. Whether it was shown. */
-  async #show(step: Step, cut: ViewCut, iso: number, gen: number, final: boolean): Promise<boolean> {
+  /**
+   * Fetches what the step needs, computes its levels' surfaces (finest
+   * first), then shows it: true; false when stale or stopped; a BudgetStop
+   * when it does not fit (the caller coarsens the cut or stops).
+   */
+  async #show(step: Step, cut: ViewCut, iso: number, gen: number, final: boolean): Promise<boolean | BudgetStop> {
     const stale = () => gen !== this.#gen || this.#destroyed;
     const shownWanted = this.#shownWanted();
     // pools: room for what the step wants and what is on screen now
@@ -418,10 +452,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
       const keep = new Set([...step.wanted[L], ...(shownWanted[L] ?? [])]);
       if (step.wanted[L].length === 0) continue;
       const refused = this.#fitPool(this.levels[L], keep);
-      if (refused) {
-        this.#stop(L, refused, 'budget');
-        return false;
-      }
+      if (refused) return { level: L, reason: refused };
     }
     const missing = new Set<number>();
     const order: { level: number; chunk: ChunkIndex }[] = [];
@@ -471,8 +502,10 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     progress('computing');
     const levels: CutLevelShown<V, S, F>[] = [];
     const used = step.drawn.map((d, L) => (d.size > 0 ? L : -1)).filter((L) => L >= 0);
+    let computing = step.finest;
     try {
       for (const L of used) {
+        computing = L;
         const lv = this.levels[L];
         const pool = lv.volume!;
         // ghosts as skirts: the one cell layer next to a drawn chunk emits too, an overlap into the neighbouring
@@ -499,14 +532,21 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
         );
         const stats = await entry.surface.compute(iso);
         if (stale()) return false;
+        this.#surfaceCost[L] = (stats.cacheBytes + stats.vertexBytes) / Math.max(1, step.wanted[L].length);
         levels.push({ level: L, volume: pool, surface: entry.surface, stats, drawn: [...step.drawn[L]], ghosts: [...step.ghosts[L]] });
       }
     } catch (e) {
       if (stale()) return false;
       if (isAbort(e) || (e as Error).name === 'IsosurfaceSupersededError') return false;
-      const budget = (e as Error).name === 'IsosurfaceBudgetError';
-      if (!budget) for (const l of this.#errors) l(e as Error);
-      this.#stop(step.finest, (e as Error).message, budget ? 'budget' : 'gpu');
+      if ((e as Error).name === 'IsosurfaceBudgetError') {
+        // what the surface needed, per wanted chunk: the cost the next plan uses
+        const needed = (e as { neededBytes?: number }).neededBytes;
+        if (needed !== undefined && Number.isFinite(needed))
+          this.#surfaceCost[computing] = Math.max(this.#surfaceCost[computing] ?? 0, needed / Math.max(1, step.wanted[computing].length));
+        return { level: computing, reason: (e as Error).message };
+      }
+      for (const l of this.#errors) l(e as Error);
+      this.#stop(step.finest, (e as Error).message, 'gpu');
       return false;
     }
     // levels this step does not draw: their surfaces go, their pools' chunks become idle
@@ -559,6 +599,25 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
   /** Resolves when the learnt ranges asked for so far are recorded. */
   learnSettled(): Promise<void> {
     return this.#learning;
+  }
+
+  /** Lets go of the surfaces and pools of levels that the surface on screen does not draw. */
+  #releaseUnshown(): void {
+    const shown = new Set((this.#shown?.levels ?? []).map((l) => l.level));
+    for (const [L, entry] of this.#surfaces) {
+      if (shown.has(L)) continue;
+      entry.surface.destroy();
+      this.#surfaces.delete(L);
+    }
+    for (const s of this.#retired) s.destroy();
+    this.#retired = [];
+    for (const lv of this.levels) {
+      if (shown.has(lv.index) || !lv.volume) continue;
+      this.#poolChanges++;
+      lv.volume.destroy();
+      lv.volume = null;
+      lv.lru.clear();
+    }
   }
 
   /** Per level, the chunks the surface on screen reads (drawn and ghosts). */
@@ -685,6 +744,17 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
   }
 }
 
+/** A step that did not fit the budget: the level and why; `coarser` when the cut could be made coarser. */
+interface BudgetStop {
+  level: number;
+  reason: string;
+  coarser?: boolean;
+}
+
+/** The share of the budget (less the reserve) the cut is planned with: room for surfaces replaced while a step computes. */
+const PLAN_SHARE = 0.8;
+/** How many times a cut that does not fit is planned again, coarser, before the refinement stops. */
+const MAX_COARSENINGS = 6;
 /** Kept free within the budget for short-lived buffers (statistics and readback staging, uniforms). */
 const RESERVE_BYTES = 1 << 20;
 /** The most block ranges read back at once to learn chunk ranges (a short-lived staging buffer, the reserve's size). */

@@ -81,15 +81,20 @@ interface FakeStats extends LevelStats {
   drawn: number;
 }
 
-function fakeGpu(store: ZfpStore, ranges: Float32Array[]) {
+/**
+ * `bytesPerDrawn`: a surface's cache and vertices take this much per drawn
+ * chunk (a dense surface); over its cap (setMemoryBudget) it refuses as the
+ * Isosurface does, with what it needs.
+ */
+function fakeGpu(store: ZfpStore, ranges: Float32Array[], bytesPerDrawn = 0) {
   const pools: FakePool[] = [];
-  const surfaces = new Set<object>();
+  const surfaces = new Map<object, { held: number }>();
   let peak = 0;
   const gpu: StreamGpu<FakePool, FakeStats> = {
     get allocatedBytes() {
       let n = 0;
       for (const p of pools) if (!p.destroyed) n += p.poolBytes;
-      n += surfaces.size * 4000;
+      for (const s of surfaces.values()) n += 4000 + s.held;
       peak = Math.max(peak, n);
       return n;
     },
@@ -103,17 +108,31 @@ function fakeGpu(store: ZfpStore, ranges: Float32Array[]) {
       const level = store.levels.findIndex((l) => l.layout === pool.layout);
       const nb = neighbourhoodRanges(pool.layout.chunkGrid, ranges[level]);
       const me = {};
-      surfaces.add(me);
+      const state = { held: 0, cap: Infinity };
+      surfaces.set(me, state);
       return {
-        budgetedBytes: 2000,
+        get budgetedBytes() {
+          return 2000 + state.held;
+        },
         trimCache() {},
-        setMemoryBudget() {},
+        setMemoryBudget(bytes: number) {
+          state.cap = bytes;
+        },
         async compute(iso: number) {
           const needed = new Set(chunksNeeded(nb, iso));
           // every drawn chunk and ghost the surface needs is resident: the drawn chunks' cells are complete
           for (const c of [...(pool.drawn ?? []), ...pool.ghosts])
             if (needed.has(c) && !pool.has(c)) throw new Error(`level ${level}: chunk ${c} computed while absent`);
-          return { triangles: 0, cacheBytes: 1000, vertexBytes: 1000, drawn: pool.drawn?.size ?? 0 };
+          const drawn = pool.drawn === null ? pool.resident.size : [...pool.drawn].filter((c) => needed.has(c)).length;
+          const need = 2000 + bytesPerDrawn * drawn;
+          if (need > state.cap)
+            throw Object.assign(new Error(`level ${level}: the surface needs ${need} B, the budget is ${state.cap} B`), {
+              name: 'IsosurfaceBudgetError',
+              neededBytes: need,
+              budgetBytes: state.cap,
+            });
+          state.held = need - 2000;
+          return { triangles: 0, cacheBytes: 1000 + state.held, vertexBytes: 1000, drawn: pool.drawn?.size ?? 0 };
         },
         destroy() {
           surfaces.delete(me);
@@ -124,12 +143,12 @@ function fakeGpu(store: ZfpStore, ranges: Float32Array[]) {
   return { gpu, pools, peak: () => peak };
 }
 
-async function setup(budget = 2 ** 30, link?: { mbitPerSecond: number; latencyMs: number }) {
+async function setup(budget = 2 ** 30, link?: { mbitPerSecond: number; latencyMs: number }, bytesPerDrawn = 0) {
   const files = storeForLocation(path);
   const store = await openStore(link ? new SimulatedLinkStore(files, link) : files, path);
   const ranges = await Promise.all(store.levels.map((_, i) => store.readRanges(i).then((r) => r!)));
   const fetcher = new ChunkFetcher(store, { maxInFlight: 4 });
-  const fake = fakeGpu(store, ranges);
+  const fake = fakeGpu(store, ranges, bytesPerDrawn);
   const stream = await ViewStream.create(store, fetcher, fake.gpu, budget);
   const shown: ShownCut<FakePool, FakeStats, unknown>[] = [];
   stream.onShown((s) => shown.push(s as ShownCut<FakePool, FakeStats, unknown>));
@@ -267,6 +286,59 @@ describe('ViewStream', () => {
     expect(fake.peak()).toBeLessThanOrEqual(budget);
     expect(stops).toEqual([]);
     expect(shown.at(-1)!.cut.limitedByBudget).toBe(true);
+    stream.destroy();
+  });
+});
+
+describe('ViewStream within a budget its surfaces outgrow', () => {
+  // A dense surface: 400 KiB of cache and vertices per drawn chunk, far above the cut's first guess, so the
+  // cut planned from chunk bytes does not fit and must be made coarser once the surfaces' size is known.
+  const DENSE = 400 << 10;
+  it('a cut whose surfaces do not fit is made coarser until it fits: shown whole, never over the budget, no stop', async () => {
+    const free = await setup(2 ** 30, undefined, DENSE);
+    await free.stream.setView(free.view([0, 0, 0, 127, 127, 127]));
+    await free.stream.setIsovalue(ISO);
+    const unlimited = free.shown.at(-1)!;
+    const finestFree = Math.min(...unlimited.levels.map((l) => l.level));
+    expect(finestFree).toBe(0);
+    free.stream.destroy();
+
+    const budget = 6 << 20;
+    const { stream, shown, fake, view } = await setup(budget, undefined, DENSE);
+    const stops: string[] = [];
+    stream.onProgress((p) => {
+      if (p.phase === 'stopped') stops.push(p.reason ?? '');
+    });
+    await stream.setView(view([0, 0, 0, 127, 127, 127]));
+    await stream.setIsovalue(ISO);
+    const last = shown.at(-1)!;
+    expect(last.final, 'the whole (coarser) cut is shown').toBe(true);
+    expect(stops).toEqual([]);
+    expect(coverage(stream.store, last.leaves).every((n) => n === 1)).toBe(true);
+    // coarser than the cut an unlimited budget gives, and within the budget at every moment
+    const drawnAt = (c: typeof last, L: number) => c.levels.find((l) => l.level === L)?.drawn.length ?? 0;
+    expect(drawnAt(last, 0)).toBeLessThan(drawnAt(unlimited, 0));
+    expect(fake.peak()).toBeLessThanOrEqual(budget);
+    // another isovalue and a camera move keep to it
+    await stream.setIsovalue(ISO + 0.05);
+    await stream.setView(view([100, 100, 100, 127, 127, 127]));
+    expect(shown.at(-1)!.final).toBe(true);
+    expect(stops).toEqual([]);
+    expect(fake.peak()).toBeLessThanOrEqual(budget);
+    stream.destroy();
+  });
+
+  it('a budget the coarsest level alone does not fit: the refinement stops and says so', async () => {
+    const { stream, view } = await setup(3 << 20, undefined, 4 << 20);
+    const stops: { reason?: string; cause?: string }[] = [];
+    stream.onProgress((p) => {
+      if (p.phase === 'stopped') stops.push(p);
+    });
+    await stream.setView(view([0, 0, 0, 127, 127, 127]));
+    await stream.setIsovalue(ISO);
+    expect(stops.length).toBe(1);
+    expect(stops[0].cause).toBe('budget');
+    expect(stops[0].reason).toMatch(/the surface needs \d+ B, the budget is/);
     stream.destroy();
   });
 });
