@@ -36,8 +36,14 @@
 // is known, the node's world box meets the view frustum (a conservative
 // box-vs-6-planes test), its error 2^L * max(voxelSize) * pixelsPerUnit /
 // distance (distance from the eye to the box, 0 inside it: error Infinity)
-// exceeds tolerancePx, and the budget allows it. Splits go by a max-priority
-// queue on the error (ties: nearer first, then level, then chunk). The cut is
+// exceeds tolerancePx, and the budget allows it. Splits go by a priority
+// queue: nodes in the middle of the view first (a cone from the eye to the
+// sphere of `CutCamera.focus`, not beyond it) by error, so nearest first;
+// then the others by error / (1 + (s / D)^2)^2, s the box's distance from
+// the cone's axis, D the focus' from the eye (ties: nearer first, then level,
+// then chunk). So a budget that binds goes to what the view
+// frames, front to back, then to the edges of the view
+// (src/store/view/README.md). The cut is
 // 2:1 balanced (leaves whose closed boxes touch differ by at most one level):
 // before a node is split, the coarser leaves around it are split first
 // (forced splits, which ignore error and frustum). A split with its forced
@@ -70,6 +76,15 @@ export interface CutCamera {
   eye: [number, number, number];
   /** Pixels per world unit at distance 1 along the view: viewportHeightPx / (2 tan(fovY / 2)) (perspective). */
   pixelsPerUnit: number;
+  /**
+   * What the view is framed on: the point the camera looks at (the page's
+   * orbit target, the centre of `--view-box`) and a radius about it (half
+   * the view's half-height there). A budget that binds is spent first on the
+   * regions in the cone from the eye through that sphere (the middle of the
+   * screen), nearer before farther, then on the others, nearer the middle
+   * first. Without one, by error alone.
+   */
+  focus?: { point: [number, number, number]; radius: number };
 }
 
 export interface CutInput {
@@ -171,6 +186,10 @@ export function viewCut(input: CutInput): ViewCut {
   const maxVoxel = Math.max(sx, sy, sz);
   const [ex, ey, ez] = camera.eye;
   const ppu = camera.pixelsPerUnit;
+  // the view's middle: a cone about the eye -> focus axis, as wide as the focus sphere at its end
+  const focus = camera.focus;
+  const focusDistance = focus ? Math.hypot(focus.point[0] - ex, focus.point[1] - ey, focus.point[2] - ez) : 0;
+  const axis = focus && focusDistance > 0 ? focus.point.map((p, a) => (p - camera.eye[a]) / focusDistance) : null;
   const E = levels.map((l, L) => l.chunkEdge * 2 ** L);
   const notes: string[] = [];
 
@@ -242,6 +261,9 @@ export function viewCut(input: CutInput): ViewCut {
   let nInView = false;
   let nDist = 0;
   let nErr = 0;
+  /** The split priority: whether the box meets the focus, then its error weighed down by its distance from the focus. */
+  let nFocused = true;
+  let nPriority = 0;
   const evalNode = (L: number, cx: number, cy: number, cz: number): void => {
     const e = E[L];
     const x0 = cx * e * sx;
@@ -256,6 +278,27 @@ export function viewCut(input: CutInput): ViewCut {
     const dz = Math.max(z0 - ez, 0, ez - z1);
     nDist = Math.sqrt(dx * dx + dy * dy + dz * dz);
     nErr = nDist > 0 ? (2 ** L * maxVoxel * ppu) / nDist : Infinity;
+    nPriority = nErr;
+    nFocused = true;
+    if (axis && focus) {
+      // the middle of the view up to the focus: a cone from the eye to the focus sphere. The point of
+      // its axis nearest the box's centre, and the box's distance from it against the cone's radius there
+      const cx = (x0 + x1) / 2 - ex;
+      const cy = (y0 + y1) / 2 - ey;
+      const cz = (z0 + z1) / 2 - ez;
+      const t = Math.min(1, Math.max(0, (cx * axis[0] + cy * axis[1] + cz * axis[2]) / focusDistance));
+      const qx = ex + axis[0] * t * focusDistance;
+      const qy = ey + axis[1] * t * focusDistance;
+      const qz = ez + axis[2] * t * focusDistance;
+      const fx = Math.max(x0 - qx, 0, qx - x1);
+      const fy = Math.max(y0 - qy, 0, qy - y1);
+      const fz = Math.max(z0 - qz, 0, qz - z1);
+      const f = Math.sqrt(fx * fx + fy * fy + fz * fz);
+      nFocused = f <= focus.radius * t;
+      // the others: nearer the middle first
+      const r = (f * f) / (focusDistance * focusDistance);
+      nPriority = nFocused ? nErr : nErr / ((1 + r) * (1 + r));
+    }
   };
 
   // --- the tree
@@ -362,14 +405,23 @@ export function viewCut(input: CutInput): ViewCut {
     return true;
   };
 
-  // --- the queue: max error, then nearer, then level, then chunk
+  // --- the queue: focused first, then max priority, then nearer, then level, then chunk
+  const qFocused: boolean[] = [];
   const qErr: number[] = [];
   const qDist: number[] = [];
   const qL: number[] = [];
   const qC: number[] = [];
   const heap: number[] = [];
   const before = (a: number, b: number): boolean =>
-    qErr[a] !== qErr[b] ? qErr[a] > qErr[b] : qDist[a] !== qDist[b] ? qDist[a] < qDist[b] : qL[a] !== qL[b] ? qL[a] < qL[b] : qC[a] < qC[b];
+    qFocused[a] !== qFocused[b]
+      ? qFocused[a]
+      : qErr[a] !== qErr[b]
+        ? qErr[a] > qErr[b]
+        : qDist[a] !== qDist[b]
+          ? qDist[a] < qDist[b]
+          : qL[a] !== qL[b]
+            ? qL[a] < qL[b]
+            : qC[a] < qC[b];
   const push = (id: number): void => {
     let i = heap.length;
     heap.push(id);
@@ -417,7 +469,8 @@ export function viewCut(input: CutInput): ViewCut {
     }
     if (!canSplit(L, cx, cy, cz)) return;
     const id = qErr.length;
-    qErr.push(nErr);
+    qFocused.push(nFocused);
+    qErr.push(nPriority);
     qDist.push(nDist);
     qL.push(L);
     qC.push(c);
@@ -702,6 +755,7 @@ export function cameraFromView(state: ViewCameraState, viewport: Viewport, scene
     viewProj,
     eye: [eye[0] + tx, eye[1] + ty, eye[2] + tz],
     pixelsPerUnit: viewport.height / (2 * Math.tan(fovYRad / 2)),
+    focus: { point: [tx, ty, tz], radius: 0.5 * d * Math.tan(fovYRad / 2) },
     state: { rotation: [...state.rotation], target: [tx, ty, tz], distance: d },
     target: [tx, ty, tz],
     up: [up[0], up[1], up[2]],

@@ -28,40 +28,56 @@ const CHUNK_COST = 64 ** 3 + (48 * 4096 + 32) + 4096 * 0.5 * 384;
 describe('a binding budget goes to what the view frames first', () => {
   const levels = pyramid(2048, 64, 6);
   const voxelSize: V3 = [1, 1, 1];
-  for (const [name, box] of [
+  const boxes: [string, [number, number, number, number, number, number]][] = [
     ['the far corner (the one Fit looks at from +z)', [1792, 1792, 1792, 2047, 2047, 2047]],
     ['a box in the middle of a face', [896, 896, 1792, 1151, 1151, 2047]],
-  ] as [string, [number, number, number, number, number, number]][]) {
-    it(`${name}, 256 MB: level 0 where the framed box needs it, within the budget`, () => {
-      const framed = cameraForBox(box, voxelSize, DEFAULT_VIEWPORT);
-      const camera = cameraFromView(framed.state, DEFAULT_VIEWPORT, sceneRadiusOf(box, voxelSize));
-      const input = {
-        levels,
-        voxelSize,
-        camera,
-        tolerancePx: 1.5,
-        finest: 0,
-        coarsest: levels.length - 1,
-        needs: () => () => true,
-        chunkBytes: () => CHUNK_COST,
-      };
-      const free = viewCut({ ...input, budgetBytes: Infinity });
-      const budgetBytes = (256 << 20) * 0.8;
-      const cut = viewCut({ ...input, budgetBytes });
-      expect(cut.bytes).toBeLessThanOrEqual(budgetBytes);
-      expect(free.bytes, 'the budget binds here').toBeGreaterThan(budgetBytes);
-      const inBox = (n: { level: number; coords: V3 }) => {
-        const e = 64 * 2 ** n.level;
-        return n.coords.every((c, a) => c * e >= box[a] && (c + 1) * e <= box[a + 3] + 1);
-      };
-      // the level-0 chunks the framed box holds in the unlimited cut: all of them in the budgeted one
-      const wanted = free.nodes.filter((n) => n.level === 0 && inBox(n)).map((n) => n.chunk);
-      expect(wanted.length).toBeGreaterThan(8);
-      const got = new Set(cut.nodes.filter((n) => n.level === 0).map((n) => n.chunk));
-      expect(
-        wanted.filter((c) => !got.has(c)),
-        'level-0 chunks of the framed box left coarser',
-      ).toEqual([]);
+  ];
+  /** The cut for the box's framing at `mb` MB (the view stream plans with 0.8 of it), and the level-0 chunks of the box it draws against those the unlimited cut draws. */
+  function framedCut(box: (typeof boxes)[number][1], mb: number, focus = true) {
+    const framed = cameraForBox(box, voxelSize, DEFAULT_VIEWPORT);
+    const camera = cameraFromView(framed.state, DEFAULT_VIEWPORT, sceneRadiusOf(box, voxelSize));
+    if (!focus) delete (camera as { focus?: unknown }).focus;
+    const input = {
+      levels,
+      voxelSize,
+      camera,
+      tolerancePx: 1.5,
+      finest: 0,
+      coarsest: levels.length - 1,
+      needs: () => () => true,
+      chunkBytes: () => CHUNK_COST,
+    };
+    const budgetBytes = (mb << 20) * 0.8;
+    const free = viewCut({ ...input, budgetBytes: Infinity });
+    const cut = viewCut({ ...input, budgetBytes });
+    const inBox = (n: { level: number; coords: V3 }) => {
+      const e = 64 * 2 ** n.level;
+      return n.coords.every((c, a) => c * e >= box[a] && (c + 1) * e <= box[a + 3] + 1);
+    };
+    const wanted = free.nodes.filter((n) => n.level === 0 && inBox(n)).map((n) => n.chunk);
+    const got = new Set(cut.nodes.filter((n) => n.level === 0).map((n) => n.chunk));
+    const boxLeaves = cut.nodes.filter((n) => n.level <= 2 && inBox(n));
+    return { cut, free, budgetBytes, wanted, drawn: wanted.filter((c) => got.has(c)), boxLeaves };
+  }
+
+  for (const [name, box] of boxes) {
+    it(`${name}, 1 GB: the whole framed box at level 0 (where it needs it), within the budget`, () => {
+      const r = framedCut(box, 1024);
+      expect(r.free.bytes, 'the budget binds here').toBeGreaterThan(r.budgetBytes);
+      expect(r.cut.bytes).toBeLessThanOrEqual(r.budgetBytes);
+      expect(r.wanted.length).toBe(64);
+      expect(r.drawn.length, 'level-0 chunks of the framed box drawn').toBe(64);
     });
   }
+
+  it('the far corner at 256 MB: most of the framed box at level 0 and none of it coarser than level 1; by error alone it was a quarter', () => {
+    const box = boxes[0][1];
+    const r = framedCut(box, 256);
+    expect(r.cut.bytes).toBeLessThanOrEqual(r.budgetBytes);
+    expect(r.drawn.length).toBeGreaterThanOrEqual(32);
+    expect(r.boxLeaves.every((n) => n.level <= 1)).toBe(true);
+    // the same cut without a focus (the rule before): the budget went around and behind the box
+    const errorOnly = framedCut(box, 256, false);
+    expect(errorOnly.drawn.length).toBeLessThan(r.drawn.length);
+  });
 });

@@ -1,0 +1,10 @@
+import { cameraForBox, cameraFromView, sceneRadiusOf, viewCut, type CutLevel } from '/work/main/src/store/view/cut.ts';
+import { DEFAULT_VIEWPORT } from '/work/main/src/store/view/view-request.ts';
+type V3 = [number, number, number];
+const levels: CutLevel[] = Array.from({ length: 6 }, (_, L) => { const d = Math.ceil(2048 / 2 ** L); const g = Math.ceil(d / 64); return { dims: [d, d, d] as V3, chunkEdge: 64, chunkGrid: [g, g, g] as V3 }; });
+const COST = 64 ** 3 + (48 * 4096 + 32) + 4096 * 0.5 * 384;
+const box: [number, number, number, number, number, number] = [1792, 1792, 1792, 2047, 2047, 2047];
+const framed = cameraForBox(box, [1, 1, 1], DEFAULT_VIEWPORT);
+const camera = cameraFromView(framed.state, DEFAULT_VIEWPORT, sceneRadiusOf(box, [1, 1, 1]));
+(globalThis as any).CUT_DEBUG = true;
+viewCut({ levels, voxelSize: [1, 1, 1] as V3, camera, tolerancePx: 1.5, finest: 0, coarsest: 5, needs: () => () => true, chunkBytes: () => COST, budgetBytes: (256 << 20) * 0.8 });
