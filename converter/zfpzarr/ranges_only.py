@@ -44,7 +44,30 @@ def _levels(node, path: str):
     ms = (attrs.get("ome") or {}).get("multiscales") or attrs.get("multiscales")
     if not ms:
         raise InputError(f"{path}: a Zarr group without OME-Zarr multiscales")
-    return [(d["path"], node[d["path"]]) for d in ms[0]["datasets"]], ms[0].get("axes")
+    datasets = pyramid_chain(ms[0]["datasets"])
+    return [(d["path"], node[d["path"]]) for d in datasets], ms[0].get("axes")
+
+
+def pyramid_chain(datasets: list) -> list:
+    """The page's rule (metadata.ts pyramidChain): level 0, then the datasets
+    whose OME scale is 2, 4, 8... times level 0's on x, y and z, in order; the
+    others (levels that halve only some axes) are not levels the page draws.
+    Without a scale on every dataset, all of them."""
+    def scale(d):
+        for t in d.get("coordinateTransformations") or []:
+            if t.get("type") == "scale" and len(t.get("scale") or []) >= 3:
+                v = [float(x) for x in t["scale"][-3:]]
+                return v if all(x > 0 for x in v) else None
+        return None
+    scales = [scale(d) for d in datasets]
+    if not datasets or any(s is None for s in scales):
+        return list(datasets)
+    out = [datasets[0]]
+    for d, s in zip(datasets[1:], scales[1:]):
+        want = 2.0 ** len(out)
+        if all(abs(a / b - want) <= 1e-6 * want for a, b in zip(s, scales[0])):
+            out.append(d)
+    return out
 
 
 def _spatial(path: str, shape, axes, time: int, channel: int):

@@ -1,6 +1,8 @@
 // The converter's Python environment (.venv-converter): converter/requirements.txt
 // (pinned; zfpy 1.0.1, which numcodecs imports, unlike the tests' .venv with
-// zfpy 1.0.1.post0), plus data-only packages installed without dependencies.
+// zfpy 1.0.1.post0), plus packages installed without dependencies: ngff-zarr
+// (its OME-Zarr schemas, and the test fixtures it writes) and the few of its
+// dependencies the converter's do not give (requirements-fixtures.txt).
 // Made on first use by `npm run convert`, `npm run bench:convert` and `npm test`.
 import { execSync } from 'node:child_process';
 import { createHash } from 'node:crypto';
@@ -8,7 +10,7 @@ import { existsSync, readFileSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
 
 const VENV = '.venv-converter';
-const FILES = ['converter/requirements.txt', 'converter/requirements-schemas.txt'];
+const FILES = ['converter/requirements.txt', 'converter/requirements-schemas.txt', 'converter/requirements-fixtures.txt'];
 
 export function converterPython(root) {
   return join(root, VENV, 'bin', 'python');
@@ -42,7 +44,7 @@ export function ensureConverterEnv(root, log = console.error) {
   log(`[setup] installing the converter's dependencies into ${VENV} (pip)...`);
   const pip = `${converterPython(root)} -m pip install -q --disable-pip-version-check`;
   execSync(`${pip} -r ${FILES[0]}`, { cwd: root, stdio: 'inherit' });
-  execSync(`${pip} --no-deps -r ${FILES[1]}`, { cwd: root, stdio: 'inherit' });
+  execSync(`${pip} --no-deps -r ${FILES[1]} -r ${FILES[2]}`, { cwd: root, stdio: 'inherit' });
   writeFileSync(stamp, want);
   return converterPython(root);
 }

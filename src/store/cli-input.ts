@@ -19,6 +19,7 @@ import { openStore } from './zarr/open-store.ts';
 import type { SourceInfo } from './zarr/source-store.ts';
 import { MeteredStore } from './zarr/stores.ts';
 import { rangesSidecarFiles } from './zarr/ranges-sidecar-files.ts';
+import { isZipStoreName } from './zarr/zip-store.ts';
 import type { ZfpStore } from './zarr/store.ts';
 import type { StreamGpuBytes } from './stream-port.ts';
 import type { ChunkedStreamGpu } from './gpu-port.ts';
@@ -36,7 +37,7 @@ export class NoSuchLevelError extends Error {
 
 /** A URL, or a folder with Zarr metadata at its root (v3 zarr.json, v2 .zgroup or .zarray). */
 export function isStoreInput(input: string): boolean {
-  return isStoreUrl(input) || ['zarr.json', '.zgroup', '.zarray'].some((f) => existsSync(join(input, f)));
+  return isStoreUrl(input) || isZipStoreName(input) || ['zarr.json', '.zgroup', '.zarray'].some((f) => existsSync(join(input, f)));
 }
 
 export interface StoreRecord {

@@ -1,6 +1,7 @@
 // Wires the store view into the page: a progress line over the view, a
 // "Store" section at the top of the panel, the loader's install path, and
 // window.zfpisoStore for the page tests.
+import { fileZipBytes, isZipStoreName, ZipStore } from '../../store/zarr/zip-store.ts';
 import { droppedFolder, pickDirectory, pickedFolder } from './folder.ts';
 import { StoreView, type StorePageState, type StoreViewDeps } from './store-view.ts';
 
@@ -39,10 +40,36 @@ export function mountStoreView(p: Omit<StoreViewDeps, 'publish' | 'line' | 'pane
   const openFolder = (f: { name: string; store: Parameters<StoreView['openStore']>[0] } | null) => {
     if (f) void view.openStore(f.store, f.name);
   };
+  // A zipped store (.ozx, .zip) dropped or picked as a file opens as a store, read in place
+  const zipOf = (files: FileList | null | undefined): File | null =>
+    files && files.length === 1 && isZipStoreName(files[0].name) ? files[0] : null;
+  const openZip = (file: File) => void view.openStore(new ZipStore(fileZipBytes(file), file.name), file.name);
+  window.addEventListener(
+    'change',
+    (e) => {
+      const input = e.target as HTMLInputElement | null;
+      const zip = input?.id === 'file-input' ? zipOf(input.files) : null;
+      if (!zip) return;
+      e.stopImmediatePropagation();
+      input!.value = '';
+      openZip(zip);
+    },
+    { capture: true },
+  );
   // A dropped folder is a store (files keep going to the page's usual drop handler).
   window.addEventListener(
     'drop',
     (e) => {
+      const zip = zipOf(e.dataTransfer?.files);
+      if (zip) {
+        e.preventDefault();
+        e.stopImmediatePropagation();
+        const overlay = document.getElementById('drop-overlay');
+        if (overlay) overlay.hidden = true;
+        window.dispatchEvent(new Event('dragleave'));
+        openZip(zip);
+        return;
+      }
       const folder = droppedFolder(e);
       if (!folder) return;
       e.preventDefault();

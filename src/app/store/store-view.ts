@@ -14,6 +14,7 @@ import type { GpuContext } from '../../gpu/device.ts';
 import { ChunkFetcher } from '../../store/fetch/chunk-fetcher.ts';
 import { chunkedGpu, createChunkStream, storeEncoder } from '../../store/gpu-port.ts';
 import { sessionRanges } from '../../store/learnt-ranges.ts';
+import { isZipStoreName, storeZipBytes, ZipStore } from '../../store/zarr/zip-store.ts';
 import { storeRateChooser } from '../../store/rate.ts';
 import type { ChunkStreamController } from '../../store/pinned-level.ts';
 import type { StreamProgress } from '../../store/stream-controller.ts';
@@ -122,7 +123,15 @@ export class StoreView {
   /** A store by URL (same origin, or another one with CORS); `rangesUrl`: its per-brick ranges written apart (&ranges=). */
   open(url: string, rangesUrl?: string | null): Promise<void> {
     const ranges = rangesUrl ? { store: new HttpStore(new URL(rangesUrl, location.href).href), name: rangesUrl } : undefined;
-    return this.openStore(new HttpStore(new URL(url, location.href).href), url, undefined, ranges);
+    const href = new URL(url, location.href);
+    // a zipped store (.ozx): read in place with range requests
+    const source = isZipStoreName(href.pathname)
+      ? new ZipStore(
+          storeZipBytes(new HttpStore(new URL('.', href).href), `/${href.pathname.slice(href.pathname.lastIndexOf('/') + 1)}`, url),
+          url,
+        )
+      : new HttpStore(href.href);
+    return this.openStore(source, url, undefined, ranges);
   }
 
   /**

@@ -54,6 +54,45 @@ export function voxelSizeOf(attrs: Json): [number, number, number] {
 }
 
 /**
+ * The datasets that make a pyramid the viewer can draw: level L halves every
+ * axis L times (OME `scale` 2^L x level 0's on x, y and z). Pyramids whose
+ * levels halve only some axes (ngff-zarr's per-axis scale factors: a
+ * 128x128x256 volume's level 1 at 128x128x128) keep level 0 and the datasets
+ * that are 2, 4, 8... times level 0's scale on every axis, in order; the
+ * others are left out and named in `skipped`. Without scales on every
+ * dataset, all of them (the converter's and zarr-python's stores).
+ */
+export function pyramidChain(attrs: Json, count: number): { datasets: number[]; skipped: string | null } {
+  const ms = multiscaleOf(attrs);
+  const list = ms && Array.isArray(ms.datasets) ? (ms.datasets as Json[]) : [];
+  const scales = list.slice(0, count).map((d) => {
+    const t = Array.isArray(d.coordinateTransformations) ? (d.coordinateTransformations as Json[]) : [];
+    const v = t.find((x) => isObject(x) && x.type === 'scale')?.scale as number[] | undefined;
+    if (!Array.isArray(v) || v.length < 3) return null;
+    const [z, y, x] = v.slice(-3).map(Number);
+    return [x, y, z].every((a) => Number.isFinite(a) && a > 0) ? [x, y, z] : null;
+  });
+  const all = Array.from({ length: count }, (_, i) => i);
+  if (scales.length < count || scales.some((sc) => sc === null)) return { datasets: all, skipped: null };
+  const s0 = scales[0]!;
+  const datasets: number[] = [0];
+  const left: string[] = [];
+  for (let i = 1; i < count; i++) {
+    const f = scales[i]!.map((v, a) => v / s0[a]);
+    const want = 2 ** datasets.length;
+    if (f.every((v) => Math.abs(v - want) <= 1e-6 * want)) datasets.push(i);
+    else left.push(`${String(list[i].path)} (${f.map((v) => Number(v.toPrecision(4))).join(' x ')} times level 0's voxel)`);
+  }
+  return {
+    datasets,
+    skipped:
+      left.length === 0
+        ? null
+        : `datasets ${left.join(', ')} are not shown: the levels drawn halve every axis (2, 4, 8... times level 0's voxel on x, y and z)`,
+  };
+}
+
+/**
  * Where each level sits, in level-0 voxels (x, y, z): level L's voxel j at
  * level-0 index j * 2^L + offset. From the OME `translation` of each dataset
  * (relative to level 0's, divided by level 0's `scale`): a coarse voxel of a
@@ -62,9 +101,11 @@ export function voxelSizeOf(attrs: Json): [number, number, number] {
  * translation places its levels at 0 (nearest-neighbour pyramids). Levels
  * beyond the datasets listed (a plain array) get 0.
  */
-export function levelOffsetsOf(attrs: Json, count: number): [number, number, number][] {
+export function levelOffsetsOf(attrs: Json, count: number, chain?: readonly number[]): [number, number, number][] {
   const ms = multiscaleOf(attrs);
-  const datasets = ms && Array.isArray(ms.datasets) ? (ms.datasets as Json[]) : [];
+  const all = ms && Array.isArray(ms.datasets) ? (ms.datasets as Json[]) : [];
+  // the levels shown (pyramidChain): level L is dataset chain[L]
+  const datasets = chain ? chain.map((i) => all[i]) : all;
   const transformOf = (d: Json | undefined, type: string): [number, number, number] | null => {
     const list = d && Array.isArray(d.coordinateTransformations) ? (d.coordinateTransformations as Json[]) : [];
     const v = list.find((x) => isObject(x) && x.type === type)?.[type] as number[] | undefined;

@@ -6,7 +6,7 @@ import type { AbsolutePath } from '@zarrita/storage';
 import * as zarr from 'zarrita';
 import { checkRate } from '../../zfp/format.ts';
 import { describeTransportError, StoreError } from './errors.ts';
-import { isObject, type Json, levelPaths, multiscaleOf, voxelSizeOf, levelOffsetsOf, zfpChunkBytes } from './metadata.ts';
+import { isObject, type Json, levelPaths, pyramidChain, multiscaleOf, voxelSizeOf, levelOffsetsOf, zfpChunkBytes } from './metadata.ts';
 import type { MetadataMemo } from './metadata.ts';
 import type { OpenStoreOptions, StoreLevel, ZfpStore } from './store.ts';
 import { openRangesSidecar, type RangesSidecar } from './ranges-sidecar.ts';
@@ -91,8 +91,11 @@ export async function openSourceStore(
 ): Promise<ZfpStore> {
   const { mem, metered, retrying } = layers;
   const ms = multiscaleOf(attrs);
-  const paths = kind === 'array' ? [''] : levelPaths(attrs);
-  if (!paths) throw new StoreError('not-a-store', `${name}: a Zarr group without OME-Zarr multiscales (no levels to show)`);
+  const allPaths = kind === 'array' ? [''] : levelPaths(attrs);
+  if (!allPaths) throw new StoreError('not-a-store', `${name}: a Zarr group without OME-Zarr multiscales (no levels to show)`);
+  // levels that halve every axis; datasets that halve only some are left out (and said so)
+  const chain = kind === 'array' ? { datasets: [0], skipped: null } : pyramidChain(attrs, allPaths.length);
+  const paths = chain.datasets.map((i) => allPaths[i]);
   const sidecar = options.ranges ? await openRangesSidecar(options.ranges.store, options.ranges.name, metered.meter, options.retry) : null;
   let rate = options.rate ?? sidecar?.rate ?? DEFAULT_SOURCE_RATE;
   const rateHow: SourceInfo['rateHow'] =
@@ -172,6 +175,7 @@ export async function openSourceStore(
     `lossless chunks (${codecs.join(' + ') || 'uncompressed'}, ${a0.dtype}): each ${sources[0].layout.chunkEdge}^3 brick is compressed on the GPU at rate ${rate} as it arrives`,
   ];
   if (rateNote) notes.push(rateNote);
+  if (chain.skipped) notes.push(chain.skipped);
   const usable = sidecar ? sidecarFits(sidecar, levels, rate, info!) : null;
   if (sidecar && usable === true) {
     for (const l of levels) l.rangesPath = `${sidecar.name} ranges/${l.index}`;
@@ -229,7 +233,7 @@ export async function openSourceStore(
     retries: retrying.counters,
     metadataBytes: metered.meter.bytes,
     voxelSize: voxelSizeOf(attrs),
-    levelOffsets: levelOffsetsOf(attrs, levels.length),
+    levelOffsets: levelOffsetsOf(attrs, levels.length, chain.datasets),
     unit: axisUnit('x'),
     valueRange: null,
     isAbsent: () => false,

@@ -14,7 +14,17 @@ import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
 export { chunkCoords, zfpChunkBytes } from './metadata.ts';
 import { describeTransportError, RequestFailedError, StoreError } from './errors.ts';
 import { RetryingStore } from './retrying-store.ts';
-import { chunkCoords, isObject, type Json, levelPaths, MetadataMemo, voxelSizeOf, levelOffsetsOf, zfpChunkBytes } from './metadata.ts';
+import {
+  chunkCoords,
+  isObject,
+  type Json,
+  levelPaths,
+  MetadataMemo,
+  pyramidChain,
+  voxelSizeOf,
+  levelOffsetsOf,
+  zfpChunkBytes,
+} from './metadata.ts';
 export { MetadataMemo } from './metadata.ts';
 import { openSourceStore } from './open-source.ts';
 import type { OpenStoreOptions, StoreLevel, ZfpStore } from './store.ts';
@@ -223,6 +233,7 @@ async function openZfpLevels({ mem, metered, retrying }: StoreLayers, name: stri
   const levels: StoreLevel[] = [];
   const notes: string[] = [];
   let attrs: Json = {};
+  let chain: number[] | undefined;
   if (rootJson.node_type === 'array') {
     levels.push(await openLevel(mem, name, 0, '', null));
   } else {
@@ -233,9 +244,13 @@ async function openZfpLevels({ mem, metered, retrying }: StoreLayers, name: stri
     const ours = isObject(attrs.zfpzarr) ? attrs.zfpzarr : null;
     const ourLevels = (ours?.levels as Json[] | undefined) ?? [];
     if (ours && ours.complete !== true) notes.push('the store is unfinished (zfpzarr.complete is not true): chunks may be missing');
-    for (let i = 0; i < paths.length; i++) {
-      const rp = ourLevels.find((l) => String(l.path) === paths[i])?.ranges;
-      levels.push(await openLevel(mem, name, i, paths[i], typeof rp === 'string' ? rp : null));
+    // levels that halve every axis; datasets that halve only some are left out (and said so)
+    const pyramid = pyramidChain(attrs, paths.length);
+    chain = pyramid.datasets;
+    if (pyramid.skipped) notes.push(pyramid.skipped);
+    for (const [i, d] of chain.entries()) {
+      const rp = ourLevels.find((l) => String(l.path) === paths[d])?.ranges;
+      levels.push(await openLevel(mem, name, i, paths[d], typeof rp === 'string' ? rp : null));
     }
   }
   const unusable = levels.filter((l) => l.unusable);
@@ -286,7 +301,7 @@ async function openZfpLevels({ mem, metered, retrying }: StoreLayers, name: stri
     retries: retrying.counters,
     metadataBytes: metered.meter.bytes,
     voxelSize: voxelSizeOf(attrs),
-    levelOffsets: levelOffsetsOf(attrs, levels.length),
+    levelOffsets: levelOffsetsOf(attrs, levels.length, chain),
     unit: typeof ours?.unit === 'string' ? ours.unit : null,
     valueRange: Array.isArray(vr) && vr.length === 2 ? [Number(vr[0]), Number(vr[1])] : null,
     isAbsent(bytes) {

@@ -15,8 +15,8 @@ import { readFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
-import { repoRoot, runPython } from '../../helpers/python.ts';
-import { cli } from './stores.ts';
+import { repoRoot } from '../../helpers/python.ts';
+import { cli, samePly } from './stores.ts';
 
 const work = mkdtempSync(join(tmpdir(), 'source-stores-'));
 interface Entry {
@@ -30,31 +30,6 @@ interface Entry {
   isoT1C1?: number[];
 }
 let manifest: Record<string, Entry> & { errors: Record<string, string> };
-
-/** Whether two PLY files hold the same triangles (each a set of three vertex positions), by NumPy. */
-function samePly(a: string, b: string): string {
-  return runPython(
-    `
-import sys, numpy as np
-def tris(path):
-    data = open(path, 'rb').read()
-    end = data.index(b'end_header\\n') + len(b'end_header\\n')
-    head = data[:end].decode().split('\\n')
-    nv = int([l for l in head if l.startswith('element vertex')][0].split()[2])
-    nf = int([l for l in head if l.startswith('element face')][0].split()[2])
-    v = np.frombuffer(data, dtype='<f4', count=3 * nv, offset=end).reshape(nv, 3)
-    f = np.frombuffer(data, dtype=np.dtype([('n', 'u1'), ('i', '<i4', 3)]), count=nf, offset=end + 12 * nv)
-    assert (f['n'] == 3).all()
-    t = v[f['i']]                                   # nf x 3 x 3
-    t = t.view([('x', '<f4'), ('y', '<f4'), ('z', '<f4')]).reshape(nf, 3)
-    t = np.sort(t, axis=1)                          # the three corners in one order
-    return np.sort(t.view('V36').reshape(nf))       # the triangles in one order
-ta, tb = tris(sys.argv[1]), tris(sys.argv[2])
-print('same' if ta.shape == tb.shape and (ta == tb).all() else f'differ: {ta.shape[0]} vs {tb.shape[0]} triangles, {int((ta != tb).sum()) if ta.shape == tb.shape else -1} differ')
-`,
-    [a, b],
-  ).trim();
-}
 
 function extract(input: string, iso: number[], prefix: string, extra: string[] = []) {
   const json = `${prefix}.json`;
