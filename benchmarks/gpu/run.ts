@@ -7,7 +7,7 @@
 // tables. benchmarks/gpu/README.md says how to run it on a lent GPU (the
 // bundle pack.mjs makes) and how to compare two results.
 //
-//   npm run bench:gpu [-- --smoke] [--max-seconds S] [--only probe,zfp,primitives,surfaces,stream]
+//   npm run bench:gpu [-- --smoke] [--max-seconds S] [--only probe,zfp,primitives,surfaces,stream,lossless]
 //                     [--out DIR] [--data DIR] [--work DIR] [--python PY]
 //   npm run bench:gpu -- --compare A.json B.json
 import { existsSync, mkdirSync } from 'node:fs';
@@ -19,11 +19,12 @@ import { BenchRun, FULL_PLAN, SMOKE_PLAN } from './context.ts';
 import { primitivesSection } from './primitives.ts';
 import { chromiumAvailability, type ProbeData, probeSection } from './probe.ts';
 import { compareRecords, gpuSlug, printRecord, type GpuBenchRecord, writeRecord } from './report.ts';
+import { losslessSection } from './lossless.ts';
 import { streamSection } from './stream.ts';
 import { surfacesSection } from './surfaces.ts';
 import { zfpDecodeSection } from './zfp-decode.ts';
 
-const SECTIONS = ['probe', 'zfp', 'primitives', 'surfaces', 'stream'] as const;
+const SECTIONS = ['probe', 'zfp', 'primitives', 'surfaces', 'stream', 'lossless'] as const;
 
 function parseArgs(argv: string[]) {
   const opts: Record<string, string | boolean> = {};
@@ -51,7 +52,7 @@ async function main(): Promise<number> {
   const { opts, rest } = parseArgs(process.argv.slice(2));
   if (opts.help) {
     console.log(
-      'npm run bench:gpu [-- --smoke] [--max-seconds S] [--only probe,zfp,primitives,surfaces,stream] [--out DIR] [--data DIR] [--work DIR] [--python PY]\n' +
+      'npm run bench:gpu [-- --smoke] [--max-seconds S] [--only probe,zfp,primitives,surfaces,stream,lossless] [--out DIR] [--data DIR] [--work DIR] [--python PY]\n' +
         'npm run bench:gpu -- --compare A.json B.json\nbenchmarks/gpu/README.md: what it measures, and how to run it on a lent GPU.',
     );
     return 0;
@@ -98,6 +99,7 @@ async function main(): Promise<number> {
   if (only.includes('primitives')) await run.section('primitives', 20, () => primitivesSection(run));
   if (only.includes('surfaces')) await run.section('surfaces', 60, () => surfacesSection(run));
   if (only.includes('stream')) await run.section('stream', 60, () => streamSection(run));
+  if (only.includes('lossless')) await run.section('lossless', 30, () => losslessSection(run));
   const chromium = chromiumAvailability();
   run.sections.push({ name: 'page benchmark (Chromium)', status: 'skipped', reason: chromium.reason, seconds: 0 });
   for (const f of failures) run.check('webgpu', 'no uncaptured WebGPU error or device loss', false, `${f.kind}: ${f.message}`);

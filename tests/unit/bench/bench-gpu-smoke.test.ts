@@ -52,7 +52,7 @@ afterAll(() => rmSync(work, { recursive: true, force: true }));
 describe('bench:gpu --smoke (the bundled benchmark on SwiftShader)', () => {
   test('every section ran within the smoke allowance', () => {
     const gpuSections = record.sections.filter((s) => s.name !== 'page benchmark (Chromium)');
-    expect(gpuSections.map((s) => s.name)).toEqual(['probe', 'zfp decode', 'primitives', 'surfaces', 'stream']);
+    expect(gpuSections.map((s) => s.name)).toEqual(['probe', 'zfp decode', 'primitives', 'surfaces', 'stream', 'lossless']);
     for (const s of gpuSections) expect(s.status, `${s.name}: ${s.reason ?? ''}\n${output.slice(-3000)}`).toBe('ran');
     // the page benchmark is reported, not silently dropped
     expect(record.sections.find((s) => s.name === 'page benchmark (Chromium)')?.reason).toBeTruthy();
@@ -62,7 +62,7 @@ describe('bench:gpu --smoke (the bundled benchmark on SwiftShader)', () => {
   });
 
   test('every figure is present, finite and positive, in every section', () => {
-    for (const section of ['probe', 'zfp decode', 'primitives', 'surfaces', 'stream'])
+    for (const section of ['probe', 'zfp decode', 'primitives', 'surfaces', 'stream', 'lossless'])
       expect(record.figures.filter((f) => f.section === section).length, section).toBeGreaterThan(0);
     for (const f of record.figures) expect(Number.isFinite(f.value) && f.value > 0, `${f.section}: ${f.name} = ${f.value}`).toBe(true);
     // the primitives at each size and kernel family, the decodes of both volumes on both paths
@@ -110,7 +110,7 @@ describe('bench:gpu --smoke (the bundled benchmark on SwiftShader)', () => {
       { encoding: 'utf8', timeout: 60_000 },
     );
     expect(r.status, r.stderr).toBe(0);
-    const ratios = r.stdout.split('\n').filter((l) => /^(probe|zfp decode|primitives|surfaces|stream): /.test(l));
+    const ratios = r.stdout.split('\n').filter((l) => /^(probe|zfp decode|primitives|surfaces|stream|lossless): /.test(l));
     expect(ratios.length).toBe(record.figures.length);
     for (const l of ratios) expect(l.trim().endsWith(' 1'), l).toBe(true);
   });

@@ -1,0 +1,246 @@
+// bench:gpu's published-style store (issue 37): an N^3 uint8 volume with
+// structure in a ball and empty space around it, written by zarr-python the
+// way public collections are (Zarr v3, OME 0.5, zstd, 64^3 chunks in shards,
+// a 2x2x2-mean pyramid down to one chunk, no range arrays), made on the
+// machine that runs the benchmark, served over HTTP on localhost and through
+// the simulated 100 Mbit/s link. Refined by the view (the page's Fit of the
+// volume, then a zoom onto the ball's edge) within the budget, as the page
+// streams it; the bricks are zfp-encoded on the GPU as they arrive and their
+// ranges learnt then (src/store/learnt-ranges.ts). Measured per link:
+// - open (metadata) and the coarsest level read whole for the value range;
+// - the first isovalue: time to the first update and to the whole cut, bytes
+//   fetched;
+// - a second isovalue: bytes fetched and bricks put (the learnt ranges skip
+//   the bricks that hold none of it), time to the whole cut;
+// - the zoom: time to the whole cut, level-0 bricks on screen, GPU peak;
+// - decode throughput of one thread (the CPU side of a brick: fetch, zstd,
+//   assemble; the page runs it in up to 4 Web Workers, Node has none).
+import { execFileSync } from 'node:child_process';
+import { existsSync } from 'node:fs';
+import { createServer } from 'node:http';
+import { join } from 'node:path';
+import { storesMiddleware } from '../../scripts/vite-stores.ts';
+import type { Isosurface } from '../../src/isosurface/isosurface.ts';
+import type { IsosurfaceStats } from '../../src/isosurface/types.ts';
+import { ChunkFetcher } from '../../src/store/fetch/chunk-fetcher.ts';
+import { chunkedGpu, storeEncoder } from '../../src/store/gpu-port.ts';
+import { readLevelValues } from '../../src/store/level-values.ts';
+import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../src/store/view/cut.ts';
+import { DEFAULT_VIEWPORT } from '../../src/store/view/view-request.ts';
+import { DEFAULT_TOLERANCE_PX, ViewStream } from '../../src/store/view/view-stream.ts';
+import { openStore } from '../../src/store/zarr/open-store.ts';
+import type { ChunkedVolume } from '../../src/zfp/chunked-volume.ts';
+import { linkStore } from '../stream-scale.ts';
+import type { BenchRun } from './context.ts';
+
+const SECTION = 'lossless';
+const ISO = [100.5, 200.5];
+const MiB = 2 ** 20;
+
+const MAKE_STORE = `
+import sys, numpy as np, dask.array as da, zarr
+from zarr.codecs import ZstdCodec
+n, out = int(sys.argv[1]), sys.argv[2]
+def field(block_info=None):
+    loc = block_info[None]['array-location']
+    z, y, x = np.meshgrid(*[np.arange(a, b, dtype=np.float32) for a, b in loc], indexing='ij')
+    c = (n - 1) / 2.0
+    r = np.sqrt((x - c) ** 2 + (y - c) ** 2 + (z - c) ** 2) / n
+    s = n / 24.0
+    f = 128 + 100 * np.sin(x / s) * np.cos(y / (1.3 * s)) * np.sin(z / (0.9 * s) + x / (3 * s))
+    return np.where(r < 0.3, f, 0).clip(0, 255).astype(np.uint8)
+v = da.map_blocks(field, chunks=((64,) * (n // 64),) * 3, dtype=np.uint8)
+g = zarr.open_group(out, mode='w', zarr_format=3)
+levels = 0
+while True:
+    shape = v.shape
+    shards = tuple(min(256, s) for s in shape)
+    chunks = tuple(min(64, s) for s in shape)
+    arr = g.create_array(str(levels), shape=shape, chunks=chunks, shards=shards, dtype='uint8', compressors=ZstdCodec(level=3))
+    da.store(v.rechunk(shards), arr, lock=False)
+    levels += 1
+    if max(shape) <= 64:
+        break
+    v = da.coarsen(np.mean, v.astype(np.float32), {0: 2, 1: 2, 2: 2}).round().astype(np.uint8)
+axes = [{'name': a, 'type': 'space', 'unit': 'micrometer'} for a in 'zyx']
+g.attrs['ome'] = {'version': '0.5', 'multiscales': [{'axes': axes, 'datasets': [
+    {'path': str(i), 'coordinateTransformations': [{'type': 'scale', 'scale': [2.0 ** i] * 3}, {'type': 'translation', 'translation': [(2.0 ** i - 1) / 2] * 3}]} for i in range(levels)]}]}
+`;
+
+function makeStore(run: BenchRun, edge: number): { name: string; seconds: number } {
+  const name = `ball${edge}-zstd.zarr`;
+  const out = join(run.paths.work, name);
+  if (existsSync(join(out, 'zarr.json'))) return { name, seconds: 0 };
+  const t0 = performance.now();
+  console.log(`  writing ${name} (uint8, zstd, 64^3 chunks in shards, mean pyramid) with zarr-python...`);
+  execFileSync(run.paths.python, ['-c', MAKE_STORE, String(edge), out], { stdio: 'inherit', timeout: 600_000 });
+  return { name, seconds: (performance.now() - t0) / 1000 };
+}
+
+interface LinkRecord {
+  link: string;
+  openMs: number;
+  coarseReadMs: number;
+  valueRange: [number, number] | null;
+  first: { firstUpdateMs: number; wholeMs: number; bytes: number; bricks: number };
+  second: { wholeMs: number; bytes: number; bricks: number };
+  zoom: { wholeMs: number; level0Bricks: number; bytes: number };
+  gpuPeakBytes: number;
+  decodeMBps: number;
+  learntBricks: number;
+  /** Bricks handed over for the second isovalue although the learnt ranges excluded them (0 expected). */
+  excluded: number;
+  stops: string[];
+}
+
+export async function losslessSection(run: BenchRun): Promise<unknown> {
+  const edge = run.plan.storeEdge;
+  const budget = 2 * run.plan.storeBudgetBytes;
+  const { name, seconds } = makeStore(run, edge);
+  if (seconds > 0) console.log(`  written in ${seconds.toFixed(1)} s`);
+  const mw = storesMiddleware(run.paths.work);
+  const server = createServer((req, res) =>
+    mw(req, res, () => {
+      res.statusCode = 404;
+      res.end();
+    }),
+  );
+  await new Promise<void>((r) => server.listen(0, '127.0.0.1', () => r()));
+  const url = `http://127.0.0.1:${(server.address() as { port: number }).port}/stores/${name}`;
+  const records: LinkRecord[] = [];
+  try {
+    // localhost twice (the first compiles the pipelines), then the link
+    for (const link of ['localhost', 'localhost', 'link']) {
+      const metered = linkStore(url, link);
+      const t0 = performance.now();
+      const store = await openStore(metered, url, { rate: 8 });
+      const openMs = performance.now() - t0;
+      const coarse = await readLevelValues(store, store.levels.length - 1);
+      const coarseReadMs = performance.now() - t0 - openMs;
+      const port = chunkedGpu(run.gpu, undefined, await storeEncoder(run.gpu, store));
+      const fetcher = new ChunkFetcher(store);
+      let put = 0;
+      let excluded = 0;
+      let secondIso = false;
+      fetcher.onChunk((L, c) => {
+        put++;
+        // a brick handed over for the second isovalue that the ranges learnt so far exclude (its own is learnt after it arrives)
+        if (secondIso && !stream.learnt.needs(L, ISO[1], c) && !store.levels[L].rangesPath) excluded++;
+      });
+      const stream = await ViewStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budget);
+      const stops: string[] = [];
+      stream.onProgress((p) => {
+        if (p.phase === 'stopped') stops.push(p.reason ?? 'stopped');
+      });
+      const box0 = fitBox0(store.levels[0].layout, 0);
+      const sceneRadius = sceneRadiusOf(box0, store.voxelSize);
+      const view = (box: typeof box0) => ({
+        camera: cameraFromView(cameraForBox(box, store.voxelSize, DEFAULT_VIEWPORT).state, DEFAULT_VIEWPORT, sceneRadius),
+        tolerancePx: DEFAULT_TOLERANCE_PX,
+      });
+      /** One refinement: ms to the first step shown and to the whole cut, bytes and bricks it fetched. */
+      const measure = async (go: () => Promise<void>) => {
+        const b0 = metered.meter.bytes;
+        const p0 = put;
+        const s0 = performance.now();
+        let firstUpdate = Number.NaN;
+        const off = stream.onShown(() => {
+          if (Number.isNaN(firstUpdate)) firstUpdate = performance.now() - s0;
+        });
+        await go();
+        off();
+        const wholeMs = performance.now() - s0;
+        await stream.learnSettled();
+        return { firstUpdateMs: firstUpdate, wholeMs, bytes: metered.meter.bytes - b0, bricks: put - p0 };
+      };
+      await stream.setView(view(box0));
+      const first = await measure(() => stream.setIsovalue(ISO[0]));
+      secondIso = true;
+      const second = await measure(() => stream.setIsovalue(ISO[1]));
+      secondIso = false;
+      // onto the ball's edge: a box an eighth of the volume wide where the ball meets empty space
+      const e = edge / 8;
+      const c = edge / 2 + 0.3 * edge * Math.SQRT1_2;
+      const zoom = await measure(() => stream.setView(view([c - e, c - e, edge / 2 - e, c + e, c + e, edge / 2 + e])));
+      const decode = store.sourceDecode?.();
+      records.push({
+        link,
+        openMs,
+        coarseReadMs,
+        valueRange: coarse?.valueRange ?? null,
+        first,
+        second: { wholeMs: second.wholeMs, bytes: second.bytes, bricks: second.bricks },
+        zoom: {
+          wholeMs: zoom.wholeMs,
+          bytes: zoom.bytes,
+          level0Bricks: stream.shown?.levels.find((l) => l.level === 0)?.drawn.length ?? 0,
+        },
+        gpuPeakBytes: port.meter.peak,
+        decodeMBps: decode && decode.ms > 0 ? decode.bytes / MiB / (decode.ms / 1000) : 0,
+        learntBricks: store.levels.reduce((a, _, L) => a + stream.learnt.knownCount(L), 0),
+        excluded,
+        stops,
+      });
+      stream.destroy();
+      store.close?.();
+    }
+    const measured = [records[1], records[2]];
+    for (const r of measured) {
+      const at = `ball ${edge}^3 zstd, ${r.link}`;
+      run.figure(SECTION, `${at}: first update after the metadata (ms)`, r.first.firstUpdateMs, 'ms');
+      run.figure(SECTION, `${at}: whole cut, first isovalue (ms)`, r.first.wholeMs, 'ms');
+      run.figure(SECTION, `${at}: whole cut after the zoom (ms)`, r.zoom.wholeMs, 'ms');
+      run.figure(SECTION, `${at}: first isovalue fetched (MiB)`, r.first.bytes / MiB, 'MiB');
+      run.figure(SECTION, `${at}: second isovalue fetched (MiB)`, Math.max(r.second.bytes / MiB, 1e-6), 'MiB');
+      run.figure(SECTION, `${at}: decode, one thread (MB/s)`, r.decodeMBps, 'MB/s');
+      run.check(
+        SECTION,
+        `${at}: GPU peak within the budget`,
+        r.gpuPeakBytes <= budget,
+        `${(r.gpuPeakBytes / MiB).toFixed(1)} of ${(budget / MiB).toFixed(0)} MiB`,
+      );
+      run.check(SECTION, `${at}: every refinement reached its whole cut`, r.stops.length === 0, r.stops.join('; ') || 'no stop');
+      run.check(
+        SECTION,
+        `${at}: the second isovalue fetched no brick its learnt ranges exclude`,
+        r.excluded === 0 && r.learntBricks > 0,
+        `${r.excluded} excluded bricks fetched; ${r.learntBricks} brick ranges learnt`,
+      );
+    }
+    run.table({
+      title: `published-style store: ball ${edge}^3 uint8, zstd, 64^3 chunks in shards, budget ${(budget / MiB).toFixed(0)} MiB, rate 8, iso ${ISO.join(' then ')} (second localhost run and the 100 Mbit/s link)`,
+      header: [
+        'link',
+        'open ms',
+        'coarsest read ms',
+        'first update ms',
+        'whole cut ms',
+        'fetched MiB',
+        '2nd iso bricks',
+        '2nd iso MiB',
+        'zoom whole ms',
+        'zoom level-0 bricks',
+        'GPU peak MiB',
+        'decode MB/s (1 thread)',
+      ],
+      rows: measured.map((r) => [
+        r.link,
+        r.openMs,
+        r.coarseReadMs,
+        r.first.firstUpdateMs,
+        r.first.wholeMs,
+        (r.first.bytes / MiB).toFixed(1),
+        `${r.second.bricks} (1st: ${r.first.bricks})`,
+        (r.second.bytes / MiB).toFixed(1),
+        r.zoom.wholeMs,
+        r.zoom.level0Bricks,
+        (r.gpuPeakBytes / MiB).toFixed(1),
+        r.decodeMBps,
+      ]),
+    });
+    return { store: name, writeSeconds: seconds, budgetBytes: budget, iso: ISO, runs: records };
+  } finally {
+    server.closeAllConnections();
+    server.close();
+  }
+}
