@@ -17,7 +17,7 @@ import type { Isosurface } from '../src/isosurface/isosurface.ts';
 import type { IsosurfaceStats } from '../src/isosurface/types.ts';
 import { ChunkFetcher } from '../src/store/fetch/chunk-fetcher.ts';
 import { chunkedGpu } from '../src/store/gpu-port.ts';
-import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf, type ViewCameraState } from '../src/store/view/cut.ts';
+import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf, type ViewCameraState } from '../src/store/view/camera.ts';
 import { DEFAULT_VIEWPORT } from '../src/store/view/view-request.ts';
 import { DEFAULT_TOLERANCE_PX, ViewStream } from '../src/store/view/view-stream.ts';
 import { openStore } from '../src/store/zarr/open-store.ts';

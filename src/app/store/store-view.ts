@@ -25,7 +25,7 @@ import { MeteredStore } from '../../store/zarr/stores.ts';
 import type { Isosurface } from '../../isosurface/isosurface.ts';
 import type { IsosurfaceStats } from '../../isosurface/types.ts';
 import type { CameraState } from '../../render/camera.ts';
-import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf, type Viewport } from '../../store/view/cut.ts';
+import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf, type Viewport } from '../../store/view/camera.ts';
 import { estimateFixedBytes } from '../../store/level-state.ts';
 import { type LevelValues, readLevelValues } from '../../store/level-values.ts';
 import { DEFAULT_TOLERANCE_PX, type ViewSpec, ViewStream } from '../../store/view/view-stream.ts';

@@ -20,7 +20,7 @@ import { decodeVertices } from '../../isosurface/vertex-format.ts';
 import { meshMetrics } from '../../mc/mesh-metrics.ts';
 import { LevelStoppedError } from '../../store/pinned-level.ts';
 import { openInputSurface } from '../input.ts';
-import { parseCam } from '../../store/view/cut.ts';
+import { parseCam } from '../../store/view/camera.ts';
 import { type ViewRequest, parseViewBox } from '../../store/view/view-request.ts';
 import type { CutChunkRecord } from '../../store/view/view-surface.ts';
 import { rateErrorRecord } from '../../zfp/rate-choice.ts';

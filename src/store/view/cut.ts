@@ -19,7 +19,7 @@
 //   level's voxel: pass it divided by 2^L as the level-0 voxelSize.) A node's
 //   world box is [lo * s, hi * s] with [lo, hi) its clipped level-0 box.
 // - Camera: the page's arcball camera (src/render/camera.ts, which this layer
-//   may not import: the math is repeated here and checked against it in
+//   may not import: the math is repeated in camera.ts and checked against it in
 //   tests/unit/store/view-cut.test.ts). Its state (the link's cam=qx,qy,qz,qw,
 //   tx,ty,tz,d) is a rotation (world -> eye), a target and a distance: eye =
 //   R^-1 (0, 0, d) + target, view = T(0, 0, -d) R T(-target), projection =
@@ -50,8 +50,6 @@
 // splits that would make the wanted chunks cost more than the budget is undone
 // whole, and the queue goes on.
 
-import { mat3, mat4, quat, vec3 } from 'gl-matrix';
-import { DEFAULT_VIEW_DIRECTION } from '../../core/view.ts';
 import type { ChunkIndex } from '../types.ts';
 
 /** One level of the store, as the cut needs it. */
@@ -614,164 +612,4 @@ function boxInFrustum(p: Float64Array, x0: number, y0: number, z0: number, x1: n
     if (a * (a >= 0 ? x1 : x0) + b * (b >= 0 ? y1 : y0) + c * (c >= 0 ? z1 : z0) + p[i + 3] < 0) return false;
   }
   return true;
-}
-
-// --- the page's camera -------------------------------------------------------
-
-/** The page's vertical field of view (src/render/camera.ts, ArcballCamera.fovY). */
-export const PAGE_FOV_Y_RAD = (40 * Math.PI) / 180;
-
-/** The axis shown pointing up by the page's fit (its Display section; 'y' by default). */
-export type UpAxis = 'x' | 'y' | 'z';
-
-/** The page's camera state, as src/render/camera.ts's CameraState and the link's cam=qx,qy,qz,qw,tx,ty,tz,d. */
-export interface ViewCameraState {
-  /** Rotation from world to eye orientation, [x, y, z, w]. */
-  rotation: [number, number, number, number];
-  /** The point the camera orbits, in world units. */
-  target: [number, number, number];
-  /** From the target to the eye, in world units. */
-  distance: number;
-}
-
-/** A viewport in device pixels (the canvas' width and height). */
-export interface Viewport {
-  width: number;
-  height: number;
-}
-
-/** A box in level-0 voxel coordinates: [x0, y0, z0, x1, y1, z1] (world = these * voxelSize). */
-export type Box0 = [number, number, number, number, number, number];
-
-/** A CutCamera with the page camera it stands for. */
-export interface ViewCamera extends CutCamera {
-  /** The page's camera state (what the link's cam= holds). */
-  state: ViewCameraState;
-  target: [number, number, number];
-  /** The eye's up direction in world units (unit length). */
-  up: [number, number, number];
-  fovYRad: number;
-  /** The page's near and far planes (they follow sceneRadius). */
-  near: number;
-  far: number;
-  /** Half the diagonal of the box the page last fitted: near and far follow it. */
-  sceneRadius: number;
-  viewport: Viewport;
-  /** World -> eye. */
-  view: Float64Array;
-  /** Eye -> clip. */
-  projection: Float64Array;
-}
-
-/**
- * The level-0 voxel box the page fits when it shows level `index` of a store:
- * min 0, max (dims_L - 1) * 2^L (the page's bounds (dims_L - 1) * spacing_L
- * with spacing_L = voxelSize * 2^L). For a single volume, index 0.
- */
-export function fitBox0(level: Pick<CutLevel, 'dims'>, index: number): Box0 {
-  const f = 2 ** index;
-  return [0, 0, 0, (level.dims[0] - 1) * f, (level.dims[1] - 1) * f, (level.dims[2] - 1) * f];
-}
-
-/** The page's sceneRadius for a fitted box: half its world diagonal (at least 1e-6), in float32 as the page computes it. */
-export function sceneRadiusOf(box0: Box0, voxelSize: [number, number, number]): number {
-  const [sx, sy, sz] = voxelSize;
-  const r =
-    0.5 *
-    vec3.distance(vec3.fromValues(box0[0] * sx, box0[1] * sy, box0[2] * sz), vec3.fromValues(box0[3] * sx, box0[4] * sy, box0[5] * sz));
-  return Math.max(r, 1e-6);
-}
-
-/** The page fit's rotation (ArcballCamera.fit), in float32 like the page's. */
-function fitRotation(up: UpAxis): [number, number, number, number] {
-  const rotation = quat.create();
-  if (up === 'z') {
-    const q = quat.create();
-    quat.setAxisAngle(q, [1, 0, 0], (-62 * Math.PI) / 180);
-    const yaw = quat.create();
-    quat.setAxisAngle(yaw, [0, 0, 1], (35 * Math.PI) / 180);
-    quat.multiply(rotation, q, yaw);
-  } else {
-    const d = DEFAULT_VIEW_DIRECTION;
-    const dir = up === 'y' ? vec3.fromValues(d[0], d[1], d[2]) : vec3.fromValues(d[2], d[0], d[1]);
-    const upVec = up === 'y' ? vec3.fromValues(0, 1, 0) : vec3.fromValues(1, 0, 0);
-    const look = mat4.lookAt(mat4.create(), vec3.normalize(dir, dir), [0, 0, 0], upVec);
-    quat.fromMat3(rotation, mat3.fromMat4(mat3.create(), look));
-    quat.normalize(rotation, rotation);
-  }
-  return [rotation[0], rotation[1], rotation[2], rotation[3]];
-}
-
-/**
- * The camera the page's Fit gives a box: ArcballCamera.fit(bounds, up) with
- * bounds = box0 * voxelSize: it looks at the box centre from the up axis'
- * three-quarter direction (y up, the page's default: from +z, right and a
- * little above, DEFAULT_VIEW_DIRECTION; z up: from -x, -y, above), at
- * distance 1.05 r / sin(fovY / 2) (r = half the box diagonal), near and far
- * from r. Pass fitBox0(level, L) to get the page's view of level L.
- */
-export function cameraForBox(
-  box0: Box0,
-  voxelSize: [number, number, number],
-  viewport: Viewport,
-  fovYRad = PAGE_FOV_Y_RAD,
-  up: UpAxis = 'y',
-): ViewCamera {
-  const [sx, sy, sz] = voxelSize;
-  // the page's target is a float32 vec3
-  const t = vec3.fromValues(((box0[0] + box0[3]) * sx) / 2, ((box0[1] + box0[4]) * sy) / 2, ((box0[2] + box0[5]) * sz) / 2);
-  const sceneRadius = sceneRadiusOf(box0, voxelSize);
-  const state: ViewCameraState = {
-    rotation: fitRotation(up),
-    target: [t[0], t[1], t[2]],
-    distance: (sceneRadius / Math.sin(fovYRad / 2)) * 1.05,
-  };
-  return cameraFromView(state, viewport, sceneRadius, fovYRad);
-}
-
-/**
- * The CutCamera of the page's camera state (ArcballCamera.getState(), or the
- * link's cam= through parseCam) on a viewport: the same view, projection
- * (near/far from `sceneRadius`: sceneRadiusOf(fitBox0(shown level...))) and
- * eye as the page's, in float64.
- */
-export function cameraFromView(state: ViewCameraState, viewport: Viewport, sceneRadius: number, fovYRad = PAGE_FOV_Y_RAD): ViewCamera {
-  const d = state.distance;
-  const q = quat.normalize(new Float64Array(4), Float64Array.from(state.rotation));
-  const [tx, ty, tz] = state.target;
-  const view = new Float64Array(16);
-  mat4.fromTranslation(view, [0, 0, -d]);
-  mat4.multiply(view, view, mat4.fromQuat(new Float64Array(16), q));
-  mat4.translate(view, view, [-tx, -ty, -tz]);
-  const near = Math.max(d - sceneRadius * 1.5, d * 0.01, 1e-4);
-  const far = d + sceneRadius * 1.5;
-  const projection = new Float64Array(16);
-  mat4.perspectiveZO(projection, fovYRad, viewport.width / viewport.height, near, far);
-  const viewProj = mat4.multiply(new Float64Array(16), projection, view) as Float64Array;
-  const inv = quat.invert(new Float64Array(4), q);
-  const eye = vec3.transformQuat(new Float64Array(3), [0, 0, d], inv);
-  const up = vec3.transformQuat(new Float64Array(3), [0, 1, 0], inv);
-  return {
-    viewProj,
-    eye: [eye[0] + tx, eye[1] + ty, eye[2] + tz],
-    pixelsPerUnit: viewport.height / (2 * Math.tan(fovYRad / 2)),
-    focus: { point: [tx, ty, tz], radius: 0.5 * d * Math.tan(fovYRad / 2) },
-    state: { rotation: [...state.rotation], target: [tx, ty, tz], distance: d },
-    target: [tx, ty, tz],
-    up: [up[0], up[1], up[2]],
-    fovYRad,
-    near,
-    far,
-    sceneRadius,
-    viewport: { width: viewport.width, height: viewport.height },
-    view,
-    projection,
-  };
-}
-
-/** The link's cam=qx,qy,qz,qw,tx,ty,tz,d (as src/app/url-state.ts reads it), or null when it is not one. */
-export function parseCam(text: string): ViewCameraState | null {
-  const cam = text.split(',').map(Number);
-  if (cam.length !== 8 || !cam.every(Number.isFinite) || !(cam[7] > 0)) return null;
-  return { rotation: [cam[0], cam[1], cam[2], cam[3]], target: [cam[4], cam[5], cam[6]], distance: cam[7] };
 }

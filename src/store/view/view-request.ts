@@ -3,7 +3,7 @@
 // page's link (--view '#iso=..&cam=..&px=W,H&tol=T'). Both become the same
 // ViewSpec the page's camera gives (cut.ts: the page's camera math), so a
 // headless run computes the page's cut for that camera.
-import { type Box0, cameraForBox, cameraFromView, fitBox0, parseCam, sceneRadiusOf, type Viewport } from './cut.ts';
+import { type Box0, cameraForBox, cameraFromView, fitBox0, parseCam, sceneRadiusOf, type Viewport } from './camera.ts';
 import { DEFAULT_TOLERANCE_PX, type ViewSpec } from './view-stream.ts';
 
 export interface ViewRequest {

@@ -15,7 +15,7 @@ import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
 import { chunkedGpu, storeEncoder } from '../../../src/store/gpu-port.ts';
 import { LearntRanges, MAX_LEARNT_CHUNKS, sessionRanges } from '../../../src/store/learnt-ranges.ts';
 import { chunkNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
-import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../../src/store/view/cut.ts';
+import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../../src/store/view/camera.ts';
 import { DEFAULT_VIEWPORT } from '../../../src/store/view/view-request.ts';
 import { ViewStream } from '../../../src/store/view/view-stream.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';

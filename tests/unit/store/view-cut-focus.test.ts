@@ -9,7 +9,8 @@
 // ArcballCamera in view-cut.test.ts); what counts as "framed" is the box
 // given, computed here from the level-0 boxes of the leaves.
 import { describe, expect, it } from 'vitest';
-import { type CutLevel, cameraForBox, cameraFromView, sceneRadiusOf, viewCut } from '../../../src/store/view/cut.ts';
+import { type CutLevel, viewCut } from '../../../src/store/view/cut.ts';
+import { cameraForBox, cameraFromView, sceneRadiusOf } from '../../../src/store/view/camera.ts';
 import { DEFAULT_VIEWPORT } from '../../../src/store/view/view-request.ts';
 
 type V3 = [number, number, number];

@@ -12,20 +12,16 @@ import { mat4 } from 'gl-matrix';
 import { describe, expect, it } from 'vitest';
 import { ArcballCamera } from '../../../src/render/camera.ts';
 import { encodeViewState, decodeViewState } from '../../../src/app/url-state.ts';
+import { type CutCamera, type CutInput, type CutLevel, type ViewCut, viewCut } from '../../../src/store/view/cut.ts';
 import {
   type Box0,
-  type CutCamera,
-  type CutInput,
-  type CutLevel,
-  type ViewCut,
   cameraForBox,
   cameraFromView,
   fitBox0,
   PAGE_FOV_Y_RAD,
   parseCam,
   sceneRadiusOf,
-  viewCut,
-} from '../../../src/store/view/cut.ts';
+} from '../../../src/store/view/camera.ts';
 
 type V3 = [number, number, number];
 

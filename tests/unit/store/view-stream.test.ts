@@ -12,7 +12,7 @@ import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
 import { chunksNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
 import type { LevelStats, StreamGpu } from '../../../src/store/stream-port.ts';
 import type { ChunkIndex, ChunkLevelLayout } from '../../../src/store/types.ts';
-import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../../src/store/view/cut.ts';
+import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../../src/store/view/camera.ts';
 import { DEFAULT_VIEWPORT } from '../../../src/store/view/view-request.ts';
 import { type RoleVolume, type ShownCut, ViewStream } from '../../../src/store/view/view-stream.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
