@@ -321,11 +321,15 @@ export class StoreView {
     // what the store is and how it is read goes to the panel; what a user should act on is also a (dismissable) notice
     state.notes = [...store.notes];
     for (const note of store.notes) if (WARNING_NOTE.test(note)) this.d.onNotice(`${url}: ${note}`);
-    const fetchedOnce = new Set<string>();
+    // chunks counted once: a bit per chunk of each level, made when the level's first chunk arrives (bounded by the store)
+    const fetchedOnce: (Uint8Array | undefined)[] = [];
     f.onChunk((level, chunk, bytes, fromCache) => {
       // absent from the store (the fill value): nothing came over
-      if (fromCache || fetchedOnce.has(`${level}:${chunk}`) || store.isAbsent(bytes)) return;
-      fetchedOnce.add(`${level}:${chunk}`);
+      if (fromCache || store.isAbsent(bytes)) return;
+      const bits = (fetchedOnce[level] ??= new Uint8Array(Math.ceil(store.levels[level].chunkCount / 8)));
+      const bit = 1 << (chunk & 7);
+      if (bits[chunk >>> 3] & bit) return;
+      bits[chunk >>> 3] |= bit;
       state.chunksFetched++;
       state.levels[level].chunksFetched++;
       state.levels[level].chunkBytesFetched += bytes.byteLength;

@@ -32,6 +32,7 @@ import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
 import { isAbort } from '../zarr/errors.ts';
 import type { ZfpStore } from '../zarr/store.ts';
 import { type CutCamera, type ViewCut, viewCut } from './cut.ts';
+import { cutStep, type Step } from './step.ts';
 
 /** A pool whose chunks can be drawn, ghosts or idle (ChunkedVolume.setRoles). */
 export interface RoleVolume extends LevelVolume {
@@ -76,15 +77,6 @@ interface LevelState<V> {
   volume: V | null;
   /** Resident chunks, least recently wanted first. */
   lru: Map<ChunkIndex, true>;
-}
-
-/** One step of the refinement: per level, its leaves, drawn (needed) chunks, ghosts and wanted chunks. */
-interface Step {
-  finest: number;
-  leaves: ChunkIndex[][];
-  drawn: Set<ChunkIndex>[];
-  ghosts: Set<ChunkIndex>[];
-  wanted: ChunkIndex[][];
 }
 
 /** Chunks a step waits for (keys level * 2^32 + chunk), and per level what must stay resident meanwhile. */
@@ -361,65 +353,16 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     return readLevelRanges(this.store, lv);
   }
 
-  /** The cut coarsened to levels >= k: leaves finer than k drawn by their ancestor at k. */
+  /** The cut coarsened to levels >= k (step.ts). */
   #step(cut: ViewCut, k: number): Step {
-    const n = this.levels.length;
-    const leaves: Set<ChunkIndex>[] = Array.from({ length: n }, () => new Set());
-    const edge0 = (L: number) => this.levels[L].layout.chunkEdge * 2 ** L;
-    for (const node of cut.nodes) {
-      if (node.level >= k) {
-        leaves[node.level].add(node.chunk);
-        continue;
-      }
-      const [gx, gy] = this.levels[k].layout.chunkGrid;
-      const e = edge0(node.level);
-      const a = node.coords.map((c) => Math.floor((c * e) / edge0(k)));
-      leaves[k].add(a[0] + gx * (a[1] + gy * a[2]));
-    }
-    const drawn: Set<ChunkIndex>[] = [];
-    const ghosts: Set<ChunkIndex>[] = [];
-    const wanted: ChunkIndex[][] = [];
-    const eye = this.#view!.camera.eye;
-    for (let L = 0; L < n; L++) {
-      const need = leaves[L].size > 0 ? (this.#needs(L, this.#iso) ?? (() => true)) : () => false;
-      const { chunkGrid: g } = this.levels[L].layout;
-      const d = new Set<ChunkIndex>();
-      const gh = new Set<ChunkIndex>();
-      for (const c of leaves[L]) {
-        if (need(c)) d.add(c);
-        const x = c % g[0];
-        const y = Math.floor(c / g[0]) % g[1];
-        const z = Math.floor(c / (g[0] * g[1]));
-        for (let o = 1; o < 8; o++) {
-          const ux = x + (o & 1);
-          const uy = y + ((o >> 1) & 1);
-          const uz = z + ((o >> 2) & 1);
-          if (ux >= g[0] || uy >= g[1] || uz >= g[2]) continue;
-          const u = ux + g[0] * (uy + g[1] * uz);
-          if (!leaves[L].has(u) && need(u)) gh.add(u);
-        }
-      }
-      drawn.push(d);
-      ghosts.push(gh);
-      wanted.push(this.#nearestFirst(L, [...d, ...gh], eye));
-    }
-    return { finest: k, leaves: leaves.map((s) => [...s]), drawn, ghosts, wanted };
-  }
-
-  #nearestFirst(L: number, chunks: ChunkIndex[], eye: [number, number, number]): ChunkIndex[] {
-    const { chunkGrid: g, chunkEdge } = this.levels[L].layout;
-    const s = this.store.voxelSize;
-    const e = chunkEdge * 2 ** L;
-    const dist = (c: ChunkIndex) => {
-      const p = [c % g[0], Math.floor(c / g[0]) % g[1], Math.floor(c / (g[0] * g[1]))];
-      let d = 0;
-      for (let a = 0; a < 3; a++) d += ((p[a] + 0.5) * e * s[a] - eye[a]) ** 2;
-      return d;
-    };
-    return chunks
-      .map((c) => [dist(c), c] as const)
-      .sort((a, b) => a[0] - b[0] || a[1] - b[1])
-      .map(([, c]) => c);
+    return cutStep(
+      cut,
+      k,
+      this.levels.map((l) => l.layout),
+      (L) => this.#needs(L, this.#iso),
+      this.#view!.camera.eye,
+      this.store.voxelSize,
+    );
   }
 
   /** Whether the whole cut on screen is this step at this isovalue (the same drawn chunks and ghosts per level). */

@@ -1,0 +1,94 @@
+// One step of the view stream's refinement (view-stream.ts): the cut
+// coarsened to levels >= k, a region whose target is finer than k drawn by
+// its ancestor at level k (still balanced, still covering every region
+// once), and per level what that draws: its leaves, the drawn chunks (the
+// leaves the surface needs), the ghosts (needed +x/+y/+z and diagonal
+// neighbours of leaves that are not leaves: their voxels complete the drawn
+// chunks' upper cells) and the chunks wanted, nearest to the eye first.
+import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
+import type { ViewCut } from './cut.ts';
+
+export interface Step {
+  finest: number;
+  leaves: ChunkIndex[][];
+  drawn: Set<ChunkIndex>[];
+  ghosts: Set<ChunkIndex>[];
+  wanted: ChunkIndex[][];
+}
+
+/**
+ * Step k of `cut`. `needs(L)`: which chunks of level L the surface needs
+ * (null: unknown, every chunk); `eye` and `voxelSize` in the cut's world
+ * (level-0 voxel (i, j, k) at (i, j, k) * voxelSize).
+ */
+export function cutStep(
+  cut: ViewCut,
+  k: number,
+  layouts: readonly ChunkLevelLayout[],
+  needs: (level: number) => ((chunk: ChunkIndex) => boolean) | null,
+  eye: readonly [number, number, number],
+  voxelSize: readonly [number, number, number],
+): Step {
+  const n = layouts.length;
+  const leaves: Set<ChunkIndex>[] = Array.from({ length: n }, () => new Set());
+  const edge0 = (L: number) => layouts[L].chunkEdge * 2 ** L;
+  for (const node of cut.nodes) {
+    if (node.level >= k) {
+      leaves[node.level].add(node.chunk);
+      continue;
+    }
+    const [gx, gy] = layouts[k].chunkGrid;
+    const e = edge0(node.level);
+    const a = node.coords.map((c) => Math.floor((c * e) / edge0(k)));
+    leaves[k].add(a[0] + gx * (a[1] + gy * a[2]));
+  }
+  const drawn: Set<ChunkIndex>[] = [];
+  const ghosts: Set<ChunkIndex>[] = [];
+  const wanted: ChunkIndex[][] = [];
+  for (let L = 0; L < n; L++) {
+    const need = leaves[L].size > 0 ? (needs(L) ?? (() => true)) : () => false;
+    const { chunkGrid: g } = layouts[L];
+    const d = new Set<ChunkIndex>();
+    const gh = new Set<ChunkIndex>();
+    for (const c of leaves[L]) {
+      if (need(c)) d.add(c);
+      const x = c % g[0];
+      const y = Math.floor(c / g[0]) % g[1];
+      const z = Math.floor(c / (g[0] * g[1]));
+      for (let o = 1; o < 8; o++) {
+        const ux = x + (o & 1);
+        const uy = y + ((o >> 1) & 1);
+        const uz = z + ((o >> 2) & 1);
+        if (ux >= g[0] || uy >= g[1] || uz >= g[2]) continue;
+        const u = ux + g[0] * (uy + g[1] * uz);
+        if (!leaves[L].has(u) && need(u)) gh.add(u);
+      }
+    }
+    drawn.push(d);
+    ghosts.push(gh);
+    wanted.push(nearestFirst(layouts[L], L, [...d, ...gh], eye, voxelSize));
+  }
+  return { finest: k, leaves: leaves.map((s) => [...s]), drawn, ghosts, wanted };
+}
+
+/** Chunks of level L by their centre's distance to the eye, nearest first (ties: ascending chunk). */
+function nearestFirst(
+  layout: ChunkLevelLayout,
+  L: number,
+  chunks: ChunkIndex[],
+  eye: readonly [number, number, number],
+  s: readonly [number, number, number],
+): ChunkIndex[] {
+  const { chunkGrid: g, chunkEdge } = layout;
+  const e = chunkEdge * 2 ** L;
+  const dist = (c: ChunkIndex) => {
+    const p = [c % g[0], Math.floor(c / g[0]) % g[1], Math.floor(c / (g[0] * g[1]))];
+    let d = 0;
+    for (let a = 0; a < 3; a++) d += ((p[a] + 0.5) * e * s[a] - eye[a]) ** 2;
+    return d;
+  };
+  return chunks
+    .map((c) => [dist(c), c] as const)
+    .sort((a, b) => a[0] - b[0] || a[1] - b[1])
+    .map(([, c]) => c);
+}
