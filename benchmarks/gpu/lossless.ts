@@ -18,9 +18,7 @@
 //   after the other.
 import { execFileSync } from 'node:child_process';
 import { existsSync } from 'node:fs';
-import { createServer } from 'node:http';
 import { join } from 'node:path';
-import { storesMiddleware } from '../../scripts/vite-stores.ts';
 import type { Isosurface } from '../../src/isosurface/isosurface.ts';
 import type { IsosurfaceStats } from '../../src/isosurface/types.ts';
 import { ChunkFetcher } from '../../src/store/fetch/chunk-fetcher.ts';
@@ -33,6 +31,7 @@ import { openStore } from '../../src/store/zarr/open-store.ts';
 import type { ChunkedVolume } from '../../src/zfp/chunked-volume.ts';
 import { linkStore } from '../stream-scale.ts';
 import type { BenchRun } from './context.ts';
+import { serveStores } from './serve.ts';
 
 const SECTION = 'lossless';
 const ISO = [100.5, 200.5];
@@ -98,15 +97,8 @@ export async function losslessSection(run: BenchRun): Promise<unknown> {
   const budget = 2 * run.plan.storeBudgetBytes;
   const { name, seconds } = makeStore(run, edge);
   if (seconds > 0) console.log(`  written in ${seconds.toFixed(1)} s`);
-  const mw = storesMiddleware(run.paths.work);
-  const server = createServer((req, res) =>
-    mw(req, res, () => {
-      res.statusCode = 404;
-      res.end();
-    }),
-  );
-  await new Promise<void>((r) => server.listen(0, '127.0.0.1', () => r()));
-  const url = `http://127.0.0.1:${(server.address() as { port: number }).port}/stores/${name}`;
+  const server = await serveStores(run.paths.work);
+  const url = `${server.base}/${name}`;
   const records: LinkRecord[] = [];
   try {
     // localhost twice (the first compiles the pipelines), then the link
@@ -258,7 +250,6 @@ export async function losslessSection(run: BenchRun): Promise<unknown> {
     );
     return { store: name, writeSeconds: seconds, budgetBytes: budget, iso: ISO, runs: records, cpuVoxelsPerSecond: voxelsPerSecond };
   } finally {
-    server.closeAllConnections();
     server.close();
   }
 }

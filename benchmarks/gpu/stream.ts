@@ -11,15 +11,14 @@
 //   the budget.
 import { execFileSync } from 'node:child_process';
 import { existsSync } from 'node:fs';
-import { createServer } from 'node:http';
 import { join } from 'node:path';
-import { storesMiddleware } from '../../scripts/vite-stores.ts';
 import { ChunkFetcher } from '../../src/store/fetch/chunk-fetcher.ts';
 import { chunkedGpu, createChunkStream } from '../../src/store/gpu-port.ts';
 import { openStore } from '../../src/store/zarr/open-store.ts';
 import { flightRun } from '../stream-flight.ts';
 import { linkStore } from '../stream-scale.ts';
 import type { BenchRun } from './context.ts';
+import { serveStores } from './serve.ts';
 
 const SECTION = 'stream';
 const ISO = 2.5;
@@ -53,15 +52,8 @@ export async function streamSection(run: BenchRun): Promise<unknown> {
   const budget = run.plan.storeBudgetBytes;
   const { name, seconds } = makeStore(run, edge);
   if (seconds > 0) console.log(`  converted in ${seconds.toFixed(1)} s`);
-  const mw = storesMiddleware(run.paths.work);
-  const server = createServer((req, res) =>
-    mw(req, res, () => {
-      res.statusCode = 404;
-      res.end();
-    }),
-  );
-  await new Promise<void>((r) => server.listen(0, '127.0.0.1', () => r()));
-  const base = `http://127.0.0.1:${(server.address() as { port: number }).port}/stores`;
+  const server = await serveStores(run.paths.work);
+  const { base } = server;
   const rows: (string | number)[][] = [];
   try {
     // the first streamed surface (level by level), twice: the first run compiles the pipelines
@@ -147,7 +139,6 @@ export async function streamSection(run: BenchRun): Promise<unknown> {
     });
     return { store: name, convertSeconds: seconds, budgetBytes: budget, iso: ISO, levelByLevel: first, flight };
   } finally {
-    server.closeAllConnections();
     server.close();
   }
 }

@@ -46,3 +46,15 @@ export async function nonBackgroundFraction(page: Page): Promise<number> {
     [...png],
   );
 }
+
+/** Waits until the store's refinement has ended with level 0 on screen (window.zfpisoStore). */
+export function level0Shown(page: Page, timeout = 240_000) {
+  return page.waitForFunction(
+    () => {
+      const s = (window as unknown as { zfpisoStore?: { done: boolean; shownLevel: number } }).zfpisoStore;
+      return s?.done === true && s.shownLevel === 0;
+    },
+    null,
+    { timeout },
+  );
+}

@@ -8,24 +8,13 @@
 import { execFileSync } from 'node:child_process';
 import { mkdirSync, rmSync } from 'node:fs';
 import { join } from 'node:path';
-import { expect, type Page, test } from '@playwright/test';
+import { expect, test } from '@playwright/test';
 import { E2E_STORES_DIR, runCli, SHARED_VOLUMES_DIR } from './cli.ts';
-import { openApp, watchErrors } from './page.ts';
+import { level0Shown, openApp, watchErrors } from './page.ts';
 import { trianglesShown } from './volume-page.ts';
 
 const root = join(import.meta.dirname, '..', '..');
 let store = '';
-
-/** Waits until the store's refinement has ended with level 0 on screen. */
-const level0Shown = (page: Page) =>
-  page.waitForFunction(
-    () => {
-      const s = (window as unknown as { zfpisoStore?: { done: boolean; shownLevel: number } }).zfpisoStore;
-      return s?.done === true && s.shownLevel === 0;
-    },
-    null,
-    { timeout: 240_000 },
-  );
 
 test.beforeAll(() => {
   store = join(E2E_STORES_DIR, 'neghip-zstd.zarr');
