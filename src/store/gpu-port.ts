@@ -10,6 +10,7 @@ import { ChunkedVolume } from '../zfp/chunked-volume.ts';
 import { encoderFor, type ZfpEncoder } from '../zfp/encoder.ts';
 import { maxShardBytesFor } from '../zfp/gpu-stream.ts';
 import type { ChunkFetcher } from './fetch/chunk-fetcher.ts';
+import type { LearntRanges } from './learnt-ranges.ts';
 import { StreamController, type StreamGpu } from './stream-controller.ts';
 import type { ZfpStore } from './zarr/open-store.ts';
 
@@ -47,7 +48,8 @@ export async function createChunkStream(
   fetcher: ChunkFetcher,
   gpu: GpuContext | ChunkedStreamGpu,
   budgetBytes: number,
+  options: { learnt?: LearntRanges } = {},
 ): Promise<StreamController<ChunkedVolume, IsosurfaceStats, Isosurface>> {
   const port = 'meter' in gpu ? gpu : chunkedGpu(gpu, undefined, await storeEncoder(gpu, store));
-  return StreamController.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budgetBytes);
+  return StreamController.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budgetBytes, options);
 }

@@ -20,6 +20,7 @@
 // chunk's cool-down has passed the onRetry listeners are told (the page asks
 // for the same isovalue again; the CLI reports the failure instead).
 import type { ChunkFetcher } from './fetch/chunk-fetcher.ts';
+import { LearntRanges } from './learnt-ranges.ts';
 import { allChunks, chunkCount, chunkRangesOfIds, estimateFixedBytes, readLevelRanges, storeValueRange } from './level-state.ts';
 import { chunksNeeded, nearestFirst, neighbourhoodRanges } from './plan.ts';
 import type { LevelStats, LevelSurface, LevelVolume, ShownSurface, StreamGpu, StreamGpuBytes, StreamProgress } from './stream-port.ts';
@@ -58,6 +59,10 @@ export class StreamController<
   F extends LevelSurface<S> = LevelSurface<S>,
 > {
   readonly levels: Level<V>[];
+  /** Chunk ranges learnt as chunks arrive, for levels without range arrays (learnt-ranges.ts; shared with the view stream). */
+  readonly learnt: LearntRanges;
+  /** Chunks put into or evicted from any pool so far: a surface's block ranges are its slots' chunks' while this is unchanged. */
+  #poolChanges = 0;
   #gen = 0;
   #shown: ShownSurface<V, S, F> | null = null;
   #surfaces = new Map<number, F>();
@@ -94,8 +99,11 @@ export class StreamController<
     readonly fetcher: ChunkFetcher,
     readonly gpu: StreamGpu<V, S, F>,
     budgetBytes: number,
+    learnt?: LearntRanges,
   ) {
     this.budgetBytes = budgetBytes;
+    const grids = store.levels.map((l) => l.layout.chunkGrid);
+    this.learnt = learnt?.fits(grids) ? learnt : new LearntRanges(grids);
     this.levels = store.levels.map((l, i) => ({
       index: i,
       layout: l.layout,
@@ -105,6 +113,8 @@ export class StreamController<
       reading: null,
       nb: null,
     }));
+    // ranges learnt earlier in the session (the same store opened again): planned with from the start
+    for (const lv of this.levels) this.#applyLearnt(lv);
     this.coarsest = this.levels.length - 1;
     const d = store.levels[0].layout.dims;
     this.focus = [d[0] / 2, d[1] / 2, d[2] / 2];
@@ -130,8 +140,9 @@ export class StreamController<
     fetcher: ChunkFetcher,
     gpu: StreamGpu<V, S, F>,
     budgetBytes: number,
+    options: { learnt?: LearntRanges } = {},
   ): Promise<StreamController<V, S, F>> {
-    const c = new StreamController(store, fetcher, gpu, budgetBytes);
+    const c = new StreamController(store, fetcher, gpu, budgetBytes, options.learnt);
     await c.#readRanges(c.levels[c.levels.length - 1]);
     return c;
   }
@@ -164,9 +175,11 @@ export class StreamController<
     return this.#shown;
   }
 
-  /** [min, max] per chunk of a level, when known (range arrays, or computed once the level was resident whole). */
+  /** [min, max] per chunk of a level, when known for every chunk (range arrays, or every chunk's learnt). */
   chunkRanges(level: number): Float32Array | null {
-    return this.levels[level]?.ranges ?? null;
+    const lv = this.levels[level];
+    if (!lv?.ranges) return null;
+    return this.store.levels[level].rangesPath || this.learnt.knownCount(level) === chunkCount(lv.layout) ? lv.ranges : null;
   }
 
   /** The store's value range: its metadata, else the finest level whose chunk ranges are known; null when none is. */
@@ -272,6 +285,7 @@ export class StreamController<
         this.#lastStats.delete(L);
       }
       if (lv.volume) {
+        this.#poolChanges++;
         lv.volume.destroy();
         lv.volume = null;
         lv.lru.clear();
@@ -321,6 +335,7 @@ export class StreamController<
         v.evict(c);
         lv.lru.delete(c);
       }
+      this.#poolChanges++;
       v.resize(Math.max(target, v.residentCount));
     }
     if (v && n <= v.poolChunks) return null;
@@ -342,8 +357,10 @@ export class StreamController<
         `; the budget of ${mib(this.budgetBytes)} MiB has ${mib(Math.max(0, this.#free()))} MiB free${this.#shownNote(L)}`
       );
     }
-    if (v) v.resize(target);
-    else lv.volume = this.gpu.createVolume(lv.layout, target);
+    if (v) {
+      this.#poolChanges++;
+      v.resize(target);
+    } else lv.volume = this.gpu.createVolume(lv.layout, target);
     return null;
   }
 
@@ -467,6 +484,7 @@ export class StreamController<
       }
       if (gen !== this.#gen || this.#destroyed) return 'stopped';
       let stats: S;
+      const changes = this.#poolChanges;
       try {
         surface.setMemoryBudget(Math.max(1, this.#capFor(L, surface, true)));
         stats = await surface.compute(iso);
@@ -479,13 +497,10 @@ export class StreamController<
       }
       this.#lastStats.set(L, stats);
       this.#footprint.set(L, Math.max(0, (stats.fixedBytes ?? 0) - pool.poolBytes) + stats.cacheBytes + stats.vertexBytes);
-      // A store without range arrays: the level was fetched whole; its chunk
-      // ranges come from the GPU's block ranges, so the next isovalue fetches
-      // only what it needs.
-      if (!lv.nb && surface.readBlockRanges && pool.residentCount === chunkCount(lv.layout)) {
-        lv.ranges = chunkRangesOfIds(lv.layout, await surface.readBlockRanges(), pool);
-        lv.nb = neighbourhoodRanges(lv.layout.chunkGrid, lv.ranges);
-      }
+      // A level without range arrays: the ranges of the chunks this surface read are learnt from its block
+      // ranges (as decoded), so the next isovalue fetches only what it needs (unknown chunks stay needed)
+      if (!this.store.levels[L].rangesPath && gen === this.#gen && this.#poolChanges === changes)
+        await this.#learn(L, pool, surface, changes);
       if (gen !== this.#gen || this.#destroyed) return 'stopped';
       this.#show({ level: L, iso, volume: pool, surface, stats });
       progress('shown');
@@ -562,6 +577,41 @@ export class StreamController<
     this.#retryTimer = null;
   }
 
+  /**
+   * Records the ranges of level L's resident chunks whose range is not known,
+   * from the block ranges `surface` was just computed with (valid while no
+   * chunk was put or evicted since: `changes`), then the level's ranges and
+   * neighbourhood ranges as the plan reads them (NaN: unknown, needed).
+   */
+  async #learn(L: number, pool: V, surface: F, changes: number): Promise<void> {
+    const lv = this.levels[L];
+    if (!this.learnt.learns(L)) return;
+    const todo = [...lv.lru.keys()].filter((c) => pool.has(c) && !this.learnt.has(L, c));
+    if (todo.length > 0 && surface.readSlotRanges) {
+      const batch = Math.max(1, Math.floor(LEARN_SLOTS_BYTES / (8 * pool.blocksPerChunk)));
+      for (let i = 0; i < todo.length; i += batch) {
+        if (this.#poolChanges !== changes || this.#destroyed) return;
+        const chunks = todo.slice(i, i + batch);
+        const r = await surface.readSlotRanges(chunks.map((c) => pool.slotOfChunk(c)!)).catch(() => null);
+        if (!r) return;
+        chunks.forEach((c, k) => this.learnt.record(L, c, r[2 * k], r[2 * k + 1]));
+      }
+    } else if (todo.length > 0 && surface.readBlockRanges && pool.residentCount === chunkCount(lv.layout)) {
+      // a surface without slot ranges (tests' stand-ins): the level's ranges once it is resident whole
+      const all = chunkRangesOfIds(lv.layout, await surface.readBlockRanges(), pool);
+      for (const c of todo) this.learnt.record(L, c, all[2 * c], all[2 * c + 1]);
+    }
+    this.#applyLearnt(lv);
+  }
+
+  /** A level without range arrays plans with its learnt ranges (NaN: unknown, needed), once any is known. */
+  #applyLearnt(lv: Level<V>): void {
+    const known = this.learnt.level(lv.index);
+    if (this.store.levels[lv.index].rangesPath || !known || this.learnt.knownCount(lv.index) === 0) return;
+    lv.ranges = known;
+    lv.nb = neighbourhoodRanges(lv.layout.chunkGrid, known);
+  }
+
   #emit(p: StreamProgress): void {
     for (const l of this.#progress) l(p);
   }
@@ -572,6 +622,7 @@ export class StreamController<
     for (const c of [...lv.lru.keys()]) {
       if (free >= count) break;
       if (keep.has(c)) continue;
+      this.#poolChanges++;
       v.evict(c);
       lv.lru.delete(c);
       free++;
@@ -585,6 +636,7 @@ export class StreamController<
     if (!lv.volume.has(chunk)) {
       if (lv.volume.freeCount === 0 && !lv.volume.isReserved(chunk)) this.#makeRoom(lv, 1, w.missing);
       try {
+        this.#poolChanges++;
         lv.volume.put(chunk, bytes);
       } catch (e) {
         for (const l of this.#errors) l(e as Error);
@@ -629,3 +681,6 @@ const RESERVE_BYTES = 1 << 20;
 const MIN_SURFACE_BYTES = 256 << 10;
 
 const mib = (b: number) => (b / 2 ** 20).toFixed(1);
+
+/** The most block ranges read back at once to learn chunk ranges (a short-lived staging buffer). */
+const LEARN_SLOTS_BYTES = 1 << 20;

@@ -72,6 +72,17 @@ export interface StoreViewDeps {
   panel: HTMLElement;
 }
 
+/** What was learnt of this store's bricks (at this rate, time point and channel) earlier in the session, whichever engine learnt it. */
+function learntOf(store: ZfpStore, url: string) {
+  const values = store.source
+    ? `${store.source.rate}|${store.source.time.index}|${store.source.channel.index}`
+    : String(store.levels[0].layout.rate);
+  return sessionRanges(
+    `${url}|${values}`,
+    store.levels.map((l) => l.layout.chunkGrid),
+  );
+}
+
 /** Store notes a user should act on (the rest only go to the panel). */
 const WARNING_NOTE = /unfinished|is not used|cannot be shown/;
 
@@ -202,27 +213,18 @@ export class StoreView {
       if (asked.cut ?? this.#levelZeroIsLarge(store)) {
         // refined by the view: each region at the level the camera needs
         const gpu = this.d.gpu();
-        // what was learnt of this store's bricks at this rate, time point and channel earlier in the session
-        const values = store.source
-          ? `${store.source.rate}|${store.source.time.index}|${store.source.channel.index}`
-          : String(store.levels[0].layout.rate);
         const view = await ViewStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(
           store,
           f,
           chunkedGpu(gpu, undefined, await storeEncoder(gpu, store)),
           this.d.budgetBytes(),
-          {
-            learnt: sessionRanges(
-              `${url}|${values}`,
-              store.levels.map((l) => l.layout.chunkGrid),
-            ),
-          },
+          { learnt: learntOf(store, url) },
         );
         cut = { tolerancePx: asked.tolerancePx ?? DEFAULT_TOLERANCE_PX, tint: asked.tint ?? false };
         controller = view;
         await view.setView(this.#viewSpec(store, cut.tolerancePx, asked.camera));
       } else {
-        controller = await createChunkStream(store, f, this.d.gpu(), this.d.budgetBytes());
+        controller = await createChunkStream(store, f, this.d.gpu(), this.d.budgetBytes(), { learnt: learntOf(store, url) });
       }
     } catch (e) {
       // a failed open lets its store go (decode workers, requests)
@@ -480,18 +482,10 @@ export class StoreView {
     const vr = o.state.valueRange;
     if (this.#open !== o || !vr?.provisional) return;
     const c = o.controller;
-    let learnt: [number, number] | null;
-    let complete: boolean;
-    let bricks: number;
-    if (c instanceof ViewStream) {
-      learnt = c.learnt.valueRange();
-      bricks = o.store.levels.reduce((a, _, L) => a + c.learnt.knownCount(L), 0);
-      complete = c.learnt.knownCount(0) === o.store.levels[0].chunkCount;
-    } else {
-      learnt = c.valueRange;
-      complete = c.chunkRanges(0) !== null;
-      bricks = o.store.levels.reduce((a, l, L) => a + (c.chunkRanges(L) ? l.chunkCount : 0), 0);
-    }
+    // both engines learn brick ranges as bricks arrive (learnt-ranges.ts)
+    const learnt = c.learnt.valueRange();
+    const bricks = o.store.levels.reduce((a, _, L) => a + c.learnt.knownCount(L), 0);
+    const complete = c.learnt.knownCount(0) === o.store.levels[0].chunkCount;
     if (!learnt) return;
     const lo = Math.min(vr.lo, learnt[0]);
     const hi = Math.max(vr.hi, learnt[1]);

@@ -12,7 +12,7 @@ import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
-import { chunkedGpu, storeEncoder } from '../../../src/store/gpu-port.ts';
+import { chunkedGpu, createChunkStream, storeEncoder } from '../../../src/store/gpu-port.ts';
 import { LearntRanges, MAX_LEARNT_CHUNKS, sessionRanges } from '../../../src/store/learnt-ranges.ts';
 import { chunkNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
 import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../../src/store/view/camera.ts';
@@ -171,6 +171,41 @@ describe('ranges learnt by the view stream on the GPU', () => {
       expect([...new Set(fetched)].sort((a, b) => a - b)).toEqual(expected);
       expect(stream.shown?.levels[0].stats.triangles).toBeGreaterThan(100);
       stream.destroy();
+      store.close?.();
+    },
+    300_000,
+  );
+});
+
+describe('ranges learnt level by level (the stream controller)', () => {
+  gpuTest(
+    "level by level: the same learnt ranges (= the sidecar's), kept for the store; a controller opened again fetches only the bricks the next isovalue needs",
+    async ({ gpu }) => {
+      const store = await openStore(storeForLocation(storePath), storePath, { rate: 8 });
+      const truth = await (await openRangesSidecar(storeForLocation(sidecarPath), sidecarPath, { bytes: 0, requests: 0 })).read(0);
+      const port = chunkedGpu(gpu, undefined, await storeEncoder(gpu, store));
+      const first = await createChunkStream(store, new ChunkFetcher(store, { maxInFlight: 4 }), port, 64 << 20);
+      await first.setIsovalue(60.5);
+      const layout = store.levels[0].layout;
+      const chunks = layout.chunkGrid[0] * layout.chunkGrid[1] * layout.chunkGrid[2];
+      expect(first.shown?.level).toBe(0);
+      expect(first.learnt.knownCount(0)).toBe(chunks);
+      for (let c = 0; c < chunks; c++) expect(first.learnt.get(0, c), `brick ${c}`).toEqual([truth[2 * c], truth[2 * c + 1]]);
+      expect(first.chunkRanges(0)).toEqual(truth);
+      first.destroy();
+      // opened again with what was learnt (the page keeps it per store for the session): nothing resident, yet
+      // only the bricks the isovalue's neighbourhood rule needs are fetched
+      const fetcher = new ChunkFetcher(store, { maxInFlight: 4 });
+      const fetched: number[] = [];
+      fetcher.onChunk((_L, c) => fetched.push(c));
+      const again = await createChunkStream(store, fetcher, port, 64 << 20, { learnt: first.learnt });
+      const iso2 = 180.5;
+      await again.setIsovalue(iso2);
+      const nb = neighbourhoodRanges(layout.chunkGrid, truth);
+      const expected = Array.from({ length: chunks }, (_, c) => c).filter((c) => chunkNeeded(nb, iso2, c));
+      expect([...new Set(fetched)].sort((a, b) => a - b)).toEqual(expected);
+      expect(again.shown?.stats.triangles).toBeGreaterThan(100);
+      again.destroy();
       store.close?.();
     },
     300_000,
