@@ -123,6 +123,37 @@ export class LearntRanges {
   }
 }
 
+/** The most block ranges read back at once to learn chunk ranges (a short-lived staging buffer). */
+const LEARN_SLOTS_BYTES = 1 << 20;
+
+/**
+ * Learns the ranges of level L's `chunks` (resident in `volume`) from the
+ * block ranges `surface` was last computed with, in batches of at most
+ * LEARN_SLOTS_BYTES: each batch only while `valid()` (no chunk put or
+ * evicted since that surface was computed, the surface still live), since a
+ * slot's block ranges are its chunk's only then. Both stream engines call it.
+ */
+export async function learnSlotRanges(
+  learnt: LearntRanges,
+  L: number,
+  chunks: readonly ChunkIndex[],
+  volume: { has(c: ChunkIndex): boolean; slotOfChunk(c: ChunkIndex): number | undefined; readonly blocksPerChunk: number },
+  surface: { readSlotRanges?(slots: readonly number[]): Promise<Float32Array> },
+  valid: () => boolean,
+): Promise<void> {
+  if (!surface.readSlotRanges || !learnt.learns(L)) return;
+  const todo = chunks.filter((c) => !learnt.has(L, c));
+  const batch = Math.max(1, Math.floor(LEARN_SLOTS_BYTES / (8 * volume.blocksPerChunk)));
+  for (let i = 0; i < todo.length; i += batch) {
+    if (!valid()) return;
+    const part = todo.slice(i, i + batch).filter((c) => volume.has(c));
+    // the copies are submitted by this call, while the surface's buffers live; the wait may outlast them
+    const r = await surface.readSlotRanges(part.map((c) => volume.slotOfChunk(c)!)).catch(() => null);
+    if (!r) return;
+    part.forEach((c, k) => learnt.record(L, c, r[2 * k], r[2 * k + 1]));
+  }
+}
+
 /**
  * The ranges learnt for a store in this session, by a key naming the store
  * and what its values are (URL, rate, time point, channel): a store opened

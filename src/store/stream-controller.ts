@@ -20,7 +20,7 @@
 // chunk's cool-down has passed the onRetry listeners are told (the page asks
 // for the same isovalue again; the CLI reports the failure instead).
 import type { ChunkFetcher } from './fetch/chunk-fetcher.ts';
-import { LearntRanges } from './learnt-ranges.ts';
+import { LearntRanges, learnSlotRanges } from './learnt-ranges.ts';
 import { allChunks, chunkCount, chunkRangesOfIds, estimateFixedBytes, readLevelRanges, storeValueRange } from './level-state.ts';
 import { chunksNeeded, nearestFirst, neighbourhoodRanges } from './plan.ts';
 import type { LevelStats, LevelSurface, LevelVolume, ShownSurface, StreamGpu, StreamGpuBytes, StreamProgress } from './stream-port.ts';
@@ -585,22 +585,8 @@ export class StreamController<
    */
   async #learn(L: number, pool: V, surface: F, changes: number): Promise<void> {
     const lv = this.levels[L];
-    if (!this.learnt.learns(L)) return;
-    const todo = [...lv.lru.keys()].filter((c) => pool.has(c) && !this.learnt.has(L, c));
-    if (todo.length > 0 && surface.readSlotRanges) {
-      const batch = Math.max(1, Math.floor(LEARN_SLOTS_BYTES / (8 * pool.blocksPerChunk)));
-      for (let i = 0; i < todo.length; i += batch) {
-        if (this.#poolChanges !== changes || this.#destroyed) return;
-        const chunks = todo.slice(i, i + batch);
-        const r = await surface.readSlotRanges(chunks.map((c) => pool.slotOfChunk(c)!)).catch(() => null);
-        if (!r) return;
-        chunks.forEach((c, k) => this.learnt.record(L, c, r[2 * k], r[2 * k + 1]));
-      }
-    } else if (todo.length > 0 && surface.readBlockRanges && pool.residentCount === chunkCount(lv.layout)) {
-      // a surface without slot ranges (tests' stand-ins): the level's ranges once it is resident whole
-      const all = chunkRangesOfIds(lv.layout, await surface.readBlockRanges(), pool);
-      for (const c of todo) this.learnt.record(L, c, all[2 * c], all[2 * c + 1]);
-    }
+    const valid = () => this.#poolChanges === changes && !this.#destroyed;
+    await learnSlotRanges(this.learnt, L, [...lv.lru.keys()], pool, surface, valid);
     this.#applyLearnt(lv);
   }
 
@@ -681,6 +667,3 @@ const RESERVE_BYTES = 1 << 20;
 const MIN_SURFACE_BYTES = 256 << 10;
 
 const mib = (b: number) => (b / 2 ** 20).toFixed(1);
-
-/** The most block ranges read back at once to learn chunk ranges (a short-lived staging buffer). */
-const LEARN_SLOTS_BYTES = 1 << 20;

@@ -23,7 +23,7 @@
 // (each surface is updated in place: for the frame between, a region may be
 // drawn twice, never missing).
 import type { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
-import { LearntRanges } from '../learnt-ranges.ts';
+import { LearntRanges, learnSlotRanges } from '../learnt-ranges.ts';
 import { chunkCount, estimateFixedBytes, readLevelRanges, storeValueRange } from '../level-state.ts';
 import { chunkNeeded } from '../plan.ts';
 import type { LevelStats, LevelSurface, LevelVolume, StreamGpu, StreamGpuBytes, StreamProgress } from '../stream-port.ts';
@@ -513,29 +513,16 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
    * known (levels without range arrays), from the block ranges the surfaces
    * were just computed with: valid while no chunk has been put or evicted
    * since (#poolChanges) and the surface is still the level's. In batches of
-   * at most LEARN_SLOTS_BYTES of block ranges, one after the other; recorded
+   * at most 1 MiB of block ranges, one after the other (learnSlotRanges); recorded
    * as they arrive (learnSettled).
    */
   #learn(levels: readonly CutLevelShown<V, S, F>[]): void {
     const changes = this.#poolChanges;
-    const valid = (l: CutLevelShown<V, S, F>) =>
-      !this.#destroyed && this.#poolChanges === changes && this.#surfaces.get(l.level)?.surface === l.surface;
     for (const l of levels) {
-      const L = l.level;
-      if (this.store.levels[L].rangesPath || !this.learnt.learns(L) || !l.surface.readSlotRanges) continue;
-      const todo = [...l.drawn, ...l.ghosts].filter((c) => !this.learnt.has(L, c));
-      const batch = Math.max(1, Math.floor(LEARN_SLOTS_BYTES / (8 * l.volume.blocksPerChunk)));
-      this.#learning = this.#learning.then(async () => {
-        for (let i = 0; i < todo.length; i += batch) {
-          if (!valid(l)) return;
-          const chunks = todo.slice(i, i + batch).filter((c) => l.volume.has(c));
-          const slots = chunks.map((c) => l.volume.slotOfChunk(c)!);
-          // the copies are submitted by this call, while the surface's buffers live; the wait may outlast them
-          const r = await l.surface.readSlotRanges!(slots).catch(() => null);
-          if (!r) return;
-          chunks.forEach((c, k) => this.learnt.record(L, c, r[2 * k], r[2 * k + 1]));
-        }
-      });
+      if (this.store.levels[l.level].rangesPath) continue;
+      const valid = () => !this.#destroyed && this.#poolChanges === changes && this.#surfaces.get(l.level)?.surface === l.surface;
+      const chunks = [...l.drawn, ...l.ghosts];
+      this.#learning = this.#learning.then(() => learnSlotRanges(this.learnt, l.level, chunks, l.volume, l.surface, valid));
     }
   }
 
@@ -700,6 +687,4 @@ const PLAN_SHARE = 0.8;
 const MAX_COARSENINGS = 6;
 /** Kept free within the budget for short-lived buffers (statistics and readback staging, uniforms). */
 const RESERVE_BYTES = 1 << 20;
-/** The most block ranges read back at once to learn chunk ranges (a short-lived staging buffer, the reserve's size). */
-const LEARN_SLOTS_BYTES = 1 << 20;
 const mib = (b: number) => (b / 2 ** 20).toFixed(1);

@@ -60,6 +60,7 @@ export class ZipStore implements AsyncReadable {
     if (!e) return undefined;
     const start = await this.#dataStart(key, e, opts);
     const raw = await this.bytes.read(start, e.compressedSize, opts);
+    if (raw.length !== e.compressedSize) throw this.#bad(`${key.replace(/^\//, '')} is cut short`);
     return e.method === 0 ? raw : this.#inflate(key, e, raw);
   }
 
@@ -79,7 +80,9 @@ export class ZipStore implements AsyncReadable {
         ? [Math.max(0, e.size - range.suffixLength), Math.min(range.suffixLength, e.size)]
         : [range.offset, Math.max(0, Math.min(range.length, e.size - range.offset))];
     if (from > e.size) return new Uint8Array(0);
-    return this.bytes.read(start + from, length, opts);
+    const got = await this.bytes.read(start + from, length, opts);
+    if (got.length !== length) throw this.#bad(`${key.replace(/^\//, '')} is cut short`);
+    return got;
   }
 
   /** The central directory, read once (a failed read is tried again next time). */
