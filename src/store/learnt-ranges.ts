@@ -156,7 +156,7 @@ export async function learnSlotRanges(
 
 /**
  * The ranges learnt for a store in this session, by a key naming the store
- * and what its values are (URL, rate, time point, channel): a store opened
+ * and what its values are (the source it was opened from, rate, time point, channel): a store opened
  * again (a new rate and back, the refinement switched) keeps what it learnt.
  * The last STORES_KEPT stores are kept.
  */

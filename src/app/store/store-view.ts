@@ -72,16 +72,26 @@ export interface StoreViewDeps {
   panel: HTMLElement;
 }
 
-/** What was learnt of this store's bricks (at this rate, time point and channel) earlier in the session, whichever engine learnt it. */
-function learntOf(store: ZfpStore, url: string) {
+/**
+ * What was learnt of this store's bricks (at this rate, time point and
+ * channel) earlier in the session, whichever engine learnt it. Keyed by the
+ * source object the store was opened from (the page opens the same one again
+ * for another rate, time point, channel or refinement), not by its name: two
+ * dropped folders of one name are two stores.
+ */
+function learntOf(store: ZfpStore, source: AsyncReadable) {
+  let id = sourceIds.get(source);
+  if (id === undefined) sourceIds.set(source, (id = ++sourceCount));
   const values = store.source
     ? `${store.source.rate}|${store.source.time.index}|${store.source.channel.index}`
     : String(store.levels[0].layout.rate);
   return sessionRanges(
-    `${url}|${values}`,
+    `${id}|${values}`,
     store.levels.map((l) => l.layout.chunkGrid),
   );
 }
+const sourceIds = new WeakMap<AsyncReadable, number>();
+let sourceCount = 0;
 
 /** Store notes a user should act on (the rest only go to the panel). */
 const WARNING_NOTE = /unfinished|is not used|cannot be shown/;
@@ -218,13 +228,13 @@ export class StoreView {
           f,
           chunkedGpu(gpu, undefined, await storeEncoder(gpu, store)),
           this.d.budgetBytes(),
-          { learnt: learntOf(store, url) },
+          { learnt: learntOf(store, source) },
         );
         cut = { tolerancePx: asked.tolerancePx ?? DEFAULT_TOLERANCE_PX, tint: asked.tint ?? false };
         controller = view;
         await view.setView(this.#viewSpec(store, cut.tolerancePx, asked.camera));
       } else {
-        controller = await createChunkStream(store, f, this.d.gpu(), this.d.budgetBytes(), { learnt: learntOf(store, url) });
+        controller = await createChunkStream(store, f, this.d.gpu(), this.d.budgetBytes(), { learnt: learntOf(store, source) });
       }
     } catch (e) {
       // a failed open lets its store go (decode workers, requests)
@@ -474,9 +484,8 @@ export class StoreView {
 
   /**
    * A provisional value range (the coarsest level's, read at open) widened
-   * by what the stream has learnt since: chunk ranges as bricks arrive (the
-   * view), or a level's once resident whole (level by level). Final once
-   * every brick of level 0 is known.
+   * by the brick ranges the stream has learnt since (either engine, as
+   * bricks arrive). Final once every brick of level 0 is known.
    */
   #widen(o: OpenStore): void {
     const vr = o.state.valueRange;
