@@ -17,7 +17,7 @@ import { describeAdapter } from '../src/gpu/device.ts';
 import { requestNodeGpu } from '../src/gpu/node-gpu.ts';
 import { Isosurface } from '../src/isosurface/isosurface.ts';
 import { meshMetrics } from '../src/mc/mesh-metrics.ts';
-import { decodeVertices } from '../src/isosurface/vertex-format.ts';
+import { meshPositions } from '../src/isosurface/vertex-format.ts';
 import { soupOf } from '../src/mc/ply.ts';
 import { openVolumeBytes, type OpenedVolume } from '../src/volume/open-volume.ts';
 import { printTable, summarize, writeJson } from './lib/report.ts';
@@ -57,7 +57,7 @@ async function surfaces(opened: OpenedVolume, isovalues: number[]): Promise<{ tr
       const stats = await iso.compute(v);
       const ms = performance.now() - t0;
       const mesh = await iso.readMesh();
-      const soup = soupOf(decodeVertices(mesh.vertices, mesh.vertices.length / 3), mesh.indices);
+      const soup = soupOf(meshPositions(mesh), mesh.indices);
       out.push({ triangles: stats.triangles, area: meshMetrics(soup).area, ms });
     }
     return out;

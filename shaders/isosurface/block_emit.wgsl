@@ -110,7 +110,7 @@ fn emit_surface(@builtin(workgroup_id) wid: vec3u, @builtin(num_workgroups) nwg:
       // the project's interpolation formula (src/mc/README.md), from the lower corner
       let t = (volume.iso - v0) / (v1 - v0);
       if (vertex < capacity) {
-        let w = encode_vertex_edge(l + mc_corner_offset(lower), mc_edge_axis(e), t, c);
+        let w = encode_vertex_edge(l + mc_corner_offset(lower), mc_edge_axis(e), t, c, volume.grid);
         vertex_data[3u * vertex] = w.x;
         vertex_data[3u * vertex + 1u] = w.y;
         // Outward (toward decreasing values): minus the gradient.

@@ -31,13 +31,18 @@ struct VsOut {
   @location(1) normal: vec3f,
 };
 
+// The surface's volume in blocks of 4^3: how its vertices number their blocks (vertex_format.wgsl).
+fn block_grid() -> vec3u {
+  return (vec3u(surface.dims.xyz) + vec3u(3u)) / 4u;
+}
+
 fn world_of(p: vec3f) -> vec3f {
   return (p + surface.origin.xyz) * surface.voxel_size.xyz;
 }
 
 @vertex
 fn vs(@location(0) v: vec2u, @location(1) packed_normal: u32) -> VsOut {
-  let p = decode_vertex_position(v.x, v.y);
+  let p = decode_vertex_position(v.x, v.y, block_grid());
   var out: VsOut;
   out.world = world_of(p);
   out.clip = frame.view_proj * vec4f(out.world, 1.0);
@@ -56,7 +61,7 @@ struct DepthOut {
 // Depth only (opaque-layer pre-pass of the neuron page): positions only.
 @vertex
 fn vs_depth(@location(0) v: vec2u) -> DepthOut {
-  let p = decode_vertex_position(v.x, v.y);
+  let p = decode_vertex_position(v.x, v.y, block_grid());
   return DepthOut(frame.view_proj * vec4f(world_of(p), 1.0));
 }
 

@@ -4,7 +4,7 @@
 import type { Viewer } from '../render/viewer.ts';
 import { download } from './dom.ts';
 import { captureViewPng } from './export/screenshot.ts';
-import { decodeVertices } from '../isosurface/vertex-format.ts';
+import { meshPositions } from '../isosurface/vertex-format.ts';
 import { encodePly } from '../mc/ply.ts';
 import { formatBytes } from './format.ts';
 import type { Messages } from './messages.ts';
@@ -42,7 +42,7 @@ export async function savePly(session: Session, messages: Messages): Promise<voi
     else {
       const surface = await v.iso.readMesh();
       // Welded on the GPU: one vertex per cut grid edge, as VTK's merged points.
-      mesh = { positions: decodeVertices(surface.vertices, surface.vertices.length / 3), indices: surface.indices };
+      mesh = { positions: meshPositions(surface), indices: surface.indices };
     }
     if (mesh.indices.length === 0) {
       messages.show('The surface is empty at this isovalue: nothing to export.', 'info', 4000);

@@ -433,7 +433,7 @@ export class IsosurfacePipeline {
     for (const v of indices) {
       if (v >= welded) throw new Error(`Isosurface: index ${v} outside the ${welded} vertices of the surface`);
     }
-    return { vertices, indices };
+    return { vertices, indices, dims: [...this.info.dims] };
   }
 
   /** Per-block (min, max), 2 f32 per block in raster block order (for the page's block-count profile). */

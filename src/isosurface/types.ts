@@ -113,6 +113,8 @@ export interface SurfaceMesh {
   vertices: Uint32Array;
   /** 3 indices into `vertices` per triangle. */
   indices: Uint32Array;
+  /** The volume's voxels per axis: how the vertices' block field is laid out (meshPositions in vertex-format.ts decodes it). */
+  dims: readonly [number, number, number];
 }
 
 /** An index shard: part of the triangles, as indices into the welded vertices, in one buffer (one storage binding). */

@@ -16,7 +16,7 @@ import { describeAdapter } from '../../gpu/device.ts';
 import { encodePly, soupOf } from '../../mc/ply.ts';
 import { formatMB } from '../../isosurface/budget.ts';
 import { IsosurfaceBudgetError } from '../../isosurface/types.ts';
-import { decodeVertices } from '../../isosurface/vertex-format.ts';
+import { meshPositions } from '../../isosurface/vertex-format.ts';
 import { meshMetrics } from '../../mc/mesh-metrics.ts';
 import { LevelStoppedError } from '../../store/pinned-level.ts';
 import { openInputSurface } from '../input.ts';
@@ -177,7 +177,7 @@ export const extractCommand: CliCommand = {
           cut = await iso.cutRecord();
         } else {
           const surface = await iso.readMesh();
-          welded = decodeVertices(surface.vertices, surface.vertices.length / 3);
+          welded = meshPositions(surface);
           indices = surface.indices;
         }
         const m = meshMetrics(soupOf(welded, indices));

@@ -30,7 +30,7 @@ export function packTriangleSoup(positions: Float32Array, dims: Dims): Uint32Arr
         }
       }
       for (let a = 0; a < 3; a++) corner[a] = Math.min(4, Math.max(0, (a === axis ? Math.floor(p[a]) : Math.round(p[a])) - 4 * block[a]));
-      const [w0, w1] = encodeVertexEdge(corner, axis, p[axis] - Math.floor(p[axis]), block);
+      const [w0, w1] = encodeVertexEdge(corner, axis, p[axis] - Math.floor(p[axis]), block, dims);
       const i = (t / 9) * 6 + 2 * v;
       out[i] = w0;
       out[i + 1] = w1;

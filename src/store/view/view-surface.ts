@@ -3,7 +3,7 @@
 // cut for each isovalue, its levels' meshes joined in level-0 voxel index
 // space (level L's voxel j at j * 2^L + the level's OME offset), and the cut
 // as the record lists it.
-import { decodeVertices } from '../../isosurface/vertex-format.ts';
+import { meshPositions } from '../../isosurface/vertex-format.ts';
 import type { Isosurface } from '../../isosurface/isosurface.ts';
 import type { IsosurfaceStats, VolumeInfo } from '../../isosurface/types.ts';
 import type { ChunkedVolume } from '../../zfp/chunked-volume.ts';
@@ -132,7 +132,7 @@ export async function joinLevelMeshes(
   const parts: { positions: Float32Array; indices: Uint32Array }[] = [];
   for (const l of levels) {
     const mesh = await l.surface.readMesh();
-    const positions = decodeVertices(mesh.vertices, mesh.vertices.length / 3);
+    const positions = meshPositions(mesh);
     const k = 2 ** l.level;
     const off = levelOffsets[l.level] ?? [0, 0, 0];
     for (let i = 0; i < positions.length; i++) positions[i] = positions[i] * k + off[i % 3];
