@@ -100,5 +100,5 @@ export async function decodeVolume(device: GPUDevice, stream: ZfpGpuStream): Pro
 /** The drawn surface as a float32 soup in voxel index space. */
 export async function drawnSoup(iso: Isosurface): Promise<Float32Array> {
   const packed = await readVertices(iso);
-  return decodeVertices(packed, packed.length / 2, 2);
+  return decodeVertices(packed, packed.length / 2, 2, iso.info.dims);
 }

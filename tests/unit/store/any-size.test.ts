@@ -16,7 +16,7 @@ import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import type { GpuFailure } from '../../../src/gpu/device.ts';
 import { requestNodeGpu } from '../../../src/gpu/node-gpu.ts';
-import { decodeVertices } from '../../../src/isosurface/vertex-format.ts';
+import { meshPositions } from '../../../src/isosurface/vertex-format.ts';
 import { openStoreInput } from '../../../src/store/cli-input.ts';
 import { zfpChunkBytes } from '../../../src/store/zarr/open-store.ts';
 import { countBuffers } from '../../helpers/gpu-memory.ts';
@@ -35,8 +35,13 @@ const ISO = 50.37;
 const sizes = [2048, 4096, 16384];
 const path = (size: number) => join(work, `sparse${size}.zarr`);
 
+// 40000 voxels along x (past 16384, where a vertex's 12-bit block coordinates once ended), the box at the far end
+const WIDE: [number, number, number] = [40000, 2 * CHUNK, 2 * CHUNK];
+const widePath = join(work, 'sparse-wide.zarr');
+
 beforeAll(() => {
   for (const size of sizes) sparseStore(path(size), { size, chunk: CHUNK, rate: 8, levels: 2, boxChunks: BOX_CHUNKS });
+  sparseStore(widePath, { size: 0, shape: WIDE, chunk: CHUNK, rate: 8, levels: 2, boxChunks: 2 });
 }, 900_000);
 afterAll(() => rmSync(work, { recursive: true, force: true }));
 
@@ -88,7 +93,7 @@ describe('a level of any size, on the GPU by what is resident', () => {
         after.push(r.gpuBytes);
         // every vertex in the box at the far corner
         const mesh = await (input.surface as PinnedLevelSurface).readMesh();
-        const p = decodeVertices(mesh.vertices, mesh.vertices.length / 3);
+        const p = meshPositions(mesh);
         let lo = Infinity;
         let hi = -Infinity;
         for (const v of p) {
@@ -117,4 +122,31 @@ describe('a level of any size, on the GPU by what is resident', () => {
       await finishTestGpu(gpu);
     }
   }, 900_000);
+
+  it('a level 40000 voxels wide: VTK triangles over the box at its far end, every vertex placed there', async () => {
+    const failures: GpuFailure[] = [];
+    const ctx = await requestNodeGpu({ label: 'test.anySize.wide', limits: 'default', onFailure: (f) => failures.push(f) });
+    pushTestScopes(ctx.device);
+    const gpu = { ...ctx, failures };
+    try {
+      const input = await openStoreInput(gpu, widePath, { level: 0, budget: 256 * MiB });
+      const stats = await input.surface.compute(ISO);
+      const p = meshPositions(await (input.surface as PinnedLevelSurface).readMesh());
+      const box = 2 * CHUNK;
+      for (let a = 0; a < 3; a++) {
+        let [lo, hi] = [Infinity, -Infinity];
+        for (let i = a; i < p.length; i += 3) [lo, hi] = [Math.min(lo, p[i]), Math.max(hi, p[i])];
+        expect(lo, `axis ${a}`).toBeGreaterThan(WIDE[a] - box);
+        expect(hi, `axis ${a}`).toBeLessThan(WIDE[a]);
+      }
+      const raw = join(work, 'box-wide.raw');
+      decodeRegion(widePath, [WIDE[0] - box, 0, 0], raw);
+      const triangles = vtkTriangles(raw, box, ISO);
+      expect(triangles).toBeGreaterThan(10_000);
+      expect(stats.triangles).toBe(triangles);
+      input.surface.destroy();
+    } finally {
+      await finishTestGpu(gpu);
+    }
+  }, 600_000);
 });

@@ -82,8 +82,10 @@ a[:] = v
 }
 
 export interface SparseStoreSpec {
-  /** Level-0 voxels per axis (x = y = z). */
+  /** Level-0 voxels per axis (x = y = z), unless `shape` says otherwise. */
   size: number;
+  /** Level-0 voxels along x, y, z when they differ (`size` is then unused). */
+  shape?: [number, number, number];
   chunk: number;
   rate: number;
   levels: number;
@@ -109,10 +111,12 @@ sys.path.insert(0, sys.argv[3])
 from zarr.codecs.numcodecs import ZFPY
 from zfpzarr.store import ome_multiscales, ATTR, FORMAT_VERSION
 out, spec = sys.argv[1], json.loads(sys.argv[2])
-S, C, levels = spec['size'], spec['chunk'], spec['levels']
+C, levels = spec['chunk'], spec['levels']
+S0 = spec.get('shape') or [spec['size']] * 3   # x, y, z
+S0 = S0[::-1]                                  # z, y, x: the arrays' order
 box = spec['boxChunks'] * C
-centre = S - box / 2
-shapes = [tuple(-(-S // 2**L) for _ in range(3)) for L in range(levels)]
+centre = [max(0, n - box) + min(n, box) / 2 for n in S0]
+shapes = [tuple(-(-n // 2**L) for n in S0) for L in range(levels)]
 attrs = {'ome': ome_multiscales('sparse', shapes, None, None),
          ATTR: {'format': FORMAT_VERSION, 'complete': True, 'value_range': [0.0, 100.0],
                 'levels': [{'path': str(L), 'ranges': f'ranges/{L}'} for L in range(levels)]}}
@@ -125,17 +129,15 @@ for L, shape in enumerate(shapes):
     r = g.create_array(name=f'ranges/{L}', shape=(*grid, 2), chunks=(*(min(n, 64) for n in grid), 2), dtype='float32',
                        compressors=None, filters=None, fill_value=0.0, dimension_names=['z', 'y', 'x', 'minmax'])
     f = 2**L
-    lo = int((S - box) // f)
-    n = shape[0] - lo
-    idx = (np.arange(lo, lo + n, dtype=np.float64) + 0.5) * f - 0.5
-    zz, yy, xx = np.meshgrid(idx, idx, idx, indexing='ij')
-    field = np.maximum(0.0, 100.0 - np.sqrt((xx - centre) ** 2 + (yy - centre) ** 2 + (zz - centre) ** 2)).astype(np.float32)
-    a[lo:, lo:, lo:] = field
-    back = a[lo:, lo:, lo:]
-    c0 = lo // C
-    for cz in range(c0, grid[0]):
-        for cy in range(c0, grid[1]):
-            for cx in range(c0, grid[2]):
+    lo = [int(max(0, n - box) // f) for n in S0]
+    idx = [(np.arange(l, m, dtype=np.float64) + 0.5) * f - 0.5 for l, m in zip(lo, shape)]
+    zz, yy, xx = np.meshgrid(*idx, indexing='ij')
+    field = np.maximum(0.0, 100.0 - np.sqrt((xx - centre[2]) ** 2 + (yy - centre[1]) ** 2 + (zz - centre[0]) ** 2)).astype(np.float32)
+    a[lo[0]:, lo[1]:, lo[2]:] = field
+    c0 = [l // C for l in lo]
+    for cz in range(c0[0], grid[0]):
+        for cy in range(c0[1], grid[1]):
+            for cx in range(c0[2], grid[2]):
                 part = a[cz * C:(cz + 1) * C, cy * C:(cy + 1) * C, cx * C:(cx + 1) * C]
                 r[cz, cy, cx] = [float(part.min()), float(part.max())]
 `,
@@ -145,14 +147,15 @@ for L, shape in enumerate(shapes):
 }
 
 /** The level-0 region [lo, size) per axis of a store, decoded by zarr-python, written as raw float32 (x fastest) to `raw`. */
-export function decodeRegion(store: string, lo: number, raw: string): void {
+export function decodeRegion(store: string, lo: number | [number, number, number], raw: string): void {
+  const [x, y, z] = typeof lo === 'number' ? [lo, lo, lo] : lo;
   converterPython(
     `
 import sys, numpy as np, zarr
 a = zarr.open_array(sys.argv[1], path='0', mode='r')
-lo = int(sys.argv[2])
-np.ascontiguousarray(a[lo:, lo:, lo:], dtype=np.float32).tofile(sys.argv[3])
+x, y, z = map(int, sys.argv[2:5])
+np.ascontiguousarray(a[z:, y:, x:], dtype=np.float32).tofile(sys.argv[5])
 `,
-    [store, String(lo), raw],
+    [store, String(x), String(y), String(z), raw],
   );
 }
