@@ -38,7 +38,7 @@ export function encodeVertexEdge(
   const field = block[0] + block[1] * 2 ** kx + block[2] * 2 ** (kx + ky);
   const hi = Math.floor(field / 2 ** 32);
   const w0 = corner[0] | (corner[1] << 3) | (corner[2] << 6) | (axis << 9) | (q << 11) | ((hi & 15) << 27);
-  return [w0 >>> 0, field % 2 ** 32 >>> 0];
+  return [w0 >>> 0, (field % 2 ** 32) >>> 0];
 }
 
 /** WGSL's round(): halfway cases to even. */

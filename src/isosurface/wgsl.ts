@@ -20,7 +20,7 @@ import { gridSnippet } from '../gpu/dispatch.ts';
 const part = (name: string, code: string): WgslPart => ({ name: `shaders/isosurface/${name}.wgsl`, code });
 
 /**
- * The compressed vertex format: `decode_vertex_position(w0, w1) -> vec3f`
+ * The compressed vertex format: `decode_vertex_position(w0, w1, grid) -> vec3f`
  * (voxel index space) and `encode_vertex_edge`. The renderer composes this
  * part into its vertex shader.
  */

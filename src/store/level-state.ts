@@ -94,3 +94,19 @@ export function storeValueRange(store: ZfpStore, levels: readonly Pick<LevelRang
   }
   return null;
 }
+
+/**
+ * The coarsest level a surface can be drawn at: usable (not wider than a
+ * surface can be) and with at least 2 voxels on every axis where level 0 has
+ * them. A pyramid of a long thin volume ends in levels one voxel thick (a
+ * 20480 x 32 x 32 store's level 5 is 640 x 1 x 1): they hold no cell, so a
+ * surface starting there would be empty, and a cut rooted there would look
+ * fine enough from afar to never go finer.
+ */
+export function coarsestDrawableLevel(levels: readonly { layout: Pick<ChunkLevelLayout, 'dims'>; unusable: string | null }[]): number {
+  const base = levels[0].layout.dims;
+  const holdsCells = (L: number) => levels[L].layout.dims.every((d, a) => d >= 2 || base[a] < 2);
+  let L = levels.length - 1;
+  while (L > 0 && (levels[L].unusable || !holdsCells(L))) L--;
+  return L;
+}

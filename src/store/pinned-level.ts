@@ -77,7 +77,9 @@ export class PinnedLevelSurface {
 
   readMesh(): Promise<SurfaceMesh> {
     const shown = this.controller.shown;
-    return shown ? shown.surface.readMesh() : Promise.resolve({ vertices: new Uint32Array(0), indices: new Uint32Array(0), dims: [...this.info.dims] });
+    return shown
+      ? shown.surface.readMesh()
+      : Promise.resolve({ vertices: new Uint32Array(0), indices: new Uint32Array(0), dims: [...this.info.dims] });
   }
 
   /** Empties the block cache (the pool of compressed chunks stays: that is the network's cache). */

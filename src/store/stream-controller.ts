@@ -21,7 +21,15 @@
 // for the same isovalue again; the CLI reports the failure instead).
 import type { ChunkFetcher } from './fetch/chunk-fetcher.ts';
 import { LearntRanges, learnSlotRanges } from './learnt-ranges.ts';
-import { allChunks, chunkCount, chunkRangesOfIds, estimateFixedBytes, readLevelRanges, storeValueRange } from './level-state.ts';
+import {
+  allChunks,
+  chunkCount,
+  chunkRangesOfIds,
+  coarsestDrawableLevel,
+  estimateFixedBytes,
+  readLevelRanges,
+  storeValueRange,
+} from './level-state.ts';
 import { chunksNeeded, nearestFirst, neighbourhoodRanges } from './plan.ts';
 import type { LevelStats, LevelSurface, LevelVolume, ShownSurface, StreamGpu, StreamGpuBytes, StreamProgress } from './stream-port.ts';
 import type { ChunkIndex, ChunkLevelLayout } from './types.ts';
@@ -115,7 +123,7 @@ export class StreamController<
     }));
     // ranges learnt earlier in the session (the same store opened again): planned with from the start
     for (const lv of this.levels) this.#applyLearnt(lv);
-    this.coarsest = this.levels.length - 1;
+    this.coarsest = coarsestDrawableLevel(store.levels);
     const d = store.levels[0].layout.dims;
     this.focus = [d[0] / 2, d[1] / 2, d[2] / 2];
     fetcher.onChunk((level, chunk, bytes) => this.#arrived(level, chunk, bytes));

@@ -14,7 +14,12 @@ const NAME = 'gen-view-e2e.zarr';
 
 interface CutState {
   done: boolean;
-  cut: { tolerancePx: number; tint: boolean; final: boolean; levels: { level: number; drawn: number; regions: number }[] } | null;
+  cut: {
+    tolerancePx: number;
+    tint: boolean;
+    final: boolean;
+    levels: { level: number; drawn: number; regions: number; triangles: number }[];
+  } | null;
   gpu: { total: number; budget: number };
 }
 const storeState = (page: Page) => page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore) as Promise<CutState>;
@@ -101,5 +106,51 @@ test('cut=1: wheel zoom brings level 0 where the camera looks; frames go on whil
   await page.locator('#iso-value').fill('0.437');
   await page.locator('#iso-value').press('Enter');
   await settled(page);
+  expect(errors).toEqual([]);
+});
+
+test('cut=1 on a store 20480 voxels wide (past 16384): 8 wheel steps toward it, the page stays responsive and draws level 0 where it looks', async ({
+  page,
+}) => {
+  test.setTimeout(400_000);
+  const wide = 'gen-wide-e2e.zarr';
+  const out = join(E2E_STORES_DIR, wide);
+  rmSync(out, { recursive: true, force: true });
+  execFileSync(
+    process.execPath,
+    [join(E2E_STORES_DIR, '../../scripts/convert.mjs'), 'gen:20480x32x32', '--out', out, '--chunk', '32', '--rate', '2', '--quiet'],
+    { timeout: 600_000 },
+  );
+  const errors = watchErrors(page);
+  await openApp(page, `/?store=/stores/${wide}#iso=0.5&cut=1`);
+  await settled(page);
+  // the coarsest levels are one voxel thick (640 x 1 x 1 ...): no cell, no surface; the cut starts where a surface can be
+  const fitted = await storeState(page);
+  expect(fitted.cut!.levels.reduce((a, l) => a + l.triangles, 0)).toBeGreaterThan(0);
+  expect(fitted.cut!.levels.slice(5).every((l) => l.regions === 0)).toBe(true);
+  await expect(page.locator('#messages')).not.toContainText(/cannot be shown/);
+  const view = page.locator('#view');
+  const box = (await view.boundingBox())!;
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  // the wheel steps that took the tab down when level 0 could not be drawn
+  for (let i = 0; i < 8; i++) {
+    await page.mouse.wheel(0, -240);
+    await page.waitForTimeout(60);
+  }
+  const frames = await page.evaluate(() => window.zfpiso!.framesDrawn());
+  await page.mouse.wheel(0, 30);
+  await page.waitForFunction((n) => window.zfpiso!.framesDrawn() > n, frames, { timeout: 60_000 });
+  // closer still, until a voxel of level 0 spans more than the tolerance (the bar is 32 voxels across)
+  for (let i = 0; i < 8; i++) {
+    await page.mouse.wheel(0, -240);
+    await page.waitForTimeout(60);
+  }
+  await page.waitForFunction(() => ((window as unknown as { zfpisoStore?: CutState }).zfpisoStore?.cut?.levels[0].drawn ?? 0) > 0, null, {
+    timeout: 240_000,
+  });
+  await settled(page);
+  const zoomed = await storeState(page);
+  expect(zoomed.cut!.levels[0].drawn).toBeGreaterThan(0);
+  expect(zoomed.gpu.total).toBeLessThanOrEqual(zoomed.gpu.budget);
   expect(errors).toEqual([]);
 });

@@ -149,7 +149,9 @@ export class StoreCutIsosurface implements PageIsosurface {
   readMesh(): Promise<SurfaceMesh> {
     const finest = this.#shown.levels[0];
     // an empty cut (no chunk in view holds the isovalue): no triangles
-    return finest ? finest.surface.readMesh() : Promise.resolve({ vertices: new Uint32Array(0), indices: new Uint32Array(0), dims: [...this.info.dims] });
+    return finest
+      ? finest.surface.readMesh()
+      : Promise.resolve({ vertices: new Uint32Array(0), indices: new Uint32Array(0), dims: [...this.info.dims] });
   }
 
   /** Every level's mesh as one, in level-0 voxel index space (the PLY export). */

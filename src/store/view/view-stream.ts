@@ -24,7 +24,7 @@
 // drawn twice, never missing).
 import type { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
 import { LearntRanges, learnSlotRanges } from '../learnt-ranges.ts';
-import { chunkCount, estimateFixedBytes, readLevelRanges, storeValueRange } from '../level-state.ts';
+import { chunkCount, coarsestDrawableLevel, estimateFixedBytes, readLevelRanges, storeValueRange } from '../level-state.ts';
 import { chunkNeeded } from '../plan.ts';
 import type { LevelStats, LevelSurface, LevelVolume, StreamGpu, StreamGpuBytes, StreamProgress } from '../stream-port.ts';
 import type { ChunkRoleOptions } from '../../zfp/chunked-volume.ts';
@@ -145,8 +145,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     // ranges learnt earlier in the session (the same store reopened at the same rate) carry over
     const grids = store.levels.map((l) => l.layout.chunkGrid);
     this.learnt = learnt?.fits(grids) ? learnt : new LearntRanges(grids);
-    this.coarsest = this.levels.length - 1;
-    while (this.coarsest > 0 && store.levels[this.coarsest].unusable) this.coarsest--;
+    this.coarsest = coarsestDrawableLevel(store.levels);
     // levels finer than a level that cannot be drawn (wider than a surface can be) are never split into:
     // the cut stops there (the store's notes say which levels cannot be shown)
     this.#finestUsable = this.coarsest;

@@ -28,7 +28,7 @@ async function createDrawer(device: GPUDevice, info: IsosurfaceDrawData['info'])
 struct View { grid: vec3u, _pad: u32, extent: vec3f, _pad2: f32 }
 @group(0) @binding(0) var<uniform> view: View;
 @vertex fn vs(@location(0) v: vec2u) -> @builtin(position) vec4f {
-  let p = decode_vertex_position(v.x, v.y) / view.extent;
+  let p = decode_vertex_position(v.x, v.y, view.grid) / view.extent;
   return vec4f(p.xy * 2.0 - 1.0, 0.5, 1.0);
 }
 @fragment fn fs() -> @location(0) vec4f { return vec4f(1.0); }`,

@@ -9,7 +9,14 @@ import { readF32, readU32 } from '../../../src/gpu/buffers.ts';
 import { createComputePipeline } from '../../../src/gpu/pipeline-cache.ts';
 import { A, C, NONE, S, SHARD_RECORD_BYTES, STATUS_CACHE_SHORTFALL, STATUS_VERTEX_OVERFLOW } from '../../../src/isosurface/layout.ts';
 import { vertexBlockBits, surfaceDimsProblem } from '../../../src/core/limits.ts';
-import { decodeVertices, encodeVertexEdge, MAX_VERTEX_VOXELS, VERTEX_BLOCK_BITS, VERTEX_QUANTUM, vertexBlock } from '../../../src/isosurface/vertex-format.ts';
+import {
+  decodeVertices,
+  encodeVertexEdge,
+  MAX_VERTEX_VOXELS,
+  VERTEX_BLOCK_BITS,
+  VERTEX_QUANTUM,
+  vertexBlock,
+} from '../../../src/isosurface/vertex-format.ts';
 import { vertexFormatSnippet } from '../../../src/isosurface/wgsl.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { rng } from '../mc/reference.ts';
@@ -40,7 +47,8 @@ describe('vertex format', () => {
       const extreme = v < 4 * grids.length ? Math.floor(v / grids.length) : -1;
       for (let a = 0; a < 3; a++) {
         corners[4 * v + a] = extreme >= 0 ? [0, 4, 2, 3][extreme] : Math.floor(random() * 5);
-        blocks[4 * v + a] = extreme >= 0 ? [0, grid[a] - 1, grid[a] >> 1, Math.min(256, grid[a] - 1)][extreme] : Math.floor(random() * grid[a]);
+        blocks[4 * v + a] =
+          extreme >= 0 ? [0, grid[a] - 1, grid[a] >> 1, Math.min(256, grid[a] - 1)][extreme] : Math.floor(random() * grid[a]);
         gridOf[4 * v + a] = grid[a];
       }
       corners[4 * v + 3] = v % 3; // the axis
@@ -57,12 +65,16 @@ describe('vertex format', () => {
     expect(surfaceDimsProblem([32768, 64, 64])).toBeNull();
     expect(surfaceDimsProblem([30000, 20000, 100])).toBeNull();
     expect(surfaceDimsProblem([12, 2 ** 24, 36])).toBeNull();
-    expect(surfaceDimsProblem([12, 2 ** 24 + 1, 36])).toMatch(/16777217 along an axis.* float32, whole voxels exact up to 16777216 per axis$/);
+    expect(surfaceDimsProblem([12, 2 ** 24 + 1, 36])).toMatch(
+      /16777217 along an axis.* float32, whole voxels exact up to 16777216 per axis$/,
+    );
     expect(surfaceDimsProblem([2 ** 20, 2 ** 20, 64])).toMatch(
       /^1048576x1048576x64 voxels: its 262144 x 262144 x 16 blocks of 4\^3 need 18 \+ 18 \+ 4 = 40 bits .* in 36 bits$/,
     );
     // the layout of volumes up to 16384 voxels per axis did not change: dims or none, the same words
-    expect(encodeVertexEdge([4, 4, 4], 1, 1, [4095, 4095, 4095], [16384, 16384, 16384])).toEqual(encodeVertexEdge([4, 4, 4], 1, 1, [4095, 4095, 4095]));
+    expect(encodeVertexEdge([4, 4, 4], 1, 1, [4095, 4095, 4095], [16384, 16384, 16384])).toEqual(
+      encodeVertexEdge([4, 4, 4], 1, 1, [4095, 4095, 4095]),
+    );
     expect(vertexBlock(...encodeVertexEdge([4, 4, 4], 1, 1, [4095, 4095, 4095]))).toEqual([4095, 4095, 4095]);
   });
 
@@ -139,7 +151,8 @@ describe('vertex format', () => {
       const [w0, w1] = encodeVertexEdge(at(corners, v), corners[4 * v + 3], ts[v], at(blocks, v), dims);
       if (w0 !== gpuPacked[2 * v] || w1 !== gpuPacked[2 * v + 1]) different++;
       const tsDecoded = decodeVertices(gpuPacked.subarray(2 * v, 2 * v + 2), 1, 2, dims);
-      for (let a = 0; a < 3; a++) expect(Math.abs(gpuDecoded[4 * v + a] - tsDecoded[a])).toBeLessThanOrEqual(Math.abs(tsDecoded[a]) * 2 ** -22);
+      for (let a = 0; a < 3; a++)
+        expect(Math.abs(gpuDecoded[4 * v + a] - tsDecoded[a])).toBeLessThanOrEqual(Math.abs(tsDecoded[a]) * 2 ** -22);
     }
     expect(different).toBe(0);
   });
