@@ -170,7 +170,13 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
     notes: store.notes,
     fileName: `${input} level ${L}`,
     record,
-    ...(store.source ? { saveRanges: async (dir: string) => writeSidecar(store, dir, (l) => controller.chunkRanges(l)) } : {}),
+    // levels with range arrays: those; the others: what was learnt as bricks arrived, a level learnt in part included
+    ...(store.source
+      ? {
+          saveRanges: async (dir: string) =>
+            writeSidecar(store, dir, (l) => (store.levels[l].rangesPath ? controller.chunkRanges(l) : controller.learnt.level(l))),
+        }
+      : {}),
   };
 }
 
