@@ -1,31 +1,23 @@
-// The CLI's store input (`extract` / `bench` STORE --level L): a store URL
-// or folder, streamed at level L only (pinned-level.ts): each isovalue
-// fetches the chunks its surface needs (8 requests in flight) into the
-// level's GPU pool of compressed chunks; the record says how much came over.
+// The CLI's store input (`extract` / `bench` STORE --level L, or refined by
+// --view-box / --view): a store URL, folder or zip opened as a StoreSession
+// (session.ts, as the page opens it): at level L only (pinned-level.ts) each
+// isovalue fetches the chunks its surface needs (8 requests in flight) into
+// the level's GPU pool of compressed chunks; the record says how much came over.
 import { existsSync, mkdirSync, readFileSync, rmSync, statSync, writeFileSync } from 'node:fs';
 import { dirname, join } from 'node:path';
 import type { GpuContext } from '../gpu/device.ts';
-import type { Isosurface } from '../isosurface/isosurface.ts';
-import type { IsosurfaceStats } from '../isosurface/types.ts';
-import type { ChunkedVolume } from '../zfp/chunked-volume.ts';
 import { defaultMemoryBudget } from '../isosurface/budget.ts';
-import { ChunkFetcher } from './fetch/chunk-fetcher.ts';
-import { chunkedGpu, createChunkStream, storeEncoder } from './gpu-port.ts';
 import { PinnedLevelSurface } from './pinned-level.ts';
 import { storeRateChooser } from './rate.ts';
+import { type StoreRecord, StoreSession } from './session.ts';
+import { type ViewRequest, viewSpecFor } from './view/view-request.ts';
+import { type ViewSpec, ViewStream } from './view/view-stream.ts';
+import { type ChunkViewStream, ViewCutSurface } from './view/view-surface.ts';
 import { StoreError } from './zarr/errors.ts';
 import { isStoreUrl, storeForLocation } from './zarr/node-store.ts';
-import { openStore } from './zarr/open-store.ts';
-import type { SourceInfo } from './zarr/source-store.ts';
-import { MeteredStore } from './zarr/stores.ts';
 import { rangesSidecarFiles } from './zarr/ranges-sidecar-files.ts';
-import { isZipStoreName } from './zarr/zip-store.ts';
 import type { ZfpStore } from './zarr/store.ts';
-import type { StreamGpuBytes } from './stream-port.ts';
-import type { ChunkedStreamGpu } from './gpu-port.ts';
-import { type ViewRequest, viewSpecFor } from './view/view-request.ts';
-import { ViewStream } from './view/view-stream.ts';
-import { ViewCutSurface } from './view/view-surface.ts';
+import { isZipStoreName } from './zarr/zip-store.ts';
 
 /** --level names a level the store does not have (a wrong command line, not a data failure). */
 export class NoSuchLevelError extends Error {
@@ -40,47 +32,7 @@ export function isStoreInput(input: string): boolean {
   return isStoreUrl(input) || isZipStoreName(input) || ['zarr.json', '.zgroup', '.zarray'].some((f) => existsSync(join(input, f)));
 }
 
-export interface StoreRecord {
-  store: string;
-  level: number;
-  levels: number;
-  dims: [number, number, number];
-  chunkEdge: number;
-  rate: number;
-  /** Distinct chunks (bricks, for a store of lossless chunks) put at the level / chunks of the level. */
-  chunks: number;
-  levelChunks: number;
-  /** A store of lossless chunks: format, codecs, type, axes, rate (null for zfp stores). */
-  source: SourceInfo | null;
-  /** A store of lossless chunks: [min, max] of the source values of the level's bricks read (all of it once the level was read whole). */
-  sourceValueRange: [number, number] | null;
-  /** A store of lossless chunks: source chunks decoded (count, decoded bytes, ms from request to decoded, summed over chunks). */
-  sourceDecode: { chunks: number; bytes: number; ms: number; nonFinite: number } | null;
-  /** Level 0's voxel size (x, y, z) and unit, from the store's metadata. */
-  voxelSize: [number, number, number];
-  unit: string | null;
-  /** Bytes through the store: chunk bytes, and everything (metadata, range arrays, shard indexes). */
-  chunkBytesFetched: number;
-  bytesFetched: number;
-  metadataBytes: number;
-  requests: number;
-  /** Every chunk of every level (what a full download would be). */
-  storeChunkBytes: number;
-  /** GPU memory budget of the stream: everything it holds on the GPU. */
-  budgetBytes: number;
-  /** GPU bytes held now, counted where they are made (pools, the surface's per-level buffers, cache, vertices, scratch). */
-  gpuBytes: number;
-  /** Of gpuBytes: the pool of compressed chunks, and the surface's cache and vertex buffers. */
-  gpuPoolBytes: number;
-  gpuCacheBytes: number;
-  gpuVertexBytes: number;
-  /** The most GPU bytes held at once so far. */
-  gpuPeakBytes: number;
-  /** Requests tried again after a transient failure, requests that failed for good, and what the failed tries saw. */
-  retries: number;
-  failedRequests: number;
-  faults: Record<string, number>;
-}
+export type { StoreRecord };
 
 export interface StoreInput {
   surface: PinnedLevelSurface | ViewCutSurface;
@@ -116,49 +68,55 @@ export interface StoreInputOptions {
 }
 
 export async function openStoreInput(gpu: GpuContext, input: string, opts: StoreInputOptions): Promise<StoreInput> {
-  const metered = new MeteredStore(storeForLocation(input));
-  const store = await openStore(metered, input, {
-    ...(opts.deadlineMs === undefined ? {} : { retry: { deadlineMs: opts.deadlineMs } }),
-    rate: opts.rate,
-    chooseRate: storeRateChooser(gpu),
-    time: opts.time,
-    channel: opts.channel,
-    ...(opts.ranges === undefined ? {} : { ranges: { store: storeForLocation(opts.ranges), name: opts.ranges } }),
+  const L = opts.level ?? 0;
+  const budgetBytes = opts.budget ?? defaultMemoryBudget(gpu.device.limits);
+  let view: ViewSpec | undefined;
+  const session = await StoreSession.open(gpu, storeForLocation(input), input, {
+    open: {
+      ...(opts.deadlineMs === undefined ? {} : { retry: { deadlineMs: opts.deadlineMs } }),
+      rate: opts.rate,
+      chooseRate: storeRateChooser(gpu),
+      time: opts.time,
+      channel: opts.channel,
+      ...(opts.ranges === undefined ? {} : { ranges: { store: storeForLocation(opts.ranges), name: opts.ranges } }),
+    },
+    budgetBytes,
+    // checked before any stream is made: a level that does not exist or cannot be drawn, a view that does not fit the store
+    view: (store) => {
+      if (!Number.isInteger(L) || L < 0 || L >= store.levels.length)
+        throw new NoSuchLevelError(`${input}: --level ${opts.level} does not exist (levels 0 to ${store.levels.length - 1})`);
+      const unusable = store.levels[L].unusable;
+      if (unusable) throw new StoreError('layout', `${input}: --level ${L}: ${unusable}`);
+      if (!opts.view) return null;
+      try {
+        view = viewSpecFor(
+          opts.view,
+          store.levels.map((l) => l.layout),
+          store.voxelSize,
+        );
+      } catch (e) {
+        throw new StoreError('layout', `${input}: ${(e as Error).message}`);
+      }
+      return view;
+    },
+    setup: (stream) => {
+      if (!(stream instanceof ViewStream)) return;
+      stream.retryFailed = false; // the CLI reports a chunk that failed (after the store's own retries)
+      stream.skirts = opts.view?.skirts ?? true;
+    },
   });
+  const { store } = session;
   if (!store.source && opts.ranges !== undefined)
     store.notes.push(`--ranges is for stores of lossless chunks; this store's chunks are zfp, with their own ranges or none`);
   if (!store.source && opts.rate !== undefined && opts.rate !== store.levels[0].layout.rate)
     store.notes.push(
       `--rate ${opts.rate} is for stores of lossless chunks; this store's chunks are zfp at rate ${store.levels[0].layout.rate}, used as they are`,
     );
-  const { level } = opts;
-  const L = level ?? 0;
-  if (!Number.isInteger(L) || L < 0 || L >= store.levels.length) {
-    throw new NoSuchLevelError(`${input}: --level ${level} does not exist (levels 0 to ${store.levels.length - 1})`);
-  }
+  const refined = session.view;
+  if (refined && view) return viewInput(input, session, refined, view);
+  const controller = session.levels!;
   const lv = store.levels[L];
-  if (lv.unusable) throw new StoreError('layout', `${input}: --level ${L}: ${lv.unusable}`);
-  const fetcher = new ChunkFetcher(store, { maxInFlight: 8 });
-  const fetched = new Set<number>();
-  let chunkBytes = 0;
-  fetcher.onChunk((l, c, bytes, fromCache) => {
-    if (l !== L || fromCache || fetched.has(c) || store.isAbsent(bytes)) return;
-    fetched.add(c);
-    chunkBytes += bytes.byteLength;
-  });
-  const budgetBytes = opts.budget ?? defaultMemoryBudget(gpu.device.limits);
-  const port = chunkedGpu(gpu, undefined, await storeEncoder(gpu, store));
-  if (opts.view) return viewInput(input, store, metered, fetcher, port, budgetBytes, opts.view);
-  const controller = await createChunkStream(store, fetcher, port, budgetBytes);
   const surface = new PinnedLevelSurface(controller, L);
-  const record = (): StoreRecord =>
-    storeRecord(input, store, metered, L, L, {
-      chunks: fetched.size,
-      chunkBytes,
-      budgetBytes,
-      gpu: controller.gpuBytes,
-      peak: port.meter.peak,
-    });
   const kind = store.source
     ? `${store.source.format} store of ${store.source.dtype} (${store.source.codecs.join(' + ') || 'uncompressed'}), level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 bricks compressed on the GPU at rate ${lv.layout.rate})`
     : `Zarr store, level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 chunks, rate ${lv.layout.rate})`;
@@ -169,7 +127,7 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
     rate: lv.layout.rate,
     notes: store.notes,
     fileName: `${input} level ${L}`,
-    record,
+    record: () => session.record(L, L, L),
     // levels with range arrays: those; the others: what was learnt as bricks arrived, a level learnt in part included
     ...(store.source
       ? {
@@ -205,50 +163,13 @@ function writeSidecar(store: ZfpStore, dir: string, ranges: (level: number) => F
  * each region at the level the view needs; the record's `level` is the
  * finest level drawn, `chunks` the distinct chunks put at any level.
  */
-async function viewInput(
-  input: string,
-  store: ZfpStore,
-  metered: MeteredStore,
-  fetcher: ChunkFetcher,
-  port: ChunkedStreamGpu,
-  budgetBytes: number,
-  request: ViewRequest,
-): Promise<StoreInput> {
-  let view;
-  try {
-    view = viewSpecFor(
-      request,
-      store.levels.map((l) => l.layout),
-      store.voxelSize,
-    );
-  } catch (e) {
-    throw new StoreError('layout', `${input}: ${(e as Error).message}`);
-  }
-  const fetched = new Set<number>();
-  let chunkBytes = 0;
-  fetcher.onChunk((l, c, bytes, fromCache) => {
-    const k = l * 2 ** 32 + c;
-    if (fromCache || fetched.has(k) || store.isAbsent(bytes)) return;
-    fetched.add(k);
-    chunkBytes += bytes.byteLength;
-  });
-  const stream = await ViewStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budgetBytes);
-  stream.retryFailed = false; // the CLI reports a chunk that failed (after the store's own retries)
-  stream.skirts = request.skirts ?? true;
-  await stream.setView(view);
+function viewInput(input: string, session: StoreSession, stream: ChunkViewStream, view: ViewSpec): StoreInput {
+  const { store } = session;
   const surface = new ViewCutSurface(stream);
   const lv0 = store.levels[0];
-  const record = (): StoreRecord =>
-    storeRecord(input, store, metered, Math.min(...(stream.shown?.levels.map((l) => l.level) ?? [0])), 0, {
-      chunks: fetched.size,
-      chunkBytes,
-      budgetBytes,
-      gpu: stream.gpuBytes,
-      peak: port.meter.peak,
-    });
   const how =
     `Zarr store of ${store.levels.length} levels (level 0 ${lv0.layout.dims.join('x')}, ${lv0.layout.chunkEdge}^3 chunks, rate ${lv0.layout.rate}), ` +
-    `refined by the view (each region at the level whose voxels project to at most ${view.tolerancePx} px), within ${(budgetBytes / 2 ** 20).toFixed(0)} MiB of GPU memory`;
+    `refined by the view (each region at the level whose voxels project to at most ${view.tolerancePx} px), within ${(session.budgetBytes / 2 ** 20).toFixed(0)} MiB of GPU memory`;
   // levels with range arrays (a sidecar given): those; the others: what the stream learnt as bricks arrived
   const saveRanges = async (dir: string) => {
     await stream.learnSettled();
@@ -260,52 +181,7 @@ async function viewInput(
     rate: lv0.layout.rate,
     notes: store.notes,
     fileName: `${input} (view)`,
-    record,
+    record: () => session.record(Math.min(...(stream.shown?.levels.map((l) => l.level) ?? [0])), 0),
     ...(store.source ? { saveRanges } : {}),
-  };
-}
-
-/**
- * The record of a store input: `level` the level streamed (or the finest a
- * view drew), `layoutLevel` whose dims, chunks and rate it gives.
- */
-function storeRecord(
-  input: string,
-  store: ZfpStore,
-  metered: MeteredStore,
-  level: number,
-  layoutLevel: number,
-  got: { chunks: number; chunkBytes: number; budgetBytes: number; gpu: StreamGpuBytes; peak: number },
-): StoreRecord {
-  const lv = store.levels[layoutLevel];
-  return {
-    store: input,
-    level,
-    levels: store.levels.length,
-    dims: lv.layout.dims,
-    chunkEdge: lv.layout.chunkEdge,
-    rate: lv.layout.rate,
-    chunks: got.chunks,
-    source: store.source,
-    sourceValueRange: store.sourceValueRange?.(layoutLevel) ?? null,
-    sourceDecode: store.sourceDecode?.() ?? null,
-    voxelSize: store.voxelSize,
-    unit: store.unit,
-    levelChunks: lv.chunkCount,
-    // a store of lossless chunks: what came over for the bricks (their source chunks), not the bricks' values
-    chunkBytesFetched: store.source ? metered.meter.bytes - store.metadataBytes : got.chunkBytes,
-    bytesFetched: metered.meter.bytes,
-    metadataBytes: store.metadataBytes,
-    requests: metered.meter.requests,
-    storeChunkBytes: store.levels.reduce((a, l) => a + l.storedBytes, 0),
-    budgetBytes: got.budgetBytes,
-    gpuBytes: got.gpu.total,
-    gpuPoolBytes: got.gpu.pools,
-    gpuCacheBytes: got.gpu.cache,
-    gpuVertexBytes: got.gpu.vertices,
-    gpuPeakBytes: got.peak,
-    retries: store.retries.retries,
-    failedRequests: store.retries.failed,
-    faults: { ...store.retries.faults },
   };
 }

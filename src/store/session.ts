@@ -1,0 +1,251 @@
+// One opened store, as the page and the CLI both use it: the store (its
+// requests metered), the chunk fetcher, the GPU port, the stream (level by
+// level, or refined by the view), the chunks that came over (a bit per
+// chunk), the record, and close(). Opening is all or nothing: an open that
+// fails part-way (or that the caller abandons with close()) lets its store
+// go, decode workers and requests included, and frees what the stream made.
+import type { AsyncReadable } from '@zarrita/storage';
+import type { GpuContext } from '../gpu/device.ts';
+import type { Isosurface } from '../isosurface/isosurface.ts';
+import type { IsosurfaceStats } from '../isosurface/types.ts';
+import type { ChunkedVolume } from '../zfp/chunked-volume.ts';
+import { ChunkFetcher } from './fetch/chunk-fetcher.ts';
+import { type ChunkedStreamGpu, chunkedGpu, createChunkStream, storeEncoder } from './gpu-port.ts';
+import type { LearntRanges } from './learnt-ranges.ts';
+import type { ChunkStreamController } from './pinned-level.ts';
+import type { StreamGpuBytes } from './stream-port.ts';
+import { type ViewSpec, ViewStream } from './view/view-stream.ts';
+import type { ChunkViewStream } from './view/view-surface.ts';
+import { openStore } from './zarr/open-store.ts';
+import type { SourceInfo } from './zarr/source-store.ts';
+import type { OpenStoreOptions, ZfpStore } from './zarr/store.ts';
+import { MeteredStore } from './zarr/stores.ts';
+
+/** What a store session's figures say (the CLI's `store` record; the page's panel reads the same counters). */
+export interface StoreRecord {
+  store: string;
+  level: number;
+  levels: number;
+  dims: [number, number, number];
+  chunkEdge: number;
+  rate: number;
+  /** Distinct chunks (bricks, for a store of lossless chunks) put at the level / chunks of the level. */
+  chunks: number;
+  levelChunks: number;
+  /** A store of lossless chunks: format, codecs, type, axes, rate (null for zfp stores). */
+  source: SourceInfo | null;
+  /** A store of lossless chunks: [min, max] of the source values of the level's bricks read (all of it once the level was read whole). */
+  sourceValueRange: [number, number] | null;
+  /** A store of lossless chunks: source chunks decoded (count, decoded bytes, ms from request to decoded, summed over chunks). */
+  sourceDecode: { chunks: number; bytes: number; ms: number; nonFinite: number } | null;
+  /** Level 0's voxel size (x, y, z) and unit, from the store's metadata. */
+  voxelSize: [number, number, number];
+  unit: string | null;
+  /** Bytes through the store: chunk bytes, and everything (metadata, range arrays, shard indexes). */
+  chunkBytesFetched: number;
+  bytesFetched: number;
+  metadataBytes: number;
+  requests: number;
+  /** Every chunk of every level (what a full download would be). */
+  storeChunkBytes: number;
+  /** GPU memory budget of the stream: everything it holds on the GPU. */
+  budgetBytes: number;
+  /** GPU bytes held now, counted where they are made (pools, the surface's per-level buffers, cache, vertices, scratch). */
+  gpuBytes: number;
+  /** Of gpuBytes: the pool of compressed chunks, and the surface's cache and vertex buffers. */
+  gpuPoolBytes: number;
+  gpuCacheBytes: number;
+  gpuVertexBytes: number;
+  /** The most GPU bytes held at once so far. */
+  gpuPeakBytes: number;
+  /** Requests tried again after a transient failure, requests that failed for good, and what the failed tries saw. */
+  retries: number;
+  failedRequests: number;
+  faults: Record<string, number>;
+}
+
+/**
+ * The distinct chunks that came over, per level: a bit per chunk, made when
+ * a level's first chunk arrives (bounded by the store, not by the session's
+ * length). Chunks absent from the store (the fill value) and the fetcher's
+ * cache hits are not counted.
+ */
+export class FetchedChunks {
+  readonly #bits: (Uint8Array | undefined)[] = [];
+  readonly #count: number[] = [];
+  readonly #bytes: number[] = [];
+  readonly #listeners: ((level: number, bytes: number) => void)[] = [];
+
+  constructor(private readonly store: ZfpStore) {}
+
+  /** Counts a chunk that arrived; true when it is the first time. */
+  add(level: number, chunk: number, bytes: Uint8Array, fromCache: boolean): boolean {
+    if (fromCache || this.store.isAbsent(bytes)) return false;
+    const bits = (this.#bits[level] ??= new Uint8Array(Math.ceil(this.store.levels[level].chunkCount / 8)));
+    const bit = 1 << (chunk & 7);
+    if (bits[chunk >>> 3] & bit) return false;
+    bits[chunk >>> 3] |= bit;
+    this.#count[level] = (this.#count[level] ?? 0) + 1;
+    this.#bytes[level] = (this.#bytes[level] ?? 0) + bytes.byteLength;
+    for (const l of this.#listeners) l(level, bytes.byteLength);
+    return true;
+  }
+
+  /** Calls `l` for each chunk counted from now on. */
+  onNew(l: (level: number, bytes: number) => void): void {
+    this.#listeners.push(l);
+  }
+
+  /** Distinct chunks of `level`, or of every level. */
+  chunks(level?: number): number {
+    return level === undefined ? this.#count.reduce((a, n) => a + (n ?? 0), 0) : (this.#count[level] ?? 0);
+  }
+
+  /** Their bytes as they came (compressed chunk bytes). */
+  bytes(level?: number): number {
+    return level === undefined ? this.#bytes.reduce((a, n) => a + (n ?? 0), 0) : (this.#bytes[level] ?? 0);
+  }
+}
+
+/** The stream of a session: level by level, or refined by the view. */
+export type StoreStream = ChunkStreamController | ChunkViewStream;
+
+export interface StoreSessionOptions {
+  /** How the store is opened (rate, time point, channel, ranges sidecar, retries, decode workers). */
+  open: OpenStoreOptions;
+  /** The GPU memory of the whole stream. */
+  budgetBytes: number;
+  /** Requests in flight at once (default 8). */
+  maxInFlight?: number;
+  /** Ranges learnt earlier for this store (the page keeps them per opened source). */
+  learnt?: (store: ZfpStore) => LearntRanges | undefined;
+  /**
+   * Refined by the view: the first view, given the opened store; null (or
+   * absent) streams level by level. May throw (a view that does not fit the
+   * store): the open then fails and lets the store go.
+   */
+  view?: (store: ZfpStore) => ViewSpec | null;
+  /** Called with the stream as soon as it is made, before its first view (the CLI turns retries and skirts here). */
+  setup?: (stream: StoreStream) => void;
+}
+
+export class StoreSession {
+  readonly fetched: FetchedChunks;
+  #closed = false;
+
+  private constructor(
+    /** The store's name in messages (a URL or a path). */
+    readonly name: string,
+    readonly store: ZfpStore,
+    readonly metered: MeteredStore,
+    readonly fetcher: ChunkFetcher,
+    readonly port: ChunkedStreamGpu,
+    readonly stream: StoreStream,
+    readonly budgetBytes: number,
+    fetched: FetchedChunks,
+  ) {
+    this.fetched = fetched;
+  }
+
+  /** The stream when it is refined by the view, else null. */
+  get view(): ChunkViewStream | null {
+    return this.stream instanceof ViewStream ? this.stream : null;
+  }
+
+  /** The stream when it is level by level, else null. */
+  get levels(): ChunkStreamController | null {
+    return this.stream instanceof ViewStream ? null : this.stream;
+  }
+
+  get closed(): boolean {
+    return this.#closed;
+  }
+
+  /**
+   * Stops the store: no more requests, decode workers end. `keepSurfaces`
+   * leaves the stream's GPU side alive (a level of it is still on screen;
+   * the page destroys the stream when it lets that level go).
+   */
+  close(keepSurfaces = false): void {
+    if (this.#closed) return;
+    this.#closed = true;
+    this.fetcher.cancelAll();
+    this.store.close?.();
+    if (!keepSurfaces) this.stream.destroy();
+  }
+
+  /**
+   * The record: `level` the level streamed (or the finest a view drew),
+   * `layoutLevel` whose dims, chunks and rate it gives, `chunksOf` the level
+   * whose chunks it counts (all levels when absent).
+   */
+  record(level: number, layoutLevel: number, chunksOf?: number): StoreRecord {
+    const { store, metered } = this;
+    const lv = store.levels[layoutLevel];
+    const gpu: StreamGpuBytes = this.stream.gpuBytes;
+    return {
+      store: this.name,
+      level,
+      levels: store.levels.length,
+      dims: lv.layout.dims,
+      chunkEdge: lv.layout.chunkEdge,
+      rate: lv.layout.rate,
+      chunks: this.fetched.chunks(chunksOf),
+      source: store.source,
+      sourceValueRange: store.sourceValueRange?.(layoutLevel) ?? null,
+      sourceDecode: store.sourceDecode?.() ?? null,
+      voxelSize: store.voxelSize,
+      unit: store.unit,
+      levelChunks: lv.chunkCount,
+      // a store of lossless chunks: what came over for the bricks (their source chunks), not the bricks' values
+      chunkBytesFetched: store.source ? metered.meter.bytes - store.metadataBytes : this.fetched.bytes(chunksOf),
+      bytesFetched: metered.meter.bytes,
+      metadataBytes: store.metadataBytes,
+      requests: metered.meter.requests,
+      storeChunkBytes: store.levels.reduce((a, l) => a + l.storedBytes, 0),
+      budgetBytes: this.budgetBytes,
+      gpuBytes: gpu.total,
+      gpuPoolBytes: gpu.pools,
+      gpuCacheBytes: gpu.cache,
+      gpuVertexBytes: gpu.vertices,
+      gpuPeakBytes: this.port.meter.peak,
+      retries: store.retries.retries,
+      failedRequests: store.retries.failed,
+      faults: { ...store.retries.faults },
+    };
+  }
+
+  /**
+   * Opens `source` (named `name` in messages) and its stream on `gpu`. The
+   * refined stream has planned its first view when this resolves; nothing
+   * has been fetched for a surface yet.
+   */
+  static async open(gpu: GpuContext, source: AsyncReadable, name: string, options: StoreSessionOptions): Promise<StoreSession> {
+    const metered = source instanceof MeteredStore ? source : new MeteredStore(source);
+    let store: ZfpStore | undefined;
+    let stream: StoreStream | undefined;
+    try {
+      store = await openStore(metered, name, options.open);
+      const fetcher = new ChunkFetcher(store, { maxInFlight: options.maxInFlight ?? 8 });
+      const fetched = new FetchedChunks(store);
+      fetcher.onChunk((level, chunk, bytes, fromCache) => fetched.add(level, chunk, bytes, fromCache));
+      const port = chunkedGpu(gpu, undefined, await storeEncoder(gpu, store));
+      const learnt = options.learnt?.(store);
+      const view = options.view?.(store) ?? null;
+      if (view) {
+        const refined = await ViewStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, options.budgetBytes, { learnt });
+        stream = refined;
+        options.setup?.(refined);
+        await refined.setView(view);
+      } else {
+        stream = await createChunkStream(store, fetcher, port, options.budgetBytes, { learnt });
+        options.setup?.(stream);
+      }
+      return new StoreSession(name, store, metered, fetcher, port, stream, options.budgetBytes, fetched);
+    } catch (e) {
+      stream?.destroy();
+      store?.close?.();
+      throw e;
+    }
+  }
+}
