@@ -233,7 +233,9 @@ export class StoreSession {
       const learnt = options.learnt?.(store);
       const view = options.view?.(store) ?? null;
       if (view) {
-        const refined = await ViewStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, options.budgetBytes, { learnt });
+        const refined = await ViewStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, options.budgetBytes, {
+          learnt,
+        });
         stream = refined;
         options.setup?.(refined);
         await refined.setView(view);

@@ -11,26 +11,23 @@
 // (levels, network, memory). Errors name the store; the current surface stays.
 import type { AsyncReadable } from '@zarrita/storage';
 import type { GpuContext } from '../../gpu/device.ts';
-import { ChunkFetcher } from '../../store/fetch/chunk-fetcher.ts';
-import { chunkedGpu, createChunkStream, storeEncoder } from '../../store/gpu-port.ts';
+import type { ChunkFetcher } from '../../store/fetch/chunk-fetcher.ts';
 import { sessionRanges } from '../../store/learnt-ranges.ts';
 import { isZipStoreName, storeZipBytes, ZipStore } from '../../store/zarr/zip-store.ts';
 import { storeRateChooser } from '../../store/rate.ts';
+import { StoreSession } from '../../store/session.ts';
 import type { ChunkStreamController } from '../../store/pinned-level.ts';
 import type { StreamProgress } from '../../store/stream-controller.ts';
 import { StoreError } from '../../store/zarr/errors.ts';
 import { HttpStore } from '../../store/zarr/http-store.ts';
-import { openStore, type ZfpStore } from '../../store/zarr/open-store.ts';
-import { MeteredStore } from '../../store/zarr/stores.ts';
-import type { Isosurface } from '../../isosurface/isosurface.ts';
-import type { IsosurfaceStats } from '../../isosurface/types.ts';
+import type { ZfpStore } from '../../store/zarr/open-store.ts';
+import type { MeteredStore } from '../../store/zarr/stores.ts';
 import type { CameraState } from '../../render/camera.ts';
 import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf, type Viewport } from '../../store/view/camera.ts';
 import { estimateFixedBytes } from '../../store/level-state.ts';
 import { type LevelValues, readLevelValues } from '../../store/level-values.ts';
 import { DEFAULT_TOLERANCE_PX, type ViewSpec, ViewStream } from '../../store/view/view-stream.ts';
 import type { ChunkViewStream } from '../../store/view/view-surface.ts';
-import type { ChunkedVolume } from '../../zfp/chunked-volume.ts';
 import { type ShownCutOfPage, StoreCutIsosurface } from './store-cut.ts';
 import { chooseIsovalue } from '../iso-choice.ts';
 import type { LoadedVolume } from '../loading/loader.ts';
@@ -105,6 +102,8 @@ interface OpenStore {
   source: AsyncReadable;
   choice: StoreChoice;
   ranges: { store: AsyncReadable; name: string } | undefined;
+  /** The opened store, its fetcher, stream and counters (src/store/session.ts); the next four are its parts. */
+  session: StoreSession;
   store: ZfpStore;
   metered: MeteredStore;
   fetcher: ChunkFetcher;
@@ -185,9 +184,7 @@ export class StoreView {
   #stop(o: OpenStore): void {
     o.detachCamera();
     if (o.replanTimer !== null) clearTimeout(o.replanTimer);
-    o.fetcher.cancelAll();
-    o.store.close?.();
-    if (!o.current) o.controller.destroy();
+    o.session.close(o.current !== null);
   }
 
   /**
@@ -203,47 +200,36 @@ export class StoreView {
     ranges?: { store: AsyncReadable; name: string },
   ): Promise<void> {
     const gen = ++this.#gen;
-    const metered = new MeteredStore(source);
-    let store: ZfpStore | undefined;
-    let controller: ChunkStreamController | ChunkViewStream | undefined;
-    let cut: OpenStore['cut'] = null;
+    let cut = null as OpenStore['cut'];
     this.#line(`Opening ${url}…`);
-    let f: ChunkFetcher;
+    let session: StoreSession;
     try {
-      store = await openStore(metered, url, {
-        rate: choice.storeRate,
-        chooseRate: storeRateChooser(this.d.gpu()),
-        time: choice.time,
-        channel: choice.channel,
-        ranges,
-        decodeWorkers: true,
-      });
-      f = new ChunkFetcher(store, { maxInFlight: 8 });
       const asked = { ...this.d.linkCut(), ...this.#cutChoice };
-      if (asked.cut ?? this.#levelZeroIsLarge(store)) {
-        // refined by the view: each region at the level the camera needs
-        const gpu = this.d.gpu();
-        const view = await ViewStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(
-          store,
-          f,
-          chunkedGpu(gpu, undefined, await storeEncoder(gpu, store)),
-          this.d.budgetBytes(),
-          { learnt: learntOf(store, source) },
-        );
-        cut = { tolerancePx: asked.tolerancePx ?? DEFAULT_TOLERANCE_PX, tint: asked.tint ?? false };
-        controller = view;
-        await view.setView(this.#viewSpec(store, cut.tolerancePx, asked.camera));
-      } else {
-        controller = await createChunkStream(store, f, this.d.gpu(), this.d.budgetBytes(), { learnt: learntOf(store, source) });
-      }
+      session = await StoreSession.open(this.d.gpu(), source, url, {
+        open: {
+          rate: choice.storeRate,
+          chooseRate: storeRateChooser(this.d.gpu()),
+          time: choice.time,
+          channel: choice.channel,
+          ranges,
+          decodeWorkers: true,
+        },
+        budgetBytes: this.d.budgetBytes(),
+        learnt: (store) => learntOf(store, source),
+        // refined by the view (asked for, or level 0 too large to stream whole): each region at the level the camera needs
+        view: (store) => {
+          if (!(asked.cut ?? this.#levelZeroIsLarge(store))) return null;
+          cut = { tolerancePx: asked.tolerancePx ?? DEFAULT_TOLERANCE_PX, tint: asked.tint ?? false };
+          return this.#viewSpec(store, cut.tolerancePx, asked.camera);
+        },
+      });
     } catch (e) {
-      // a failed open lets its store go (decode workers, requests)
-      controller?.destroy();
-      store?.close?.();
+      // a failed open has let its store go (decode workers, requests)
       if (gen === this.#gen) this.#line('');
       this.d.onError(e instanceof StoreError ? e.message : `${url}: ${(e as Error).message}`);
       return;
     }
+    const { store, metered, fetcher: f, stream: controller } = session;
     // no value range in the metadata nor from range arrays: the coarsest level, read whole now, gives one (provisional)
     let coarse: LevelValues | null = null;
     if (!controller.valueRange && gen === this.#gen) {
@@ -257,8 +243,7 @@ export class StoreView {
     }
     if (gen !== this.#gen) {
       // superseded by another open: this one lets its store go
-      controller.destroy();
-      store.close?.();
+      session.close();
       return;
     }
     // the previous store (if any) stops here; its level stays on screen until this one's first level replaces it
@@ -303,6 +288,7 @@ export class StoreView {
       source,
       choice: shownChoice,
       ranges,
+      session,
       store,
       metered,
       fetcher: f,
@@ -333,18 +319,11 @@ export class StoreView {
     // what the store is and how it is read goes to the panel; what a user should act on is also a (dismissable) notice
     state.notes = [...store.notes];
     for (const note of store.notes) if (WARNING_NOTE.test(note)) this.d.onNotice(`${url}: ${note}`);
-    // chunks counted once: a bit per chunk of each level, made when the level's first chunk arrives (bounded by the store)
-    const fetchedOnce: (Uint8Array | undefined)[] = [];
-    f.onChunk((level, chunk, bytes, fromCache) => {
-      // absent from the store (the fill value): nothing came over
-      if (fromCache || store.isAbsent(bytes)) return;
-      const bits = (fetchedOnce[level] ??= new Uint8Array(Math.ceil(store.levels[level].chunkCount / 8)));
-      const bit = 1 << (chunk & 7);
-      if (bits[chunk >>> 3] & bit) return;
-      bits[chunk >>> 3] |= bit;
+    // chunks counted once (a bit per chunk of each level: session.ts)
+    session.fetched.onNew((level, bytes) => {
       state.chunksFetched++;
       state.levels[level].chunksFetched++;
-      state.levels[level].chunkBytesFetched += bytes.byteLength;
+      state.levels[level].chunkBytesFetched += bytes;
     });
     controller.onProgress((p) => this.#progress(o, p));
     if (controller instanceof ViewStream) controller.onShown((s) => this.#shownCut(o, s));
