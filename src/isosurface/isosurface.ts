@@ -16,6 +16,7 @@ import type { BlockSource } from '../zfp/gpu-stream.ts';
 import { defaultMemoryBudget } from './budget.ts';
 import { C, STATUS_VERTEX_OVERFLOW } from './layout.ts';
 import { IsosurfacePipeline } from './pipeline.ts';
+import { SurfaceSnapshot } from './snapshot.ts';
 import { StatsReadback, type RawStats } from './stats-readback.ts';
 import {
   hitRate,
@@ -79,6 +80,8 @@ export class Isosurface {
   private lastStats?: IsosurfaceStats;
   /** Increases with every resetCache(): a vertices-only retry needs the same cache as its attempt. */
   private cacheEpoch = 0;
+  /** present(): the copy of the last computed surface that is drawn (snapshot.ts). */
+  private snapshot: SurfaceSnapshot | null = null;
 
   private constructor(
     private readonly gpu: GpuContext,
@@ -413,6 +416,34 @@ export class Isosurface {
     return this.pipeline.cacheBytes + this.pipeline.vertexBytes;
   }
 
+  // ---- snapshots (a view stream's steps): drawn from a copy while the next surface is computed
+
+  /**
+   * Copies the last computed surface (on the GPU, in queue order) and draws
+   * the copy from now on (`presented`): later computations no longer change
+   * what is drawn until present() is called again.
+   */
+  present(): void {
+    if (this.destroyed || !this.lastStats) return;
+    this.snapshot ??= new SurfaceSnapshot(this.gpu.device, this.drawData);
+    this.snapshot.capture(this.pipeline.parts.shards, this.drawData, this.lastStats);
+  }
+
+  /** What present() copied last, or null before the first present(). */
+  get presented(): IsosurfaceDrawData | null {
+    return this.snapshot?.drawData ?? null;
+  }
+
+  /** Bytes the copy holds now (0 before the first present()). */
+  get presentedBytes(): number {
+    return this.snapshot?.byteSize ?? 0;
+  }
+
+  /** Bytes a present() of the last computed surface would hold. */
+  get presentBytesNeeded(): number {
+    return this.lastStats ? SurfaceSnapshot.bytesFor(this.lastStats, this.pipeline.parts.shards.perShard) : 0;
+  }
+
   // ---- readback (CLI, export): these wait for the GPU; the tests' own readbacks are in tests/helpers
 
   /** The packed (position, block id) pairs of the drawn surface, shard after shard. */
@@ -449,6 +480,7 @@ export class Isosurface {
     this.pending = undefined;
     this.inFlight.length = 0;
     this.stats.destroy();
+    this.snapshot?.destroy();
     this.pipeline.destroy();
     this.statsListeners.clear();
     this.errorListeners.clear();

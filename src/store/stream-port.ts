@@ -48,6 +48,11 @@ export interface LevelSurface<S extends LevelStats = LevelStats> {
   readBlockRanges?(): Promise<Float32Array>;
   /** [min, max] per listed slot of its chunk's decoded values (Isosurface.readSlotRanges): ranges learnt as chunks arrive. */
   readSlotRanges?(slots: readonly number[]): Promise<Float32Array>;
+  /** Draws a copy of the last computed surface from now on (Isosurface.present): a view stream's steps are snapshots. */
+  present?(): void;
+  /** Bytes the drawn copy holds, and what a present() now would hold. */
+  readonly presentedBytes?: number;
+  readonly presentBytesNeeded?: number;
   destroy(): void;
 }
 /** The GPU side, injected (the real one: gpu-port.ts; tests: a CPU fake). */

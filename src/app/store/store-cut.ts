@@ -80,7 +80,8 @@ export class StoreCutIsosurface implements PageIsosurface {
 
   /** The finest level's surface (what a single draw would take; none when the cut holds no surface); the layer draws drawParts. */
   get drawData(): IsosurfaceDrawData | undefined {
-    return this.#shown.levels[0]?.surface.drawData;
+    const finest = this.#shown.levels[0]?.surface;
+    return finest ? (finest.presented ?? finest.drawData) : undefined;
   }
 
   /** Tint the surface by level (the panel's toggle). */
@@ -102,7 +103,8 @@ export class StoreCutIsosurface implements PageIsosurface {
       const k = 2 ** l.level;
       const off = offsets[l.level] ?? [0, 0, 0];
       return {
-        data: l.surface.drawData,
+        // the copy the step was shown with (a snapshot: the surface itself may be computing the next step)
+        data: l.surface.presented ?? l.surface.drawData,
         scale: k,
         origin: [off[0] / k, off[1] / k, off[2] / k],
         ...(this.#tint ? { tint: LEVEL_TINTS[l.level % LEVEL_TINTS.length] } : {}),

@@ -1,132 +1,44 @@
-// The page's store view (`?store=URL`, a dropped or picked `.zarr` folder):
-// opens a Zarr store of zfp chunks (src/store/) and hands it to the stream
-// controller, which fetches only the chunks the surface needs into GPU pools
-// of compressed chunks: the coarsest level first, then refinement level by
-// level, each finer level replacing the coarser surface once every chunk it
-// needs is resident. Each level the controller shows is installed in the
-// session as the volume on screen (store-surface.ts), so the isovalue
-// slider, the statistics and the exports work as for any volume, and
-// scrubbing goes through the controller (newest wins, stale requests
-// aborted). A progress line (level, chunks done / needed, bytes) and a panel
-// (levels, network, memory). Errors name the store; the current surface stays.
+// The page's store view (`?store=URL`, a dropped or picked folder or .ozx):
+// opens the store as a StoreSession (src/store/session.ts: level by level,
+// or refined by the view when asked or when level 0 is large), installs
+// each level or cut the stream shows as the volume on screen (store-surface.ts,
+// store-cut.ts), so the slider, statistics and exports work as for any
+// volume; a progress line and a panel (levels, network, memory). Errors name
+// the store; the current surface stays. Its parts that are not behaviour: store-open.ts.
 import type { AsyncReadable } from '@zarrita/storage';
-import type { GpuContext } from '../../gpu/device.ts';
-import type { ChunkFetcher } from '../../store/fetch/chunk-fetcher.ts';
-import { sessionRanges } from '../../store/learnt-ranges.ts';
-import { isZipStoreName, storeZipBytes, ZipStore } from '../../store/zarr/zip-store.ts';
 import { storeRateChooser } from '../../store/rate.ts';
 import { StoreSession } from '../../store/session.ts';
 import type { ChunkStreamController } from '../../store/pinned-level.ts';
 import type { StreamProgress } from '../../store/stream-controller.ts';
 import { StoreError } from '../../store/zarr/errors.ts';
 import { HttpStore } from '../../store/zarr/http-store.ts';
-import type { ZfpStore } from '../../store/zarr/open-store.ts';
-import type { MeteredStore } from '../../store/zarr/stores.ts';
-import type { CameraState } from '../../render/camera.ts';
-import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf, type Viewport } from '../../store/view/camera.ts';
-import { estimateFixedBytes } from '../../store/level-state.ts';
 import { type LevelValues, readLevelValues } from '../../store/level-values.ts';
-import { DEFAULT_TOLERANCE_PX, type ViewSpec, ViewStream } from '../../store/view/view-stream.ts';
+import { DEFAULT_TOLERANCE_PX, ViewStream } from '../../store/view/view-stream.ts';
 import type { ChunkViewStream } from '../../store/view/view-surface.ts';
 import { type ShownCutOfPage, StoreCutIsosurface } from './store-cut.ts';
 import { chooseIsovalue } from '../iso-choice.ts';
-import type { LoadedVolume } from '../loading/loader.ts';
 import { renderStorePanel, type StoreChoice, type StorePageState } from './store-panel.ts';
 import { type ShownLevel, StoreLevelIsosurface } from './store-surface.ts';
+import {
+  initialPageState,
+  updatePageFigures,
+  storeChoiceOf,
+  storeSourceOfUrl,
+  learntOf,
+  levelZeroIsLarge,
+  pageViewSpec,
+  mib,
+  type OpenStore,
+  type StoreViewDeps,
+  storeVolume,
+  WARNING_NOTE,
+} from './store-open.ts';
+
+export type { StoreViewDeps };
 
 export type { StorePageState };
 
-export interface StoreViewDeps {
-  /** The device to stream to (the page's current one). */
-  gpu: () => GpuContext;
-  /** Puts a level on screen as the current volume (Session.install); `first` for the store's first level. */
-  install(volume: LoadedVolume, level: number | undefined, first: boolean): void;
-  /** The isovalue to open at when the page's link gives one (used as given, even outside a provisional range). */
-  linkIso(valueRange: [number, number]): number | undefined;
-  /** The volume installed reaches further than its value range said: the slider spans `range` (Session.widenValueRange). */
-  widenValueRange(volume: LoadedVolume, range: [number, number]): void;
-  budgetBytes(): number;
-  onError(message: string): void;
-  onNotice(message: string): void;
-  /** The finest level to show (a link's #level=), or undefined for level 0. */
-  linkLevel(): number | undefined;
-  /** A store of lossless chunks: the link's rate, time point and channel (#rate=, t=, c=). */
-  linkStoreChoice(): StoreChoice;
-  /** What the link says about the store open now (empty for a zfp store or no store). */
-  setStoreChoice(choice: StoreChoice): void;
-  /** Where the page tests read the figures (window.zfpisoStore). */
-  publish(state: StorePageState): void;
-  /** The page's camera now and its canvas in device pixels (a store refined by the view plans its cut from them). */
-  camera(): { state: CameraState; viewport: Viewport };
-  /** Called after every camera change; returns an unsubscribe function. */
-  onCameraChange(listener: () => void): () => void;
-  /** The link's refinement (cut=1|0, tol=, tint=) and camera. */
-  linkCut(): { cut?: boolean; tolerancePx?: number; tint?: boolean; camera?: CameraState };
-  /** What the link says of the refinement of the store open now. */
-  setCut(cut: { cut?: boolean; tolerancePx?: number; tint?: boolean }): void;
-  requestFrame(): void;
-  line: HTMLElement;
-  panel: HTMLElement;
-}
-
-/**
- * What was learnt of this store's bricks (at this rate, time point and
- * channel) earlier in the session, whichever engine learnt it. Keyed by the
- * source object the store was opened from (the page opens the same one again
- * for another rate, time point, channel or refinement), not by its name: two
- * dropped folders of one name are two stores.
- */
-function learntOf(store: ZfpStore, source: AsyncReadable) {
-  let id = sourceIds.get(source);
-  if (id === undefined) sourceIds.set(source, (id = ++sourceCount));
-  const values = store.source
-    ? `${store.source.rate}|${store.source.time.index}|${store.source.channel.index}`
-    : String(store.levels[0].layout.rate);
-  return sessionRanges(
-    `${id}|${values}`,
-    store.levels.map((l) => l.layout.chunkGrid),
-  );
-}
-const sourceIds = new WeakMap<AsyncReadable, number>();
-let sourceCount = 0;
-
-/** Store notes a user should act on (the rest only go to the panel). */
-const WARNING_NOTE = /unfinished|is not used|cannot be shown/;
-
-const mib = (b: number) => `${(b / 2 ** 20).toFixed(2)} MiB`;
-
 export type { StoreChoice };
-
-interface OpenStore {
-  url: string;
-  source: AsyncReadable;
-  choice: StoreChoice;
-  ranges: { store: AsyncReadable; name: string } | undefined;
-  /** The opened store, its fetcher, stream and counters (src/store/session.ts); the next four are its parts. */
-  session: StoreSession;
-  store: ZfpStore;
-  metered: MeteredStore;
-  fetcher: ChunkFetcher;
-  /** Level by level (StreamController), or refined by the view (ViewStream). */
-  controller: ChunkStreamController | ChunkViewStream;
-  /** Refined by the view: its tolerance and tint; null when level by level. */
-  cut: { tolerancePx: number; tint: boolean } | null;
-  /** A camera change waits this timer (throttled re-planning), and unsubscribes with this. */
-  replanTimer: ReturnType<typeof setTimeout> | null;
-  detachCamera: () => void;
-  valueRange: [number, number];
-  /** The coarsest level read whole at open when the store gives no value range (level-values.ts): the slider's range and profile until finer ones are known. */
-  coarse: LevelValues | null;
-  state: StorePageState;
-  current: StoreLevelIsosurface | StoreCutIsosurface | null;
-  /** The volume installed on the page for `current`. */
-  installed: LoadedVolume | null;
-  /** Refinements started and not yet ended (the isovalue changed meanwhile). */
-  running: number;
-  lastProgress: StreamProgress | null;
-  /** The isovalue asked for last. */
-  iso: number;
-}
 
 export class StoreView {
   #gen = 0;
@@ -143,15 +55,7 @@ export class StoreView {
   /** A store by URL (same origin, or another one with CORS); `rangesUrl`: its per-brick ranges written apart (&ranges=). */
   open(url: string, rangesUrl?: string | null): Promise<void> {
     const ranges = rangesUrl ? { store: new HttpStore(new URL(rangesUrl, location.href).href), name: rangesUrl } : undefined;
-    const href = new URL(url, location.href);
-    // a zipped store (.ozx): read in place with range requests
-    const source = isZipStoreName(href.pathname)
-      ? new ZipStore(
-          storeZipBytes(new HttpStore(new URL('.', href).href), `/${href.pathname.slice(href.pathname.lastIndexOf('/') + 1)}`, url),
-          url,
-        )
-      : new HttpStore(href.href);
-    return this.openStore(source, url, undefined, ranges);
+    return this.openStore(storeSourceOfUrl(url), url, undefined, ranges);
   }
 
   /**
@@ -218,9 +122,9 @@ export class StoreView {
         learnt: (store) => learntOf(store, source),
         // refined by the view (asked for, or level 0 too large to stream whole): each region at the level the camera needs
         view: (store) => {
-          if (!(asked.cut ?? this.#levelZeroIsLarge(store))) return null;
+          if (!(asked.cut ?? levelZeroIsLarge(store, this.d.budgetBytes()))) return null;
           cut = { tolerancePx: asked.tolerancePx ?? DEFAULT_TOLERANCE_PX, tint: asked.tint ?? false };
-          return this.#viewSpec(store, cut.tolerancePx, asked.camera);
+          return pageViewSpec(this.d.camera(), store, cut.tolerancePx, asked.camera);
         },
       });
     } catch (e) {
@@ -251,37 +155,8 @@ export class StoreView {
     if (previous) this.#stop(previous);
     const finest = Math.min(this.d.linkLevel() ?? 0, store.levels.length - 1);
     controller.finest = finest;
-    const state: StorePageState = {
-      url,
-      shownLevel: null,
-      shownLevels: [],
-      done: false,
-      bytesFetched: 0,
-      chunkBytesFetched: 0,
-      requests: 0,
-      chunksFetched: 0,
-      reason: finest > 0 ? `the link asks for level ${finest}` : null,
-      levels: store.levels.map((l) => ({
-        level: l.index,
-        dims: l.layout.dims,
-        chunks: l.chunkCount,
-        chunkBytes: l.layout.chunkBytes,
-        storedBytes: l.storedBytes,
-        chunksFetched: 0,
-        chunkBytesFetched: 0,
-      })),
-      retries: 0,
-      failedRequests: 0,
-      gpu: { pools: 0, surfaces: 0, cache: 0, vertices: 0, total: 0, peak: 0, budget: controller.budgetBytes },
-      cut: cut ? { tolerancePx: cut.tolerancePx, tint: cut.tint, levels: [], final: false } : null,
-    };
-    const shownChoice: StoreChoice = store.source
-      ? {
-          storeRate: store.source.rate,
-          ...(store.source.time.count > 1 ? { time: store.source.time.index } : {}),
-          ...(store.source.channel.count > 1 ? { channel: store.source.channel.index } : {}),
-        }
-      : {};
+    const state = initialPageState(url, store, controller, finest, cut, coarse);
+    const shownChoice = storeChoiceOf(store);
     this.d.setStoreChoice(shownChoice);
     const o: OpenStore = {
       url,
@@ -306,18 +181,9 @@ export class StoreView {
       iso: NaN,
     };
     this.#open = o;
-    if (controller.valueRange) state.valueRange = { lo: o.valueRange[0], hi: o.valueRange[1], provisional: false, from: 'the store' };
-    else if (coarse?.valueRange)
-      state.valueRange = {
-        lo: o.valueRange[0],
-        hi: o.valueRange[1],
-        provisional: true,
-        from: `level ${coarse.level} (${coarse.dims.join('×')}) read whole at open, ${mib(coarse.bytes)}`,
-      };
     this.d.setCut(cut ? { cut: true, tolerancePx: cut.tolerancePx, ...(cut.tint ? { tint: true } : {}) } : {});
     if (cut) o.detachCamera = this.d.onCameraChange(() => this.#scheduleReplan(o));
-    // what the store is and how it is read goes to the panel; what a user should act on is also a (dismissable) notice
-    state.notes = [...store.notes];
+    // what the store is and how it is read goes to the panel (state.notes); what a user should act on is also a (dismissable) notice
     for (const note of store.notes) if (WARNING_NOTE.test(note)) this.d.onNotice(`${url}: ${note}`);
     // chunks counted once (a bit per chunk of each level: session.ts)
     session.fetched.onNew((level, bytes) => {
@@ -337,11 +203,8 @@ export class StoreView {
     controller.onError((e) => this.d.onError(e.message));
     this.#publish(o);
 
-    // The isovalue: the link's, else Otsu over the finest known chunk ranges. A
-    // store without range arrays shows its coarsest level (fetched whole) first,
-    // whose block ranges then give the value range and the choice.
-    // (a store without ranges has no value range before its coarsest level is read: the link's isovalue waits for it)
-    // the link's isovalue (or the one kept over a reopen) is used as given, even outside a provisional range
+    // The isovalue: the link's (or the one kept over a reopen) as given, even outside a provisional range; else
+    // Otsu over the finest known ranges (a store without any: its coarsest level shown first gives them).
     const linkIso = (range: [number, number]) => {
       const kept = this.#keepIso;
       this.#keepIso = undefined;
@@ -493,16 +356,7 @@ export class StoreView {
 
   #publish(o: OpenStore): void {
     const st = o.state;
-    const g = o.controller.gpuBytes;
-    Object.assign(st, {
-      bytesFetched: o.metered.meter.bytes,
-      // a store of lossless chunks: what came over for the bricks, not the bricks' values (as the CLI's record)
-      chunkBytesFetched: o.store.source ? o.metered.meter.bytes - o.store.metadataBytes : o.fetcher.counters.bytesFetched,
-      requests: o.metered.meter.requests,
-    });
-    st.gpu = { ...g, peak: Math.max(st.gpu.peak, g.total), budget: o.controller.budgetBytes };
-    st.retries = o.store.retries.retries;
-    st.failedRequests = o.store.retries.failed;
+    updatePageFigures(st, o.session);
     renderStorePanel(
       this.d.panel,
       o.store,
@@ -516,32 +370,6 @@ export class StoreView {
       (next) => this.#changeCut(o, next),
     );
     this.d.publish({ ...st, levels: st.levels.map((l) => ({ ...l })), shownLevels: [...st.shownLevels] });
-  }
-
-  /**
-   * Refine by the view when a store's level 0 is large: its chunks, at what
-   * the GPU keeps per resident chunk, would take more than a quarter of the
-   * budget (level by level it would stop coarse everywhere). Smaller stores
-   * go level by level to full resolution, as before; the panel and the
-   * link's cut= choose either way.
-   */
-  #levelZeroIsLarge(store: ZfpStore): boolean {
-    const L = store.levels.find((l) => !l.unusable);
-    if (!L) return false;
-    // a resident chunk: its slot and the surface's per-block state (the 64 KiB of a pool's scratch are not per chunk)
-    const perChunk = L.layout.chunkBytes + estimateFixedBytes(L.layout, 1) - (64 << 10);
-    return L.chunkCount * perChunk > this.d.budgetBytes() / 4;
-  }
-
-  /** The view spec of the page's camera now, or (before the store's first surface) the link's camera or Fit of level 0. */
-  #viewSpec(store: ZfpStore, tolerancePx: number, linkCamera?: CameraState, current = false): ViewSpec {
-    const { state, viewport } = this.d.camera();
-    const vp = viewport.width > 0 && viewport.height > 0 ? viewport : { width: 1280, height: 800 };
-    const level0 = fitBox0(store.levels[0].layout, 0);
-    const sceneRadius = sceneRadiusOf(level0, store.voxelSize);
-    const camState = current ? state : linkCamera;
-    const camera = camState ? cameraFromView(camState, vp, sceneRadius) : cameraForBox(level0, store.voxelSize, vp);
-    return { camera, tolerancePx };
   }
 
   /** The camera moved: the cut is planned again at most every 150 ms (newest wins; the stream aborts what is no longer needed). */
@@ -561,7 +389,7 @@ export class StoreView {
     o.state.done = false;
     this.#publish(o);
     try {
-      await stream.setView(this.#viewSpec(o.store, o.cut!.tolerancePx, undefined, true));
+      await stream.setView(pageViewSpec(this.d.camera(), o.store, o.cut!.tolerancePx, undefined, true));
     } finally {
       o.running--;
     }
@@ -667,45 +495,4 @@ export class StoreView {
     this.d.line.hidden = text === '';
     this.d.line.textContent = text;
   }
-}
-
-/**
- * A store shown as the session's volume: level `level`'s dims at `scale` times
- * the store's voxel size, placed by its OME translation; the stream owns the
- * pools (the volume's own stream is nothing to destroy).
- */
-function storeVolume(
-  o: OpenStore,
-  name: string,
-  level: number,
-  scale: number,
-  iso: LoadedVolume['iso'],
-  initialIso: number,
-  firstStats: LoadedVolume['firstStats'],
-  ranges: Float32Array | null,
-): LoadedVolume {
-  const lv = o.store.levels[level];
-  const off = o.store.levelOffsets[level] ?? [0, 0, 0];
-  return {
-    opened: {
-      stream: { destroy() {} },
-      name,
-      fileName: name,
-      kind: 'zfp',
-      dims: [...lv.layout.dims],
-      sourceDtype: 'float32',
-      sourceBytes: lv.storedBytes,
-      compressedBytes: lv.storedBytes,
-      rate: lv.layout.rate,
-      compressedHere: false,
-      spacing: [o.store.voxelSize[0] * scale, o.store.voxelSize[1] * scale, o.store.voxelSize[2] * scale],
-      origin: [off[0] / scale, off[1] / scale, off[2] / scale],
-      notes: [],
-    },
-    iso,
-    ranges: ranges ?? new Float32Array(0),
-    initialIso,
-    firstStats,
-    loadMs: 0,
-  };
 }

@@ -474,7 +474,9 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
         );
         const stats = await entry.surface.compute(iso);
         if (stale()) return false;
-        this.#surfaceCost[L] = (stats.cacheBytes + stats.vertexBytes) / Math.max(1, step.wanted[L].length);
+        // what the surface holds, and the copy of it that is drawn (present(), below)
+        const drawnCopy = entry.surface.presentBytesNeeded ?? 0;
+        this.#surfaceCost[L] = (stats.cacheBytes + stats.vertexBytes + drawnCopy) / Math.max(1, step.wanted[L].length);
         levels.push({ level: L, volume: pool, surface: entry.surface, stats, drawn: [...step.drawn[L]], ghosts: [...step.ghosts[L]] });
       }
     } catch (e) {
@@ -491,6 +493,18 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
       this.#stop(step.finest, (e as Error).message, 'gpu');
       return false;
     }
+    // A snapshot: the frames until now drew the copies of the step before (whole, whatever was computed in
+    // place since); the copies of this step's surfaces are made together now and drawn from here on. Room
+    // for them: what they need beyond the copies they replace, less what the surfaces this step lets go held.
+    const goes = [...this.#retired, ...[...this.#surfaces].filter(([L]) => !used.includes(L)).map(([, e]) => e.surface)];
+    const freed = goes.reduce((a, f) => a + f.budgetedBytes + (f.presentedBytes ?? 0), 0);
+    const copies = levels.reduce((a, l) => a + (l.surface.presentBytesNeeded ?? 0) - (l.surface.presentedBytes ?? 0), 0);
+    if (this.gpu.allocatedBytes - freed + copies > this.budgetBytes - RESERVE_BYTES / 2) {
+      return {
+        level: step.finest,
+        reason: `the step's surfaces and the copies drawn of them need ${copies} B more than the budget of ${this.budgetBytes} B leaves`,
+      };
+    }
     // levels this step does not draw: their surfaces go, their pools' chunks become idle
     for (const [L, entry] of this.#surfaces) {
       if (used.includes(L)) continue;
@@ -500,6 +514,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     }
     for (const s of this.#retired) s.destroy();
     this.#retired = [];
+    for (const l of levels) l.surface.present?.();
     this.#shown = { iso, step: step.finest, final, levels, cut, leaves: step.leaves };
     for (const l of this.#shownListeners) l(this.#shown);
     progress('shown');

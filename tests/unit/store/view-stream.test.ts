@@ -86,15 +86,23 @@ interface FakeStats extends LevelStats {
  * chunk (a dense surface); over its cap (setMemoryBudget) it refuses as the
  * Isosurface does, with what it needs.
  */
+/** What a fake surface computed last, and the copy of it present() made (what the page draws). */
+interface FakeDrawn {
+  iso: number;
+  drawn: number[];
+}
+
 function fakeGpu(store: ZfpStore, ranges: Float32Array[], bytesPerDrawn = 0) {
   const pools: FakePool[] = [];
-  const surfaces = new Map<object, { held: number }>();
+  /** Called at the start of every compute (a test moves the camera from here). */
+  const hooks: { onCompute?: () => void } = {};
+  const surfaces = new Map<object, { held: number; copy: number }>();
   let peak = 0;
   const gpu: StreamGpu<FakePool, FakeStats> = {
     get allocatedBytes() {
       let n = 0;
       for (const p of pools) if (!p.destroyed) n += p.poolBytes;
-      for (const s of surfaces.values()) n += 4000 + s.held;
+      for (const s of surfaces.values()) n += 4000 + s.held + s.copy;
       peak = Math.max(peak, n);
       return n;
     },
@@ -108,17 +116,35 @@ function fakeGpu(store: ZfpStore, ranges: Float32Array[], bytesPerDrawn = 0) {
       const level = store.levels.findIndex((l) => l.layout === pool.layout);
       const nb = neighbourhoodRanges(pool.layout.chunkGrid, ranges[level]);
       const me = {};
-      const state = { held: 0, cap: Infinity };
+      const state = { held: 0, cap: Infinity, copy: 0 };
       surfaces.set(me, state);
+      let computed: FakeDrawn | null = null;
+      let presented: FakeDrawn | null = null;
       return {
         get budgetedBytes() {
           return 2000 + state.held;
         },
+        get computed() {
+          return computed;
+        },
+        get presented() {
+          return presented;
+        },
+        present() {
+          presented = computed && { iso: computed.iso, drawn: [...computed.drawn] };
+          state.copy = 300;
+        },
+        get presentedBytes() {
+          return state.copy;
+        },
+        presentBytesNeeded: 300,
         trimCache() {},
         setMemoryBudget(bytes: number) {
           state.cap = bytes;
         },
         async compute(iso: number) {
+          hooks.onCompute?.();
+          await new Promise((r) => setTimeout(r, 1));
           const needed = new Set(chunksNeeded(nb, iso));
           // every drawn chunk and ghost the surface needs is resident: the drawn chunks' cells are complete
           for (const c of [...(pool.drawn ?? []), ...pool.ghosts])
@@ -132,6 +158,7 @@ function fakeGpu(store: ZfpStore, ranges: Float32Array[], bytesPerDrawn = 0) {
               budgetBytes: state.cap,
             });
           state.held = need - 2000;
+          computed = { iso, drawn: [...(pool.drawn ?? pool.resident)].sort((a, b) => a - b) };
           return { triangles: 0, cacheBytes: 1000 + state.held, vertexBytes: 1000, drawn: pool.drawn?.size ?? 0 };
         },
         destroy() {
@@ -140,7 +167,7 @@ function fakeGpu(store: ZfpStore, ranges: Float32Array[], bytesPerDrawn = 0) {
       };
     },
   };
-  return { gpu, pools, peak: () => peak };
+  return { gpu, pools, peak: () => peak, hooks };
 }
 
 async function setup(budget = 2 ** 30, link?: { mbitPerSecond: number; latencyMs: number }, bytesPerDrawn = 0) {
@@ -214,6 +241,52 @@ describe('ViewStream', () => {
     last.cut.levels.forEach((l, L) => expect(new Set(l.drawn)).toEqual(new Set(ref.cut.levels[L].drawn)));
     stream.destroy();
     again.stream.destroy();
+  });
+
+  it('steps are snapshots: while surfaces compute and camera moves supersede them, every level drawn is a copy of the step shown, whole', async () => {
+    const { stream, shown, view, fake } = await setup();
+    type Drawable = { presented: FakeDrawn | null; computed: FakeDrawn | null };
+    let checks = 0;
+    let stale = 0;
+    /** What the page draws (each shown level's copy) is the shown step: its isovalue and its drawn chunks, every level. */
+    const drawnIsShown = () => {
+      const s = stream.shown;
+      if (!s) return;
+      checks++;
+      for (const l of s.levels) {
+        const surface = l.surface as unknown as Drawable;
+        expect(surface.presented, `level ${l.level}`).toEqual({ iso: s.iso, drawn: [...l.drawn].sort((a, b) => a - b) });
+        // the surface itself has moved on (computed in place for a newer step) while its copy is drawn
+        if (surface.computed && JSON.stringify(surface.computed) !== JSON.stringify(surface.presented)) stale++;
+      }
+    };
+    stream.onShown(() => drawnIsShown());
+    await stream.setView(view([0, 0, 0, 127, 127, 127], 6));
+    await stream.setIsovalue(ISO);
+    // camera moves and an isovalue change land while surfaces compute (from inside a computation) and while chunks are in flight
+    const moves = [
+      view([100, 100, 100, 127, 127, 127]),
+      view([0, 0, 0, 27, 27, 27]),
+      view([0, 0, 0, 127, 127, 127], 3),
+      view([60, 0, 0, 127, 60, 60]),
+    ];
+    const pending: Promise<unknown>[] = [];
+    let computes = 0;
+    fake.hooks.onCompute = () => {
+      drawnIsShown();
+      computes++;
+      if (computes % 3 === 0 && moves.length > 0) pending.push(stream.setView(moves.shift()!));
+      if (computes === 7) pending.push(stream.setIsovalue(ISO * 1.3));
+    };
+    pending.push(stream.setView(view([0, 0, 0, 63, 63, 63])));
+    while (pending.length > 0) await pending.shift();
+    fake.hooks.onCompute = undefined;
+    drawnIsShown();
+    expect(shown.at(-1)!.final).toBe(true);
+    expect(checks).toBeGreaterThan(10);
+    // some copies were drawn while their surfaces had already moved on: the case the copies are for
+    expect(stale).toBeGreaterThan(0);
+    stream.destroy();
   });
 
   it('a camera move that leaves the cut as it is shows nothing again (no fetch, no surface computed)', async () => {

@@ -1,0 +1,274 @@
+// The store view's parts that are not its behaviour: what it needs from the
+// page (StoreViewDeps), what it keeps of an open store (OpenStore), the
+// panel's state at open, the volume a shown level is installed as, and the
+// ranges learnt per opened source for the session.
+import type { AsyncReadable } from '@zarrita/storage';
+import { HttpStore } from '../../store/zarr/http-store.ts';
+import { isZipStoreName, storeZipBytes, ZipStore } from '../../store/zarr/zip-store.ts';
+import { estimateFixedBytes } from '../../store/level-state.ts';
+import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../store/view/camera.ts';
+import type { ViewSpec } from '../../store/view/view-stream.ts';
+import type { GpuContext } from '../../gpu/device.ts';
+import type { ChunkFetcher } from '../../store/fetch/chunk-fetcher.ts';
+import { sessionRanges } from '../../store/learnt-ranges.ts';
+import type { StoreSession } from '../../store/session.ts';
+import type { ChunkStreamController } from '../../store/pinned-level.ts';
+import type { StreamProgress } from '../../store/stream-controller.ts';
+import type { ZfpStore } from '../../store/zarr/open-store.ts';
+import type { MeteredStore } from '../../store/zarr/stores.ts';
+import type { CameraState } from '../../render/camera.ts';
+import type { Viewport } from '../../store/view/camera.ts';
+import type { LevelValues } from '../../store/level-values.ts';
+import type { ChunkViewStream } from '../../store/view/view-surface.ts';
+import type { StoreCutIsosurface } from './store-cut.ts';
+import type { LoadedVolume } from '../loading/loader.ts';
+import type { StoreChoice, StorePageState } from './store-panel.ts';
+import type { StoreLevelIsosurface } from './store-surface.ts';
+
+export interface StoreViewDeps {
+  /** The device to stream to (the page's current one). */
+  gpu: () => GpuContext;
+  /** Puts a level on screen as the current volume (Session.install); `first` for the store's first level. */
+  install(volume: LoadedVolume, level: number | undefined, first: boolean): void;
+  /** The isovalue to open at when the page's link gives one (used as given, even outside a provisional range). */
+  linkIso(valueRange: [number, number]): number | undefined;
+  /** The volume installed reaches further than its value range said: the slider spans `range` (Session.widenValueRange). */
+  widenValueRange(volume: LoadedVolume, range: [number, number]): void;
+  budgetBytes(): number;
+  onError(message: string): void;
+  onNotice(message: string): void;
+  /** The finest level to show (a link's #level=), or undefined for level 0. */
+  linkLevel(): number | undefined;
+  /** A store of lossless chunks: the link's rate, time point and channel (#rate=, t=, c=). */
+  linkStoreChoice(): StoreChoice;
+  /** What the link says about the store open now (empty for a zfp store or no store). */
+  setStoreChoice(choice: StoreChoice): void;
+  /** Where the page tests read the figures (window.zfpisoStore). */
+  publish(state: StorePageState): void;
+  /** The page's camera now and its canvas in device pixels (a store refined by the view plans its cut from them). */
+  camera(): { state: CameraState; viewport: Viewport };
+  /** Called after every camera change; returns an unsubscribe function. */
+  onCameraChange(listener: () => void): () => void;
+  /** The link's refinement (cut=1|0, tol=, tint=) and camera. */
+  linkCut(): { cut?: boolean; tolerancePx?: number; tint?: boolean; camera?: CameraState };
+  /** What the link says of the refinement of the store open now. */
+  setCut(cut: { cut?: boolean; tolerancePx?: number; tint?: boolean }): void;
+  requestFrame(): void;
+  line: HTMLElement;
+  panel: HTMLElement;
+}
+
+/**
+ * What was learnt of this store's bricks (at this rate, time point and
+ * channel) earlier in the session, whichever engine learnt it. Keyed by the
+ * source object the store was opened from (the page opens the same one again
+ * for another rate, time point, channel or refinement), not by its name: two
+ * dropped folders of one name are two stores.
+ */
+export function learntOf(store: ZfpStore, source: AsyncReadable) {
+  let id = sourceIds.get(source);
+  if (id === undefined) sourceIds.set(source, (id = ++sourceCount));
+  const values = store.source
+    ? `${store.source.rate}|${store.source.time.index}|${store.source.channel.index}`
+    : String(store.levels[0].layout.rate);
+  return sessionRanges(
+    `${id}|${values}`,
+    store.levels.map((l) => l.layout.chunkGrid),
+  );
+}
+const sourceIds = new WeakMap<AsyncReadable, number>();
+let sourceCount = 0;
+
+/** Store notes a user should act on (the rest only go to the panel). */
+export const WARNING_NOTE = /unfinished|is not used|cannot be shown/;
+
+export const mib = (b: number) => `${(b / 2 ** 20).toFixed(2)} MiB`;
+
+export interface OpenStore {
+  url: string;
+  source: AsyncReadable;
+  choice: StoreChoice;
+  ranges: { store: AsyncReadable; name: string } | undefined;
+  /** The opened store, its fetcher, stream and counters (src/store/session.ts); the next four are its parts. */
+  session: StoreSession;
+  store: ZfpStore;
+  metered: MeteredStore;
+  fetcher: ChunkFetcher;
+  /** Level by level (StreamController), or refined by the view (ViewStream). */
+  controller: ChunkStreamController | ChunkViewStream;
+  /** Refined by the view: its tolerance and tint; null when level by level. */
+  cut: { tolerancePx: number; tint: boolean } | null;
+  /** A camera change waits this timer (throttled re-planning), and unsubscribes with this. */
+  replanTimer: ReturnType<typeof setTimeout> | null;
+  detachCamera: () => void;
+  valueRange: [number, number];
+  /** The coarsest level read whole at open when the store gives no value range (level-values.ts): the slider's range and profile until finer ones are known. */
+  coarse: LevelValues | null;
+  state: StorePageState;
+  current: StoreLevelIsosurface | StoreCutIsosurface | null;
+  /** The volume installed on the page for `current`. */
+  installed: LoadedVolume | null;
+  /** Refinements started and not yet ended (the isovalue changed meanwhile). */
+  running: number;
+  lastProgress: StreamProgress | null;
+  /** The isovalue asked for last. */
+  iso: number;
+}
+
+/** The panel's figures when a store opens: nothing fetched or shown yet; the value range the store or its coarsest level gave. */
+export function initialPageState(
+  url: string,
+  store: ZfpStore,
+  stream: { budgetBytes: number; valueRange: [number, number] | null },
+  finest: number,
+  cut: OpenStore['cut'],
+  coarse: LevelValues | null,
+): StorePageState {
+  const range = stream.valueRange ?? coarse?.valueRange;
+  return {
+    url,
+    shownLevel: null,
+    shownLevels: [],
+    done: false,
+    bytesFetched: 0,
+    chunkBytesFetched: 0,
+    requests: 0,
+    chunksFetched: 0,
+    reason: finest > 0 ? `the link asks for level ${finest}` : null,
+    levels: store.levels.map((l) => ({
+      level: l.index,
+      dims: l.layout.dims,
+      chunks: l.chunkCount,
+      chunkBytes: l.layout.chunkBytes,
+      storedBytes: l.storedBytes,
+      chunksFetched: 0,
+      chunkBytesFetched: 0,
+    })),
+    retries: 0,
+    failedRequests: 0,
+    gpu: { pools: 0, surfaces: 0, cache: 0, vertices: 0, total: 0, peak: 0, budget: stream.budgetBytes },
+    cut: cut ? { tolerancePx: cut.tolerancePx, tint: cut.tint, levels: [], final: false } : null,
+    notes: [...store.notes],
+    ...(range
+      ? {
+          valueRange: stream.valueRange
+            ? { lo: range[0], hi: range[1], provisional: false, from: 'the store' }
+            : {
+                lo: range[0],
+                hi: range[1],
+                provisional: true,
+                from: `level ${coarse!.level} (${coarse!.dims.join('×')}) read whole at open, ${mib(coarse!.bytes)}`,
+              },
+        }
+      : {}),
+  };
+}
+
+/** The panel's network and GPU figures now, from the session's counters (the same the CLI's record reads). */
+export function updatePageFigures(st: StorePageState, session: StoreSession): void {
+  const { store, metered, fetcher, stream } = session;
+  const g = stream.gpuBytes;
+  st.bytesFetched = metered.meter.bytes;
+  // a store of lossless chunks: what came over for the bricks, not the bricks' values (as the CLI's record)
+  st.chunkBytesFetched = store.source ? metered.meter.bytes - store.metadataBytes : fetcher.counters.bytesFetched;
+  st.requests = metered.meter.requests;
+  // the peak the GPU meter saw (every allocation counted where it is made), not only what was held at a publish
+  st.gpu = { ...g, peak: Math.max(st.gpu.peak, g.total, session.port.meter.peak), budget: stream.budgetBytes };
+  st.retries = store.retries.retries;
+  st.failedRequests = store.retries.failed;
+}
+
+/** What the link says of a store of lossless chunks open now (rate, and time point and channel when it has several); empty for a zfp store. */
+export function storeChoiceOf(store: ZfpStore): StoreChoice {
+  return store.source
+    ? {
+        storeRate: store.source.rate,
+        ...(store.source.time.count > 1 ? { time: store.source.time.index } : {}),
+        ...(store.source.channel.count > 1 ? { channel: store.source.channel.index } : {}),
+      }
+    : {};
+}
+
+/** The store behind a URL (same origin, or another one with CORS); a zipped store (.ozx) is read in place with range requests. */
+export function storeSourceOfUrl(url: string): AsyncReadable {
+  const href = new URL(url, location.href);
+  return isZipStoreName(href.pathname)
+    ? new ZipStore(
+        storeZipBytes(new HttpStore(new URL('.', href).href), `/${href.pathname.slice(href.pathname.lastIndexOf('/') + 1)}`, url),
+        url,
+      )
+    : new HttpStore(href.href);
+}
+
+/**
+ * A store shown as the session's volume: level `level`'s dims at `scale` times
+ * the store's voxel size, placed by its OME translation; the stream owns the
+ * pools (the volume's own stream is nothing to destroy).
+ */
+export function storeVolume(
+  o: OpenStore,
+  name: string,
+  level: number,
+  scale: number,
+  iso: LoadedVolume['iso'],
+  initialIso: number,
+  firstStats: LoadedVolume['firstStats'],
+  ranges: Float32Array | null,
+): LoadedVolume {
+  const lv = o.store.levels[level];
+  const off = o.store.levelOffsets[level] ?? [0, 0, 0];
+  return {
+    opened: {
+      stream: { destroy() {} },
+      name,
+      fileName: name,
+      kind: 'zfp',
+      dims: [...lv.layout.dims],
+      sourceDtype: 'float32',
+      sourceBytes: lv.storedBytes,
+      compressedBytes: lv.storedBytes,
+      rate: lv.layout.rate,
+      compressedHere: false,
+      spacing: [o.store.voxelSize[0] * scale, o.store.voxelSize[1] * scale, o.store.voxelSize[2] * scale],
+      origin: [off[0] / scale, off[1] / scale, off[2] / scale],
+      notes: [],
+    },
+    iso,
+    ranges: ranges ?? new Float32Array(0),
+    initialIso,
+    firstStats,
+    loadMs: 0,
+  };
+}
+
+/**
+ * Refine by the view when a store's level 0 is large: its chunks, at what
+ * the GPU keeps per resident chunk, would take more than a quarter of the
+ * budget (level by level it would stop coarse everywhere). Smaller stores
+ * go level by level to full resolution, as before; the panel and the
+ * link's cut= choose either way.
+ */
+export function levelZeroIsLarge(store: ZfpStore, budgetBytes: number): boolean {
+  const L = store.levels.find((l) => !l.unusable);
+  if (!L) return false;
+  // a resident chunk: its slot and the surface's per-block state (the 64 KiB of a pool's scratch are not per chunk)
+  const perChunk = L.layout.chunkBytes + estimateFixedBytes(L.layout, 1) - (64 << 10);
+  return L.chunkCount * perChunk > budgetBytes / 4;
+}
+
+/** The view spec of the page's camera now (`current`), or (before the store's first surface) the link's camera or Fit of level 0. */
+export function pageViewSpec(
+  page: { state: CameraState; viewport: Viewport },
+  store: ZfpStore,
+  tolerancePx: number,
+  linkCamera?: CameraState,
+  current = false,
+): ViewSpec {
+  const { state, viewport } = page;
+  const vp = viewport.width > 0 && viewport.height > 0 ? viewport : { width: 1280, height: 800 };
+  const level0 = fitBox0(store.levels[0].layout, 0);
+  const sceneRadius = sceneRadiusOf(level0, store.voxelSize);
+  const camState = current ? state : linkCamera;
+  const camera = camState ? cameraFromView(camState, vp, sceneRadius) : cameraForBox(level0, store.voxelSize, vp);
+  return { camera, tolerancePx };
+}
