@@ -5,7 +5,9 @@
 // closing a store or a volume gives back every byte, the CPU cache of chunks
 // stays under its bound, and the last surface of the scrub equals a fresh
 // open's at the same isovalue (pools grown and shrunk along the way keep
-// their chunks right).
+// their chunks right). Refined by the view (ViewStream, snapshots included):
+// camera moves and isovalues landing mid-refinement at a budget that binds,
+// every allocation within it, every byte back.
 import { mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
@@ -13,7 +15,10 @@ import { afterAll, beforeAll, describe, expect } from 'vitest';
 import type { GpuContext } from '../../../src/gpu/device.ts';
 import { Isosurface } from '../../../src/isosurface/isosurface.ts';
 import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
-import { createChunkStream } from '../../../src/store/gpu-port.ts';
+import { chunkedGpu, createChunkStream } from '../../../src/store/gpu-port.ts';
+import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../../src/store/view/camera.ts';
+import { DEFAULT_VIEWPORT } from '../../../src/store/view/view-request.ts';
+import { ViewStream } from '../../../src/store/view/view-stream.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
 import { openStore } from '../../../src/store/zarr/open-store.ts';
 import { mulberry32 } from '../../../src/util/random.ts';
@@ -101,6 +106,74 @@ describe('a long session', () => {
           }
           expect(count.live).toBe(base);
         }
+        expect(over).toBe(0);
+      } finally {
+        count.restore();
+      }
+    },
+    900_000,
+  );
+
+  gpuTest(
+    'refined by the view: camera moves landing while chunks arrive and surfaces compute, isovalues, at every allocation within the budget; every byte back',
+    async ({ gpu }) => {
+      (await openDefaultVolume(gpu.device, {})).stream.destroy();
+      const count = countBuffers(gpu.device);
+      const base = count.live;
+      // a budget that binds: the cut is made coarser, the copies drawn of each step (snapshots) included
+      const budget = 6 * MiB;
+      let over = 0;
+      count.onAllocate = (live) => {
+        if (live - base > budget) over = Math.max(over, live - base);
+      };
+      try {
+        const store = await openStore(storeForLocation(hydrogen), hydrogen);
+        const fetcher = new ChunkFetcher(store, { maxInFlight: 4, cacheBytes: CPU_CACHE });
+        const stream = await ViewStream.create(store, fetcher, chunkedGpu(gpu), budget);
+        const errors: string[] = [];
+        stream.onError((e) => errors.push(e.message));
+        let bound = 0;
+        let shows = 0;
+        stream.onShown((shown) => {
+          shows++;
+          if (shown.cut.limitedByBudget) bound++;
+        });
+        const stops: string[] = [];
+        stream.onProgress((p) => {
+          if (p.phase === 'stopped') stops.push(`${p.level}: ${p.reason}`);
+        });
+        const radius = sceneRadiusOf(fitBox0(store.levels[0].layout, 0), store.voxelSize);
+        const view = (box: [number, number, number, number, number, number]) => ({
+          camera: cameraFromView(cameraForBox(box, store.voxelSize, DEFAULT_VIEWPORT).state, DEFAULT_VIEWPORT, radius),
+          tolerancePx: 1.5,
+        });
+        const boxes: [number, number, number, number, number, number][] = [
+          [0, 0, 0, 127, 127, 127],
+          [64, 64, 64, 127, 127, 127],
+          [0, 0, 0, 40, 40, 40],
+          [40, 40, 40, 90, 90, 90],
+          [0, 64, 0, 63, 127, 63],
+        ];
+        await stream.setView(view(boxes[0]));
+        await stream.setIsovalue(20);
+        // each move lands 0-250 ms into the previous refinement (fetching or computing), newest wins
+        const random = mulberry32(11);
+        const runs: Promise<unknown>[] = [];
+        for (let i = 0; i < 12; i++) {
+          runs.push(i % 4 === 3 ? stream.setIsovalue(10 + 60 * random()) : stream.setView(view(boxes[i % boxes.length])));
+          await new Promise((r) => setTimeout(r, 250 * random()));
+        }
+        await Promise.all(runs);
+        expect(errors).toEqual([]);
+        expect(stream.shown?.final).toBe(true);
+        console.log(
+          `view stream at ${budget / MiB} MiB: ${shows} steps shown, ${bound} of them cut short by the budget; stops: ${stops.join('; ') || 'none'}`,
+        );
+        // the budget binds: some steps were made coarser for it
+        expect(bound).toBeGreaterThan(0);
+        stream.destroy();
+        store.close?.();
+        expect(count.live).toBe(base);
         expect(over).toBe(0);
       } finally {
         count.restore();
