@@ -19,77 +19,33 @@
 // resident (scrubbing and orbiting stay at full detail where they can); the
 // newest request wins and requests no longer needed are aborted.
 //
-// Within a step the finer level is computed first, then the coarser ones
-// (each surface is updated in place: for the frame between, a region may be
-// drawn twice, never missing).
+// Steps are snapshots: a step's chunks are all resident before any surface
+// is computed; the levels are computed in place, finer first, and once every
+// level is done the copies the page draws are made together
+// (Isosurface.present), so the frames between draw the step before, whole.
+// The types it takes and gives: view-types.ts.
 import type { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
 import { LearntRanges, learnSlotRanges } from '../learnt-ranges.ts';
 import { chunkCount, coarsestDrawableLevel, estimateFixedBytes, readLevelRanges, storeValueRange } from '../level-state.ts';
 import { chunkNeeded } from '../plan.ts';
-import type { LevelStats, LevelSurface, LevelVolume, StreamGpu, StreamGpuBytes, StreamProgress } from '../stream-port.ts';
-import type { ChunkRoleOptions } from '../../zfp/chunked-volume.ts';
-import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
+import type { LevelStats, LevelSurface, StreamGpu, StreamGpuBytes, StreamProgress } from '../stream-port.ts';
+import type { ChunkIndex } from '../types.ts';
 import { isAbort } from '../zarr/errors.ts';
 import type { ZfpStore } from '../zarr/store.ts';
-import { type CutCamera, type ViewCut, viewCut } from './cut.ts';
+import { type ViewCut, viewCut } from './cut.ts';
 import { cutStep, type Step } from './step.ts';
+import {
+  type CutLevelShown,
+  DEFAULT_TOLERANCE_PX,
+  key,
+  type LevelState,
+  type RoleVolume,
+  type ShownCut,
+  type ViewSpec,
+  type Waiting,
+} from './view-types.ts';
 
-/** A pool whose chunks can be drawn, ghosts or idle (ChunkedVolume.setRoles). */
-export interface RoleVolume extends LevelVolume {
-  setRoles(drawn: ReadonlySet<ChunkIndex> | null, ghosts: ReadonlySet<ChunkIndex>, options?: ChunkRoleOptions): void;
-}
-
-export interface ViewSpec {
-  camera: CutCamera;
-  /** A region is refined while one of its voxels projects to more than this many pixels. */
-  tolerancePx: number;
-}
-
-/** One level of the surface on screen. */
-export interface CutLevelShown<V, S, F> {
-  level: number;
-  volume: V;
-  surface: F;
-  stats: S;
-  /** Chunks drawn at this level that hold part of the surface (the others have none). */
-  drawn: ChunkIndex[];
-  ghosts: ChunkIndex[];
-}
-
-export interface ShownCut<V, S, F> {
-  iso: number;
-  /** The finest level of this step; `final` when it is the view's whole cut. */
-  step: number;
-  final: boolean;
-  levels: CutLevelShown<V, S, F>[];
-  /** The view's cut this step leads to. */
-  cut: ViewCut;
-  /** Leaves drawn per level in this step (needed or not): the regions each level covers. */
-  leaves: ChunkIndex[][];
-}
-
-interface LevelState<V> {
-  index: number;
-  layout: ChunkLevelLayout;
-  ranges: Float32Array | null;
-  nb: Float32Array | null;
-  reading: Promise<void> | null;
-  volume: V | null;
-  /** Resident chunks, least recently wanted first. */
-  lru: Map<ChunkIndex, true>;
-}
-
-/** Chunks a step waits for (keys level * 2^32 + chunk), and per level what must stay resident meanwhile. */
-interface Waiting {
-  missing: Set<number>;
-  done: () => void;
-  keep: Set<number>[];
-}
-
-const key = (level: number, chunk: ChunkIndex) => level * 2 ** 32 + chunk;
-
-/** Default screen-space tolerance in pixels. */
-export const DEFAULT_TOLERANCE_PX = 1.5;
+export { type CutLevelShown, DEFAULT_TOLERANCE_PX, type RoleVolume, type ShownCut, type ViewSpec };
 
 export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends LevelSurface<S>> {
   readonly levels: LevelState<V>[];

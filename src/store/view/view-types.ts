@@ -1,0 +1,63 @@
+// What a view stream (view-stream.ts) takes and gives: the pools it draws
+// (chunk roles), the view, the steps it shows, and its per-level state.
+import type { ChunkRoleOptions } from '../../zfp/chunked-volume.ts';
+import type { LevelVolume } from '../stream-port.ts';
+import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
+import type { CutCamera, ViewCut } from './cut.ts';
+
+/** A pool whose chunks can be drawn, ghosts or idle (ChunkedVolume.setRoles). */
+export interface RoleVolume extends LevelVolume {
+  setRoles(drawn: ReadonlySet<ChunkIndex> | null, ghosts: ReadonlySet<ChunkIndex>, options?: ChunkRoleOptions): void;
+}
+
+export interface ViewSpec {
+  camera: CutCamera;
+  /** A region is refined while one of its voxels projects to more than this many pixels. */
+  tolerancePx: number;
+}
+
+/** One level of the surface on screen. */
+export interface CutLevelShown<V, S, F> {
+  level: number;
+  volume: V;
+  surface: F;
+  stats: S;
+  /** Chunks drawn at this level that hold part of the surface (the others have none). */
+  drawn: ChunkIndex[];
+  ghosts: ChunkIndex[];
+}
+
+export interface ShownCut<V, S, F> {
+  iso: number;
+  /** The finest level of this step; `final` when it is the view's whole cut. */
+  step: number;
+  final: boolean;
+  levels: CutLevelShown<V, S, F>[];
+  /** The view's cut this step leads to. */
+  cut: ViewCut;
+  /** Leaves drawn per level in this step (needed or not): the regions each level covers. */
+  leaves: ChunkIndex[][];
+}
+
+export interface LevelState<V> {
+  index: number;
+  layout: ChunkLevelLayout;
+  ranges: Float32Array | null;
+  nb: Float32Array | null;
+  reading: Promise<void> | null;
+  volume: V | null;
+  /** Resident chunks, least recently wanted first. */
+  lru: Map<ChunkIndex, true>;
+}
+
+/** Chunks a step waits for (keys level * 2^32 + chunk), and per level what must stay resident meanwhile. */
+export interface Waiting {
+  missing: Set<number>;
+  done: () => void;
+  keep: Set<number>[];
+}
+
+export const key = (level: number, chunk: ChunkIndex) => level * 2 ** 32 + chunk;
+
+/** Default screen-space tolerance in pixels. */
+export const DEFAULT_TOLERANCE_PX = 1.5;
