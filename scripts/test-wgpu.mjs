@@ -34,6 +34,8 @@ export const WGPU_TESTS = [
   'tests/unit/mc/naive-gpu.test.ts',
   'tests/unit/isosurface/block-mc.test.ts',
   'tests/unit/isosurface/vertex-format.test.ts',
+  'tests/unit/isosurface/slot-ranges.test.ts',
+  'tests/unit/isosurface/snapshot.test.ts',
   'tests/unit/isosurface/lru-cache.test.ts',
   'tests/unit/isosurface/no-readback.test.ts',
   'tests/unit/isosurface/behaviour.test.ts',

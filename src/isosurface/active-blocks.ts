@@ -22,6 +22,7 @@ import type { BlockSource, ZfpGpuStream } from '../zfp/gpu-stream.ts';
 import { Counters } from './counters.ts';
 import { bindGroup, bufferLayout, storageBuffer } from '../gpu/bindings.ts';
 import { createComputePipeline } from '../gpu/pipeline-cache.ts';
+import { SlotRangeReducer } from './slot-ranges.ts';
 import type { BlockIds } from './block-ids.ts';
 import { A } from './layout.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
@@ -72,6 +73,8 @@ export class ActiveBlocks {
   private readonly markBlocksGroup: GPUBindGroup;
   /** Chunked volumes only: the changed chunks and the bind groups of their range updates. */
   private readonly chunkUpdate?: ChunkUpdate;
+  /** Chunked volumes only: [min, max] per slot, reduced on the GPU (readSlotRanges). */
+  private slotRanges?: SlotRangeReducer;
 
   private constructor(
     private readonly device: GPUDevice,
@@ -283,6 +286,7 @@ export class ActiveBlocks {
     ]);
     const chunkPipelines = chunkNeighbourhood && chunkGroups ? { neighbourhood: chunkNeighbourhood, groups: chunkGroups } : undefined;
     const active = new ActiveBlocks(device, parts, markGroups, markBlocks, layouts, chunkPipelines);
+    if (ids.pool) active.slotRanges = await SlotRangeReducer.create(device, active.blockRanges, ids.pool.chunkBlocks ** 3);
     if (neighbourhood && groupRange) {
       // a whole stream: every range at once
       const encoder = device.createCommandEncoder({ label: 'Isosurface.neighbourhoodRanges' });
@@ -360,44 +364,18 @@ export class ActiveBlocks {
   /**
    * A pool's chunk ranges: [min, max] per listed slot over its blocks' ranges
    * (the decoded values inside the volume, as the surface reads them; the
-   * empty range [FLT_MAX, -FLT_MAX] for a slot without a finite value). The
-   * copies are submitted before this returns; the reduction waits for the GPU.
+   * empty range [FLT_MAX, -FLT_MAX] for a slot without a finite value),
+   * reduced on the GPU (slot-ranges.ts: 8 bytes read back per slot). When no
+   * read is in flight the work is submitted before this returns.
    */
-  async readSlotRanges(slots: readonly number[]): Promise<Float32Array> {
-    const pool = this.parts.ids.pool;
-    const out = new Float32Array(2 * slots.length);
-    if (!pool || slots.length === 0) return out;
-    const per = pool.chunkBlocks ** 3;
-    const staging = this.device.createBuffer({
-      label: 'Isosurface.slotRanges.staging',
-      size: slots.length * per * 8,
-      usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST,
-    });
-    try {
-      const encoder = this.device.createCommandEncoder({ label: 'Isosurface.slotRanges' });
-      slots.forEach((slot, i) => encoder.copyBufferToBuffer(this.blockRanges, slot * per * 8, staging, i * per * 8, per * 8));
-      this.device.queue.submit([encoder.finish()]);
-      await staging.mapAsync(GPUMapMode.READ);
-      const f = new Float32Array(staging.getMappedRange());
-      for (let i = 0; i < slots.length; i++) {
-        let lo = 3.4028234663852886e38;
-        let hi = -3.4028234663852886e38;
-        for (let b = i * per; b < (i + 1) * per; b++) {
-          if (f[2 * b] < lo) lo = f[2 * b];
-          if (f[2 * b + 1] > hi) hi = f[2 * b + 1];
-        }
-        out[2 * i] = lo;
-        out[2 * i + 1] = hi;
-      }
-      return out;
-    } finally {
-      staging.destroy();
-    }
+  readSlotRanges(slots: readonly number[]): Promise<Float32Array> {
+    if (!this.slotRanges) return Promise.resolve(new Float32Array(2 * slots.length));
+    return this.slotRanges.read(slots);
   }
 
   /** Bytes held (fixed per volume). */
   get byteSize(): number {
-    return this.buffers().reduce((n, b) => n + b.size, 0);
+    return this.buffers().reduce((n, b) => n + b.size, 0) + (this.slotRanges?.byteSize ?? 0);
   }
 
   private buffers(): GPUBuffer[] {
@@ -420,6 +398,7 @@ export class ActiveBlocks {
 
   destroy(): void {
     this.chunkUpdate?.changes.close();
+    this.slotRanges?.destroy();
     for (const b of this.buffers()) b.destroy();
   }
 }

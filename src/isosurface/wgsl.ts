@@ -13,6 +13,7 @@ import vertexFormatWgsl from '../../shaders/isosurface/vertex_format.wgsl?raw';
 import edgeOwnerWgsl from '../../shaders/isosurface/edge_owner.wgsl?raw';
 import blocksStreamWgsl from '../../shaders/isosurface/blocks_stream.wgsl?raw';
 import blocksPoolWgsl from '../../shaders/isosurface/blocks_pool.wgsl?raw';
+import slotRangesWgsl from '../../shaders/isosurface/slot_ranges.wgsl?raw';
 import type { WgslPart } from '../gpu/wgsl.ts';
 import { mcCaseTableSnippet } from '../mc/case-table-wgsl.ts';
 import { gridSnippet } from '../gpu/dispatch.ts';
@@ -57,4 +58,5 @@ export const isosurfaceWgsl = {
     part('block_mc_common', blockMcCommonWgsl),
     part('block_emit', blockEmitWgsl),
   ],
+  slotRanges: [part('slot_ranges', slotRangesWgsl)],
 } satisfies Record<string, WgslPart[]>;

@@ -123,13 +123,13 @@ export class LearntRanges {
   }
 }
 
-/** The most block ranges read back at once to learn chunk ranges (a short-lived staging buffer). */
-const LEARN_SLOTS_BYTES = 1 << 20;
+/** Slots whose ranges are read back at once (8 bytes each: reduced per slot on the GPU, Isosurface.readSlotRanges). */
+const LEARN_SLOTS = 4096;
 
 /**
  * Learns the ranges of level L's `chunks` (resident in `volume`) from the
  * block ranges `surface` was last computed with, in batches of at most
- * LEARN_SLOTS_BYTES: each batch only while `valid()` (no chunk put or
+ * LEARN_SLOTS slots: each batch only while `valid()` (no chunk put or
  * evicted since that surface was computed, the surface still live), since a
  * slot's block ranges are its chunk's only then. Both stream engines call it.
  */
@@ -143,7 +143,7 @@ export async function learnSlotRanges(
 ): Promise<void> {
   if (!surface.readSlotRanges || !learnt.learns(L)) return;
   const todo = chunks.filter((c) => !learnt.has(L, c));
-  const batch = Math.max(1, Math.floor(LEARN_SLOTS_BYTES / (8 * volume.blocksPerChunk)));
+  const batch = LEARN_SLOTS;
   for (let i = 0; i < todo.length; i += batch) {
     if (!valid()) return;
     const part = todo.slice(i, i + batch).filter((c) => volume.has(c));
