@@ -110,3 +110,34 @@ export function coarsestDrawableLevel(levels: readonly { layout: Pick<ChunkLevel
   while (L > 0 && (levels[L].unusable || !holdsCells(L))) L--;
   return L;
 }
+
+/**
+ * Puts a chunk that arrived into its level's pool, the same way for both
+ * engines: when the pool is full and no slot was set aside for it, the least
+ * recently wanted resident chunk that `keep` does not hold (what the step
+ * wants and what is on screen) goes first. `changed` is called before each
+ * put or eviction (a stream's pool-change counter). Throws what put throws.
+ */
+export function putArrived(
+  lv: { volume: LevelVolume | null; lru: Map<ChunkIndex, true> },
+  chunk: ChunkIndex,
+  bytes: Uint8Array,
+  keep: (c: ChunkIndex) => boolean,
+  changed: () => void,
+): void {
+  const v = lv.volume!;
+  if (!v.has(chunk)) {
+    if (v.freeCount === 0 && !v.isReserved(chunk)) {
+      for (const c of lv.lru.keys()) {
+        if (keep(c)) continue;
+        changed();
+        v.evict(c);
+        lv.lru.delete(c);
+        break;
+      }
+    }
+    changed();
+    v.put(chunk, bytes);
+  }
+  lv.lru.set(chunk, true);
+}

@@ -19,6 +19,7 @@
 // surface on screen: the refinement stops with the reason, and once the
 // chunk's cool-down has passed the onRetry listeners are told (the page asks
 // for the same isovalue again; the CLI reports the failure instead).
+import { StreamEvents } from './stream-events.ts';
 import type { ChunkFetcher } from './fetch/chunk-fetcher.ts';
 import { LearntRanges, learnSlotRanges } from './learnt-ranges.ts';
 import {
@@ -27,6 +28,7 @@ import {
   chunkRangesOfIds,
   coarsestDrawableLevel,
   estimateFixedBytes,
+  putArrived,
   readLevelRanges,
   storeValueRange,
 } from './level-state.ts';
@@ -44,6 +46,8 @@ interface Waiting {
   iso: number;
   needed: number;
   missing: Set<ChunkIndex>;
+  /** The chunks the surface needs (an arrival never evicts one of them). */
+  wanted: ReadonlySet<ChunkIndex>;
   done: () => void;
 }
 
@@ -83,9 +87,7 @@ export class StreamController<
   #surfaceCapacity = new WeakMap<F, number>();
   #retired: F | null = null;
   #waiting: Waiting | null = null;
-  #progress = new Set<(p: StreamProgress) => void>();
-  #shownListeners = new Set<(s: ShownSurface<V, S, F>) => void>();
-  #errors = new Set<(e: Error) => void>();
+  readonly #events = new StreamEvents<ShownSurface<V, S, F>>();
   #retryListeners = new Set<(iso: number) => void>();
   #retryTimer: ReturnType<typeof setTimeout> | null = null;
   /** The isovalue of the newest setIsovalue. */
@@ -128,7 +130,7 @@ export class StreamController<
     this.focus = [d[0] / 2, d[1] / 2, d[2] / 2];
     fetcher.onChunk((level, chunk, bytes) => this.#arrived(level, chunk, bytes));
     fetcher.onError((level, chunk, e, repeated) => {
-      if (!repeated) for (const l of this.#errors) l(e);
+      if (!repeated) this.#events.error(e);
       const w = this.#waiting;
       if (w?.level !== level || !w.missing.has(chunk)) return;
       const at = fetcher.retryAt(level, chunk);
@@ -161,17 +163,14 @@ export class StreamController<
   }
 
   onProgress(l: (p: StreamProgress) => void): () => void {
-    this.#progress.add(l);
-    return () => this.#progress.delete(l);
+    return this.#events.onProgress(l);
   }
   onShown(l: (s: ShownSurface<V, S, F>) => void): () => void {
-    this.#shownListeners.add(l);
-    return () => this.#shownListeners.delete(l);
+    return this.#events.onShown(l);
   }
   /** Chunk failures (each once, not its repeats during the cool-down) and GPU errors. */
   onError(l: (e: Error) => void): () => void {
-    this.#errors.add(l);
-    return () => this.#errors.delete(l);
+    return this.#events.onError(l);
   }
   /** A refinement stopped by a failed chunk may be tried again now, at this isovalue (still the newest). */
   onRetry(l: (iso: number) => void): () => void {
@@ -400,7 +399,7 @@ export class StreamController<
         await this.#readRanges(lv);
       } catch (e) {
         if (gen !== this.#gen || this.#destroyed) return 'stopped';
-        for (const l of this.#errors) l(e as Error);
+        this.#events.error(e as Error);
         return this.#stop(L, (e as Error).message, 'chunk');
       }
       if (gen !== this.#gen || this.#destroyed) return 'stopped';
@@ -430,7 +429,7 @@ export class StreamController<
     if (missing.size > 0) {
       let mine: Waiting | null = null;
       await new Promise<void>((resolve) => {
-        mine = this.#waiting = { level: L, iso, needed: needed.length, missing, done: resolve };
+        mine = this.#waiting = { level: L, iso, needed: needed.length, missing, wanted, done: resolve };
         // evict chunks this surface does not need first, so arrivals find room
         const coming = needed.filter((c) => missing.has(c));
         pool.reserve(coming); // gives back what an older isovalue set aside
@@ -520,14 +519,14 @@ export class StreamController<
       // a surface over its budget is the pipeline's clear refusal: the finer level stops, the coarser stays
       if ((e as Error).name === 'IsosurfaceBudgetError')
         return this.#skippable(L) ? 'skipped' : this.#stop(L, (e as Error).message, 'budget');
-      for (const l of this.#errors) l(e as Error);
+      this.#events.error(e as Error);
       return this.#stop(L, (e as Error).message, 'gpu');
     }
   }
 
   #show(s: ShownSurface<V, S, F>): void {
     this.#shown = s;
-    for (const l of this.#shownListeners) l(s);
+    this.#events.shown(s);
     // one surface stays: the one shown now (the coarser one it replaces goes, and one made for a pool's old capacity)
     for (const [level, surf] of this.#surfaces) {
       if (level !== s.level) {
@@ -555,17 +554,7 @@ export class StreamController<
       this.fetcher.want(level, []);
       w.done();
     }
-    this.#emit({
-      iso: this.#shown?.iso ?? NaN,
-      level,
-      chunksDone: 0,
-      chunksNeeded: 0,
-      bytesFetched: this.fetcher.counters.bytesFetched,
-      phase: 'stopped',
-      reason,
-      cause,
-      ...(retryInMs !== undefined ? { retryInMs } : {}),
-    });
+    this.#events.stopped(this.#shown?.iso ?? Number.NaN, level, reason, cause, this.fetcher.counters.bytesFetched, retryInMs);
     return 'stopped';
   }
 
@@ -607,7 +596,7 @@ export class StreamController<
   }
 
   #emit(p: StreamProgress): void {
-    for (const l of this.#progress) l(p);
+    this.#events.progress(p);
   }
 
   #makeRoom(lv: Level<V>, count: number, keep: ReadonlySet<ChunkIndex>): void {
@@ -627,18 +616,19 @@ export class StreamController<
     const lv = this.levels[level];
     const w = this.#waiting;
     if (!lv?.volume || w?.level !== level || !w.missing.has(chunk)) return;
-    if (!lv.volume.has(chunk)) {
-      if (lv.volume.freeCount === 0 && !lv.volume.isReserved(chunk)) this.#makeRoom(lv, 1, w.missing);
-      try {
-        this.#poolChanges++;
-        lv.volume.put(chunk, bytes);
-      } catch (e) {
-        for (const l of this.#errors) l(e as Error);
-        this.#stop(level, (e as Error).message, 'chunk');
-        return;
-      }
+    try {
+      putArrived(
+        lv,
+        chunk,
+        bytes,
+        (c) => w.wanted.has(c),
+        () => this.#poolChanges++,
+      );
+    } catch (e) {
+      this.#events.error(e as Error);
+      this.#stop(level, (e as Error).message, 'chunk');
+      return;
     }
-    lv.lru.set(chunk, true);
     w.missing.delete(chunk);
     this.#emit({
       iso: w.iso,

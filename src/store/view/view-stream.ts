@@ -24,9 +24,10 @@
 // level is done the copies the page draws are made together
 // (Isosurface.present), so the frames between draw the step before, whole.
 // The types it takes and gives: view-types.ts.
+import { StreamEvents } from '../stream-events.ts';
 import type { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
 import { LearntRanges, learnSlotRanges } from '../learnt-ranges.ts';
-import { chunkCount, coarsestDrawableLevel, estimateFixedBytes, readLevelRanges, storeValueRange } from '../level-state.ts';
+import { chunkCount, coarsestDrawableLevel, estimateFixedBytes, putArrived, readLevelRanges, storeValueRange } from '../level-state.ts';
 import { chunkNeeded } from '../plan.ts';
 import type { LevelStats, LevelSurface, StreamGpu, StreamGpuBytes, StreamProgress } from '../stream-port.ts';
 import type { ChunkIndex } from '../types.ts';
@@ -77,9 +78,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
   skirts = true;
   /** Whether failed chunks are tried again on their own (the page; the CLI reports the failure instead). */
   retryFailed = true;
-  #progress = new Set<(p: StreamProgress) => void>();
-  #shownListeners = new Set<(s: ShownCut<V, S, F>) => void>();
-  #errors = new Set<(e: Error) => void>();
+  readonly #events = new StreamEvents<ShownCut<V, S, F>>();
 
   private constructor(
     readonly store: ZfpStore,
@@ -108,7 +107,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     while (this.#finestUsable > 0 && !store.levels[this.#finestUsable - 1].unusable) this.#finestUsable--;
     fetcher.onChunk((level, chunk, bytes) => this.#arrived(level, chunk, bytes));
     fetcher.onError((level, chunk, e, repeated) => {
-      if (!repeated) for (const l of this.#errors) l(e);
+      if (!repeated) this.#events.error(e);
       const w = this.#waiting;
       if (!w?.missing.has(key(level, chunk))) return;
       const at = fetcher.retryAt(level, chunk);
@@ -132,16 +131,13 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
   }
 
   onProgress(l: (p: StreamProgress) => void): () => void {
-    this.#progress.add(l);
-    return () => this.#progress.delete(l);
+    return this.#events.onProgress(l);
   }
   onShown(l: (s: ShownCut<V, S, F>) => void): () => void {
-    this.#shownListeners.add(l);
-    return () => this.#shownListeners.delete(l);
+    return this.#events.onShown(l);
   }
   onError(l: (e: Error) => void): () => void {
-    this.#errors.add(l);
-    return () => this.#errors.delete(l);
+    return this.#events.onError(l);
   }
 
   get shown(): ShownCut<V, S, F> | null {
@@ -220,7 +216,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
         await Promise.all(cut.wantsRanges.map((L) => this.#readRanges(this.levels[L])));
       } catch (e) {
         if (gen !== this.#gen || this.#destroyed) return 'done';
-        for (const l of this.#errors) l(e as Error);
+        this.#events.error(e as Error);
         this.#stop(cut.wantsRanges[0], (e as Error).message, 'chunk');
         return 'done';
       }
@@ -445,7 +441,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
           this.#surfaceCost[computing] = Math.max(this.#surfaceCost[computing] ?? 0, needed / Math.max(1, step.wanted[computing].length));
         return { level: computing, reason: (e as Error).message };
       }
-      for (const l of this.#errors) l(e as Error);
+      this.#events.error(e as Error);
       this.#stop(step.finest, (e as Error).message, 'gpu');
       return false;
     }
@@ -472,7 +468,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     this.#retired = [];
     for (const l of levels) l.surface.present?.();
     this.#shown = { iso, step: step.finest, final, levels, cut, leaves: step.leaves };
-    for (const l of this.#shownListeners) l(this.#shown);
+    this.#events.shown(this.#shown);
     progress('shown');
     this.#learn(levels);
     return true;
@@ -567,27 +563,19 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     const w = this.#waiting;
     const lv = this.levels[level];
     if (!w || !lv?.volume || !w.missing.has(key(level, chunk))) return;
-    const v = lv.volume;
-    if (!v.has(chunk)) {
-      if (v.freeCount === 0 && !v.isReserved(chunk)) {
-        for (const c of lv.lru.keys()) {
-          if (w.keep[level]?.has(key(level, c))) continue;
-          this.#poolChanges++;
-          v.evict(c);
-          lv.lru.delete(c);
-          break;
-        }
-      }
-      try {
-        this.#poolChanges++;
-        v.put(chunk, bytes);
-      } catch (e) {
-        for (const l of this.#errors) l(e as Error);
-        this.#stop(level, (e as Error).message, 'chunk');
-        return;
-      }
+    try {
+      putArrived(
+        lv,
+        chunk,
+        bytes,
+        (c) => w.keep[level]?.has(key(level, c)) ?? false,
+        () => this.#poolChanges++,
+      );
+    } catch (e) {
+      this.#events.error(e as Error);
+      this.#stop(level, (e as Error).message, 'chunk');
+      return;
     }
-    lv.lru.set(chunk, true);
     w.missing.delete(key(level, chunk));
     if (w.missing.size === 0) w.done();
   }
@@ -609,21 +597,11 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
       this.fetcher.wantAll([]);
       w.done();
     }
-    this.#emit({
-      iso: this.#shown?.iso ?? Number.NaN,
-      level,
-      chunksDone: 0,
-      chunksNeeded: 0,
-      bytesFetched: this.fetcher.counters.bytesFetched,
-      phase: 'stopped',
-      reason,
-      cause,
-      ...(retryInMs !== undefined ? { retryInMs } : {}),
-    });
+    this.#events.stopped(this.#shown?.iso ?? Number.NaN, level, reason, cause, this.fetcher.counters.bytesFetched, retryInMs);
   }
 
   #emit(p: StreamProgress): void {
-    for (const l of this.#progress) l(p);
+    this.#events.progress(p);
   }
 
   destroy(): void {
