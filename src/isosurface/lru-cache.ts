@@ -26,8 +26,9 @@ import { Counters } from './counters.ts';
 import { bindGroup, bufferLayout, storageBuffer } from '../gpu/bindings.ts';
 import { BindGroupCache } from '../gpu/bind-group-cache.ts';
 import { dispatchWorkgroups } from '../gpu/dispatch.ts';
-import { bindGroupLayout, createComputePipeline } from '../gpu/pipeline-cache.ts';
+import { createComputePipeline } from '../gpu/pipeline-cache.ts';
 import { A, logBytesFor, logSizeFor, logTreeWords, SLOT_BYTES } from './layout.ts';
+import { NoneFill } from './none-fill.ts';
 import { isosurfaceWgsl } from './wgsl.ts';
 
 export interface BlockCacheParts {
@@ -81,31 +82,26 @@ interface Pipelines {
   append: GPUComputePipeline;
   rebuild: GPUComputePipeline;
   rebuildCompacted: GPUComputePipeline;
-  fill: GPUComputePipeline;
   markLayout: GPUBindGroupLayout;
   pickLayout: GPUBindGroupLayout;
   assignLayout: GPUBindGroupLayout;
   appendLayout: GPUBindGroupLayout;
   rebuildLayout: GPUBindGroupLayout;
   rebuildCompactedLayout: GPUBindGroupLayout;
-  fillLayout: GPUBindGroupLayout;
   forget: GPUComputePipeline;
   forgetLayout: GPUBindGroupLayout;
 }
 
-const FILL_SLOTS = 8;
-const FILL_STRIDE = 256;
+/** Bytes between the two records of the rebuild parameters (the uniform offset alignment). */
+const PARAMS_STRIDE = 256;
 
 export class BlockCache {
   /** Per block: its slot, or NONE. */
   readonly blockToSlot: GPUBuffer;
   private slots!: SlotBuffers;
   private groups!: Groups;
-  private readonly fillParams: GPUBuffer;
   /** rebuild_log parameters: [0] for a compaction (constant), [1] written by reset and growth. */
   private readonly rebuildParams: GPUBuffer;
-  private fillsRecorded = 0;
-  private readonly fillGroups = new BindGroupCache();
   private readonly forgetGroups = new BindGroupCache();
 
   private constructor(
@@ -114,18 +110,15 @@ export class BlockCache {
     private readonly pipelines: Pipelines,
     /** Sized to the log positions. */
     private readonly logScan: ExclusiveScan,
+    /** Empties the maps (none-fill.ts). */
+    private readonly fill: NoneFill,
     capacity: number,
   ) {
     const blocks = parts.blockIds;
     this.blockToSlot = storageBuffer(device, 'Isosurface.blockToSlot', blocks * 4, GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST);
-    this.fillParams = device.createBuffer({
-      label: 'Isosurface.fillParams',
-      size: FILL_SLOTS * FILL_STRIDE,
-      usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
-    });
     this.rebuildParams = device.createBuffer({
       label: 'Isosurface.rebuildParams',
-      size: 2 * FILL_STRIDE,
+      size: 2 * PARAMS_STRIDE,
       usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
     });
     device.queue.writeBuffer(this.rebuildParams, 0, new Uint32Array([0, 0, 1, 0]));
@@ -149,14 +142,10 @@ export class BlockCache {
       'rw',
       'rw',
     ]);
-    const fillLayout = bindGroupLayout(device, 'Isosurface.fillNone.layout', [
-      { binding: 0, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'uniform', hasDynamicOffset: true, minBindingSize: 8 } },
-      { binding: 1, visibility: GPUShaderStage.COMPUTE, buffer: { type: 'storage' } },
-    ]);
     const forgetLayout = bufferLayout(device, 'Isosurface.forgetSlots.layout', ['read', 'uniform', 'rw', 'rw']);
     const constants = { MAX_WG_PER_DIM: parts.maxWorkgroupsPerDimension };
     const wgsl = isosurfaceWgsl.lru;
-    const [mark, pick, assign, append, rebuild, rebuildCompacted, fill, forget, logScan] = await Promise.all([
+    const [mark, pick, assign, append, rebuild, rebuildCompacted, forget, logScan, fill] = await Promise.all([
       createComputePipeline(device, 'Isosurface.markCached', wgsl, 'mark_cached', { layout: [markLayout], constants }),
       createComputePipeline(device, 'Isosurface.pickVictims', wgsl, 'pick_victims_of_new', { layout: [pickLayout], constants }),
       createComputePipeline(device, 'Isosurface.assignSlots', wgsl, 'assign_slots', { layout: [assignLayout], constants }),
@@ -166,9 +155,9 @@ export class BlockCache {
         layout: [rebuildCompactedLayout],
         constants,
       }),
-      createComputePipeline(device, 'Isosurface.fillNone', wgsl, 'fill_none', { layout: [fillLayout], constants }),
       createComputePipeline(device, 'Isosurface.forgetSlots', wgsl, 'forget_slots', { layout: [forgetLayout], constants }),
       ExclusiveScan.create(device, { capacity: logSizeFor(capacity), maxWorkgroupsPerDimension: parts.maxWorkgroupsPerDimension }),
+      NoneFill.create(device, parts.maxWorkgroupsPerDimension),
     ]);
     const pipelines = {
       mark,
@@ -177,18 +166,16 @@ export class BlockCache {
       append,
       rebuild,
       rebuildCompacted,
-      fill,
       markLayout,
       pickLayout,
       assignLayout,
       appendLayout,
       rebuildLayout,
       rebuildCompactedLayout,
-      fillLayout,
       forget,
       forgetLayout,
     };
-    return new BlockCache(device, parts, pipelines, logScan, capacity);
+    return new BlockCache(device, parts, pipelines, logScan, fill, capacity);
   }
 
   get capacity(): number {
@@ -321,7 +308,7 @@ export class BlockCache {
 
   private rebuildGroup(s: SlotBuffers, scratch: GPUBuffer, params: 0 | 1, layout = this.pipelines.rebuildLayout): GPUBindGroup {
     return bindGroup(this.device, 'Isosurface.rebuildLog.bindGroup', layout, [
-      { buffer: this.rebuildParams, offset: params * FILL_STRIDE, size: 16 },
+      { buffer: this.rebuildParams, offset: params * PARAMS_STRIDE, size: 16 },
       this.parts.counters.buffer,
       scratch,
       s.log,
@@ -335,32 +322,9 @@ export class BlockCache {
     for (const b of this.ownBuffers(s)) b.destroy();
   }
 
-  /** Records words [begin, end) of `target` := NONE. At most FILL_SLOTS per submission. */
-  private encodeFill(encoder: GPUCommandEncoder, target: GPUBuffer, begin: number, end: number): void {
-    if (end <= begin) return;
-    if (this.fillsRecorded >= FILL_SLOTS) throw new Error('BlockCache: too many fills in one submission');
-    const offset = this.fillsRecorded++ * FILL_STRIDE;
-    this.device.queue.writeBuffer(this.fillParams, offset, new Uint32Array([begin, end]));
-    const pass = encoder.beginComputePass({ label: 'Isosurface.fillNone' });
-    pass.setPipeline(this.pipelines.fill);
-    const group = this.fillGroups.key(target).get(() =>
-      this.device.createBindGroup({
-        label: 'Isosurface.fillNone.bindGroup',
-        layout: this.pipelines.fillLayout,
-        entries: [
-          { binding: 0, resource: { buffer: this.fillParams, size: 8 } },
-          { binding: 1, resource: { buffer: target } },
-        ],
-      }),
-    );
-    pass.setBindGroup(0, group, [offset]);
-    dispatchWorkgroups(pass, Math.ceil((end - begin) / 64), this.parts.maxWorkgroupsPerDimension);
-    pass.end();
-  }
-
   private submitFills(encoder: GPUCommandEncoder): void {
     this.device.queue.submit([encoder.finish()]);
-    this.fillsRecorded = 0;
+    this.fill.submitted();
   }
 
   /** Records rebuild_log over the log of `s` with host parameters (fresh slots first_fresh.., then the kept entries of `scratch` if useKept). */
@@ -372,7 +336,7 @@ export class BlockCache {
     firstFresh: number,
     useKept: boolean,
   ): void {
-    this.device.queue.writeBuffer(this.rebuildParams, FILL_STRIDE, new Uint32Array([fresh, firstFresh, useKept ? 1 : 0, 0]));
+    this.device.queue.writeBuffer(this.rebuildParams, PARAMS_STRIDE, new Uint32Array([fresh, firstFresh, useKept ? 1 : 0, 0]));
     this.parts.counters.set('logSize', s.logSize);
     const pass = encoder.beginComputePass({ label: 'Isosurface.rebuildLog' });
     pass.setPipeline(this.pipelines.rebuild);
@@ -384,8 +348,8 @@ export class BlockCache {
   /** Empties every slot and block entry (submits): the log holds the slots in order, all empty. Capacity stays. */
   private clear(capacity: number): void {
     const encoder = this.device.createCommandEncoder({ label: 'Isosurface.clearCache' });
-    this.encodeFill(encoder, this.blockToSlot, 0, this.parts.blockIds);
-    this.encodeFill(encoder, this.slots.slotToBlock, 0, capacity);
+    this.fill.encode(encoder, this.blockToSlot, 0, this.parts.blockIds);
+    this.fill.encode(encoder, this.slots.slotToBlock, 0, capacity);
     this.encodeRebuild(encoder, this.slots, this.slots.logScratch, capacity, 0, false);
     this.submitFills(encoder);
     this.parts.counters.set('slots', capacity);
@@ -425,7 +389,7 @@ export class BlockCache {
     const encoder = this.device.createCommandEncoder({ label: 'Isosurface.growCache' });
     encoder.copyBufferToBuffer(old.slotData, 0, next.slotData, 0, old.capacity * SLOT_BYTES);
     encoder.copyBufferToBuffer(old.slotToBlock, 0, next.slotToBlock, 0, old.capacity * 4);
-    this.encodeFill(encoder, next.slotToBlock, old.capacity, capacity);
+    this.fill.encode(encoder, next.slotToBlock, old.capacity, capacity);
     // The old log's valid entries, in order, into the new scratch (count: the old tail).
     this.logScan.encode(encoder, {
       input: old.valid,
@@ -516,7 +480,7 @@ export class BlockCache {
   destroy(): void {
     this.destroySlots(this.slots);
     this.blockToSlot.destroy();
-    this.fillParams.destroy();
+    this.fill.destroy();
     this.rebuildParams.destroy();
     this.logScan.destroy();
   }
