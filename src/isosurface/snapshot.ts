@@ -21,14 +21,21 @@ export class SurfaceSnapshot {
   #vertices: GPUBuffer | null = null;
   #indices: GPUBuffer[] = [];
   #drawArgs: GPUBuffer | null = null;
-  /** What the renderer binds: the copies (slotData and blockToSlot stay the surface's). */
+  /** What the renderer binds: the copies (slotData and blockToSlot are the surface's, read through). */
   readonly drawData: IsosurfaceDrawData;
 
   constructor(
     private readonly device: GPUDevice,
     source: IsosurfaceDrawData,
   ) {
-    this.drawData = { ...source, shards: [], version: 0 };
+    // slotData and blockToSlot stay the surface's own (replaced in place on growth: read through)
+    this.drawData = Object.defineProperties(
+      { vertices: source.vertices, shards: [], info: source.info, version: 0 } as unknown as IsosurfaceDrawData,
+      {
+        slotData: { get: () => source.slotData, enumerable: true },
+        blockToSlot: { get: () => source.blockToSlot, enumerable: true },
+      },
+    );
   }
 
   /** Bytes a copy of a surface of `counts` holds, in shards of `perShard` indices. */
@@ -90,8 +97,6 @@ export class SurfaceSnapshot {
       vertices: this.#vertices,
       shards: this.#indices.map((indices, k) => ({ indices, drawArgs: this.#drawArgs!, drawArgsOffset: k * DRAW_ARGS_BYTES })),
       info: source.info,
-      slotData: source.slotData,
-      blockToSlot: source.blockToSlot,
       version: this.drawData.version + 1,
     });
   }
