@@ -6,7 +6,8 @@
 // after the computation): the welded vertices the surface has, each index
 // shard's indices, and the draw arguments, so the copy draws exactly what
 // the surface drew. Its buffers are the surface's size, not its capacity;
-// they are kept while a later copy fits and made again when it does not.
+// they are kept while a later copy fits (and is at least half their size)
+// and made again when it does not.
 import { DRAW_ARGS_BYTES, INDEX_BYTES, VERTEX_BYTES } from './layout.ts';
 import type { IsosurfaceDrawData } from './types.ts';
 import type { SurfaceOutput } from './vertex-output.ts';
@@ -60,11 +61,13 @@ export class SurfaceSnapshot {
     const shards = Math.min(output.shards.length, Math.max(1, Math.ceil(counts.indices / perShard)));
     const vertices = Math.min(counts.vertices, output.weldedCapacity);
     const sizes = Array.from({ length: shards }, (_, k) => Math.max(0, Math.min(perShard, counts.indices - k * perShard)));
+    // kept while the copy fits and is not more than twice what it must hold (a smaller surface gives memory back)
+    const holds = (b: GPUBuffer, bytes: number) => b.size >= bytes && b.size <= 2 * bytes + 4096;
     const fits =
       this.#vertices !== null &&
-      this.#vertices.size >= Math.max(1, vertices) * VERTEX_BYTES &&
+      holds(this.#vertices, Math.max(1, vertices) * VERTEX_BYTES) &&
       this.#indices.length === shards &&
-      this.#indices.every((b, k) => b.size >= Math.max(1, sizes[k]) * INDEX_BYTES);
+      this.#indices.every((b, k) => holds(b, Math.max(1, sizes[k]) * INDEX_BYTES));
     if (!fits) {
       this.#destroyBuffers();
       this.#vertices = device.createBuffer({

@@ -103,6 +103,7 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
       if (!(stream instanceof ViewStream)) return;
       stream.retryFailed = false; // the CLI reports a chunk that failed (after the store's own retries)
       stream.skirts = opts.view?.skirts ?? true;
+      stream.snapshots = false; // nothing is drawn while it refines: the surfaces are read once it ends
     },
   });
   const { store } = session;

@@ -78,6 +78,11 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
   skirts = true;
   /** Whether failed chunks are tried again on their own (the page; the CLI reports the failure instead). */
   retryFailed = true;
+  /**
+   * Whether each step is drawn from copies of its surfaces (Isosurface.present): the page, which draws
+   * while the next step computes; the CLI reads the surfaces once the refinement ended and needs none.
+   */
+  snapshots = true;
   readonly #events = new StreamEvents<ShownCut<V, S, F>>();
 
   private constructor(
@@ -427,7 +432,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
         const stats = await entry.surface.compute(iso);
         if (stale()) return false;
         // what the surface holds, and the copy of it that is drawn (present(), below)
-        const drawnCopy = entry.surface.presentBytesNeeded ?? 0;
+        const drawnCopy = this.snapshots ? (entry.surface.presentBytesNeeded ?? 0) : 0;
         this.#surfaceCost[L] = (stats.cacheBytes + stats.vertexBytes + drawnCopy) / Math.max(1, step.wanted[L].length);
         levels.push({ level: L, volume: pool, surface: entry.surface, stats, drawn: [...step.drawn[L]], ghosts: [...step.ghosts[L]] });
       }
@@ -450,7 +455,9 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     // for them: what they need beyond the copies they replace, less what the surfaces this step lets go held.
     const goes = [...this.#retired, ...[...this.#surfaces].filter(([L]) => !used.includes(L)).map(([, e]) => e.surface)];
     const freed = goes.reduce((a, f) => a + f.budgetedBytes + (f.presentedBytes ?? 0), 0);
-    const copies = levels.reduce((a, l) => a + (l.surface.presentBytesNeeded ?? 0) - (l.surface.presentedBytes ?? 0), 0);
+    const copies = this.snapshots
+      ? levels.reduce((a, l) => a + (l.surface.presentBytesNeeded ?? 0) - (l.surface.presentedBytes ?? 0), 0)
+      : 0;
     if (this.gpu.allocatedBytes - freed + copies > this.budgetBytes - RESERVE_BYTES / 2) {
       return {
         level: step.finest,
@@ -466,7 +473,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     }
     for (const s of this.#retired) s.destroy();
     this.#retired = [];
-    for (const l of levels) l.surface.present?.();
+    if (this.snapshots) for (const l of levels) l.surface.present?.();
     this.#shown = { iso, step: step.finest, final, levels, cut, leaves: step.leaves };
     this.#events.shown(this.#shown);
     progress('shown');
