@@ -125,12 +125,11 @@ export interface StoreSessionOptions {
    * store): the open then fails and lets the store go.
    */
   view?: (store: ZfpStore) => ViewSpec | null;
-  /** Called with the stream as soon as it is made, before its first view (the CLI turns retries and skirts here). */
+  /** Called with the stream as soon as it is made, before its first view (the CLI turns off retries and snapshots here, and sets skirts). */
   setup?: (stream: StoreStream) => void;
 }
 
 export class StoreSession {
-  readonly fetched: FetchedChunks;
   #closed = false;
 
   private constructor(
@@ -142,10 +141,9 @@ export class StoreSession {
     readonly port: ChunkedStreamGpu,
     readonly stream: StoreStream,
     readonly budgetBytes: number,
-    fetched: FetchedChunks,
-  ) {
-    this.fetched = fetched;
-  }
+    /** The chunks that came over (counted once). */
+    readonly fetched: FetchedChunks,
+  ) {}
 
   /** The stream when it is refined by the view, else null. */
   get view(): ChunkViewStream | null {
@@ -155,10 +153,6 @@ export class StoreSession {
   /** The stream when it is level by level, else null. */
   get levels(): ChunkStreamController | null {
     return this.stream instanceof ViewStream ? null : this.stream;
-  }
-
-  get closed(): boolean {
-    return this.#closed;
   }
 
   /**
