@@ -19,7 +19,7 @@ import { ChunkFetcher } from '../src/store/fetch/chunk-fetcher.ts';
 import { chunkedGpu } from '../src/store/gpu-port.ts';
 import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf, type ViewCameraState } from '../src/store/view/camera.ts';
 import { DEFAULT_VIEWPORT } from '../src/store/view/view-request.ts';
-import { DEFAULT_TOLERANCE_PX, ViewStream } from '../src/store/view/view-stream.ts';
+import { DEFAULT_TOLERANCE_PX, StoreStream } from '../src/store/stream/store-stream.ts';
 import { openStore } from '../src/store/zarr/open-store.ts';
 import type { ChunkedVolume } from '../src/zfp/chunked-volume.ts';
 import { printTable, summarize } from './lib/report.ts';
@@ -102,7 +102,7 @@ export async function flightRun(
   const store = await openStore(metered, url);
   const fetcher = new ChunkFetcher(store);
   const port = chunkedGpu(gpu);
-  const stream = await ViewStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budgetBytes);
+  const stream = await StoreStream.byView<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budgetBytes);
   let stopped: string | null = null;
   stream.onProgress((p) => {
     if (p.phase === 'stopped') stopped = p.reason ?? 'stopped';
@@ -145,7 +145,7 @@ export async function flightRun(
       gpuBytes: port.meter.bytes,
       gpuPeakBytes: port.meter.peak,
       chunksPerLevel: store.levels.map((_, L) => shown?.levels.find((l) => l.level === L)?.drawn.length ?? 0),
-      limitedByBudget: shown?.cut.limitedByBudget ?? false,
+      limitedByBudget: shown?.cut?.limitedByBudget ?? false,
       gapMedianMs: Number(percentile(gaps, 0.5).toFixed(1)),
       gapP95Ms: Number(percentile(gaps, 0.95).toFixed(1)),
       longestTaskMs: Number((gaps.at(-1) ?? 0).toFixed(1)),

@@ -26,7 +26,7 @@ import { chunkedGpu, storeEncoder } from '../../src/store/gpu-port.ts';
 import { readLevelValues } from '../../src/store/level-values.ts';
 import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../src/store/view/camera.ts';
 import { DEFAULT_VIEWPORT } from '../../src/store/view/view-request.ts';
-import { DEFAULT_TOLERANCE_PX, ViewStream } from '../../src/store/view/view-stream.ts';
+import { DEFAULT_TOLERANCE_PX, StoreStream } from '../../src/store/stream/store-stream.ts';
 import { openStore } from '../../src/store/zarr/open-store.ts';
 import type { ChunkedVolume } from '../../src/zfp/chunked-volume.ts';
 import { linkStore } from '../stream-scale.ts';
@@ -119,7 +119,7 @@ export async function losslessSection(run: BenchRun): Promise<unknown> {
         // a brick handed over for the second isovalue that the ranges learnt so far exclude (its own is learnt after it arrives)
         if (secondIso && !stream.learnt.needs(L, ISO[1], c) && !store.levels[L].rangesPath) excluded++;
       });
-      const stream = await ViewStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budget);
+      const stream = await StoreStream.byView<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budget);
       const stops: string[] = [];
       stream.onProgress((p) => {
         if (p.phase === 'stopped') stops.push(p.reason ?? 'stopped');

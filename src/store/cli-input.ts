@@ -11,7 +11,7 @@ import { PinnedLevelSurface } from './pinned-level.ts';
 import { storeRateChooser } from './rate.ts';
 import { type StoreRecord, StoreSession } from './session.ts';
 import { type ViewRequest, viewSpecFor } from './view/view-request.ts';
-import { type ViewSpec, ViewStream } from './view/view-stream.ts';
+import { type ViewSpec, StoreStream } from './stream/store-stream.ts';
 import { type ChunkViewStream, ViewCutSurface } from './view/view-surface.ts';
 import { StoreError } from './zarr/errors.ts';
 import { isStoreUrl, storeForLocation } from './zarr/node-store.ts';
@@ -100,7 +100,6 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
       return view;
     },
     setup: (stream) => {
-      if (!(stream instanceof ViewStream)) return;
       stream.retryFailed = false; // the CLI reports a chunk that failed (after the store's own retries)
       stream.skirts = opts.view?.skirts ?? true;
       stream.snapshots = false; // nothing is drawn while it refines: the surfaces are read once it ends

@@ -11,7 +11,8 @@ import { encoderFor, type ZfpEncoder } from '../zfp/encoder.ts';
 import { maxShardBytesFor } from '../zfp/gpu-stream.ts';
 import type { ChunkFetcher } from './fetch/chunk-fetcher.ts';
 import type { LearntRanges } from './learnt-ranges.ts';
-import { StreamController, type StreamGpu } from './stream-controller.ts';
+import { LevelStream } from './stream/level-stream.ts';
+import type { StreamGpu } from './stream-port.ts';
 import type { ZfpStore } from './zarr/open-store.ts';
 
 export interface ChunkedStreamGpu extends StreamGpu<ChunkedVolume, IsosurfaceStats, Isosurface> {
@@ -49,7 +50,7 @@ export async function createChunkStream(
   gpu: GpuContext | ChunkedStreamGpu,
   budgetBytes: number,
   options: { learnt?: LearntRanges } = {},
-): Promise<StreamController<ChunkedVolume, IsosurfaceStats, Isosurface>> {
+): Promise<LevelStream<ChunkedVolume, IsosurfaceStats, Isosurface>> {
   const port = 'meter' in gpu ? gpu : chunkedGpu(gpu, undefined, await storeEncoder(gpu, store));
-  return StreamController.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budgetBytes, options);
+  return LevelStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budgetBytes, options);
 }

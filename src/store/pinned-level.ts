@@ -8,7 +8,7 @@
 import type { Isosurface } from '../isosurface/isosurface.ts';
 import type { IsosurfaceStats, SurfaceMesh, VolumeInfo } from '../isosurface/types.ts';
 import type { ChunkedVolume } from '../zfp/chunked-volume.ts';
-import type { StreamController } from './stream-controller.ts';
+import type { LevelStream } from './stream/level-stream.ts';
 
 /** The level could not show a surface at this isovalue (over the budget, a failed chunk): the controller's reason. */
 export class LevelStoppedError extends Error {
@@ -22,7 +22,7 @@ export class LevelStoppedError extends Error {
   }
 }
 
-export type ChunkStreamController = StreamController<ChunkedVolume, IsosurfaceStats, Isosurface>;
+export type ChunkLevelStream = LevelStream<ChunkedVolume, IsosurfaceStats, Isosurface>;
 
 export class PinnedLevelSurface {
   readonly info: VolumeInfo;
@@ -31,7 +31,7 @@ export class PinnedLevelSurface {
   #errors: string[] = [];
 
   constructor(
-    readonly controller: ChunkStreamController,
+    readonly controller: ChunkLevelStream,
     readonly level: number,
   ) {
     controller.finest = level;

@@ -12,9 +12,9 @@ import type { ChunkedVolume } from '../zfp/chunked-volume.ts';
 import { ChunkFetcher } from './fetch/chunk-fetcher.ts';
 import { type ChunkedStreamGpu, chunkedGpu, createChunkStream, storeEncoder } from './gpu-port.ts';
 import type { LearntRanges } from './learnt-ranges.ts';
-import type { ChunkStreamController } from './pinned-level.ts';
+import type { ChunkLevelStream } from './pinned-level.ts';
 import type { StreamGpuBytes } from './stream-port.ts';
-import { type ViewSpec, ViewStream } from './view/view-stream.ts';
+import { type ViewSpec, StoreStream } from './stream/store-stream.ts';
 import type { ChunkViewStream } from './view/view-surface.ts';
 import { openStore } from './zarr/open-store.ts';
 import type { SourceInfo } from './zarr/source-store.ts';
@@ -107,9 +107,6 @@ export class FetchedChunks {
   }
 }
 
-/** The stream of a session: level by level, or refined by the view. */
-export type StoreStream = ChunkStreamController | ChunkViewStream;
-
 export interface StoreSessionOptions {
   /** How the store is opened (rate, time point, channel, ranges sidecar, retries, decode workers). */
   open: OpenStoreOptions;
@@ -126,7 +123,7 @@ export interface StoreSessionOptions {
    */
   view?: (store: ZfpStore) => ViewSpec | null;
   /** Called with the stream as soon as it is made, before its first view (the CLI turns off retries and snapshots here, and sets skirts). */
-  setup?: (stream: StoreStream) => void;
+  setup?: (stream: ChunkViewStream) => void;
 }
 
 export class StoreSession {
@@ -139,7 +136,10 @@ export class StoreSession {
     readonly metered: MeteredStore,
     readonly fetcher: ChunkFetcher,
     readonly port: ChunkedStreamGpu,
-    readonly stream: StoreStream,
+    /** The stream (one engine, planned by the view or level by level). */
+    readonly stream: ChunkViewStream,
+    /** The stream as levels, when it is planned level by level; else null. */
+    readonly levels: ChunkLevelStream | null,
     readonly budgetBytes: number,
     /** The chunks that came over (counted once). */
     readonly fetched: FetchedChunks,
@@ -147,12 +147,7 @@ export class StoreSession {
 
   /** The stream when it is refined by the view, else null. */
   get view(): ChunkViewStream | null {
-    return this.stream instanceof ViewStream ? this.stream : null;
-  }
-
-  /** The stream when it is level by level, else null. */
-  get levels(): ChunkStreamController | null {
-    return this.stream instanceof ViewStream ? null : this.stream;
+    return this.levels ? null : this.stream;
   }
 
   /**
@@ -217,7 +212,7 @@ export class StoreSession {
   static async open(gpu: GpuContext, source: AsyncReadable, name: string, options: StoreSessionOptions): Promise<StoreSession> {
     const metered = source instanceof MeteredStore ? source : new MeteredStore(source);
     let store: ZfpStore | undefined;
-    let stream: StoreStream | undefined;
+    let stream: ChunkViewStream | undefined;
     try {
       store = await openStore(metered, name, options.open);
       const fetcher = new ChunkFetcher(store, { maxInFlight: options.maxInFlight ?? 8 });
@@ -226,18 +221,19 @@ export class StoreSession {
       const port = chunkedGpu(gpu, undefined, await storeEncoder(gpu, store));
       const learnt = options.learnt?.(store);
       const view = options.view?.(store) ?? null;
+      let levels: ChunkLevelStream | null = null;
       if (view) {
-        const refined = await ViewStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, options.budgetBytes, {
+        stream = await StoreStream.byView<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, options.budgetBytes, {
           learnt,
         });
-        stream = refined;
-        options.setup?.(refined);
-        await refined.setView(view);
+        options.setup?.(stream);
+        await stream.setView(view);
       } else {
-        stream = await createChunkStream(store, fetcher, port, options.budgetBytes, { learnt });
+        levels = await createChunkStream(store, fetcher, port, options.budgetBytes, { learnt });
+        stream = levels.stream;
         options.setup?.(stream);
       }
-      return new StoreSession(name, store, metered, fetcher, port, stream, options.budgetBytes, fetched);
+      return new StoreSession(name, store, metered, fetcher, port, stream, levels, options.budgetBytes, fetched);
     } catch (e) {
       stream?.destroy();
       store?.close?.();

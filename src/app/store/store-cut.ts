@@ -6,7 +6,7 @@
 // it and tells the store view.
 import type { IsosurfaceDrawData, IsosurfaceStats, SurfaceMesh, VolumeInfo } from '../../isosurface/types.ts';
 import type { Rgb, SurfacePart } from '../../render/surface-layer.ts';
-import type { ShownCut } from '../../store/view/view-stream.ts';
+import type { ShownCut } from '../../store/stream/store-stream.ts';
 import { type ChunkViewStream, joinLevelMeshes, sumStats } from '../../store/view/view-surface.ts';
 import type { Isosurface } from '../../isosurface/isosurface.ts';
 import type { ChunkedVolume } from '../../zfp/chunked-volume.ts';

@@ -7,13 +7,13 @@ import { HttpStore } from '../../store/zarr/http-store.ts';
 import { isZipStoreName, storeZipBytes, ZipStore } from '../../store/zarr/zip-store.ts';
 import { estimateFixedBytes } from '../../store/level-state.ts';
 import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../store/view/camera.ts';
-import type { ViewSpec } from '../../store/view/view-stream.ts';
+import type { ViewSpec } from '../../store/stream/store-stream.ts';
 import type { GpuContext } from '../../gpu/device.ts';
 import type { ChunkFetcher } from '../../store/fetch/chunk-fetcher.ts';
 import { sessionRanges } from '../../store/learnt-ranges.ts';
 import type { StoreSession } from '../../store/session.ts';
-import type { ChunkStreamController } from '../../store/pinned-level.ts';
-import type { StreamProgress } from '../../store/stream-controller.ts';
+import type { ChunkLevelStream } from '../../store/pinned-level.ts';
+import type { StreamProgress } from '../../store/stream-port.ts';
 import type { ZfpStore } from '../../store/zarr/open-store.ts';
 import type { MeteredStore } from '../../store/zarr/stores.ts';
 import type { CameraState } from '../../render/camera.ts';
@@ -94,8 +94,8 @@ export interface OpenStore {
   store: ZfpStore;
   metered: MeteredStore;
   fetcher: ChunkFetcher;
-  /** Level by level (StreamController), or refined by the view (ViewStream). */
-  controller: ChunkStreamController | ChunkViewStream;
+  /** Level by level (LevelStream), or refined by the view (StoreStream). */
+  controller: ChunkLevelStream | ChunkViewStream;
   /** Refined by the view: its tolerance and tint; null when level by level. */
   cut: { tolerancePx: number; tint: boolean } | null;
   /** A camera change waits this timer (throttled re-planning), and unsubscribes with this. */

@@ -5,8 +5,8 @@
 // says the store itself is gone (another volume replaced it).
 import type { Isosurface } from '../../isosurface/isosurface.ts';
 import type { IsosurfaceDrawData, IsosurfaceStats, SurfaceMesh, VolumeInfo } from '../../isosurface/types.ts';
-import type { ChunkStreamController } from '../../store/pinned-level.ts';
-import type { ShownSurface } from '../../store/stream-controller.ts';
+import type { ChunkLevelStream } from '../../store/pinned-level.ts';
+import type { ShownSurface } from '../../store/stream-port.ts';
 import type { ChunkedVolume } from '../../zfp/chunked-volume.ts';
 import type { PageIsosurface } from '../engine.ts';
 
@@ -21,7 +21,7 @@ export class StoreLevelIsosurface implements PageIsosurface {
   #destroyed = false;
 
   constructor(
-    private readonly controller: ChunkStreamController,
+    private readonly controller: ChunkLevelStream,
     private shown: ShownLevel,
     valueRange: [number, number],
     /** A new isovalue for the store (the store view's refinement: newest wins, stale requests aborted). */

@@ -8,12 +8,12 @@
 import type { AsyncReadable } from '@zarrita/storage';
 import { storeRateChooser } from '../../store/rate.ts';
 import { StoreSession } from '../../store/session.ts';
-import type { ChunkStreamController } from '../../store/pinned-level.ts';
-import type { StreamProgress } from '../../store/stream-controller.ts';
+import type { ChunkLevelStream } from '../../store/pinned-level.ts';
+import type { StreamProgress } from '../../store/stream-port.ts';
 import { StoreError } from '../../store/zarr/errors.ts';
 import { HttpStore } from '../../store/zarr/http-store.ts';
 import { type LevelValues, readLevelValues } from '../../store/level-values.ts';
-import { DEFAULT_TOLERANCE_PX, ViewStream } from '../../store/view/view-stream.ts';
+import { DEFAULT_TOLERANCE_PX, StoreStream } from '../../store/stream/store-stream.ts';
 import type { ChunkViewStream } from '../../store/view/view-surface.ts';
 import { type ShownCutOfPage, StoreCutIsosurface } from './store-cut.ts';
 import { chooseIsovalue } from '../iso-choice.ts';
@@ -133,7 +133,8 @@ export class StoreView {
       this.d.onError(e instanceof StoreError ? e.message : `${url}: ${(e as Error).message}`);
       return;
     }
-    const { store, metered, fetcher: f, stream: controller } = session;
+    const { store, metered, fetcher: f } = session;
+    const controller = session.levels ?? session.stream;
     // no value range in the metadata nor from range arrays: the coarsest level, read whole now, gives one (provisional)
     let coarse: LevelValues | null = null;
     if (!controller.valueRange && gen === this.#gen) {
@@ -192,14 +193,9 @@ export class StoreView {
       state.levels[level].chunkBytesFetched += bytes;
     });
     controller.onProgress((p) => this.#progress(o, p));
-    if (controller instanceof ViewStream) controller.onShown((s) => this.#shownCut(o, s));
-    else {
-      controller.onShown((s) => this.#shown(o, s));
-      // a chunk that failed has cooled down: the same isovalue again (the coarser surface stayed meanwhile)
-      controller.onRetry((value) => {
-        if (this.#open === o && value === o.iso) void this.#refine(o, value);
-      });
-    }
+    // a chunk that failed is tried again by the stream once it has cooled down (the coarser surface stays meanwhile)
+    if (session.levels) session.levels.onShown((s) => this.#shown(o, s));
+    else session.stream.onShown((s) => this.#shownCut(o, s));
     controller.onError((e) => this.d.onError(e.message));
     this.#publish(o);
 
@@ -277,7 +273,7 @@ export class StoreView {
     } else {
       const first = o.current === null;
       const iso = new StoreLevelIsosurface(
-        o.controller as ChunkStreamController,
+        o.controller as ChunkLevelStream,
         s,
         o.valueRange,
         (value) => this.#refine(o, value),

@@ -1,4 +1,4 @@
-// One step of the view stream's refinement (view-stream.ts): the cut
+// One step of a view's refinement (cut-planner.ts): the cut
 // coarsened to levels >= k, a region whose target is finer than k drawn by
 // its ancestor at level k (still balanced, still covering every region
 // once), and per level what that draws: its leaves, the drawn chunks (the
@@ -6,15 +6,8 @@
 // neighbours of leaves that are not leaves: their voxels complete the drawn
 // chunks' upper cells) and the chunks wanted, nearest to the eye first.
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
+import type { Step } from '../stream/stream-types.ts';
 import type { ViewCut } from './cut.ts';
-
-export interface Step {
-  finest: number;
-  leaves: ChunkIndex[][];
-  drawn: Set<ChunkIndex>[];
-  ghosts: Set<ChunkIndex>[];
-  wanted: ChunkIndex[][];
-}
 
 /**
  * Step k of `cut`. `needs(L)`: which chunks of level L the surface needs
@@ -68,7 +61,8 @@ export function cutStep(
     ghosts.push(gh);
     wanted.push(nearestFirst(layouts[L], L, [...d, ...gh], eye, voxelSize));
   }
-  return { finest: k, leaves: leaves.map((s) => [...s]), drawn, ghosts, wanted };
+  const levels = drawn.map((d, L) => (d.size > 0 ? L : -1)).filter((L) => L >= 0);
+  return { finest: k, levels, leaves: leaves.map((s) => [...s]), drawn, ghosts, wanted };
 }
 
 /** Chunks of level L by their centre's distance to the eye, nearest first (ties: ascending chunk). */

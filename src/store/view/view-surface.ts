@@ -9,9 +9,9 @@ import type { IsosurfaceStats, VolumeInfo } from '../../isosurface/types.ts';
 import type { ChunkedVolume } from '../../zfp/chunked-volume.ts';
 import { LevelStoppedError } from '../pinned-level.ts';
 import type { ChunkIndex } from '../types.ts';
-import type { ViewStream } from './view-stream.ts';
+import type { StoreStream } from '../stream/store-stream.ts';
 
-export type ChunkViewStream = ViewStream<ChunkedVolume, IsosurfaceStats, Isosurface>;
+export type ChunkViewStream = StoreStream<ChunkedVolume, IsosurfaceStats, Isosurface>;
 
 /** One chunk of the cut: its level, chunk coordinates, and the triangles of that level's regular cells whose lowest corner lies in it. */
 export interface CutChunkRecord {

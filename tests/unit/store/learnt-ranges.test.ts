@@ -17,7 +17,7 @@ import { LearntRanges, MAX_LEARNT_CHUNKS, sessionRanges } from '../../../src/sto
 import { chunkNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
 import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../../src/store/view/camera.ts';
 import { DEFAULT_VIEWPORT } from '../../../src/store/view/view-request.ts';
-import { ViewStream } from '../../../src/store/view/view-stream.ts';
+import { StoreStream } from '../../../src/store/stream/store-stream.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
 import { openStore } from '../../../src/store/zarr/open-store.ts';
 import { openRangesSidecar } from '../../../src/store/zarr/ranges-sidecar.ts';
@@ -135,7 +135,7 @@ describe('ranges learnt by the view stream on the GPU', () => {
       const fetched: number[] = [];
       // every chunk handed to the stream, fetched or from the fetcher's cache of bytes
       fetcher.onChunk((_L, c) => fetched.push(c));
-      const stream = await ViewStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, 64 << 20);
+      const stream = await StoreStream.byView<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, 64 << 20);
       const layout = store.levels[0].layout;
       const box = fitBox0(layout, 0);
       const camera = cameraFromView(

@@ -5,7 +5,7 @@
 // closing a store or a volume gives back every byte, the CPU cache of chunks
 // stays under its bound, and the last surface of the scrub equals a fresh
 // open's at the same isovalue (pools grown and shrunk along the way keep
-// their chunks right). Refined by the view (ViewStream, snapshots included):
+// their chunks right). Refined by the view (StoreStream, snapshots included):
 // camera moves and isovalues landing mid-refinement at a budget that binds,
 // every allocation within it, every byte back.
 import { mkdtempSync, rmSync } from 'node:fs';
@@ -18,7 +18,7 @@ import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
 import { chunkedGpu, createChunkStream } from '../../../src/store/gpu-port.ts';
 import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../../src/store/view/camera.ts';
 import { DEFAULT_VIEWPORT } from '../../../src/store/view/view-request.ts';
-import { ViewStream } from '../../../src/store/view/view-stream.ts';
+import { StoreStream } from '../../../src/store/stream/store-stream.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
 import { openStore } from '../../../src/store/zarr/open-store.ts';
 import { mulberry32 } from '../../../src/util/random.ts';
@@ -129,14 +129,14 @@ describe('a long session', () => {
       try {
         const store = await openStore(storeForLocation(hydrogen), hydrogen);
         const fetcher = new ChunkFetcher(store, { maxInFlight: 4, cacheBytes: CPU_CACHE });
-        const stream = await ViewStream.create(store, fetcher, chunkedGpu(gpu), budget);
+        const stream = await StoreStream.byView(store, fetcher, chunkedGpu(gpu), budget);
         const errors: string[] = [];
         stream.onError((e) => errors.push(e.message));
         let bound = 0;
         let shows = 0;
         stream.onShown((shown) => {
           shows++;
-          if (shown.cut.limitedByBudget) bound++;
+          if (shown.cut?.limitedByBudget) bound++;
         });
         const stops: string[] = [];
         stream.onProgress((p) => {

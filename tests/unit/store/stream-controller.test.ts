@@ -9,14 +9,10 @@ import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
 import { chunksNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
-import {
-  estimateFixedBytes,
-  StreamController,
-  type LevelStats,
-  type LevelVolume,
-  type StreamGpu,
-  type StreamProgress,
-} from '../../../src/store/stream-controller.ts';
+import { estimateFixedBytes } from '../../../src/store/level-state.ts';
+import { LevelStream } from '../../../src/store/stream/level-stream.ts';
+import type { RoleVolume } from '../../../src/store/stream/stream-types.ts';
+import type { LevelStats, StreamGpu, StreamProgress } from '../../../src/store/stream-port.ts';
 import type { ChunkLevelLayout } from '../../../src/store/types.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
 import { openStore, type ZfpStore } from '../../../src/store/zarr/open-store.ts';
@@ -25,7 +21,7 @@ import { convert } from './stores.ts';
 const work = mkdtempSync(join(tmpdir(), 'store-stream-'));
 const path = join(work, 'hydrogen.zarr');
 
-class FakeVolume implements LevelVolume {
+class FakeVolume implements RoleVolume {
   resident = new Set<number>();
   destroyed = false;
   constructor(
@@ -60,6 +56,7 @@ class FakeVolume implements LevelVolume {
     return undefined;
   }
   reserve() {}
+  setRoles() {}
   isReserved() {
     return false;
   }
@@ -122,7 +119,7 @@ async function setup(budget: number, maxInFlight = 8) {
   const ranges = await Promise.all(store.levels.map((_, i) => store.readRanges(i).then((r) => r!)));
   const fetcher = new ChunkFetcher(store, { maxInFlight });
   const { gpu, volumes } = fakeGpu(store, ranges);
-  const c = await StreamController.create(store, fetcher, gpu, budget);
+  const c = await LevelStream.create(store, fetcher, gpu, budget);
   const progress: StreamProgress[] = [];
   const shown: Array<[number, number]> = [];
   c.onProgress((p) => progress.push(p));
@@ -135,7 +132,7 @@ beforeAll(() => {
 }, 900_000);
 afterAll(() => rmSync(work, { recursive: true, force: true }));
 
-describe('StreamController', () => {
+describe('LevelStream', () => {
   it('shows the coarsest level first, then refines to level 0, fetching only needed chunks', async () => {
     const { store, ranges, fetcher, c, progress, shown } = await setup(256 << 20);
     await c.setIsovalue(20);

@@ -56,7 +56,7 @@ async function controller(gpu: GpuContext, budget: number, maxInFlight = 8, at =
   return { store, fetcher, c, errors };
 }
 
-describe('StreamController on ChunkedVolume', () => {
+describe('LevelStream on ChunkedVolume', () => {
   gpuTest(
     "a store without range arrays: its first surface fetches the level whole, then its chunk ranges (from the GPU) equal NumPy's over zarr-python's decode and plan the next surface",
     async ({ gpu }) => {

@@ -1,30 +1,33 @@
-// View-dependent streaming (issue 27): each region of the volume at the
-// level the camera needs, one surface made of several levels.
+// The one stream of a store, for the page and the CLI, whichever way it is
+// planned (planner.ts): by the view (each region of the volume at the level
+// the camera needs, one surface made of several levels) or level by level
+// (each step one level everywhere).
 //
-// For the isovalue and the view, the cut (cut.ts) says which chunk of which
-// level draws each region (a 2:1 balanced octree cut by screen-space error,
-// within the budget). Each level used has its pool (ChunkedVolume) holding
-// the cut's chunks the surface needs there and their ghosts (the +x/+y/+z
-// neighbours whose voxels complete the drawn chunks' upper cells), and its
-// Isosurface restricted to the drawn chunks by the pool's chunk roles: so a
-// drawn chunk's cells are exactly the level's regular cells, whatever its
-// neighbours are drawn at.
+// The planner turns the isovalue (and the view) into steps, coarse to fine.
+// Each level a step uses has its pool (ChunkedVolume) holding the step's
+// drawn chunks and their ghosts (the +x/+y/+z neighbours whose voxels
+// complete the drawn chunks' upper cells), and its Isosurface restricted to
+// the drawn chunks by the pool's chunk roles: so a drawn chunk's cells are
+// exactly the level's regular cells, whatever its neighbours are drawn at.
+// The first surface comes from the coarsest step at once, and each finer
+// step replaces the one before when its chunks are resident. A new isovalue
+// or view starts at the finest step already resident (scrubbing and
+// orbiting stay at full detail where they can); the newest request wins and
+// requests no longer needed are aborted.
 //
-// Refinement goes coarse to fine as today, but only where the view needs it:
-// step k shows the cut coarsened to levels >= k (a region whose target is
-// finer than k is drawn by its ancestor at level k; still balanced, still
-// covering every region once), so the first surface comes from the coarsest
-// level at once and each finer step replaces its parents when its chunks are
-// resident. A new isovalue or a new view starts at the finest step already
-// resident (scrubbing and orbiting stay at full detail where they can); the
-// newest request wins and requests no longer needed are aborted.
+// One budget: everything the stream holds on the GPU (pools, surfaces with
+// their per-level buffers, cache, vertices, the drawn copies) is counted
+// where it is made (the port's allocatedBytes). A step that does not fit is
+// tried once more with what is not on screen let go, then planned coarser
+// (a planner that can), else the refinement stops there and says why, the
+// coarser step staying on screen. A coarser step that does not fit while a
+// finer one is on screen is skipped (the finer one stays).
 //
 // Steps are snapshots: a step's chunks are all resident before any surface
 // is computed; the levels are computed in place, finer first, and once every
 // level is done the copies the page draws are made together
 // (Isosurface.present), so the frames between draw the step before, whole.
-// The types it takes and gives: view-types.ts.
-import { StreamEvents } from '../stream-events.ts';
+// The types it takes and gives: stream-types.ts.
 import type { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
 import { LearntRanges, learnSlotRanges } from '../learnt-ranges.ts';
 import { chunkCount, coarsestDrawableLevel, estimateFixedBytes, putArrived, readLevelRanges, storeValueRange } from '../level-state.ts';
@@ -32,9 +35,11 @@ import { chunkNeeded } from '../plan.ts';
 import type { LevelStats, LevelSurface, StreamGpu, StreamGpuBytes, StreamProgress } from '../stream-port.ts';
 import type { ChunkIndex } from '../types.ts';
 import { isAbort } from '../zarr/errors.ts';
+import { StreamEvents } from '../stream-events.ts';
 import type { ZfpStore } from '../zarr/store.ts';
-import { type ViewCut, viewCut } from './cut.ts';
-import { cutStep, type Step } from './step.ts';
+import type { ViewCut } from '../view/cut.ts';
+import { CutPlanner } from '../view/cut-planner.ts';
+import type { Planner, StreamPlan } from './planner.ts';
 import {
   type CutLevelShown,
   DEFAULT_TOLERANCE_PX,
@@ -42,13 +47,14 @@ import {
   type LevelState,
   type RoleVolume,
   type ShownCut,
+  type Step,
   type ViewSpec,
   type Waiting,
-} from './view-types.ts';
+} from './stream-types.ts';
 
-export { type CutLevelShown, DEFAULT_TOLERANCE_PX, type RoleVolume, type ShownCut, type ViewSpec };
+export { type CutLevelShown, DEFAULT_TOLERANCE_PX, type RoleVolume, type ShownCut, type Step, type ViewSpec };
 
-export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends LevelSurface<S>> {
+export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends LevelSurface<S>> {
   readonly levels: LevelState<V>[];
   /** Chunk ranges learnt as chunks arrive, for the levels without range arrays (learnt-ranges.ts). */
   readonly learnt: LearntRanges;
@@ -90,6 +96,8 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     readonly fetcher: ChunkFetcher,
     readonly gpu: StreamGpu<V, S, F>,
     budgetBytes: number,
+    /** What the steps draw: by view (view/cut-planner.ts) or level by level (level-planner.ts). */
+    readonly planner: Planner,
     learnt?: LearntRanges,
   ) {
     this.budgetBytes = budgetBytes;
@@ -123,16 +131,29 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     });
   }
 
+  /** A stream planned by `planner`, once the coarsest level's range array is read. */
   static async create<V extends RoleVolume, S extends LevelStats, F extends LevelSurface<S>>(
     store: ZfpStore,
     fetcher: ChunkFetcher,
     gpu: StreamGpu<V, S, F>,
     budgetBytes: number,
+    planner: Planner,
     options: { learnt?: LearntRanges } = {},
-  ): Promise<ViewStream<V, S, F>> {
-    const v = new ViewStream(store, fetcher, gpu, budgetBytes, options.learnt);
+  ): Promise<StoreStream<V, S, F>> {
+    const v = new StoreStream(store, fetcher, gpu, budgetBytes, planner, options.learnt);
     await v.#readRanges(v.levels[v.coarsest]);
     return v;
+  }
+
+  /** A stream refined by the view (setView before setIsovalue). */
+  static byView<V extends RoleVolume, S extends LevelStats, F extends LevelSurface<S>>(
+    store: ZfpStore,
+    fetcher: ChunkFetcher,
+    gpu: StreamGpu<V, S, F>,
+    budgetBytes: number,
+    options: { learnt?: LearntRanges } = {},
+  ): Promise<StoreStream<V, S, F>> {
+    return StoreStream.create(store, fetcher, gpu, budgetBytes, new CutPlanner(), options);
   }
 
   onProgress(l: (p: StreamProgress) => void): () => void {
@@ -184,26 +205,25 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     return Number.isFinite(this.#iso) ? this.setIsovalue(this.#iso) : Promise.resolve();
   }
 
-  /** Newest wins: resolves when this isovalue's refinement for the current view ends (the whole cut shown, stopped, or superseded). */
+  /** Newest wins: resolves when this isovalue's refinement (for the current view) ends: the whole plan shown, stopped, or superseded. */
   async setIsovalue(iso: number): Promise<void> {
     const gen = ++this.#gen;
     this.#iso = iso;
     this.#waiting?.done();
     this.#waiting = null;
-    const view = this.#view;
-    if (!view) throw new Error('ViewStream: setView before setIsovalue');
-    // A step that does not fit (a pool that cannot grow, a surface over its cap) makes the cut
-    // coarser: what the surfaces really took is learnt (#surfaceCost) and the cut planned again
-    // with it, and with less of the budget each time, until it fits; the coarser step stays on
-    // screen meanwhile. Only a cut that cannot be made coarser is refused.
+    if (!this.#view && this.planner.needsView) throw new Error('StoreStream: setView before setIsovalue');
+    // A step that does not fit (a pool that cannot grow, a surface over its cap) is tried once more with
+    // what is not on screen let go, then made coarser: what the surfaces really took is learnt
+    // (#surfaceCost) and the plan made again with it, and with less of the budget each time, until it
+    // fits; the coarser step stays on screen meanwhile. Only a plan that cannot be made coarser is refused.
     let share = PLAN_SHARE;
     for (let attempt = 0; ; attempt++) {
-      const r = await this.#refine(iso, view, gen, share);
+      const r = await this.#refine(iso, gen, share);
       if (r === 'done' || gen !== this.#gen || this.#destroyed) return;
-      if (r.coarser && attempt < MAX_COARSENINGS) {
+      if ((r.coarser || attempt === 0) && attempt < MAX_COARSENINGS) {
         // what the step that did not fit made goes; what is on screen stays
         this.#releaseUnshown();
-        share *= 0.85;
+        if (r.coarser) share *= 0.85;
         continue;
       }
       this.#stop(r.level, r.reason, 'budget');
@@ -211,73 +231,89 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     }
   }
 
-  /** Plans the cut with `share` of the budget and shows its steps; 'done', or a step that did not fit. */
-  async #refine(iso: number, view: ViewSpec, gen: number, share: number): Promise<'done' | BudgetStop> {
-    let cut: ViewCut;
+  /** Plans with `share` of the budget and shows the plan's steps; 'done', or a step that did not fit. */
+  async #refine(iso: number, gen: number, share: number): Promise<'done' | BudgetStop> {
+    const stale = () => gen !== this.#gen || this.#destroyed;
     for (;;) {
-      cut = this.#cut(iso, view, share);
-      if (cut.wantsRanges.length === 0) break;
-      try {
-        await Promise.all(cut.wantsRanges.map((L) => this.#readRanges(this.levels[L])));
-      } catch (e) {
-        if (gen !== this.#gen || this.#destroyed) return 'done';
-        this.#events.error(e as Error);
-        this.#stop(cut.wantsRanges[0], (e as Error).message, 'chunk');
+      const plan = this.#plan(iso, share);
+      if (plan.steps.length === 0) {
+        if (!(await this.#readWanted(plan, gen))) return 'done';
+        continue;
+      }
+      const { steps } = plan;
+      const complete = plan.wantsRanges.length === 0 && !plan.refused;
+      // a camera move that leaves the plan as it is on screen: nothing to fetch or compute, and
+      // what a superseded step was still fetching is aborted (its chunks are no longer needed)
+      if (complete && this.#isShown(steps[steps.length - 1], iso)) {
+        this.fetcher.wantAll([]);
+        this.#shown = { ...this.#shown!, cut: plan.cut, final: true };
         return 'done';
       }
-      if (gen !== this.#gen || this.#destroyed) return 'done';
-    }
-    const used = cut.levels.map((l, L) => (l.drawn.length > 0 ? L : Infinity));
-    const finestUsed = Math.min(...used);
-    const top = Math.max(...cut.levels.map((l, L) => (l.drawn.length > 0 ? L : -1)));
-    const steps: Step[] = [];
-    for (let k = top; k >= finestUsed; k--) steps.push(this.#step(cut, k));
-    // a cut that draws no chunk: one empty step, shown, so the page draws nothing at this isovalue
-    if (steps.length === 0) steps.push(this.#step(cut, this.coarsest));
-    // a camera move that leaves the cut as it is on screen: nothing to fetch or compute, and
-    // what a superseded step was still fetching is aborted (its chunks are no longer needed)
-    if (this.#isShown(steps[steps.length - 1], iso)) {
-      this.fetcher.wantAll([]);
-      this.#shown = { ...this.#shown!, cut };
-      return 'done';
-    }
-    // the finest step already resident: no fetching before it is shown
-    let first = 0;
-    for (let i = steps.length - 1; i > 0; i--) {
-      if (this.#resident(steps[i])) {
-        first = i;
-        break;
+      // the finest step already resident: no fetching before it is shown
+      let first = 0;
+      for (let i = steps.length - 1; i > 0; i--) {
+        if (this.#resident(steps[i])) {
+          first = i;
+          break;
+        }
       }
+      for (let i = first; i < steps.length; i++) {
+        if (stale()) return 'done';
+        // on screen already (a plan that goes on once a finer level's range array was read)
+        if (this.#isShown(steps[i], iso)) continue;
+        const r = await this.#show(steps[i], plan.cut, iso, gen, complete && i === steps.length - 1);
+        if (r === true) continue;
+        if (r === false) return 'done';
+        // a coarser step than the one on screen that finds no room (the finer one holds it): the finer stays
+        const s = this.#shown;
+        if (i < steps.length - 1 && s && s.step < steps[i].finest) {
+          this.#releaseUnshown();
+          continue;
+        }
+        return { ...r, coarser: plan.coarsenable };
+      }
+      if (stale()) return 'done';
+      if (plan.refused) {
+        this.#stop(plan.refused.level, plan.refused.reason, 'limit');
+        return 'done';
+      }
+      if (plan.wantsRanges.length === 0 || !(await this.#readWanted(plan, gen))) return 'done';
     }
-    for (let i = first; i < steps.length; i++) {
-      if (gen !== this.#gen || this.#destroyed) return 'done';
-      const r = await this.#show(steps[i], cut, iso, gen, i === steps.length - 1);
-      if (r === true) continue;
-      if (r === false) return 'done';
-      // the cut can be made coarser while some region is drawn finer than the coarsest level
-      return { ...r, coarser: finestUsed < this.coarsest };
-    }
-    return 'done';
   }
 
-  /** The view's cut at `iso` with the store's levels, ranges and budget. */
-  #cut(iso: number, view: ViewSpec, share = PLAN_SHARE): ViewCut {
+  /** The plan at `iso` with the store's levels, ranges, the view and `share` of the budget. */
+  #plan(iso: number, share: number): StreamPlan {
     const needs = new Map<number, ((c: ChunkIndex) => boolean) | null>();
-    return viewCut({
-      levels: this.levels.map((l) => ({ dims: l.layout.dims, chunkEdge: l.layout.chunkEdge, chunkGrid: l.layout.chunkGrid })),
+    return this.planner.plan({
+      iso,
+      view: this.#view,
       voxelSize: this.store.voxelSize,
-      camera: view.camera,
-      tolerancePx: view.tolerancePx,
-      finest: Math.max(this.#finestUsable, Math.min(this.finest, this.coarsest)),
+      layouts: this.levels.map((l) => l.layout),
+      finest: this.finest,
+      finestUsable: this.#finestUsable,
       coarsest: this.coarsest,
+      unusable: (L) => this.store.levels[L].unusable,
       needs: (L) => {
         if (!needs.has(L)) needs.set(L, this.#needs(L, iso));
         return needs.get(L)!;
       },
-      chunkBytes: (L) => this.#chunkCost(L),
+      chunkCost: (L) => this.#chunkCost(L),
       // some room for the surfaces being replaced while a step is computed
       budgetBytes: Math.max(0, this.budgetBytes - RESERVE_BYTES) * share,
     });
+  }
+
+  /** Reads the range arrays the plan wants; false when that failed (the stream stopped) or went stale. */
+  async #readWanted(plan: StreamPlan, gen: number): Promise<boolean> {
+    try {
+      await Promise.all(plan.wantsRanges.map((L) => this.#readRanges(this.levels[L])));
+    } catch (e) {
+      if (gen !== this.#gen || this.#destroyed) return false;
+      this.#events.error(e as Error);
+      this.#stop(plan.wantsRanges[0], (e as Error).message, 'chunk');
+      return false;
+    }
+    return gen === this.#gen && !this.#destroyed;
   }
 
   /** Which chunks of level L the surface at `iso` needs, or null while its range array is unread. */
@@ -309,24 +345,13 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     return readLevelRanges(this.store, lv);
   }
 
-  /** The cut coarsened to levels >= k (step.ts). */
-  #step(cut: ViewCut, k: number): Step {
-    return cutStep(
-      cut,
-      k,
-      this.levels.map((l) => l.layout),
-      (L) => this.#needs(L, this.#iso),
-      this.#view!.camera.eye,
-      this.store.voxelSize,
-    );
-  }
-
-  /** Whether the whole cut on screen is this step at this isovalue (the same drawn chunks and ghosts per level). */
+  /** Whether the step on screen is this step at this isovalue (the same levels, drawn chunks and ghosts per level). */
   #isShown(step: Step, iso: number): boolean {
     const s = this.#shown;
-    if (!s?.final || s.iso !== iso || s.levels.length !== step.drawn.filter((d) => d.size > 0).length) return false;
+    if (!s || s.iso !== iso || s.levels.length !== step.levels.length) return false;
     return s.levels.every(
       (l) =>
+        step.levels.includes(l.level) &&
         l.drawn.length === step.drawn[l.level].size &&
         l.ghosts.length === step.ghosts[l.level].size &&
         l.drawn.every((c) => step.drawn[l.level].has(c)) &&
@@ -343,13 +368,13 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
    * first), then shows it: true; false when stale or stopped; a BudgetStop
    * when it does not fit (the caller coarsens the cut or stops).
    */
-  async #show(step: Step, cut: ViewCut, iso: number, gen: number, final: boolean): Promise<boolean | BudgetStop> {
+  async #show(step: Step, cut: ViewCut | null, iso: number, gen: number, final: boolean): Promise<boolean | BudgetStop> {
     const stale = () => gen !== this.#gen || this.#destroyed;
     const shownWanted = this.#shownWanted();
     // pools: room for what the step wants and what is on screen now
     for (let L = 0; L < this.levels.length; L++) {
       const keep = new Set([...step.wanted[L], ...(shownWanted[L] ?? [])]);
-      if (step.wanted[L].length === 0) continue;
+      if (step.wanted[L].length === 0 && !step.levels.includes(L)) continue;
       const refused = this.#fitPool(this.levels[L], keep);
       if (refused) return { level: L, reason: refused };
     }
@@ -400,7 +425,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     }
     progress('computing');
     const levels: CutLevelShown<V, S, F>[] = [];
-    const used = step.drawn.map((d, L) => (d.size > 0 ? L : -1)).filter((L) => L >= 0);
+    const used = step.levels;
     let computing = step.finest;
     try {
       for (const L of used) {
@@ -557,7 +582,7 @@ export class ViewStream<V extends RoleVolume, S extends LevelStats, F extends Le
     }
     if (extra > this.#free())
       return (
-        `level ${lv.index} needs ${n} chunks (${mib(n * lv.layout.chunkBytes)} MiB) for this view; ` +
+        `level ${lv.index} needs ${n} chunks (${mib(n * lv.layout.chunkBytes)} MiB) for this step; ` +
         `the budget of ${mib(this.budgetBytes)} MiB has ${mib(Math.max(0, this.#free()))} MiB free`
       );
     this.#poolChanges++;

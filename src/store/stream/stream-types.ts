@@ -1,9 +1,10 @@
-// What a view stream (view-stream.ts) takes and gives: the pools it draws
-// (chunk roles), the view, the steps it shows, and its per-level state.
+// What the store stream (store-stream.ts) takes and gives: the pools it
+// draws (chunk roles), the steps its planner makes (planner.ts), the view,
+// the step on screen, and its per-level state.
 import type { ChunkRoleOptions } from '../../zfp/chunked-volume.ts';
 import type { LevelVolume } from '../stream-port.ts';
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
-import type { CutCamera, ViewCut } from './cut.ts';
+import type { CutCamera, ViewCut } from '../view/cut.ts';
 
 /** A pool whose chunks can be drawn, ghosts or idle (ChunkedVolume.setRoles). */
 export interface RoleVolume extends LevelVolume {
@@ -14,6 +15,22 @@ export interface ViewSpec {
   camera: CutCamera;
   /** A region is refined while one of its voxels projects to more than this many pixels. */
   tolerancePx: number;
+}
+
+/**
+ * One step of a refinement: per level, the regions it covers (leaves), the
+ * chunks drawn there that hold part of the surface, the ghosts (chunks that
+ * only lend their voxels to the drawn chunks' upper cells) and the chunks
+ * wanted resident, in fetch order. `levels`: the levels whose surfaces the
+ * step computes, finest first.
+ */
+export interface Step {
+  finest: number;
+  levels: number[];
+  leaves: ChunkIndex[][];
+  drawn: Set<ChunkIndex>[];
+  ghosts: Set<ChunkIndex>[];
+  wanted: ChunkIndex[][];
 }
 
 /** One level of the surface on screen. */
@@ -29,12 +46,12 @@ export interface CutLevelShown<V, S, F> {
 
 export interface ShownCut<V, S, F> {
   iso: number;
-  /** The finest level of this step; `final` when it is the view's whole cut. */
+  /** The finest level of this step; `final` when it is the plan's last step. */
   step: number;
   final: boolean;
   levels: CutLevelShown<V, S, F>[];
-  /** The view's cut this step leads to. */
-  cut: ViewCut;
+  /** The view's cut this step leads to (null: a plan by level, not by view). */
+  cut: ViewCut | null;
   /** Leaves drawn per level in this step (needed or not): the regions each level covers. */
   leaves: ChunkIndex[][];
 }
