@@ -11,7 +11,7 @@ import { PinnedLevelSurface } from './pinned-level.ts';
 import { storeRateChooser } from './rate.ts';
 import { type StoreRecord, StoreSession } from './session.ts';
 import { type ViewRequest, viewSpecFor } from './view/view-request.ts';
-import { type ViewSpec, StoreStream } from './stream/store-stream.ts';
+import type { ViewSpec } from './stream/store-stream.ts';
 import { type ChunkViewStream, ViewCutSurface } from './view/view-surface.ts';
 import { StoreError } from './zarr/errors.ts';
 import { isStoreUrl, storeForLocation } from './zarr/node-store.ts';

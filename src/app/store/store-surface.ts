@@ -1,6 +1,6 @@
 // A store's surface as the page's isosurface (PageIsosurface): what the
-// session draws and scrubs is the stream controller's shown level. One of
-// these per level installed; the controller owns the GPU side (pools and
+// session draws and scrubs is the level stream's shown level. One of
+// these per level installed; the stream owns the GPU side (pools and
 // surfaces), so destroying this one only detaches it, unless the store view
 // says the store itself is gone (another volume replaced it).
 import type { Isosurface } from '../../isosurface/isosurface.ts';

@@ -1,37 +1,16 @@
-// The one stream of a store, for the page and the CLI, whichever way it is
-// planned (planner.ts): by the view (each region of the volume at the level
-// the camera needs, one surface made of several levels) or level by level
-// (each step one level everywhere).
-//
-// The planner turns the isovalue (and the view) into steps, coarse to fine.
-// Each level a step uses has its pool (ChunkedVolume) holding the step's
-// drawn chunks and their ghosts (the +x/+y/+z neighbours whose voxels
-// complete the drawn chunks' upper cells), and its Isosurface restricted to
-// the drawn chunks by the pool's chunk roles: so a drawn chunk's cells are
-// exactly the level's regular cells, whatever its neighbours are drawn at.
-// The first surface comes from the coarsest step at once, and each finer
-// step replaces the one before when its chunks are resident. A new isovalue
-// or view starts at the finest step already resident (scrubbing and
-// orbiting stay at full detail where they can); the newest request wins and
-// requests no longer needed are aborted.
-//
-// One budget: everything the stream holds on the GPU (pools, surfaces with
-// their per-level buffers, cache, vertices, the drawn copies) is counted
-// where it is made (the port's allocatedBytes). A step that does not fit is
-// tried once more with what is not on screen let go, then planned coarser
-// (a planner that can), else the refinement stops there and says why, the
-// coarser step staying on screen. A coarser step that does not fit while a
-// finer one is on screen is skipped (the finer one stays).
-//
-// Steps are snapshots: a step's chunks are all resident before any surface
-// is computed; the levels are computed in place, finer first, and once every
-// level is done the copies the page draws are made together
-// (Isosurface.present), so the frames between draw the step before, whole.
-// The types it takes and gives: stream-types.ts.
+// The one stream of a store, for the page and the CLI, planned by the view
+// or level by level (planner.ts); README.md says how it works. Each step the
+// planner makes is fetched (what is not resident, nearest first), its levels'
+// surfaces computed over their pools restricted to the drawn chunks (chunk
+// roles), then shown whole (steps are snapshots). A new isovalue or view
+// starts at the finest step already resident; the newest request wins and
+// requests no longer needed are aborted. One budget for everything it holds
+// on the GPU: a step that does not fit is tried once more with what is not
+// on screen let go, then planned coarser (a planner that can), else the
+// refinement stops there and says why, the coarser step staying on screen.
 import type { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
 import { LearntRanges, learnSlotRanges } from '../learnt-ranges.ts';
-import { chunkCount, coarsestDrawableLevel, estimateFixedBytes, putArrived, readLevelRanges, storeValueRange } from '../level-state.ts';
-import { chunkNeeded } from '../plan.ts';
+import { coarsestDrawableLevel, storeValueRange } from '../level-state.ts';
 import type { LevelStats, LevelSurface, StreamGpu, StreamGpuBytes, StreamProgress } from '../stream-port.ts';
 import type { ChunkIndex } from '../types.ts';
 import { isAbort } from '../zarr/errors.ts';
@@ -40,6 +19,8 @@ import type { ZfpStore } from '../zarr/store.ts';
 import type { ViewCut } from '../view/cut.ts';
 import { CutPlanner } from '../view/cut-planner.ts';
 import type { Planner, StreamPlan } from './planner.ts';
+import { StreamLevels } from './stream-levels.ts';
+import { StreamSurfaces } from './stream-surfaces.ts';
 import {
   type CutLevelShown,
   DEFAULT_TOLERANCE_PX,
@@ -48,6 +29,8 @@ import {
   type RoleVolume,
   type ShownCut,
   type Step,
+  showsStep,
+  shownWanted as wantedOnScreen,
   type ViewSpec,
   type Waiting,
 } from './stream-types.ts';
@@ -60,10 +43,8 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   readonly learnt: LearntRanges;
   /** The readbacks of learnt ranges in flight (learnSettled). */
   #learning: Promise<void> = Promise.resolve();
-  /** Per level, the cache and vertex bytes its last surface took (or needed, when it did not fit) per wanted chunk: the cut's cost model. */
-  #surfaceCost: (number | undefined)[] = [];
-  /** Chunks put into or evicted from any pool so far: a surface's block ranges are its slots' chunks' while this is unchanged. */
-  #poolChanges = 0;
+  /** Per level: ranges, pool, resident chunks, which chunks a surface needs, the cost model (stream-levels.ts). */
+  readonly #pools: StreamLevels<V>;
   budgetBytes: number;
   finest = 0;
   coarsest: number;
@@ -74,10 +55,8 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   #gen = 0;
   #destroyed = false;
   #shown: ShownCut<V, S, F> | null = null;
-  #surfaces = new Map<number, { surface: F; capacity: number }>();
+  readonly #surfaces: StreamSurfaces<V, S, F>;
   #waiting: Waiting | null = null;
-  /** Surfaces made for a pool's old capacity, destroyed when the next step shows. */
-  #retired: F[] = [];
   /** A refinement stopped by a failed chunk is tried again when the chunk has cooled down. */
   #retryTimer: ReturnType<typeof setTimeout> | null = null;
   /** Ghosts as skirts (ChunkedVolume's 'skirt' role): level seams covered by a one-cell overlap. */
@@ -101,18 +80,12 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     learnt?: LearntRanges,
   ) {
     this.budgetBytes = budgetBytes;
-    this.levels = store.levels.map((l, i) => ({
-      index: i,
-      layout: l.layout,
-      ranges: null,
-      nb: null,
-      reading: null,
-      volume: null,
-      lru: new Map(),
-    }));
     // ranges learnt earlier in the session (the same store reopened at the same rate) carry over
     const grids = store.levels.map((l) => l.layout.chunkGrid);
     this.learnt = learnt?.fits(grids) ? learnt : new LearntRanges(grids);
+    this.#pools = new StreamLevels(store, gpu, this.learnt);
+    this.levels = this.#pools.levels;
+    this.#surfaces = new StreamSurfaces(gpu);
     this.coarsest = coarsestDrawableLevel(store.levels);
     // levels finer than a level that cannot be drawn (wider than a surface can be) are never split into:
     // the cut stops there (the store's notes say which levels cannot be shown)
@@ -141,7 +114,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     options: { learnt?: LearntRanges } = {},
   ): Promise<StoreStream<V, S, F>> {
     const v = new StoreStream(store, fetcher, gpu, budgetBytes, planner, options.learnt);
-    await v.#readRanges(v.levels[v.coarsest]);
+    await v.#pools.readRanges(v.coarsest);
     return v;
   }
 
@@ -176,8 +149,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
 
   /** GPU bytes held now (counted where they are made): pools, surfaces, and of these the cache and vertex buffers. */
   get gpuBytes(): StreamGpuBytes {
-    let pools = 0;
-    for (const l of this.levels) pools += l.volume?.poolBytes ?? 0;
+    const pools = this.#pools.poolBytes;
     const total = this.gpu.allocatedBytes;
     const shown = this.#shown?.levels ?? [];
     return {
@@ -226,6 +198,8 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
         if (r.coarser) share *= 0.85;
         continue;
       }
+      // what the step that did not fit made goes: only what is on screen is held
+      this.#releaseUnshown();
       this.#stop(r.level, r.reason, 'budget');
       return;
     }
@@ -244,7 +218,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       const complete = plan.wantsRanges.length === 0 && !plan.refused;
       // a camera move that leaves the plan as it is on screen: nothing to fetch or compute, and
       // what a superseded step was still fetching is aborted (its chunks are no longer needed)
-      if (complete && this.#isShown(steps[steps.length - 1], iso)) {
+      if (complete && showsStep(this.#shown, steps[steps.length - 1], iso)) {
         this.fetcher.wantAll([]);
         this.#shown = { ...this.#shown!, cut: plan.cut, final: true };
         return 'done';
@@ -252,7 +226,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       // the finest step already resident: no fetching before it is shown
       let first = 0;
       for (let i = steps.length - 1; i > 0; i--) {
-        if (this.#resident(steps[i])) {
+        if (this.#pools.resident(steps[i])) {
           first = i;
           break;
         }
@@ -260,7 +234,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       for (let i = first; i < steps.length; i++) {
         if (stale()) return 'done';
         // on screen already (a plan that goes on once a finer level's range array was read)
-        if (this.#isShown(steps[i], iso)) continue;
+        if (showsStep(this.#shown, steps[i], iso)) continue;
         const r = await this.#show(steps[i], plan.cut, iso, gen, complete && i === steps.length - 1);
         if (r === true) continue;
         if (r === false) return 'done';
@@ -294,10 +268,10 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       coarsest: this.coarsest,
       unusable: (L) => this.store.levels[L].unusable,
       needs: (L) => {
-        if (!needs.has(L)) needs.set(L, this.#needs(L, iso));
+        if (!needs.has(L)) needs.set(L, this.#pools.needs(L, iso));
         return needs.get(L)!;
       },
-      chunkCost: (L) => this.#chunkCost(L),
+      chunkCost: (L) => this.#pools.chunkCost(L),
       // some room for the surfaces being replaced while a step is computed
       budgetBytes: Math.max(0, this.budgetBytes - RESERVE_BYTES) * share,
     });
@@ -306,7 +280,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   /** Reads the range arrays the plan wants; false when that failed (the stream stopped) or went stale. */
   async #readWanted(plan: StreamPlan, gen: number): Promise<boolean> {
     try {
-      await Promise.all(plan.wantsRanges.map((L) => this.#readRanges(this.levels[L])));
+      await Promise.all(plan.wantsRanges.map((L) => this.#pools.readRanges(L)));
     } catch (e) {
       if (gen !== this.#gen || this.#destroyed) return false;
       this.#events.error(e as Error);
@@ -316,53 +290,6 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     return gen === this.#gen && !this.#destroyed;
   }
 
-  /** Which chunks of level L the surface at `iso` needs, or null while its range array is unread. */
-  #needs(L: number, iso: number): ((c: ChunkIndex) => boolean) | null {
-    const lv = this.levels[L];
-    if (this.store.levels[L].unusable) return null;
-    // read from the neighbourhood ranges per chunk asked: nothing made per level (a level may have 2^24 chunks)
-    const nb = lv.nb;
-    if (nb) return (c) => chunkNeeded(nb, iso, c);
-    // no range arrays: the ranges learnt so far, every chunk with an unknown neighbour may hold the surface
-    if (!this.store.levels[L].rangesPath) return this.learnt.learns(L) ? (c) => this.learnt.needs(L, iso, c) : () => true;
-    return null;
-  }
-
-  /**
-   * GPU bytes one wanted chunk of level L costs: its pool slot, the
-   * surface's per-block state, and its share of the surface's cache and
-   * vertex buffers: what the level's last surface took per wanted chunk
-   * (#surfaceCost), or before one was made, a guess (half its blocks active,
-   * a chunk the surface crosses).
-   */
-  #chunkCost(L: number): number {
-    const layout = this.levels[L].layout;
-    const blocks = (layout.chunkEdge / 4) ** 3;
-    return layout.chunkBytes + estimateFixedBytes(layout, 1) - (64 << 10) + (this.#surfaceCost[L] ?? blocks * 0.5 * 384);
-  }
-
-  #readRanges(lv: LevelState<V>): Promise<void> {
-    return readLevelRanges(this.store, lv);
-  }
-
-  /** Whether the step on screen is this step at this isovalue (the same levels, drawn chunks and ghosts per level). */
-  #isShown(step: Step, iso: number): boolean {
-    const s = this.#shown;
-    if (!s || s.iso !== iso || s.levels.length !== step.levels.length) return false;
-    return s.levels.every(
-      (l) =>
-        step.levels.includes(l.level) &&
-        l.drawn.length === step.drawn[l.level].size &&
-        l.ghosts.length === step.ghosts[l.level].size &&
-        l.drawn.every((c) => step.drawn[l.level].has(c)) &&
-        l.ghosts.every((c) => step.ghosts[l.level].has(c)),
-    );
-  }
-
-  #resident(step: Step): boolean {
-    return step.wanted.every((w, L) => w.length === 0 || (this.levels[L].volume !== null && w.every((c) => this.levels[L].volume!.has(c))));
-  }
-
   /**
    * Fetches what the step needs, computes its levels' surfaces (finest
    * first), then shows it: true; false when stale or stopped; a BudgetStop
@@ -370,32 +297,20 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
    */
   async #show(step: Step, cut: ViewCut | null, iso: number, gen: number, final: boolean): Promise<boolean | BudgetStop> {
     const stale = () => gen !== this.#gen || this.#destroyed;
-    const shownWanted = this.#shownWanted();
+    const shownWanted = wantedOnScreen(this.#shown, this.levels.length);
     // pools: room for what the step wants and what is on screen now
-    for (let L = 0; L < this.levels.length; L++) {
-      const keep = new Set([...step.wanted[L], ...(shownWanted[L] ?? [])]);
-      if (step.wanted[L].length === 0 && !step.levels.includes(L)) continue;
-      const refused = this.#fitPool(this.levels[L], keep);
-      if (refused) return { level: L, reason: refused };
-    }
-    const missing = new Set<number>();
-    const order: { level: number; chunk: ChunkIndex }[] = [];
-    for (let L = this.levels.length - 1; L >= 0; L--) {
-      const lv = this.levels[L];
-      for (const c of step.wanted[L]) {
-        if (lv.lru.has(c)) {
-          lv.lru.delete(c);
-          lv.lru.set(c, true);
-        }
-        if (!lv.volume!.has(c)) {
-          missing.add(key(L, c));
-          order.push({ level: L, chunk: c });
-        }
-      }
-    }
+    const refused = this.#pools.fitStep(
+      step,
+      shownWanted,
+      () => this.#free(),
+      (L) => this.#surfaces.has(L),
+      this.budgetBytes,
+    );
+    if (refused) return refused;
+    const { missing, order } = this.#pools.missing(step);
     const total = step.wanted.reduce((a, w) => a + w.length, 0);
     const progress = (phase: StreamProgress['phase']) =>
-      this.#emit({
+      this.#events.progress({
         iso,
         level: step.finest,
         chunksDone: total - missing.size,
@@ -408,10 +323,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       let mine: Waiting | null = null;
       await new Promise<void>((resolve) => {
         mine = this.#waiting = { missing, done: resolve, keep };
-        for (let L = 0; L < this.levels.length; L++) {
-          const v = this.levels[L].volume;
-          if (v && step.wanted[L].length > 0) v.reserve(step.wanted[L].filter((c) => missing.has(key(L, c))));
-        }
+        this.#pools.reserve(step, missing);
         progress('fetching');
         this.fetcher.wantAll(order);
         if (missing.size === 0) resolve();
@@ -435,31 +347,17 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
         // ghosts as skirts: the one cell layer next to a drawn chunk emits too, an overlap into the neighbouring
         // region at another level that covers the crack between the two (counted apart from the cut's triangles)
         pool.setRoles(step.drawn[L], step.ghosts[L], { skirts: this.skirts });
-        let entry = this.#surfaces.get(L);
-        if (entry && entry.capacity !== pool.poolChunks) {
-          // made for the pool's old capacity (block ids are slot-relative): made again, the old one let go when this step shows
-          this.#retired.push(entry.surface);
-          this.#surfaces.delete(L);
-          entry = undefined;
-        }
-        if (!entry) {
-          const surface = await this.gpu.createSurface(pool, Math.max(256 << 10, this.#free()));
-          if (stale() || lv.volume !== pool) {
-            surface.destroy();
-            return false;
-          }
-          entry = { surface, capacity: pool.poolChunks };
-          this.#surfaces.set(L, entry);
-        }
-        entry.surface.setMemoryBudget(
-          Math.max(1, this.budgetBytes - RESERVE_BYTES - (this.gpu.allocatedBytes - entry.surface.budgetedBytes)),
-        );
-        const stats = await entry.surface.compute(iso);
+        const noRoom = this.#surfaces.noRoom(L, pool, lv.layout, this.#free(), this.budgetBytes);
+        if (noRoom) return { level: L, reason: noRoom };
+        const surface = await this.#surfaces.surfaceFor(L, pool, lv.layout, this.#free(), () => stale() || lv.volume !== pool);
+        if (!surface) return false;
+        surface.setMemoryBudget(Math.max(1, this.budgetBytes - RESERVE_BYTES - (this.gpu.allocatedBytes - surface.budgetedBytes)));
+        const stats = await surface.compute(iso);
         if (stale()) return false;
         // what the surface holds, and the copy of it that is drawn (present(), below)
-        const drawnCopy = this.snapshots ? (entry.surface.presentBytesNeeded ?? 0) : 0;
-        this.#surfaceCost[L] = (stats.cacheBytes + stats.vertexBytes + drawnCopy) / Math.max(1, step.wanted[L].length);
-        levels.push({ level: L, volume: pool, surface: entry.surface, stats, drawn: [...step.drawn[L]], ghosts: [...step.ghosts[L]] });
+        const drawnCopy = this.snapshots ? (surface.presentBytesNeeded ?? 0) : 0;
+        this.#pools.recordCost(L, (stats.cacheBytes + stats.vertexBytes + drawnCopy) / Math.max(1, step.wanted[L].length));
+        levels.push({ level: L, volume: pool, surface, stats, drawn: [...step.drawn[L]], ghosts: [...step.ghosts[L]] });
       }
     } catch (e) {
       if (stale()) return false;
@@ -468,7 +366,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
         // what the surface needed, per wanted chunk: the cost the next plan uses
         const needed = (e as { neededBytes?: number }).neededBytes;
         if (needed !== undefined && Number.isFinite(needed))
-          this.#surfaceCost[computing] = Math.max(this.#surfaceCost[computing] ?? 0, needed / Math.max(1, step.wanted[computing].length));
+          this.#pools.recordCost(computing, needed / Math.max(1, step.wanted[computing].length), true);
         return { level: computing, reason: (e as Error).message };
       }
       this.#events.error(e as Error);
@@ -478,8 +376,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     // A snapshot: the frames until now drew the copies of the step before (whole, whatever was computed in
     // place since); the copies of this step's surfaces are made together now and drawn from here on. Room
     // for them: what they need beyond the copies they replace, less what the surfaces this step lets go held.
-    const goes = [...this.#retired, ...[...this.#surfaces].filter(([L]) => !used.includes(L)).map(([, e]) => e.surface)];
-    const freed = goes.reduce((a, f) => a + f.budgetedBytes + (f.presentedBytes ?? 0), 0);
+    const freed = this.#surfaces.bytesOutside(used);
     const copies = this.snapshots
       ? levels.reduce((a, l) => a + (l.surface.presentBytesNeeded ?? 0) - (l.surface.presentedBytes ?? 0), 0)
       : 0;
@@ -490,14 +387,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       };
     }
     // levels this step does not draw: their surfaces go, their pools' chunks become idle
-    for (const [L, entry] of this.#surfaces) {
-      if (used.includes(L)) continue;
-      entry.surface.destroy();
-      this.#surfaces.delete(L);
-      this.levels[L].volume?.setRoles(new Set(), new Set());
-    }
-    for (const s of this.#retired) s.destroy();
-    this.#retired = [];
+    for (const L of this.#surfaces.letGoOutside(used)) this.levels[L].volume?.setRoles(new Set(), new Set());
     if (this.snapshots) for (const l of levels) l.surface.present?.();
     this.#shown = { iso, step: step.finest, final, levels, cut, leaves: step.leaves };
     this.#events.shown(this.#shown);
@@ -515,10 +405,10 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
    * as they arrive (learnSettled).
    */
   #learn(levels: readonly CutLevelShown<V, S, F>[]): void {
-    const changes = this.#poolChanges;
+    const changes = this.#pools.poolChanges;
     for (const l of levels) {
       if (this.store.levels[l.level].rangesPath) continue;
-      const valid = () => !this.#destroyed && this.#poolChanges === changes && this.#surfaces.get(l.level)?.surface === l.surface;
+      const valid = () => !this.#destroyed && this.#pools.poolChanges === changes && this.#surfaces.get(l.level) === l.surface;
       const chunks = [...l.drawn, ...l.ghosts];
       this.#learning = this.#learning.then(() => learnSlotRanges(this.learnt, l.level, chunks, l.volume, l.surface, valid));
     }
@@ -529,66 +419,20 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     return this.#learning;
   }
 
-  /** Lets go of the surfaces and pools of levels that the surface on screen does not draw. */
+  /**
+   * Lets go of the surfaces and pools of levels that the surface on screen
+   * does not draw, and empties the block caches of those that stay (their
+   * drawn meshes stay; a cache regrows as its surface needs it).
+   */
   #releaseUnshown(): void {
-    const shown = new Set((this.#shown?.levels ?? []).map((l) => l.level));
-    for (const [L, entry] of this.#surfaces) {
-      if (shown.has(L)) continue;
-      entry.surface.destroy();
-      this.#surfaces.delete(L);
-    }
-    for (const s of this.#retired) s.destroy();
-    this.#retired = [];
-    for (const lv of this.levels) {
-      if (shown.has(lv.index) || !lv.volume) continue;
-      this.#poolChanges++;
-      lv.volume.destroy();
-      lv.volume = null;
-      lv.lru.clear();
-    }
-  }
-
-  /** Per level, the chunks the surface on screen reads (drawn and ghosts). */
-  #shownWanted(): ChunkIndex[][] {
-    const out: ChunkIndex[][] = this.levels.map(() => []);
-    for (const l of this.#shown?.levels ?? []) out[l.level] = [...l.drawn, ...l.ghosts];
-    return out;
+    const shown = (this.#shown?.levels ?? []).map((l) => l.level);
+    this.#surfaces.letGoOutside(shown);
+    for (const lv of this.levels) if (!shown.includes(lv.index)) this.#pools.dropPool(lv);
+    this.#surfaces.trimCaches();
   }
 
   #free(): number {
     return this.budgetBytes - RESERVE_BYTES - this.gpu.allocatedBytes;
-  }
-
-  /**
-   * Gives a level's pool room for `keep` (what the step wants and what is on
-   * screen): idle chunks are evicted first (least recently wanted), then the
-   * pool grows. Returns why it cannot, or null.
-   */
-  #fitPool(lv: LevelState<V>, keep: ReadonlySet<ChunkIndex>): string | null {
-    const n = Math.max(1, keep.size);
-    const v = lv.volume;
-    if (v && v.poolChunks >= n) return null;
-    const target = Math.min(chunkCount(lv.layout), Math.max(n, Math.ceil((v?.poolChunks ?? 0) * 1.25)));
-    const extra = this.gpu.poolBytesFor(lv.layout, target) - (v?.poolBytes ?? 0) + estimateFixedBytes(lv.layout, target);
-    if (extra > this.#free()) {
-      // pools of levels the step does not use give their room back
-      for (const other of this.levels) {
-        if (other === lv || !other.volume || this.#surfaces.has(other.index)) continue;
-        this.#poolChanges++;
-        other.volume.destroy();
-        other.volume = null;
-        other.lru.clear();
-      }
-    }
-    if (extra > this.#free())
-      return (
-        `level ${lv.index} needs ${n} chunks (${mib(n * lv.layout.chunkBytes)} MiB) for this step; ` +
-        `the budget of ${mib(this.budgetBytes)} MiB has ${mib(Math.max(0, this.#free()))} MiB free`
-      );
-    this.#poolChanges++;
-    if (v) v.resize(Math.max(target, v.residentCount));
-    else lv.volume = this.gpu.createVolume(lv.layout, target);
-    return null;
   }
 
   #arrived(level: number, chunk: ChunkIndex, bytes: Uint8Array): void {
@@ -596,13 +440,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     const lv = this.levels[level];
     if (!w || !lv?.volume || !w.missing.has(key(level, chunk))) return;
     try {
-      putArrived(
-        lv,
-        chunk,
-        bytes,
-        (c) => w.keep[level]?.has(key(level, c)) ?? false,
-        () => this.#poolChanges++,
-      );
+      this.#pools.put(level, chunk, bytes, (c) => w.keep[level]?.has(key(level, c)) ?? false);
     } catch (e) {
       this.#events.error(e as Error);
       this.#stop(level, (e as Error).message, 'chunk');
@@ -632,24 +470,14 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     this.#events.stopped(this.#shown?.iso ?? Number.NaN, level, reason, cause, this.fetcher.counters.bytesFetched, retryInMs);
   }
 
-  #emit(p: StreamProgress): void {
-    this.#events.progress(p);
-  }
-
   destroy(): void {
     this.#destroyed = true;
     this.#gen++;
     if (this.#retryTimer !== null) clearTimeout(this.#retryTimer);
     this.fetcher.cancelAll();
     this.#waiting?.done();
-    for (const e of this.#surfaces.values()) e.surface.destroy();
-    this.#surfaces.clear();
-    for (const s of this.#retired) s.destroy();
-    this.#retired = [];
-    for (const l of this.levels) {
-      l.volume?.destroy();
-      l.volume = null;
-    }
+    this.#surfaces.destroy();
+    this.#pools.destroy();
     this.#shown = null;
   }
 }
@@ -667,4 +495,3 @@ const PLAN_SHARE = 0.8;
 const MAX_COARSENINGS = 6;
 /** Kept free within the budget for short-lived buffers (statistics and readback staging, uniforms). */
 const RESERVE_BYTES = 1 << 20;
-const mib = (b: number) => (b / 2 ** 20).toFixed(1);

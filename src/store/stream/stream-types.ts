@@ -74,6 +74,26 @@ export interface Waiting {
   keep: Set<number>[];
 }
 
+/** Whether `shown` is this step at this isovalue (the same levels, drawn chunks and ghosts per level). */
+export function showsStep(shown: ShownCut<unknown, unknown, unknown> | null, step: Step, iso: number): boolean {
+  if (!shown || shown.iso !== iso || shown.levels.length !== step.levels.length) return false;
+  return shown.levels.every(
+    (l) =>
+      step.levels.includes(l.level) &&
+      l.drawn.length === step.drawn[l.level].size &&
+      l.ghosts.length === step.ghosts[l.level].size &&
+      l.drawn.every((c) => step.drawn[l.level].has(c)) &&
+      l.ghosts.every((c) => step.ghosts[l.level].has(c)),
+  );
+}
+
+/** Per level (of `levels`), the chunks the step on screen reads (drawn and ghosts). */
+export function shownWanted(shown: ShownCut<unknown, unknown, unknown> | null, levels: number): ChunkIndex[][] {
+  const out: ChunkIndex[][] = Array.from({ length: levels }, () => []);
+  for (const l of shown?.levels ?? []) out[l.level] = [...l.drawn, ...l.ghosts];
+  return out;
+}
+
 export const key = (level: number, chunk: ChunkIndex) => level * 2 ** 32 + chunk;
 
 /** Default screen-space tolerance in pixels. */

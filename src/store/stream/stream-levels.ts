@@ -1,0 +1,182 @@
+// The store stream's per-level state (store-stream.ts): each level's chunk
+// ranges (range arrays, read when first needed, or ranges learnt as chunks
+// arrive), its pool of compressed chunks on the GPU with the resident chunks
+// least recently wanted first, which chunks a surface needs, and what a
+// wanted chunk costs on the GPU (the plan's cost model).
+import type { LearntRanges } from '../learnt-ranges.ts';
+import { chunkCount, estimateFixedBytes, putArrived, readLevelRanges } from '../level-state.ts';
+import { chunkNeeded } from '../plan.ts';
+import type { StreamGpu } from '../stream-port.ts';
+import type { ChunkIndex } from '../types.ts';
+import type { ZfpStore } from '../zarr/store.ts';
+import { key, type LevelState, type RoleVolume, type Step } from './stream-types.ts';
+
+export class StreamLevels<V extends RoleVolume> {
+  readonly levels: LevelState<V>[];
+  /** Chunks put into or evicted from any pool so far: a surface's block ranges are its slots' chunks' while this is unchanged. */
+  poolChanges = 0;
+  /** Per level, the cache and vertex bytes its last surface took (or needed, when it did not fit) per wanted chunk. */
+  readonly #surfaceCost: (number | undefined)[] = [];
+
+  constructor(
+    readonly store: ZfpStore,
+    readonly gpu: Pick<StreamGpu<V>, 'createVolume' | 'poolBytesFor'>,
+    readonly learnt: LearntRanges,
+  ) {
+    this.levels = store.levels.map((l, i) => ({
+      index: i,
+      layout: l.layout,
+      ranges: null,
+      nb: null,
+      reading: null,
+      volume: null,
+      lru: new Map(),
+    }));
+  }
+
+  /** The level's range array, read once (a failed read is tried again next time; rejects with its StoreError). */
+  readRanges(L: number): Promise<void> {
+    return readLevelRanges(this.store, this.levels[L]);
+  }
+
+  /** Which chunks of level L the surface at `iso` needs, or null while its range array is unread. */
+  needs(L: number, iso: number): ((c: ChunkIndex) => boolean) | null {
+    const lv = this.levels[L];
+    if (this.store.levels[L].unusable) return null;
+    // read from the neighbourhood ranges per chunk asked: nothing made per level (a level may have 2^24 chunks)
+    const nb = lv.nb;
+    if (nb) return (c) => chunkNeeded(nb, iso, c);
+    // no range arrays: the ranges learnt so far, every chunk with an unknown neighbour may hold the surface
+    if (!this.store.levels[L].rangesPath) return this.learnt.learns(L) ? (c) => this.learnt.needs(L, iso, c) : () => true;
+    return null;
+  }
+
+  /**
+   * GPU bytes one wanted chunk of level L costs: its pool slot, the
+   * surface's per-block state, and its share of the surface's cache and
+   * vertex buffers: what the level's last surface took per wanted chunk,
+   * or before one was made, a guess (half its blocks active, a chunk the
+   * surface crosses).
+   */
+  chunkCost(L: number): number {
+    const layout = this.levels[L].layout;
+    const blocks = (layout.chunkEdge / 4) ** 3;
+    return layout.chunkBytes + estimateFixedBytes(layout, 1) - (64 << 10) + (this.#surfaceCost[L] ?? blocks * 0.5 * 384);
+  }
+
+  /** What level L's surface took (or, `atLeast`, needed) per wanted chunk: the cost the next plan uses. */
+  recordCost(L: number, bytesPerChunk: number, atLeast = false): void {
+    this.#surfaceCost[L] = atLeast ? Math.max(this.#surfaceCost[L] ?? 0, bytesPerChunk) : bytesPerChunk;
+  }
+
+  /** Whether every chunk the step wants is resident. */
+  resident(step: Step): boolean {
+    return step.wanted.every((w, L) => w.length === 0 || (this.levels[L].volume !== null && w.every((c) => this.levels[L].volume!.has(c))));
+  }
+
+  /** Marks the step's wanted chunks as just wanted (least recently wanted go first) and lists those not resident, in fetch order (coarsest level first). */
+  missing(step: Step): { missing: Set<number>; order: { level: number; chunk: ChunkIndex }[] } {
+    const missing = new Set<number>();
+    const order: { level: number; chunk: ChunkIndex }[] = [];
+    for (let L = this.levels.length - 1; L >= 0; L--) {
+      const lv = this.levels[L];
+      for (const c of step.wanted[L]) {
+        if (lv.lru.has(c)) {
+          lv.lru.delete(c);
+          lv.lru.set(c, true);
+        }
+        if (!lv.volume!.has(c)) {
+          missing.add(key(L, c));
+          order.push({ level: L, chunk: c });
+        }
+      }
+    }
+    return { missing, order };
+  }
+
+  /**
+   * Gives a level's pool room for `keep` (what the step wants and what is on
+   * screen): idle chunks are evicted first (least recently wanted), then the
+   * pool grows within `free()` bytes, after the pools of levels `inUse` does
+   * not hold gave theirs back. Returns why it cannot, or null.
+   */
+  fitPool(
+    lv: LevelState<V>,
+    keep: ReadonlySet<ChunkIndex>,
+    free: () => number,
+    inUse: (L: number) => boolean,
+    budgetBytes: number,
+  ): string | null {
+    const n = Math.max(1, keep.size);
+    const v = lv.volume;
+    if (v && v.poolChunks >= n) return null;
+    const target = Math.min(chunkCount(lv.layout), Math.max(n, Math.ceil((v?.poolChunks ?? 0) * 1.25)));
+    const extra = this.gpu.poolBytesFor(lv.layout, target) - (v?.poolBytes ?? 0) + estimateFixedBytes(lv.layout, target);
+    if (extra > free()) for (const other of this.levels) if (other !== lv && !inUse(other.index)) this.dropPool(other);
+    if (extra > free())
+      return (
+        `level ${lv.index} needs ${n} chunks (${mib(n * lv.layout.chunkBytes)} MiB) for this step; ` +
+        `the budget of ${mib(budgetBytes)} MiB has ${mib(Math.max(0, free()))} MiB free`
+      );
+    this.poolChanges++;
+    if (v) v.resize(Math.max(target, v.residentCount));
+    else lv.volume = this.gpu.createVolume(lv.layout, target);
+    return null;
+  }
+
+  /**
+   * Room in each level's pool for what `step` wants and what is on screen
+   * (`shownWanted`, per level): null, or the level that has none and why.
+   */
+  fitStep(
+    step: Step,
+    shownWanted: readonly ChunkIndex[][],
+    free: () => number,
+    inUse: (L: number) => boolean,
+    budgetBytes: number,
+  ): { level: number; reason: string } | null {
+    for (let L = 0; L < this.levels.length; L++) {
+      if (step.wanted[L].length === 0 && !step.levels.includes(L)) continue;
+      const keep = new Set([...step.wanted[L], ...(shownWanted[L] ?? [])]);
+      const reason = this.fitPool(this.levels[L], keep, free, inUse, budgetBytes);
+      if (reason) return { level: L, reason };
+    }
+    return null;
+  }
+
+  /** Sets slots aside for the step's missing chunks (keys level * 2^32 + chunk), in its order: slots follow the plan, not arrivals. */
+  reserve(step: Step, missing: ReadonlySet<number>): void {
+    for (let L = 0; L < this.levels.length; L++) {
+      const v = this.levels[L].volume;
+      if (v && step.wanted[L].length > 0) v.reserve(step.wanted[L].filter((c) => missing.has(key(L, c))));
+    }
+  }
+
+  /** Lets a level's pool go (its chunks stay in the fetcher's CPU cache). */
+  dropPool(lv: LevelState<V>): void {
+    if (!lv.volume) return;
+    this.poolChanges++;
+    lv.volume.destroy();
+    lv.volume = null;
+    lv.lru.clear();
+  }
+
+  /** Puts an arrived chunk into its level's pool (putArrived: a full pool evicts what `keep` does not hold). */
+  put(level: number, chunk: ChunkIndex, bytes: Uint8Array, keep: (c: ChunkIndex) => boolean): void {
+    putArrived(this.levels[level], chunk, bytes, keep, () => this.poolChanges++);
+  }
+
+  /** GPU bytes of the pools. */
+  get poolBytes(): number {
+    return this.levels.reduce((a, l) => a + (l.volume?.poolBytes ?? 0), 0);
+  }
+
+  destroy(): void {
+    for (const l of this.levels) {
+      l.volume?.destroy();
+      l.volume = null;
+    }
+  }
+}
+
+const mib = (b: number) => (b / 2 ** 20).toFixed(1);
