@@ -16,6 +16,7 @@ checks against the store before using them.
 """
 from __future__ import annotations
 
+import math
 import os
 from concurrent.futures import ThreadPoolExecutor
 
@@ -49,24 +50,29 @@ def _levels(node, path: str):
 
 
 def pyramid_chain(datasets: list) -> list:
-    """The page's rule (metadata.ts pyramidChain): level 0, then the datasets
-    whose OME scale is 2, 4, 8... times level 0's on x, y and z, in order; the
-    others (levels that halve only some axes) are not levels the page draws.
-    Without a scale on every dataset, all of them."""
+    """The page's rule (metadata.ts pyramidChain): level 0, then each dataset
+    whose OME scale is a power of two times level 0's on every axis, at least
+    the previous level's on every axis and more on one (levels may halve only
+    some axes); the others are not levels the page draws. Without a scale on
+    every dataset, all of them."""
     def scale(d):
         for t in d.get("coordinateTransformations") or []:
             if t.get("type") == "scale" and len(t.get("scale") or []) >= 3:
                 v = [float(x) for x in t["scale"][-3:]]
-                return v if all(x > 0 for x in v) else None
+                return v if all(x > 0 and math.isfinite(x) for x in v) else None
         return None
     scales = [scale(d) for d in datasets]
     if not datasets or any(s is None for s in scales):
         return list(datasets)
     out = [datasets[0]]
+    prev = [1.0, 1.0, 1.0]
     for d, s in zip(datasets[1:], scales[1:]):
-        want = 2.0 ** len(out)
-        if all(abs(a / b - want) <= 1e-6 * want for a, b in zip(s, scales[0])):
+        f = [a / b for a, b in zip(s, scales[0])]
+        pow2 = [2.0 ** round(math.log2(v)) for v in f]
+        exact = all(abs(v - p) <= 1e-6 * p for v, p in zip(f, pow2))
+        if exact and all(p >= q for p, q in zip(pow2, prev)) and any(p > q for p, q in zip(pow2, prev)):
             out.append(d)
+            prev = pow2
     return out
 
 

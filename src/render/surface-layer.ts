@@ -49,16 +49,17 @@ export const DEFAULT_SURFACE_STYLE: SurfaceStyle = {
 };
 
 const UNIFORM_BYTES = 128;
+const UNIT_SCALE = [1, 1, 1] as const;
 
 /**
  * One piece of a surface made of several (a store refined by the view: one
- * per level): its draw data, drawn at `scale` times the layer's voxel size
- * from `origin` (in its own voxels), tinted by `tint` (linear multiplier; the
+ * per level): its draw data, drawn at `scale` (per axis) times the layer's
+ * voxel size from `origin` (in its own voxels), tinted by `tint` (linear multiplier; the
  * level tint) when given.
  */
 export interface SurfacePart {
   data: IsosurfaceDrawData;
-  scale: number;
+  scale: readonly [number, number, number];
   origin: [number, number, number];
   tint?: Rgb;
 }
@@ -82,9 +83,9 @@ export class SurfaceLayer implements RenderLayer {
   origin: [number, number, number] = [0, 0, 0];
   private data: IsosurfaceDrawData | undefined;
   /** The single surface as its own scene for the depth cue (one object, reused: a frame allocates nothing). */
-  private readonly singleScene: { data: IsosurfaceDrawData | undefined; scale: number; origin: readonly number[] } = {
+  private readonly singleScene: { data: IsosurfaceDrawData | undefined; scale: readonly number[]; origin: readonly number[] } = {
     data: undefined,
-    scale: 1,
+    scale: [1, 1, 1],
     origin: [0, 0, 0],
   };
   /** Several pieces instead of `data` (setParts): each with its own uniforms and bind group. */
@@ -209,10 +210,10 @@ export class SurfaceLayer implements RenderLayer {
   private writeUniforms(
     data: IsosurfaceDrawData,
     into: GPUBuffer,
-    scale: number,
+    scale: readonly number[],
     origin: readonly number[],
     tint: Rgb | undefined,
-    scene: { data?: IsosurfaceDrawData; scale: number; origin: readonly number[] },
+    scene: { data?: IsosurfaceDrawData; scale: readonly number[]; origin: readonly number[] },
   ): void {
     const sceneDims = (scene.data ?? data).info.dims;
     const s = this.style;
@@ -236,7 +237,7 @@ export class SurfaceLayer implements RenderLayer {
     // Depth-cue range: the eye distance to the volume's bounding sphere (world space).
     let r2 = 0;
     for (let a = 0; a < 3; a++) {
-      const size = this.voxelSize[a] * scene.scale;
+      const size = this.voxelSize[a] * scene.scale[a];
       const extent = (sceneDims[a] - 1) * size;
       this.centre[a] = extent / 2 + scene.origin[a] * size;
       r2 += extent * extent;
@@ -247,9 +248,9 @@ export class SurfaceLayer implements RenderLayer {
     f32[17] = s.depthCue;
     f32[18] = Math.max(0, eyeDist - radius);
     f32[19] = eyeDist + radius;
-    f32[20] = this.voxelSize[0] * scale;
-    f32[21] = this.voxelSize[1] * scale;
-    f32[22] = this.voxelSize[2] * scale;
+    f32[20] = this.voxelSize[0] * scale[0];
+    f32[21] = this.voxelSize[1] * scale[1];
+    f32[22] = this.voxelSize[2] * scale[2];
     f32[23] = 0;
     f32[24] = origin[0];
     f32[25] = origin[1];
@@ -270,9 +271,10 @@ export class SurfaceLayer implements RenderLayer {
   private drawWith(pass: GPURenderPassEncoder, pipeline: GPURenderPipeline): void {
     if (this.parts) {
       if (!this.visible) return;
-      // the depth cue spans the whole scene: the piece of the largest scale (the coarsest level covers the volume)
+      // the depth cue spans the whole scene: the piece of the largest voxels (the coarsest level covers the volume)
       let scene = this.parts[0];
-      for (const part of this.parts) if (part.scale > scene.scale) scene = part;
+      const volumeOf = (p: SurfacePart) => p.scale[0] * p.scale[1] * p.scale[2];
+      for (const part of this.parts) if (volumeOf(part) > volumeOf(scene)) scene = part;
       pass.setPipeline(pipeline);
       for (let i = 0; i < this.parts.length; i++) {
         const part = this.parts[i];
@@ -293,7 +295,7 @@ export class SurfaceLayer implements RenderLayer {
     // Written at every draw (the camera moves); the pre-pass and the frame see the same values.
     this.singleScene.data = data;
     this.singleScene.origin = this.origin;
-    this.writeUniforms(data, this.uniforms, 1, this.origin, undefined, this.singleScene);
+    this.writeUniforms(data, this.uniforms, UNIT_SCALE, this.origin, undefined, this.singleScene);
     pass.setPipeline(pipeline);
     pass.setBindGroup(1, this.ensureBindGroup(data));
     pass.setVertexBuffer(0, data.vertices);

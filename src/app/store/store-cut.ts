@@ -100,13 +100,13 @@ export class StoreCutIsosurface implements PageIsosurface {
   #makeParts(): SurfacePart[] {
     const offsets = this.stream.store.levelOffsets;
     return this.#shown.levels.map((l) => {
-      const k = 2 ** l.level;
+      const k = this.stream.store.levelScales[l.level] ?? [2 ** l.level, 2 ** l.level, 2 ** l.level];
       const off = offsets[l.level] ?? [0, 0, 0];
       return {
         // the copy the step was shown with (a snapshot: the surface itself may be computing the next step)
         data: l.surface.presented ?? l.surface.drawData,
         scale: k,
-        origin: [off[0] / k, off[1] / k, off[2] / k],
+        origin: [off[0] / k[0], off[1] / k[1], off[2] / k[2]],
         ...(this.#tint ? { tint: LEVEL_TINTS[l.level % LEVEL_TINTS.length] } : {}),
       };
     });
@@ -158,7 +158,7 @@ export class StoreCutIsosurface implements PageIsosurface {
 
   /** Every level's mesh as one, in level-0 voxel index space (the PLY export). */
   readPositions(): Promise<{ positions: Float32Array; indices: Uint32Array }> {
-    return joinLevelMeshes(this.#shown.levels, this.stream.store.levelOffsets);
+    return joinLevelMeshes(this.#shown.levels, this.stream.store.levelOffsets, this.stream.store.levelScales);
   }
 
   /** The coarsest level's block ranges (the slider's block profile). */

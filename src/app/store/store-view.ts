@@ -291,7 +291,7 @@ export class StoreView {
           if (this.#open === o && Number.isFinite(o.iso)) void this.#refine(o, o.iso);
         },
       );
-      const k = 2 ** s.level;
+      const k = o.store.levelScales[s.level];
       const name = `${o.url} level ${s.level}`;
       // the level where its metadata puts it: a coarse voxel at the centre of the finer ones it averages
       const volume = storeVolume(
@@ -467,7 +467,7 @@ export class StoreView {
         o,
         o.url,
         0,
-        1,
+        [1, 1, 1],
         iso,
         s.iso,
         iso.stats,

@@ -27,18 +27,22 @@ export class LevelPlanner implements Planner {
       if (unusable) return { steps, wantsRanges: [], coarsenable: false, cut: null, refused: { level: L, reason: unusable } };
       const needs = input.needs(L);
       if (!needs) return { steps, wantsRanges: [L], coarsenable: false, cut: null };
-      steps.push(this.#step(input.layouts, L, needs));
+      steps.push(this.#step(input.layouts, L, input.scales[L], needs));
     }
     return { steps, wantsRanges: [], coarsenable: false, cut: null };
   }
 
-  #step(layouts: readonly ChunkLevelLayout[], L: number, needs: (c: ChunkIndex) => boolean): Step {
+  #step(
+    layouts: readonly ChunkLevelLayout[],
+    L: number,
+    scale: readonly [number, number, number],
+    needs: (c: ChunkIndex) => boolean,
+  ): Step {
     const layout = layouts[L];
     const [gx, gy, gz] = layout.chunkGrid;
     const needed: ChunkIndex[] = [];
     for (let c = 0; c < gx * gy * gz; c++) if (needs(c)) needed.push(c);
-    const s = 1 / 2 ** L;
-    const wanted = nearestFirst(layout, needed, [this.focus[0] * s, this.focus[1] * s, this.focus[2] * s]);
+    const wanted = nearestFirst(layout, needed, [this.focus[0] / scale[0], this.focus[1] / scale[1], this.focus[2] / scale[2]]);
     const none = () => layouts.map(() => new Set<ChunkIndex>());
     const drawn = none();
     drawn[L] = new Set(needed);

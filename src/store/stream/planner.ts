@@ -17,6 +17,8 @@ export interface PlanInput {
   /** Level 0's voxel size (x, y, z). */
   voxelSize: [number, number, number];
   layouts: readonly ChunkLevelLayout[];
+  /** Per level, level-0 voxels one of its voxels spans on x, y and z (ZfpStore.levelScales). */
+  scales: readonly (readonly [number, number, number])[];
   /** The levels the plan may use: `finest` (as asked) to `coarsest`; none finer than `finestUsable` can be drawn. */
   finest: number;
   finestUsable: number;

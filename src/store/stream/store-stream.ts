@@ -263,6 +263,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       view: this.#view,
       voxelSize: this.store.voxelSize,
       layouts: this.levels.map((l) => l.layout),
+      scales: this.store.levelScales,
       finest: this.finest,
       finestUsable: this.#finestUsable,
       coarsest: this.coarsest,

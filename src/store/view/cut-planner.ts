@@ -15,7 +15,7 @@ export class CutPlanner implements Planner {
     const { view, layouts } = input;
     if (!view) throw new Error('CutPlanner: a plan by view needs a view');
     const cut = viewCut({
-      levels: layouts.map((l) => ({ dims: l.dims, chunkEdge: l.chunkEdge, chunkGrid: l.chunkGrid })),
+      levels: layouts.map((l, L) => ({ dims: l.dims, chunkEdge: l.chunkEdge, chunkGrid: l.chunkGrid, scale: input.scales[L] })),
       voxelSize: input.voxelSize,
       camera: view.camera,
       tolerancePx: view.tolerancePx,
@@ -26,7 +26,7 @@ export class CutPlanner implements Planner {
       budgetBytes: input.budgetBytes,
     });
     if (cut.wantsRanges.length > 0) return { steps: [], wantsRanges: cut.wantsRanges, coarsenable: false, cut };
-    const step = (k: number): Step => cutStep(cut, k, layouts, (L) => input.needs(L), view.camera.eye, input.voxelSize);
+    const step = (k: number): Step => cutStep(cut, k, layouts, input.scales, (L) => input.needs(L), view.camera.eye, input.voxelSize);
     const drawnAt = cut.levels.map((l, L) => (l.drawn.length > 0 ? L : -1)).filter((L) => L >= 0);
     const steps: Step[] = [];
     if (drawnAt.length > 0) for (let k = Math.max(...drawnAt); k >= Math.min(...drawnAt); k--) steps.push(step(k));

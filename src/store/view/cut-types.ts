@@ -10,6 +10,8 @@ export interface CutLevel {
   chunkEdge: number;
   /** ceil(dims / chunkEdge) per axis. */
   chunkGrid: [number, number, number];
+  /** Level-0 voxels one voxel of this level spans, x, y, z (default 2^L on every axis; a level may halve only some axes). */
+  scale?: readonly [number, number, number];
 }
 
 /** The camera the cut sees. */

@@ -4,11 +4,12 @@
 //
 // Coordinates.
 // - Level-0 voxel space: level 0's voxel (i, j, k), i in [0, dims0[0]) and so
-//   on (x fastest). A level-L voxel covers 2^L level-0 voxels per axis.
+//   on (x fastest). A level-L voxel covers scale_L level-0 voxels per axis
+//   (CutLevel.scale: 2^L on every axis unless a level halves only some).
 // - The octree: level L's chunk (cx, cy, cz) (ChunkIndex c = cx + gx * (cy +
 //   gy * cz), src/zfp/chunked-volume.ts) is the node (L, c) covering the
 //   half-open level-0 box [c * E_L, (c + 1) * E_L) per axis, E_L = chunkEdge_L *
-//   2^L, clipped to level 0's dims. Chunks whose box starts at or past level
+//   scale_L (per axis), clipped to level 0's dims. Chunks whose box starts at or past level
 //   0's dims cover nothing and are left out of the tree.
 // - World: level-0 voxel (i, j, k) at (i * sx, j * sy, k * sz), voxelSize =
 //   [sx, sy, sz]. It is the page's world: the page draws level L's voxel
@@ -32,9 +33,10 @@
 //
 // The rule (viewCut). Node (L, c) is split into its children (level L-1's
 // chunks inside it) when L > finest, level L-1 nests in level L (E_L a
-// multiple of E_{L-1}; else level L is final and a note says so), needs(L-1)
-// is known, the node's world box meets the view frustum (a conservative
-// box-vs-6-planes test), its error 2^L * max(voxelSize) * pixelsPerUnit /
+// multiple of E_{L-1} on every axis: 1, 2, 4... children per axis; else level
+// L is final and a note says so), needs(L-1) is known, the node's world box
+// meets the view frustum (a conservative box-vs-6-planes test), its error
+// max over axes of (scale_L * voxelSize) * pixelsPerUnit /
 // distance (distance from the eye to the box, 0 inside it: error Infinity)
 // exceeds tolerancePx, and the budget allows it. Splits go by a priority
 // queue: nodes in the middle of the view first (a cone from the eye to the
@@ -84,23 +86,26 @@ export function viewCut(input: CutInput): ViewCut {
   }
   const [Dx, Dy, Dz] = levels[0].dims;
   const [sx, sy, sz] = voxelSize;
-  const maxVoxel = Math.max(sx, sy, sz);
   const [ex, ey, ez] = camera.eye;
   const ppu = camera.pixelsPerUnit;
   // the view's middle: a cone about the eye -> focus axis, as wide as the focus sphere at its end
   const focus = camera.focus;
   const focusDistance = focus ? Math.hypot(focus.point[0] - ex, focus.point[1] - ey, focus.point[2] - ez) : 0;
   const axis = focus && focusDistance > 0 ? focus.point.map((p, a) => (p - camera.eye[a]) / focusDistance) : null;
-  const E = levels.map((l, L) => l.chunkEdge * 2 ** L);
+  const scale = levels.map((l, L) => l.scale ?? [2 ** L, 2 ** L, 2 ** L]);
+  // a level's chunk edge in level-0 voxels, per axis, and its voxel's largest world edge
+  const E = levels.map((l, L) => scale[L].map((f) => l.chunkEdge * f) as [number, number, number]);
+  const voxelEdge = scale.map((f) => Math.max(f[0] * sx, f[1] * sy, f[2] * sz));
   const notes: string[] = [];
 
-  // k[L]: children per axis when level L splits into L-1 (0: level L is final)
-  const k = new Int32Array(n);
+  // k[L]: children per axis when level L splits into L-1 (null: level L is final)
+  const k: ([number, number, number] | null)[] = new Array(n).fill(null);
   for (let L = finest + 1; L <= coarsest; L++) {
-    if (E[L] % E[L - 1] === 0) k[L] = E[L] / E[L - 1];
+    const per = E[L].map((e, a) => e / E[L - 1][a]);
+    if (per.every((v) => Number.isInteger(v) && v >= 1)) k[L] = per as [number, number, number];
     else
       notes.push(
-        `level ${L} is final: its chunks (${E[L]} level-0 voxels) are not made of level ${L - 1}'s (${E[L - 1]} level-0 voxels), so it cannot be refined`,
+        `level ${L} is final: its chunks (${E[L].join(' x ')} level-0 voxels) are not made of level ${L - 1}'s (${E[L - 1].join(' x ')} level-0 voxels), so it cannot be refined`,
       );
   }
 
@@ -166,19 +171,19 @@ export function viewCut(input: CutInput): ViewCut {
   let nFocused = true;
   let nPriority = 0;
   const evalNode = (L: number, cx: number, cy: number, cz: number): void => {
-    const e = E[L];
-    const x0 = cx * e * sx;
-    const y0 = cy * e * sy;
-    const z0 = cz * e * sz;
-    const x1 = Math.min((cx + 1) * e, Dx) * sx;
-    const y1 = Math.min((cy + 1) * e, Dy) * sy;
-    const z1 = Math.min((cz + 1) * e, Dz) * sz;
+    const [ex0, ey0, ez0] = E[L];
+    const x0 = cx * ex0 * sx;
+    const y0 = cy * ey0 * sy;
+    const z0 = cz * ez0 * sz;
+    const x1 = Math.min((cx + 1) * ex0, Dx) * sx;
+    const y1 = Math.min((cy + 1) * ey0, Dy) * sy;
+    const z1 = Math.min((cz + 1) * ez0, Dz) * sz;
     nInView = boxInFrustum(planes, x0, y0, z0, x1, y1, z1);
     const dx = Math.max(x0 - ex, 0, ex - x1);
     const dy = Math.max(y0 - ey, 0, ey - y1);
     const dz = Math.max(z0 - ez, 0, ez - z1);
     nDist = Math.sqrt(dx * dx + dy * dy + dz * dz);
-    nErr = nDist > 0 ? (2 ** L * maxVoxel * ppu) / nDist : Infinity;
+    nErr = nDist > 0 ? (voxelEdge[L] * ppu) / nDist : Infinity;
     nPriority = nErr;
     nFocused = true;
     if (axis && focus) {
@@ -204,9 +209,10 @@ export function viewCut(input: CutInput): ViewCut {
 
   // --- the tree
   const canSplit = (L: number, cx: number, cy: number, cz: number): boolean => {
-    if (L <= finest || k[L] === 0 || needsOf(L - 1) === null) return false;
+    const kk = k[L];
+    if (L <= finest || kk === null || needsOf(L - 1) === null) return false;
     const [gx, gy, gz] = levels[L - 1].chunkGrid;
-    return k[L] * cx < gx && k[L] * cy < gy && k[L] * cz < gz;
+    return kk[0] * cx < gx && kk[1] * cy < gy && kk[2] * cz < gz;
   };
   const logL: number[] = [];
   const logC: number[] = [];
@@ -217,13 +223,13 @@ export function viewCut(input: CutInput): ViewCut {
     const cy = Math.floor(c / p.gx) % p.gy;
     const cz = Math.floor(c / (p.gx * p.gy));
     const s = levelState(L - 1);
-    const kk = k[L];
+    const [kx, ky, kz] = k[L]!;
     const e = E[L - 1];
-    const xEnd = Math.min(kk * cx + kk, s.gx, Math.ceil(Dx / e));
-    const yEnd = Math.min(kk * cy + kk, s.gy, Math.ceil(Dy / e));
-    const zEnd = Math.min(kk * cz + kk, s.gz, Math.ceil(Dz / e));
-    for (let z = kk * cz; z < zEnd; z++)
-      for (let y = kk * cy; y < yEnd; y++) for (let x = kk * cx; x < xEnd; x++) fn(s, x + s.gx * (y + s.gy * z));
+    const xEnd = Math.min(kx * cx + kx, s.gx, Math.ceil(Dx / e[0]));
+    const yEnd = Math.min(ky * cy + ky, s.gy, Math.ceil(Dy / e[1]));
+    const zEnd = Math.min(kz * cz + kz, s.gz, Math.ceil(Dz / e[2]));
+    for (let z = kz * cz; z < zEnd; z++)
+      for (let y = ky * cy; y < yEnd; y++) for (let x = kx * cx; x < xEnd; x++) fn(s, x + s.gx * (y + s.gy * z));
   };
   const drawChild = (s: LevelState, child: number): void => {
     s.state[child] = LEAF;
@@ -259,9 +265,9 @@ export function viewCut(input: CutInput): ViewCut {
     for (let L = coarsest; L >= finest; L--) {
       const s = lv[L];
       if (!s) return false;
-      const x = Math.floor(px / E[L]);
-      const y = Math.floor(py / E[L]);
-      const z = Math.floor(pz / E[L]);
+      const x = Math.floor(px / E[L][0]);
+      const y = Math.floor(py / E[L][1]);
+      const z = Math.floor(pz / E[L][2]);
       if (x >= s.gx || y >= s.gy || z >= s.gz) return false;
       const c = x + s.gx * (y + s.gy * z);
       const st = s.state[c];
@@ -279,14 +285,14 @@ export function viewCut(input: CutInput): ViewCut {
   const balanceAround = (L: number, cx: number, cy: number, cz: number): void => {
     const e = E[L];
     for (let dz = -1; dz <= 1; dz++) {
-      const pz = (cz + dz) * e;
+      const pz = (cz + dz) * e[2];
       if (pz < 0 || pz >= Dz) continue;
       for (let dy = -1; dy <= 1; dy++) {
-        const py = (cy + dy) * e;
+        const py = (cy + dy) * e[1];
         if (py < 0 || py >= Dy) continue;
         for (let dx = -1; dx <= 1; dx++) {
           if (dx === 0 && dy === 0 && dz === 0) continue;
-          const px = (cx + dx) * e;
+          const px = (cx + dx) * e[0];
           if (px < 0 || px >= Dx) continue;
           while (locate(px, py, pz) && locL > L) {
             if (!forceSplit(locL, locC)) break;
@@ -357,7 +363,7 @@ export function viewCut(input: CutInput): ViewCut {
   const wantsRanges = new Set<number>();
   /** Queues leaf (L, c) if it asks to be split. */
   const consider = (L: number, c: number): void => {
-    if (L <= finest || k[L] === 0) return;
+    if (L <= finest || k[L] === null) return;
     const s = lv[L]!;
     const cx = c % s.gx;
     const cy = Math.floor(c / s.gx) % s.gy;
@@ -382,9 +388,9 @@ export function viewCut(input: CutInput): ViewCut {
   const root = levelState(coarsest);
   if (root.need === null) wantsRanges.add(coarsest);
   const eR = E[coarsest];
-  for (let z = 0; z < Math.min(root.gz, Math.ceil(Dz / eR)); z++)
-    for (let y = 0; y < Math.min(root.gy, Math.ceil(Dy / eR)); y++)
-      for (let x = 0; x < Math.min(root.gx, Math.ceil(Dx / eR)); x++) drawChild(root, x + root.gx * (y + root.gy * z));
+  for (let z = 0; z < Math.min(root.gz, Math.ceil(Dz / eR[2])); z++)
+    for (let y = 0; y < Math.min(root.gy, Math.ceil(Dy / eR[1])); y++)
+      for (let x = 0; x < Math.min(root.gx, Math.ceil(Dx / eR[0])); x++) drawChild(root, x + root.gx * (y + root.gy * z));
   let limitedByBudget = false;
   if (bytes > budgetBytes) {
     limitedByBudget = true;

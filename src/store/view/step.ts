@@ -12,27 +12,28 @@ import type { ViewCut } from './cut.ts';
 /**
  * Step k of `cut`. `needs(L)`: which chunks of level L the surface needs
  * (null: unknown, every chunk); `eye` and `voxelSize` in the cut's world
- * (level-0 voxel (i, j, k) at (i, j, k) * voxelSize).
+ * (level-0 voxel (i, j, k) at (i, j, k) * voxelSize); `scales[L]`: level-0
+ * voxels per voxel of level L, per axis.
  */
 export function cutStep(
   cut: ViewCut,
   k: number,
   layouts: readonly ChunkLevelLayout[],
+  scales: readonly (readonly [number, number, number])[],
   needs: (level: number) => ((chunk: ChunkIndex) => boolean) | null,
   eye: readonly [number, number, number],
   voxelSize: readonly [number, number, number],
 ): Step {
   const n = layouts.length;
   const leaves: Set<ChunkIndex>[] = Array.from({ length: n }, () => new Set());
-  const edge0 = (L: number) => layouts[L].chunkEdge * 2 ** L;
+  const edge0 = (L: number, a: number) => layouts[L].chunkEdge * scales[L][a];
   for (const node of cut.nodes) {
     if (node.level >= k) {
       leaves[node.level].add(node.chunk);
       continue;
     }
     const [gx, gy] = layouts[k].chunkGrid;
-    const e = edge0(node.level);
-    const a = node.coords.map((c) => Math.floor((c * e) / edge0(k)));
+    const a = node.coords.map((c, axis) => Math.floor((c * edge0(node.level, axis)) / edge0(k, axis)));
     leaves[k].add(a[0] + gx * (a[1] + gy * a[2]));
   }
   const drawn: Set<ChunkIndex>[] = [];
@@ -59,7 +60,7 @@ export function cutStep(
     }
     drawn.push(d);
     ghosts.push(gh);
-    wanted.push(nearestFirst(layouts[L], L, [...d, ...gh], eye, voxelSize));
+    wanted.push(nearestFirst(layouts[L], scales[L], [...d, ...gh], eye, voxelSize));
   }
   const levels = drawn.map((d, L) => (d.size > 0 ? L : -1)).filter((L) => L >= 0);
   return { finest: k, levels, leaves: leaves.map((s) => [...s]), drawn, ghosts, wanted };
@@ -68,17 +69,16 @@ export function cutStep(
 /** Chunks of level L by their centre's distance to the eye, nearest first (ties: ascending chunk). */
 function nearestFirst(
   layout: ChunkLevelLayout,
-  L: number,
+  scale: readonly [number, number, number],
   chunks: ChunkIndex[],
   eye: readonly [number, number, number],
   s: readonly [number, number, number],
 ): ChunkIndex[] {
   const { chunkGrid: g, chunkEdge } = layout;
-  const e = chunkEdge * 2 ** L;
   const dist = (c: ChunkIndex) => {
     const p = [c % g[0], Math.floor(c / g[0]) % g[1], Math.floor(c / (g[0] * g[1]))];
     let d = 0;
-    for (let a = 0; a < 3; a++) d += ((p[a] + 0.5) * e * s[a] - eye[a]) ** 2;
+    for (let a = 0; a < 3; a++) d += ((p[a] + 0.5) * chunkEdge * scale[a] * s[a] - eye[a]) ** 2;
     return d;
   };
   return chunks

@@ -67,7 +67,7 @@ export class ViewCutSurface {
 
   /** The shown levels' meshes as one, positions in level-0 voxel index space. */
   readPositions(): Promise<{ positions: Float32Array; indices: Uint32Array }> {
-    return joinLevelMeshes(this.stream.shown?.levels ?? [], this.stream.store.levelOffsets);
+    return joinLevelMeshes(this.stream.shown?.levels ?? [], this.stream.store.levelOffsets, this.stream.store.levelScales);
   }
 
   /** The cut on screen: per drawn chunk that holds part of the surface, its triangles (from the GPU's per-block counts). */
@@ -124,18 +124,19 @@ export function sumStats(iso: number, all: readonly IsosurfaceStats[]): Isosurfa
   } as IsosurfaceStats;
 }
 
-/** Several levels' meshes as one, positions in level-0 voxel index space (level L's voxel j at j * 2^L + its offset). */
+/** Several levels' meshes as one, positions in level-0 voxel index space (level L's voxel j at j * scale_L + its offset). */
 export async function joinLevelMeshes(
   levels: readonly { level: number; surface: Pick<Isosurface, 'readMesh'> }[],
   levelOffsets: readonly [number, number, number][],
+  levelScales?: readonly (readonly [number, number, number])[],
 ): Promise<{ positions: Float32Array; indices: Uint32Array }> {
   const parts: { positions: Float32Array; indices: Uint32Array }[] = [];
   for (const l of levels) {
     const mesh = await l.surface.readMesh();
     const positions = meshPositions(mesh);
-    const k = 2 ** l.level;
+    const k = levelScales?.[l.level] ?? [2 ** l.level, 2 ** l.level, 2 ** l.level];
     const off = levelOffsets[l.level] ?? [0, 0, 0];
-    for (let i = 0; i < positions.length; i++) positions[i] = positions[i] * k + off[i % 3];
+    for (let i = 0; i < positions.length; i++) positions[i] = positions[i] * k[i % 3] + off[i % 3];
     parts.push({ positions, indices: mesh.indices });
   }
   const positions = new Float32Array(parts.reduce((a, p) => a + p.positions.length, 0));

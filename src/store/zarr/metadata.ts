@@ -54,15 +54,20 @@ export function voxelSizeOf(attrs: Json): [number, number, number] {
 }
 
 /**
- * The datasets that make a pyramid the viewer can draw: level L halves every
- * axis L times (OME `scale` 2^L x level 0's on x, y and z). Pyramids whose
- * levels halve only some axes (ngff-zarr's per-axis scale factors: a
- * 128x128x256 volume's level 1 at 128x128x128) keep level 0 and the datasets
- * that are 2, 4, 8... times level 0's scale on every axis, in order; the
- * others are left out and named in `skipped`. Without scales on every
- * dataset, all of them (the converter's and zarr-python's stores).
+ * The datasets that make a pyramid the viewer can draw, and each one's
+ * scale: how many level-0 voxels one of its voxels spans on x, y and z.
+ * Level 0, then each dataset whose OME `scale` is a power of two times level
+ * 0's on every axis, at least the previous level's on every axis and more on
+ * one (ngff-zarr's per-axis scale factors: a 128x128x256 volume's level 1 at
+ * 128x128x128 spans (1, 1, 2)); the others (not a power of two, finer than
+ * the level before) are left out and named in `skipped`. Without scales on
+ * every dataset, all of them, level L spanning 2^L on every axis (the
+ * converter's and zarr-python's stores).
  */
-export function pyramidChain(attrs: Json, count: number): { datasets: number[]; skipped: string | null } {
+export function pyramidChain(
+  attrs: Json,
+  count: number,
+): { datasets: number[]; scales: [number, number, number][]; skipped: string | null } {
   const ms = multiscaleOf(attrs);
   const list = ms && Array.isArray(ms.datasets) ? (ms.datasets as Json[]) : [];
   const scales = list.slice(0, count).map((d) => {
@@ -73,31 +78,38 @@ export function pyramidChain(attrs: Json, count: number): { datasets: number[]; 
     return [x, y, z].every((a) => Number.isFinite(a) && a > 0) ? [x, y, z] : null;
   });
   const all = Array.from({ length: count }, (_, i) => i);
-  if (scales.length < count || scales.some((sc) => sc === null)) return { datasets: all, skipped: null };
+  if (scales.length < count || scales.some((sc) => sc === null))
+    return { datasets: all, scales: all.map((L) => [2 ** L, 2 ** L, 2 ** L]), skipped: null };
   const s0 = scales[0]!;
   const datasets: number[] = [0];
+  const chainScales: [number, number, number][] = [[1, 1, 1]];
   const left: string[] = [];
   for (let i = 1; i < count; i++) {
     const f = scales[i]!.map((v, a) => v / s0[a]);
-    const want = 2 ** datasets.length;
-    if (f.every((v) => Math.abs(v - want) <= 1e-6 * want)) datasets.push(i);
-    else left.push(`${String(list[i].path)} (${f.map((v) => Number(v.toPrecision(4))).join(' x ')} times level 0's voxel)`);
+    const pow2 = f.map((v) => 2 ** Math.round(Math.log2(v)));
+    const prev = chainScales[chainScales.length - 1];
+    const exact = f.every((v, a) => Math.abs(v - pow2[a]) <= 1e-6 * pow2[a]);
+    if (exact && pow2.every((v, a) => v >= prev[a]) && pow2.some((v, a) => v > prev[a])) {
+      datasets.push(i);
+      chainScales.push([pow2[0], pow2[1], pow2[2]]);
+    } else left.push(`${String(list[i].path)} (${f.map((v) => Number(v.toPrecision(4))).join(' x ')} times level 0's voxel)`);
   }
   return {
     datasets,
+    scales: chainScales,
     skipped:
       left.length === 0
         ? null
-        : `datasets ${left.join(', ')} are not shown: the levels drawn halve every axis (2, 4, 8... times level 0's voxel on x, y and z)`,
+        : `datasets ${left.join(', ')} are not shown: each level drawn spans a power of two of level 0's voxels on every axis, and more than the level before`,
   };
 }
 
 /**
  * Where each level sits, in level-0 voxels (x, y, z): level L's voxel j at
- * level-0 index j * 2^L + offset. From the OME `translation` of each dataset
+ * level-0 index j * scale_L + offset (pyramidChain's scales). From the OME `translation` of each dataset
  * (relative to level 0's, divided by level 0's `scale`): a coarse voxel of a
- * mean pyramid is the mean of 2^L finer ones and sits at their centre,
- * (2^L - 1) / 2 (the converter writes that); a store that gives no
+ * mean pyramid is the mean of scale_L finer ones per axis and sits at their
+ * centre, (scale_L - 1) / 2 (the converter writes that); a store that gives no
  * translation places its levels at 0 (nearest-neighbour pyramids). Levels
  * beyond the datasets listed (a plain array) get 0.
  */

@@ -93,8 +93,11 @@ export async function openSourceStore(
   const ms = multiscaleOf(attrs);
   const allPaths = kind === 'array' ? [''] : levelPaths(attrs);
   if (!allPaths) throw new StoreError('not-a-store', `${name}: a Zarr group without OME-Zarr multiscales (no levels to show)`);
-  // levels that halve every axis; datasets that halve only some are left out (and said so)
-  const chain = kind === 'array' ? { datasets: [0], skipped: null } : pyramidChain(attrs, allPaths.length);
+  // levels that span powers of two of level 0's voxels, coarser each time; other datasets are left out (and said so)
+  const chain =
+    kind === 'array'
+      ? { datasets: [0], scales: [[1, 1, 1]] as [number, number, number][], skipped: null }
+      : pyramidChain(attrs, allPaths.length);
   const paths = chain.datasets.map((i) => allPaths[i]);
   const sidecar = options.ranges ? await openRangesSidecar(options.ranges.store, options.ranges.name, metered.meter, options.retry) : null;
   let rate = options.rate ?? sidecar?.rate ?? DEFAULT_SOURCE_RATE;
@@ -234,6 +237,7 @@ export async function openSourceStore(
     metadataBytes: metered.meter.bytes,
     voxelSize: voxelSizeOf(attrs),
     levelOffsets: levelOffsetsOf(attrs, levels.length, chain.datasets),
+    levelScales: levels.map((_, L) => chain.scales[L] ?? [2 ** L, 2 ** L, 2 ** L]),
     unit: axisUnit('x'),
     valueRange: null,
     isAbsent: () => false,

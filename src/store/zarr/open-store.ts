@@ -234,6 +234,7 @@ async function openZfpLevels({ mem, metered, retrying }: StoreLayers, name: stri
   const notes: string[] = [];
   let attrs: Json = {};
   let chain: number[] | undefined;
+  let scales: [number, number, number][] | undefined;
   if (rootJson.node_type === 'array') {
     levels.push(await openLevel(mem, name, 0, '', null));
   } else {
@@ -244,9 +245,10 @@ async function openZfpLevels({ mem, metered, retrying }: StoreLayers, name: stri
     const ours = isObject(attrs.zfpzarr) ? attrs.zfpzarr : null;
     const ourLevels = (ours?.levels as Json[] | undefined) ?? [];
     if (ours && ours.complete !== true) notes.push('the store is unfinished (zfpzarr.complete is not true): chunks may be missing');
-    // levels that halve every axis; datasets that halve only some are left out (and said so)
+    // levels that span powers of two of level 0's voxels, coarser each time; other datasets are left out (and said so)
     const pyramid = pyramidChain(attrs, paths.length);
     chain = pyramid.datasets;
+    scales = pyramid.scales;
     if (pyramid.skipped) notes.push(pyramid.skipped);
     for (const [i, d] of chain.entries()) {
       const rp = ourLevels.find((l) => String(l.path) === paths[d])?.ranges;
@@ -302,6 +304,7 @@ async function openZfpLevels({ mem, metered, retrying }: StoreLayers, name: stri
     metadataBytes: metered.meter.bytes,
     voxelSize: voxelSizeOf(attrs),
     levelOffsets: levelOffsetsOf(attrs, levels.length, chain),
+    levelScales: levels.map((_, L) => scales?.[L] ?? [2 ** L, 2 ** L, 2 ** L]),
     unit: typeof ours?.unit === 'string' ? ours.unit : null,
     valueRange: Array.isArray(vr) && vr.length === 2 ? [Number(vr[0]), Number(vr[1])] : null,
     isAbsent(bytes) {

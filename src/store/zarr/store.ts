@@ -33,6 +33,12 @@ export interface ZfpStore {
   voxelSize: [number, number, number];
   /** Per level, where its voxel 0 sits in level-0 voxels (OME translation; metadata.ts levelOffsetsOf). */
   levelOffsets: [number, number, number][];
+  /**
+   * Per level, how many level-0 voxels one of its voxels spans on x, y and z
+   * (2^L on every axis unless the store's OME scales say otherwise: a level
+   * may halve only some axes; metadata.ts pyramidChain).
+   */
+  levelScales: [number, number, number][];
   unit: string | null;
   /** Decoded level-0 [min, max] from our attributes, else null. */
   valueRange: [number, number] | null;

@@ -9,7 +9,7 @@ import type { ChunkViewStream } from '../../../src/store/view/view-surface.ts';
 function fakeStream(): ChunkViewStream {
   return {
     levels: [{ layout: { dims: [64, 64, 64] } }],
-    store: { levelOffsets: [[0, 0, 0]] },
+    store: { levelOffsets: [[0, 0, 0]], levelScales: [[1, 1, 1]] },
     onError: () => () => {},
   } as unknown as ChunkViewStream;
 }

@@ -238,16 +238,16 @@ describe('SurfaceLayer', () => {
             }
         return [Math.min(...xs), Math.min(...ys), Math.max(...xs), Math.max(...ys)];
       };
-      // one piece at scale 2 from origin (3, 1, 0) (in its own voxels), against the soup placed there on the CPU
+      // one piece at scale (2, 3, 1) (a level that halves x and thirds y) from origin (3, 1, 0) (in its own voxels), against the soup placed there on the CPU
       layer.setDrawData(surface.data);
-      layer.setParts([{ data: surface.data, scale: 2, origin: [3, 1, 0] }]);
+      layer.setParts([{ data: surface.data, scale: [2, 3, 1], origin: [3, 1, 0] }]);
       const drawn = covered(await render(device, layer, camera, frameLayout));
       const vp = camera.viewProjection(mat4.create());
       const soup = marchingCubes(values, dims, 11.3).positions;
       const px: number[] = [];
       const py: number[] = [];
       for (let i = 0; i < soup.length; i += 3) {
-        const p = [(soup[i] + 3) * 2, (soup[i + 1] + 1) * 2, soup[i + 2] * 2];
+        const p = [(soup[i] + 3) * 2, (soup[i + 1] + 1) * 3, soup[i + 2]];
         const c = vec4.transformMat4(vec4.create(), [p[0], p[1], p[2], 1], vp);
         px.push(((c[0] / c[3] + 1) / 2) * SIZE - 0.5);
         py.push(((1 - c[1] / c[3]) / 2) * SIZE - 0.5);
@@ -255,7 +255,7 @@ describe('SurfaceLayer', () => {
       const expected = [Math.min(...px), Math.min(...py), Math.max(...px), Math.max(...py)];
       drawn.forEach((v, i) => expect(Math.abs(v - expected[i])).toBeLessThanOrEqual(1.5));
       // a tint changes the colour, not the coverage; back to the single draw data without parts
-      layer.setParts([{ data: surface.data, scale: 2, origin: [3, 1, 0], tint: [0.2, 0.2, 1.5] }]);
+      layer.setParts([{ data: surface.data, scale: [2, 3, 1], origin: [3, 1, 0], tint: [0.2, 0.2, 1.5] }]);
       const tinted = await render(device, layer, camera, frameLayout);
       expect(covered(tinted)).toEqual(drawn);
       layer.setParts(undefined);

@@ -3,7 +3,8 @@
 // (tests/fixtures/ngff-stores.py, ngff-zarr 0.50.0 pinned): OME 0.4 / Zarr
 // v2 in chunks of 96, OME 0.5 / Zarr v3 sharded 2 chunks per shard, the same
 // zipped (.ozx, RFC 9) read in place as a file and over HTTP, and an int16
-// pyramid whose level 1 halves only z. Truth from outside: level 0 at rate 8
+// pyramid whose level 1 halves only z (drawn where its scale puts it; level 1
+// = zarr-python's array of it in core). Truth from outside: level 0 at rate 8
 // = the raw file in core at rate 8, the same triangles (NumPy over both PLY
 // files); at the rate chosen from the data, within 1% of vtkMarchingCubes
 // (shared/data/reference/mc.json); zip files damaged in each way we read
@@ -118,7 +119,7 @@ describe('stores written by ngff-zarr', () => {
     }
   }, 300_000);
 
-  it('a pyramid whose level 1 halves only z: the levels drawn halve every axis (ngff level 2 is level 1), the other is named', async () => {
+  it("a pyramid whose level 1 halves only z: every level drawn where its scale and translation put it; level 1 = zarr-python's array in core; the cut draws it in level-0 voxels", async () => {
     const m = manifest.hydrogen_aniso;
     expect(m.shapes).toEqual([
       [128, 128, 128],
@@ -128,12 +129,42 @@ describe('stores written by ngff-zarr', () => {
     const store = await openStore(storeForLocation(m.store), m.store, { rate: 8 });
     expect(store.levels.map((l) => [l.path, ...l.layout.dims])).toEqual([
       ['scale0/hydrogen', 128, 128, 128],
+      ['scale1/hydrogen', 128, 128, 64],
       ['scale2/hydrogen', 64, 64, 64],
     ]);
-    expect(store.notes.join('\n')).toMatch(/scale1\/hydrogen \(1 x 1 x 2 times level 0's voxel\) are not shown/);
-    // the Gaussian pyramid's translation (0.5 of a level-0 voxel per axis) places level 1
-    expect(store.levelOffsets[1]).toEqual([0.5, 0.5, 0.5]);
+    // level 1 spans 2 level-0 voxels on z only; the Gaussian pyramid's translation puts it half a voxel up z
+    expect(store.levelScales).toEqual([
+      [1, 1, 1],
+      [1, 1, 2],
+      [2, 2, 2],
+    ]);
+    expect(store.levelOffsets).toEqual([
+      [0, 0, 0],
+      [0, 0, 0.5],
+      [0.5, 0.5, 0.5],
+    ]);
+    expect(store.notes.join('\n')).not.toMatch(/not shown/);
     store.close?.();
+    // level 1 as zarr-python reads it, compressed in core at rate 8: the same triangles
+    const raw1 = join(work, 'hydrogen-level1_128x128x64_int16.raw');
+    converterPython(
+      "import sys, zarr, numpy as np\nnp.ascontiguousarray(zarr.open_group(sys.argv[1], mode='r')['scale1/hydrogen'][...]).astype('<i2').tofile(sys.argv[2])",
+      [m.store, raw1],
+    );
+    const level1 = extract(m.store, [1500.5], join(work, 'aniso-level1'), ['--level', '1', '--rate', '8']);
+    const core1 = extract(raw1, [1500.5], join(work, 'aniso-core1'), ['--rate', '8']);
+    expect(triangles(level1.record)).toEqual(triangles(core1.record));
+    expect(samePly(join(work, 'aniso-level1-iso1500.5.ply'), join(work, 'aniso-core1-iso1500.5.ply'))).toBe('same');
+    // the view's cut of the whole volume draws level 1 (its 64^3 bricks do not nest in level 0's 96^3: a note says
+    // level 1 is final), placed in level-0 voxels: where level 0's surface (the raw in core) is, within a voxel
+    const cut = extract(m.store, [1500.5], join(work, 'aniso-cut'), ['--view-box', '0,0,0,127,127,127', '--rate', '8']);
+    const fine = extract(m.raw, [1500.5], join(work, 'aniso-core0'), ['--rate', '8']);
+    const drawn = cut.record.isosurfaces[0];
+    expect(new Set(drawn.cut.map((c: { level: number }) => c.level))).toEqual(new Set([1]));
+    const ref = fine.record.isosurfaces[0];
+    for (const end of ['min', 'max'] as const)
+      for (let a = 0; a < 3; a++) expect(Math.abs(drawn.bbox[end][a] - ref.bbox[end][a]), `${end}[${a}]`).toBeLessThan(1);
+    expect(Math.abs(drawn.surfaceArea / ref.surfaceArea - 1)).toBeLessThan(0.03);
     // the converter's sidecar takes the same levels, so it fits
     const ranges = join(work, 'hydrogen-ranges.zarr');
     execFileSync(process.execPath, [join(repoRoot, 'scripts/convert.mjs'), m.store, '--out', ranges, '--ranges-only', '--quiet'], {

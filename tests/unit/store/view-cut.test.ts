@@ -25,13 +25,17 @@ import {
 
 type V3 = [number, number, number];
 
-/** Levels with dims ceil(dims0 / 2^L) and the given chunk edges. */
-function layout(dims0: V3, edges: number[]): CutLevel[] {
+/** Levels with dims ceil(dims0 / 2^L) and the given chunk edges; with `scales`, ceil(dims0 / scale_L) per axis (levels that halve only some axes). */
+function layout(dims0: V3, edges: number[], scales?: V3[]): CutLevel[] {
   return edges.map((edge, L) => {
-    const dims = dims0.map((d) => Math.ceil(d / 2 ** L)) as V3;
-    return { dims, chunkEdge: edge, chunkGrid: dims.map((d) => Math.ceil(d / edge)) as V3 };
+    const f = scales?.[L] ?? [2 ** L, 2 ** L, 2 ** L];
+    const dims = dims0.map((d, a) => Math.ceil(d / f[a])) as V3;
+    return { dims, chunkEdge: edge, chunkGrid: dims.map((d) => Math.ceil(d / edge)) as V3, ...(scales ? { scale: f } : {}) };
   });
 }
+
+/** Level L's voxel in level-0 voxels, per axis (CutLevel.scale, else 2^L). */
+const scaleOf = (levels: CutLevel[], L: number): readonly [number, number, number] => levels[L].scale ?? [2 ** L, 2 ** L, 2 ** L];
 
 const LAYOUTS: { name: string; levels: CutLevel[]; voxelSize: V3 }[] = [
   { name: '256^3 in 16^3 chunks, levels 0..4', levels: layout([256, 256, 256], [16, 16, 16, 16, 16]), voxelSize: [1, 1, 1] },
@@ -40,6 +44,21 @@ const LAYOUTS: { name: string; levels: CutLevel[]; voxelSize: V3 }[] = [
   { name: '128^3, finer chunks half and twice the coarser', levels: layout([128, 128, 128], [8, 16, 8, 8, 8]), voxelSize: [1, 1, 1] },
   // E = 32, 16, 32, 64: level 1 cannot split into level 0 (E_0 = 32 does not divide 16)
   { name: '128^3, level 1 does not nest over level 0', levels: layout([128, 128, 128], [32, 8, 8, 8]), voxelSize: [2, 2, 2] },
+  // ngff-zarr's per-axis scale factors: level 1 halves z only, level 2 x and y only, level 3 every axis
+  {
+    name: '96x80x150, levels that halve only some axes',
+    levels: layout(
+      [96, 80, 150],
+      [8, 8, 8, 8],
+      [
+        [1, 1, 1],
+        [1, 1, 2],
+        [2, 2, 2],
+        [4, 4, 4],
+      ],
+    ),
+    voxelSize: [1, 1, 0.6],
+  },
 ];
 
 const VIEWPORT = { width: 640, height: 480 };
@@ -105,22 +124,24 @@ const seen = { balancingSplits: 0, culledRefinable: 0 };
 function refCut(inp: CutInput): { leaves: RNode[]; wantsRanges: number[] } {
   const { levels, voxelSize: s, camera, finest, coarsest } = inp;
   const D = levels[0].dims;
-  const E = (L: number) => levels[L].chunkEdge * 2 ** L;
+  // a chunk's edge in level-0 voxels, per axis
+  const E = (L: number, a: number) => levels[L].chunkEdge * scaleOf(levels, L)[a];
+  const nests = (L: number) => [0, 1, 2].every((a) => E(L, a) % E(L - 1, a) === 0);
   const node = (L: number, c: V3): RNode => ({
     L,
     c,
-    lo: [c[0] * E(L), c[1] * E(L), c[2] * E(L)],
-    hi: [Math.min((c[0] + 1) * E(L), D[0]), Math.min((c[1] + 1) * E(L), D[1]), Math.min((c[2] + 1) * E(L), D[2])],
+    lo: [c[0] * E(L, 0), c[1] * E(L, 1), c[2] * E(L, 2)],
+    hi: [Math.min((c[0] + 1) * E(L, 0), D[0]), Math.min((c[1] + 1) * E(L, 1), D[1]), Math.min((c[2] + 1) * E(L, 2), D[2])],
   });
   const children = (n: RNode): RNode[] => {
     const L = n.L - 1;
-    const k = E(n.L) / E(L);
+    const k = [0, 1, 2].map((a) => E(n.L, a) / E(L, a));
     const out: RNode[] = [];
-    for (let z = 0; z < k; z++)
-      for (let y = 0; y < k; y++)
-        for (let x = 0; x < k; x++) {
-          const c: V3 = [k * n.c[0] + x, k * n.c[1] + y, k * n.c[2] + z];
-          if (c.every((v, a) => v < levels[L].chunkGrid[a] && v * E(L) < D[a])) out.push(node(L, c));
+    for (let z = 0; z < k[2]; z++)
+      for (let y = 0; y < k[1]; y++)
+        for (let x = 0; x < k[0]; x++) {
+          const c: V3 = [k[0] * n.c[0] + x, k[1] * n.c[1] + y, k[2] * n.c[2] + z];
+          if (c.every((v, a) => v < levels[L].chunkGrid[a] && v * E(L, a) < D[a])) out.push(node(L, c));
         }
     return out;
   };
@@ -150,11 +171,13 @@ function refCut(inp: CutInput): { leaves: RNode[]; wantsRanges: number[] } {
       const nearest = Math.min(Math.max(e, n.lo[a] * s[a]), n.hi[a] * s[a]);
       d2 += (e - nearest) ** 2;
     }
-    return d2 === 0 ? Infinity : (2 ** n.L * Math.max(...s) * camera.pixelsPerUnit) / Math.sqrt(d2);
+    // the level's largest voxel edge in world units
+    const edge = Math.max(...scaleOf(levels, n.L).map((f, a) => f * s[a]));
+    return d2 === 0 ? Infinity : (edge * camera.pixelsPerUnit) / Math.sqrt(d2);
   };
   const wants = new Set<number>();
   const asks = (n: RNode): boolean => {
-    if (n.L <= finest || E(n.L) % E(n.L - 1) !== 0 || !inView(n) || !(error(n) > inp.tolerancePx)) return false;
+    if (n.L <= finest || !nests(n.L) || !inView(n) || !(error(n) > inp.tolerancePx)) return false;
     if (inp.needs(n.L - 1) === null) {
       wants.add(n.L - 1);
       return false;
@@ -168,7 +191,7 @@ function refCut(inp: CutInput): { leaves: RNode[]; wantsRanges: number[] } {
     for (let y = 0; y < g[1]; y++)
       for (let x = 0; x < g[0]; x++) {
         const c: V3 = [x, y, z];
-        if (c.every((v, a) => v * E(coarsest) < D[a])) leaves.push(node(coarsest, c));
+        if (c.every((v, a) => v * E(coarsest, a) < D[a])) leaves.push(node(coarsest, c));
       }
   for (let changed = true; changed; ) {
     changed = false;
@@ -196,7 +219,7 @@ function refCut(inp: CutInput): { leaves: RNode[]; wantsRanges: number[] } {
   }
   // leaves kept coarse only by the frustum: in view they would have been split
   for (const n of leaves)
-    if (n.L > finest && E(n.L) % E(n.L - 1) === 0 && !inView(n) && error(n) > inp.tolerancePx && inp.needs(n.L - 1)) seen.culledRefinable++;
+    if (n.L > finest && nests(n.L) && !inView(n) && error(n) > inp.tolerancePx && inp.needs(n.L - 1)) seen.culledRefinable++;
   return { leaves, wantsRanges: [...wants].sort((a, b) => a - b) };
 }
 
@@ -206,9 +229,9 @@ const touch = (a: { lo: V3; hi: V3 }, b: { lo: V3; hi: V3 }) =>
 // --- checks from outside ---------------------------------------------------------
 
 function boxOf(levels: CutLevel[], L: number, c: V3): { lo: V3; hi: V3 } {
-  const E = levels[L].chunkEdge * 2 ** L;
+  const E = scaleOf(levels, L).map((f) => levels[L].chunkEdge * f);
   const D = levels[0].dims;
-  return { lo: c.map((v) => v * E) as V3, hi: c.map((v, a) => Math.min((v + 1) * E, D[a])) as V3 };
+  return { lo: c.map((v, a) => v * E[a]) as V3, hi: c.map((v, a) => Math.min((v + 1) * E[a], D[a])) as V3 };
 }
 
 function coordsOf(level: CutLevel, c: number): V3 {
