@@ -8,7 +8,7 @@ import { mkdirSync } from 'node:fs';
 import { join } from 'node:path';
 import { expect, test } from '@playwright/test';
 import { E2E_STORES_DIR, runCli, SHARED_VOLUMES_DIR } from './cli.ts';
-import { level0Shown, openApp, watchErrors } from './page.ts';
+import { level0Shown, nonBackgroundFraction, openApp, watchErrors } from './page.ts';
 import { trianglesShown } from './volume-page.ts';
 
 const root = join(import.meta.dirname, '..', '..');
@@ -63,6 +63,52 @@ test('an .ozx picked with "Open file…" opens as a store (not as a volume file)
   const rate = await page.locator('#store-section input[data-choice="storeRate"]').inputValue();
   const cli = await runCli<{ isosurfaces: { triangles: number }[] }>(['extract', ozx, '--level', '0', `--iso=${iso}`, '--rate', rate]);
   expect(await trianglesShown(page)).toBe(cli.isosurfaces[0].triangles);
+  await expect(page.locator('#messages .message.error')).toHaveCount(0);
+  expect(realErrors(logged)).toEqual([]);
+});
+
+test('a pyramid whose level 1 halves only z: level 1 drawn at its scale (1, 1, 2) where its translation puts it, level by level and in the cut', async ({
+  page,
+}) => {
+  test.setTimeout(300_000);
+  const logged = watchErrors(page);
+  // level by level, pinned at level 1 by the link: its voxels are 1 x 1 x 2 of level 0's, half a voxel up z
+  await openApp(page, '/?store=/stores/ngff/hydrogen_aniso.ome.zarr#iso=1500.5&rate=8&level=1');
+  await page.waitForFunction(
+    () => {
+      const s = (window as unknown as { zfpisoStore?: { done: boolean; shownLevel: number } }).zfpisoStore;
+      return s?.done === true && s.shownLevel === 1;
+    },
+    null,
+    { timeout: 240_000 },
+  );
+  const st = (await page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore)) as {
+    levels: { dims: number[] }[];
+  };
+  expect(st.levels.map((l) => l.dims)).toEqual([
+    [128, 128, 128],
+    [128, 128, 64],
+    [64, 64, 64],
+  ]);
+  const volume = await page.evaluate(
+    () => (window as unknown as { zfpiso: { volume: { dims: number[]; spacing: number[] } } }).zfpiso.volume,
+  );
+  expect(volume).toMatchObject({ dims: [128, 128, 64], spacing: [1, 1, 2] });
+  const store = join(folder, 'hydrogen_aniso.ome.zarr');
+  const cli = await runCli<{ isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '1', '--iso', '1500.5', '--rate', '8']);
+  expect(await trianglesShown(page)).toBe(cli.isosurfaces[0].triangles);
+  // refined by the view (a fresh load: the same URL with another hash would not reload): the whole cut shown, frames drawn, no error
+  await page.goto('about:blank');
+  await openApp(page, '/?store=/stores/ngff/hydrogen_aniso.ome.zarr#iso=1500.5&rate=8&cut=1');
+  await page.waitForFunction(
+    () => {
+      const s = (window as unknown as { zfpisoStore?: { done: boolean; cut: { final: boolean } | null } }).zfpisoStore;
+      return s?.done === true && s.cut?.final === true;
+    },
+    null,
+    { timeout: 240_000 },
+  );
+  expect(await nonBackgroundFraction(page)).toBeGreaterThan(0.01);
   await expect(page.locator('#messages .message.error')).toHaveCount(0);
   expect(realErrors(logged)).toEqual([]);
 });
