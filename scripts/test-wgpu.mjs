@@ -29,6 +29,7 @@ export const WGPU_TESTS = [
   'tests/unit/primitives/sort.test.ts',
   'tests/unit/primitives/indirect.test.ts',
   'tests/unit/gpu/grid.test.ts',
+  'tests/unit/gpu/buffers.test.ts',
   'tests/unit/gpu/pipeline-cache.test.ts',
   'tests/unit/mc/case-table-wgsl.test.ts',
   'tests/unit/mc/naive-gpu.test.ts',

@@ -18,24 +18,36 @@ export function createBuffer(
   return buffer;
 }
 
-/** Copies `size` bytes at `offset` of `source` to the CPU (waits for the GPU). */
+/**
+ * Copies `size` bytes at `offset` of `source` to the CPU (waits for the GPU),
+ * through one staging buffer of at most READ_PIECE_BYTES reused piece by
+ * piece: a readback of a large surface (the CLI's meshes) then fits in what
+ * a stream's budget keeps free for short-lived buffers.
+ */
 export async function readBuffer(device: GPUDevice, source: GPUBuffer, offset = 0, size = source.size - offset): Promise<ArrayBuffer> {
   const aligned = Math.ceil(size / 4) * 4;
-  const staging = device.createBuffer({
-    label: 'readBuffer.staging',
-    size: Math.max(4, aligned),
-    usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST,
-  });
+  const piece = Math.max(4, Math.min(aligned, READ_PIECE_BYTES));
+  const staging = device.createBuffer({ label: 'readBuffer.staging', size: piece, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+  const out = new Uint8Array(aligned);
   try {
-    const encoder = device.createCommandEncoder({ label: 'readBuffer' });
-    if (aligned > 0) encoder.copyBufferToBuffer(source, offset, staging, 0, aligned);
-    device.queue.submit([encoder.finish()]);
-    await staging.mapAsync(GPUMapMode.READ);
-    return staging.getMappedRange().slice(0, size);
+    for (let at = 0; at < aligned || at === 0; at += piece) {
+      const n = Math.min(piece, aligned - at);
+      const encoder = device.createCommandEncoder({ label: 'readBuffer' });
+      if (n > 0) encoder.copyBufferToBuffer(source, offset + at, staging, 0, n);
+      device.queue.submit([encoder.finish()]);
+      await staging.mapAsync(GPUMapMode.READ, 0, Math.max(4, n));
+      if (n > 0) out.set(new Uint8Array(staging.getMappedRange(0, n)), at);
+      staging.unmap();
+      if (n === 0) break;
+    }
+    return out.buffer.slice(0, size);
   } finally {
     staging.destroy();
   }
 }
+
+/** The largest staging buffer a readback makes (a quarter of the stream's reserve for short-lived buffers). */
+export const READ_PIECE_BYTES = 256 << 10;
 
 export async function readU32(device: GPUDevice, source: GPUBuffer, offset = 0, count?: number): Promise<Uint32Array> {
   const n = count ?? (source.size - offset) / 4;

@@ -94,7 +94,7 @@ export interface OpenStore {
   store: ZfpStore;
   metered: MeteredStore;
   fetcher: ChunkFetcher;
-  /** Level by level (LevelStream), or refined by the view (StoreStream). */
+  /** The session's stream as the page drives it: its levels (LevelStream) when level by level, else the stream itself (refined by the view). */
   controller: ChunkLevelStream | ChunkViewStream;
   /** Refined by the view: its tolerance and tint; null when level by level. */
   cut: { tolerancePx: number; tint: boolean } | null;

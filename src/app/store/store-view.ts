@@ -8,13 +8,11 @@
 import type { AsyncReadable } from '@zarrita/storage';
 import { storeRateChooser } from '../../store/rate.ts';
 import { StoreSession } from '../../store/session.ts';
-import type { ChunkLevelStream } from '../../store/pinned-level.ts';
 import type { StreamProgress } from '../../store/stream-port.ts';
 import { StoreError } from '../../store/zarr/errors.ts';
 import { HttpStore } from '../../store/zarr/http-store.ts';
 import { type LevelValues, readLevelValues } from '../../store/level-values.ts';
-import { DEFAULT_TOLERANCE_PX, StoreStream } from '../../store/stream/store-stream.ts';
-import type { ChunkViewStream } from '../../store/view/view-surface.ts';
+import { DEFAULT_TOLERANCE_PX } from '../../store/stream/store-stream.ts';
 import { type ShownCutOfPage, StoreCutIsosurface } from './store-cut.ts';
 import { chooseIsovalue } from '../iso-choice.ts';
 import { renderStorePanel, type StoreChoice, type StorePageState } from './store-panel.ts';
@@ -273,7 +271,7 @@ export class StoreView {
     } else {
       const first = o.current === null;
       const iso = new StoreLevelIsosurface(
-        o.controller as ChunkLevelStream,
+        o.session.levels!,
         s,
         o.valueRange,
         (value) => this.#refine(o, value),
@@ -380,7 +378,7 @@ export class StoreView {
 
   /** The current isovalue refined for the page's camera now. */
   async #refineView(o: OpenStore): Promise<void> {
-    const stream = o.controller as ChunkViewStream;
+    const { stream } = o.session;
     o.running++;
     o.state.done = false;
     this.#publish(o);
@@ -444,7 +442,7 @@ export class StoreView {
     if (o.current instanceof StoreCutIsosurface) {
       o.current.showAgain(s);
     } else if (s.levels.length > 0) {
-      const stream = o.controller as ChunkViewStream;
+      const { stream } = o.session;
       const iso = new StoreCutIsosurface(
         stream,
         s,
@@ -484,7 +482,7 @@ export class StoreView {
     this.d.requestFrame();
     this.#publish(o);
     // the ranges of the bricks this step read are recorded once their readback arrives
-    void (o.controller as ChunkViewStream).learnSettled().then(() => this.#widen(o));
+    void o.session.stream.learnSettled().then(() => this.#widen(o));
   }
 
   #line(text: string): void {

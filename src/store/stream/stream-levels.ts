@@ -110,13 +110,16 @@ export class StreamLevels<V extends RoleVolume> {
     const n = Math.max(1, keep.size);
     const v = lv.volume;
     if (v && v.poolChunks >= n) return null;
-    const target = Math.min(chunkCount(lv.layout), Math.max(n, Math.ceil((v?.poolChunks ?? 0) * 1.25)));
-    const extra = this.gpu.poolBytesFor(lv.layout, target) - (v?.poolBytes ?? 0) + estimateFixedBytes(lv.layout, target);
-    if (extra > free()) for (const other of this.levels) if (other !== lv && !inUse(other.index)) this.dropPool(other);
-    if (extra > free())
+    const extraFor = (chunks: number) =>
+      this.gpu.poolBytesFor(lv.layout, chunks) - (v?.poolBytes ?? 0) + estimateFixedBytes(lv.layout, chunks);
+    // room to grow into (fewer resizes, each of which makes the level's surface again), else exactly what is asked
+    let target = Math.min(chunkCount(lv.layout), Math.max(n, Math.ceil((v?.poolChunks ?? 0) * 1.25)));
+    if (extraFor(target) > free()) for (const other of this.levels) if (other !== lv && !inUse(other.index)) this.dropPool(other);
+    if (extraFor(target) > free()) target = n;
+    if (extraFor(target) > free())
       return (
-        `level ${lv.index} needs ${n} chunks (${mib(n * lv.layout.chunkBytes)} MiB) for this step; ` +
-        `the budget of ${mib(budgetBytes)} MiB has ${mib(Math.max(0, free()))} MiB free`
+        `level ${lv.index} needs ${n} chunks (${mib(n * lv.layout.chunkBytes)} MiB) and ${mib(estimateFixedBytes(lv.layout, n))} MiB ` +
+        `of per-block state for its surface for this step; the budget of ${mib(budgetBytes)} MiB has ${mib(Math.max(0, free()))} MiB free`
       );
     this.poolChanges++;
     if (v) v.resize(Math.max(target, v.residentCount));
