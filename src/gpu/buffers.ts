@@ -27,7 +27,11 @@ export function createBuffer(
 export async function readBuffer(device: GPUDevice, source: GPUBuffer, offset = 0, size = source.size - offset): Promise<ArrayBuffer> {
   const aligned = Math.ceil(size / 4) * 4;
   const piece = Math.max(4, Math.min(aligned, READ_PIECE_BYTES));
-  const staging = device.createBuffer({ label: 'readBuffer.staging', size: piece, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+  const staging = device.createBuffer({
+    label: 'readBuffer.staging',
+    size: piece,
+    usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST,
+  });
   const out = new Uint8Array(aligned);
   try {
     for (let at = 0; at < aligned || at === 0; at += piece) {

@@ -1,4 +1,4 @@
-// The stream controller's GPU side: one ChunkedVolume (pool of compressed
+// The store stream's GPU side: one ChunkedVolume (pool of compressed
 // chunks + page table) per level and the one isosurface pipeline over it,
 // all made on a metered view of the device, so what the stream holds on the
 // GPU is counted where it is made (src/gpu/memory-meter.ts).
@@ -43,7 +43,7 @@ export async function storeEncoder(gpu: GpuContext, store: ZfpStore): Promise<Zf
   return store.source ? encoderFor(gpu.device) : undefined;
 }
 
-/** The controller over real GPU pools and surfaces, its port's meter counting what it holds. */
+/** The level-by-level stream over real GPU pools and surfaces, its port's meter counting what it holds. */
 export async function createChunkStream(
   store: ZfpStore,
   fetcher: ChunkFetcher,

@@ -1,5 +1,5 @@
 // One level of a store as one surface for the CLI (`extract` / `bench`
-// STORE --level L): the stream controller pinned to level L, so each
+// STORE --level L): the level stream pinned to level L, so each
 // isovalue fetches only the chunks its surface needs at that level (plan.ts)
 // into the level's pool of compressed chunks, then computes the surface with
 // the one isosurface pipeline over that pool. What `extract` and `bench`
@@ -10,7 +10,7 @@ import type { IsosurfaceStats, SurfaceMesh, VolumeInfo } from '../isosurface/typ
 import type { ChunkedVolume } from '../zfp/chunked-volume.ts';
 import type { LevelStream } from './stream/level-stream.ts';
 
-/** The level could not show a surface at this isovalue (over the budget, a failed chunk): the controller's reason. */
+/** The level could not show a surface at this isovalue (over the budget, a failed chunk): the stream's reason. */
 export class LevelStoppedError extends Error {
   constructor(
     message: string,
@@ -31,26 +31,26 @@ export class PinnedLevelSurface {
   #errors: string[] = [];
 
   constructor(
-    readonly controller: ChunkLevelStream,
+    readonly levels: ChunkLevelStream,
     readonly level: number,
   ) {
-    controller.finest = level;
-    controller.coarsest = level;
-    const { dims } = controller.levels[level].layout;
+    levels.finest = level;
+    levels.coarsest = level;
+    const { dims } = levels.levels[level].layout;
     const blockGrid = dims.map((n) => Math.ceil(n / 4)) as [number, number, number];
     this.info = {
       dims: [...dims],
       blockGrid,
       blockCount: blockGrid[0] * blockGrid[1] * blockGrid[2],
-      valueRange: controller.valueRange ?? [0, 0],
+      valueRange: levels.valueRange ?? [0, 0],
     };
-    controller.onProgress((p) => {
+    levels.onProgress((p) => {
       if (p.phase === 'stopped') {
         this.#reason = p.reason ?? `level ${level} stopped`;
         this.#overBudget = p.cause === 'budget';
       }
     });
-    controller.onError((e) => this.#errors.push(e.message));
+    levels.onError((e) => this.#errors.push(e.message));
   }
 
   /** Messages of chunks that failed (after their retries), in order. */
@@ -59,24 +59,24 @@ export class PinnedLevelSurface {
   }
 
   get memoryBudget(): number {
-    return this.controller.budgetBytes;
+    return this.levels.budgetBytes;
   }
 
   /** Fetches what the surface at `iso` needs at this level, then computes it. */
   async compute(iso: number): Promise<IsosurfaceStats> {
     this.#reason = null;
-    await this.controller.setIsovalue(iso);
-    const shown = this.controller.shown;
+    await this.levels.setIsovalue(iso);
+    const shown = this.levels.shown;
     if (!shown || shown.level !== this.level || shown.iso !== iso) {
       throw new LevelStoppedError(this.#reason ?? `level ${this.level}: no surface at isovalue ${iso}`, this.#overBudget);
     }
     // a store without range arrays: its value range is known once a level was resident whole
-    if (this.info.valueRange[0] === this.info.valueRange[1]) this.info.valueRange = this.controller.valueRange ?? this.info.valueRange;
+    if (this.info.valueRange[0] === this.info.valueRange[1]) this.info.valueRange = this.levels.valueRange ?? this.info.valueRange;
     return shown.stats;
   }
 
   readMesh(): Promise<SurfaceMesh> {
-    const shown = this.controller.shown;
+    const shown = this.levels.shown;
     return shown
       ? shown.surface.readMesh()
       : Promise.resolve({ vertices: new Uint32Array(0), indices: new Uint32Array(0), dims: [...this.info.dims] });
@@ -84,10 +84,10 @@ export class PinnedLevelSurface {
 
   /** Empties the block cache (the pool of compressed chunks stays: that is the network's cache). */
   resetCache(): void {
-    this.controller.shown?.surface.resetCache();
+    this.levels.shown?.surface.resetCache();
   }
 
   destroy(): void {
-    this.controller.destroy();
+    this.levels.destroy();
   }
 }

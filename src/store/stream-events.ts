@@ -1,5 +1,5 @@
-// What a stream tells its listeners, the same way for both engines (level by
-// level, stream-controller.ts; refined by the view, view/view-stream.ts):
+// What the store stream tells its listeners (stream/store-stream.ts, planned
+// level by level or by the view):
 // progress (fetching, computing, shown, stopped with its cause), what is
 // shown, and errors (a chunk that failed, each once; a GPU error).
 import type { StreamProgress } from './stream-port.ts';

@@ -1,11 +1,11 @@
-// The stream controller's view of the GPU side (stream-controller.ts): what
+// The store stream's view of the GPU side (stream/store-stream.ts): what
 // it needs of a level's pool (a ChunkedVolume, src/zfp/chunked-volume.ts),
 // of a surface over it (an Isosurface), and of the port that makes them
 // (gpu-port.ts; tests inject a CPU stand-in), and what it tells its
 // listeners.
 import type { ChunkIndex, ChunkLevelLayout } from './types.ts';
 
-/** What the controller needs of a ChunkedVolume (src/zfp/chunked-volume.ts). */
+/** What the stream needs of a ChunkedVolume (src/zfp/chunked-volume.ts). */
 export interface LevelVolume {
   readonly poolChunks: number;
   /** GPU bytes the pool holds (slots, page table, parameters). */
