@@ -11,7 +11,7 @@
 //   total over workers is not measured here).
 // - GPU: the level's bricks encoded into a pool (ChunkedVolume.put of
 //   values, ZfpEncoder.encodeSlot): MB/s of voxels.
-// - The stream controller over HTTP (localhost and the simulated 100 Mbit/s
+// - The level-by-level store stream over HTTP (localhost and the simulated 100 Mbit/s
 //   link): time to the first surface (coarsest level) and to level 0, bytes
 //   fetched, against the zfp store.
 // Median of the repeats after a discarded first; JSON to

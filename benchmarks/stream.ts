@@ -3,9 +3,9 @@
 // `-- --flight [--size N]`: a fly-through refined by the view, stream-flight.ts):
 // stores served over HTTP on localhost (the dev server's /stores/
 // middleware) and through a simulated link (100 Mbit/s, 20 ms per request,
-// in the fetch layer). The path is the stream controller's (the page's and
-// the CLI's): the chunks the plan needs, fetched into ChunkedVolume pools,
-// coarsest level first.
+// in the fetch layer). The path is the store stream's planned level by level
+// (the page's and the CLI's): the chunks the plan needs, fetched into
+// ChunkedVolume pools, coarsest level first.
 // - bonsai (256^3): time to the first surface (coarsest level) and to the
 //   full-resolution one (level 0), bytes fetched / store size, level-0
 //   chunks fetched against the plan's count, requests and retries, GPU bytes
@@ -251,7 +251,7 @@ async function main() {
       scaleTable(scale),
     );
   printTable(
-    `bench:stream, ${describeAdapter(gpu.adapter)}, median of ${repeats - 1} after a discarded first; gen size ${size}^3; the stream controller (the page's and the CLI's path): the planned chunks into ChunkedVolume pools, coarsest level first; budget ${budgetBytes / 2 ** 20} MiB`,
+    `bench:stream, ${describeAdapter(gpu.adapter)}, median of ${repeats - 1} after a discarded first; gen size ${size}^3; the store stream level by level (the page's and the CLI's path): the planned chunks into ChunkedVolume pools, coarsest level first; budget ${budgetBytes / 2 ** 20} MiB`,
     [
       'store',
       'link',

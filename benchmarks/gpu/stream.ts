@@ -2,7 +2,7 @@
 // field, 64^3 chunks at rate 1 in shards, levels down to one chunk, made on
 // the machine that runs the benchmark by the project's converter) served over
 // HTTP on localhost, as bench:stream serves it:
-// - the first streamed surface: the stream controller's coarsest level after
+// - the first streamed surface: the level stream's coarsest level after
 //   the metadata, then as fine as the budget allows (the level-by-level
 //   engine);
 // - flight stops (the view's refinement, src/store/view/): the page's Fit and
