@@ -316,6 +316,8 @@ export class StoreView {
     o.state.shownLevel = s.level;
     this.#widen(o);
     this.#publish(o);
+    // the ranges of the bricks this level read are recorded once their readback arrives
+    void o.session.stream.learnSettled().then(() => this.#widen(o));
   }
 
   /**

@@ -391,9 +391,10 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     for (const L of this.#surfaces.letGoOutside(used)) this.levels[L].volume?.setRoles(new Set(), new Set());
     if (this.snapshots) for (const l of levels) l.surface.present?.();
     this.#shown = { iso, step: step.finest, final, levels, cut, leaves: step.leaves };
+    // learning is asked for before listeners hear of the step, so their learnSettled() waits for it
+    this.#learn(levels);
     this.#events.shown(this.#shown);
     progress('shown');
-    this.#learn(levels);
     return true;
   }
 
