@@ -11,7 +11,7 @@ import { join } from 'node:path';
 import { expect, test } from '@playwright/test';
 import { E2E_STORES_DIR, runCli, SHARED_VOLUMES_DIR } from './cli.ts';
 import { level0Shown, openApp, watchErrors } from './page.ts';
-import { trianglesShown } from './volume-page.ts';
+import { setIsovalue, trianglesShown } from './volume-page.ts';
 
 const root = join(import.meta.dirname, '..', '..');
 let store = '';
@@ -164,3 +164,55 @@ for (const cut of [false, true])
     await expect(page.locator('#iso-value')).toHaveValue(/^300/);
     expect(logged.filter((e) => !/status of 404/.test(e))).toEqual([]);
   });
+
+/** Bricks of level 0 a surface at `iso` reads by zfpy's ranges at `rate` (convert --ranges-only): lo < iso <= hi over each brick's 27 neighbours. */
+function neededByRanges(rate: string, iso: number): number {
+  const out = join(E2E_STORES_DIR, `neghip-zstd-ranges-${rate}.zarr`);
+  const printed = execFileSync(
+    join(root, '.venv-converter/bin/python'),
+    [
+      '-c',
+      `
+import sys, numpy as np, zarr
+r = zarr.open_array(sys.argv[1] + '/ranges/0')[...].astype(np.float64)
+lo = np.pad(r[..., 0], 1, constant_values=np.inf)
+hi = np.pad(r[..., 1], 1, constant_values=-np.inf)
+z, y, x = r.shape[:3]
+nlo = np.min([lo[a:a + z, b:b + y, c:c + x] for a in range(3) for b in range(3) for c in range(3)], axis=0)
+nhi = np.max([hi[a:a + z, b:b + y, c:c + x] for a in range(3) for b in range(3) for c in range(3)], axis=0)
+iso = float(sys.argv[2])
+print(int(((nlo < iso) & (iso <= nhi)).sum()))
+`,
+      out,
+      String(iso),
+    ],
+    { encoding: 'utf8' },
+  );
+  return Number(printed.trim());
+}
+
+test("a second isovalue reads only the bricks whose learnt ranges hold it (zfpy's at the store's rate) and fetches none again", async ({
+  page,
+}) => {
+  test.setTimeout(300_000);
+  const logged = watchErrors(page);
+  await openApp(page, '/?store=/stores/neghip-zstd.zarr#iso=80.5&rate=8');
+  await level0Shown(page);
+  // every brick of level 0 read once (no ranges yet: the first surface of a level reads it whole), and its range learnt
+  await expect(page.locator('#store-section dd[data-k="value-range"]')).not.toContainText('provisional', { timeout: 60_000 });
+  type Levels = { chunksFetched: number; levels: { chunks: number; chunksFetched: number; chunksShown: number }[] };
+  const state = () => page.evaluate(() => (window as unknown as { zfpisoStore: Levels }).zfpisoStore);
+  const first = await state();
+  expect(first.levels[0].chunksShown).toBe(first.levels[0].chunks);
+  sidecarRange('8');
+  const needed = neededByRanges('8', 200.5);
+  expect(needed).toBeGreaterThan(0);
+  expect(needed).toBeLessThan(first.levels[0].chunks);
+  await setIsovalue(page, 200.5);
+  await level0Shown(page);
+  const second = await state();
+  // the plan used the learnt ranges: exactly the bricks zfpy's ranges say the surface needs, none fetched again
+  expect(second.levels[0].chunksShown).toBe(needed);
+  expect(second.chunksFetched).toBe(first.chunksFetched);
+  expect(logged.filter((e) => !/status of 404/.test(e))).toEqual([]);
+});

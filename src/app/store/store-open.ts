@@ -143,6 +143,7 @@ export function initialPageState(
       storedBytes: l.storedBytes,
       chunksFetched: 0,
       chunkBytesFetched: 0,
+      chunksShown: 0,
     })),
     retries: 0,
     failedRequests: 0,
@@ -176,6 +177,11 @@ export function updatePageFigures(st: StorePageState, session: StoreSession): vo
   st.gpu = { ...g, peak: Math.max(st.gpu.peak, g.total, session.port.meter.peak), budget: stream.budgetBytes };
   st.retries = store.retries.retries;
   st.failedRequests = store.retries.failed;
+  const shown = stream.shown?.levels ?? [];
+  for (const l of st.levels) {
+    const s = shown.find((x) => x.level === l.level);
+    l.chunksShown = s ? s.drawn.length + s.ghosts.length : 0;
+  }
 }
 
 /** What the link says of a store of lossless chunks open now (rate, and time point and channel when it has several); empty for a zfp store. */

@@ -23,6 +23,8 @@ export interface StorePageState {
     storedBytes: number;
     chunksFetched: number;
     chunkBytesFetched: number;
+    /** Chunks the surface on screen reads at this level (drawn and ghosts: those its isovalue needs). */
+    chunksShown: number;
   }[];
   shownLevel: number | null;
   /** Levels in the order they replaced each other on screen. */
