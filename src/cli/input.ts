@@ -11,7 +11,7 @@ import type { GpuContext } from '../gpu/device.ts';
 import { Isosurface } from '../isosurface/isosurface.ts';
 import { isStoreInput, NoSuchLevelError, openStoreInput, type StoreRecord } from '../store/cli-input.ts';
 import type { ViewRequest } from '../store/view/view-request.ts';
-import type { CutChunkRecord } from '../store/view/view-surface.ts';
+import type { CutChunkRecord } from '../store/view-surface.ts';
 import { StoreError } from '../store/zarr/errors.ts';
 import {
   checkValueRange,

@@ -12,7 +12,8 @@ import { storeRateChooser } from './rate.ts';
 import { type StoreRecord, StoreSession } from './session.ts';
 import { type ViewRequest, viewSpecFor } from './view/view-request.ts';
 import type { ViewSpec } from './stream/store-stream.ts';
-import { type ChunkViewStream, ViewCutSurface } from './view/view-surface.ts';
+import type { ChunkStoreStream } from './gpu-port.ts';
+import { ViewCutSurface } from './view-surface.ts';
 import { StoreError } from './zarr/errors.ts';
 import { isStoreUrl, storeForLocation } from './zarr/node-store.ts';
 import { rangesSidecarFiles } from './zarr/ranges-sidecar-files.ts';
@@ -163,7 +164,7 @@ function writeSidecar(store: ZfpStore, dir: string, ranges: (level: number) => F
  * each region at the level the view needs; the record's `level` is the
  * finest level drawn, `chunks` the distinct chunks put at any level.
  */
-function viewInput(input: string, session: StoreSession, stream: ChunkViewStream, view: ViewSpec): StoreInput {
+function viewInput(input: string, session: StoreSession, stream: ChunkStoreStream, view: ViewSpec): StoreInput {
   const { store } = session;
   const surface = new ViewCutSurface(stream);
   const lv0 = store.levels[0];

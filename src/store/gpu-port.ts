@@ -12,8 +12,12 @@ import { maxShardBytesFor } from '../zfp/gpu-stream.ts';
 import type { ChunkFetcher } from './fetch/chunk-fetcher.ts';
 import type { LearntRanges } from './learnt-ranges.ts';
 import { LevelStream } from './stream/level-stream.ts';
+import type { StoreStream } from './stream/store-stream.ts';
 import type { StreamGpu } from './stream-port.ts';
 import type { ZfpStore } from './zarr/open-store.ts';
+
+/** The store stream over real GPU pools (ChunkedVolume) and surfaces (Isosurface). */
+export type ChunkStoreStream = StoreStream<ChunkedVolume, IsosurfaceStats, Isosurface>;
 
 export interface ChunkedStreamGpu extends StreamGpu<ChunkedVolume, IsosurfaceStats, Isosurface> {
   readonly meter: GpuMemoryMeter;

@@ -15,7 +15,7 @@ import type { LearntRanges } from './learnt-ranges.ts';
 import type { ChunkLevelStream } from './pinned-level.ts';
 import type { StreamGpuBytes } from './stream-port.ts';
 import { type ViewSpec, StoreStream } from './stream/store-stream.ts';
-import type { ChunkViewStream } from './view/view-surface.ts';
+import type { ChunkStoreStream } from './gpu-port.ts';
 import { openStore } from './zarr/open-store.ts';
 import type { SourceInfo } from './zarr/source-store.ts';
 import type { OpenStoreOptions, ZfpStore } from './zarr/store.ts';
@@ -123,7 +123,7 @@ export interface StoreSessionOptions {
    */
   view?: (store: ZfpStore) => ViewSpec | null;
   /** Called with the stream as soon as it is made, before its first view (the CLI turns off retries and snapshots here, and sets skirts). */
-  setup?: (stream: ChunkViewStream) => void;
+  setup?: (stream: ChunkStoreStream) => void;
 }
 
 export class StoreSession {
@@ -137,7 +137,7 @@ export class StoreSession {
     readonly fetcher: ChunkFetcher,
     readonly port: ChunkedStreamGpu,
     /** The stream (one engine, planned by the view or level by level). */
-    readonly stream: ChunkViewStream,
+    readonly stream: ChunkStoreStream,
     /** The stream as levels, when it is planned level by level; else null. */
     readonly levels: ChunkLevelStream | null,
     readonly budgetBytes: number,
@@ -146,7 +146,7 @@ export class StoreSession {
   ) {}
 
   /** The stream when it is refined by the view, else null. */
-  get view(): ChunkViewStream | null {
+  get view(): ChunkStoreStream | null {
     return this.levels ? null : this.stream;
   }
 
@@ -212,7 +212,7 @@ export class StoreSession {
   static async open(gpu: GpuContext, source: AsyncReadable, name: string, options: StoreSessionOptions): Promise<StoreSession> {
     const metered = source instanceof MeteredStore ? source : new MeteredStore(source);
     let store: ZfpStore | undefined;
-    let stream: ChunkViewStream | undefined;
+    let stream: ChunkStoreStream | undefined;
     try {
       store = await openStore(metered, name, options.open);
       const fetcher = new ChunkFetcher(store, { maxInFlight: options.maxInFlight ?? 8 });

@@ -7,7 +7,8 @@
 import type { IsosurfaceDrawData, IsosurfaceStats, SurfaceMesh, VolumeInfo } from '../../isosurface/types.ts';
 import type { Rgb, SurfacePart } from '../../render/surface-layer.ts';
 import type { ShownCut } from '../../store/stream/store-stream.ts';
-import { type ChunkViewStream, joinLevelMeshes, sumStats } from '../../store/view/view-surface.ts';
+import type { ChunkStoreStream } from '../../store/gpu-port.ts';
+import { joinLevelMeshes, sumStats } from '../../store/view-surface.ts';
 import type { Isosurface } from '../../isosurface/isosurface.ts';
 import type { ChunkedVolume } from '../../zfp/chunked-volume.ts';
 import type { PageIsosurface } from '../engine.ts';
@@ -37,7 +38,7 @@ export class StoreCutIsosurface implements PageIsosurface {
   #shown: ShownCutOfPage;
 
   constructor(
-    private readonly stream: ChunkViewStream,
+    private readonly stream: ChunkStoreStream,
     shown: ShownCutOfPage,
     valueRange: [number, number],
     /** A new isovalue for the store (newest wins). */

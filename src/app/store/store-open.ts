@@ -19,7 +19,7 @@ import type { MeteredStore } from '../../store/zarr/stores.ts';
 import type { CameraState } from '../../render/camera.ts';
 import type { Viewport } from '../../store/view/camera.ts';
 import type { LevelValues } from '../../store/level-values.ts';
-import type { ChunkViewStream } from '../../store/view/view-surface.ts';
+import type { ChunkStoreStream } from '../../store/gpu-port.ts';
 import type { StoreCutIsosurface } from './store-cut.ts';
 import type { LoadedVolume } from '../loading/loader.ts';
 import type { StoreChoice, StorePageState } from './store-panel.ts';
@@ -95,7 +95,7 @@ export interface OpenStore {
   metered: MeteredStore;
   fetcher: ChunkFetcher;
   /** The session's stream as the page drives it: its levels (LevelStream) when level by level, else the stream itself (refined by the view). */
-  controller: ChunkLevelStream | ChunkViewStream;
+  controller: ChunkLevelStream | ChunkStoreStream;
   /** Refined by the view: its tolerance and tint; null when level by level. */
   cut: { tolerancePx: number; tint: boolean } | null;
   /** A camera change waits this timer (throttled re-planning), and unsubscribes with this. */

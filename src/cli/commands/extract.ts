@@ -22,7 +22,7 @@ import { LevelStoppedError } from '../../store/pinned-level.ts';
 import { openInputSurface } from '../input.ts';
 import { parseCam } from '../../store/view/camera.ts';
 import { type ViewRequest, parseViewBox } from '../../store/view/view-request.ts';
-import type { CutChunkRecord } from '../../store/view/view-surface.ts';
+import type { CutChunkRecord } from '../../store/view-surface.ts';
 import { rateErrorRecord } from '../../zfp/rate-choice.ts';
 import {
   CommandFailed,

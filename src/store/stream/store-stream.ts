@@ -17,7 +17,7 @@ import { isAbort } from '../zarr/errors.ts';
 import { StreamEvents } from '../stream-events.ts';
 import type { ZfpStore } from '../zarr/store.ts';
 import type { ViewCut } from '../view/cut.ts';
-import { CutPlanner } from '../view/cut-planner.ts';
+import { CutPlanner } from './cut-planner.ts';
 import type { Planner, StreamPlan } from './planner.ts';
 import { StreamLevels } from './stream-levels.ts';
 import { StreamSurfaces } from './stream-surfaces.ts';

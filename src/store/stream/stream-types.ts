@@ -4,33 +4,15 @@
 import type { ChunkRoleOptions } from '../../zfp/chunked-volume.ts';
 import type { LevelVolume } from '../stream-port.ts';
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
-import type { CutCamera, ViewCut } from '../view/cut.ts';
+import type { ViewCut } from '../view/cut.ts';
+import type { Step } from '../view/step.ts';
+
+export type { Step } from '../view/step.ts';
+export { DEFAULT_TOLERANCE_PX, type ViewSpec } from '../view/cut-types.ts';
 
 /** A pool whose chunks can be drawn, ghosts or idle (ChunkedVolume.setRoles). */
 export interface RoleVolume extends LevelVolume {
   setRoles(drawn: ReadonlySet<ChunkIndex> | null, ghosts: ReadonlySet<ChunkIndex>, options?: ChunkRoleOptions): void;
-}
-
-export interface ViewSpec {
-  camera: CutCamera;
-  /** A region is refined while one of its voxels projects to more than this many pixels. */
-  tolerancePx: number;
-}
-
-/**
- * One step of a refinement: per level, the regions it covers (leaves), the
- * chunks drawn there that hold part of the surface, the ghosts (chunks that
- * only lend their voxels to the drawn chunks' upper cells) and the chunks
- * wanted resident, in fetch order. `levels`: the levels whose surfaces the
- * step computes, finest first.
- */
-export interface Step {
-  finest: number;
-  levels: number[];
-  leaves: ChunkIndex[][];
-  drawn: Set<ChunkIndex>[];
-  ghosts: Set<ChunkIndex>[];
-  wanted: ChunkIndex[][];
 }
 
 /** One level of the surface on screen. */
@@ -95,6 +77,3 @@ export function shownWanted(shown: ShownCut<unknown, unknown, unknown> | null, l
 }
 
 export const key = (level: number, chunk: ChunkIndex) => level * 2 ** 32 + chunk;
-
-/** Default screen-space tolerance in pixels. */
-export const DEFAULT_TOLERANCE_PX = 1.5;

@@ -104,3 +104,13 @@ export interface ViewCut {
   /** Facts worth telling: levels that cannot be refined (chunks that do not nest), a budget the coarsest level alone exceeds. */
   notes: string[];
 }
+
+/** A view a store is refined by: the camera and the screen-space tolerance. */
+export interface ViewSpec {
+  camera: CutCamera;
+  /** A region is refined while one of its voxels projects to more than this many pixels. */
+  tolerancePx: number;
+}
+
+/** Default screen-space tolerance in pixels. */
+export const DEFAULT_TOLERANCE_PX = 1.5;

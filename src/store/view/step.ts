@@ -1,4 +1,4 @@
-// One step of a view's refinement (cut-planner.ts): the cut
+// One step of a view's refinement (../stream/cut-planner.ts): the cut
 // coarsened to levels >= k, a region whose target is finer than k drawn by
 // its ancestor at level k (still balanced, still covering every region
 // once), and per level what that draws: its leaves, the drawn chunks (the
@@ -6,8 +6,23 @@
 // neighbours of leaves that are not leaves: their voxels complete the drawn
 // chunks' upper cells) and the chunks wanted, nearest to the eye first.
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
-import type { Step } from '../stream/stream-types.ts';
 import type { ViewCut } from './cut.ts';
+
+/**
+ * One step of a refinement: per level, the regions it covers (leaves), the
+ * chunks drawn there that hold part of the surface, the ghosts (chunks that
+ * only lend their voxels to the drawn chunks' upper cells) and the chunks
+ * wanted resident, in fetch order. `levels`: the levels whose surfaces the
+ * step computes, finest first.
+ */
+export interface Step {
+  finest: number;
+  levels: number[];
+  leaves: ChunkIndex[][];
+  drawn: Set<ChunkIndex>[];
+  ghosts: Set<ChunkIndex>[];
+  wanted: ChunkIndex[][];
+}
 
 /**
  * Step k of `cut`. `needs(L)`: which chunks of level L the surface needs

@@ -4,7 +4,7 @@
 // ViewSpec the page's camera gives (cut.ts: the page's camera math), so a
 // headless run computes the page's cut for that camera.
 import { type Box0, cameraForBox, cameraFromView, fitBox0, parseCam, sceneRadiusOf, type Viewport } from './camera.ts';
-import { DEFAULT_TOLERANCE_PX, type ViewSpec } from '../stream/store-stream.ts';
+import { DEFAULT_TOLERANCE_PX, type ViewSpec } from './cut-types.ts';
 
 export interface ViewRequest {
   /** A box in level-0 voxels, x0,y0,z0,x1,y1,z1. */

@@ -4,14 +4,14 @@
 // exports read the mesh, the slider reads block ranges; none of them may throw.
 import { describe, expect, it } from 'vitest';
 import { StoreCutIsosurface, type ShownCutOfPage } from '../../../src/app/store/store-cut.ts';
-import type { ChunkViewStream } from '../../../src/store/view/view-surface.ts';
+import type { ChunkStoreStream } from '../../../src/store/gpu-port.ts';
 
-function fakeStream(): ChunkViewStream {
+function fakeStream(): ChunkStoreStream {
   return {
     levels: [{ layout: { dims: [64, 64, 64] } }],
     store: { levelOffsets: [[0, 0, 0]], levelScales: [[1, 1, 1]] },
     onError: () => () => {},
-  } as unknown as ChunkViewStream;
+  } as unknown as ChunkStoreStream;
 }
 
 const emptyCut = (iso: number): ShownCutOfPage =>

@@ -3,15 +3,12 @@
 // cut for each isovalue, its levels' meshes joined in level-0 voxel index
 // space (level L's voxel j at j * 2^L + the level's OME offset), and the cut
 // as the record lists it.
-import { meshPositions } from '../../isosurface/vertex-format.ts';
-import type { Isosurface } from '../../isosurface/isosurface.ts';
-import type { IsosurfaceStats, VolumeInfo } from '../../isosurface/types.ts';
-import type { ChunkedVolume } from '../../zfp/chunked-volume.ts';
-import { LevelStoppedError } from '../pinned-level.ts';
-import type { ChunkIndex } from '../types.ts';
-import type { StoreStream } from '../stream/store-stream.ts';
-
-export type ChunkViewStream = StoreStream<ChunkedVolume, IsosurfaceStats, Isosurface>;
+import { meshPositions } from '../isosurface/vertex-format.ts';
+import type { Isosurface } from '../isosurface/isosurface.ts';
+import type { IsosurfaceStats, VolumeInfo } from '../isosurface/types.ts';
+import { LevelStoppedError } from './pinned-level.ts';
+import type { ChunkIndex } from './types.ts';
+import type { ChunkStoreStream } from './gpu-port.ts';
 
 /** One chunk of the cut: its level, chunk coordinates, and the triangles of that level's regular cells whose lowest corner lies in it. */
 export interface CutChunkRecord {
@@ -26,7 +23,7 @@ export class ViewCutSurface {
   #overBudget = false;
   #errors: string[] = [];
 
-  constructor(readonly stream: ChunkViewStream) {
+  constructor(readonly stream: ChunkStoreStream) {
     const { dims } = stream.levels[0].layout;
     const blockGrid = dims.map((n) => Math.ceil(n / 4)) as [number, number, number];
     this.info = {

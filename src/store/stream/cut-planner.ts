@@ -3,10 +3,10 @@
 // budget); step k is the cut coarsened to levels >= k (step.ts), from the
 // coarsest level the cut uses down to its finest, so the first surface comes
 // from the coarsest level at once and each finer step replaces its parents.
-import type { Planner, PlanInput, StreamPlan } from '../stream/planner.ts';
-import type { Step } from '../stream/stream-types.ts';
-import { viewCut } from './cut.ts';
-import { cutStep } from './step.ts';
+// The cut itself is the view's (../view/).
+import { viewCut } from '../view/cut.ts';
+import { cutStep, type Step } from '../view/step.ts';
+import type { Planner, PlanInput, StreamPlan } from './planner.ts';
 
 export class CutPlanner implements Planner {
   readonly needsView = true;
