@@ -61,3 +61,15 @@ def test_a_5d_store_at_a_time_point_and_channel(tmp_path):
     assert r.attrs["zfpzarr_ranges"]["time"] == 1 and r.attrs["zfpzarr_ranges"]["channel"] == 2
     np.testing.assert_array_equal(r["ranges/0"][...], brute(a[1, 2], 64, 8))
     assert main([str(src), "--out", str(tmp_path / "bad.zarr"), "--ranges-only", "--time", "2", "--quiet"]) == 1
+
+
+def test_brick_edge_nests_in_the_finer_level():
+    # ngff-zarr's z-halved level 1 of a 96^3-chunked level 0: chunks (64, 96, 96) are no cube, 64^3 bricks
+    # would not nest in level 0's 96^3 (the view's cut could not refine it): level 0's edge instead
+    assert brick_edge((64, 96, 96)) == 64
+    assert brick_edge((64, 96, 96), (2, 1, 1), (96, (1, 1, 1))) == 96
+    # cubes of 64 at scale 2 over 96^3 bricks at scale (2, 1, 1): 128 is no multiple of 96 on y and x
+    assert brick_edge((64, 64, 64), (2, 2, 2), (96, (2, 1, 1))) == 96
+    # bricks that nest keep their own edge
+    assert brick_edge((32, 32, 32), (2, 2, 2), (64, (1, 1, 1))) == 32
+    assert brick_edge((64, 64, 64), (2, 2, 2), (64, (1, 1, 1))) == 64

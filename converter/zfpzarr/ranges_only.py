@@ -5,7 +5,8 @@ needs before fetching any.
 
 The page reads such a store as bricks (src/store/zarr/source-store.ts): a
 level's chunk when it is a cube with an edge a multiple of 4 (4..256), else
-64^3 bricks; each brick is compressed on the GPU at a rate (default 8). The
+64^3 bricks, or the finer level's edge when those would not nest in its
+bricks (brick_edge); each brick is compressed on the GPU at a rate (default 8). The
 surface is made from the zfp-decoded values, so a brick's range here is the
 range of its values compressed at that rate by zfpy and decoded (a source
 range alone does not bound them): min and max over the brick's voxels inside
@@ -31,30 +32,39 @@ BRICK_EDGE = 64
 ATTR = "zfpzarr_ranges"
 
 
-def brick_edge(chunks_zyx: tuple[int, int, int]) -> int:
-    """The page's rule (source-store.ts sourceLevel)."""
+def brick_edge(chunks_zyx: tuple[int, int, int], scale_zyx=(1, 1, 1), finer=None) -> int:
+    """The page's rule (source-store.ts brickEdge): the chunk edge when chunks
+    are cubes of 4..256 (a multiple of 4), else 64; but the finer level's edge
+    when its bricks would not nest in this level's (`finer`: its edge and
+    scale, z, y, x; a scale is level-0 voxels per voxel)."""
     cz, cy, cx = chunks_zyx
-    return cx if cx == cy == cz and cx % 4 == 0 and 4 <= cx <= 256 else BRICK_EDGE
+    edge = cx if cx == cy == cz and cx % 4 == 0 and 4 <= cx <= 256 else BRICK_EDGE
+    if finer is None:
+        return edge
+    f_edge, f_scale = finer
+    nests = all((edge * s) % (f_edge * fs) == 0 for s, fs in zip(scale_zyx, f_scale))
+    return edge if nests else f_edge
 
 
 def _levels(node, path: str):
-    """(path in the store, array) per level, finest first."""
+    """(path in the store, array, scale z, y, x) per level, finest first."""
     if isinstance(node, zarr.Array):
-        return [("", node)], None
+        return [("", node, (1, 1, 1))], None
     attrs = dict(node.attrs)
     ms = (attrs.get("ome") or {}).get("multiscales") or attrs.get("multiscales")
     if not ms:
         raise InputError(f"{path}: a Zarr group without OME-Zarr multiscales")
-    datasets = pyramid_chain(ms[0]["datasets"])
-    return [(d["path"], node[d["path"]]) for d in datasets], ms[0].get("axes")
+    datasets, scales = pyramid_chain(ms[0]["datasets"])
+    return [(d["path"], node[d["path"]], sc) for d, sc in zip(datasets, scales)], ms[0].get("axes")
 
 
-def pyramid_chain(datasets: list) -> list:
+def pyramid_chain(datasets: list) -> tuple[list, list]:
     """The page's rule (metadata.ts pyramidChain): level 0, then each dataset
     whose OME scale is a power of two times level 0's on every axis, at least
     the previous level's on every axis and more on one (levels may halve only
     some axes); the others are not levels the page draws. Without a scale on
-    every dataset, all of them."""
+    every dataset, all of them, level L at 2^L. With each, its scale (z, y, x:
+    level-0 voxels per voxel)."""
     def scale(d):
         for t in d.get("coordinateTransformations") or []:
             if t.get("type") == "scale" and len(t.get("scale") or []) >= 3:
@@ -63,8 +73,9 @@ def pyramid_chain(datasets: list) -> list:
         return None
     scales = [scale(d) for d in datasets]
     if not datasets or any(s is None for s in scales):
-        return list(datasets)
+        return list(datasets), [(2 ** L,) * 3 for L in range(len(datasets))]
     out = [datasets[0]]
+    out_scales = [(1, 1, 1)]
     prev = [1.0, 1.0, 1.0]
     for d, s in zip(datasets[1:], scales[1:]):
         f = [a / b for a, b in zip(s, scales[0])]
@@ -72,8 +83,9 @@ def pyramid_chain(datasets: list) -> list:
         exact = all(abs(v - p) <= 1e-6 * p for v, p in zip(f, pow2))
         if exact and all(p >= q for p, q in zip(pow2, prev)) and any(p > q for p, q in zip(pow2, prev)):
             out.append(d)
+            out_scales.append(tuple(int(v) for v in pow2))
             prev = pow2
-    return out
+    return out, out_scales
 
 
 def _spatial(path: str, shape, axes, time: int, channel: int):
@@ -119,10 +131,13 @@ def ranges_only(path: str, out: str, rate: float = 8.0, time: int = 0, channel: 
     root = zarr.open_group(out, mode="w", zarr_format=3)
     meta = []
     with ThreadPoolExecutor(max_workers=workers or os.cpu_count()) as pool:
-        for L, (p, arr) in enumerate(levels):
+        finer = None
+        for L, (p, arr, scale) in enumerate(levels):
             index, zyx = _spatial(f"{path} level {L}", arr.shape, axes, time, channel)
             dims = [arr.shape[a] for a in zyx]
-            edge = brick_edge(tuple(arr.chunks[a] for a in zyx))
+            # bricks that nest in the finer level's (the view's cut refines every level)
+            edge = brick_edge(tuple(arr.chunks[a] for a in zyx), scale, finer)
+            finer = (edge, scale)
             grid = [-(-d // edge) for d in dims]  # z, y, x
             bricks = [(bz, by, bx) for bz in range(grid[0]) for by in range(grid[1]) for bx in range(grid[2])]
 

@@ -22,6 +22,7 @@ import {
   DEFAULT_SOURCE_RATE,
   type SourceLevel,
   sourceBytesPerValue,
+  brickEdge,
   sourceLevel,
   type RateSample,
   sampleAs,
@@ -139,7 +140,16 @@ export async function openSourceStore(
     }
     const axes = axesOf(where, array.shape, omeAxes, { time: options.time, channel: options.channel });
     info ??= { time: axes.time, channel: axes.channel, axes: axes.names };
-    const level = sourceLevel(path, where, array, axes, rate, zfpChunkBytes);
+    // bricks that nest in the finer level's, so that the view's cut can refine every level
+    const finer = sources.at(-1);
+    const finerScale = chain.scales[i - 1];
+    const level = sourceLevel(path, where, array, axes, rate, zfpChunkBytes, (c) =>
+      brickEdge(
+        c,
+        chain.scales[i] ?? [2 ** i, 2 ** i, 2 ** i],
+        finer && finerScale ? { edge: finer.layout.chunkEdge, scale: finerScale } : undefined,
+      ),
+    );
     sources.push(level);
     const { chunkGrid } = level.layout;
     levels.push({

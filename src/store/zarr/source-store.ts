@@ -3,7 +3,8 @@
 // shape; 3-D or 5-D tczyx). Chunks are decoded by zarrita's codecs on the
 // CPU, and the page's own bricks are cut from them: C^3 with C a multiple
 // of 4 (the source chunk itself when it is such a cube, else 64^3 made of
-// the chunks that overlap it), values as float32 (numpy's astype), padded
+// the chunks that overlap it; the finer level's edge when that would not
+// nest in its bricks: brickEdge), values as float32 (numpy's astype), padded
 // past the array's edge as zfp pads a partial block (so a level's bricks
 // hold exactly the blocks of the whole level compressed as one stream, as
 // the converter's chunks do). The GPU encodes each brick into its pool slot
@@ -213,7 +214,28 @@ export function axesOf(
   return { spatial: [x, y, z], fixed, names, time, channel };
 }
 
-/** The level's layout of bricks and its source array's axes; throws StoreError on what cannot be read. */
+/**
+ * The brick edge of a level: its chunk edge when chunks are cubes of 4..256
+ * (a multiple of 4), else BRICK_EDGE; but when the next finer level's bricks
+ * (`finer`, with the level scales of both) would not nest in this level's
+ * (a coarse brick made of whole finer ones on every axis, as the view's cut
+ * needs to refine it), the finer level's edge, which always nests (a level
+ * spans a power of two of the finer level's voxels per axis).
+ */
+export function brickEdge(
+  chunkXYZ: readonly [number, number, number],
+  scale: readonly [number, number, number],
+  finer?: { edge: number; scale: readonly [number, number, number] },
+): number {
+  const [cx, cy, cz] = chunkXYZ;
+  const cube = cx === cy && cy === cz && cx % 4 === 0 && cx >= 4 && cx <= 256;
+  const edge = cube ? cx : BRICK_EDGE;
+  if (!finer) return edge;
+  const nests = scale.every((f, a) => (edge * f) % (finer.edge * finer.scale[a]) === 0);
+  return nests ? edge : finer.edge;
+}
+
+/** The level's layout of bricks (edge: brickEdge) and its source array's axes; throws StoreError on what cannot be read. */
 export function sourceLevel(
   path: string,
   where: string,
@@ -221,6 +243,7 @@ export function sourceLevel(
   axes: ReturnType<typeof axesOf>,
   rate: number,
   chunkBytesAt: (edge: number, rate: number) => number,
+  brick: (chunkXYZ: [number, number, number]) => number = (c) => brickEdge(c, [1, 1, 1]),
 ): SourceLevel {
   const shape = array.shape;
   const chunks = array.chunks;
@@ -241,9 +264,7 @@ export function sourceLevel(
       'layout',
       `${where}: chunks of [${chunks.join(', ')}] ${array.dtype} are ${chunkValues * bytes} bytes decoded, more than ${MAX_SOURCE_CHUNK_BYTES} this reader decodes`,
     );
-  const [cx, cy, cz] = chunkXYZ;
-  const cube = cx === cy && cy === cz && cx % 4 === 0 && cx >= 4 && cx <= 256;
-  const edge = cube ? cx : BRICK_EDGE;
+  const edge = brick(chunkXYZ);
   const chunkGrid: [number, number, number] = [Math.ceil(dims[0] / edge), Math.ceil(dims[1] / edge), Math.ceil(dims[2] / edge)];
   const count = chunkGrid[0] * chunkGrid[1] * chunkGrid[2];
   if (count > MAX_BRICKS)

@@ -119,7 +119,7 @@ describe('stores written by ngff-zarr', () => {
     }
   }, 300_000);
 
-  it("a pyramid whose level 1 halves only z: every level drawn where its scale and translation put it; level 1 = zarr-python's array in core; the cut draws it in level-0 voxels", async () => {
+  it("a pyramid whose level 1 halves only z: every level drawn where its scale and translation put it; level 1 = zarr-python's array in core; bricks that nest, so the cut refines to level 0 and draws level 1 in level-0 voxels", async () => {
     const m = manifest.hydrogen_aniso;
     expect(m.shapes).toEqual([
       [128, 128, 128],
@@ -144,6 +144,8 @@ describe('stores written by ngff-zarr', () => {
       [0.5, 0.5, 0.5],
     ]);
     expect(store.notes.join('\n')).not.toMatch(/not shown/);
+    // bricks that nest: level 1's chunks (64 x 96 x 96) and level 2's (64^3) read as level 0's 96^3 bricks
+    expect(store.levels.map((l) => l.layout.chunkEdge)).toEqual([96, 96, 96]);
     store.close?.();
     // level 1 as zarr-python reads it, compressed in core at rate 8: the same triangles
     const raw1 = join(work, 'hydrogen-level1_128x128x64_int16.raw');
@@ -155,13 +157,26 @@ describe('stores written by ngff-zarr', () => {
     const core1 = extract(raw1, [1500.5], join(work, 'aniso-core1'), ['--rate', '8']);
     expect(triangles(level1.record)).toEqual(triangles(core1.record));
     expect(samePly(join(work, 'aniso-level1-iso1500.5.ply'), join(work, 'aniso-core1-iso1500.5.ply'))).toBe('same');
-    // the view's cut of the whole volume draws level 1 (its 64^3 bricks do not nest in level 0's 96^3: a note says
-    // level 1 is final), placed in level-0 voxels: where level 0's surface (the raw in core) is, within a voxel
-    const cut = extract(m.store, [1500.5], join(work, 'aniso-cut'), ['--view-box', '0,0,0,127,127,127', '--rate', '8']);
+    // the view's cut: level 1's chunks (64 x 96 x 96, no cubes) are read as 96^3 bricks that nest in level 0's, so
+    // the cut refines to full resolution: at the Fit, level 0 everywhere, the in-core surface of the raw exactly
     const fine = extract(m.raw, [1500.5], join(work, 'aniso-core0'), ['--rate', '8']);
-    const drawn = cut.record.isosurfaces[0];
-    expect(new Set(drawn.cut.map((c: { level: number }) => c.level))).toEqual(new Set([1]));
     const ref = fine.record.isosurfaces[0];
+    const full = extract(m.store, [1500.5], join(work, 'aniso-cut'), ['--view-box', '0,0,0,127,127,127', '--rate', '8']);
+    expect(new Set(full.record.isosurfaces[0].cut.map((c: { level: number }) => c.level))).toEqual(new Set([0]));
+    expect(triangles(full.record)).toEqual(triangles(fine.record));
+    // within a budget that level 0 does not fit, level 1 is drawn, placed in level-0 voxels by its scale (1, 1, 2)
+    // and translation: where level 0's surface is, within a voxel
+    const coarse = extract(m.store, [1500.5], join(work, 'aniso-cut24'), [
+      '--view-box',
+      '0,0,0,127,127,127',
+      '--rate',
+      '8',
+      '--cache-budget',
+      '24',
+    ]);
+    const drawn = coarse.record.isosurfaces[0];
+    expect(drawn.cut.some((c: { level: number }) => c.level === 1)).toBe(true);
+    expect(coarse.record.store.gpuPeakBytes).toBeLessThanOrEqual(24 * 2 ** 20);
     for (const end of ['min', 'max'] as const)
       for (let a = 0; a < 3; a++) expect(Math.abs(drawn.bbox[end][a] - ref.bbox[end][a]), `${end}[${a}]`).toBeLessThan(1);
     expect(Math.abs(drawn.surfaceArea / ref.surfaceArea - 1)).toBeLessThan(0.03);
