@@ -143,10 +143,6 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     return this.#shown;
   }
 
-  get view(): ViewSpec | null {
-    return this.#view;
-  }
-
   /** GPU bytes held now (counted where they are made): pools, surfaces, and of these the cache and vertex buffers. */
   get gpuBytes(): StreamGpuBytes {
     const pools = this.#pools.poolBytes;
@@ -185,21 +181,18 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     this.#waiting = null;
     if (!this.#view && this.planner.needsView) throw new Error('StoreStream: setView before setIsovalue');
     // A step that does not fit (a pool that cannot grow, a surface over its cap) is tried once more with
-    // what is not on screen let go, then made coarser: what the surfaces really took is learnt
-    // (#surfaceCost) and the plan made again with it, and with less of the budget each time, until it
-    // fits; the coarser step stays on screen meanwhile. Only a plan that cannot be made coarser is refused.
+    // what is not on screen let go, then made coarser: planned again with what the surfaces really took
+    // (the cost model) and less of the budget each time; the coarser step stays on screen meanwhile.
     let share = PLAN_SHARE;
     for (let attempt = 0; ; attempt++) {
       const r = await this.#refine(iso, gen, share);
       if (r === 'done' || gen !== this.#gen || this.#destroyed) return;
+      // what the step that did not fit made goes; what is on screen stays
+      this.#releaseUnshown();
       if ((r.coarser || attempt === 0) && attempt < MAX_COARSENINGS) {
-        // what the step that did not fit made goes; what is on screen stays
-        this.#releaseUnshown();
         if (r.coarser) share *= 0.85;
         continue;
       }
-      // what the step that did not fit made goes: only what is on screen is held
-      this.#releaseUnshown();
       this.#stop(r.level, r.reason, 'budget');
       return;
     }
@@ -211,6 +204,11 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     for (;;) {
       const plan = this.#plan(iso, share);
       if (plan.steps.length === 0) {
+        // nothing the plan can draw: a level it cannot reach, or range arrays to read first
+        if (plan.wantsRanges.length === 0) {
+          if (plan.refused) this.#stop(plan.refused.level, plan.refused.reason, 'limit');
+          return 'done';
+        }
         if (!(await this.#readWanted(plan, gen))) return 'done';
         continue;
       }

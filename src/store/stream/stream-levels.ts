@@ -15,6 +15,8 @@ export class StreamLevels<V extends RoleVolume> {
   readonly levels: LevelState<V>[];
   /** Chunks put into or evicted from any pool so far: a surface's block ranges are its slots' chunks' while this is unchanged. */
   poolChanges = 0;
+  /** Levels whose range array was read (it may have held none: every chunk is then needed). */
+  readonly #read = new Set<number>();
   /** Per level, the cache and vertex bytes its last surface took (or needed, when it did not fit) per wanted chunk. */
   readonly #surfaceCost: (number | undefined)[] = [];
 
@@ -36,7 +38,9 @@ export class StreamLevels<V extends RoleVolume> {
 
   /** The level's range array, read once (a failed read is tried again next time; rejects with its StoreError). */
   readRanges(L: number): Promise<void> {
-    return readLevelRanges(this.store, this.levels[L]);
+    return readLevelRanges(this.store, this.levels[L]).then(() => {
+      this.#read.add(L);
+    });
   }
 
   /** Which chunks of level L the surface at `iso` needs, or null while its range array is unread. */
@@ -48,7 +52,8 @@ export class StreamLevels<V extends RoleVolume> {
     if (nb) return (c) => chunkNeeded(nb, iso, c);
     // no range arrays: the ranges learnt so far, every chunk with an unknown neighbour may hold the surface
     if (!this.store.levels[L].rangesPath) return this.learnt.learns(L) ? (c) => this.learnt.needs(L, iso, c) : () => true;
-    return null;
+    // a range array read that gave none: every chunk (a plan never waits for it again)
+    return this.#read.has(L) ? () => true : null;
   }
 
   /**

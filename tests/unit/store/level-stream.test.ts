@@ -202,4 +202,25 @@ describe('LevelStream', () => {
     expect(progress.at(-1)!.reason).toMatch(/level 3 needs \d+ chunks .* the budget of 0\.0 MiB has 0\.0 MiB free/);
     small.c.destroy();
   });
+
+  it('a level it cannot draw stops with its limit named; a range array that holds nothing makes every chunk needed; neither hangs', async () => {
+    const { store, c, progress, shown } = await setup(256 << 20);
+    // level 3 pinned, and it cannot be drawn: a stop naming the limit, nothing shown
+    c.finest = 3;
+    c.coarsest = 3;
+    store.levels[3].unusable = 'level 3 is wider than a surface can be';
+    await c.setIsovalue(20);
+    expect(shown).toEqual([]);
+    expect(progress.at(-1)).toMatchObject({ phase: 'stopped', cause: 'limit', reason: 'level 3 is wider than a surface can be' });
+    store.levels[3].unusable = null;
+    // level 2, whose range array reads as none: every chunk needed (the plan does not wait for it again)
+    store.readRanges = async () => null;
+    c.finest = 2;
+    c.coarsest = 2;
+    await c.setIsovalue(20);
+    expect(shown.at(-1)).toEqual([2, 20]);
+    const shownProgress = progress.filter((p) => p.phase === 'shown').at(-1)!;
+    expect(shownProgress.chunksNeeded).toBe(store.levels[2].chunkCount);
+    c.destroy();
+  });
 });
