@@ -33,7 +33,7 @@ ATTR = "zfpzarr_ranges"
 
 
 def brick_edge(chunks_zyx: tuple[int, int, int], scale_zyx=(1, 1, 1), finer=None) -> int:
-    """The page's rule (source-store.ts brickEdge): the chunk edge when chunks
+    """The page's rule (brick-edge.ts brickEdge): the chunk edge when chunks
     are cubes of 4..256 (a multiple of 4), else 64; but the finer level's edge
     when its bricks would not nest in this level's (`finer`: its edge and
     scale, z, y, x; a scale is level-0 voxels per voxel)."""

@@ -11,6 +11,7 @@ import type { MetadataMemo } from './metadata.ts';
 import type { OpenStoreOptions, StoreLevel, ZfpStore } from './store.ts';
 import { openRangesSidecar, type RangesSidecar } from './ranges-sidecar.ts';
 import { BrickWorkerPool } from '../decode/brick-pool.ts';
+import { brickEdge } from './brick-edge.ts';
 import { storeSpecOf } from '../decode/store-spec.ts';
 import type { RetryingStore } from './retrying-store.ts';
 import {
@@ -22,7 +23,6 @@ import {
   DEFAULT_SOURCE_RATE,
   type SourceLevel,
   sourceBytesPerValue,
-  brickEdge,
   sourceLevel,
   type RateSample,
   sampleAs,

@@ -15,13 +15,12 @@ import * as zarr from 'zarrita';
 import { surfaceDimsProblem } from '../../core/limits.ts';
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
 import { ByteLru } from '../fetch/lru-bytes.ts';
+import { brickEdge } from './brick-edge.ts';
 import { describeTransportError, StoreError } from './errors.ts';
 
 type Json = Record<string, unknown>;
 const isObject = (v: unknown): v is Json => typeof v === 'object' && v !== null && !Array.isArray(v);
 
-/** Bricks cut from chunks that are not C^3 cubes with C a multiple of 4. */
-export const BRICK_EDGE = 64;
 /** Rate of stores of lossless chunks when none is asked for (bits per value). */
 export const DEFAULT_SOURCE_RATE = 8;
 /** A decoded source chunk larger than this is refused (hostile metadata must not allocate). */
@@ -212,27 +211,6 @@ export function axesOf(
     if (isChannel) Object.assign(channel, { index, count: shape[i] });
   });
   return { spatial: [x, y, z], fixed, names, time, channel };
-}
-
-/**
- * The brick edge of a level: its chunk edge when chunks are cubes of 4..256
- * (a multiple of 4), else BRICK_EDGE; but when the next finer level's bricks
- * (`finer`, with the level scales of both) would not nest in this level's
- * (a coarse brick made of whole finer ones on every axis, as the view's cut
- * needs to refine it), the finer level's edge, which always nests (a level
- * spans a power of two of the finer level's voxels per axis).
- */
-export function brickEdge(
-  chunkXYZ: readonly [number, number, number],
-  scale: readonly [number, number, number],
-  finer?: { edge: number; scale: readonly [number, number, number] },
-): number {
-  const [cx, cy, cz] = chunkXYZ;
-  const cube = cx === cy && cy === cz && cx % 4 === 0 && cx >= 4 && cx <= 256;
-  const edge = cube ? cx : BRICK_EDGE;
-  if (!finer) return edge;
-  const nests = scale.every((f, a) => (edge * f) % (finer.edge * finer.scale[a]) === 0);
-  return nests ? edge : finer.edge;
 }
 
 /** The level's layout of bricks (edge: brickEdge) and its source array's axes; throws StoreError on what cannot be read. */
