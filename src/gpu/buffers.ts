@@ -26,7 +26,8 @@ export function createBuffer(
  */
 export async function readBuffer(device: GPUDevice, source: GPUBuffer, offset = 0, size = source.size - offset): Promise<ArrayBuffer> {
   const aligned = Math.ceil(size / 4) * 4;
-  const piece = Math.max(4, Math.min(aligned, READ_PIECE_BYTES));
+  if (aligned === 0) return new ArrayBuffer(0);
+  const piece = Math.min(aligned, READ_PIECE_BYTES);
   const staging = device.createBuffer({
     label: 'readBuffer.staging',
     size: piece,
@@ -34,15 +35,14 @@ export async function readBuffer(device: GPUDevice, source: GPUBuffer, offset = 
   });
   const out = new Uint8Array(aligned);
   try {
-    for (let at = 0; at < aligned || at === 0; at += piece) {
+    for (let at = 0; at < aligned; at += piece) {
       const n = Math.min(piece, aligned - at);
       const encoder = device.createCommandEncoder({ label: 'readBuffer' });
-      if (n > 0) encoder.copyBufferToBuffer(source, offset + at, staging, 0, n);
+      encoder.copyBufferToBuffer(source, offset + at, staging, 0, n);
       device.queue.submit([encoder.finish()]);
-      await staging.mapAsync(GPUMapMode.READ, 0, Math.max(4, n));
-      if (n > 0) out.set(new Uint8Array(staging.getMappedRange(0, n)), at);
+      await staging.mapAsync(GPUMapMode.READ, 0, n);
+      out.set(new Uint8Array(staging.getMappedRange(0, n)), at);
       staging.unmap();
-      if (n === 0) break;
     }
     return out.buffer.slice(0, size);
   } finally {

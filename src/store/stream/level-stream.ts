@@ -75,10 +75,6 @@ export class LevelStream<V extends RoleVolume, S extends LevelStats, F extends L
   set focus(p: [number, number, number]) {
     this.planner.focus = p;
   }
-  /** Whether a failed chunk's refinement is tried again once it has cooled down (the page; not the CLI). */
-  set retryFailed(on: boolean) {
-    this.stream.retryFailed = on;
-  }
 
   /** The level on screen. */
   get shown(): ShownSurface<V, S, F> | null {

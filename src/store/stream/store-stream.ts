@@ -399,16 +399,17 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   /**
    * Learns the ranges of the chunks these surfaces read whose range is not
    * known (levels without range arrays), from the block ranges the surfaces
-   * were just computed with: valid while no chunk has been put or evicted
-   * since (#poolChanges) and the surface is still the level's. In batches of
-   * at most 1 MiB of block ranges, one after the other (learnSlotRanges); recorded
-   * as they arrive (learnSettled).
+   * were just computed with: valid while no chunk has been put into or
+   * evicted from that level's pool since and the surface is still the
+   * level's (a finer step fetching meanwhile does not spoil it). Reduced per
+   * slot on the GPU, one batch after the other (learnSlotRanges); recorded as
+   * they arrive (learnSettled).
    */
   #learn(levels: readonly CutLevelShown<V, S, F>[]): void {
-    const changes = this.#pools.poolChanges;
     for (const l of levels) {
       if (this.store.levels[l.level].rangesPath) continue;
-      const valid = () => !this.#destroyed && this.#pools.poolChanges === changes && this.#surfaces.get(l.level) === l.surface;
+      const changes = this.#pools.changes(l.level);
+      const valid = () => !this.#destroyed && this.#pools.changes(l.level) === changes && this.#surfaces.get(l.level) === l.surface;
       const chunks = [...l.drawn, ...l.ghosts];
       this.#learning = this.#learning.then(() => learnSlotRanges(this.learnt, l.level, chunks, l.volume, l.surface, valid));
     }

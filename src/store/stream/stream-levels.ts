@@ -13,8 +13,8 @@ import { key, type LevelState, type RoleVolume, type Step } from './stream-types
 
 export class StreamLevels<V extends RoleVolume> {
   readonly levels: LevelState<V>[];
-  /** Chunks put into or evicted from any pool so far: a surface's block ranges are its slots' chunks' while this is unchanged. */
-  poolChanges = 0;
+  /** Per level, chunks put into or evicted from its pool so far: a surface's block ranges are its slots' chunks' while this is unchanged. */
+  readonly #changes: number[];
   /** Levels whose range array was read (it may have held none: every chunk is then needed). */
   readonly #read = new Set<number>();
   /** Per level, the cache and vertex bytes its last surface took (or needed, when it did not fit) per wanted chunk. */
@@ -25,6 +25,7 @@ export class StreamLevels<V extends RoleVolume> {
     readonly gpu: Pick<StreamGpu<V>, 'createVolume' | 'poolBytesFor'>,
     readonly learnt: LearntRanges,
   ) {
+    this.#changes = store.levels.map(() => 0);
     this.levels = store.levels.map((l, i) => ({
       index: i,
       layout: l.layout,
@@ -126,7 +127,7 @@ export class StreamLevels<V extends RoleVolume> {
         `level ${lv.index} needs ${n} chunks (${mib(n * lv.layout.chunkBytes)} MiB) and ${mib(estimateFixedBytes(lv.layout, n))} MiB ` +
         `of per-block state for its surface for this step; the budget of ${mib(budgetBytes)} MiB has ${mib(Math.max(0, free()))} MiB free`
       );
-    this.poolChanges++;
+    this.#changes[lv.index]++;
     if (v) v.resize(Math.max(target, v.residentCount));
     else lv.volume = this.gpu.createVolume(lv.layout, target);
     return null;
@@ -163,7 +164,7 @@ export class StreamLevels<V extends RoleVolume> {
   /** Lets a level's pool go (its chunks stay in the fetcher's CPU cache). */
   dropPool(lv: LevelState<V>): void {
     if (!lv.volume) return;
-    this.poolChanges++;
+    this.#changes[lv.index]++;
     lv.volume.destroy();
     lv.volume = null;
     lv.lru.clear();
@@ -171,7 +172,12 @@ export class StreamLevels<V extends RoleVolume> {
 
   /** Puts an arrived chunk into its level's pool (putArrived: a full pool evicts what `keep` does not hold). */
   put(level: number, chunk: ChunkIndex, bytes: Uint8Array, keep: (c: ChunkIndex) => boolean): void {
-    putArrived(this.levels[level], chunk, bytes, keep, () => this.poolChanges++);
+    putArrived(this.levels[level], chunk, bytes, keep, () => this.#changes[level]++);
+  }
+
+  /** Chunks put into or evicted from level L's pool so far (its slots hold the same chunks while this is unchanged). */
+  changes(L: number): number {
+    return this.#changes[L];
   }
 
   /** GPU bytes of the pools. */

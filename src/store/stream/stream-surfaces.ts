@@ -90,5 +90,5 @@ export class StreamSurfaces<V extends RoleVolume, S extends LevelStats, F extend
 }
 
 /** Below this, a surface's cache and vertex buffers are too small to be worth creating. */
-export const MIN_SURFACE_BYTES = 256 << 10;
+const MIN_SURFACE_BYTES = 256 << 10;
 const mib = (b: number) => (b / 2 ** 20).toFixed(1);
