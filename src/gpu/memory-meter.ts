@@ -14,23 +14,36 @@ const BASE = Symbol('zfpiso.baseDevice');
 export class GpuMemoryMeter {
   /** Bytes of the buffers made through the view and not destroyed. */
   bytes = 0;
-  /** The most `bytes` has been. */
+  /** The most `bytes` has been (since resetPeak). */
   peak = 0;
   /** Live buffers. */
   buffers = 0;
   /** Called after every allocation with the new total (tests check bounds there). */
   onAllocate?: (bytes: number) => void;
 
+  /**
+   * `parent`: a meter that counts this one's buffers too (a page's budget
+   * counts every store's; each store's own meter says what it holds).
+   */
+  constructor(readonly parent?: GpuMemoryMeter) {}
+
   add(size: number): void {
     this.bytes += size;
     this.buffers++;
     if (this.bytes > this.peak) this.peak = this.bytes;
     this.onAllocate?.(this.bytes);
+    this.parent?.add(size);
   }
 
   remove(size: number): void {
     this.bytes -= size;
     this.buffers--;
+    this.parent?.remove(size);
+  }
+
+  /** The peak from now on starts at what is held now. */
+  resetPeak(): void {
+    this.peak = this.bytes;
   }
 }
 

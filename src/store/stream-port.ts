@@ -53,6 +53,12 @@ export interface LevelSurface<S extends LevelStats = LevelStats> {
   /** Bytes the drawn copy holds, and what a present() now would hold. */
   readonly presentedBytes?: number;
   readonly presentBytesNeeded?: number;
+  /**
+   * Lets go of everything but the drawn copy (a lowered budget, a suspended
+   * stream): the copy stays drawable until destroy(); nothing can be
+   * computed on the surface any more.
+   */
+  release?(): void;
   destroy(): void;
 }
 /** The GPU side, injected (the real one: gpu-port.ts; tests: a CPU fake). */
@@ -63,7 +69,7 @@ export interface StreamGpu<
 > {
   createVolume(layout: ChunkLevelLayout, poolChunks: number): V;
   createSurface(volume: V, memoryBudgetBytes: number): Promise<F>;
-  /** GPU bytes held now by everything made here (pools, surfaces and all their buffers). */
+  /** GPU bytes held now by everything made here (pools, surfaces and all their buffers): this stream's share of its budget. */
   readonly allocatedBytes: number;
   /** GPU bytes a pool of `poolChunks` chunks of this layout holds. */
   poolBytesFor(layout: ChunkLevelLayout, poolChunks: number): number;

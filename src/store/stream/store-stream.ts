@@ -8,10 +8,16 @@
 // on the GPU: a step that does not fit is tried once more with what is not
 // on screen let go, then planned coarser (a planner that can), else the
 // refinement stops there and says why, the coarser step staying on screen.
+// The budget is an object shared with whatever else holds GPU memory (the
+// page's other store being replaced, gpu/budget.ts): a lower limit frees at
+// once, and a suspended stream holds nothing but the copies it draws.
+import { GpuBudget } from '../../gpu/budget.ts';
 import type { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
-import { LearntRanges, learnSlotRanges } from '../learnt-ranges.ts';
-import { coarsestDrawableLevel, storeValueRange } from '../level-state.ts';
+import { LearntRanges } from '../learnt-ranges.ts';
+import { coarsestDrawableLevel } from '../level-state.ts';
 import type { LevelStats, LevelSurface, StreamGpu, StreamGpuBytes, StreamProgress } from '../stream-port.ts';
+import { StepFetch } from './step-fetch.ts';
+import { StreamMemory } from './stream-memory.ts';
 import type { ChunkIndex } from '../types.ts';
 import { isAbort } from '../zarr/errors.ts';
 import { StreamEvents } from '../stream-events.ts';
@@ -24,7 +30,6 @@ import { StreamSurfaces } from './stream-surfaces.ts';
 import {
   type CutLevelShown,
   DEFAULT_TOLERANCE_PX,
-  key,
   type LevelState,
   type RoleVolume,
   type ShownCut,
@@ -32,7 +37,6 @@ import {
   showsStep,
   shownWanted as wantedOnScreen,
   type ViewSpec,
-  type Waiting,
 } from './stream-types.ts';
 
 export { type CutLevelShown, DEFAULT_TOLERANCE_PX, type RoleVolume, type ShownCut, type Step, type ViewSpec };
@@ -41,11 +45,10 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   readonly levels: LevelState<V>[];
   /** Chunk ranges learnt as chunks arrive, for the levels without range arrays (learnt-ranges.ts). */
   readonly learnt: LearntRanges;
-  /** The readbacks of learnt ranges in flight (learnSettled). */
-  #learning: Promise<void> = Promise.resolve();
   /** Per level: ranges, pool, resident chunks, which chunks a surface needs, the cost model (stream-levels.ts). */
   readonly #pools: StreamLevels<V>;
-  budgetBytes: number;
+  /** The GPU memory everything here is held against (shared with the page's other users of it). */
+  readonly budget: GpuBudget;
   finest = 0;
   coarsest: number;
   /** The finest level the cut may use: levels below it, or one between, cannot be drawn. */
@@ -54,9 +57,18 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   #iso = Number.NaN;
   #gen = 0;
   #destroyed = false;
+  /** Stopped and holding only the copies it draws (the page opens another store); a new isovalue resumes it. */
+  #suspended = false;
+  /** Readers of the step on screen (exports): a new step is not shown before they are done. */
+  #holds: Promise<unknown>[] = [];
   #shown: ShownCut<V, S, F> | null = null;
   readonly #surfaces: StreamSurfaces<V, S, F>;
-  #waiting: Waiting | null = null;
+  /** Pools and surfaces against the budget: room, giving back, figures. */
+  readonly #memory: StreamMemory<V, S, F>;
+  /** Unsubscribes from the fetcher and the budget. */
+  readonly #unlisten: (() => void)[] = [];
+  /** The chunks the step being shown waits for. */
+  readonly #fetch: StepFetch<V>;
   /** A refinement stopped by a failed chunk is tried again when the chunk has cooled down. */
   #retryTimer: ReturnType<typeof setTimeout> | null = null;
   /** Ghosts as skirts (ChunkedVolume's 'skirt' role): level seams covered by a one-cell overlap. */
@@ -74,47 +86,62 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     readonly store: ZfpStore,
     readonly fetcher: ChunkFetcher,
     readonly gpu: StreamGpu<V, S, F>,
-    budgetBytes: number,
+    budget: GpuBudget,
     /** What the steps draw: by view (view/cut-planner.ts) or level by level (level-planner.ts). */
     readonly planner: Planner,
     learnt?: LearntRanges,
   ) {
-    this.budgetBytes = budgetBytes;
+    this.budget = budget;
+    this.#unlisten.push(budget.onChange((next, previous) => this.#budgetChanged(next, previous)));
     // ranges learnt earlier in the session (the same store reopened at the same rate) carry over
     const grids = store.levels.map((l) => l.layout.chunkGrid);
     this.learnt = learnt?.fits(grids) ? learnt : new LearntRanges(grids);
     this.#pools = new StreamLevels(store, gpu, this.learnt);
     this.levels = this.#pools.levels;
     this.#surfaces = new StreamSurfaces(gpu);
+    this.#memory = new StreamMemory(budget, gpu, this.#pools, this.#surfaces);
+    this.#fetch = new StepFetch(fetcher, this.#pools, (level, e) => {
+      this.#events.error(e);
+      this.#stop(level, e.message, 'chunk');
+    });
     this.coarsest = coarsestDrawableLevel(store.levels);
     // levels finer than a level that cannot be drawn (wider than a surface can be) are never split into:
     // the cut stops there (the store's notes say which levels cannot be shown)
     this.#finestUsable = this.coarsest;
     while (this.#finestUsable > 0 && !store.levels[this.#finestUsable - 1].unusable) this.#finestUsable--;
-    fetcher.onChunk((level, chunk, bytes) => this.#arrived(level, chunk, bytes));
-    fetcher.onError((level, chunk, e, repeated) => {
+    this.#unlisten.push(fetcher.onChunk((level, chunk, bytes) => this.#fetch.arrived(level, chunk, bytes)));
+    this.#unlisten.push(fetcher.onError((level, chunk, e, repeated) => {
       if (!repeated) this.#events.error(e);
-      const w = this.#waiting;
-      if (!w?.missing.has(key(level, chunk))) return;
+      if (!this.#fetch.waitsFor(level, chunk)) return;
       const at = fetcher.retryAt(level, chunk);
       const inMs = at === undefined ? undefined : Math.max(0, at - performance.now());
       this.#stop(level, e.message, 'chunk', inMs);
       // the coarser surface stays; once the chunk has cooled down, the same isovalue and view again
       if (inMs !== undefined && this.retryFailed) this.#scheduleRetry(inMs);
-    });
+    }));
   }
 
-  /** A stream planned by `planner`, once the coarsest level's range array is read. */
+  /**
+   * A stream planned by `planner`, once the coarsest level's range array is
+   * read. `budget`: a shared GpuBudget, or bytes for a budget of its own
+   * (what its port holds against it).
+   */
   static async create<V extends RoleVolume, S extends LevelStats, F extends LevelSurface<S>>(
     store: ZfpStore,
     fetcher: ChunkFetcher,
     gpu: StreamGpu<V, S, F>,
-    budgetBytes: number,
+    budget: GpuBudget | number,
     planner: Planner,
     options: { learnt?: LearntRanges } = {},
   ): Promise<StoreStream<V, S, F>> {
-    const v = new StoreStream(store, fetcher, gpu, budgetBytes, planner, options.learnt);
-    await v.#pools.readRanges(v.coarsest);
+    const shared = typeof budget === 'number' ? new GpuBudget(budget, undefined, () => gpu.allocatedBytes) : budget;
+    const v = new StoreStream(store, fetcher, gpu, shared, planner, options.learnt);
+    try {
+      await v.#pools.readRanges(v.coarsest);
+    } catch (e) {
+      v.destroy();
+      throw e;
+    }
     return v;
   }
 
@@ -123,10 +150,18 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     store: ZfpStore,
     fetcher: ChunkFetcher,
     gpu: StreamGpu<V, S, F>,
-    budgetBytes: number,
+    budget: GpuBudget | number,
     options: { learnt?: LearntRanges } = {},
   ): Promise<StoreStream<V, S, F>> {
-    return StoreStream.create(store, fetcher, gpu, budgetBytes, new CutPlanner(), options);
+    return StoreStream.create(store, fetcher, gpu, budget, new CutPlanner(), options);
+  }
+
+  /** The budget's limit, bytes; setting it sets the shared budget's (everyone holding against it is told). */
+  get budgetBytes(): number {
+    return this.budget.bytes;
+  }
+  set budgetBytes(bytes: number) {
+    this.budget.bytes = bytes;
   }
 
   onProgress(l: (p: StreamProgress) => void): () => void {
@@ -143,28 +178,24 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     return this.#shown;
   }
 
-  /** GPU bytes held now (counted where they are made): pools, surfaces, and of these the cache and vertex buffers. */
+  /** GPU bytes this stream holds now (counted where they are made): pools, surfaces, and of these the cache and vertex buffers. */
   get gpuBytes(): StreamGpuBytes {
-    const pools = this.#pools.poolBytes;
-    const total = this.gpu.allocatedBytes;
-    const shown = this.#shown?.levels ?? [];
-    return {
-      pools,
-      surfaces: total - pools,
-      total,
-      cache: shown.reduce((a, l) => a + l.stats.cacheBytes, 0),
-      vertices: shown.reduce((a, l) => a + l.stats.vertexBytes, 0),
-    };
+    return this.#memory.bytes(this.#shown);
   }
 
-  /** [min, max] per chunk of a level, when read. */
+  /** [min, max] per chunk of a level, when known for every chunk (its range array, or every chunk's learnt as chunks arrived). */
   chunkRanges(level: number): Float32Array | null {
-    return this.levels[level]?.ranges ?? null;
+    return this.#pools.knownRanges(level);
   }
 
-  /** [min, max] of the store's values: its metadata, else the coarsest level's chunk ranges. */
+  /** [min, max] of the store's values: its metadata, else the finest level whose chunk ranges are (partly) known. */
   get valueRange(): [number, number] | null {
-    return storeValueRange(this.store, [...this.levels].reverse());
+    return this.#pools.valueRange;
+  }
+
+  /** Whether suspend() stopped it (a new isovalue resumes it). */
+  get suspended(): boolean {
+    return this.#suspended;
   }
 
   /** A new camera (or tolerance): the cut is planned again at the current isovalue; resolves when that refinement ends. */
@@ -175,10 +206,11 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
 
   /** Newest wins: resolves when this isovalue's refinement (for the current view) ends: the whole plan shown, stopped, or superseded. */
   async setIsovalue(iso: number): Promise<void> {
+    if (this.#destroyed) return;
+    this.#suspended = false;
     const gen = ++this.#gen;
     this.#iso = iso;
-    this.#waiting?.done();
-    this.#waiting = null;
+    this.#fetch.supersede();
     if (!this.#view && this.planner.needsView) throw new Error('StoreStream: setView before setIsovalue');
     // A step that does not fit (a pool that cannot grow, a surface over its cap) is tried once more with
     // what is not on screen let go, then made coarser: planned again with what the surfaces really took
@@ -238,7 +270,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
         if (r === false) return 'done';
         // a coarser step than the one on screen that finds no room (the finer one holds it): the finer stays
         const s = this.#shown;
-        if (i < steps.length - 1 && s && s.step < steps[i].finest) {
+        if (i < steps.length - 1 && s && !s.frozen && s.step < steps[i].finest) {
           this.#releaseUnshown();
           continue;
         }
@@ -271,8 +303,9 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
         return needs.get(L)!;
       },
       chunkCost: (L) => this.#pools.chunkCost(L),
-      // some room for the surfaces being replaced while a step is computed
-      budgetBytes: Math.max(0, this.budgetBytes - RESERVE_BYTES) * share,
+      // some room for the surfaces being replaced while a step is computed; what others hold against the
+      // budget (the page's store being replaced) and the copies this stream's next step replaces are not for it
+      budgetBytes: this.#memory.planBytes(share),
     });
   }
 
@@ -301,7 +334,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     const refused = this.#pools.fitStep(
       step,
       shownWanted,
-      () => this.#free(),
+      () => this.#memory.free(),
       (L) => this.#surfaces.has(L),
       this.budgetBytes,
     );
@@ -317,23 +350,8 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
         bytesFetched: this.fetcher.counters.bytesFetched,
         phase,
       });
-    if (missing.size > 0) {
-      const keep = step.wanted.map((w, L) => new Set([...w, ...(shownWanted[L] ?? [])].map((c) => key(L, c))));
-      let mine: Waiting | null = null;
-      await new Promise<void>((resolve) => {
-        mine = this.#waiting = { missing, done: resolve, keep };
-        this.#pools.reserve(step, missing);
-        progress('fetching');
-        this.fetcher.wantAll(order);
-        if (missing.size === 0) resolve();
-      });
-      if (this.#waiting === mine) this.#waiting = null;
-      if (stale()) return false;
-      if (missing.size > 0) return false; // a chunk failed
-    } else {
-      // everything resident: what a superseded step was still fetching is no longer needed
-      this.fetcher.wantAll([]);
-    }
+    const arrived = await this.#fetch.fetch(step, missing, order, shownWanted, () => progress('fetching'));
+    if (stale() || !arrived) return false; // superseded, or a chunk failed
     progress('computing');
     const levels: CutLevelShown<V, S, F>[] = [];
     const used = step.levels;
@@ -346,11 +364,11 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
         // ghosts as skirts: the one cell layer next to a drawn chunk emits too, an overlap into the neighbouring
         // region at another level that covers the crack between the two (counted apart from the cut's triangles)
         pool.setRoles(step.drawn[L], step.ghosts[L], { skirts: this.skirts });
-        const noRoom = this.#surfaces.noRoom(L, pool, lv.layout, this.#free(), this.budgetBytes);
+        const noRoom = this.#surfaces.noRoom(L, pool, lv.layout, this.#memory.free(), this.budgetBytes);
         if (noRoom) return { level: L, reason: noRoom };
-        const surface = await this.#surfaces.surfaceFor(L, pool, lv.layout, this.#free(), () => stale() || lv.volume !== pool);
+        const surface = await this.#surfaces.surfaceFor(L, pool, lv.layout, this.#memory.free(), () => stale() || lv.volume !== pool);
         if (!surface) return false;
-        surface.setMemoryBudget(Math.max(1, this.budgetBytes - RESERVE_BYTES - (this.gpu.allocatedBytes - surface.budgetedBytes)));
+        surface.setMemoryBudget(this.#memory.capFor(surface));
         const stats = await surface.compute(iso);
         if (stale()) return false;
         // what the surface holds, and the copy of it that is drawn (present(), below)
@@ -373,82 +391,94 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       return false;
     }
     // A snapshot: the frames until now drew the copies of the step before (whole, whatever was computed in
-    // place since); the copies of this step's surfaces are made together now and drawn from here on. Room
-    // for them: what they need beyond the copies they replace, less what the surfaces this step lets go held.
-    const freed = this.#surfaces.bytesOutside(used);
-    const copies = this.snapshots
-      ? levels.reduce((a, l) => a + (l.surface.presentBytesNeeded ?? 0) - (l.surface.presentedBytes ?? 0), 0)
-      : 0;
-    if (this.gpu.allocatedBytes - freed + copies > this.budgetBytes - RESERVE_BYTES / 2) {
-      return {
-        level: step.finest,
-        reason: `the step's surfaces and the copies drawn of them need ${copies} B more than the budget of ${this.budgetBytes} B leaves`,
-      };
+    // place since); the copies of this step's surfaces are made together now and drawn from here on.
+    const noCopies = this.snapshots ? this.#memory.copiesRefusal(used, levels) : null;
+    if (noCopies) return { level: step.finest, reason: noCopies };
+    // readers of the step on screen (an export) finish before it is replaced
+    while (this.#holds.length > 0) {
+      await Promise.allSettled(this.#holds);
+      if (stale()) return false;
     }
     // levels this step does not draw: their surfaces go, their pools' chunks become idle
     for (const L of this.#surfaces.letGoOutside(used)) this.levels[L].volume?.setRoles(new Set(), new Set());
     if (this.snapshots) for (const l of levels) l.surface.present?.();
     this.#shown = { iso, step: step.finest, final, levels, cut, leaves: step.leaves };
     // learning is asked for before listeners hear of the step, so their learnSettled() waits for it
-    this.#learn(levels);
+    this.#pools.learn(levels, (l) => !this.#destroyed && !this.#suspended && this.#surfaces.get(l.level) === l.surface);
     this.#events.shown(this.#shown);
     progress('shown');
     return true;
   }
 
-  /**
-   * Learns the ranges of the chunks these surfaces read whose range is not
-   * known (levels without range arrays), from the block ranges the surfaces
-   * were just computed with: valid while no chunk has been put into or
-   * evicted from that level's pool since and the surface is still the
-   * level's (a finer step fetching meanwhile does not spoil it). Reduced per
-   * slot on the GPU, one batch after the other (learnSlotRanges); recorded as
-   * they arrive (learnSettled).
-   */
-  #learn(levels: readonly CutLevelShown<V, S, F>[]): void {
-    for (const l of levels) {
-      if (this.store.levels[l.level].rangesPath) continue;
-      const changes = this.#pools.changes(l.level);
-      const valid = () => !this.#destroyed && this.#pools.changes(l.level) === changes && this.#surfaces.get(l.level) === l.surface;
-      const chunks = [...l.drawn, ...l.ghosts];
-      this.#learning = this.#learning.then(() => learnSlotRanges(this.learnt, l.level, chunks, l.volume, l.surface, valid));
-    }
-  }
-
   /** Resolves when the learnt ranges asked for so far are recorded. */
   learnSettled(): Promise<void> {
-    return this.#learning;
+    return this.#pools.learnSettled();
   }
 
   /**
-   * Lets go of the surfaces and pools of levels that the surface on screen
-   * does not draw, and empties the block caches of those that stay (their
-   * drawn meshes stay; a cache regrows as its surface needs it).
+   * Reads the step on screen with `read` (an export: the step's own
+   * surfaces, drawn copies included); no new step is shown before it is
+   * done, so what it reads is what was on screen. Null when nothing is.
    */
-  #releaseUnshown(): void {
-    const shown = (this.#shown?.levels ?? []).map((l) => l.level);
-    this.#surfaces.letGoOutside(shown);
-    for (const lv of this.levels) if (!shown.includes(lv.index)) this.#pools.dropPool(lv);
-    this.#surfaces.trimCaches();
-  }
-
-  #free(): number {
-    return this.budgetBytes - RESERVE_BYTES - this.gpu.allocatedBytes;
-  }
-
-  #arrived(level: number, chunk: ChunkIndex, bytes: Uint8Array): void {
-    const w = this.#waiting;
-    const lv = this.levels[level];
-    if (!w || !lv?.volume || !w.missing.has(key(level, chunk))) return;
+  async readShown<T>(read: (shown: ShownCut<V, S, F>) => Promise<T>): Promise<T | null> {
+    const shown = this.#shown;
+    if (!shown || this.#destroyed) return null;
+    const reading = read(shown);
+    this.#holds.push(reading);
     try {
-      this.#pools.put(level, chunk, bytes, (c) => w.keep[level]?.has(key(level, c)) ?? false);
-    } catch (e) {
-      this.#events.error(e as Error);
-      this.#stop(level, (e as Error).message, 'chunk');
-      return;
+      return await reading;
+    } finally {
+      this.#holds = this.#holds.filter((h) => h !== reading);
     }
-    w.missing.delete(key(level, chunk));
-    if (w.missing.size === 0) w.done();
+  }
+
+  /**
+   * Stops (no fetches, decodes, timers or learning go on) and lets go of
+   * everything but the copies the step on screen is drawn from: the page
+   * opens another store within the same budget while this one stays on
+   * screen. A new isovalue (setIsovalue) resumes it.
+   */
+  suspend(): void {
+    if (this.#destroyed) return;
+    this.#suspended = true;
+    this.#interrupt();
+    this.#releaseUnshown();
+    this.#releaseToCopies();
+  }
+
+  /**
+   * The limit changed. Lower: what is held comes within it at once: first
+   * what the step on screen does not draw, then (still over) the step on
+   * screen keeps only its drawn copies, and a coarser one is planned to
+   * replace it. Either way the refinement is planned again for the new
+   * limit (a suspended stream waits to be resumed).
+   */
+  #budgetChanged(next: number, previous: number): void {
+    if (this.#destroyed) return;
+    if (next < previous && this.#memory.over) {
+      this.#interrupt();
+      this.#releaseUnshown();
+      if (this.#memory.over) this.#releaseToCopies();
+    }
+    if (!this.#suspended && Number.isFinite(this.#iso)) void this.setIsovalue(this.#iso);
+  }
+
+  /** Whatever is being fetched or computed is no longer wanted (it becomes stale). */
+  #interrupt(): void {
+    this.#gen++;
+    if (this.#retryTimer !== null) clearTimeout(this.#retryTimer);
+    this.#retryTimer = null;
+    this.#fetch.end();
+  }
+
+  /** Lets go of what the step on screen does not draw (StreamMemory.releaseUnshown). */
+  #releaseUnshown(): void {
+    this.#memory.releaseUnshown(this.#shown);
+  }
+
+  /** Keeps only the copies the step on screen is drawn from (without copies, the CLI's, only what is not on screen goes). */
+  #releaseToCopies(): void {
+    if (this.snapshots) this.#shown = this.#memory.releaseToCopies(this.#shown);
   }
 
   #scheduleRetry(inMs: number): void {
@@ -456,27 +486,24 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     const gen = this.#gen;
     this.#retryTimer = setTimeout(() => {
       this.#retryTimer = null;
-      if (gen !== this.#gen || this.#destroyed || !Number.isFinite(this.#iso)) return;
+      if (gen !== this.#gen || this.#destroyed || this.#suspended || !Number.isFinite(this.#iso)) return;
       void this.setIsovalue(this.#iso);
     }, inMs + 50);
   }
 
   #stop(level: number, reason: string, cause: NonNullable<StreamProgress['cause']>, retryInMs?: number): void {
-    const w = this.#waiting;
-    this.#waiting = null;
-    if (w) {
-      this.fetcher.wantAll([]);
-      w.done();
-    }
+    this.#fetch.end();
     this.#events.stopped(this.#shown?.iso ?? Number.NaN, level, reason, cause, this.fetcher.counters.bytesFetched, retryInMs);
   }
 
   destroy(): void {
+    if (this.#destroyed) return;
     this.#destroyed = true;
+    for (const u of this.#unlisten) u();
     this.#gen++;
     if (this.#retryTimer !== null) clearTimeout(this.#retryTimer);
-    this.fetcher.cancelAll();
-    this.#waiting?.done();
+    this.#retryTimer = null;
+    this.#fetch.end();
     this.#surfaces.destroy();
     this.#pools.destroy();
     this.#shown = null;
@@ -494,5 +521,3 @@ interface BudgetStop {
 const PLAN_SHARE = 0.8;
 /** How many times a cut that does not fit is planned again, coarser, before the refinement stops. */
 const MAX_COARSENINGS = 6;
-/** Kept free within the budget for short-lived buffers (statistics and readback staging, uniforms). */
-const RESERVE_BYTES = 1 << 20;

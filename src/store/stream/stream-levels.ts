@@ -3,10 +3,10 @@
 // arrive), its pool of compressed chunks on the GPU with the resident chunks
 // least recently wanted first, which chunks a surface needs, and what a
 // wanted chunk costs on the GPU (the plan's cost model).
-import type { LearntRanges } from '../learnt-ranges.ts';
-import { chunkCount, estimateFixedBytes, putArrived, readLevelRanges } from '../level-state.ts';
+import { type LearntRanges, learnSlotRanges } from '../learnt-ranges.ts';
+import { chunkCount, estimateFixedBytes, putArrived, readLevelRanges, storeValueRange } from '../level-state.ts';
 import { chunkNeeded } from '../plan.ts';
-import type { StreamGpu } from '../stream-port.ts';
+import type { LevelSurface, StreamGpu } from '../stream-port.ts';
 import type { ChunkIndex } from '../types.ts';
 import type { ZfpStore } from '../zarr/store.ts';
 import { key, type LevelState, type RoleVolume, type Step } from './stream-types.ts';
@@ -19,6 +19,8 @@ export class StreamLevels<V extends RoleVolume> {
   readonly #read = new Set<number>();
   /** Per level, the cache and vertex bytes its last surface took (or needed, when it did not fit) per wanted chunk. */
   readonly #surfaceCost: (number | undefined)[] = [];
+  /** The readbacks of learnt ranges in flight (learnSettled). */
+  #learning: Promise<void> = Promise.resolve();
 
   constructor(
     readonly store: ZfpStore,
@@ -55,6 +57,53 @@ export class StreamLevels<V extends RoleVolume> {
     if (!this.store.levels[L].rangesPath) return this.learnt.learns(L) ? (c) => this.learnt.needs(L, iso, c) : () => true;
     // a range array read that gave none: every chunk (a plan never waits for it again)
     return this.#read.has(L) ? () => true : null;
+  }
+
+  /** [min, max] per chunk of level L when known for every chunk (its range array, or every chunk's learnt), else null. */
+  knownRanges(L: number): Float32Array | null {
+    const lv = this.levels[L];
+    if (!lv) return null;
+    if (this.store.levels[L].rangesPath) return lv.ranges;
+    return this.learnt.knownCount(L) === chunkCount(lv.layout) ? this.learnt.level(L) : null;
+  }
+
+  /**
+   * The store's value range: its metadata, else the finest level whose chunk
+   * ranges are (partly) known: its range array, or what was learnt of it as
+   * chunks arrived. Null while none is.
+   */
+  get valueRange(): [number, number] | null {
+    const known = this.levels.map((lv) => ({
+      ranges: this.store.levels[lv.index].rangesPath ? lv.ranges : this.learnt.knownCount(lv.index) > 0 ? this.learnt.level(lv.index) : null,
+    }));
+    return storeValueRange(this.store, known);
+  }
+
+  /**
+   * Learns the ranges of the chunks a step's surfaces read whose range is
+   * not known (levels without range arrays), from the block ranges the
+   * surfaces were just computed with: valid while no chunk has been put into
+   * or evicted from that level's pool since and `current` holds (the surface
+   * is still the level's, the stream alive; a finer step fetching meanwhile
+   * does not spoil it). Reduced per slot on the GPU, one batch after the
+   * other (learnSlotRanges); recorded as they arrive (learnSettled).
+   */
+  learn<F extends Pick<LevelSurface, 'readSlotRanges'>>(
+    levels: readonly { level: number; volume: V; surface: F; drawn: ChunkIndex[]; ghosts: ChunkIndex[] }[],
+    current: (l: { level: number; surface: F }) => boolean,
+  ): void {
+    for (const l of levels) {
+      if (this.store.levels[l.level].rangesPath) continue;
+      const changes = this.#changes[l.level];
+      const valid = () => this.#changes[l.level] === changes && current(l);
+      const chunks = [...l.drawn, ...l.ghosts];
+      this.#learning = this.#learning.then(() => learnSlotRanges(this.learnt, l.level, chunks, l.volume, l.surface, valid));
+    }
+  }
+
+  /** Resolves when the learnt ranges asked for so far are recorded. */
+  learnSettled(): Promise<void> {
+    return this.#learning;
   }
 
   /**

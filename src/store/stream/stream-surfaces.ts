@@ -1,7 +1,10 @@
 // The store stream's surfaces (store-stream.ts): one Isosurface per level a
-// step draws, made for its pool's capacity (block ids are slot-relative, so
-// a pool that was resized gets a new surface; the old one stays drawn until
-// the next step shows), and what letting some of them go gives back.
+// step draws, made for its pool's capacity. A surface the stream no longer
+// computes on is parked: one made for a pool's old capacity (block ids are
+// slot-relative, so a resized pool gets a new surface), or one released to
+// its drawn copy (a lowered budget, a suspended stream). A parked surface
+// is destroyed once no step on screen draws it; a surface on screen is never
+// destroyed before the step that replaces it shows.
 import { estimateFixedBytes } from '../level-state.ts';
 import type { LevelStats, LevelSurface, StreamGpu } from '../stream-port.ts';
 import type { ChunkLevelLayout } from '../types.ts';
@@ -9,8 +12,8 @@ import type { RoleVolume } from './stream-types.ts';
 
 export class StreamSurfaces<V extends RoleVolume, S extends LevelStats, F extends LevelSurface<S>> {
   readonly #byLevel = new Map<number, { surface: F; capacity: number }>();
-  /** Surfaces made for a pool's old capacity, destroyed when the next step shows. */
-  #retired: F[] = [];
+  /** Surfaces no longer computed on, destroyed once no step on screen draws them. */
+  readonly #parked = new Set<F>();
 
   constructor(readonly gpu: Pick<StreamGpu<V, S, F>, 'createSurface'>) {}
 
@@ -40,14 +43,14 @@ export class StreamSurfaces<V extends RoleVolume, S extends LevelStats, F extend
   /**
    * Level L's surface over `pool`: the one it has when made for the pool's
    * capacity, else a new one (its cache and vertices capped by what `free`
-   * bytes leave beside its per-level buffers); undefined when `stale()`
-   * after it was made (it is let go).
+   * bytes leave beside its per-level buffers; the old one is parked);
+   * undefined when `stale()` after it was made (it is let go).
    */
   async surfaceFor(level: number, pool: V, layout: ChunkLevelLayout, free: number, stale: () => boolean): Promise<F | undefined> {
     const entry = this.#byLevel.get(level);
     if (entry && entry.capacity === pool.poolChunks) return entry.surface;
     if (entry) {
-      this.#retired.push(entry.surface);
+      this.#parked.add(entry.surface);
       this.#byLevel.delete(level);
     }
     const surface = await this.gpu.createSurface(pool, Math.max(MIN_SURFACE_BYTES, free - estimateFixedBytes(layout, pool.poolChunks)));
@@ -59,13 +62,20 @@ export class StreamSurfaces<V extends RoleVolume, S extends LevelStats, F extend
     return surface;
   }
 
-  /** Bytes the surfaces of levels outside `keep` and the retired ones hold (their drawn copies included). */
+  /** Bytes the surfaces of levels outside `keep` and the parked ones hold (their drawn copies included): what a step of `keep` gives back. */
   bytesOutside(keep: readonly number[]): number {
-    const goes = [...this.#retired, ...[...this.#byLevel].filter(([L]) => !keep.includes(L)).map(([, e]) => e.surface)];
+    const goes = [...this.#parked, ...[...this.#byLevel].filter(([L]) => !keep.includes(L)).map(([, e]) => e.surface)];
     return goes.reduce((a, f) => a + f.budgetedBytes + (f.presentedBytes ?? 0), 0);
   }
 
-  /** Lets the surfaces of levels outside `keep` go, and the retired ones; the levels let go, for their pools. */
+  /** Bytes of the parked surfaces (drawn copies of a step being replaced, surfaces of old pool capacities). */
+  get parkedBytes(): number {
+    let n = 0;
+    for (const f of this.#parked) n += f.budgetedBytes + (f.presentedBytes ?? 0);
+    return n;
+  }
+
+  /** A step of levels `keep` shows: the surfaces of other levels go, and every parked one; the levels let go, for their pools. */
   letGoOutside(keep: readonly number[]): number[] {
     const gone: number[] = [];
     for (const [L, entry] of this.#byLevel) {
@@ -74,9 +84,41 @@ export class StreamSurfaces<V extends RoleVolume, S extends LevelStats, F extend
       this.#byLevel.delete(L);
       gone.push(L);
     }
-    for (const s of this.#retired) s.destroy();
-    this.#retired = [];
+    for (const s of this.#parked) s.destroy();
+    this.#parked.clear();
     return gone;
+  }
+
+  /** Lets go of every surface the step on screen (`onScreen`) does not draw; the levels whose surface went. */
+  letGoUnshown(onScreen: ReadonlySet<F>): number[] {
+    const gone: number[] = [];
+    for (const [L, entry] of this.#byLevel) {
+      if (onScreen.has(entry.surface)) continue;
+      entry.surface.destroy();
+      this.#byLevel.delete(L);
+      gone.push(L);
+    }
+    for (const s of this.#parked) {
+      if (onScreen.has(s)) continue;
+      s.destroy();
+      this.#parked.delete(s);
+    }
+    return gone;
+  }
+
+  /**
+   * Keeps only the drawn copies of the surfaces on screen: each is released
+   * to its copy (LevelSurface.release) and parked, the others destroyed.
+   * Every level then makes a new surface for its next step.
+   */
+  releaseToCopies(onScreen: ReadonlySet<F>): void {
+    this.letGoUnshown(onScreen);
+    for (const entry of this.#byLevel.values()) {
+      entry.surface.release?.();
+      this.#parked.add(entry.surface);
+    }
+    this.#byLevel.clear();
+    for (const s of this.#parked) s.release?.();
   }
 
   /** Empties every block cache back to its first size (the drawn meshes stay). */

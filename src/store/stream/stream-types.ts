@@ -36,6 +36,12 @@ export interface ShownCut<V, S, F> {
   cut: ViewCut | null;
   /** Leaves drawn per level in this step (needed or not): the regions each level covers. */
   leaves: ChunkIndex[][];
+  /**
+   * Its surfaces were released to their drawn copies (a lowered budget, a
+   * suspended stream): it is still drawn, but nothing is computed on it and
+   * the next refinement replaces it.
+   */
+  frozen?: boolean;
 }
 
 export interface LevelState<V> {
@@ -58,7 +64,7 @@ export interface Waiting {
 
 /** Whether `shown` is this step at this isovalue (the same levels, drawn chunks and ghosts per level). */
 export function showsStep(shown: ShownCut<unknown, unknown, unknown> | null, step: Step, iso: number): boolean {
-  if (!shown || shown.iso !== iso || shown.levels.length !== step.levels.length) return false;
+  if (!shown || shown.frozen || shown.iso !== iso || shown.levels.length !== step.levels.length) return false;
   return shown.levels.every(
     (l) =>
       step.levels.includes(l.level) &&
@@ -69,9 +75,10 @@ export function showsStep(shown: ShownCut<unknown, unknown, unknown> | null, ste
   );
 }
 
-/** Per level (of `levels`), the chunks the step on screen reads (drawn and ghosts). */
+/** Per level (of `levels`), the chunks the step on screen reads (drawn and ghosts); none when it is frozen (its pools are gone). */
 export function shownWanted(shown: ShownCut<unknown, unknown, unknown> | null, levels: number): ChunkIndex[][] {
   const out: ChunkIndex[][] = Array.from({ length: levels }, () => []);
+  if (shown?.frozen) return out;
   for (const l of shown?.levels ?? []) out[l.level] = [...l.drawn, ...l.ghosts];
   return out;
 }
