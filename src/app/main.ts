@@ -4,6 +4,7 @@
 // new device, the viewer and layers made again on it (same camera, style and
 // panel), and what was on screen opened again (the file, URL, built-in
 // volume or store) at the same isovalue and view, with a message.
+import { GpuBudget } from '../gpu/budget.ts';
 import { describeAdapter, type GpuContext } from '../gpu/device.ts';
 import { ArcballCamera } from '../render/camera.ts';
 import { BoxLayer } from '../render/box-layer.ts';
@@ -128,9 +129,13 @@ async function start(): Promise<void> {
   const spacing = new SpacingControl([byId('spacing-x'), byId('spacing-y'), byId('spacing-z')], byId('spacing-note'), (s) =>
     session.setSpacing(s),
   );
-  const budget = new BudgetControl(byId('budget-mb'), byId('budget-bar'), byId('budget-note'), defaultBudgetBytes(gpu.limits), (bytes) =>
-    session.current?.iso.setMemoryBudget(bytes),
-  );
+  // The page's one GPU memory budget: every store streams against it (a lower one frees at once, a store being
+  // replaced holds only what it draws); an in-core volume's cache and vertices are capped by the same figure.
+  const pageBudget = new GpuBudget(defaultBudgetBytes(gpu.limits));
+  const budget = new BudgetControl(byId('budget-mb'), byId('budget-bar'), byId('budget-note'), pageBudget.bytes, (bytes) => {
+    pageBudget.bytes = bytes;
+    session.current?.iso.setMemoryBudget(bytes);
+  });
   const frames = {
     get fps() {
       return viewer.fps;
@@ -341,22 +346,20 @@ async function start(): Promise<void> {
   const storeUrl = storeParameter();
   storeView = mountStoreView({
     gpu: () => gpu,
-    budgetBytes: () => budget.bytes,
+    budget: pageBudget,
     onError: (m) => messages.show(m),
     onNotice: (m) => messages.show(m, 'info', 8000),
-    // each level the store's controller shows becomes the volume on screen; a finer or coarser one keeps the camera
-    install: (v, level, firstLevel) => {
-      if (!firstLevel) session.pendingCamera = camera.getState();
+    // a store's first step with a surface becomes the volume on screen (level 0's frame); its later steps update it
+    install: (v) => {
       session.install(v);
-      link?.setLevel(level);
-      if (firstLevel) {
-        const view = storeView!;
-        reopen = async () => {
-          const again = view.reopener();
-          if (again) await again.open();
-        };
-      }
+      const view = storeView!;
+      reopen = async () => {
+        const again = view.reopener();
+        if (again) await again.open();
+      };
     },
+    setLevel: (level) => link?.setLevel(level),
+    showGpuBytes: (bytes) => budget.setUsed(bytes, 'held on the GPU by the streamed store'),
     // a store's range is often provisional (its coarsest level's): the link's isovalue is used as given
     linkIso: () => {
       const wanted = pendingIso;

@@ -191,7 +191,8 @@ export class Session {
       this.requestedAt.delete(Math.fround(s.isovalue));
     }
     p.stats.update(s, v.iso.info.blockCount, this.lastLatency);
-    p.budget.setUsed(s.cacheBytes + s.vertexBytes);
+    // a streamed store's meter is what the page holds on the GPU (the store view sets it)
+    if (!v.iso.drawParts) p.budget.setUsed(s.cacheBytes + s.vertexBytes);
     p.budget.clearError();
     p.hud.setSurface(formatIso(s.isovalue, v.iso.info.valueRange), s.triangles, s.gpuMs);
     p.state.stats = s;

@@ -11,7 +11,7 @@ import type { GpuContext } from '../gpu/device.ts';
 import { Isosurface } from '../isosurface/isosurface.ts';
 import { isStoreInput, NoSuchLevelError, openStoreInput, type StoreRecord } from '../store/cli-input.ts';
 import type { ViewRequest } from '../store/view/view-request.ts';
-import type { CutChunkRecord } from '../store/view-surface.ts';
+import type { CutChunkRecord } from '../store/stream-surface.ts';
 import { StoreError } from '../store/zarr/errors.ts';
 import {
   checkValueRange,
@@ -26,17 +26,17 @@ import { describeRateChoice, type RateChoice } from '../zfp/rate-choice.ts';
 import { InputError, UsageError } from './command.ts';
 
 /**
- * What `extract` and `bench` use of a surface: an Isosurface, a store level
- * (PinnedLevelSurface), or a store refined by a view (ViewCutSurface: several
- * levels, so no one packed mesh; its positions come in level-0 voxels, with
- * the cut).
+ * What `extract` and `bench` use of a surface: an Isosurface, or a store's
+ * stream (StoreStreamSurface: one level pinned, or the view's cut of several
+ * levels, so no one packed mesh; its positions come in the level's or
+ * level-0 voxels, with the cut).
  */
 export type InputSurface = Pick<Isosurface, 'info' | 'compute' | 'resetCache' | 'memoryBudget' | 'destroy'> &
   (
     | Pick<Isosurface, 'readMesh'>
     | {
         readPositions(): Promise<{ positions: Float32Array; indices: Uint32Array }>;
-        cutRecord(): Promise<CutChunkRecord[]>;
+        cutRecord(): Promise<CutChunkRecord[] | undefined>;
       }
   );
 

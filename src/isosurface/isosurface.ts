@@ -411,9 +411,9 @@ export class Isosurface {
     this.resetCache();
   }
 
-  /** Bytes the cache and vertex buffers hold now (what the budget caps). */
+  /** Bytes the cache and vertex buffers hold now (what the budget caps); 0 once released or destroyed. */
   get budgetedBytes(): number {
-    return this.pipeline.cacheBytes + this.pipeline.vertexBytes;
+    return this.destroyed ? 0 : this.pipeline.cacheBytes + this.pipeline.vertexBytes;
   }
 
   // ---- snapshots (a view stream's steps): drawn from a copy while the next surface is computed
@@ -441,7 +441,24 @@ export class Isosurface {
 
   /** Bytes a present() of the last computed surface would hold. */
   get presentBytesNeeded(): number {
-    return this.lastStats ? SurfaceSnapshot.bytesFor(this.lastStats, this.pipeline.parts.shards.perShard) : 0;
+    return this.lastStats && !this.destroyed ? SurfaceSnapshot.bytesFor(this.lastStats, this.pipeline.parts.shards.perShard) : 0;
+  }
+
+  /**
+   * Lets go of everything but the drawn copy (present()): the pipeline, its
+   * cache, vertices and per-block state. The copy stays drawable (its
+   * vertices carry positions and normals) until destroy(); the surface can
+   * compute nothing more. A stream does this to come within a lowered
+   * budget while the step on screen stays drawn.
+   */
+  release(): void {
+    this.#stopWork('Isosurface: released to its drawn copy');
+  }
+
+  /** The mesh drawn now: the copy present() made, else the surface itself (readMesh). */
+  readDrawnMesh(): Promise<SurfaceMesh> {
+    if (this.snapshot) return this.snapshot.readMesh(this.info.dims);
+    return this.destroyed ? Promise.reject(new Error('Isosurface: destroyed')) : this.pipeline.readMesh();
   }
 
   // ---- readback (CLI, export): these wait for the GPU; the tests' own readbacks are in tests/helpers
@@ -473,14 +490,20 @@ export class Isosurface {
   }
 
   destroy(): void {
+    this.#stopWork('Isosurface: destroyed');
+    this.snapshot?.destroy();
+    this.snapshot = null;
+  }
+
+  /** Everything but the drawn copy goes; requests waiting are rejected with `message`. */
+  #stopWork(message: string): void {
     if (this.destroyed) return;
     this.destroyed = true;
-    const error = new Error('Isosurface: destroyed');
+    const error = new Error(message);
     for (const r of [this.pending, ...this.inFlight.map((a) => a.r)]) for (const w of r?.waiters ?? []) w.reject(error);
     this.pending = undefined;
     this.inFlight.length = 0;
     this.stats.destroy();
-    this.snapshot?.destroy();
     this.pipeline.destroy();
     this.statsListeners.clear();
     this.errorListeners.clear();

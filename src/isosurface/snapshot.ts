@@ -8,8 +8,9 @@
 // the surface drew. Its buffers are the surface's size, not its capacity;
 // they are kept while a later copy fits (and is at least half their size)
 // and made again when it does not.
+import { readU32 } from '../gpu/buffers.ts';
 import { DRAW_ARGS_BYTES, INDEX_BYTES, VERTEX_BYTES } from './layout.ts';
-import type { IsosurfaceDrawData } from './types.ts';
+import type { IsosurfaceDrawData, SurfaceMesh } from './types.ts';
 import type { SurfaceOutput } from './vertex-output.ts';
 
 /** What a surface holds: its welded vertices and its indices (IsosurfaceStats.vertices, .indices). */
@@ -22,6 +23,9 @@ export class SurfaceSnapshot {
   #vertices: GPUBuffer | null = null;
   #indices: GPUBuffer[] = [];
   #drawArgs: GPUBuffer | null = null;
+  /** What the copy holds: welded vertices, and indices per shard. */
+  #vertexCount = 0;
+  #indexCounts: number[] = [];
   /** What the renderer binds: the copies (slotData and blockToSlot are the surface's, read through). */
   readonly drawData: IsosurfaceDrawData;
 
@@ -88,6 +92,8 @@ export class SurfaceSnapshot {
         usage: GPUBufferUsage.INDIRECT | GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST | GPUBufferUsage.COPY_SRC,
       });
     }
+    this.#vertexCount = vertices;
+    this.#indexCounts = sizes;
     const encoder = device.createCommandEncoder({ label: 'SurfaceSnapshot.capture' });
     // copy sizes are multiples of 4 (12-byte vertices, 4-byte indices, 20-byte records)
     if (vertices > 0) encoder.copyBufferToBuffer(output.vertices, 0, this.#vertices!, 0, vertices * VERTEX_BYTES);
@@ -104,6 +110,29 @@ export class SurfaceSnapshot {
     });
   }
 
+  /**
+   * The copy as an indexed mesh (what is drawn, not what the surface has
+   * computed since); waits for the GPU. `dims`: the volume's voxels per axis.
+   */
+  async readMesh(dims: readonly [number, number, number]): Promise<SurfaceMesh> {
+    const vertexBuffer = this.#vertices;
+    const indexBuffers = this.#indices;
+    const counts = this.#indexCounts;
+    const welded = this.#vertexCount;
+    const vertices = vertexBuffer && welded > 0 ? await readU32(this.device, vertexBuffer, 0, 3 * welded) : new Uint32Array(0);
+    const indices = new Uint32Array(counts.reduce((a, b) => a + b, 0));
+    let at = 0;
+    for (let k = 0; k < counts.length; k++) {
+      if (counts[k] === 0) continue;
+      indices.set(await readU32(this.device, indexBuffers[k], 0, counts[k]), at);
+      at += counts[k];
+    }
+    for (const v of indices) {
+      if (v >= welded) throw new Error(`SurfaceSnapshot: index ${v} outside the ${welded} vertices of the copy`);
+    }
+    return { vertices, indices, dims: [...dims] };
+  }
+
   #destroyBuffers(): void {
     this.#vertices?.destroy();
     for (const b of this.#indices) b.destroy();
@@ -111,6 +140,8 @@ export class SurfaceSnapshot {
     this.#vertices = null;
     this.#indices = [];
     this.#drawArgs = null;
+    this.#vertexCount = 0;
+    this.#indexCounts = [];
   }
 
   destroy(): void {

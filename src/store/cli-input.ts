@@ -1,19 +1,18 @@
 // The CLI's store input (`extract` / `bench` STORE --level L, or refined by
 // --view-box / --view): a store URL, folder or zip opened as a StoreSession
-// (session.ts, as the page opens it): at level L only (pinned-level.ts) each
-// isovalue fetches the chunks its surface needs (8 requests in flight) into
-// the level's GPU pool of compressed chunks; the record says how much came over.
+// (session.ts, as the page opens it), read as one surface (stream-surface.ts):
+// at level L only, each isovalue fetches the chunks its surface needs (8
+// requests in flight) into the level's GPU pool of compressed chunks; by a
+// view, every level the cut uses. The record says how much came over.
 import { existsSync, mkdirSync, readFileSync, rmSync, statSync, writeFileSync } from 'node:fs';
 import { dirname, join } from 'node:path';
 import type { GpuContext } from '../gpu/device.ts';
 import { defaultMemoryBudget } from '../isosurface/budget.ts';
-import { PinnedLevelSurface } from './pinned-level.ts';
 import { storeRateChooser } from './rate.ts';
 import { type StoreRecord, StoreSession } from './session.ts';
 import { type ViewRequest, viewSpecFor } from './view/view-request.ts';
 import type { ViewSpec } from './stream/store-stream.ts';
-import type { ChunkStoreStream } from './gpu-port.ts';
-import { ViewCutSurface } from './view-surface.ts';
+import { StoreStreamSurface } from './stream-surface.ts';
 import { StoreError } from './zarr/errors.ts';
 import { isStoreUrl, storeForLocation } from './zarr/node-store.ts';
 import { rangesSidecarFiles } from './zarr/ranges-sidecar-files.ts';
@@ -36,7 +35,7 @@ export function isStoreInput(input: string): boolean {
 export type { StoreRecord };
 
 export interface StoreInput {
-  surface: PinnedLevelSurface | ViewCutSurface;
+  surface: StoreStreamSurface;
   how: string;
   rate: number;
   notes: string[];
@@ -81,7 +80,7 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
       channel: opts.channel,
       ...(opts.ranges === undefined ? {} : { ranges: { store: storeForLocation(opts.ranges), name: opts.ranges } }),
     },
-    budgetBytes,
+    budget: budgetBytes,
     // checked before any stream is made: a level that does not exist or cannot be drawn, a view that does not fit the store
     view: (store) => {
       if (!Number.isInteger(L) || L < 0 || L >= store.levels.length)
@@ -113,11 +112,10 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
     store.notes.push(
       `--rate ${opts.rate} is for stores of lossless chunks; this store's chunks are zfp at rate ${store.levels[0].layout.rate}, used as they are`,
     );
-  const refined = session.view;
-  if (refined && view) return viewInput(input, session, refined, view);
-  const controller = session.levels!;
+  if (view) return viewInput(input, session, view);
+  const { stream } = session;
   const lv = store.levels[L];
-  const surface = new PinnedLevelSurface(controller, L);
+  const surface = new StoreStreamSurface(stream, L);
   const kind = store.source
     ? `${store.source.format} store of ${store.source.dtype} (${store.source.codecs.join(' + ') || 'uncompressed'}), level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 bricks compressed on the GPU at rate ${lv.layout.rate})`
     : `Zarr store, level ${L} of ${store.levels.length} (${lv.layout.dims.join('x')}, ${lv.layout.chunkEdge}^3 chunks, rate ${lv.layout.rate})`;
@@ -133,7 +131,7 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
     ...(store.source
       ? {
           saveRanges: async (dir: string) =>
-            writeSidecar(store, dir, (l) => (store.levels[l].rangesPath ? controller.chunkRanges(l) : controller.learnt.level(l))),
+            writeSidecar(store, dir, (l) => (store.levels[l].rangesPath ? stream.chunkRanges(l) : stream.learnt.level(l))),
         }
       : {}),
   };
@@ -164,9 +162,9 @@ function writeSidecar(store: ZfpStore, dir: string, ranges: (level: number) => F
  * each region at the level the view needs; the record's `level` is the
  * finest level drawn, `chunks` the distinct chunks put at any level.
  */
-function viewInput(input: string, session: StoreSession, stream: ChunkStoreStream, view: ViewSpec): StoreInput {
-  const { store } = session;
-  const surface = new ViewCutSurface(stream);
+function viewInput(input: string, session: StoreSession, view: ViewSpec): StoreInput {
+  const { store, stream } = session;
+  const surface = new StoreStreamSurface(stream, null);
   const lv0 = store.levels[0];
   const how =
     `Zarr store of ${store.levels.length} levels (level 0 ${lv0.layout.dims.join('x')}, ${lv0.layout.chunkEdge}^3 chunks, rate ${lv0.layout.rate}), ` +

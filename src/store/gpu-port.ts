@@ -18,16 +18,21 @@ import type { ZfpStore } from './zarr/open-store.ts';
 
 /** The store stream over real GPU pools (ChunkedVolume) and surfaces (Isosurface). */
 export type ChunkStoreStream = StoreStream<ChunkedVolume, IsosurfaceStats, Isosurface>;
+/** Its level-by-level view (LevelStream). */
+export type ChunkLevelStream = LevelStream<ChunkedVolume, IsosurfaceStats, Isosurface>;
 
 export interface ChunkedStreamGpu extends StreamGpu<ChunkedVolume, IsosurfaceStats, Isosurface> {
   readonly meter: GpuMemoryMeter;
 }
 
 /**
- * The real GPU side. `encoder` (made on the same device) encodes the bricks
- * of stores of lossless chunks into their slots; zfp stores need none.
+ * The real GPU side. `budgetMeter`: the meter of the budget the stream holds
+ * against (a page's GpuBudget counts every store's buffers), the parent of
+ * the port's own meter. `encoder` (made on the same device) encodes the
+ * bricks of stores of lossless chunks into their slots; zfp stores need none.
  */
-export function chunkedGpu(gpu: GpuContext, meter = new GpuMemoryMeter(), encoder?: ZfpEncoder): ChunkedStreamGpu {
+export function chunkedGpu(gpu: GpuContext, budgetMeter?: GpuMemoryMeter, encoder?: ZfpEncoder): ChunkedStreamGpu {
+  const meter = new GpuMemoryMeter(budgetMeter);
   const view = meteredGpu(gpu, meter).gpu;
   const maxShardBytes = maxShardBytesFor(gpu.device);
   return {

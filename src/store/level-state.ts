@@ -21,32 +21,23 @@ export function estimateFixedBytes(layout: ChunkLevelLayout, poolChunks: number)
 
 export const chunkCount = (layout: ChunkLevelLayout) => layout.chunkGrid[0] * layout.chunkGrid[1] * layout.chunkGrid[2];
 
-export function allChunks(layout: ChunkLevelLayout): ChunkIndex[] {
-  return Array.from({ length: chunkCount(layout) }, (_, i) => i);
+/**
+ * The cost model (one place: the stream's plans, the page's choice of
+ * refining by the view, tests). GPU bytes a resident chunk holds whatever
+ * its surface: its pool slot and the surface's per-block state (a pool's
+ * 64 KiB of scratch is not per chunk).
+ */
+export function residentChunkBytes(layout: ChunkLevelLayout): number {
+  return layout.chunkBytes + estimateFixedBytes(layout, 1) - (64 << 10);
 }
 
-/** [min, max] per chunk from [min, max] per block id of the pool (resident chunks; the others get the empty range). */
-export function chunkRangesOfIds(
-  layout: ChunkLevelLayout,
-  idRanges: Float32Array,
-  pool: Pick<LevelVolume, 'slotOfChunk' | 'blocksPerChunk'>,
-): Float32Array {
-  const out = new Float32Array(2 * chunkCount(layout));
-  const per = pool.blocksPerChunk;
-  for (let c = 0; c < out.length / 2; c++) {
-    let lo = Infinity;
-    let hi = -Infinity;
-    const slot = pool.slotOfChunk(c);
-    if (slot !== undefined) {
-      for (let b = slot * per; b < (slot + 1) * per; b++) {
-        if (idRanges[2 * b] < lo) lo = idRanges[2 * b];
-        if (idRanges[2 * b + 1] > hi) hi = idRanges[2 * b + 1];
-      }
-    }
-    out[2 * c] = lo;
-    out[2 * c + 1] = hi;
-  }
-  return out;
+/**
+ * A wanted chunk's share of its surface's cache and vertices before the
+ * level's first surface says what it is: half its blocks active, each with
+ * a cache slot and the vertices of a surface crossing it (384 B).
+ */
+export function guessedSurfaceBytesPerChunk(layout: ChunkLevelLayout): number {
+  return (layout.chunkEdge / 4) ** 3 * 0.5 * 384;
 }
 
 /** What a stream knows of a level's chunk ranges: the range array (read once) and the neighbourhood ranges the plan uses. */

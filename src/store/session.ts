@@ -10,9 +10,13 @@ import type { Isosurface } from '../isosurface/isosurface.ts';
 import type { IsosurfaceStats } from '../isosurface/types.ts';
 import type { ChunkedVolume } from '../zfp/chunked-volume.ts';
 import { ChunkFetcher } from './fetch/chunk-fetcher.ts';
-import { type ChunkedStreamGpu, chunkedGpu, createChunkStream, storeEncoder } from './gpu-port.ts';
+import { GpuBudget } from '../gpu/budget.ts';
+import { type ChunkedStreamGpu, chunkedGpu, storeEncoder } from './gpu-port.ts';
+import { CutPlanner } from './stream/cut-planner.ts';
+import { LevelPlanner } from './stream/level-planner.ts';
+import { LevelStream } from './stream/level-stream.ts';
 import type { LearntRanges } from './learnt-ranges.ts';
-import type { ChunkLevelStream } from './pinned-level.ts';
+import type { ChunkLevelStream } from './gpu-port.ts';
 import type { StreamGpuBytes } from './stream-port.ts';
 import { type ViewSpec, StoreStream } from './stream/store-stream.ts';
 import type { ChunkStoreStream } from './gpu-port.ts';
@@ -110,8 +114,11 @@ export class FetchedChunks {
 export interface StoreSessionOptions {
   /** How the store is opened (rate, time point, channel, ranges sidecar, retries, decode workers). */
   open: OpenStoreOptions;
-  /** The GPU memory of the whole stream. */
-  budgetBytes: number;
+  /**
+   * The GPU memory the stream holds against: a budget shared with the rest
+   * of the page (gpu/budget.ts), or bytes for a budget of its own (the CLI).
+   */
+  budget: GpuBudget | number;
   /** Requests in flight at once (default 8). */
   maxInFlight?: number;
   /** Ranges learnt earlier for this store (the page keeps them per opened source). */
@@ -140,7 +147,6 @@ export class StoreSession {
     readonly stream: ChunkStoreStream,
     /** The stream as levels, when it is planned level by level; else null. */
     readonly levels: ChunkLevelStream | null,
-    readonly budgetBytes: number,
     /** The chunks that came over (counted once). */
     readonly fetched: FetchedChunks,
   ) {}
@@ -150,17 +156,33 @@ export class StoreSession {
     return this.levels ? null : this.stream;
   }
 
+  /** The GPU memory the stream holds against (shared with the page's other users of it). */
+  get budget(): GpuBudget {
+    return this.stream.budget;
+  }
+
+  /** The budget's limit, bytes. */
+  get budgetBytes(): number {
+    return this.stream.budget.bytes;
+  }
+
   /**
-   * Stops the store: no more requests, decode workers end. `keepSurfaces`
-   * leaves the stream's GPU side alive (a level of it is still on screen;
-   * the page destroys the stream when it lets that level go).
+   * Stops streaming and keeps only the copies of the step on screen
+   * (StoreStream.suspend): the page opens another store within the same
+   * budget while this one stays drawn. A new isovalue resumes it (the new
+   * store failed to open); close() ends it (the new one is on screen).
    */
-  close(keepSurfaces = false): void {
+  suspend(): void {
+    if (!this.#closed) this.stream.suspend();
+  }
+
+  /** Ends the store: no more requests, decode workers end, everything on the GPU is given back. */
+  close(): void {
     if (this.#closed) return;
     this.#closed = true;
+    this.stream.destroy();
     this.fetcher.cancelAll();
     this.store.close?.();
-    if (!keepSurfaces) this.stream.destroy();
   }
 
   /**
@@ -192,7 +214,7 @@ export class StoreSession {
       metadataBytes: store.metadataBytes,
       requests: metered.meter.requests,
       storeChunkBytes: store.levels.reduce((a, l) => a + l.storedBytes, 0),
-      budgetBytes: this.budgetBytes,
+      budgetBytes: this.stream.budgetBytes,
       gpuBytes: gpu.total,
       gpuPoolBytes: gpu.pools,
       gpuCacheBytes: gpu.cache,
@@ -218,22 +240,17 @@ export class StoreSession {
       const fetcher = new ChunkFetcher(store, { maxInFlight: options.maxInFlight ?? 8 });
       const fetched = new FetchedChunks(store);
       fetcher.onChunk((level, chunk, bytes, fromCache) => fetched.add(level, chunk, bytes, fromCache));
-      const port = chunkedGpu(gpu, undefined, await storeEncoder(gpu, store));
+      const budget = typeof options.budget === 'number' ? new GpuBudget(options.budget) : options.budget;
+      const port = chunkedGpu(gpu, budget.meter, await storeEncoder(gpu, store));
       const learnt = options.learnt?.(store);
       const view = options.view?.(store) ?? null;
-      let levels: ChunkLevelStream | null = null;
-      if (view) {
-        stream = await StoreStream.byView<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, options.budgetBytes, {
-          learnt,
-        });
-        options.setup?.(stream);
-        await stream.setView(view);
-      } else {
-        levels = await createChunkStream(store, fetcher, port, options.budgetBytes, { learnt });
-        stream = levels.stream;
-        options.setup?.(stream);
-      }
-      return new StoreSession(name, store, metered, fetcher, port, stream, levels, options.budgetBytes, fetched);
+      // one engine whichever way it is planned: by the view, or level by level
+      const planner = view ? new CutPlanner() : new LevelPlanner(store.levels[0].layout);
+      stream = await StoreStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budget, planner, { learnt });
+      options.setup?.(stream);
+      if (view) await stream.setView(view);
+      const levels = planner instanceof LevelPlanner ? LevelStream.of(stream, planner) : null;
+      return new StoreSession(name, store, metered, fetcher, port, stream, levels, fetched);
     } catch (e) {
       stream?.destroy();
       store?.close?.();

@@ -5,36 +5,37 @@
 import type { AsyncReadable } from '@zarrita/storage';
 import { HttpStore } from '../../store/zarr/http-store.ts';
 import { isZipStoreName, storeZipBytes, ZipStore } from '../../store/zarr/zip-store.ts';
-import { estimateFixedBytes } from '../../store/level-state.ts';
+import { residentChunkBytes } from '../../store/level-state.ts';
 import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../store/view/camera.ts';
 import type { ViewSpec } from '../../store/stream/store-stream.ts';
+import type { GpuBudget } from '../../gpu/budget.ts';
 import type { GpuContext } from '../../gpu/device.ts';
-import type { ChunkFetcher } from '../../store/fetch/chunk-fetcher.ts';
 import { sessionRanges } from '../../store/learnt-ranges.ts';
 import type { StoreSession } from '../../store/session.ts';
-import type { ChunkLevelStream } from '../../store/pinned-level.ts';
 import type { StreamProgress } from '../../store/stream-port.ts';
 import type { ZfpStore } from '../../store/zarr/open-store.ts';
-import type { MeteredStore } from '../../store/zarr/stores.ts';
 import type { CameraState } from '../../render/camera.ts';
 import type { Viewport } from '../../store/view/camera.ts';
 import type { LevelValues } from '../../store/level-values.ts';
-import type { ChunkStoreStream } from '../../store/gpu-port.ts';
-import type { StoreCutIsosurface } from './store-cut.ts';
+import type { StoreIsosurface } from './store-isosurface.ts';
 import type { LoadedVolume } from '../loading/loader.ts';
 import type { StoreChoice, StorePageState } from './store-panel.ts';
-import type { StoreLevelIsosurface } from './store-surface.ts';
 
 export interface StoreViewDeps {
   /** The device to stream to (the page's current one). */
   gpu: () => GpuContext;
-  /** Puts a level on screen as the current volume (Session.install); `first` for the store's first level. */
-  install(volume: LoadedVolume, level: number | undefined, first: boolean): void;
+  /** The page's one GPU memory budget: every store holds against it. */
+  budget: GpuBudget;
+  /** Puts a store on screen as the current volume (Session.install), once per opened store. */
+  install(volume: LoadedVolume): void;
+  /** The store level the link reopens (level by level: the level on screen), or undefined (the view decides). */
+  setLevel(level: number | undefined): void;
+  /** What the page holds on the GPU against the budget now (the budget control's meter). */
+  showGpuBytes(bytes: number): void;
   /** The isovalue to open at when the page's link gives one (used as given, even outside a provisional range). */
   linkIso(valueRange: [number, number]): number | undefined;
   /** The volume installed reaches further than its value range said: the slider spans `range` (Session.widenValueRange). */
   widenValueRange(volume: LoadedVolume, range: [number, number]): void;
-  budgetBytes(): number;
   onError(message: string): void;
   onNotice(message: string): void;
   /** The finest level to show (a link's #level=), or undefined for level 0. */
@@ -89,15 +90,13 @@ export interface OpenStore {
   source: AsyncReadable;
   choice: StoreChoice;
   ranges: { store: AsyncReadable; name: string } | undefined;
-  /** The opened store, its fetcher, stream and counters (src/store/session.ts); the next four are its parts. */
+  /** The opened store, its fetcher, stream and counters (src/store/session.ts). */
   session: StoreSession;
   store: ZfpStore;
-  metered: MeteredStore;
-  fetcher: ChunkFetcher;
-  /** The session's stream as the page drives it: its levels (LevelStream) when level by level, else the stream itself (refined by the view). */
-  controller: ChunkLevelStream | ChunkStoreStream;
   /** Refined by the view: its tolerance and tint; null when level by level. */
   cut: { tolerancePx: number; tint: boolean } | null;
+  /** Another store is opening: this one keeps only what it draws, and nothing moves it (StoreSession.suspend). */
+  suspended: boolean;
   /** A camera change waits this timer (throttled re-planning), and unsubscribes with this. */
   replanTimer: ReturnType<typeof setTimeout> | null;
   detachCamera: () => void;
@@ -105,7 +104,7 @@ export interface OpenStore {
   /** The coarsest level read whole at open when the store gives no value range (level-values.ts): the slider's range and profile until finer ones are known. */
   coarse: LevelValues | null;
   state: StorePageState;
-  current: StoreLevelIsosurface | StoreCutIsosurface | null;
+  current: StoreIsosurface | null;
   /** The volume installed on the page for `current`. */
   installed: LoadedVolume | null;
   /** Refinements started and not yet ended (the isovalue changed meanwhile). */
@@ -147,7 +146,8 @@ export function initialPageState(
     })),
     retries: 0,
     failedRequests: 0,
-    gpu: { pools: 0, surfaces: 0, cache: 0, vertices: 0, total: 0, peak: 0, budget: stream.budgetBytes },
+    gpu: { pools: 0, surfaces: 0, cache: 0, vertices: 0, store: 0, total: 0, peak: 0, budget: stream.budgetBytes },
+    parts: [],
     cut: cut ? { tolerancePx: cut.tolerancePx, tint: cut.tint, levels: [], final: false } : null,
     notes: [...store.notes],
     ...(range
@@ -165,16 +165,32 @@ export function initialPageState(
   };
 }
 
-/** The panel's network and GPU figures now, from the session's counters (the same the CLI's record reads). */
+/**
+ * The panel's network and GPU figures now, from the session's counters (the
+ * same the CLI's record reads): what this store holds (pools, surfaces, of
+ * these cache and vertices: `store`), and against the page's one budget what
+ * the page holds (`total`, a store being replaced included) and the most it
+ * held since the budget was last set (`peak`: every allocation counted).
+ */
 export function updatePageFigures(st: StorePageState, session: StoreSession): void {
-  const { store, metered, fetcher, stream } = session;
+  const { store, metered, fetcher, stream, budget } = session;
   const g = stream.gpuBytes;
   st.bytesFetched = metered.meter.bytes;
   // a store of lossless chunks: what came over for the bricks, not the bricks' values (as the CLI's record)
   st.chunkBytesFetched = store.source ? metered.meter.bytes - store.metadataBytes : fetcher.counters.bytesFetched;
   st.requests = metered.meter.requests;
-  // the peak the GPU meter saw (every allocation counted where it is made), not only what was held at a publish
-  st.gpu = { ...g, peak: Math.max(st.gpu.peak, g.total, session.port.meter.peak), budget: stream.budgetBytes };
+  st.gpu = {
+    pools: g.pools,
+    surfaces: g.surfaces,
+    cache: g.cache,
+    vertices: g.vertices,
+    store: g.total,
+    total: budget.heldBytes,
+    peak: budget.meter.peak,
+    budget: budget.bytes,
+  };
+  const queue = store.decodeQueue?.();
+  if (queue) st.decodeQueue = queue;
   st.retries = store.retries.retries;
   st.failedRequests = store.retries.failed;
   const shown = stream.shown?.levels ?? [];
@@ -207,27 +223,23 @@ export function storeSourceOfUrl(url: string): AsyncReadable {
 }
 
 /**
- * A store shown as the session's volume: level `level`'s dims at `scale` times
- * the store's voxel size, placed by its OME translation; the stream owns the
- * pools (the volume's own stream is nothing to destroy).
+ * A store shown as the session's volume: level 0's dims at the store's voxel
+ * size (the pieces of coarser levels are drawn at their own scale and place);
+ * the stream owns the pools (the volume's own stream is nothing to destroy).
  */
 export function storeVolume(
   o: OpenStore,
-  name: string,
-  level: number,
-  scale: readonly [number, number, number],
   iso: LoadedVolume['iso'],
   initialIso: number,
   firstStats: LoadedVolume['firstStats'],
   ranges: Float32Array | null,
 ): LoadedVolume {
-  const lv = o.store.levels[level];
-  const off = o.store.levelOffsets[level] ?? [0, 0, 0];
+  const lv = o.store.levels[0];
   return {
     opened: {
       stream: { destroy() {} },
-      name,
-      fileName: name,
+      name: o.url,
+      fileName: o.url,
       kind: 'zfp',
       dims: [...lv.layout.dims],
       sourceDtype: 'float32',
@@ -235,8 +247,8 @@ export function storeVolume(
       compressedBytes: lv.storedBytes,
       rate: lv.layout.rate,
       compressedHere: false,
-      spacing: [o.store.voxelSize[0] * scale[0], o.store.voxelSize[1] * scale[1], o.store.voxelSize[2] * scale[2]],
-      origin: [off[0] / scale[0], off[1] / scale[1], off[2] / scale[2]],
+      spacing: [...o.store.voxelSize],
+      origin: [...(o.store.levelOffsets[0] ?? [0, 0, 0])],
       notes: [],
     },
     iso,
@@ -258,8 +270,7 @@ export function levelZeroIsLarge(store: ZfpStore, budgetBytes: number): boolean 
   const L = store.levels.find((l) => !l.unusable);
   if (!L) return false;
   // a resident chunk: its slot and the surface's per-block state (the 64 KiB of a pool's scratch are not per chunk)
-  const perChunk = L.layout.chunkBytes + estimateFixedBytes(L.layout, 1) - (64 << 10);
-  return L.chunkCount * perChunk > budgetBytes / 4;
+  return L.chunkCount * residentChunkBytes(L.layout) > budgetBytes / 4;
 }
 
 /** The view spec of the page's camera now (`current`), or (before the store's first surface) the link's camera or Fit of level 0. */

@@ -41,8 +41,18 @@ export interface StorePageState {
   /** Requests tried again after a transient failure, and requests that failed for good (after their deadline). */
   retries: number;
   failedRequests: number;
-  /** GPU bytes held (counted where they are made): pools of compressed chunks, surfaces (of which cache and vertices), against the budget. */
-  gpu: { pools: number; surfaces: number; cache: number; vertices: number; total: number; peak: number; budget: number };
+  /**
+   * GPU bytes (counted where they are made): this store's pools of compressed
+   * chunks and surfaces (of which cache and vertices), all it holds
+   * (`store`); against the page's one budget, what the page holds (`total`: a
+   * store being replaced included) and the most it held since the budget was
+   * last set (`peak`).
+   */
+  gpu: { pools: number; surfaces: number; cache: number; vertices: number; store: number; total: number; peak: number; budget: number };
+  /** Where each piece of the step on screen is drawn: its level, scale (level-0 voxels per voxel) and origin (its own voxels). */
+  parts: { level: number; scale: [number, number, number]; origin: [number, number, number] }[];
+  /** A store of lossless chunks: bricks in the decode workers now (asked for, not yet answered), and the most there were at once. */
+  decodeQueue?: { queued: number; maxQueued: number };
   /**
    * Refined by the view (null: level by level): the pixel tolerance, the
    * level tint, and per level the chunks on screen that hold surface
@@ -199,7 +209,10 @@ function renderFigures(figures: HTMLElement, panel: HTMLElement, store: ZfpStore
     `<dt>GPU cache</dt><dd data-k="cache">${mib(st.gpu.cache)}</dd>` +
     `<dt>GPU vertices</dt><dd data-k="vertices">${mib(st.gpu.vertices)}</dd>` +
     `<dt>GPU per level</dt><dd data-k="level-state">${mib(Math.max(0, st.gpu.surfaces - st.gpu.cache - st.gpu.vertices))}</dd>` +
-    `<dt>GPU total</dt><dd data-k="gpu">${mib(st.gpu.total)} of ${mib(st.gpu.budget)}</dd>` +
+    (st.gpu.total > st.gpu.store
+      ? `<dt>GPU, store being replaced</dt><dd data-k="gpu-others">${mib(st.gpu.total - st.gpu.store)}</dd>`
+      : '') +
+    `<dt>GPU total</dt><dd data-k="gpu" title="everything the page streams holds on the GPU, against the budget; the most since the budget was set: ${mib(st.gpu.peak)}">${mib(st.gpu.total)} of ${mib(st.gpu.budget)}</dd>` +
     (st.valueRange
       ? `<dt>value range</dt><dd data-k="value-range" title="${escapeHtml(st.valueRange.from)}">${Number(st.valueRange.lo.toPrecision(6))} .. ${Number(st.valueRange.hi.toPrecision(6))}${st.valueRange.provisional ? ' (provisional: bricks not yet read may reach further)' : ''}</dd>`
       : '') +

@@ -1,7 +1,8 @@
-// The GPU memory budget of the isosurface (cache + vertex buffers), in MiB,
-// with a meter of what the current surface uses. Growth past the budget is
-// refused by the pipeline with an IsosurfaceBudgetError, shown here and in
-// the messages.
+// The page's GPU memory budget, in MiB, with a meter of what is held against
+// it: an in-core surface's cache and vertex buffers (growth past the budget
+// is refused by the pipeline with an IsosurfaceBudgetError, shown here and
+// in the messages), or everything a streamed store holds (src/gpu/budget.ts:
+// a lower budget frees at once).
 
 import type { IsosurfaceBudgetError } from '../../isosurface/types.ts';
 import { formatBytes } from '../format.ts';
@@ -16,6 +17,7 @@ export function defaultBudgetBytes(limits: GPUSupportedLimits): number {
 export class BudgetControl {
   private budget: number;
   private used = 0;
+  private usedBy = 'used by the cache and vertex buffers';
 
   constructor(
     input: HTMLInputElement,
@@ -44,8 +46,10 @@ export class BudgetControl {
     return this.budget;
   }
 
-  setUsed(bytes: number): void {
+  /** What is held against the budget now, and by what (an in-core surface's cache and vertices; a store: everything streamed). */
+  setUsed(bytes: number, by = 'used by the cache and vertex buffers'): void {
     this.used = bytes;
+    this.usedBy = by;
     this.render();
   }
 
@@ -65,6 +69,6 @@ export class BudgetControl {
     const fill = this.meter.firstElementChild as HTMLElement;
     fill.style.width = `${(f * 100).toFixed(1)}%`;
     this.meter.classList.toggle('high', f > 0.85);
-    this.meter.title = `${formatBytes(this.used)} of ${formatBytes(this.budget)} used by the cache and vertex buffers`;
+    this.meter.title = `${formatBytes(this.used)} of ${formatBytes(this.budget)} ${this.usedBy}`;
   }
 }

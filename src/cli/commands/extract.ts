@@ -18,11 +18,11 @@ import { formatMB } from '../../isosurface/budget.ts';
 import { IsosurfaceBudgetError } from '../../isosurface/types.ts';
 import { meshPositions } from '../../isosurface/vertex-format.ts';
 import { meshMetrics } from '../../mc/mesh-metrics.ts';
-import { LevelStoppedError } from '../../store/pinned-level.ts';
+import { LevelStoppedError } from '../../store/stream-surface.ts';
 import { openInputSurface } from '../input.ts';
 import { parseCam } from '../../store/view/camera.ts';
 import { type ViewRequest, parseViewBox } from '../../store/view/view-request.ts';
-import type { CutChunkRecord } from '../../store/view-surface.ts';
+import type { CutChunkRecord } from '../../store/stream-surface.ts';
 import { rateErrorRecord } from '../../zfp/rate-choice.ts';
 import {
   CommandFailed,
@@ -172,7 +172,7 @@ export const extractCommand: CliCommand = {
         let indices: Uint32Array;
         let cut: CutChunkRecord[] | undefined;
         if ('readPositions' in iso) {
-          // several levels: positions in level-0 voxels (each level placed by its metadata), and the cut
+          // a store: positions in the pinned level's voxels, or (a view's cut) in level-0 voxels with each level placed by its metadata, and the cut
           ({ positions: welded, indices } = await iso.readPositions());
           cut = await iso.cutRecord();
         } else {

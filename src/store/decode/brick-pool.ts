@@ -2,15 +2,17 @@
 // (brick-worker.ts), so decoding never holds the page's main thread. A brick
 // goes to the worker of the source chunk holding its first voxel, so bricks
 // cut from one chunk (planes, 64x128x128 chunks) find it decoded in that
-// worker's cache. What the workers' stores fetched is added to the page's
-// meters as replies come.
+// worker's cache. A read whose request is aborted (the brick is no longer
+// wanted) is cancelled in its worker, which drops it before fetching or
+// decoding it if it has not started (brick-queue.ts). What the workers'
+// stores fetched is added to the page's meters as replies come.
 import type { GetOptions } from '@zarrita/storage';
 import type { ChunkIndex } from '../types.ts';
 import { StoreError, type StoreErrorKind } from '../zarr/errors.ts';
 import type { RetryCounters } from '../zarr/retrying-store.ts';
 import type { BrickSource, SourceLevel } from '../zarr/source-store.ts';
 import type { StoreMeter } from '../zarr/stores.ts';
-import type { BrickInit, BrickReply } from './brick-protocol.ts';
+import type { BrickCancel, BrickInit, BrickReply, BrickRequest } from './brick-protocol.ts';
 import type { StoreSpec } from './store-spec.ts';
 
 /** Workers for a machine: one per core but one, 1 to 4. */
@@ -25,6 +27,9 @@ export class BrickWorkerPool implements BrickSource {
   readonly #workers: Worker[];
   readonly #decodeByWorker: BrickSource['counters'][];
   readonly #pending = new Map<number, { resolve: (b: Uint8Array) => void; reject: (e: unknown) => void; level: number }>();
+  /** Reads sent to a worker and not answered yet (cancelled ones until their worker says so), and the most at once. */
+  readonly #inWorkers = new Set<number>();
+  #maxInWorkers = 0;
   #next = 0;
   #closed = false;
 
@@ -66,6 +71,11 @@ export class BrickWorkerPool implements BrickSource {
     });
   }
 
+  /** Bricks in the workers now (asked for and not answered) and the most there were at once: what a moving camera leaves behind. */
+  get queue(): { queued: number; maxQueued: number } {
+    return { queued: this.#inWorkers.size, maxQueued: this.#maxInWorkers };
+  }
+
   read(level: number, brick: ChunkIndex, options?: GetOptions): Promise<Uint8Array> {
     if (this.#closed) return Promise.reject(new StoreError('aborted', `${this.levels[level].layout.name}: the store was closed`));
     const signal = options?.signal;
@@ -73,9 +83,10 @@ export class BrickWorkerPool implements BrickSource {
     const id = this.#next++;
     const worker = this.#workers[this.#workerOf(level, brick)];
     return new Promise<Uint8Array>((resolve, reject) => {
-      // an abort ends the wait; the worker finishes the brick (its chunks may serve the next one) and the reply is dropped
+      // an abort ends the wait and cancels the read in its worker: dropped there unless it has started
       const onAbort = () => {
         this.#pending.delete(id);
+        worker.postMessage({ type: 'cancel', id } satisfies BrickCancel);
         reject(signal!.reason ?? new DOMException('aborted', 'AbortError'));
       };
       signal?.addEventListener('abort', onAbort, { once: true });
@@ -90,7 +101,9 @@ export class BrickWorkerPool implements BrickSource {
           reject(e);
         },
       });
-      worker.postMessage({ type: 'read', id, level, brick });
+      this.#inWorkers.add(id);
+      this.#maxInWorkers = Math.max(this.#maxInWorkers, this.#inWorkers.size);
+      worker.postMessage({ type: 'read', id, level, brick } satisfies BrickRequest);
     });
   }
 
@@ -110,6 +123,7 @@ export class BrickWorkerPool implements BrickSource {
     this.meter.requests += m.meter.requests;
     this.retries.retries += m.meter.retries;
     this.retries.failed += m.meter.failed;
+    this.#inWorkers.delete(m.id);
     const p = this.#pending.get(m.id);
     this.#pending.delete(m.id);
     if (m.type === 'done') {
@@ -136,6 +150,7 @@ export class BrickWorkerPool implements BrickSource {
 
   destroy(): void {
     this.#closed = true;
+    this.#inWorkers.clear();
     for (const w of this.#workers) w.terminate();
     this.#failAll(new StoreError('aborted', 'the store was closed'));
   }

@@ -24,6 +24,12 @@ export interface BrickRequest {
   brick: number;
 }
 
+/** The page no longer wants read `id` (its request was aborted): dropped before it is fetched or decoded (brick-queue.ts). */
+export interface BrickCancel {
+  type: 'cancel';
+  id: number;
+}
+
 /** What the worker's store did since its previous reply. */
 export interface MeterDelta {
   bytes: number;

@@ -1,15 +1,17 @@
 // A Web Worker that reads bricks of a store of lossless chunks
 // (source-store.ts BrickReader) off the main thread: it opens the store
 // again from its spec, fetches and decodes the chunks (zarrita's codecs),
-// assembles and pads each brick, and transfers its float32 values back.
-// Protocol: brick-protocol.ts.
+// assembles and pads each brick, and transfers its float32 values back. Reads
+// run a few at a time (brick-queue.ts): one the page cancels before it starts
+// is dropped unread. Protocol: brick-protocol.ts.
 import * as zarr from 'zarrita';
 import { StoreError } from '../zarr/errors.ts';
 import { MetadataMemo } from '../zarr/metadata.ts';
 import { RetryingStore } from '../zarr/retrying-store.ts';
 import { BrickReader, type SourceLevel } from '../zarr/source-store.ts';
 import { MeteredStore } from '../zarr/stores.ts';
-import type { BrickReply, BrickRequest, BrickInit } from './brick-protocol.ts';
+import type { BrickCancel, BrickInit, BrickReply, BrickRequest } from './brick-protocol.ts';
+import { BrickQueue } from './brick-queue.ts';
 import { storeFromSpec } from './store-spec.ts';
 
 declare const self: { postMessage(m: unknown, transfer?: Transferable[]): void; onmessage: ((e: MessageEvent) => void) | null };
@@ -31,16 +33,20 @@ async function init(m: BrickInit) {
   return { reader: new BrickReader(levels, m.cacheBytes), metered, retrying };
 }
 
+const queue = new BrickQueue(
+  read,
+  (m, transfer) => self.postMessage(m, transfer),
+  () => ({ bytes: 0, requests: 0, retries: 0, failed: 0 }),
+);
+
 self.onmessage = (e: MessageEvent) => {
-  const m = e.data as BrickInit | BrickRequest;
-  if (m.type === 'init') {
-    initMessage = m;
-    return;
-  }
-  void read(m);
+  const m = e.data as BrickInit | BrickRequest | BrickCancel;
+  if (m.type === 'init') initMessage = m;
+  else if (m.type === 'cancel') queue.cancel(m.id);
+  else queue.read(m);
 };
 
-async function read(m: BrickRequest) {
+async function read(m: BrickRequest, signal: AbortSignal): Promise<{ reply: BrickReply; transfer: Transferable[] }> {
   let reply: BrickReply;
   const transfer: Transferable[] = [];
   let w: Awaited<NonNullable<typeof ready>> | null = null;
@@ -54,7 +60,7 @@ async function read(m: BrickRequest) {
       });
     }
     w = await ready;
-    const bytes = await w.reader.read(m.level, m.brick);
+    const bytes = await w.reader.read(m.level, m.brick, { signal });
     transfer.push(bytes.buffer as ArrayBuffer);
     reply = { type: 'done', id: m.id, bytes, range: w.reader.valueRanges[m.level], decode: { ...w.reader.counters }, meter: delta(w) };
   } catch (e) {
@@ -70,7 +76,7 @@ async function read(m: BrickRequest) {
       meter: w ? delta(w) : { bytes: 0, requests: 0, retries: 0, failed: 0 },
     };
   }
-  self.postMessage(reply, transfer);
+  return { reply, transfer };
 }
 
 /** What the store did since the last reply (the main thread adds it to the store's meters). */

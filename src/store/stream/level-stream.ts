@@ -3,9 +3,9 @@
 // planned by LevelPlanner, shown as one level's surface at a time (the
 // coarsest first, then each finer level that replaces it), with the value
 // range and chunk ranges of the finest level known.
+import type { GpuBudget } from '../../gpu/budget.ts';
 import type { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
 import type { LearntRanges } from '../learnt-ranges.ts';
-import { chunkCount, storeValueRange } from '../level-state.ts';
 import type { LevelStats, LevelSurface, ShownSurface, StreamGpu, StreamGpuBytes, StreamProgress } from '../stream-port.ts';
 import type { ZfpStore } from '../zarr/store.ts';
 import { LevelPlanner } from './level-planner.ts';
@@ -23,13 +23,21 @@ export class LevelStream<V extends RoleVolume, S extends LevelStats, F extends L
     store: ZfpStore,
     fetcher: ChunkFetcher,
     gpu: StreamGpu<V, S, F>,
-    budgetBytes: number,
+    budget: GpuBudget | number,
     options: { learnt?: LearntRanges } = {},
   ): Promise<LevelStream<V, S, F>> {
     const planner = new LevelPlanner(store.levels[0].layout);
-    const stream = await StoreStream.create(store, fetcher, gpu, budgetBytes, planner, options);
-    // each level is drawn once it is computed, whole (no step mixes levels): no copies needed
+    const stream = await StoreStream.create(store, fetcher, gpu, budget, planner, options);
+    // read once the refinement ended (the CLI, tests): each level is whole when it shows, no copies needed
     stream.snapshots = false;
+    return new LevelStream(stream, planner);
+  }
+
+  /** The level-by-level view of a stream planned by `planner` (StoreSession: the page draws its steps with copies, the CLI reads them). */
+  static of<V extends RoleVolume, S extends LevelStats, F extends LevelSurface<S>>(
+    stream: StoreStream<V, S, F>,
+    planner: LevelPlanner,
+  ): LevelStream<V, S, F> {
     return new LevelStream(stream, planner);
   }
 
@@ -107,22 +115,12 @@ export class LevelStream<V extends RoleVolume, S extends LevelStats, F extends L
 
   /** [min, max] per chunk of a level, when known for every chunk (range arrays, or every chunk's learnt). */
   chunkRanges(level: number): Float32Array | null {
-    const lv = this.stream.levels[level];
-    if (!lv) return null;
-    if (this.store.levels[level].rangesPath) return lv.ranges;
-    return this.learnt.knownCount(level) === chunkCount(lv.layout) ? this.learnt.level(level) : null;
+    return this.stream.chunkRanges(level);
   }
 
   /** The store's value range: its metadata, else the finest level whose chunk ranges are (partly) known; null when none is. */
   get valueRange(): [number, number] | null {
-    const known = this.stream.levels.map((lv) => ({
-      ranges: this.store.levels[lv.index].rangesPath
-        ? lv.ranges
-        : this.learnt.knownCount(lv.index) > 0
-          ? this.learnt.level(lv.index)
-          : null,
-    }));
-    return storeValueRange(this.store, known);
+    return this.stream.valueRange;
   }
 
   destroy(): void {

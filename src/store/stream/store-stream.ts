@@ -110,15 +110,17 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     this.#finestUsable = this.coarsest;
     while (this.#finestUsable > 0 && !store.levels[this.#finestUsable - 1].unusable) this.#finestUsable--;
     this.#unlisten.push(fetcher.onChunk((level, chunk, bytes) => this.#fetch.arrived(level, chunk, bytes)));
-    this.#unlisten.push(fetcher.onError((level, chunk, e, repeated) => {
-      if (!repeated) this.#events.error(e);
-      if (!this.#fetch.waitsFor(level, chunk)) return;
-      const at = fetcher.retryAt(level, chunk);
-      const inMs = at === undefined ? undefined : Math.max(0, at - performance.now());
-      this.#stop(level, e.message, 'chunk', inMs);
-      // the coarser surface stays; once the chunk has cooled down, the same isovalue and view again
-      if (inMs !== undefined && this.retryFailed) this.#scheduleRetry(inMs);
-    }));
+    this.#unlisten.push(
+      fetcher.onError((level, chunk, e, repeated) => {
+        if (!repeated) this.#events.error(e);
+        if (!this.#fetch.waitsFor(level, chunk)) return;
+        const at = fetcher.retryAt(level, chunk);
+        const inMs = at === undefined ? undefined : Math.max(0, at - performance.now());
+        this.#stop(level, e.message, 'chunk', inMs);
+        // the coarser surface stays; once the chunk has cooled down, the same isovalue and view again
+        if (inMs !== undefined && this.retryFailed) this.#scheduleRetry(inMs);
+      }),
+    );
   }
 
   /**
@@ -451,7 +453,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
    * what the step on screen does not draw, then (still over) the step on
    * screen keeps only its drawn copies, and a coarser one is planned to
    * replace it. Either way the refinement is planned again for the new
-   * limit (a suspended stream waits to be resumed).
+   * limit (a microtask later; a suspended stream waits to be resumed).
    */
   #budgetChanged(next: number, previous: number): void {
     if (this.#destroyed) return;
@@ -460,7 +462,11 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       this.#releaseUnshown();
       if (this.#memory.over) this.#releaseToCopies();
     }
-    if (!this.#suspended && Number.isFinite(this.#iso)) void this.setIsovalue(this.#iso);
+    // planned again for the new limit, unless someone asks for an isovalue first (the page, after every listener shed)
+    const gen = this.#gen;
+    queueMicrotask(() => {
+      if (gen === this.#gen && !this.#destroyed && !this.#suspended && Number.isFinite(this.#iso)) void this.setIsovalue(this.#iso);
+    });
   }
 
   /** Whatever is being fetched or computed is no longer wanted (it becomes stale). */

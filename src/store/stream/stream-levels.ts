@@ -4,7 +4,15 @@
 // least recently wanted first, which chunks a surface needs, and what a
 // wanted chunk costs on the GPU (the plan's cost model).
 import { type LearntRanges, learnSlotRanges } from '../learnt-ranges.ts';
-import { chunkCount, estimateFixedBytes, putArrived, readLevelRanges, storeValueRange } from '../level-state.ts';
+import {
+  chunkCount,
+  estimateFixedBytes,
+  guessedSurfaceBytesPerChunk,
+  putArrived,
+  readLevelRanges,
+  residentChunkBytes,
+  storeValueRange,
+} from '../level-state.ts';
 import { chunkNeeded } from '../plan.ts';
 import type { LevelSurface, StreamGpu } from '../stream-port.ts';
 import type { ChunkIndex } from '../types.ts';
@@ -74,7 +82,11 @@ export class StreamLevels<V extends RoleVolume> {
    */
   get valueRange(): [number, number] | null {
     const known = this.levels.map((lv) => ({
-      ranges: this.store.levels[lv.index].rangesPath ? lv.ranges : this.learnt.knownCount(lv.index) > 0 ? this.learnt.level(lv.index) : null,
+      ranges: this.store.levels[lv.index].rangesPath
+        ? lv.ranges
+        : this.learnt.knownCount(lv.index) > 0
+          ? this.learnt.level(lv.index)
+          : null,
     }));
     return storeValueRange(this.store, known);
   }
@@ -115,8 +127,7 @@ export class StreamLevels<V extends RoleVolume> {
    */
   chunkCost(L: number): number {
     const layout = this.levels[L].layout;
-    const blocks = (layout.chunkEdge / 4) ** 3;
-    return layout.chunkBytes + estimateFixedBytes(layout, 1) - (64 << 10) + (this.#surfaceCost[L] ?? blocks * 0.5 * 384);
+    return residentChunkBytes(layout) + (this.#surfaceCost[L] ?? guessedSurfaceBytesPerChunk(layout));
   }
 
   /** What level L's surface took (or, `atLeast`, needed) per wanted chunk: the cost the next plan uses. */

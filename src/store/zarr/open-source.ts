@@ -259,6 +259,7 @@ export async function openSourceStore(
       ms: reader.counters.decodeMs,
       nonFinite: reader.counters.nonFinite,
     }),
+    ...(reader instanceof BrickWorkerPool ? { decodeQueue: () => reader.queue } : {}),
     sourceValueRange: (level) => {
       const r = reader.valueRanges[level];
       return r && r[0] <= r[1] ? [r[0], r[1]] : null;

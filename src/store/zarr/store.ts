@@ -62,6 +62,8 @@ export interface ZfpStore {
   sourceValueRange?(level: number): [number, number] | null;
   /** A store of lossless chunks: source chunks decoded, their decoded bytes and the CPU time it took (ms, fetch waits included). */
   sourceDecode?(): { chunks: number; bytes: number; ms: number; nonFinite: number };
+  /** Bricks in the page's decode workers now, and the most there were at once (a store read in Web Workers). */
+  decodeQueue?(): { queued: number; maxQueued: number };
   /** [min, max] per chunk (chunk index order), or null when the store has no range arrays. */
   readRanges(level: number, options?: GetOptions): Promise<Float32Array | null>;
 }

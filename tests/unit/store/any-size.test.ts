@@ -21,7 +21,7 @@ import { openStoreInput } from '../../../src/store/cli-input.ts';
 import { zfpChunkBytes } from '../../../src/store/zarr/open-store.ts';
 import { countBuffers } from '../../helpers/gpu-memory.ts';
 import { finishTestGpu, pushTestScopes } from '../../helpers/gpu-scopes.ts';
-import type { PinnedLevelSurface } from '../../../src/store/pinned-level.ts';
+import type { StoreStreamSurface } from '../../../src/store/stream-surface.ts';
 import { runPython } from '../../helpers/python.ts';
 import { decodeRegion, sparseStore } from './stores.ts';
 
@@ -92,7 +92,7 @@ describe('a level of any size, on the GPU by what is resident', () => {
         expect(count.peak - before).toBeLessThanOrEqual(256 * MiB);
         after.push(r.gpuBytes);
         // every vertex in the box at the far corner
-        const mesh = await (input.surface as PinnedLevelSurface).readMesh();
+        const mesh = await (input.surface as StoreStreamSurface).stream.shown!.levels[0].surface.readMesh();
         const p = meshPositions(mesh);
         let lo = Infinity;
         let hi = -Infinity;
@@ -131,7 +131,7 @@ describe('a level of any size, on the GPU by what is resident', () => {
     try {
       const input = await openStoreInput(gpu, widePath, { level: 0, budget: 256 * MiB });
       const stats = await input.surface.compute(ISO);
-      const p = meshPositions(await (input.surface as PinnedLevelSurface).readMesh());
+      const p = meshPositions(await (input.surface as StoreStreamSurface).stream.shown!.levels[0].surface.readMesh());
       const box = 2 * CHUNK;
       for (let a = 0; a < 3; a++) {
         let [lo, hi] = [Infinity, -Infinity];

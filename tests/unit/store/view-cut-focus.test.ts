@@ -12,6 +12,8 @@ import { describe, expect, it } from 'vitest';
 import { type CutLevel, viewCut } from '../../../src/store/view/cut.ts';
 import { cameraForBox, cameraFromView, sceneRadiusOf } from '../../../src/store/view/camera.ts';
 import { DEFAULT_VIEWPORT } from '../../../src/store/view/view-request.ts';
+import { guessedSurfaceBytesPerChunk, residentChunkBytes } from '../../../src/store/level-state.ts';
+import type { ChunkLevelLayout } from '../../../src/store/types.ts';
 
 type V3 = [number, number, number];
 
@@ -23,8 +25,9 @@ function pyramid(n: number, edge: number, levels: number): CutLevel[] {
   });
 }
 
-/** The view stream's planned cost of one wanted 64^3 chunk at rate 8 (view-stream.ts #chunkCost before any surface). */
-const CHUNK_COST = 64 ** 3 + (48 * 4096 + 32) + 4096 * 0.5 * 384;
+/** The stream's planned cost of one wanted 64^3 chunk at rate 8 before any surface (the cost model, level-state.ts). */
+const LAYOUT_64_RATE_8 = { chunkEdge: 64, chunkBytes: 64 ** 3 } as ChunkLevelLayout;
+const CHUNK_COST = residentChunkBytes(LAYOUT_64_RATE_8) + guessedSurfaceBytesPerChunk(LAYOUT_64_RATE_8);
 
 describe('a binding budget goes to what the view frames first', () => {
   const levels = pyramid(2048, 64, 6);

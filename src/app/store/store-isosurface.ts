@@ -1,19 +1,22 @@
-// A store refined by the view as the page's isosurface (PageIsosurface):
-// one volume on screen (level 0's dims and voxel size) drawn as several
-// pieces, one per level of the cut (SurfaceLayer parts: level L at 2^L times
-// the voxel size, placed by its OME translation, optionally tinted by
-// level). The view stream owns the GPU side; destroying this only detaches
-// it and tells the store view.
+// A streamed store as the page's isosurface (PageIsosurface): one volume on
+// screen (level 0's dims and voxel size) drawn as the step the stream shows,
+// whichever planner made it (by the view, or level by level): one piece per
+// level of the step (SurfaceLayer parts: level L at its scale times the voxel
+// size, placed by its OME translation, optionally tinted by level), each
+// drawn from the copy its step was shown with. Exports read that step: the
+// stream shows no other while they read (StoreStream.readShown). The stream
+// owns the GPU side; destroying this only detaches it and tells the store
+// view.
 import type { IsosurfaceDrawData, IsosurfaceStats, SurfaceMesh, VolumeInfo } from '../../isosurface/types.ts';
 import type { Rgb, SurfacePart } from '../../render/surface-layer.ts';
-import type { ShownCut } from '../../store/stream/store-stream.ts';
 import type { ChunkStoreStream } from '../../store/gpu-port.ts';
-import { joinLevelMeshes, sumStats } from '../../store/view-surface.ts';
+import { joinLevelMeshes, sumStats } from '../../store/stream-surface.ts';
+import type { ShownCut } from '../../store/stream/store-stream.ts';
 import type { Isosurface } from '../../isosurface/isosurface.ts';
 import type { ChunkedVolume } from '../../zfp/chunked-volume.ts';
 import type { PageIsosurface } from '../engine.ts';
 
-export type ShownCutOfPage = ShownCut<ChunkedVolume, IsosurfaceStats, Isosurface>;
+export type ShownStep = ShownCut<ChunkedVolume, IsosurfaceStats, Isosurface>;
 
 /** The level tint: level 0 keeps the surface's colour; coarser levels shift toward blue, green, orange, violet. */
 export const LEVEL_TINTS: readonly Rgb[] = [
@@ -25,27 +28,26 @@ export const LEVEL_TINTS: readonly Rgb[] = [
   [0.6, 1.2, 1.2],
 ];
 
-export class StoreCutIsosurface implements PageIsosurface {
+export class StoreIsosurface implements PageIsosurface {
   readonly info: VolumeInfo;
   #tint = false;
-  /** The pieces drawn, made when the shown cut or the tint changes (the layer asks every frame). */
+  /** The pieces drawn, made when the step or the tint changes (the layer asks every frame). */
   #parts: SurfacePart[] = [];
   #stats = new Set<(s: IsosurfaceStats) => void>();
   #errors = new Set<(e: Error) => void>();
   #submits = new Set<(iso: number) => void>();
   #detach: (() => void)[] = [];
   #destroyed = false;
-  #shown: ShownCutOfPage;
+  #shown: ShownStep;
 
   constructor(
     private readonly stream: ChunkStoreStream,
-    shown: ShownCutOfPage,
+    shown: ShownStep,
     valueRange: [number, number],
     /** A new isovalue for the store (newest wins). */
     private readonly request: (iso: number) => Promise<void>,
     /** Called once, when the session lets the store go. */
     private readonly onRelease: () => void,
-    private readonly onBudget: (bytes: number) => void = () => {},
   ) {
     this.#shown = shown;
     this.#parts = this.#makeParts();
@@ -59,8 +61,8 @@ export class StoreCutIsosurface implements PageIsosurface {
     );
   }
 
-  /** The view stream showed another step (a new isovalue, a new view, a finer step): statistics, and a frame. */
-  showAgain(s: ShownCutOfPage): void {
+  /** The stream showed another step (a new isovalue, a new view, a finer step): statistics, and a frame. */
+  showAgain(s: ShownStep): void {
     this.#shown = s;
     this.#parts = this.#makeParts();
     const stats = this.stats;
@@ -68,7 +70,7 @@ export class StoreCutIsosurface implements PageIsosurface {
     for (const l of this.#submits) l(s.iso);
   }
 
-  get shown(): ShownCutOfPage {
+  get shown(): ShownStep {
     return this.#shown;
   }
 
@@ -79,10 +81,9 @@ export class StoreCutIsosurface implements PageIsosurface {
     );
   }
 
-  /** The finest level's surface (what a single draw would take; none when the cut holds no surface); the layer draws drawParts. */
+  /** The finest level's drawn copy (what a single draw would take; none when the step holds no surface); the layer draws drawParts. */
   get drawData(): IsosurfaceDrawData | undefined {
-    const finest = this.#shown.levels[0]?.surface;
-    return finest ? (finest.presented ?? finest.drawData) : undefined;
+    return this.#parts[0]?.data;
   }
 
   /** Tint the surface by level (the panel's toggle). */
@@ -98,13 +99,22 @@ export class StoreCutIsosurface implements PageIsosurface {
     return this.#parts;
   }
 
+  /** Where each piece is drawn: level, scale (level-0 voxels per voxel) and origin (in its own voxels). */
+  get placement(): { level: number; scale: [number, number, number]; origin: [number, number, number] }[] {
+    return this.#shown.levels.map((l, i) => ({
+      level: l.level,
+      scale: [...this.#parts[i].scale] as [number, number, number],
+      origin: [...this.#parts[i].origin] as [number, number, number],
+    }));
+  }
+
   #makeParts(): SurfacePart[] {
-    const offsets = this.stream.store.levelOffsets;
+    const { levelOffsets, levelScales } = this.stream.store;
     return this.#shown.levels.map((l) => {
-      const k = this.stream.store.levelScales[l.level] ?? [2 ** l.level, 2 ** l.level, 2 ** l.level];
-      const off = offsets[l.level] ?? [0, 0, 0];
+      const k = levelScales[l.level] ?? [2 ** l.level, 2 ** l.level, 2 ** l.level];
+      const off = levelOffsets[l.level] ?? [0, 0, 0];
       return {
-        // the copy the step was shown with (a snapshot: the surface itself may be computing the next step)
+        // the copy the step was shown with (the surface itself may be computing the next step, or be released)
         data: l.surface.presented ?? l.surface.drawData,
         scale: k,
         origin: [off[0] / k[0], off[1] / k[1], off[2] / k[2]],
@@ -117,6 +127,7 @@ export class StoreCutIsosurface implements PageIsosurface {
     void this.request(iso);
   }
 
+  /** The surface at `iso` refined to the end of its plan (the in-page benchmark). */
   async compute(iso: number): Promise<IsosurfaceStats> {
     await this.request(iso);
     const s = this.stream.shown;
@@ -141,31 +152,30 @@ export class StoreCutIsosurface implements PageIsosurface {
   }
 
   resetCache(): void {
+    if (this.#shown.frozen) return;
     for (const l of this.#shown.levels) l.surface.resetCache();
   }
 
-  setMemoryBudget(bytes: number): void {
-    this.onBudget(bytes);
+  /** The page's budget object holds every store's limit (main.ts sets it): nothing to do per surface. */
+  setMemoryBudget(): void {}
+
+  /** The finest level's drawn mesh in its own voxels (callers that can, use readPositions: every level, in level-0 voxels). */
+  async readMesh(): Promise<SurfaceMesh> {
+    const mesh = await this.stream.readShown((s) => s.levels[0]?.surface.readDrawnMesh() ?? Promise.resolve(null));
+    return mesh ?? { vertices: new Uint32Array(0), indices: new Uint32Array(0), dims: [...this.info.dims] };
   }
 
-  /** The finest level's mesh in its own voxels (callers that can, use readPositions: every level, in level-0 voxels). */
-  readMesh(): Promise<SurfaceMesh> {
-    const finest = this.#shown.levels[0];
-    // an empty cut (no chunk in view holds the isovalue): no triangles
-    return finest
-      ? finest.surface.readMesh()
-      : Promise.resolve({ vertices: new Uint32Array(0), indices: new Uint32Array(0), dims: [...this.info.dims] });
+  /** The step on screen, every level's mesh as one in level-0 voxel index space (the PLY export); the stream shows no other step meanwhile. */
+  async readPositions(): Promise<{ positions: Float32Array; indices: Uint32Array }> {
+    const { levelOffsets, levelScales } = this.stream.store;
+    const read = await this.stream.readShown((s) => joinLevelMeshes(s.levels, levelOffsets, levelScales));
+    return read ?? { positions: new Float32Array(0), indices: new Uint32Array(0) };
   }
 
-  /** Every level's mesh as one, in level-0 voxel index space (the PLY export). */
-  readPositions(): Promise<{ positions: Float32Array; indices: Uint32Array }> {
-    return joinLevelMeshes(this.#shown.levels, this.stream.store.levelOffsets, this.stream.store.levelScales);
-  }
-
-  /** The coarsest level's block ranges (the slider's block profile). */
+  /** The coarsest level's block ranges (the slider's block profile); none once the step was released to its copies. */
   readBlockRanges(): Promise<Float32Array> {
     const coarsest = this.#shown.levels.at(-1);
-    return coarsest ? coarsest.surface.readBlockRanges() : Promise.resolve(new Float32Array(0));
+    return coarsest && !this.#shown.frozen ? coarsest.surface.readBlockRanges() : Promise.resolve(new Float32Array(0));
   }
 
   destroy(): void {
