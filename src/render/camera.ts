@@ -2,8 +2,10 @@
 // like ParaView/VTK trackballs), distance for zoom, target for pan. Shared
 // by every page. State is plain numbers so it fits in a URL hash.
 
-import { mat3, mat4, quat, vec3 } from 'gl-matrix';
-import { DEFAULT_VIEW_DIRECTION } from '../core/view.ts';
+import { mat4, quat, vec3 } from 'gl-matrix';
+import { FOV_Y_RAD, fitDistance, fitRotation, nearFar, type UpAxis, viewMatrix } from '../core/camera.ts';
+
+export type { UpAxis };
 
 export interface CameraState {
   /** Rotation from world to eye orientation, [x, y, z, w]. */
@@ -11,9 +13,6 @@ export interface CameraState {
   target: [number, number, number];
   distance: number;
 }
-
-/** The world axis shown pointing up by fit() and reset: LIDAR and terrain use z, CT and ParaView's default y. */
-export type UpAxis = 'x' | 'y' | 'z';
 
 export interface Bounds {
   min: [number, number, number];
@@ -24,7 +23,7 @@ export class ArcballCamera {
   readonly rotation = quat.create();
   readonly target = vec3.create();
   distance = 3;
-  fovY = (40 * Math.PI) / 180;
+  fovY = FOV_Y_RAD;
   aspect = 1;
   private home: CameraState;
   private sceneRadius = 1;
@@ -43,26 +42,8 @@ export class ArcballCamera {
     const r = 0.5 * vec3.distance(vec3.fromValues(...bounds.min), vec3.fromValues(...bounds.max));
     this.sceneRadius = Math.max(r, 1e-6);
     vec3.copy(this.target, c);
-    if (up === 'z') {
-      // Z up, looking from -x,-y toward the centre, a little from above.
-      const q = quat.create();
-      quat.setAxisAngle(q, [1, 0, 0], (-62 * Math.PI) / 180);
-      const yaw = quat.create();
-      quat.setAxisAngle(yaw, [0, 0, 1], (35 * Math.PI) / 180);
-      quat.multiply(this.rotation, q, yaw);
-    } else {
-      // Y up: from the front (+z), right (+x) and a little above, like ParaView's
-      // default view turned to three-quarters; X up: the same with axes cycled.
-      const dir =
-        up === 'y'
-          ? vec3.fromValues(...DEFAULT_VIEW_DIRECTION)
-          : vec3.fromValues(DEFAULT_VIEW_DIRECTION[2], DEFAULT_VIEW_DIRECTION[0], DEFAULT_VIEW_DIRECTION[1]);
-      const upVec = up === 'y' ? vec3.fromValues(0, 1, 0) : vec3.fromValues(1, 0, 0);
-      const look = mat4.lookAt(mat4.create(), vec3.normalize(dir, dir), [0, 0, 0], upVec);
-      quat.fromMat3(this.rotation, mat3.fromMat4(mat3.create(), look));
-      quat.normalize(this.rotation, this.rotation);
-    }
-    this.distance = (this.sceneRadius / Math.sin(this.fovY / 2)) * 1.05;
+    fitRotation(this.rotation, up);
+    this.distance = fitDistance(this.sceneRadius, this.fovY);
     this.home = this.getState();
   }
 
@@ -71,7 +52,7 @@ export class ArcballCamera {
     const r = 0.5 * vec3.distance(vec3.fromValues(...bounds.min), vec3.fromValues(...bounds.max));
     this.sceneRadius = Math.max(r, 1e-6);
     vec3.set(this.target, (bounds.min[0] + bounds.max[0]) / 2, (bounds.min[1] + bounds.max[1]) / 2, (bounds.min[2] + bounds.max[2]) / 2);
-    this.distance = (this.sceneRadius / Math.sin(this.fovY / 2)) * 1.05;
+    this.distance = fitDistance(this.sceneRadius, this.fovY);
   }
 
   reset(): void {
@@ -92,17 +73,11 @@ export class ArcballCamera {
   }
 
   view(out = mat4.create()): mat4 {
-    // eye = R^-1 * (0, 0, d) + target; view = T(0,0,-d) * R * T(-target)
-    mat4.fromTranslation(out, vec3.set(scratchV, 0, 0, -this.distance));
-    const rot = mat4.fromQuat(scratchM, this.rotation);
-    mat4.multiply(out, out, rot);
-    mat4.translate(out, out, vec3.set(scratchV, -this.target[0], -this.target[1], -this.target[2]));
-    return out;
+    return viewMatrix(out, this.rotation, this.target, this.distance);
   }
 
   projection(out = mat4.create()): mat4 {
-    const near = Math.max(this.distance - this.sceneRadius * 1.5, this.distance * 0.01, 1e-4);
-    const far = this.distance + this.sceneRadius * 1.5;
+    const [near, far] = nearFar(this.distance, this.sceneRadius);
     // WebGPU clip space has z in [0, 1].
     return mat4.perspectiveZO(out, this.fovY, this.aspect, near, far);
   }
@@ -151,7 +126,6 @@ export class ArcballCamera {
 // render loop allocates nothing. Each is used within one call only.
 const scratchV = vec3.create();
 const scratchQ = quat.create();
-const scratchM = mat4.create();
 const scratchP = mat4.create();
 const scratchView = mat4.create();
 

@@ -12,6 +12,7 @@
 // array of 2 f32 per chunk, made when its first range arrives, for levels
 // of at most MAX_LEARNT_CHUNKS chunks (the finer levels of a vast store are
 // not learnt: their chunks stay needed, as before).
+import { neighbourhoodOf, rangeNeeded } from './plan.ts';
 import type { ChunkIndex } from './types.ts';
 
 /** The most chunks a level may have for its ranges to be learnt (2 f32 each: 32 MiB at most). */
@@ -79,37 +80,15 @@ export class LearntRanges {
   }
 
   /**
-   * Whether the surface at `iso` needs chunk c of level L: lo < iso <= hi
-   * over the chunk and its 26 neighbours (plan.ts's rule), true while any of
-   * them is unknown. Reads only those 27 entries: nothing is made per level.
+   * Whether the surface at `iso` needs chunk c of level L: plan.ts's rule
+   * over the chunk and its 26 neighbours, true while any of them is unknown.
+   * Reads only those 27 entries (neighbourhoodOf): nothing is made per level.
    */
   needs(L: number, iso: number, c: ChunkIndex): boolean {
     const r = this.#levels[L];
     if (!r) return true;
-    const [gx, gy, gz] = this.grids[L];
-    const x = c % gx;
-    const y = Math.floor(c / gx) % gy;
-    const z = Math.floor(c / (gx * gy));
-    let lo = Infinity;
-    let hi = -Infinity;
-    for (let dz = -1; dz <= 1; dz++) {
-      const w = z + dz;
-      if (w < 0 || w >= gz) continue;
-      for (let dy = -1; dy <= 1; dy++) {
-        const v = y + dy;
-        if (v < 0 || v >= gy) continue;
-        for (let dx = -1; dx <= 1; dx++) {
-          const u = x + dx;
-          if (u < 0 || u >= gx) continue;
-          const n = u + gx * (v + gy * w);
-          const a = r[2 * n];
-          if (Number.isNaN(a)) return true;
-          if (a < lo) lo = a;
-          if (r[2 * n + 1] > hi) hi = r[2 * n + 1];
-        }
-      }
-    }
-    return lo < iso && iso <= hi;
+    const [lo, hi] = neighbourhoodOf(this.grids[L], r, c);
+    return rangeNeeded(lo, hi, iso);
   }
 
   /** Level L's ranges as a range array would hold them ([min, max] per chunk, NaN where unknown), or null if none is known. */

@@ -25,8 +25,10 @@ export function neighbourhoodRanges(grid: Grid, ranges: Float32Array): Float32Ar
   for (let i = 0; i < n; i++) {
     const a = ranges[2 * i],
       b = ranges[2 * i + 1];
-    lo[i] = Number.isNaN(a) ? -Infinity : a;
-    hi[i] = Number.isNaN(b) ? Infinity : b;
+    // unknown (either end NaN): (-inf, +inf), as neighbourhoodOf reads it
+    const unknown = Number.isNaN(a) || Number.isNaN(b);
+    lo[i] = unknown ? -Infinity : a;
+    hi[i] = unknown ? Infinity : b;
   }
   const strides = [1, gx, gx * gy];
   for (let axis = 0; axis < 3; axis++) {
@@ -60,9 +62,39 @@ export function neighbourhoodRanges(grid: Grid, ranges: Float32Array): Float32Ar
   return out;
 }
 
-/** Whether a chunk's neighbourhood range satisfies lo < iso <= hi (the surface needs it). */
+/**
+ * The same neighbourhood range for one chunk, read from its 27 entries of
+ * `ranges` (nothing made per level: for ranges that change as chunks are
+ * learnt, learnt-ranges.ts). NaN anywhere makes it (-inf, +inf).
+ */
+export function neighbourhoodOf(grid: Grid, ranges: Float32Array, chunk: ChunkIndex): [number, number] {
+  const [gx, gy, gz] = grid;
+  const x = chunk % gx;
+  const y = Math.floor(chunk / gx) % gy;
+  const z = Math.floor(chunk / (gx * gy));
+  let lo = Infinity;
+  let hi = -Infinity;
+  for (let w = Math.max(0, z - 1); w <= Math.min(gz - 1, z + 1); w++)
+    for (let v = Math.max(0, y - 1); v <= Math.min(gy - 1, y + 1); v++)
+      for (let u = Math.max(0, x - 1); u <= Math.min(gx - 1, x + 1); u++) {
+        const n = u + gx * (v + gy * w);
+        const a = ranges[2 * n];
+        const b = ranges[2 * n + 1];
+        if (Number.isNaN(a) || Number.isNaN(b)) return [-Infinity, Infinity];
+        if (a < lo) lo = a;
+        if (b > hi) hi = b;
+      }
+  return [lo, hi];
+}
+
+/** The rule: a neighbourhood range [lo, hi] needs the surface at `iso` iff lo < iso <= hi. */
+export function rangeNeeded(lo: number, hi: number, iso: number): boolean {
+  return lo < iso && iso <= hi;
+}
+
+/** Whether a chunk's neighbourhood range (neighbourhoodRanges) satisfies the rule (the surface needs it). */
 export function chunkNeeded(neighbourhood: Float32Array, iso: number, chunk: ChunkIndex): boolean {
-  return neighbourhood[2 * chunk] < iso && iso <= neighbourhood[2 * chunk + 1];
+  return rangeNeeded(neighbourhood[2 * chunk], neighbourhood[2 * chunk + 1], iso);
 }
 
 /** The chunks whose neighbourhood range satisfies lo < iso <= hi, in index order. */

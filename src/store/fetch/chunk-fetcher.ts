@@ -2,8 +2,9 @@
 // flight, in the caller's priority order (nearest first), each cancellable.
 // `want` replaces the wanted list (newest wins): queued chunks no longer
 // wanted are dropped and requests in flight for them are aborted. The store
-// tries each request again while that can help (zarr/retrying-store.ts); a
-// chunk whose request still failed is reported, and is not asked for again
+// tries each request again while that can help (zarr/retrying-store.ts: the
+// one place requests are retried); a chunk whose request still failed is
+// reported, and is not asked for again
 // until its cool-down has passed (5 s, doubling per failure up to 2 min):
 // asked for sooner, its last error is reported again at once, so the caller
 // keeps what it shows and tries later (`retryAt`). Fetched chunks go into a
@@ -23,20 +24,11 @@ export interface ChunkSource {
 export interface FetcherOptions {
   /** Requests in flight at most (default 8). */
   maxInFlight?: number;
-  /**
-   * Retries here after a failure before it is reported (default 0: the store
-   * retries each request until its deadline, zarr/retrying-store.ts; a store
-   * without that may ask for some).
-   */
-  retries?: number;
-  /** First backoff delay of those retries; doubles per retry (default 250 ms). */
-  backoffMs?: number;
   /** A failed chunk is not asked for again before this; doubles per failure up to 2 min (default 5 s). */
   coolDownMs?: number;
   /** CPU-side cache of compressed chunks, bytes (default 256 MiB). */
   cacheBytes?: number;
-  /** Injected in tests: the backoff wait, and the clock for throughput. */
-  sleep?: (ms: number, signal: AbortSignal) => Promise<void>;
+  /** Injected in tests: the clock (cool-downs, throughput). */
   now?: () => number;
 }
 
@@ -50,7 +42,6 @@ export interface FetchCounters {
   aborted: number;
   /** Chunks served from the CPU-side cache. */
   cacheHits: number;
-  retries: number;
   /** Chunk failures reported (a chunk asked for again during its cool-down is not counted again). */
   failed: number;
   /** bytesFetched / seconds with at least one request in flight. */
@@ -66,26 +57,9 @@ export type ChunkErrorListener = (level: number, chunk: ChunkIndex, error: Store
 
 const key = (level: number, chunk: ChunkIndex) => `${level}:${chunk}`;
 
-function defaultSleep(ms: number, signal: AbortSignal): Promise<void> {
-  return new Promise((resolve, reject) => {
-    const t = setTimeout(resolve, ms);
-    signal.addEventListener(
-      'abort',
-      () => {
-        clearTimeout(t);
-        reject(signal.reason);
-      },
-      { once: true },
-    );
-  });
-}
-
 export class ChunkFetcher {
   readonly maxInFlight: number;
-  readonly #retries: number;
-  readonly #backoffMs: number;
   readonly #coolDownMs: number;
-  readonly #sleep: NonNullable<FetcherOptions['sleep']>;
   readonly #now: () => number;
   readonly #cache: ByteLru<string>;
   #queue: Array<{ level: number; chunk: ChunkIndex }> = [];
@@ -98,17 +72,14 @@ export class ChunkFetcher {
   #idleWaiters: Array<() => void> = [];
   #busySince = -1;
   #busyMs = 0;
-  #counts = { bytesFetched: 0, requests: 0, aborted: 0, cacheHits: 0, retries: 0, failed: 0 };
+  #counts = { bytesFetched: 0, requests: 0, aborted: 0, cacheHits: 0, failed: 0 };
 
   constructor(
     readonly source: ChunkSource,
     options: FetcherOptions = {},
   ) {
     this.maxInFlight = Math.max(1, options.maxInFlight ?? 8);
-    this.#retries = options.retries ?? 0;
-    this.#backoffMs = options.backoffMs ?? 250;
     this.#coolDownMs = options.coolDownMs ?? 5000;
-    this.#sleep = options.sleep ?? defaultSleep;
     this.#now = options.now ?? (() => performance.now());
     this.#cache = new ByteLru(options.cacheBytes ?? 256 << 20);
   }
@@ -192,25 +163,6 @@ export class ChunkFetcher {
     return this.#failed.get(key(level, chunk))?.retryAt;
   }
 
-  /**
-   * Keeps only the wanted chunks that `keep` accepts (a new isovalue: what it
-   * does not need is aborted now, what it needs keeps its request).
-   */
-  retain(keep: (level: number, chunk: ChunkIndex) => boolean): void {
-    const split = (k: string) => k.split(':').map(Number) as [number, number];
-    for (const [k, ctl] of this.#inFlight) {
-      if (!keep(...split(k))) {
-        ctl.abort(new DOMException('no longer needed', 'AbortError'));
-        this.#inFlight.delete(k);
-        this.#wanted.delete(k);
-        this.#counts.aborted++;
-      }
-    }
-    this.#queue = this.#queue.filter((q) => keep(q.level, q.chunk));
-    this.#pump();
-    this.#checkIdle();
-  }
-
   /** Stops everything wanted (e.g. the store is closed). */
   cancelAll(): void {
     this.want(0, []);
@@ -253,32 +205,25 @@ export class ChunkFetcher {
   async #run(level: number, chunk: ChunkIndex, k: string, ctl: AbortController): Promise<void> {
     let error: StoreError | null = null;
     let bytes: Uint8Array | null = null;
-    // An abort that is not ours (a shard index shared with a chunk whose request was aborted) is tried again at once.
-    let foreignAborts = 0;
-    for (let attempt = 0; attempt <= this.#retries && !ctl.signal.aborted; attempt++) {
+    // An abort that is not ours (a shard index shared with a chunk whose request was aborted) is tried again at once;
+    // every other failure is the store's final word (it retried what could help).
+    for (let foreignAborts = 0; !ctl.signal.aborted; ) {
       try {
-        if (attempt > 0) {
-          this.#counts.retries++;
-          await this.#sleep(this.#backoffMs * 2 ** (attempt - 1), ctl.signal);
-        }
         this.#counts.requests++;
         bytes = await this.source.readChunk(level, chunk, { signal: ctl.signal });
         break;
       } catch (e) {
         if (ctl.signal.aborted) break;
         if (isAbort(e) || (e as StoreError)?.kind === 'aborted') {
-          if (++foreignAborts > 8) {
-            error = new StoreError('aborted', `chunk ${chunk} of level ${level}: aborted`, { cause: e });
-            break;
-          }
-          attempt--;
-          continue;
+          if (++foreignAborts <= 8) continue;
+          error = new StoreError('aborted', `chunk ${chunk} of level ${level}: aborted`, { cause: e });
+          break;
         }
         error =
           e instanceof StoreError
             ? e
             : new StoreError('unreachable', `chunk ${chunk} of level ${level}: ${(e as Error).message}`, { cause: e });
-        if (error.kind === 'missing-chunk' || error.kind === 'codec' || error.kind === 'layout') break; // retrying cannot help
+        break;
       }
     }
     if (this.#inFlight.get(k) !== ctl) return; // aborted (and counted) by want()

@@ -1,16 +1,15 @@
-// The page's camera, repeated for the store's view cut (src/store may not
-// import src/render): its Fit of a box, its state -> matrices and eye, the
-// link's cam=. Checked against src/render/camera.ts's ArcballCamera in
-// tests/unit/store/view-cut.test.ts.
-import { mat3, mat4, quat, vec3 } from 'gl-matrix';
-import { DEFAULT_VIEW_DIRECTION } from '../../core/view.ts';
+// The page's camera for the store's view cut, in float64, from the same
+// math the page draws with (src/core/camera.ts): its Fit of a box, its state
+// -> matrices and eye, the link's cam=. Checked against src/render/camera.ts's
+// ArcballCamera in tests/unit/store/view-cut.test.ts.
+import { mat4, quat, vec3 } from 'gl-matrix';
+import { FOV_Y_RAD, fitDistance, fitRotation, nearFar, type UpAxis, viewMatrix } from '../../core/camera.ts';
 import type { CutCamera, CutLevel } from './cut.ts';
 
-/** The page's vertical field of view (src/render/camera.ts, ArcballCamera.fovY). */
-export const PAGE_FOV_Y_RAD = (40 * Math.PI) / 180;
+/** The page's vertical field of view (src/core/camera.ts). */
+export const PAGE_FOV_Y_RAD = FOV_Y_RAD;
 
-/** The axis shown pointing up by the page's fit (its Display section; 'y' by default). */
-export type UpAxis = 'x' | 'y' | 'z';
+export type { UpAxis };
 
 /** The page's camera state, as src/render/camera.ts's CameraState and the link's cam=qx,qy,qz,qw,tx,ty,tz,d. */
 export interface ViewCameraState {
@@ -70,26 +69,6 @@ export function sceneRadiusOf(box0: Box0, voxelSize: [number, number, number]): 
   return Math.max(r, 1e-6);
 }
 
-/** The page fit's rotation (ArcballCamera.fit), in float32 like the page's. */
-function fitRotation(up: UpAxis): [number, number, number, number] {
-  const rotation = quat.create();
-  if (up === 'z') {
-    const q = quat.create();
-    quat.setAxisAngle(q, [1, 0, 0], (-62 * Math.PI) / 180);
-    const yaw = quat.create();
-    quat.setAxisAngle(yaw, [0, 0, 1], (35 * Math.PI) / 180);
-    quat.multiply(rotation, q, yaw);
-  } else {
-    const d = DEFAULT_VIEW_DIRECTION;
-    const dir = up === 'y' ? vec3.fromValues(d[0], d[1], d[2]) : vec3.fromValues(d[2], d[0], d[1]);
-    const upVec = up === 'y' ? vec3.fromValues(0, 1, 0) : vec3.fromValues(1, 0, 0);
-    const look = mat4.lookAt(mat4.create(), vec3.normalize(dir, dir), [0, 0, 0], upVec);
-    quat.fromMat3(rotation, mat3.fromMat4(mat3.create(), look));
-    quat.normalize(rotation, rotation);
-  }
-  return [rotation[0], rotation[1], rotation[2], rotation[3]];
-}
-
 /**
  * The camera the page's Fit gives a box: ArcballCamera.fit(bounds, up) with
  * bounds = box0 * voxelSize: it looks at the box centre from the up axis'
@@ -109,10 +88,12 @@ export function cameraForBox(
   // the page's target is a float32 vec3
   const t = vec3.fromValues(((box0[0] + box0[3]) * sx) / 2, ((box0[1] + box0[4]) * sy) / 2, ((box0[2] + box0[5]) * sz) / 2);
   const sceneRadius = sceneRadiusOf(box0, voxelSize);
+  // in float32 like the page's
+  const q = fitRotation(quat.create(), up);
   const state: ViewCameraState = {
-    rotation: fitRotation(up),
+    rotation: [q[0], q[1], q[2], q[3]],
     target: [t[0], t[1], t[2]],
-    distance: (sceneRadius / Math.sin(fovYRad / 2)) * 1.05,
+    distance: fitDistance(sceneRadius, fovYRad),
   };
   return cameraFromView(state, viewport, sceneRadius, fovYRad);
 }
@@ -127,12 +108,8 @@ export function cameraFromView(state: ViewCameraState, viewport: Viewport, scene
   const d = state.distance;
   const q = quat.normalize(new Float64Array(4), Float64Array.from(state.rotation));
   const [tx, ty, tz] = state.target;
-  const view = new Float64Array(16);
-  mat4.fromTranslation(view, [0, 0, -d]);
-  mat4.multiply(view, view, mat4.fromQuat(new Float64Array(16), q));
-  mat4.translate(view, view, [-tx, -ty, -tz]);
-  const near = Math.max(d - sceneRadius * 1.5, d * 0.01, 1e-4);
-  const far = d + sceneRadius * 1.5;
+  const view = viewMatrix(new Float64Array(16), q, state.target, d);
+  const [near, far] = nearFar(d, sceneRadius);
   const projection = new Float64Array(16);
   mat4.perspectiveZO(projection, fovYRad, viewport.width / viewport.height, near, far);
   const viewProj = mat4.multiply(new Float64Array(16), projection, view) as Float64Array;

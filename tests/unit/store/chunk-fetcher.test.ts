@@ -1,6 +1,6 @@
 // The chunk fetcher against a scripted fake store: every request waits for
 // the test to answer it, so the order, the bound on requests in flight,
-// aborts, retries and the cache are checked without any timing.
+// aborts, failures with their cool-down and the cache are checked without any timing.
 import { describe, expect, it } from 'vitest';
 import type { GetOptions } from '@zarrita/storage';
 import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
@@ -48,7 +48,7 @@ const settle = () => new Promise((r) => setTimeout(r, 0));
 function setup(opts = {}) {
   const store = new FakeStore();
   let clock = 0;
-  const fetcher = new ChunkFetcher(store, { sleep: async () => {}, now: () => clock, ...opts });
+  const fetcher = new ChunkFetcher(store, { now: () => clock, ...opts });
   const got: string[] = [];
   const errors: string[] = [];
   fetcher.onChunk((level, chunk, bytes, fromCache) => got.push(`${level}:${chunk}:${bytes.length}${fromCache ? ':cache' : ''}`));
@@ -121,29 +121,15 @@ describe('ChunkFetcher', () => {
     expect(fetcher.counters.cacheBytes).toBeLessThanOrEqual(25);
   });
 
-  it('retries with growing backoff, then reports; a missing chunk is reported at once', async () => {
-    const sleeps: number[] = [];
-    const { store, fetcher, errors, got } = setup({
-      retries: 2,
-      backoffMs: 100,
-      sleep: async (ms: number) => {
-        sleeps.push(ms);
-      },
-    });
+  it('a failure is reported once (the store retried it), not fetched again during its cool-down; a missing chunk too', async () => {
+    const { store, fetcher, errors, got } = setup();
     fetcher.want(0, [3, 4]);
-    store.fail(3, new StoreError('http', 'HTTP 503'));
-    await settle();
-    store.answer(3); // second attempt succeeds
-    store.fail(4, new StoreError('http', 'HTTP 503'));
-    await settle();
-    store.fail(4, new TypeError('fetch failed'));
-    await settle();
+    store.answer(3);
     store.fail(4, new StoreError('http', 'HTTP 503'));
     await fetcher.idle();
     expect(got).toEqual(['0:3:4']);
     expect(errors).toEqual(['4:http']);
-    expect(sleeps).toEqual([100, 100, 200]);
-    expect(fetcher.counters).toMatchObject({ retries: 3, failed: 1, requests: 5 });
+    expect(fetcher.counters).toMatchObject({ failed: 1, requests: 2 });
     // a failed chunk is not fetched again until retryFailed
     fetcher.want(0, [4]);
     expect(store.live()).toEqual([]);

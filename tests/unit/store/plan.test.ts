@@ -7,7 +7,8 @@ import { mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
-import { chunksNeeded, nearestFirst, neighbourhoodRanges } from '../../../src/store/plan.ts';
+import { chunksNeeded, nearestFirst, neighbourhoodOf, neighbourhoodRanges } from '../../../src/store/plan.ts';
+import { mulberry32 } from '../../../src/util/random.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
 import { openStore } from '../../../src/store/zarr/open-store.ts';
 import { convert, converterPython } from './stores.ts';
@@ -85,6 +86,30 @@ describe('chunk plan', () => {
     ends[0] = NaN;
     ends[1] = NaN; // chunk 0 of a 4x1x1 row
     expect(chunksNeeded(neighbourhoodRanges([4, 1, 1], ends), 5)).toEqual([0, 1]);
+  });
+
+  it('one chunk read alone (neighbourhoodOf, the learnt ranges) = the whole grid at once, on awkward grids with unknown chunks', () => {
+    const random = mulberry32(11);
+    for (const grid of [
+      [1, 1, 1],
+      [5, 1, 1],
+      [1, 7, 2],
+      [6, 5, 4],
+      [9, 3, 8],
+    ] as [number, number, number][]) {
+      const n = grid[0] * grid[1] * grid[2];
+      const r = new Float32Array(2 * n);
+      for (let i = 0; i < n; i++) {
+        const a = random() * 100;
+        r[2 * i] = random() < 0.1 ? NaN : a;
+        r[2 * i + 1] = a + random() * 20;
+      }
+      const all = neighbourhoodRanges(grid, r);
+      for (let c = 0; c < n; c++) {
+        const [lo, hi] = neighbourhoodOf(grid, r, c);
+        expect([lo, hi], `grid ${grid} chunk ${c}`).toEqual([all[2 * c], all[2 * c + 1]]);
+      }
+    }
   });
 
   it('orders chunks nearest-first to a point, ties by index', () => {
