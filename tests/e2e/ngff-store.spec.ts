@@ -84,16 +84,19 @@ test('a pyramid whose level 1 halves only z: level 1 drawn at its scale (1, 1, 2
   );
   const st = (await page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore)) as {
     levels: { dims: number[] }[];
+    parts: { level: number; scale: number[]; origin: number[] }[];
   };
   expect(st.levels.map((l) => l.dims)).toEqual([
     [128, 128, 128],
     [128, 128, 64],
     [64, 64, 64],
   ]);
+  // the store is one volume on screen (level 0's frame); level 1's piece at its scale, where its translation puts it
   const volume = await page.evaluate(
     () => (window as unknown as { zfpiso: { volume: { dims: number[]; spacing: number[] } } }).zfpiso.volume,
   );
-  expect(volume).toMatchObject({ dims: [128, 128, 64], spacing: [1, 1, 2] });
+  expect(volume).toMatchObject({ dims: [128, 128, 128], spacing: [1, 1, 1] });
+  expect(st.parts).toEqual([{ level: 1, scale: [1, 1, 2], origin: [0, 0, 0.25] }]);
   const store = join(folder, 'hydrogen_aniso.ome.zarr');
   const cli = await runCli<{ isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '1', '--iso', '1500.5', '--rate', '8']);
   expect(await trianglesShown(page)).toBe(cli.isosurfaces[0].triangles);
