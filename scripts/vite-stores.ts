@@ -6,6 +6,8 @@
 // origin may read the store, including the Range header and the lengths).
 // A /stores/~faults(...)/ prefix serves the same stores through a
 // misbehaving server (store-faults.ts), for the tests and benchmarks.
+// /stores/~log is the server's log of the store requests it received (the
+// last 10,000: when, method and path), for the page tests.
 import { createReadStream, existsSync, statSync } from 'node:fs';
 import type { IncomingMessage, ServerResponse } from 'node:http';
 import { join, normalize, resolve, sep } from 'node:path';
@@ -33,11 +35,29 @@ export function parseRange(header: string, size: number): [number, number] | nul
   return [start, end];
 }
 
+/** A store request the server received: ms since the server started, method, the path under /stores/. */
+export interface LoggedRequest {
+  ms: number;
+  method: string;
+  path: string;
+}
+const LOG_KEPT = 10_000;
+
 export function storesMiddleware(folder = defaultStoresFolder(), faults = new FaultInjector()) {
   const root = resolve(folder);
+  const log: LoggedRequest[] = [];
+  const t0 = performance.now();
   return (req: IncomingMessage, res: ServerResponse, next: () => void) => {
     const url = req.url ?? '';
     if (!url.startsWith(STORES_PREFIX)) return next();
+    if (url.startsWith(`${STORES_PREFIX}~log`)) {
+      res.setHeader('Content-Type', 'application/json');
+      res.setHeader('Cache-Control', 'no-store');
+      res.end(JSON.stringify({ now: performance.now() - t0, requests: log }));
+      return;
+    }
+    log.push({ ms: performance.now() - t0, method: req.method ?? 'GET', path: url.slice(STORES_PREFIX.length) });
+    if (log.length > LOG_KEPT) log.splice(0, log.length - LOG_KEPT);
     res.setHeader('Access-Control-Allow-Origin', '*');
     res.setHeader('Access-Control-Allow-Headers', 'Range');
     res.setHeader('Access-Control-Expose-Headers', 'Content-Length, Content-Range, Accept-Ranges');

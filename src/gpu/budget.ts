@@ -31,14 +31,17 @@ export class GpuBudget {
     return this.#bytes;
   }
 
-  /** A new limit: the peak starts again from what is held, and every listener is told (a lower limit frees at once). */
+  /**
+   * A new limit: every listener is told (a lower limit frees at once, in the
+   * listeners), then the peak starts again from what is held.
+   */
   set bytes(next: number) {
     if (!(next >= 0)) throw new RangeError(`GPU memory budget must be a number of bytes (got ${next})`);
     const previous = this.#bytes;
     if (next === previous) return;
     this.#bytes = next;
-    this.meter.resetPeak();
     for (const l of [...this.#listeners]) l(next, previous);
+    this.meter.resetPeak();
   }
 
   /** Bytes held against the budget now. */

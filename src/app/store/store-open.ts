@@ -148,6 +148,7 @@ export function initialPageState(
     failedRequests: 0,
     gpu: { pools: 0, surfaces: 0, cache: 0, vertices: 0, store: 0, total: 0, peak: 0, budget: stream.budgetBytes },
     parts: [],
+    steps: [],
     cut: cut ? { tolerancePx: cut.tolerancePx, tint: cut.tint, levels: [], final: false } : null,
     notes: [...store.notes],
     ...(range

@@ -51,6 +51,8 @@ export interface StorePageState {
   gpu: { pools: number; surfaces: number; cache: number; vertices: number; store: number; total: number; peak: number; budget: number };
   /** Where each piece of the step on screen is drawn: its level, scale (level-0 voxels per voxel) and origin (its own voxels). */
   parts: { level: number; scale: [number, number, number]; origin: [number, number, number] }[];
+  /** The last steps shown (at most 64, oldest first): isovalue, triangles and welded vertices of all their levels. */
+  steps: { iso: number; triangles: number; vertices: number }[];
   /** A store of lossless chunks: bricks in the decode workers now (asked for, not yet answered), and the most there were at once. */
   decodeQueue?: { queued: number; maxQueued: number };
   /**

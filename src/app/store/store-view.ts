@@ -328,6 +328,9 @@ export class StoreView {
     if (o.state.shownLevels.at(-1) !== finest) o.state.shownLevels.push(finest);
     o.state.shownLevel = finest;
     o.state.parts = o.current?.placement ?? [];
+    const sum = (f: (l: ShownStep['levels'][number]) => number) => s.levels.reduce((a, l) => a + f(l), 0);
+    o.state.steps.push({ iso: s.iso, triangles: sum((l) => l.stats.triangles), vertices: sum((l) => l.stats.vertices) });
+    if (o.state.steps.length > 64) o.state.steps.shift();
     this.d.requestFrame();
     this.#widen(o);
     this.#publish(o);
@@ -386,6 +389,7 @@ export class StoreView {
       shownLevels: [...st.shownLevels],
       gpu: { ...st.gpu },
       parts: st.parts.map((p) => ({ ...p })),
+      steps: st.steps.map((p) => ({ ...p })),
     });
   }
 

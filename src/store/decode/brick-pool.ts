@@ -12,7 +12,7 @@ import { StoreError, type StoreErrorKind } from '../zarr/errors.ts';
 import type { RetryCounters } from '../zarr/retrying-store.ts';
 import type { BrickSource, SourceLevel } from '../zarr/source-store.ts';
 import type { StoreMeter } from '../zarr/stores.ts';
-import type { BrickCancel, BrickInit, BrickReply, BrickRequest } from './brick-protocol.ts';
+import type { BrickCancel, BrickInit, BrickReply, BrickRequest, QueueReport } from './brick-protocol.ts';
 import type { StoreSpec } from './store-spec.ts';
 
 /** Workers for a machine: one per core but one, 1 to 4. */
@@ -27,9 +27,8 @@ export class BrickWorkerPool implements BrickSource {
   readonly #workers: Worker[];
   readonly #decodeByWorker: BrickSource['counters'][];
   readonly #pending = new Map<number, { resolve: (b: Uint8Array) => void; reject: (e: unknown) => void; level: number }>();
-  /** Reads sent to a worker and not answered yet (cancelled ones until their worker says so), and the most at once. */
-  readonly #inWorkers = new Set<number>();
-  #maxInWorkers = 0;
+  /** Per worker, its queue as its last reply said (reads held, the most held at once). */
+  readonly #queues: QueueReport[];
   #next = 0;
   #closed = false;
 
@@ -61,6 +60,7 @@ export class BrickWorkerPool implements BrickSource {
       cacheBytes: Math.max(64 << 20, Math.floor(cacheBytes / count)),
     };
     this.#decodeByWorker = [];
+    this.#queues = Array.from({ length: count }, () => ({ held: 0, maxHeld: 0 }));
     this.#workers = Array.from({ length: count }, (_, i) => {
       const w = new Worker(new URL('./brick-worker.ts', import.meta.url), { type: 'module', name: `bricks ${i}` });
       this.#decodeByWorker.push({ chunksDecoded: 0, bytesDecoded: 0, decodeMs: 0, nonFinite: 0 });
@@ -71,9 +71,17 @@ export class BrickWorkerPool implements BrickSource {
     });
   }
 
-  /** Bricks in the workers now (asked for and not answered) and the most there were at once: what a moving camera leaves behind. */
+  /**
+   * Bricks the workers hold (waiting or being read) as their last replies
+   * said, and the most they held (each worker's most, summed: an upper
+   * bound): what a moving camera leaves behind. Cancelled reads leave a
+   * worker's queue when it gets the cancel (brick-queue.ts).
+   */
   get queue(): { queued: number; maxQueued: number } {
-    return { queued: this.#inWorkers.size, maxQueued: this.#maxInWorkers };
+    return {
+      queued: this.#queues.reduce((a, q) => a + q.held, 0),
+      maxQueued: this.#queues.reduce((a, q) => a + q.maxHeld, 0),
+    };
   }
 
   read(level: number, brick: ChunkIndex, options?: GetOptions): Promise<Uint8Array> {
@@ -101,8 +109,6 @@ export class BrickWorkerPool implements BrickSource {
           reject(e);
         },
       });
-      this.#inWorkers.add(id);
-      this.#maxInWorkers = Math.max(this.#maxInWorkers, this.#inWorkers.size);
       worker.postMessage({ type: 'read', id, level, brick } satisfies BrickRequest);
     });
   }
@@ -123,7 +129,7 @@ export class BrickWorkerPool implements BrickSource {
     this.meter.requests += m.meter.requests;
     this.retries.retries += m.meter.retries;
     this.retries.failed += m.meter.failed;
-    this.#inWorkers.delete(m.id);
+    if (m.queue) this.#queues[worker] = m.queue;
     const p = this.#pending.get(m.id);
     this.#pending.delete(m.id);
     if (m.type === 'done') {
@@ -150,7 +156,6 @@ export class BrickWorkerPool implements BrickSource {
 
   destroy(): void {
     this.#closed = true;
-    this.#inWorkers.clear();
     for (const w of this.#workers) w.terminate();
     this.#failAll(new StoreError('aborted', 'the store was closed'));
   }

@@ -38,6 +38,12 @@ export interface MeterDelta {
   failed: number;
 }
 
+/** A worker's queue when it answers: reads it holds (waiting and running, cancelled ones gone) and the most it has held at once. */
+export interface QueueReport {
+  held: number;
+  maxHeld: number;
+}
+
 export type BrickReply =
   | {
       type: 'done';
@@ -48,5 +54,6 @@ export type BrickReply =
       /** The worker's decode counters (totals). */
       decode: { chunksDecoded: number; bytesDecoded: number; decodeMs: number; nonFinite: number };
       meter: MeterDelta;
+      queue?: QueueReport;
     }
-  | { type: 'fail'; id: number; error: { name: string; kind: string | null; message: string }; meter: MeterDelta };
+  | { type: 'fail'; id: number; error: { name: string; kind: string | null; message: string }; meter: MeterDelta; queue?: QueueReport };

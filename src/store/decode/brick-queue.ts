@@ -4,7 +4,7 @@
 // has its wait aborted (the source chunk it shares with other bricks may go
 // on). So a camera that moves on never leaves a pile of bricks being decoded
 // behind it: what the page no longer wants leaves the queue when it says so.
-import type { BrickReply, BrickRequest } from './brick-protocol.ts';
+import type { BrickReply, BrickRequest, QueueReport } from './brick-protocol.ts';
 
 /** Reads a worker runs at once: enough to keep fetches overlapping, few enough that a cancel finds most reads not started. */
 export const RUNNING_PER_WORKER = 3;
@@ -14,6 +14,8 @@ export type BrickRun = (request: BrickRequest, signal: AbortSignal) => Promise<{
 export class BrickQueue {
   readonly #waiting: BrickRequest[] = [];
   readonly #running = new Map<number, AbortController>();
+  /** The most reads held at once (waiting and running): what a moving camera can leave behind. */
+  #maxHeld = 0;
 
   constructor(
     private readonly run: BrickRun,
@@ -33,8 +35,14 @@ export class BrickQueue {
     return this.#running.size;
   }
 
+  /** Reads held now (waiting and running) and the most held at once; every reply carries it. */
+  get report(): QueueReport {
+    return { held: this.#waiting.length + this.#running.size, maxHeld: this.#maxHeld };
+  }
+
   read(request: BrickRequest): void {
     this.#waiting.push(request);
+    this.#maxHeld = Math.max(this.#maxHeld, this.#waiting.length + this.#running.size);
     this.#pump();
   }
 
@@ -59,7 +67,7 @@ export class BrickQueue {
       this.#running.set(request.id, controller);
       void this.run(request, controller.signal).then(({ reply, transfer }) => {
         this.#running.delete(request.id);
-        this.reply(reply, transfer);
+        this.reply({ ...reply, queue: this.report }, transfer);
         this.#pump();
       });
     }
