@@ -339,11 +339,32 @@ export class StoreView {
   }
 
   /**
+   * The slider's block profile from the finest level whose chunk ranges are
+   * all known now (range arrays, or learnt as bricks arrived), in either
+   * refinement; the value range stays.
+   */
+  #refreshProfile(o: OpenStore): void {
+    const { stream } = o.session;
+    const v = o.installed;
+    if (this.#open !== o || !v) return;
+    for (let L = stream.finest; L < o.store.levels.length; L++) {
+      const ranges = stream.chunkRanges(L);
+      if (!ranges) continue;
+      if (ranges !== v.ranges) {
+        v.ranges = ranges;
+        this.d.widenValueRange(v, o.valueRange);
+      }
+      return;
+    }
+  }
+
+  /**
    * A provisional value range (the coarsest level's, read at open) widened
    * by the brick ranges the stream has learnt since (as bricks arrive).
    * Final once every brick of level 0 is known.
    */
   #widen(o: OpenStore): void {
+    this.#refreshProfile(o);
     const vr = o.state.valueRange;
     if (this.#open !== o || !vr?.provisional) return;
     const { learnt } = o.session.stream;
