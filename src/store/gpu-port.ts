@@ -18,8 +18,6 @@ import type { ZfpStore } from './zarr/open-store.ts';
 
 /** The store stream over real GPU pools (ChunkedVolume) and surfaces (Isosurface). */
 export type ChunkStoreStream = StoreStream<ChunkedVolume, IsosurfaceStats, Isosurface>;
-/** Its level-by-level view (LevelStream). */
-export type ChunkLevelStream = LevelStream<ChunkedVolume, IsosurfaceStats, Isosurface>;
 
 export interface ChunkedStreamGpu extends StreamGpu<ChunkedVolume, IsosurfaceStats, Isosurface> {
   readonly meter: GpuMemoryMeter;

@@ -14,9 +14,7 @@ import { GpuBudget } from '../gpu/budget.ts';
 import { type ChunkedStreamGpu, chunkedGpu, storeEncoder } from './gpu-port.ts';
 import { CutPlanner } from './stream/cut-planner.ts';
 import { LevelPlanner } from './stream/level-planner.ts';
-import { LevelStream } from './stream/level-stream.ts';
 import type { LearntRanges } from './learnt-ranges.ts';
-import type { ChunkLevelStream } from './gpu-port.ts';
 import type { StreamGpuBytes } from './stream-port.ts';
 import { type ViewSpec, StoreStream } from './stream/store-stream.ts';
 import type { ChunkStoreStream } from './gpu-port.ts';
@@ -145,16 +143,9 @@ export class StoreSession {
     readonly port: ChunkedStreamGpu,
     /** The stream (one engine, planned by the view or level by level). */
     readonly stream: ChunkStoreStream,
-    /** The stream as levels, when it is planned level by level; else null. */
-    readonly levels: ChunkLevelStream | null,
     /** The chunks that came over (counted once). */
     readonly fetched: FetchedChunks,
   ) {}
-
-  /** The stream when it is refined by the view, else null. */
-  get view(): ChunkStoreStream | null {
-    return this.levels ? null : this.stream;
-  }
 
   /** The GPU memory the stream holds against (shared with the page's other users of it). */
   get budget(): GpuBudget {
@@ -249,8 +240,7 @@ export class StoreSession {
       stream = await StoreStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budget, planner, { learnt });
       options.setup?.(stream);
       if (view) await stream.setView(view);
-      const levels = planner instanceof LevelPlanner ? LevelStream.of(stream, planner) : null;
-      return new StoreSession(name, store, metered, fetcher, port, stream, levels, fetched);
+      return new StoreSession(name, store, metered, fetcher, port, stream, fetched);
     } catch (e) {
       stream?.destroy();
       store?.close?.();

@@ -33,13 +33,6 @@ export class LevelStream<V extends RoleVolume, S extends LevelStats, F extends L
     return new LevelStream(stream, planner);
   }
 
-  /** The level-by-level view of a stream planned by `planner` (StoreSession: the page draws its steps with copies, the CLI reads them). */
-  static of<V extends RoleVolume, S extends LevelStats, F extends LevelSurface<S>>(
-    stream: StoreStream<V, S, F>,
-    planner: LevelPlanner,
-  ): LevelStream<V, S, F> {
-    return new LevelStream(stream, planner);
-  }
 
   get store(): ZfpStore {
     return this.stream.store;
