@@ -1,7 +1,7 @@
-// What a level costs and knows, computed on the CPU for the stream
-// controller: the per-level GPU state a surface over a pool of a given
-// capacity takes (its budget's estimate before one is made), and the chunk
-// ranges of a level that was resident whole (a store without range arrays).
+// What a level costs and knows, computed on the CPU for the store stream:
+// the cost model (the per-level GPU state a surface over a pool of a given
+// capacity takes, what a resident and a wanted chunk cost), range arrays read
+// once, where refinement starts, and how an arrived chunk is put.
 import { neighbourhoodRanges } from './plan.ts';
 import type { LevelVolume } from './stream-port.ts';
 import type { ZfpStore } from './zarr/store.ts';

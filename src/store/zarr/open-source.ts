@@ -1,6 +1,6 @@
 // Opens a store of lossless chunks (Zarr v2 or v3, a plain array or an
 // OME-Zarr multiscale group; source-store.ts reads its bricks) as the same
-// ZfpStore the stream controller reads: each level's layout is of bricks
+// ZfpStore the store stream reads: each level's layout is of bricks
 // that arrive as float32 values and are compressed on the GPU at `rate`.
 import type { AbsolutePath } from '@zarrita/storage';
 import * as zarr from 'zarrita';
