@@ -130,6 +130,11 @@ test('1 GiB, orbit and zoom, then 256 MiB: within a few frames the GPU bytes are
   expect(after.cut!.levels.reduce((a, l) => a + l.drawn, 0)).toBeGreaterThan(0);
   expect(await nonBackgroundFraction(page)).toBeGreaterThan(0.01);
   expect(realErrors(logged)).toEqual([]);
+  const m = (b: number) => (b / MiB).toFixed(1);
+  console.log(
+    `page budget: at 1 GiB ${m(big.gpu.total)} MiB held (peak ${m(big.gpu.peak)}); three frames after 256 MiB: ${m(low.gpu.total)}; ` +
+      `refined again: ${m(after.gpu.total)} (peak since the change ${m(after.gpu.peak)})`,
+  );
 });
 
 test('ten switches between two stores: the peak never passes the budget, each store holds the same bytes every time', async ({ page }) => {
@@ -154,6 +159,7 @@ test('ten switches between two stores: the peak never passes the budget, each st
     expect(st.gpu.total).toBe(st.gpu.store);
   }
   expect(peak).toBeLessThanOrEqual(96 * MiB);
+  console.log(`ten switches at 96 MiB: peak ${(peak / MiB).toFixed(1)} MiB; ${A} ${held[A].join(', ')} B; ${B} ${held[B].join(', ')} B`);
   expect(new Set(held[A]).size, `bytes held by ${A}: ${held[A]}`).toBe(1);
   expect(new Set(held[B]).size, `bytes held by ${B}: ${held[B]}`).toBe(1);
   expect(realErrors(logged)).toEqual([]);

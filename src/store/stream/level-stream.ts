@@ -33,7 +33,6 @@ export class LevelStream<V extends RoleVolume, S extends LevelStats, F extends L
     return new LevelStream(stream, planner);
   }
 
-
   get store(): ZfpStore {
     return this.stream.store;
   }

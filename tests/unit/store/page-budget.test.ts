@@ -294,6 +294,27 @@ describe("the page's one budget", () => {
     expect(over).toBe(0);
   }, 300_000);
 
+  it('level by level too: a lower budget freezes the level on screen to its copies at once, then a coarser level replaces it', async () => {
+    const budget = new GpuBudget(HIGH);
+    let over = 0;
+    budget.meter.onAllocate = (bytes) => {
+      if (bytes > budget.bytes) over = Math.max(over, bytes - budget.bytes);
+    };
+    const s = await open(storeB, budget);
+    await s.stream.setIsovalue(s.iso);
+    const fine = s.stream.shown!.levels[0].level;
+    budget.bytes = LOW;
+    expect(budget.heldBytes).toBeLessThanOrEqual(LOW);
+    expect(s.stream.shown?.frozen).toBe(true);
+    await s.stream.setIsovalue(s.iso);
+    expect(s.stream.shown?.frozen).toBeFalsy();
+    expect(s.stream.shown!.levels[0].level).toBeGreaterThan(fine);
+    expect(budget.heldBytes).toBeLessThanOrEqual(LOW);
+    s.stream.destroy();
+    expect(budget.heldBytes).toBe(0);
+    expect(over).toBe(0);
+  }, 120_000);
+
   it('a suspended stream runs nothing: no fetch, no timer, no step, whatever arrives', async () => {
     const budget = new GpuBudget(HIGH);
     const s = await open(storeB, budget);
