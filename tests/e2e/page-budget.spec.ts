@@ -34,6 +34,7 @@ interface StoreState {
   gpu: { store: number; total: number; peak: number; budget: number };
   decodeQueue?: { queued: number; maxQueued: number };
   steps: { iso: number; triangles: number; vertices: number }[];
+  stepsShown: number;
 }
 const storeState = (page: Page) => page.evaluate(() => (window as unknown as { zfpisoStore: StoreState }).zfpisoStore);
 /** The refinement of `url` has ended with its whole cut on screen. */
@@ -113,6 +114,7 @@ test('1 GiB, orbit and zoom, then 256 MiB: within a few frames the GPU bytes are
   // the budget that follows is below what the page holds now: lowering it must give memory back
   expect(big.gpu.total, 'GPU bytes at 1 GiB').toBeGreaterThan(256 * MiB);
 
+  const stepsBefore = big.stepsShown;
   const before = await frames(page);
   await setBudget(page, 256);
   await page.waitForFunction((n) => window.zfpiso!.framesDrawn() >= n + 3, before, { timeout: 60_000 });
@@ -125,6 +127,8 @@ test('1 GiB, orbit and zoom, then 256 MiB: within a few frames the GPU bytes are
   // the refinement for the new budget: every allocation since the change within it, a surface on screen
   await settled(page);
   const after = await storeState(page);
+  // the copies drawn at the change were replaced by steps planned for the new budget
+  expect(after.stepsShown).toBeGreaterThan(stepsBefore);
   expect(after.gpu.peak).toBeLessThanOrEqual(256 * MiB);
   expect(after.gpu.total).toBeLessThanOrEqual(256 * MiB);
   expect(after.cut!.levels.reduce((a, l) => a + l.drawn, 0)).toBeGreaterThan(0);

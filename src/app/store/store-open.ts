@@ -149,6 +149,7 @@ export function initialPageState(
     gpu: { pools: 0, surfaces: 0, cache: 0, vertices: 0, store: 0, total: 0, peak: 0, budget: stream.budgetBytes },
     parts: [],
     steps: [],
+    stepsShown: 0,
     cut: cut ? { tolerancePx: cut.tolerancePx, tint: cut.tint, levels: [], final: false } : null,
     notes: [...store.notes],
     ...(range

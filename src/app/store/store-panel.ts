@@ -53,6 +53,8 @@ export interface StorePageState {
   parts: { level: number; scale: [number, number, number]; origin: [number, number, number] }[];
   /** The last steps shown (at most 64, oldest first): isovalue, triangles and welded vertices of all their levels. */
   steps: { iso: number; triangles: number; vertices: number }[];
+  /** Steps shown since the store opened. */
+  stepsShown: number;
   /** A store of lossless chunks: bricks in the decode workers now (asked for, not yet answered), and the most there were at once. */
   decodeQueue?: { queued: number; maxQueued: number };
   /**

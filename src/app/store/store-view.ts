@@ -331,6 +331,7 @@ export class StoreView {
     const sum = (f: (l: ShownStep['levels'][number]) => number) => s.levels.reduce((a, l) => a + f(l), 0);
     o.state.steps.push({ iso: s.iso, triangles: sum((l) => l.stats.triangles), vertices: sum((l) => l.stats.vertices) });
     if (o.state.steps.length > 64) o.state.steps.shift();
+    o.state.stepsShown++;
     this.d.requestFrame();
     this.#widen(o);
     this.#publish(o);
