@@ -32,40 +32,12 @@ import type { ChunkedVolume } from '../../src/zfp/chunked-volume.ts';
 import { linkStore } from '../stream-scale.ts';
 import type { BenchRun } from './context.ts';
 import { serveStores } from './serve.ts';
+// the store's writer, shared with the page tests (zarr-python: N^3 uint8 ball, zstd, 64^3 chunks in shards, mean pyramid)
+import MAKE_STORE from '../../tests/fixtures/ball-store.py?raw';
 
 const SECTION = 'lossless';
 const ISO = [100.5, 200.5];
 const MiB = 2 ** 20;
-
-const MAKE_STORE = `
-import sys, numpy as np, dask.array as da, zarr
-from zarr.codecs import ZstdCodec
-n, out = int(sys.argv[1]), sys.argv[2]
-def field(block_info=None):
-    loc = block_info[None]['array-location']
-    z, y, x = np.meshgrid(*[np.arange(a, b, dtype=np.float32) for a, b in loc], indexing='ij')
-    c = (n - 1) / 2.0
-    r = np.sqrt((x - c) ** 2 + (y - c) ** 2 + (z - c) ** 2) / n
-    s = n / 24.0
-    f = 128 + 100 * np.sin(x / s) * np.cos(y / (1.3 * s)) * np.sin(z / (0.9 * s) + x / (3 * s))
-    return np.where(r < 0.3, f, 0).clip(0, 255).astype(np.uint8)
-v = da.map_blocks(field, chunks=((64,) * (n // 64),) * 3, dtype=np.uint8)
-g = zarr.open_group(out, mode='w', zarr_format=3)
-levels = 0
-while True:
-    shape = v.shape
-    shards = tuple(min(256, s) for s in shape)
-    chunks = tuple(min(64, s) for s in shape)
-    arr = g.create_array(str(levels), shape=shape, chunks=chunks, shards=shards, dtype='uint8', compressors=ZstdCodec(level=3))
-    da.store(v.rechunk(shards), arr, lock=False)
-    levels += 1
-    if max(shape) <= 64:
-        break
-    v = da.coarsen(np.mean, v.astype(np.float32), {0: 2, 1: 2, 2: 2}).round().astype(np.uint8)
-axes = [{'name': a, 'type': 'space', 'unit': 'micrometer'} for a in 'zyx']
-g.attrs['ome'] = {'version': '0.5', 'multiscales': [{'axes': axes, 'datasets': [
-    {'path': str(i), 'coordinateTransformations': [{'type': 'scale', 'scale': [2.0 ** i] * 3}, {'type': 'translation', 'translation': [(2.0 ** i - 1) / 2] * 3}]} for i in range(levels)]}]}
-`;
 
 function makeStore(run: BenchRun, edge: number): { name: string; seconds: number } {
   const name = `ball${edge}-zstd.zarr`;

@@ -17,6 +17,7 @@ import { execFileSync } from 'node:child_process';
 import { existsSync, mkdirSync, rmSync } from 'node:fs';
 import { join } from 'node:path';
 import { expect, type Page, test } from '@playwright/test';
+import { runPython } from '../helpers/python.ts';
 import { convertNeghipStore, E2E_STORES_DIR } from './cli.ts';
 import { nonBackgroundFraction, openApp, watchErrors } from './page.ts';
 
@@ -246,25 +247,15 @@ test('a PLY exported while the camera moves is the mesh of a step that was on sc
   await mover;
   const path = (await download.path())!;
   const counts = JSON.parse(
-    execFileSync(
-      join(root, '.venv/bin/python'),
-      [
-        '-c',
-        `
-import sys, json, numpy as np
-data = open(sys.argv[1], 'rb').read()
-end = data.index(b'end_header\\n') + len(b'end_header\\n')
-head = data[:end].decode().split('\\n')
-nv = int([l for l in head if l.startswith('element vertex')][0].split()[2])
-nf = int([l for l in head if l.startswith('element face')][0].split()[2])
-v = np.frombuffer(data, dtype='<f4', count=3 * nv, offset=end).reshape(nv, 3)
-f = np.frombuffer(data, dtype=np.dtype([('n', 'u1'), ('i', '<i4', 3)]), count=nf, offset=end + 12 * nv)
-assert (f['n'] == 3).all() and f['i'].min() >= 0 and f['i'].max() < nv
-print(json.dumps({'vertices': nv, 'triangles': nf, 'lo': float(v.min()), 'hi': float(v.max())}))
+    runPython(
+      `
+import sys, json
+from ply import read_ply
+v, f = read_ply(sys.argv[1])
+assert f.min() >= 0 and f.max() < len(v)
+print(json.dumps({'vertices': len(v), 'triangles': len(f), 'lo': float(v.min()), 'hi': float(v.max())}))
 `,
-        path,
-      ],
-      { encoding: 'utf8' },
+      [path],
     ),
   ) as { vertices: number; triangles: number; lo: number; hi: number };
   const st = await storeState(page);

@@ -12,7 +12,14 @@ export function venvPython(): string {
   return python;
 }
 
-/** Runs a Python snippet with arguments; returns its stdout. */
+/** Runs a Python snippet with arguments; returns its stdout. The snippet may import this folder's modules (`from ply import read_ply`). */
 export function runPython(code: string, args: string[] = [], timeoutMs = 300_000): string {
-  return execFileSync(venvPython(), ['-c', code, ...args], { encoding: 'utf8', timeout: timeoutMs, maxBuffer: 1 << 28 });
+  return execFileSync(venvPython(), ['-c', code, ...args], {
+    encoding: 'utf8',
+    timeout: timeoutMs,
+    maxBuffer: 1 << 28,
+    env: { ...process.env, PYTHONPATH: [helpersDir, process.env.PYTHONPATH].filter(Boolean).join(':') },
+  });
 }
+
+const helpersDir = fileURLToPath(new URL('.', import.meta.url));

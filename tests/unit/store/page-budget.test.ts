@@ -19,13 +19,13 @@ import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
 import { chunksNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
 import type { LevelStats, StreamGpu } from '../../../src/store/stream-port.ts';
 import { LevelPlanner } from '../../../src/store/stream/level-planner.ts';
-import { type RoleVolume, StoreStream } from '../../../src/store/stream/store-stream.ts';
-import type { ChunkIndex, ChunkLevelLayout } from '../../../src/store/types.ts';
+import { StoreStream } from '../../../src/store/stream/store-stream.ts';
 import { cameraForBox, fitBox0 } from '../../../src/store/view/camera.ts';
 import { DEFAULT_VIEWPORT } from '../../../src/store/view/view-request.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
 import { openStore, type ZfpStore } from '../../../src/store/zarr/open-store.ts';
 import { convert } from './stores.ts';
+import { FakePool } from './fake-pool.ts';
 
 const work = mkdtempSync(join(tmpdir(), 'page-budget-'));
 const storeA = join(work, 'gen128.zarr');
@@ -54,60 +54,6 @@ class Held {
   }
   get bytes(): number {
     return this.#bytes;
-  }
-}
-
-class FakePool implements RoleVolume {
-  resident = new Set<ChunkIndex>();
-  drawn: ReadonlySet<ChunkIndex> | null = null;
-  ghosts: ReadonlySet<ChunkIndex> = new Set();
-  readonly #held: Held;
-  readonly blocksPerChunk = 64;
-  constructor(
-    readonly layout: ChunkLevelLayout,
-    public poolChunks: number,
-    meter: GpuMemoryMeter,
-  ) {
-    this.#held = new Held(meter);
-    this.#held.set(this.poolBytes);
-  }
-  get poolBytes() {
-    return this.poolChunks * this.layout.chunkBytes;
-  }
-  get residentCount() {
-    return this.resident.size;
-  }
-  get freeCount() {
-    return this.poolChunks - this.resident.size;
-  }
-  has(c: ChunkIndex) {
-    return this.resident.has(c);
-  }
-  put(c: ChunkIndex) {
-    if (this.resident.size >= this.poolChunks) throw new Error(`${this.layout.name}: pool full`);
-    this.resident.add(c);
-  }
-  evict(c: ChunkIndex) {
-    this.resident.delete(c);
-  }
-  resize(n: number) {
-    if (n < this.resident.size) throw new Error('shrinks below the resident chunks');
-    this.poolChunks = n;
-    this.#held.set(this.poolBytes);
-  }
-  setRoles(drawn: ReadonlySet<ChunkIndex> | null, ghosts: ReadonlySet<ChunkIndex>) {
-    this.drawn = drawn && new Set(drawn);
-    this.ghosts = new Set(ghosts);
-  }
-  slotOfChunk() {
-    return undefined;
-  }
-  reserve() {}
-  isReserved() {
-    return false;
-  }
-  destroy() {
-    this.#held.set(0);
   }
 }
 

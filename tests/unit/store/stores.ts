@@ -23,16 +23,11 @@ export function samePly(a: string, b: string): string {
   return runPython(
     `
 import sys, numpy as np
+from ply import read_ply
 def tris(path):
-    data = open(path, 'rb').read()
-    end = data.index(b'end_header\\n') + len(b'end_header\\n')
-    head = data[:end].decode().split('\\n')
-    nv = int([l for l in head if l.startswith('element vertex')][0].split()[2])
-    nf = int([l for l in head if l.startswith('element face')][0].split()[2])
-    v = np.frombuffer(data, dtype='<f4', count=3 * nv, offset=end).reshape(nv, 3)
-    f = np.frombuffer(data, dtype=np.dtype([('n', 'u1'), ('i', '<i4', 3)]), count=nf, offset=end + 12 * nv)
-    assert (f['n'] == 3).all()
-    t = v[f['i']]                                   # nf x 3 x 3
+    v, f = read_ply(path)
+    nf = f.shape[0]
+    t = v[f]                                        # nf x 3 x 3
     t = t.view([('x', '<f4'), ('y', '<f4'), ('z', '<f4')]).reshape(nf, 3)
     t = np.sort(t, axis=1)                          # the three corners in one order
     return np.sort(t.view('V36').reshape(nf))       # the triangles in one order

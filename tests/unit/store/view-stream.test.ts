@@ -11,14 +11,15 @@ import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
 import { chunksNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
 import type { LevelStats, StreamGpu } from '../../../src/store/stream-port.ts';
-import type { ChunkIndex, ChunkLevelLayout } from '../../../src/store/types.ts';
+import type { ChunkIndex } from '../../../src/store/types.ts';
 import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../../src/store/view/camera.ts';
 import { DEFAULT_VIEWPORT } from '../../../src/store/view/view-request.ts';
-import { type RoleVolume, type ShownCut, StoreStream } from '../../../src/store/stream/store-stream.ts';
+import { type ShownCut, StoreStream } from '../../../src/store/stream/store-stream.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
 import { openStore, type ZfpStore } from '../../../src/store/zarr/open-store.ts';
 import { SimulatedLinkStore } from '../../../src/store/zarr/stores.ts';
 import { convert } from './stores.ts';
+import { FakePool } from './fake-pool.ts';
 
 const work = mkdtempSync(join(tmpdir(), 'view-stream-'));
 const path = join(work, 'gen128.zarr');
@@ -27,55 +28,6 @@ beforeAll(() => {
   convert('gen:128x128x128', path, ['--chunk', '16', '--rate', '4', '--levels', '4']);
 }, 600_000);
 afterAll(() => rmSync(work, { recursive: true, force: true }));
-
-class FakePool implements RoleVolume {
-  resident = new Set<ChunkIndex>();
-  drawn: ReadonlySet<ChunkIndex> | null = null;
-  ghosts: ReadonlySet<ChunkIndex> = new Set();
-  destroyed = false;
-  constructor(
-    readonly layout: ChunkLevelLayout,
-    public poolChunks: number,
-  ) {}
-  get poolBytes() {
-    return this.poolChunks * this.layout.chunkBytes;
-  }
-  get residentCount() {
-    return this.resident.size;
-  }
-  get freeCount() {
-    return this.poolChunks - this.resident.size;
-  }
-  has(c: ChunkIndex) {
-    return this.resident.has(c);
-  }
-  put(c: ChunkIndex) {
-    if (this.resident.size >= this.poolChunks) throw new Error(`${this.layout.name}: pool full`);
-    this.resident.add(c);
-  }
-  evict(c: ChunkIndex) {
-    this.resident.delete(c);
-  }
-  resize(n: number) {
-    if (n < this.resident.size) throw new Error('shrinks below the resident chunks');
-    this.poolChunks = n;
-  }
-  setRoles(drawn: ReadonlySet<ChunkIndex> | null, ghosts: ReadonlySet<ChunkIndex>) {
-    this.drawn = drawn && new Set(drawn);
-    this.ghosts = new Set(ghosts);
-  }
-  slotOfChunk() {
-    return undefined;
-  }
-  reserve() {}
-  isReserved() {
-    return false;
-  }
-  readonly blocksPerChunk = 64;
-  destroy() {
-    this.destroyed = true;
-  }
-}
 
 interface FakeStats extends LevelStats {
   drawn: number;
