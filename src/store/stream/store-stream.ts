@@ -8,18 +8,17 @@
 // on the GPU: a step that does not fit is tried once more with what is not
 // on screen let go, then planned coarser (a planner that can), else the
 // refinement stops there and says why, the coarser step staying on screen.
-// The budget is an object shared with whatever else holds GPU memory (the
-// page's other store being replaced, gpu/budget.ts): a lower limit frees at
-// once, and a suspended stream holds nothing but the copies it draws.
+// The budget may be shared (the page's, gpu/budget.ts): a lower limit frees
+// at once; a suspended stream holds nothing but the copies it draws.
 import { GpuBudget } from '../../gpu/budget.ts';
 import type { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
 import { LearntRanges } from '../learnt-ranges.ts';
 import { coarsestDrawableLevel } from '../level-state.ts';
 import type { LevelStats, LevelSurface, StreamGpu, StreamGpuBytes, StreamProgress } from '../stream-port.ts';
+import { computeStep } from './step-compute.ts';
 import { StepFetch } from './step-fetch.ts';
 import { StreamMemory } from './stream-memory.ts';
 import type { ChunkIndex } from '../types.ts';
-import { isAbort } from '../zarr/errors.ts';
 import { StreamEvents } from '../stream-events.ts';
 import type { ZfpStore } from '../zarr/store.ts';
 import type { ViewCut } from '../view/cut.ts';
@@ -28,6 +27,7 @@ import type { Planner, StreamPlan } from './planner.ts';
 import { StreamLevels } from './stream-levels.ts';
 import { StreamSurfaces } from './stream-surfaces.ts';
 import {
+  type BudgetStop,
   type CutLevelShown,
   DEFAULT_TOLERANCE_PX,
   type LevelState,
@@ -355,43 +355,21 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     const arrived = await this.#fetch.fetch(step, missing, order, shownWanted, () => progress('fetching'));
     if (stale() || !arrived) return false; // superseded, or a chunk failed
     progress('computing');
-    const levels: CutLevelShown<V, S, F>[] = [];
-    const used = step.levels;
-    let computing = step.finest;
-    try {
-      for (const L of used) {
-        computing = L;
-        const lv = this.levels[L];
-        const pool = lv.volume!;
-        // ghosts as skirts: the one cell layer next to a drawn chunk emits too, an overlap into the neighbouring
-        // region at another level that covers the crack between the two (counted apart from the cut's triangles)
-        pool.setRoles(step.drawn[L], step.ghosts[L], { skirts: this.skirts });
-        const noRoom = this.#surfaces.noRoom(L, pool, lv.layout, this.#memory.free(), this.budgetBytes);
-        if (noRoom) return { level: L, reason: noRoom };
-        const surface = await this.#surfaces.surfaceFor(L, pool, lv.layout, this.#memory.free(), () => stale() || lv.volume !== pool);
-        if (!surface) return false;
-        surface.setMemoryBudget(this.#memory.capFor(surface));
-        const stats = await surface.compute(iso);
-        if (stale()) return false;
-        // what the surface holds, and the copy of it that is drawn (present(), below)
-        const drawnCopy = this.snapshots ? (surface.presentBytesNeeded ?? 0) : 0;
-        this.#pools.recordCost(L, (stats.cacheBytes + stats.vertexBytes + drawnCopy) / Math.max(1, step.wanted[L].length));
-        levels.push({ level: L, volume: pool, surface, stats, drawn: [...step.drawn[L]], ghosts: [...step.ghosts[L]] });
-      }
-    } catch (e) {
-      if (stale()) return false;
-      if (isAbort(e) || (e as Error).name === 'IsosurfaceSupersededError') return false;
-      if ((e as Error).name === 'IsosurfaceBudgetError') {
-        // what the surface needed, per wanted chunk: the cost the next plan uses
-        const needed = (e as { neededBytes?: number }).neededBytes;
-        if (needed !== undefined && Number.isFinite(needed))
-          this.#pools.recordCost(computing, needed / Math.max(1, step.wanted[computing].length), true);
-        return { level: computing, reason: (e as Error).message };
-      }
-      this.#events.error(e as Error);
-      this.#stop(step.finest, (e as Error).message, 'gpu');
+    const computed = await computeStep(
+      step,
+      iso,
+      { pools: this.#pools, surfaces: this.#surfaces, memory: this.#memory, skirts: this.skirts, snapshots: this.snapshots },
+      stale,
+    );
+    if ('stale' in computed) return false;
+    if ('stop' in computed) return computed.stop;
+    if ('error' in computed) {
+      this.#events.error(computed.error);
+      this.#stop(computed.level, computed.error.message, 'gpu');
       return false;
     }
+    const { levels } = computed;
+    const used = step.levels;
     // A snapshot: the frames until now drew the copies of the step before (whole, whatever was computed in
     // place since); the copies of this step's surfaces are made together now and drawn from here on.
     const noCopies = this.snapshots ? this.#memory.copiesRefusal(used, levels) : null;
@@ -514,13 +492,6 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     this.#pools.destroy();
     this.#shown = null;
   }
-}
-
-/** A step that did not fit the budget: the level and why; `coarser` when the cut could be made coarser. */
-interface BudgetStop {
-  level: number;
-  reason: string;
-  coarser?: boolean;
 }
 
 /** The share of the budget (less the reserve) the cut is planned with: room for surfaces replaced while a step computes. */

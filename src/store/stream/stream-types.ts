@@ -55,6 +55,13 @@ export interface LevelState<V> {
   lru: Map<ChunkIndex, true>;
 }
 
+/** A step that did not fit the budget: the level and why; `coarser` when the cut could be made coarser. */
+export interface BudgetStop {
+  level: number;
+  reason: string;
+  coarser?: boolean;
+}
+
 /** Chunks a step waits for (keys level * 2^32 + chunk), and per level what must stay resident meanwhile. */
 export interface Waiting {
   missing: Set<number>;
