@@ -49,11 +49,6 @@ export class GpuBudget {
     return this.held();
   }
 
-  /** Bytes left (negative when over). */
-  get freeBytes(): number {
-    return this.#bytes - this.held();
-  }
-
   onChange(l: BudgetListener): () => void {
     this.#listeners.add(l);
     return () => this.#listeners.delete(l);

@@ -34,7 +34,7 @@ import {
 import { BlockCache } from './lru-cache.ts';
 import type { StatsReadback } from './stats-readback.ts';
 import { IsosurfaceBudgetError, type IsosurfaceDrawData, type IsosurfaceOptions, type SurfaceMesh, type VolumeInfo } from './types.ts';
-import { SurfaceOutput } from './vertex-output.ts';
+import { readWeldedMesh, SurfaceOutput } from './vertex-output.ts';
 import { surfaceDimsProblem } from '../core/limits.ts';
 
 /** The parts of one volume's pipeline (owned: destroy() frees them, except the stream). */
@@ -420,20 +420,9 @@ export class IsosurfacePipeline {
       readU32(device, out.drawArgs, 0, (shards.length * DRAW_ARGS_BYTES) / 4),
       readU32(device, this.parts.counters.buffer, 0, COUNTER_WORDS),
     ]);
-    const counts = shards.map((_, k) => args[(DRAW_ARGS_BYTES / 4) * k]);
     const welded = Math.min(counters[C.drawnWelded], out.weldedCapacity);
-    const vertices = welded > 0 ? await readU32(device, out.vertices, 0, 3 * welded) : new Uint32Array(0);
-    const indices = new Uint32Array(counts.reduce((a, b) => a + b, 0));
-    let at = 0;
-    for (let k = 0; k < shards.length; k++) {
-      if (counts[k] === 0) continue;
-      indices.set(await readU32(device, shards[k].indices, 0, counts[k]), at);
-      at += counts[k];
-    }
-    for (const v of indices) {
-      if (v >= welded) throw new Error(`Isosurface: index ${v} outside the ${welded} vertices of the surface`);
-    }
-    return { vertices, indices, dims: [...this.info.dims] };
+    const counted = shards.map((s, k) => ({ indices: s.indices, count: args[(DRAW_ARGS_BYTES / 4) * k] }));
+    return readWeldedMesh(device, out.vertices, welded, counted, this.info.dims);
   }
 
   /** Per-block (min, max), 2 f32 per block in raster block order (for the page's block-count profile). */

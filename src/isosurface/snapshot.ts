@@ -8,10 +8,9 @@
 // the surface drew. Its buffers are the surface's size, not its capacity;
 // they are kept while a later copy fits (and is at least half their size)
 // and made again when it does not.
-import { readU32 } from '../gpu/buffers.ts';
 import { DRAW_ARGS_BYTES, INDEX_BYTES, VERTEX_BYTES } from './layout.ts';
 import type { IsosurfaceDrawData, SurfaceMesh } from './types.ts';
-import type { SurfaceOutput } from './vertex-output.ts';
+import { readWeldedMesh, type SurfaceOutput } from './vertex-output.ts';
 
 /** What a surface holds: its welded vertices and its indices (IsosurfaceStats.vertices, .indices). */
 export interface SurfaceCounts {
@@ -114,23 +113,9 @@ export class SurfaceSnapshot {
    * The copy as an indexed mesh (what is drawn, not what the surface has
    * computed since); waits for the GPU. `dims`: the volume's voxels per axis.
    */
-  async readMesh(dims: readonly [number, number, number]): Promise<SurfaceMesh> {
-    const vertexBuffer = this.#vertices;
-    const indexBuffers = this.#indices;
-    const counts = this.#indexCounts;
-    const welded = this.#vertexCount;
-    const vertices = vertexBuffer && welded > 0 ? await readU32(this.device, vertexBuffer, 0, 3 * welded) : new Uint32Array(0);
-    const indices = new Uint32Array(counts.reduce((a, b) => a + b, 0));
-    let at = 0;
-    for (let k = 0; k < counts.length; k++) {
-      if (counts[k] === 0) continue;
-      indices.set(await readU32(this.device, indexBuffers[k], 0, counts[k]), at);
-      at += counts[k];
-    }
-    for (const v of indices) {
-      if (v >= welded) throw new Error(`SurfaceSnapshot: index ${v} outside the ${welded} vertices of the copy`);
-    }
-    return { vertices, indices, dims: [...dims] };
+  readMesh(dims: readonly [number, number, number]): Promise<SurfaceMesh> {
+    const shards = this.#indices.map((indices, k) => ({ indices, count: this.#indexCounts[k] }));
+    return readWeldedMesh(this.device, this.#vertices, this.#vertexCount, shards, dims);
   }
 
   #destroyBuffers(): void {

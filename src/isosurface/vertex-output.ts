@@ -5,8 +5,36 @@
 // i mod perShard. Each shard has a drawIndexedIndirect record and a
 // shard_info record (plan.wgsl), both written on the GPU: the index count of
 // shard k is clamp(total - k * perShard, 0, perShard).
+import { readU32 } from '../gpu/buffers.ts';
 import { DRAW_ARGS_BYTES, INDEX_BYTES, SHARD_RECORD_BINDING, SHARD_RECORD_BYTES, VERTEX_BYTES } from './layout.ts';
-import type { IndexShard } from './types.ts';
+import type { IndexShard, SurfaceMesh } from './types.ts';
+
+/**
+ * A welded surface read back as an indexed mesh (CLI, exports; waits for the
+ * GPU): `welded` vertices of `vertices`, then each index shard's first
+ * `count` indices; every index is checked against the vertices read. The
+ * surface's own buffers (pipeline.ts) or its drawn copy (snapshot.ts).
+ */
+export async function readWeldedMesh(
+  device: GPUDevice,
+  vertices: GPUBuffer | null,
+  welded: number,
+  shards: readonly { indices: GPUBuffer; count: number }[],
+  dims: readonly [number, number, number],
+): Promise<SurfaceMesh> {
+  const v = vertices && welded > 0 ? await readU32(device, vertices, 0, (VERTEX_BYTES / 4) * welded) : new Uint32Array(0);
+  const indices = new Uint32Array(shards.reduce((a, s) => a + s.count, 0));
+  let at = 0;
+  for (const s of shards) {
+    if (s.count === 0) continue;
+    indices.set(await readU32(device, s.indices, 0, s.count), at);
+    at += s.count;
+  }
+  for (const i of indices) {
+    if (i >= welded) throw new Error(`Isosurface: index ${i} outside the ${welded} vertices of the surface`);
+  }
+  return { vertices: v, indices, dims: [...dims] };
+}
 
 export interface ShardBuffer {
   indices: GPUBuffer;

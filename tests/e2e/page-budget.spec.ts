@@ -14,7 +14,8 @@
 // - a PLY exported while the camera moves is the mesh of a step that was on
 //   screen (its triangle and vertex counts, read by NumPy, are one step's).
 import { execFileSync } from 'node:child_process';
-import { existsSync, mkdirSync, rmSync } from 'node:fs';
+import { createHash } from 'node:crypto';
+import { existsSync, mkdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
 import { expect, type Page, test } from '@playwright/test';
 import { runPython } from '../helpers/python.ts';
@@ -79,15 +80,16 @@ async function zoom(page: Page, wheelSteps: number): Promise<void> {
 test.beforeAll(() => {
   test.setTimeout(600_000);
   mkdirSync(E2E_STORES_DIR, { recursive: true });
+  // made again when the writer or its arguments change (a marker holds what made it)
+  const writer = join(root, 'tests/fixtures/ball-store.py');
   const write = (name: string, n: number, radius: number) => {
     const out = join(E2E_STORES_DIR, name);
-    if (existsSync(join(out, '.complete'))) return;
+    const made = createHash('sha256').update(readFileSync(writer)).update(`${n} ${radius}`).digest('hex');
+    const marker = join(out, '.made-by');
+    if (existsSync(marker) && readFileSync(marker, 'utf8') === made) return;
     rmSync(out, { recursive: true, force: true });
-    execFileSync(join(root, '.venv-converter/bin/python'), [join(root, 'tests/fixtures/ball-store.py'), String(n), out, String(radius)], {
-      timeout: 600_000,
-      stdio: 'ignore',
-    });
-    execFileSync('touch', [join(out, '.complete')]);
+    execFileSync(join(root, '.venv-converter/bin/python'), [writer, String(n), out, String(radius)], { timeout: 600_000, stdio: 'ignore' });
+    writeFileSync(marker, made);
   };
   write(BIG, 1024, 0.3);
   write(A, 256, 0.3);

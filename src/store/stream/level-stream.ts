@@ -48,12 +48,9 @@ export class LevelStream<V extends RoleVolume, S extends LevelStats, F extends L
   get gpuBytes(): StreamGpuBytes {
     return this.stream.gpuBytes;
   }
-  /** The whole stream's GPU memory (applies from the next step on when changed). */
+  /** The whole stream's GPU memory (set it on `stream.budget`). */
   get budgetBytes(): number {
     return this.stream.budgetBytes;
-  }
-  set budgetBytes(b: number) {
-    this.stream.budgetBytes = b;
   }
   /** The levels refinement may use: from `coarsest` down to `finest` (a link's #level=, the CLI's --level L with both at L). */
   get finest(): number {

@@ -158,12 +158,9 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     return StoreStream.create(store, fetcher, gpu, budget, new CutPlanner(), options);
   }
 
-  /** The budget's limit, bytes; setting it sets the shared budget's (everyone holding against it is told). */
+  /** The budget's limit, bytes (set it on `budget`: everyone holding against it is told). */
   get budgetBytes(): number {
     return this.budget.bytes;
-  }
-  set budgetBytes(bytes: number) {
-    this.budget.bytes = bytes;
   }
 
   onProgress(l: (p: StreamProgress) => void): () => void {
@@ -396,9 +393,8 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   }
 
   /**
-   * Reads the step on screen with `read` (an export: the step's own
-   * surfaces, drawn copies included); no new step is shown before it is
-   * done, so what it reads is what was on screen. Null when nothing is.
+   * Reads the step on screen with `read` (an export, from its drawn copies):
+   * no new step is shown before it is done. Null when nothing is on screen.
    */
   async readShown<T>(read: (shown: ShownCut<V, S, F>) => Promise<T>): Promise<T | null> {
     const shown = this.#shown;
@@ -427,11 +423,10 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   }
 
   /**
-   * The limit changed. Lower: what is held comes within it at once: first
-   * what the step on screen does not draw, then (still over) the step on
-   * screen keeps only its drawn copies, and a coarser one is planned to
-   * replace it. Either way the refinement is planned again for the new
-   * limit (a microtask later; a suspended stream waits to be resumed).
+   * The limit changed. Lower: within it at once: what the step on screen
+   * does not draw goes, then (still over) all but its drawn copies, then the
+   * copies (nothing drawn until the next step). Either way the refinement is
+   * planned again (a microtask later; a suspended stream waits to be resumed).
    */
   #budgetChanged(next: number, previous: number): void {
     if (this.#destroyed) return;
@@ -439,6 +434,11 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       this.#interrupt();
       this.#releaseUnshown();
       if (this.#memory.over) this.#releaseToCopies();
+      // the copies alone are over: listeners hear that nothing is drawn until the next step
+      if (this.#memory.over && this.#shown && this.#shown.levels.length > 0) {
+        this.#shown = this.#memory.releaseAll(this.#shown);
+        if (this.#shown) this.#events.shown(this.#shown);
+      }
     }
     // planned again for the new limit, unless someone asks for an isovalue first (the page, after every listener shed)
     const gen = this.#gen;

@@ -235,11 +235,6 @@ export class StreamLevels<V extends RoleVolume> {
     putArrived(this.levels[level], chunk, bytes, keep, () => this.#changes[level]++);
   }
 
-  /** Chunks put into or evicted from level L's pool so far (its slots hold the same chunks while this is unchanged). */
-  changes(L: number): number {
-    return this.#changes[L];
-  }
-
   /** GPU bytes of the pools. */
   get poolBytes(): number {
     return this.levels.reduce((a, l) => a + (l.volume?.poolBytes ?? 0), 0);

@@ -81,6 +81,17 @@ export class StreamMemory<V extends RoleVolume, S extends LevelStats, F extends 
     return shown && { ...shown, frozen: true };
   }
 
+  /**
+   * Lets go of everything, the copies on screen too (they alone were over
+   * the budget): the step on screen is left with no level to draw until the
+   * next step shows.
+   */
+  releaseAll(shown: ShownCut<V, S, F> | null): ShownCut<V, S, F> | null {
+    this.surfaces.destroy();
+    for (const lv of this.pools.levels) this.pools.dropPool(lv);
+    return shown && { ...shown, levels: [], frozen: true };
+  }
+
   /** GPU bytes the stream holds now: pools, surfaces, and of these the cache and vertex buffers of the step on screen. */
   bytes(shown: ShownCut<V, S, F> | null): StreamGpuBytes {
     const pools = this.pools.poolBytes;

@@ -2,7 +2,8 @@
 // surface computes the next one. After present() the copy's vertices, each
 // shard's indices and the draw arguments are the surface's (several index
 // shards: a small binding limit); a later computation at another isovalue
-// changes the surface, not the copy, until present() again.
+// changes the surface, not the copy, until present() again; the mesh an
+// export reads (readDrawnMesh) is the copy's; release() keeps only the copy.
 import { describe, expect } from 'vitest';
 import { readU32 } from '../../../src/gpu/buffers.ts';
 import { Isosurface } from '../../../src/isosurface/isosurface.ts';
@@ -48,9 +49,20 @@ describe('Isosurface.present', () => {
       expect(await drawn(gpu.device, copy, a.vertices)).toEqual(before);
       const after = await drawn(gpu.device, iso.drawData, b.vertices);
       expect(after).not.toEqual(before);
+      // the mesh drawn (an export) is the copy's: the first surface's mesh, read while the surface holds the second
+      const meshA = await iso.readDrawnMesh();
+      expect(meshA.indices.length).toBe(a.indices);
+      expect(meshA.vertices).toEqual(before.vertices);
+      expect(meshA.indices).toEqual(Uint32Array.from(before.shards.flatMap((s) => [...s.indices])));
       // presented again: the copy is the new surface
       iso.present();
       expect(await drawn(gpu.device, iso.presented!, b.vertices)).toEqual(after);
+      // released to its copy: the surface computes nothing more, the copy still draws and reads back
+      iso.release();
+      expect(iso.budgetedBytes).toBe(0);
+      await expect(iso.compute(lo + 0.5 * (hi - lo))).rejects.toThrow();
+      expect(await drawn(gpu.device, iso.presented!, b.vertices)).toEqual(after);
+      expect((await iso.readDrawnMesh()).indices.length).toBe(b.indices);
     } finally {
       iso.destroy();
       stream.destroy();

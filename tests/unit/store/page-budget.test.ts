@@ -261,6 +261,32 @@ describe("the page's one budget", () => {
     expect(over).toBe(0);
   }, 120_000);
 
+  it('a budget below the copies on screen: they go too (listeners hear an empty step), then a coarse step within it', async () => {
+    const budget = new GpuBudget(HIGH);
+    let over = 0;
+    budget.meter.onAllocate = (bytes) => {
+      if (bytes > budget.bytes) over = Math.max(over, bytes - budget.bytes);
+    };
+    const s = await open(storeA, budget);
+    await s.stream.setIsovalue(s.iso);
+    const shown: number[] = [];
+    s.stream.onShown((step) => shown.push(step.levels.length));
+    // 1 MiB kept free for staging, and less than the copies of the step on screen hold (the stand-in's triangles are its drawn chunks)
+    const copies = s.stream.shown!.levels.reduce((a, l) => a + 300 + COPY_PER_CHUNK * l.stats.triangles, 0);
+    const tiny = 1024 * KiB + copies - 1;
+    expect(copies).toBeGreaterThan(400 * KiB); // room for a coarse step once they are gone
+    budget.bytes = tiny;
+    expect(budget.heldBytes).toBeLessThanOrEqual(tiny);
+    expect(shown).toEqual([0]);
+    expect(s.stream.shown?.levels).toEqual([]);
+    await s.stream.setIsovalue(s.iso);
+    expect(s.stream.shown?.levels.length).toBeGreaterThan(0);
+    expect(budget.heldBytes).toBeLessThanOrEqual(tiny);
+    s.stream.destroy();
+    expect(budget.heldBytes).toBe(0);
+    expect(over).toBe(0);
+  }, 120_000);
+
   it('a suspended stream runs nothing: no fetch, no timer, no step, whatever arrives', async () => {
     const budget = new GpuBudget(HIGH);
     const s = await open(storeB, budget);
