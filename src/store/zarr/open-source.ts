@@ -41,12 +41,28 @@ async function sampleBricks(sources: SourceLevel[], level: number, cacheBytes?: 
   const reader = new BrickReader(sources, cacheBytes);
   const { chunkEdge: B, chunkGrid, name } = sources[level].layout;
   const count = chunkGrid[0] * chunkGrid[1] * chunkGrid[2];
-  const k = Math.min(count, 64, Math.max(1, Math.floor(2 ** 23 / B ** 3)));
-  const picks = [...new Set(Array.from({ length: k }, (_, i) => Math.floor(((i + 0.5) * count) / k)))];
+  const picks = spreadBricks(chunkGrid, Math.min(count, 64, Math.max(1, Math.floor(2 ** 23 / B ** 3))));
   const values = new Float32Array(B ** 3 * picks.length);
   const bricks = await Promise.all(picks.map((b) => reader.read(level, b)));
   bricks.forEach((b, i) => values.set(new Float32Array(b.buffer, b.byteOffset, B ** 3), i * B ** 3));
   return { ...sampleAs(values, sources[level].array.dtype), dims: [B, B, B * picks.length], name };
+}
+
+/**
+ * At most `k` bricks of a grid, spread in 3-D: a lattice of m per axis (all
+ * of a shorter axis), the largest m that keeps their number within k, each
+ * at the middle of its share of the axis. (Evenly spaced brick indices are
+ * not spread: 32 of 16^3 all lie on the face x = 0, empty space around a
+ * centred specimen, and the rate chosen from them was 1.)
+ */
+export function spreadBricks(grid: readonly [number, number, number], k: number): number[] {
+  const per = (m: number) => grid.map((g) => Math.min(g, m));
+  let m = 1;
+  while (m < Math.max(...grid) && per(m + 1).reduce((a, b) => a * b, 1) <= k) m++;
+  const at = per(m).map((n, a) => Array.from({ length: n }, (_, j) => Math.floor(((j + 0.5) * grid[a]) / n)));
+  const out: number[] = [];
+  for (const z of at[2]) for (const y of at[1]) for (const x of at[0]) out.push(x + grid[0] * (y + grid[1] * z));
+  return out;
 }
 
 /**
