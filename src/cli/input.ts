@@ -47,6 +47,8 @@ export interface OpenedInput {
   /** Volumes compressed here: how the rate was found and its error (the record's `rateError`). */
   rateChoice?: RateChoice;
   notes: string[];
+  /** Where the positions read lie: voxel (i, j, k) at ((i, j, k) + origin) * voxelSize, in `unit` (null: unknown). */
+  placement: { voxelSize: [number, number, number]; origin: [number, number, number]; unit: string | null };
   /** A store's figures (bytes fetched, chunks), for the JSON record. */
   store?: () => StoreRecord;
   /** A store of lossless chunks: writes the brick ranges known now as a ranges sidecar (--save-ranges). */
@@ -83,6 +85,7 @@ export async function openInputSurface(
         how: s.how,
         rate: s.rate,
         notes: s.notes,
+        placement: { voxelSize: s.voxelSize, origin: [0, 0, 0], unit: s.unit },
         store: s.record,
         ...(s.saveRanges ? { saveRanges: s.saveRanges } : {}),
         destroy: () => s.surface.destroy(),
@@ -138,6 +141,7 @@ export async function openInputSurface(
     rate: v.rate,
     ...(v.rateChoice ? { rateChoice: v.rateChoice } : {}),
     notes: v.notes,
+    placement: { voxelSize: v.spacing ?? [1, 1, 1], origin: v.origin ?? [0, 0, 0], unit: null },
     destroy: () => {
       made.destroy();
       stream.destroy();

@@ -40,6 +40,9 @@ export interface StoreInput {
   rate: number;
   notes: string[];
   fileName: string;
+  /** The physical size of one voxel of the positions read (the pinned level's, or level 0's for a view), and its unit (OME). */
+  voxelSize: [number, number, number];
+  unit: string | null;
   /** The store's figures so far. */
   record(): StoreRecord;
   /**
@@ -126,6 +129,8 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
     rate: lv.layout.rate,
     notes: store.notes,
     fileName: `${input} level ${L}`,
+    voxelSize: store.voxelSize.map((s, a) => s * store.levelScales[L][a]) as [number, number, number],
+    unit: store.unit,
     record: () => session.record(L, L, L),
     // levels with range arrays: those; the others: what was learnt as bricks arrived, a level learnt in part included
     ...(store.source
@@ -180,6 +185,8 @@ function viewInput(input: string, session: StoreSession, view: ViewSpec): StoreI
     rate: lv0.layout.rate,
     notes: store.notes,
     fileName: `${input} (view)`,
+    voxelSize: [...store.voxelSize],
+    unit: store.unit,
     record: () => session.record(Math.min(...(stream.shown?.levels.map((l) => l.level) ?? [0])), 0),
     ...(store.source ? { saveRanges } : {}),
   };

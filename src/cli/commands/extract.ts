@@ -8,7 +8,9 @@
 // the page opens it (src/volume/open-volume.ts).
 // Per isovalue: counts, cache behaviour, surface area and bounding box in
 // voxel index space (voxel (i, j, k) at (i, j, k), as VTK places them), GPU
-// time; --ply writes each soup. A surface over the memory budget is recorded
+// time; area and enclosed volume in physical units (the file's voxel size,
+// a store's OME scale; src/mc/mesh-measure.ts); --ply writes each soup, --glb
+// all surfaces as meshes of one binary glTF. A surface over the memory budget is recorded
 // as {iso, error}, the others are still computed, and the exit status is 1.
 import { writeFileSync } from 'node:fs';
 import { basename } from 'node:path';
@@ -18,6 +20,8 @@ import { formatMB } from '../../isosurface/budget.ts';
 import { IsosurfaceBudgetError } from '../../isosurface/types.ts';
 import { meshPositions } from '../../isosurface/vertex-format.ts';
 import { meshMetrics } from '../../mc/mesh-metrics.ts';
+import { measureSurface } from '../../mc/mesh-measure.ts';
+import { encodeGlb, type GlbSurface, SURFACE_PALETTE } from '../../mc/glb.ts';
 import { LevelStoppedError } from '../../store/stream-surface.ts';
 import { openInputSurface } from '../input.ts';
 import { parseCam } from '../../store/view/camera.ts';
@@ -45,18 +49,33 @@ export interface ExtractRecord {
   newBlocks: number;
   occupiedBlocks: number;
   hitRate: number;
+  /** Voxel index space (every voxel 1 on a side). */
   surfaceArea: number;
+  /** Physical units (the result's voxelSize and unit): area, and the enclosed volume where the surface is closed (null where it is open). */
+  area: number;
+  enclosedVolume: number | null;
+  /** Edges used more often in one direction than the other (welded by position): 0 when closed. */
+  openEdges: number;
   bbox: { min: [number, number, number]; max: [number, number, number] } | null;
   gpuMs: number;
   stages: { label: string; ms: number }[];
   cacheSlots: number;
   grew: boolean;
   ply?: string;
+  /** The mesh of this surface in the --glb file. */
+  glbMesh?: string;
   /** A store refined by a view: the chunks drawn per level, with the triangles of each (stitching geometry, if any, apart). */
   cut?: CutChunkRecord[];
   /** A store refined by a view: triangles besides the cut's regular cells (skirts over level seams), and GPU bytes held with this surface. */
   stitchTriangles?: number;
   gpuBytes?: number;
+}
+
+/** Voxel index positions -> physical ones: ((i, j, k) + origin) * voxelSize. */
+function physicalPositions(positions: Float32Array, placement: { voxelSize: readonly number[]; origin: readonly number[] }): Float32Array {
+  const out = new Float32Array(positions.length);
+  for (let i = 0; i < positions.length; i++) out[i] = (positions[i] + placement.origin[i % 3]) * placement.voxelSize[i % 3];
+  return out;
 }
 
 /** --deadline S (a store's per-request retry deadline) -> ms (shared with `bench`). */
@@ -108,9 +127,10 @@ export function budgetOption(args: Parameters<typeof numberOption>[0]): number |
 
 export const extractCommand: CliCommand = {
   name: 'extract',
-  summary: 'isosurfaces on the GPU (block cache kept between isovalues): counts, area, bbox, GPU time; --ply soups',
+  summary:
+    'isosurfaces on the GPU (block cache kept between isovalues): counts, area, enclosed volume, bbox, GPU time; --ply soups, --glb glTF',
   usage:
-    "extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--level L] [--deadline S] [--time T] [--channel C] [--ranges RANGES.zarr] [--view-box x0,y0,z0,x1,y1,z1 | --view '#iso=..&cam=..'] [--tolerance PX] [--no-skirts] [--save-ranges OUT.zarr] (--level, --view-box, --view, --deadline, --time, --channel, --ranges: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8; --save-ranges: a store of lossless chunks, the brick ranges learnt by these surfaces written as a ranges sidecar)",
+    "extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--glb FILE] [--level L] [--deadline S] [--time T] [--channel C] [--ranges RANGES.zarr] [--view-box x0,y0,z0,x1,y1,z1 | --view '#iso=..&cam=..'] [--tolerance PX] [--no-skirts] [--save-ranges OUT.zarr] (--level, --view-box, --view, --deadline, --time, --channel, --ranges: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8; --save-ranges: a store of lossless chunks, the brick ranges learnt by these surfaces written as a ranges sidecar)",
   options: {
     level: { type: 'string' },
     deadline: { type: 'string' },
@@ -126,6 +146,7 @@ export const extractCommand: CliCommand = {
     'stream-budget': { type: 'string' },
     'cache-budget': { type: 'string' },
     ply: { type: 'string' },
+    glb: { type: 'string' },
     'save-ranges': { type: 'string' },
   },
   async run(ctx, args) {
@@ -134,6 +155,8 @@ export const extractCommand: CliCommand = {
     if (!isovalues || isovalues.length === 0) throw new UsageError('give the isovalues with --iso a,b,c');
     const budget = budgetOption(args);
     const plyPrefix = stringOption(args, 'ply');
+    const glbPath = stringOption(args, 'glb');
+    const glbSurfaces: GlbSurface[] = [];
     const saveRanges = stringOption(args, 'save-ranges');
     const gpu = await ctx.gpu();
     const volume = await openInputSurface(ctx, gpu, input, {
@@ -181,6 +204,7 @@ export const extractCommand: CliCommand = {
           indices = surface.indices;
         }
         const m = meshMetrics(soupOf(welded, indices));
+        const measure = measureSurface(welded, indices, volume.placement);
         const record: ExtractRecord = {
           iso: stats.isovalue,
           triangles: stats.triangles,
@@ -191,6 +215,9 @@ export const extractCommand: CliCommand = {
           occupiedBlocks: stats.occupiedBlocks,
           hitRate: stats.hitRate,
           surfaceArea: m.area,
+          area: measure.area,
+          enclosedVolume: measure.enclosedVolume,
+          openEdges: measure.openEdges,
           bbox: m.bbox,
           gpuMs: stats.gpuMs,
           stages: stats.stages,
@@ -209,10 +236,21 @@ export const extractCommand: CliCommand = {
             ]),
           );
         }
+        if (glbPath !== undefined && indices.length > 0) {
+          record.glbMesh = `iso ${stats.isovalue}`;
+          glbSurfaces.push({
+            name: record.glbMesh,
+            positions: physicalPositions(welded, volume.placement),
+            indices,
+            color: SURFACE_PALETTE[glbSurfaces.length % SURFACE_PALETTE.length],
+            opacity: 1,
+            extras: { isovalue: stats.isovalue, area: measure.area, enclosedVolume: measure.enclosedVolume },
+          });
+        }
         records.push(record);
         ctx.log(
           `iso ${stats.isovalue}: ${stats.triangles} triangles, ${stats.activeBlocks} active / ${stats.newBlocks} new / ${stats.occupiedBlocks} occupied blocks, ` +
-            `hit rate ${(stats.hitRate * 100).toFixed(1)}%, area ${m.area.toFixed(2)}, ${stats.gpuMs.toFixed(1)} ms GPU (${stats.timingSource})${record.ply ? ` -> ${record.ply}` : ''}`,
+            `hit rate ${(stats.hitRate * 100).toFixed(1)}%, area ${measure.area.toPrecision(6)}, ${measure.enclosedVolume === null ? `open (${measure.openEdges} open edges)` : `encloses ${measure.enclosedVolume.toPrecision(6)}`}, ${stats.gpuMs.toFixed(1)} ms GPU (${stats.timingSource})${record.ply ? ` -> ${record.ply}` : ''}`,
         );
       }
       storeRecord = volume.store?.(); // before destroy: the GPU bytes held with the last surface
@@ -223,6 +261,15 @@ export const extractCommand: CliCommand = {
           throw new InputError(`--save-ranges ${saveRanges}: ${(e as Error).message}`, { cause: e });
         }
         ctx.log(`${saveRanges}: the ranges of ${savedRanges.known} of ${savedRanges.bricks} bricks (the others unknown: NaN)`);
+      }
+      if (glbPath !== undefined) {
+        const unit = volume.placement.unit;
+        const glb = await encodeGlb(glbSurfaces, {
+          generator: 'zfp-isosurface-webgpu extract',
+          extras: { source: basename(input), voxelSize: volume.placement.voxelSize, unit },
+        });
+        writeFileSync(glbPath, glb);
+        ctx.log(`${glbPath}: ${glbSurfaces.length} surfaces (${unit ?? 'units of the voxel size'})`);
       }
     } finally {
       volume.destroy();
@@ -235,6 +282,10 @@ export const extractCommand: CliCommand = {
       dims: iso.info.dims,
       blockGrid: iso.info.blockGrid,
       valueRange: iso.info.valueRange,
+      voxelSize: volume.placement.voxelSize,
+      origin: volume.placement.origin,
+      unit: volume.placement.unit,
+      ...(glbPath !== undefined ? { glb: glbPath } : {}),
       notes: volume.notes,
       adapter: describeAdapter(gpu.adapter),
       memoryBudgetBytes: iso.memoryBudget,
