@@ -11,6 +11,7 @@ export interface ControlActions {
   fitView: () => void;
   savePng: () => void;
   savePly: () => void;
+  saveGlb: () => void;
   copyLink: () => void;
   stepIso: (steps: number) => void;
   setBoxVisible: (on: boolean) => void;
@@ -69,6 +70,7 @@ export function wireControls(a: ControlActions): void {
   $('fit-view').addEventListener('click', a.fitView);
   $('save-png').addEventListener('click', a.savePng);
   $('save-ply').addEventListener('click', a.savePly);
+  $('save-glb').addEventListener('click', a.saveGlb);
   $('copy-link').addEventListener('click', a.copyLink);
   const box = $<HTMLInputElement>('show-box');
   box.addEventListener('change', () => a.setBoxVisible(box.checked));

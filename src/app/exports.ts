@@ -1,13 +1,16 @@
-// What a user takes away: the view as PNG, the surface as binary PLY, and a
-// link that reopens this view.
+// What a user takes away: the view as PNG, the surface as binary PLY or
+// glTF, and a link that reopens this view.
 
 import type { Viewer } from '../render/viewer.ts';
 import { download } from './dom.ts';
 import { captureViewPng } from './export/screenshot.ts';
-import { meshPositions } from '../isosurface/vertex-format.ts';
+import { encodeGlb } from '../mc/glb.ts';
+import { measureSurface } from '../mc/mesh-measure.ts';
 import { encodePly } from '../mc/ply.ts';
+import { describePlacement, readShownMesh } from './export/shown-mesh.ts';
 import { formatBytes } from './format.ts';
 import type { Messages } from './messages.ts';
+import type { MeasuredSurface } from './ui/measure-panel.ts';
 import type { Session } from './session.ts';
 import type { ViewLink } from './view-link.ts';
 
@@ -33,34 +36,16 @@ export async function savePng(viewer: Viewer, session: Session, messages: Messag
 }
 
 export async function savePly(session: Session, messages: Messages): Promise<void> {
-  const v = session.current;
-  if (!v) return;
   try {
-    // a store refined by the view: every level's piece, in level-0 voxels
-    let mesh: { positions: Float32Array; indices: Uint32Array };
-    if (v.iso.readPositions) mesh = await v.iso.readPositions();
-    else {
-      const surface = await v.iso.readMesh();
-      // Welded on the GPU: one vertex per cut grid edge, as VTK's merged points.
-      mesh = { positions: meshPositions(surface), indices: surface.indices };
-    }
+    const mesh = await readShownMesh(session);
+    if (!mesh) return;
     if (mesh.indices.length === 0) {
       messages.show('The surface is empty at this isovalue: nothing to export.', 'info', 4000);
       return;
     }
-    // What is on screen: voxel (i, j, k) at (i, j, k) * voxel size (1 unless the file or the user gave one).
-    const size = session.spacing;
-    const origin = v.opened.origin ?? [0, 0, 0];
-    const isotropicUnit = size.every((s) => s === 1) && origin.every((o) => o === 0);
-    if (!isotropicUnit) {
-      for (let i = 0; i < mesh.positions.length; i++) mesh.positions[i] = (mesh.positions[i] + origin[i % 3]) * size[i % 3];
-    }
-    const iso = session.drawnIsovalue ?? NaN;
     const ply = encodePly(mesh, [
-      `isosurface of ${v.opened.name} at isovalue ${iso}`,
-      isotropicUnit
-        ? `voxel index coordinates: voxel (i, j, k) at (i, j, k); volume ${v.iso.info.dims.join(' x ')}`
-        : `world coordinates: voxel (i, j, k) at ((i + ${origin[0]}) * ${size[0]}, (j + ${origin[1]}) * ${size[1]}, (k + ${origin[2]}) * ${size[2]}); volume ${v.iso.info.dims.join(' x ')}`,
+      `isosurface of ${session.current?.opened.name} at isovalue ${mesh.iso}`,
+      describePlacement(mesh),
       'made by zfp-isosurface-webgpu (marching cubes on the GPU, zfp fixed-rate blocks)',
     ]);
     download(new Blob([ply as BlobPart], { type: 'application/octet-stream' }), `${baseName(session)}${isoTag(session)}.ply`);
@@ -71,6 +56,52 @@ export async function savePly(session: Session, messages: Messages): Promise<voi
     );
   } catch (e) {
     messages.show(`PLY export: ${(e as Error).message}`);
+  }
+}
+
+/** The surface on screen as binary glTF: one mesh, the page's surface colour as its material, in world units. */
+export async function saveGlb(session: Session, color: readonly [number, number, number], messages: Messages): Promise<void> {
+  try {
+    const mesh = await readShownMesh(session);
+    if (!mesh) return;
+    if (mesh.indices.length === 0) {
+      messages.show('The surface is empty at this isovalue: nothing to export.', 'info', 4000);
+      return;
+    }
+    const measure = measureSurface(mesh.positions, mesh.indices);
+    const glb = await encodeGlb(
+      [
+        {
+          name: `iso ${mesh.iso}`,
+          positions: mesh.positions,
+          indices: mesh.indices,
+          color,
+          opacity: 1,
+          extras: { isovalue: mesh.iso, area: measure.area, enclosedVolume: measure.enclosedVolume },
+        },
+      ],
+      { generator: 'zfp-isosurface-webgpu', extras: { source: session.current?.opened.name, coordinates: describePlacement(mesh) } },
+    );
+    download(new Blob([glb as BlobPart], { type: 'model/gltf-binary' }), `${baseName(session)}${isoTag(session)}.glb`);
+    messages.show(
+      `Exported ${(mesh.indices.length / 3).toLocaleString('en-US')} triangles as glTF (${formatBytes(glb.byteLength)}).`,
+      'info',
+      4000,
+    );
+  } catch (e) {
+    messages.show(`glTF export: ${(e as Error).message}`);
+  }
+}
+
+/** Area and enclosed volume of the surface on screen (world units); null when nothing is open or it failed (the message says why). */
+export async function measureShown(session: Session, messages: Messages): Promise<MeasuredSurface | null> {
+  try {
+    const mesh = await readShownMesh(session);
+    if (!mesh) return null;
+    return { ...measureSurface(mesh.positions, mesh.indices), iso: mesh.iso, voxelUnits: mesh.voxelUnits };
+  } catch (e) {
+    messages.show(`Measure: ${(e as Error).message}`);
+    return null;
   }
 }
 

@@ -12,7 +12,8 @@ import { SurfaceLayer } from '../render/surface-layer.ts';
 import { Viewer } from '../render/viewer.ts';
 import { acceptDrops, hexToRgb, wireControls } from './controls.ts';
 import { byId } from './dom.ts';
-import { copyLink, savePly, savePng } from './exports.ts';
+import { copyLink, measureShown, saveGlb, savePly, savePng } from './exports.ts';
+import { type MeasuredSurface, MeasurePanel } from './ui/measure-panel.ts';
 import { setInfoList } from './info-list.ts';
 import { chooseIsovalue } from './iso-choice.ts';
 import { VolumeLoader } from './loading/loader.ts';
@@ -178,6 +179,14 @@ async function start(): Promise<void> {
     },
     onError: (m) => messages.show(m),
   });
+  const measure = new MeasurePanel(
+    byId<HTMLButtonElement>('measure-surface'),
+    byId('surface-measure'),
+    (): Promise<MeasuredSurface | null> => measureShown(session, messages),
+    (m) => {
+      state.measure = m;
+    },
+  );
   const makeSession = () =>
     new Session({
       viewer,
@@ -193,6 +202,7 @@ async function start(): Promise<void> {
       messages,
       state,
       volumeInfo: byId('volume-info'),
+      measure,
     });
   let session = makeSession();
   session.pendingCamera = initialView.camera;
@@ -256,6 +266,7 @@ async function start(): Promise<void> {
     },
     savePng: () => void savePng(viewer, session, messages),
     savePly: () => void savePly(session, messages),
+    saveGlb: () => void saveGlb(session, surface.style.front, messages),
     copyLink: () => {
       if (session.current && session.current.opened.kind !== 'default' && !volumeUrl) {
         messages.show(

@@ -5,6 +5,7 @@ import type { AdapterSummary } from '../gpu/device.ts';
 import type { IsosurfaceStats } from '../isosurface/types.ts';
 import type { CameraState } from '../render/camera.ts';
 import type { Dims } from '../core/naming.ts';
+import type { MeasuredSurface } from './ui/measure-panel.ts';
 
 export interface PageVolumeState {
   name: string;
@@ -36,6 +37,8 @@ export interface PageState {
   /** Every message shown to the user, in order. */
   messages: string[];
   bench?: BenchResult;
+  /** The last "Measure" of the surface (cleared when another volume opens). */
+  measure?: MeasuredSurface;
   benchRunning: boolean;
   /** Devices lost so far (each followed by a new device and the volume opened again). */
   deviceLosses?: number;

@@ -17,6 +17,7 @@ import type { BenchPanel } from './ui/bench-panel.ts';
 import type { BudgetControl } from './ui/budget-control.ts';
 import type { Hud } from './ui/hud.ts';
 import type { IsoControl } from './ui/iso-control.ts';
+import type { MeasurePanel } from './ui/measure-panel.ts';
 import type { Spacing, SpacingControl } from './ui/spacing-control.ts';
 import { StatsPanel, volumeRows } from './ui/stats-panel.ts';
 import type { ViewLink } from './view-link.ts';
@@ -35,6 +36,7 @@ export interface SessionParts {
   messages: Messages;
   state: PageState;
   volumeInfo: HTMLElement;
+  measure: MeasurePanel;
 }
 
 export class Session {
@@ -58,6 +60,7 @@ export class Session {
     const old = this.current;
     this.current = v;
     this.requestedAt.clear();
+    if (old !== v) p.measure.clear();
     const { info } = v.iso;
     v.iso.onStats((s) => {
       if (this.current === v) this.showStats(s);

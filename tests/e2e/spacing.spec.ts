@@ -1,11 +1,14 @@
 // Voxel size: a NRRD's spacings stretch the surface, its box and the PLY
 // export (world coordinates = the CLI's voxel coordinates, which the unit
-// tests hold to VTK's, times the spacing); the user can correct the size,
-// and the link carries what they set.
+// tests hold to VTK's, times the spacing); Measure gives vtkMassProperties'
+// area and volume of VTK's surface at that spacing, and the glTF export
+// (read by pygltflib) the PLY's mesh with the surface colour; the user can
+// correct the size (the volume follows), and the link carries what they set.
 import { readFileSync } from 'node:fs';
 import { join } from 'node:path';
 import { expect, test } from '@playwright/test';
 import { parsePly } from '../../src/mc/ply.ts';
+import { runPython } from '../helpers/python.ts';
 import { runCli, SHARED_VOLUMES_DIR } from './cli.ts';
 import { openApp, waitForFrames } from './page.ts';
 import { acceptVolumeForm, loads, pageState, setIsovalue, SHARED_VOLUMES, waitForLoad } from './volume-page.ts';
@@ -59,6 +62,57 @@ test('a NRRD with spacings is drawn and exported to scale; the size can be corre
     expect(hi[a]).toBeCloseTo(ref.bbox.max[a] * spacing[a], 3);
   }
 
+  // Measure: VTK's surface of the same samples at the same spacing, measured by vtkMassProperties.
+  const vtk = JSON.parse(
+    runPython(
+      `
+import sys, json, numpy as np, vtk
+from vtk.util import numpy_support
+img = vtk.vtkImageData(); img.SetDimensions(66, 66, 66); img.SetSpacing(0.5, 0.75, 2)
+img.GetPointData().SetScalars(numpy_support.numpy_to_vtk(np.fromfile(sys.argv[1], np.uint8).astype(np.float32), deep=True))
+mc = vtk.vtkMarchingCubes(); mc.SetInputData(img); mc.SetValue(0, float(sys.argv[2])); mc.Update()
+mp = vtk.vtkMassProperties(); mp.SetInputConnection(mc.GetOutputPort()); mp.Update()
+print(json.dumps({'area': mp.GetSurfaceArea(), 'volume': mp.GetVolume()}))
+`,
+      [join(SHARED_VOLUMES_DIR, 'neghip_66x66x66_uint8.raw'), String(Math.fround(ISO))],
+    ),
+  );
+  const measured = async () => {
+    await page.locator('#measure-surface').click(); // clears window.zfpiso.measure until done
+    await page.waitForFunction(() => window.zfpiso!.measure !== undefined);
+    return (await page.evaluate(() => window.zfpiso!.measure))!;
+  };
+  const m = await measured();
+  expect(m).toMatchObject({ closed: true, openEdges: 0, triangles: ref.triangles, voxelUnits: false });
+  expect(Math.abs(m.area / vtk.area - 1)).toBeLessThan(1e-3);
+  expect(Math.abs(m.enclosedVolume! / vtk.volume - 1)).toBeLessThan(1e-3);
+  await expect(page.locator('#surface-measure')).toContainText('encloses');
+
+  // glTF: the PLY's mesh, in the same world coordinates, with the surface's colour.
+  const [glb] = await Promise.all([page.waitForEvent('download'), page.locator('#save-glb').click()]);
+  expect(glb.suggestedFilename()).toMatch(/^neghip_aniso_iso80\.37\.glb$/);
+  const read = JSON.parse(
+    runPython(
+      `
+import sys, json, numpy as np
+from pygltflib import GLTF2
+g = GLTF2().load_binary(sys.argv[1])
+p = g.meshes[0].primitives[0]
+a = g.accessors[p.attributes.POSITION]
+print(json.dumps({'meshes': len(g.meshes), 'vertices': a.count, 'indices': g.accessors[p.indices].count, 'min': a.min, 'max': a.max,
+                  'color': g.materials[p.material].pbrMetallicRoughness.baseColorFactor, 'alpha': g.materials[p.material].alphaMode}))
+`,
+      [(await glb.path())!],
+    ),
+  );
+  expect(read).toMatchObject({ meshes: 1, vertices: mesh.positions.length / 3, indices: mesh.indices.length, alpha: 'OPAQUE' });
+  for (let a = 0; a < 3; a++) {
+    expect(read.min[a]).toBeCloseTo(lo[a], 4);
+    expect(read.max[a]).toBeCloseTo(hi[a], 4);
+  }
+  // the page's default front colour (0.86, 0.8, 0.7) in linear light
+  expect(read.color[0]).toBeCloseTo(((0.86 + 0.055) / 1.055) ** 2.4, 5);
+
   // Correcting the size refits the view and goes into the link.
   const camBefore = await page.evaluate(() => window.zfpiso!.camera!());
   await page.locator('#spacing-z').fill('1');
@@ -68,6 +122,10 @@ test('a NRRD with spacings is drawn and exported to scale; the size can be corre
   const camAfter = await page.evaluate(() => window.zfpiso!.camera!());
   expect(camAfter.target[2]).toBeCloseTo(camBefore.target[2] / 2, 3);
   await page.waitForFunction(() => location.hash.includes('vox=0.5,0.75,1'));
+  // half the voxel depth: half the volume, the same triangles
+  const halved = await measured();
+  expect(halved.triangles).toBe(m.triangles);
+  expect(halved.enclosedVolume! / m.enclosedVolume!).toBeCloseTo(0.5, 9);
 
   // A bad size is refused and the previous one shown again.
   await page.locator('#spacing-x').fill('0');
