@@ -18,9 +18,15 @@ struct Surface {
   extra: vec4f,        // x: rim strength, y: depth cue, z: near, w: far (eye distance)
   voxel_size: vec4f,   // xyz: world size of a voxel
   origin: vec4f,       // xyz: where voxel (0, 0, 0) sits, in voxels (a store level's OME translation)
-  tint: vec4f,         // rgb: multiplies the base colours (a store refined by the view: the level tint; 1 otherwise)
+  tint: vec4f,         // rgb: multiplies the base colours (a store refined by the view: the level tint; 1 otherwise); a: opacity
 };
 @group(1) @binding(0) var<uniform> surface: Surface;
+
+// Depth peeling (fs_peel; src/render/depth-peel.ts): the depth of the layer
+// peeled before this one (fragments at or in front of it were drawn already)
+// and the opaque scene's depth (fragments behind it are hidden).
+@group(2) @binding(0) var peeled_depth: texture_depth_2d;
+@group(2) @binding(1) var opaque_depth: texture_depth_2d;
 
 struct VsOut {
   // Invariant: the depth-only entry point (vs_depth) must put every vertex at
@@ -71,6 +77,27 @@ fn to_srgb(c: vec3f) -> vec3f {
 
 @fragment
 fn fs(in: VsOut, @builtin(front_facing) front_facing: bool) -> @location(0) vec4f {
+  return vec4f(shade(in, front_facing), 1.0);
+}
+
+// One layer of a see-through surface: the nearest fragment behind the layer
+// peeled before (depth test 'less' into a cleared depth) and in front of the
+// opaque scene, premultiplied by the surface's opacity. Depths are compared
+// as the float32 the depth targets store, so a fragment peeled once is never
+// peeled again.
+@fragment
+fn fs_peel(in: VsOut, @builtin(front_facing) front_facing: bool) -> @location(0) vec4f {
+  let colour = shade(in, front_facing); // first: derivatives need uniform control flow
+  let pixel = vec2i(in.clip.xy);
+  if (in.clip.z <= textureLoad(peeled_depth, pixel, 0) || in.clip.z >= textureLoad(opaque_depth, pixel, 0)) {
+    discard;
+  }
+  let a = surface.tint.a;
+  return vec4f(colour * a, a);
+}
+
+// The lit colour (sRGB-encoded, as the canvas shows it).
+fn shade(in: VsOut, front_facing: bool) -> vec3f {
   let to_eye = normalize(frame.eye.xyz - in.world);
   // Marching cubes winds triangles so that their right-hand normal points
   // out of the value >= iso region (VTK's convention): a front-facing
@@ -120,5 +147,5 @@ fn fs(in: VsOut, @builtin(front_facing) front_facing: bool) -> @location(0) vec4
   let dist = length(frame.eye.xyz - in.world);
   let far_t = clamp((dist - surface.extra.z) / max(surface.extra.w - surface.extra.z, 1e-6), 0.0, 1.0);
   c = mix(c, c * 0.55, far_t * surface.extra.y);
-  return vec4f(to_srgb(c), 1.0);
+  return to_srgb(c);
 }

@@ -12,6 +12,7 @@ import vertexFormatWgsl from '../../shaders/isosurface/vertex_format.wgsl?raw';
 import { createShaderModule } from '../gpu/wgsl.ts';
 import type { IsosurfaceDrawData } from '../isosurface/types.ts';
 import type { ArcballCamera } from './camera.ts';
+import { PEEL_TARGET, peelBindGroupLayout } from './depth-peel.ts';
 import { DEPTH_FORMAT, frameSnippet, type RenderLayer } from './viewer.ts';
 
 /** What a layer needs from the viewer (a Viewer satisfies it; tests build one without a canvas). */
@@ -36,6 +37,8 @@ export interface SurfaceStyle {
   rim: number;
   /** 0..1: how much far parts darken. */
   depthCue: number;
+  /** 1: opaque; below 1 the surface is see-through (depth peeled: src/render/depth-peel.ts). */
+  opacity: number;
 }
 
 export const DEFAULT_SURFACE_STYLE: SurfaceStyle = {
@@ -46,6 +49,7 @@ export const DEFAULT_SURFACE_STYLE: SurfaceStyle = {
   specular: 0.28,
   rim: 0.12,
   depthCue: 0.35,
+  opacity: 1,
 };
 
 const UNIFORM_BYTES = 128;
@@ -99,12 +103,19 @@ export class SurfaceLayer implements RenderLayer {
   private readonly centre = vec3.create();
   private readonly eye = vec3.create();
 
+  private readonly pipeline: GPURenderPipeline;
+  private readonly peelPipeline: GPURenderPipeline;
+  private readonly layout: GPUBindGroupLayout;
+  private readonly depthPipeline: GPURenderPipeline | undefined;
+
   private constructor(
     private readonly target: RenderTarget,
-    private readonly pipeline: GPURenderPipeline,
-    private readonly layout: GPUBindGroupLayout,
-    private readonly depthPipeline: GPURenderPipeline | undefined,
+    pipelines: SurfacePipelines,
   ) {
+    this.pipeline = pipelines.pipeline;
+    this.peelPipeline = pipelines.peel;
+    this.layout = pipelines.layout;
+    this.depthPipeline = pipelines.depth;
     this.uniforms = target.device.createBuffer({
       label: 'SurfaceLayer.uniforms',
       size: UNIFORM_BYTES,
@@ -113,45 +124,7 @@ export class SurfaceLayer implements RenderLayer {
   }
 
   static async create(target: RenderTarget, options: SurfaceLayerOptions = {}): Promise<SurfaceLayer> {
-    const { device } = target;
-    const module = await createShaderModule(device, 'SurfaceLayer.shader', [
-      frameSnippet,
-      { name: 'shaders/isosurface/vertex_format.wgsl', code: vertexFormatWgsl },
-      { name: 'shaders/render/surface.wgsl', code: surfaceWgsl },
-    ]);
-    const layout = device.createBindGroupLayout({
-      label: 'SurfaceLayer.layout',
-      entries: [{ binding: 0, visibility: GPUShaderStage.VERTEX | GPUShaderStage.FRAGMENT, buffer: { type: 'uniform' } }],
-    });
-    const pipelineLayout = device.createPipelineLayout({ label: 'SurfaceLayer', bindGroupLayouts: [target.frameBindGroupLayout, layout] });
-    // The welded vertices, 12 bytes each: packed position and block id, then the normal.
-    const position: GPUVertexAttribute = { shaderLocation: 0, offset: 0, format: 'uint32x2' };
-    const normal: GPUVertexAttribute = { shaderLocation: 1, offset: 8, format: 'uint32' };
-    const vertices: GPUVertexBufferLayout = { arrayStride: 12, stepMode: 'vertex', attributes: [position, normal] };
-    const positions: GPUVertexBufferLayout = { arrayStride: 12, stepMode: 'vertex', attributes: [position] };
-    // Two-sided: no culling; the fragment shader tells the sides apart.
-    const primitive: GPUPrimitiveState = { topology: 'triangle-list', cullMode: 'none' };
-    const depthStencil: GPUDepthStencilState = { format: DEPTH_FORMAT, depthWriteEnabled: true, depthCompare: 'less' };
-    const [pipeline, depthPipeline] = await Promise.all([
-      device.createRenderPipelineAsync({
-        label: 'SurfaceLayer.pipeline',
-        layout: pipelineLayout,
-        vertex: { module, entryPoint: 'vs', buffers: [vertices] },
-        fragment: { module, entryPoint: 'fs', targets: [{ format: target.format }] },
-        primitive,
-        depthStencil,
-      }),
-      options.depthPrepass
-        ? device.createRenderPipelineAsync({
-            label: 'SurfaceLayer.depthPipeline',
-            layout: pipelineLayout,
-            vertex: { module, entryPoint: 'vs_depth', buffers: [positions] },
-            primitive,
-            depthStencil,
-          })
-        : undefined,
-    ]);
-    return new SurfaceLayer(target, pipeline, layout, depthPipeline);
+    return new SurfaceLayer(target, await surfacePipelines(target, options.depthPrepass === true));
   }
 
   /** The surface to draw (undefined: nothing). Bind groups follow `data.version`. */
@@ -259,7 +232,7 @@ export class SurfaceLayer implements RenderLayer {
     f32[28] = tint ? tint[0] : 1;
     f32[29] = tint ? tint[1] : 1;
     f32[30] = tint ? tint[2] : 1;
-    f32[31] = 1;
+    f32[31] = s.opacity;
     this.target.device.queue.writeBuffer(into, 0, this.scratch);
   }
 
@@ -305,8 +278,17 @@ export class SurfaceLayer implements RenderLayer {
     }
   }
 
+  /** See-through this frame: drawn by the depth peeling (drawPeel), not in the opaque pass. */
+  get transparent(): boolean {
+    return this.style.opacity < 1 && this.hasDepth;
+  }
+
   draw(pass: GPURenderPassEncoder): void {
-    this.drawWith(pass, this.pipeline);
+    if (!this.transparent) this.drawWith(pass, this.pipeline);
+  }
+
+  drawPeel(pass: GPURenderPassEncoder): void {
+    if (this.transparent) this.drawWith(pass, this.peelPipeline);
   }
 
   /** Depth only, into a pass with a depth attachment and no colour target (needs `depthPrepass`). */
@@ -323,4 +305,82 @@ export class SurfaceLayer implements RenderLayer {
     this.data = undefined;
     this.bindGroup = undefined;
   }
+}
+
+interface SurfacePipelines {
+  pipeline: GPURenderPipeline;
+  peel: GPURenderPipeline;
+  depth: GPURenderPipeline | undefined;
+  layout: GPUBindGroupLayout;
+}
+
+/** One set per device, target format and depth pre-pass: the page's several surfaces share them. */
+const pipelineCache = new WeakMap<GPUDevice, Map<string, Promise<SurfacePipelines>>>();
+
+function surfacePipelines(target: RenderTarget, depthPrepass: boolean): Promise<SurfacePipelines> {
+  const { device } = target;
+  let byKey = pipelineCache.get(device);
+  if (!byKey) pipelineCache.set(device, (byKey = new Map()));
+  const key = `${target.format} ${depthPrepass}`;
+  let made = byKey.get(key);
+  if (!made) {
+    made = makeSurfacePipelines(target, depthPrepass);
+    made.catch(() => byKey.delete(key));
+    byKey.set(key, made);
+  }
+  return made;
+}
+
+async function makeSurfacePipelines(target: RenderTarget, depthPrepass: boolean): Promise<SurfacePipelines> {
+  const { device } = target;
+  const module = await createShaderModule(device, 'SurfaceLayer.shader', [
+    frameSnippet,
+    { name: 'shaders/isosurface/vertex_format.wgsl', code: vertexFormatWgsl },
+    { name: 'shaders/render/surface.wgsl', code: surfaceWgsl },
+  ]);
+  const layout = device.createBindGroupLayout({
+    label: 'SurfaceLayer.layout',
+    entries: [{ binding: 0, visibility: GPUShaderStage.VERTEX | GPUShaderStage.FRAGMENT, buffer: { type: 'uniform' } }],
+  });
+  const pipelineLayout = device.createPipelineLayout({ label: 'SurfaceLayer', bindGroupLayouts: [target.frameBindGroupLayout, layout] });
+  const peelLayout = device.createPipelineLayout({
+    label: 'SurfaceLayer.peel',
+    bindGroupLayouts: [target.frameBindGroupLayout, layout, peelBindGroupLayout(device)],
+  });
+  // The welded vertices, 12 bytes each: packed position and block id, then the normal.
+  const position: GPUVertexAttribute = { shaderLocation: 0, offset: 0, format: 'uint32x2' };
+  const normal: GPUVertexAttribute = { shaderLocation: 1, offset: 8, format: 'uint32' };
+  const vertices: GPUVertexBufferLayout = { arrayStride: 12, stepMode: 'vertex', attributes: [position, normal] };
+  const positions: GPUVertexBufferLayout = { arrayStride: 12, stepMode: 'vertex', attributes: [position] };
+  // Two-sided: no culling; the fragment shader tells the sides apart.
+  const primitive: GPUPrimitiveState = { topology: 'triangle-list', cullMode: 'none' };
+  const depthStencil: GPUDepthStencilState = { format: DEPTH_FORMAT, depthWriteEnabled: true, depthCompare: 'less' };
+  const [pipeline, peel, depth] = await Promise.all([
+    device.createRenderPipelineAsync({
+      label: 'SurfaceLayer.pipeline',
+      layout: pipelineLayout,
+      vertex: { module, entryPoint: 'vs', buffers: [vertices] },
+      fragment: { module, entryPoint: 'fs', targets: [{ format: target.format }] },
+      primitive,
+      depthStencil,
+    }),
+    device.createRenderPipelineAsync({
+      label: 'SurfaceLayer.peelPipeline',
+      layout: peelLayout,
+      vertex: { module, entryPoint: 'vs', buffers: [vertices] },
+      fragment: { module, entryPoint: 'fs_peel', targets: [PEEL_TARGET.colour] },
+      primitive,
+      depthStencil: PEEL_TARGET.depth,
+    }),
+    depthPrepass
+      ? device.createRenderPipelineAsync({
+          label: 'SurfaceLayer.depthPipeline',
+          layout: pipelineLayout,
+          vertex: { module, entryPoint: 'vs_depth', buffers: [positions] },
+          primitive,
+          depthStencil,
+        })
+      : undefined,
+  ]);
+  return { pipeline, peel, depth, layout };
 }

@@ -7,10 +7,11 @@ import frameWgsl from '../../shaders/render/frame.wgsl?raw';
 import type { WgslPart } from '../gpu/wgsl.ts';
 import { ArcballCamera, type Bounds, type UpAxis } from './camera.ts';
 import { CameraControls } from './camera-controls.ts';
+import { DepthPeeler, PEEL_DEPTH_FORMAT } from './depth-peel.ts';
 
 export const frameSnippet: WgslPart = { name: 'shaders/render/frame.wgsl', code: frameWgsl };
 
-export const DEPTH_FORMAT: GPUTextureFormat = 'depth24plus';
+export const DEPTH_FORMAT: GPUTextureFormat = PEEL_DEPTH_FORMAT;
 export const FRAME_UNIFORM_BYTES = 4 * (16 + 16 + 4 + 4 + 4);
 
 /** Bind group 0 of every layer's pipeline: the frame uniforms (shaders/render/frame.wgsl). */
@@ -54,8 +55,12 @@ export function frameUniformData(
 }
 
 export interface RenderLayer {
-  /** Records draws into the frame's render pass (group 0 = frame uniforms is already set). */
+  /** Records draws into the frame's render pass (group 0 = frame uniforms is already set): the opaque part. */
   draw(pass: GPURenderPassEncoder): void;
+  /** Has see-through content this frame (drawn by drawPeel, not draw). */
+  readonly transparent?: boolean;
+  /** The see-through part, once per depth-peel pass (group 0 the frame, group 2 the peel's depths: src/render/depth-peel.ts). */
+  drawPeel?(pass: GPURenderPassEncoder): void;
 }
 
 export interface ViewerOptions {
@@ -97,6 +102,9 @@ export class Viewer {
   private readonly scratch = new Float32Array(FRAME_UNIFORM_BYTES / 4);
   private destroyed = false;
   private bounds: Bounds | undefined;
+  /** Made when a see-through layer first appears. */
+  private peeler: DepthPeeler | undefined;
+  private peelerMaking = false;
 
   constructor(
     readonly device: GPUDevice,
@@ -221,7 +229,8 @@ export class Viewer {
         label: 'Viewer.depth',
         size: [width, height],
         format: DEPTH_FORMAT,
-        usage: GPUTextureUsage.RENDER_ATTACHMENT,
+        // read by the depth peeling of see-through layers
+        usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.TEXTURE_BINDING,
       });
       this.depthView = this.depth.createView();
     }
@@ -243,21 +252,54 @@ export class Viewer {
     this.writeFrameUniforms();
     const encoder = this.device.createCommandEncoder(this.encoderDescriptor);
     for (const hook of this.beforeFrame) hook(encoder);
-    this.colorAttachment.view = this.context.getCurrentTexture().createView();
+    const target = this.context.getCurrentTexture().createView();
+    this.colorAttachment.view = target;
     this.colorAttachment.clearValue = this.clearColor;
-    this.depthAttachment.view = this.ensureDepthView();
+    const depthView = this.ensureDepthView();
+    this.depthAttachment.view = depthView;
     const pass = encoder.beginRenderPass(this.passDescriptor);
     pass.setBindGroup(0, this.frameBindGroup);
     for (const layer of this.layers) layer.draw(pass);
     pass.end();
+    if (DepthPeeler.anyTransparent(this.layers)) {
+      if (this.peeler) {
+        const { width, height } = this.canvas;
+        this.peeler.encode(encoder, {
+          target,
+          opaqueDepth: depthView,
+          width,
+          height,
+          frameBindGroup: this.frameBindGroup,
+          layers: this.layers,
+        });
+      } else this.makePeeler();
+    }
     this.submitList[0] = encoder.finish();
     this.device.queue.submit(this.submitList);
     this.submitList.length = 0;
     this.framesDrawn++;
   }
 
+  /** The depth peeler, made once (the see-through layers appear from the frame after). */
+  private makePeeler(): void {
+    if (this.peelerMaking) return;
+    this.peelerMaking = true;
+    void DepthPeeler.create(this.device, this.format).then(
+      (p) => {
+        if (this.destroyed) return p.destroy();
+        this.peeler = p;
+        this.requestFrame();
+      },
+      (e) => {
+        this.peelerMaking = false;
+        console.error('depth peeling:', e);
+      },
+    );
+  }
+
   destroy(): void {
     this.destroyed = true;
+    this.peeler?.destroy();
     this.resizeObserver.disconnect();
     this.controls.dispose();
     this.depth?.destroy();
