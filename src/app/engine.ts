@@ -5,6 +5,7 @@ import type { GpuContext } from '../gpu/device.ts';
 import { Isosurface } from '../isosurface/isosurface.ts';
 import type { IsosurfaceDrawData, IsosurfaceOptions, IsosurfaceStats, SurfaceMesh, VolumeInfo } from '../isosurface/types.ts';
 import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
+import type { SurfaceSnapshot } from '../isosurface/snapshot.ts';
 
 export interface PageIsosurface {
   readonly info: VolumeInfo;
@@ -21,6 +22,12 @@ export interface PageIsosurface {
   setMemoryBudget(bytes: number): void;
   /** The current surface as an indexed mesh (welded vertices, indices). */
   readMesh(): Promise<SurfaceMesh>;
+  /** In-core surfaces (the page's several surfaces keep theirs as copies): a copy this surface fills with copyInto. */
+  newCopy?(): SurfaceSnapshot;
+  /** Copies the surface computed last (after compute() resolved, before the next request). */
+  copyInto?(copy: SurfaceSnapshot): void;
+  /** Bytes the cache and vertices hold now. */
+  readonly budgetedBytes?: number;
   /** [min, max] per block. */
   readBlockRanges(): Promise<Float32Array>;
   /** A surface of several pieces (a store refined by the view: one per level): what the layer draws instead of drawData. */

@@ -4,10 +4,11 @@
 import type { Viewer } from '../render/viewer.ts';
 import { download } from './dom.ts';
 import { captureViewPng } from './export/screenshot.ts';
-import { encodeGlb } from '../mc/glb.ts';
+import { encodeGlb, type GlbSurface } from '../mc/glb.ts';
 import { measureSurface } from '../mc/mesh-measure.ts';
 import { encodePly } from '../mc/ply.ts';
-import { describePlacement, readShownMesh } from './export/shown-mesh.ts';
+import { describePlacement, readShownMesh, type ShownMesh } from './export/shown-mesh.ts';
+import type { SurfaceSet } from './surfaces/surface-set.ts';
 import { formatBytes } from './format.ts';
 import type { Messages } from './messages.ts';
 import type { MeasuredSurface } from './ui/measure-panel.ts';
@@ -59,32 +60,40 @@ export async function savePly(session: Session, messages: Messages): Promise<voi
   }
 }
 
-/** The surface on screen as binary glTF: one mesh, the page's surface colour as its material, in world units. */
-export async function saveGlb(session: Session, color: readonly [number, number, number], messages: Messages): Promise<void> {
+/** The visible surfaces as binary glTF: a mesh each, with its colour and opacity as material, in world units. */
+export async function saveGlb(session: Session, surfaces: SurfaceSet, messages: Messages): Promise<void> {
   try {
-    const mesh = await readShownMesh(session);
-    if (!mesh) return;
-    if (mesh.indices.length === 0) {
-      messages.show('The surface is empty at this isovalue: nothing to export.', 'info', 4000);
+    const parts: GlbSurface[] = [];
+    let about: ShownMesh | undefined;
+    for (const entry of surfaces.entries) {
+      if (!entry.visible) continue;
+      const snapshot = surfaces.copyOf(entry);
+      const mesh = await readShownMesh(session, snapshot ? { snapshot, iso: entry.iso } : undefined);
+      if (!mesh) return;
+      about ??= mesh;
+      if (mesh.indices.length === 0) continue;
+      const measure = measureSurface(mesh.positions, mesh.indices);
+      parts.push({
+        name: `iso ${Number(mesh.iso.toPrecision(7))}`,
+        positions: mesh.positions,
+        indices: mesh.indices,
+        color: entry.color,
+        opacity: entry.opacity,
+        extras: { isovalue: mesh.iso, area: measure.area, enclosedVolume: measure.enclosedVolume },
+      });
+    }
+    if (parts.length === 0 || !about) {
+      messages.show('No visible surface has triangles: nothing to export.', 'info', 4000);
       return;
     }
-    const measure = measureSurface(mesh.positions, mesh.indices);
-    const glb = await encodeGlb(
-      [
-        {
-          name: `iso ${mesh.iso}`,
-          positions: mesh.positions,
-          indices: mesh.indices,
-          color,
-          opacity: 1,
-          extras: { isovalue: mesh.iso, area: measure.area, enclosedVolume: measure.enclosedVolume },
-        },
-      ],
-      { generator: 'zfp-isosurface-webgpu', extras: { source: session.current?.opened.name, coordinates: describePlacement(mesh) } },
-    );
+    const glb = await encodeGlb(parts, {
+      generator: 'zfp-isosurface-webgpu',
+      extras: { source: session.current?.opened.name, coordinates: describePlacement(about) },
+    });
     download(new Blob([glb as BlobPart], { type: 'model/gltf-binary' }), `${baseName(session)}${isoTag(session)}.glb`);
+    const triangles = parts.reduce((n, p) => n + p.indices.length / 3, 0);
     messages.show(
-      `Exported ${(mesh.indices.length / 3).toLocaleString('en-US')} triangles as glTF (${formatBytes(glb.byteLength)}).`,
+      `Exported ${parts.length} surface${parts.length > 1 ? 's' : ''}, ${triangles.toLocaleString('en-US')} triangles, as glTF (${formatBytes(glb.byteLength)}).`,
       'info',
       4000,
     );

@@ -14,6 +14,8 @@ import { acceptDrops, hexToRgb, wireControls } from './controls.ts';
 import { byId } from './dom.ts';
 import { copyLink, measureShown, saveGlb, savePly, savePng } from './exports.ts';
 import { type MeasuredSurface, MeasurePanel } from './ui/measure-panel.ts';
+import { SurfaceSet } from './surfaces/surface-set.ts';
+import { SurfacesPanel } from './ui/surfaces-panel.ts';
 import { setInfoList } from './info-list.ts';
 import { chooseIsovalue } from './iso-choice.ts';
 import { VolumeLoader } from './loading/loader.ts';
@@ -125,7 +127,7 @@ async function start(): Promise<void> {
       min: byId('iso-min'),
       max: byId('iso-max'),
     },
-    (iso) => session.setIsovalue(iso),
+    (iso) => surfaces.setIsovalue(iso),
   );
   const spacing = new SpacingControl([byId('spacing-x'), byId('spacing-y'), byId('spacing-z')], byId('spacing-note'), (s) =>
     session.setSpacing(s),
@@ -135,7 +137,8 @@ async function start(): Promise<void> {
   const pageBudget = new GpuBudget(defaultBudgetBytes(gpu.limits));
   const budget = new BudgetControl(byId('budget-mb'), byId('budget-bar'), byId('budget-note'), pageBudget.bytes, (bytes) => {
     pageBudget.bytes = bytes;
-    session.current?.iso.setMemoryBudget(bytes);
+    // an in-core volume's pipeline: what the copies of its other surfaces leave
+    session.current?.iso.setMemoryBudget(Math.max(1, bytes - surfaces.copyBytes));
   });
   const frames = {
     get fps() {
@@ -171,7 +174,7 @@ async function start(): Promise<void> {
       state.benchRunning = running;
       isoControl.setEnabled(!running && session.current !== undefined);
       byId<HTMLInputElement>('budget-mb').disabled = running;
-      if (!running && session.current) session.setIsovalue(isoControl.value);
+      if (!running && session.current) surfaces.setIsovalue(isoControl.value);
     },
     onSurface: () => viewer.requestFrame(),
     onDone: (result) => {
@@ -179,6 +182,48 @@ async function start(): Promise<void> {
     },
     onError: (m) => messages.show(m),
   });
+  // Several surfaces of an in-core volume: the selected one live, the others drawn from their copies.
+  const surfaces: SurfaceSet = new SurfaceSet({
+    viewer: () => viewer,
+    live: () => surface,
+    makeLayer: () => SurfaceLayer.create(viewer),
+    current: () => session.current,
+    setLiveIsovalue: (iso) => session.setIsovalue(iso),
+    showIso: (iso) => {
+      isoControl.setValue(iso);
+      state.iso = iso;
+    },
+    budgetBytes: () => budget.bytes,
+    messages,
+    onChange: () => {
+      surfacesPanel.render();
+      link?.setSurfaces(surfaces.specs(), surfaces.selected);
+      viewer.requestFrame();
+    },
+  });
+  Object.defineProperty(state, 'surfaces', {
+    enumerable: true,
+    get: () => ({
+      entries: surfaces.entries.map((e) => {
+        const copy = surfaces.copyOf(e);
+        return {
+          iso: e.iso,
+          color: e.color,
+          opacity: e.opacity,
+          visible: e.visible,
+          triangles: copy ? copy.triangles : state.stats?.triangles,
+        };
+      }),
+      selected: surfaces.selected,
+      copyBytes: surfaces.copyBytes,
+    }),
+  });
+  const surfacesPanel = new SurfacesPanel(
+    byId('surface-list'),
+    byId<HTMLButtonElement>('add-surface'),
+    byId('surfaces-note'),
+    () => surfaces,
+  );
   const measure = new MeasurePanel(
     byId<HTMLButtonElement>('measure-surface'),
     byId('surface-measure'),
@@ -203,8 +248,10 @@ async function start(): Promise<void> {
       state,
       volumeInfo: byId('volume-info'),
       measure,
+      surfaces,
     });
   let session = makeSession();
+  surfacesPanel.render();
   session.pendingCamera = initialView.camera;
   session.pendingSpacing = initialView.spacing;
 
@@ -266,7 +313,7 @@ async function start(): Promise<void> {
     },
     savePng: () => void savePng(viewer, session, messages),
     savePly: () => void savePly(session, messages),
-    saveGlb: () => void saveGlb(session, surface.style.front, messages),
+    saveGlb: () => void saveGlb(session, surfaces, messages),
     copyLink: () => {
       if (session.current && session.current.opened.kind !== 'default' && !volumeUrl) {
         messages.show(
@@ -295,7 +342,7 @@ async function start(): Promise<void> {
       link?.schedule();
     },
     setColors: (front, back) => {
-      surface.style.front = hexToRgb(front);
+      surfaces.setStyle(surfaces.selected, { color: hexToRgb(front) });
       surface.style.back = hexToRgb(back);
       viewer.requestFrame();
     },
@@ -399,6 +446,10 @@ async function start(): Promise<void> {
   if (!session.current) {
     nextUrl = undefined;
     await loader.loadDefault();
+  }
+  // the link's other surfaces, around the one the volume opened with
+  if (initialView.surfaces && initialView.surfaces.length > 1 && session.current) {
+    await surfaces.restore(initialView.surfaces, initialView.selected ?? 0);
   }
   if (state.status !== 'error') {
     state.status = 'ready';

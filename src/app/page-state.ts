@@ -6,6 +6,7 @@ import type { IsosurfaceStats } from '../isosurface/types.ts';
 import type { CameraState } from '../render/camera.ts';
 import type { Dims } from '../core/naming.ts';
 import type { MeasuredSurface } from './ui/measure-panel.ts';
+import type { SurfaceSpec } from './url-state.ts';
 
 export interface PageVolumeState {
   name: string;
@@ -37,6 +38,8 @@ export interface PageState {
   /** Every message shown to the user, in order. */
   messages: string[];
   bench?: BenchResult;
+  /** The surfaces (several for an in-core volume), the one the slider moves, and the bytes their copies hold. */
+  surfaces?: { entries: (SurfaceSpec & { triangles?: number })[]; selected: number; copyBytes: number };
   /** The last "Measure" of the surface (cleared when another volume opens). */
   measure?: MeasuredSurface;
   benchRunning: boolean;

@@ -18,6 +18,7 @@ import type { BudgetControl } from './ui/budget-control.ts';
 import type { Hud } from './ui/hud.ts';
 import type { IsoControl } from './ui/iso-control.ts';
 import type { MeasurePanel } from './ui/measure-panel.ts';
+import type { SurfaceSet } from './surfaces/surface-set.ts';
 import type { Spacing, SpacingControl } from './ui/spacing-control.ts';
 import { StatsPanel, volumeRows } from './ui/stats-panel.ts';
 import type { ViewLink } from './view-link.ts';
@@ -37,6 +38,8 @@ export interface SessionParts {
   state: PageState;
   volumeInfo: HTMLElement;
   measure: MeasurePanel;
+  /** The volume's surfaces (the selected one is `surface`'s). */
+  surfaces: SurfaceSet;
 }
 
 export class Session {
@@ -51,6 +54,7 @@ export class Session {
   constructor(private readonly p: SessionParts) {
     p.viewer.addBeforeFrame(() => {
       p.surface.setDrawData(this.current?.iso.drawData);
+      p.surfaces.beforeFrame();
       p.surface.setParts(this.current?.iso.drawParts?.());
     });
   }
@@ -61,6 +65,7 @@ export class Session {
     this.current = v;
     this.requestedAt.clear();
     if (old !== v) p.measure.clear();
+    p.surfaces.install(v, v.initialIso);
     const { info } = v.iso;
     v.iso.onStats((s) => {
       if (this.current === v) this.showStats(s);
@@ -195,7 +200,7 @@ export class Session {
     }
     p.stats.update(s, v.iso.info.blockCount, this.lastLatency);
     // a streamed store's meter is what the page holds on the GPU (the store view sets it)
-    if (!v.iso.drawParts) p.budget.setUsed(s.cacheBytes + s.vertexBytes);
+    if (!v.iso.drawParts) p.budget.setUsed(s.cacheBytes + s.vertexBytes + p.surfaces.copyBytes);
     p.budget.clearError();
     p.hud.setSurface(formatIso(s.isovalue, v.iso.info.valueRange), s.triangles, s.gpuMs);
     p.state.stats = s;

@@ -1,14 +1,27 @@
 // The view in the URL hash, so a link reopens the same surface and camera:
 // #iso=0.5&cam=qx,qy,qz,qw,tx,ty,tz,d[&vox=sx,sy,sz] (vox: a voxel size the
-// user set, over the file's); for stores also level=L, and for stores of
+// user set, over the file's); several surfaces: iso=a,b,c with op=.. (opacity),
+// col=rrggbb,.. (colour), vis=1,0,.. (shown) and sel=k (the one the slider moves); for stores also level=L, and for stores of
 // lossless chunks rate=R (their bricks' GPU rate), t=T and c=C (time point
 // and channel), cut=1|0 (refine by the view or level by level) with px=W,H
 // (the canvas) and tol=T (pixels), tint=1 (tint by level). The volume itself comes from ?url=... (same
 // origin) or is the built-in default.
 import type { CameraState } from '../render/camera.ts';
 
+/** One surface of several (src/app/surfaces/). */
+export interface SurfaceSpec {
+  iso: number;
+  color?: [number, number, number];
+  opacity?: number;
+  visible?: boolean;
+}
+
 export interface ViewState {
+  /** The isovalue of the surface the slider moves. */
   iso?: number;
+  /** Several surfaces (absent: one, at `iso`); `iso` is surfaces[selected].iso. */
+  surfaces?: SurfaceSpec[];
+  selected?: number;
   camera?: CameraState;
   /** Voxel size set by the user (absent: the file's own). */
   spacing?: [number, number, number];
@@ -27,10 +40,25 @@ export interface ViewState {
 }
 
 const round = (x: number) => Number(x.toPrecision(7));
+const hex = (c: readonly number[]) =>
+  c
+    .map((v) =>
+      Math.round(Math.min(1, Math.max(0, v)) * 255)
+        .toString(16)
+        .padStart(2, '0'),
+    )
+    .join('');
 
 export function encodeViewState(s: ViewState): string {
   const parts: string[] = [];
-  if (s.iso !== undefined && Number.isFinite(s.iso)) parts.push(`iso=${round(s.iso)}`);
+  const many = s.surfaces?.filter((e) => Number.isFinite(e.iso));
+  if (many && (many.length > 1 || many.some((e) => (e.opacity ?? 1) !== 1 || e.visible === false))) {
+    parts.push(`iso=${many.map((e) => round(e.iso)).join(',')}`);
+    if (many.some((e) => (e.opacity ?? 1) !== 1)) parts.push(`op=${many.map((e) => round(e.opacity ?? 1)).join(',')}`);
+    if (many.some((e) => e.color)) parts.push(`col=${many.map((e) => hex(e.color ?? [1, 1, 1])).join(',')}`);
+    if (many.some((e) => e.visible === false)) parts.push(`vis=${many.map((e) => (e.visible === false ? 0 : 1)).join(',')}`);
+    if (s.selected !== undefined && s.selected > 0 && s.selected < many.length) parts.push(`sel=${s.selected}`);
+  } else if (s.iso !== undefined && Number.isFinite(s.iso)) parts.push(`iso=${round(s.iso)}`);
   if (s.camera) {
     const c = s.camera;
     parts.push(`cam=${[...c.rotation, ...c.target, c.distance].map(round).join(',')}`);
@@ -50,8 +78,26 @@ export function encodeViewState(s: ViewState): string {
 export function decodeViewState(hash: string): ViewState {
   const params = new URLSearchParams(hash.replace(/^#/, ''));
   const out: ViewState = {};
-  const iso = Number(params.get('iso'));
-  if (params.has('iso') && Number.isFinite(iso)) out.iso = iso;
+  const isos = (params.get('iso') ?? '').split(',').map((v) => (v.trim() === '' ? Number.NaN : Number(v)));
+  if (params.has('iso') && isos.length === 1 && Number.isFinite(isos[0])) out.iso = isos[0];
+  else if (params.has('iso') && isos.length > 1 && isos.length <= 8 && isos.every(Number.isFinite)) {
+    const ops = params.get('op')?.split(',').map(Number);
+    const cols = params.get('col')?.split(',');
+    const vis = params.get('vis')?.split(',');
+    out.surfaces = isos.map((iso, i) => {
+      const spec: SurfaceSpec = { iso };
+      const op = ops?.[i];
+      if (op !== undefined && op > 0 && op <= 1) spec.opacity = op;
+      const col = cols?.[i];
+      if (col && /^[0-9a-f]{6}$/i.test(col))
+        spec.color = [0, 2, 4].map((k) => Number.parseInt(col.slice(k, k + 2), 16) / 255) as [number, number, number];
+      if (vis?.[i] === '0') spec.visible = false;
+      return spec;
+    });
+    const sel = Number(params.get('sel') ?? 0);
+    out.selected = Number.isInteger(sel) && sel >= 0 && sel < isos.length ? sel : 0;
+    out.iso = isos[out.selected];
+  }
   const cam = params.get('cam')?.split(',').map(Number);
   if (cam && cam.length === 8 && cam.every(Number.isFinite) && cam[7] > 0) {
     out.camera = {

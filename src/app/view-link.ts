@@ -8,6 +8,7 @@ import { decodeViewState, encodeViewState, writeViewState, type ViewState } from
 export class ViewLink {
   private timer: ReturnType<typeof setTimeout> | undefined;
   private iso: number | undefined;
+  private surfaces: Pick<ViewState, 'surfaces' | 'selected'> = {};
   private spacing: [number, number, number] | undefined;
   private level: number | undefined;
   private storeChoice: Pick<ViewState, 'storeRate' | 'time' | 'channel'> = {};
@@ -32,6 +33,12 @@ export class ViewLink {
 
   setIso(iso: number | undefined): void {
     this.iso = iso;
+    this.schedule();
+  }
+
+  /** Several surfaces (one: the link keeps only iso=). */
+  setSurfaces(surfaces: ViewState['surfaces'], selected: number): void {
+    this.surfaces = { surfaces, selected };
     this.schedule();
   }
 
@@ -69,6 +76,7 @@ export class ViewLink {
     const vp = this.viewport();
     return {
       iso: this.iso,
+      ...this.surfaces,
       camera: this.camera.getState(),
       spacing: this.spacing,
       level: this.level,

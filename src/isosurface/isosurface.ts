@@ -429,6 +429,25 @@ export class Isosurface {
     this.snapshot.capture(this.pipeline.parts.shards, this.drawData, this.lastStats);
   }
 
+  /**
+   * A copy the caller owns (the page's other surfaces: each drawn from its
+   * copy while this one computes the surface being scrubbed); copyInto fills it.
+   */
+  newCopy(): SurfaceSnapshot {
+    return new SurfaceSnapshot(this.gpu.device, this.drawData);
+  }
+
+  /**
+   * Copies the surface computed last into `copy` (on the GPU, in queue order):
+   * call it when compute() resolved and before anything else is requested,
+   * so the buffers hold that surface and the counts are its own.
+   */
+  copyInto(copy: SurfaceSnapshot): void {
+    if (this.destroyed || !this.lastStats) throw new Error('Isosurface.copyInto: no surface computed');
+    if (this.busy) throw new Error('Isosurface.copyInto: a computation is on its way; wait for compute() first');
+    copy.capture(this.pipeline.parts.shards, this.drawData, this.lastStats);
+  }
+
   /** What present() copied last, or null before the first present(). */
   get presented(): IsosurfaceDrawData | null {
     return this.snapshot?.drawData ?? null;

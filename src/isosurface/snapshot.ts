@@ -48,6 +48,11 @@ export class SurfaceSnapshot {
     return Math.max(1, counts.vertices) * VERTEX_BYTES + Math.max(1, counts.indices) * INDEX_BYTES + shards * DRAW_ARGS_BYTES;
   }
 
+  /** Triangles the copy draws. */
+  get triangles(): number {
+    return this.#indexCounts.reduce((a, b) => a + b, 0) / 3;
+  }
+
   /** Bytes held now. */
   get byteSize(): number {
     return (this.#vertices?.size ?? 0) + this.#indices.reduce((a, b) => a + b.size, 0) + (this.#drawArgs?.size ?? 0);

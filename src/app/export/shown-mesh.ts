@@ -4,6 +4,7 @@
 // as VTK's merged points); a store: the step on screen, every level in
 // level-0 voxels. Shared by the PLY and glTF exports and the measurement.
 import { meshPositions } from '../../isosurface/vertex-format.ts';
+import type { SurfaceSnapshot } from '../../isosurface/snapshot.ts';
 import type { Session } from '../session.ts';
 
 export interface ShownMesh {
@@ -19,12 +20,15 @@ export interface ShownMesh {
   dims: readonly number[];
 }
 
-/** Null when no volume is open. */
-export async function readShownMesh(session: Session): Promise<ShownMesh | null> {
+/** Null when no volume is open. `copy`: one of the other surfaces (src/app/surfaces/), drawn from its copy, at `iso`. */
+export async function readShownMesh(session: Session, copy?: { snapshot: SurfaceSnapshot; iso: number }): Promise<ShownMesh | null> {
   const v = session.current;
   if (!v) return null;
   let mesh: { positions: Float32Array; indices: Uint32Array };
-  if (v.iso.readPositions) mesh = await v.iso.readPositions();
+  if (copy) {
+    const surface = await copy.snapshot.readMesh(v.iso.info.dims);
+    mesh = { positions: meshPositions(surface), indices: surface.indices };
+  } else if (v.iso.readPositions) mesh = await v.iso.readPositions();
   else {
     const surface = await v.iso.readMesh();
     mesh = { positions: meshPositions(surface), indices: surface.indices };
@@ -36,7 +40,7 @@ export async function readShownMesh(session: Session): Promise<ShownMesh | null>
     const p = mesh.positions;
     for (let i = 0; i < p.length; i++) p[i] = (p[i] + origin[i % 3]) * voxelSize[i % 3];
   }
-  return { ...mesh, iso: session.drawnIsovalue ?? Number.NaN, voxelSize, origin, voxelUnits, dims: v.iso.info.dims };
+  return { ...mesh, iso: copy ? copy.iso : (session.drawnIsovalue ?? Number.NaN), voxelSize, origin, voxelUnits, dims: v.iso.info.dims };
 }
 
 /** Where the mesh's coordinates come from, one line (PLY comments, glTF asset extras). */
