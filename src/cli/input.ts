@@ -11,6 +11,7 @@ import type { GpuContext } from '../gpu/device.ts';
 import { Isosurface } from '../isosurface/isosurface.ts';
 import { isStoreInput, NoSuchLevelError, openStoreInput, type StoreRecord } from '../store/cli-input.ts';
 import type { ViewRequest } from '../store/view/view-request.ts';
+import { type Clip, parseClipBox } from '../core/clip.ts';
 import type { CutChunkRecord } from '../store/stream-surface.ts';
 import { StoreError } from '../store/zarr/errors.ts';
 import {
@@ -74,6 +75,8 @@ export async function openInputSurface(
     channel?: number;
     ranges?: string;
     view?: ViewRequest;
+    /** Cuts the surfaces open (the caller clips the meshes); a store leaves out the chunks it removes whole. */
+    clip?: Clip;
   },
 ): Promise<OpenedInput> {
   if (isStoreInput(path)) {
@@ -127,6 +130,7 @@ export async function openInputSurface(
   try {
     iso = await Isosurface.create(gpu, v.stream, opts.budget === undefined ? {} : { memoryBudgetBytes: opts.budget });
     checkValueRange(v.fileName, iso.info.valueRange);
+    checkClip(v.fileName, opts.clip, iso.info.dims);
   } catch (e) {
     iso?.destroy();
     v.stream.destroy();
@@ -147,4 +151,11 @@ export async function openInputSurface(
       stream.destroy();
     },
   };
+}
+
+/** A clip box that holds no cell of the volume is refused (it would cut everything away). */
+function checkClip(name: string, clip: Clip | undefined, dims: readonly number[]): void {
+  if (!clip?.box) return;
+  const why = parseClipBox(clip.box.join(','), dims);
+  if (typeof why === 'string') throw new VolumeFileError(`${name}: --clip ${clip.box.join(',')}: ${why}`);
 }

@@ -10,7 +10,9 @@
 // voxel index space (voxel (i, j, k) at (i, j, k), as VTK places them), GPU
 // time; area and enclosed volume in physical units (the file's voxel size,
 // a store's OME scale; src/mc/mesh-measure.ts); --ply writes each soup, --glb
-// all surfaces as meshes of one binary glTF. A surface over the memory budget is recorded
+// all surfaces as meshes of one binary glTF; --clip (a box of whole cells)
+// and --plane (n . x >= d) cut every surface open before it is measured and
+// written (src/core/clip.ts; a store leaves out chunks they remove whole). A surface over the memory budget is recorded
 // as {iso, error}, the others are still computed, and the exit status is 1.
 import { writeFileSync } from 'node:fs';
 import { basename } from 'node:path';
@@ -22,6 +24,7 @@ import { meshPositions } from '../../isosurface/vertex-format.ts';
 import { meshMetrics } from '../../mc/mesh-metrics.ts';
 import { measureSurface } from '../../mc/mesh-measure.ts';
 import { encodeGlb, type GlbSurface, SURFACE_PALETTE } from '../../mc/glb.ts';
+import { type Clip, clipMesh, parseClipBox, parseClipPlane } from '../../core/clip.ts';
 import { LevelStoppedError } from '../../store/stream-surface.ts';
 import { openInputSurface } from '../input.ts';
 import { parseCam } from '../../store/view/camera.ts';
@@ -56,6 +59,8 @@ export interface ExtractRecord {
   enclosedVolume: number | null;
   /** Edges used more often in one direction than the other (welded by position): 0 when closed. */
   openEdges: number;
+  /** With --clip / --plane: the triangles kept (area, volume, bbox and the files are of those). */
+  clippedTriangles?: number;
   bbox: { min: [number, number, number]; max: [number, number, number] } | null;
   gpuMs: number;
   stages: { label: string; ms: number }[];
@@ -117,6 +122,27 @@ export function viewOption(args: Parameters<typeof numberOption>[0]): ViewReques
   return { link, tolerancePx, skirts };
 }
 
+/** --clip x0,y0,z0,x1,y1,z1 (grid points of level 0) and --plane nx,ny,nz,d -> the clip, or undefined. */
+export function clipOption(args: Parameters<typeof numberOption>[0]): Clip | undefined {
+  const boxText = stringOption(args, 'clip');
+  const planeText = stringOption(args, 'plane');
+  if (boxText === undefined && planeText === undefined) return undefined;
+  const clip: Clip = {};
+  if (boxText !== undefined) {
+    const box = parseClipBox(boxText);
+    if (typeof box === 'string') throw new UsageError(`--clip ${boxText}: ${box}`);
+    if (!box.every(Number.isInteger))
+      throw new UsageError(`--clip ${boxText}: the box's corners are grid points (whole voxel indices of level 0)`);
+    clip.box = box;
+  }
+  if (planeText !== undefined) {
+    const plane = parseClipPlane(planeText);
+    if (typeof plane === 'string') throw new UsageError(`--plane ${planeText}: ${plane}`);
+    clip.plane = plane;
+  }
+  return clip;
+}
+
 /** --cache-budget MB -> bytes (shared with `bench`). */
 export function budgetOption(args: Parameters<typeof numberOption>[0]): number | undefined {
   const mb = numberOption(args, 'cache-budget');
@@ -130,7 +156,7 @@ export const extractCommand: CliCommand = {
   summary:
     'isosurfaces on the GPU (block cache kept between isovalues): counts, area, enclosed volume, bbox, GPU time; --ply soups, --glb glTF',
   usage:
-    "extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--glb FILE] [--level L] [--deadline S] [--time T] [--channel C] [--ranges RANGES.zarr] [--view-box x0,y0,z0,x1,y1,z1 | --view '#iso=..&cam=..'] [--tolerance PX] [--no-skirts] [--save-ranges OUT.zarr] (--level, --view-box, --view, --deadline, --time, --channel, --ranges: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8; --save-ranges: a store of lossless chunks, the brick ranges learnt by these surfaces written as a ranges sidecar)",
+    "extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--glb FILE] [--clip x0,y0,z0,x1,y1,z1] [--plane nx,ny,nz,d] [--level L] [--deadline S] [--time T] [--channel C] [--ranges RANGES.zarr] [--view-box x0,y0,z0,x1,y1,z1 | --view '#iso=..&cam=..'] [--tolerance PX] [--no-skirts] [--save-ranges OUT.zarr] (--level, --view-box, --view, --deadline, --time, --channel, --ranges: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8; --save-ranges: a store of lossless chunks, the brick ranges learnt by these surfaces written as a ranges sidecar)",
   options: {
     level: { type: 'string' },
     deadline: { type: 'string' },
@@ -147,6 +173,8 @@ export const extractCommand: CliCommand = {
     'cache-budget': { type: 'string' },
     ply: { type: 'string' },
     glb: { type: 'string' },
+    clip: { type: 'string' },
+    plane: { type: 'string' },
     'save-ranges': { type: 'string' },
   },
   async run(ctx, args) {
@@ -157,6 +185,7 @@ export const extractCommand: CliCommand = {
     const plyPrefix = stringOption(args, 'ply');
     const glbPath = stringOption(args, 'glb');
     const glbSurfaces: GlbSurface[] = [];
+    const clip = clipOption(args);
     const saveRanges = stringOption(args, 'save-ranges');
     const gpu = await ctx.gpu();
     const volume = await openInputSurface(ctx, gpu, input, {
@@ -169,6 +198,7 @@ export const extractCommand: CliCommand = {
       ranges: stringOption(args, 'ranges'),
       maxStreamBytes: streamBudgetOption(args),
       view: viewOption(args),
+      clip,
     });
     ctx.log(`${input}: ${volume.how}`);
     if (saveRanges !== undefined && !volume.saveRanges) {
@@ -203,6 +233,7 @@ export const extractCommand: CliCommand = {
           welded = meshPositions(surface);
           indices = surface.indices;
         }
+        if (clip) ({ positions: welded, indices } = clipMesh(welded, indices, clip));
         const m = meshMetrics(soupOf(welded, indices));
         const measure = measureSurface(welded, indices, volume.placement);
         const record: ExtractRecord = {
@@ -218,6 +249,7 @@ export const extractCommand: CliCommand = {
           area: measure.area,
           enclosedVolume: measure.enclosedVolume,
           openEdges: measure.openEdges,
+          ...(clip ? { clippedTriangles: indices.length / 3 } : {}),
           bbox: m.bbox,
           gpuMs: stats.gpuMs,
           stages: stats.stages,

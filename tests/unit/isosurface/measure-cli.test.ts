@@ -138,6 +138,53 @@ print(json.dumps({'meshes': out, 'scenes': len(g.scenes), 'nodes': [n.name for n
     expect(read.meshes[0].color).not.toEqual(read.meshes[1].color);
   });
 
+  it('neghip cut open: a clip box of whole cells is vtkExtractVOI + vtkMarchingCubes; a plane is vtkClipPolyData', () => {
+    const file = join(sharedData, 'volumes/neghip_66x66x66_uint8.raw');
+    const vtkFigures = JSON.parse(
+      runPython(
+        `
+import sys, json, numpy as np, vtk
+from vtk.util import numpy_support
+vtk.vtkObject.GlobalWarningDisplayOff()
+f = np.fromfile(sys.argv[1], np.uint8).reshape(66, 66, 66)
+img = vtk.vtkImageData(); img.SetDimensions(66, 66, 66)
+img.GetPointData().SetScalars(numpy_support.numpy_to_vtk(f.ravel().astype(np.float32), deep=True))
+def area(port):
+    tri = vtk.vtkTriangleFilter(); tri.SetInputConnection(port); tri.Update()
+    mp = vtk.vtkMassProperties(); mp.SetInputConnection(tri.GetOutputPort()); mp.Update()
+    return tri.GetOutput().GetNumberOfCells(), mp.GetSurfaceArea()
+voi = vtk.vtkExtractVOI(); voi.SetInputData(img); voi.SetVOI(10, 50, 12, 40, 8, 60)
+mc = vtk.vtkMarchingCubes(); mc.SetInputConnection(voi.GetOutputPort()); mc.SetValue(0, 40.5); mc.Update()
+whole = vtk.vtkMarchingCubes(); whole.SetInputData(img); whole.SetValue(0, 40.5)
+n = np.array([1, 0.5, 0.2]); plane = vtk.vtkPlane(); plane.SetNormal(*n); plane.SetOrigin(*(n * 30 / n.dot(n)))
+clip = vtk.vtkClipPolyData(); clip.SetInputConnection(whole.GetOutputPort()); clip.SetClipFunction(plane)
+print(json.dumps({'box': [mc.GetOutput().GetNumberOfCells(), area(mc.GetOutputPort())[1]], 'plane': area(clip.GetOutputPort())}))
+`,
+        [file],
+      ),
+    );
+    const run = (...clipArgs: string[]) => {
+      const out = join(dir, `clip${clipArgs[0]}.json`);
+      const r = cli('extract', file, '--iso', '40.5', '--rate', '20', ...clipArgs, '--json', out);
+      expect(r.status, r.stderr).toBe(0);
+      return (JSON.parse(readFileSync(out, 'utf8')).isosurfaces as (Rec & { clippedTriangles: number })[])[0];
+    };
+    const box = run('--clip', '10,12,8,50,40,60');
+    expect(box.clippedTriangles).toBe(vtkFigures.box[0]);
+    expect(Math.abs(box.area / vtkFigures.box[1] - 1)).toBeLessThan(1e-6);
+    expect(box.enclosedVolume).toBeNull(); // cut open
+    const plane = run('--plane', '1,0.5,0.2,30');
+    expect(Math.abs(plane.area / vtkFigures.plane[1] - 1)).toBeLessThan(0.005);
+    expect(plane.clippedTriangles).toBeLessThan(plane.triangles);
+    // a box outside the volume or a plane with no direction: refused, saying why
+    const outside = cli('extract', file, '--iso', '40.5', '--clip', '70,0,0,80,10,10');
+    expect(outside.status).toBe(1);
+    expect(outside.stderr).toMatch(/--clip 70,0,0,80,10,10: the box holds no cell of the volume/);
+    const flat = cli('extract', file, '--iso', '40.5', '--plane', '0,0,0,1');
+    expect(flat.status).toBe(2);
+    expect(flat.stderr).toMatch(/the normal \(nx, ny, nz\) is zero/);
+  });
+
   it('neghip: area and volume of closed surfaces as vtkMassProperties', () => {
     const file = join(sharedData, 'volumes/neghip_66x66x66_uint8.raw');
     const isos = [40.5, 120.5];

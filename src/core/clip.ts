@@ -1,0 +1,154 @@
+// Cutting a surface open: a clip box and one free plane, in level-0 voxel
+// index coordinates (voxel (i, j, k) at (i, j, k)); what is kept is inside
+// the box and on the plane's positive side (n . x >= d).
+//
+// The box keeps whole marching-cubes cells: a triangle is kept when its cell
+// (the one holding its centroid) lies in the box, so a box whose corners are
+// grid points gives exactly the surface of the sub-volume (VTK's
+// vtkExtractVOI then vtkMarchingCubes). The plane cuts triangles (as
+// vtkClipPolyData): the part on its positive side is kept, split where the
+// plane crosses. The renderer does the same per fragment (shaders/render/
+// surface.wgsl), and a stream leaves out chunks the clip removes whole.
+
+export type ClipBox = readonly [number, number, number, number, number, number];
+
+export interface ClipPlane {
+  /** Need not be unit length; (0, 0, 0) is refused. */
+  normal: readonly [number, number, number];
+  d: number;
+}
+
+export interface Clip {
+  box?: ClipBox;
+  plane?: ClipPlane;
+}
+
+/** 'x0,y0,z0,x1,y1,z1' -> a box, or why not. `whole`: the volume's box (level-0 grid points), which the clip must meet. */
+export function parseClipBox(text: string, dims?: readonly number[]): ClipBox | string {
+  const v = text.split(',').map((s) => (s.trim() === '' ? Number.NaN : Number(s)));
+  if (v.length !== 6 || !v.every(Number.isFinite)) return 'six numbers x0,y0,z0,x1,y1,z1';
+  if (!(v[0] < v[3] && v[1] < v[4] && v[2] < v[5])) return 'each lower corner coordinate must be below the upper one';
+  if (dims && [0, 1, 2].some((a) => v[a + 3] <= 0 || v[a] >= dims[a] - 1))
+    return `the box holds no cell of the volume (0..${dims.map((n) => n - 1).join(', 0..')})`;
+  return v as unknown as ClipBox;
+}
+
+/** 'nx,ny,nz,d' -> a plane (keeps n . x >= d), or why not. */
+export function parseClipPlane(text: string): ClipPlane | string {
+  const v = text.split(',').map((s) => (s.trim() === '' ? Number.NaN : Number(s)));
+  if (v.length !== 4 || !v.every(Number.isFinite)) return 'four numbers nx,ny,nz,d (keeps nx*x + ny*y + nz*z >= d)';
+  if (v[0] === 0 && v[1] === 0 && v[2] === 0) return 'the normal (nx, ny, nz) is zero: a plane needs a direction';
+  return { normal: [v[0], v[1], v[2]], d: v[3] };
+}
+
+/** Whether a clip removes nothing. */
+export function clipIsEmpty(clip: Clip | undefined): boolean {
+  return !clip || (!clip.box && !clip.plane);
+}
+
+/**
+ * The part of an indexed mesh (level-0 voxel coordinates) the clip keeps: the
+ * box's whole cells, then the plane's positive side with crossing triangles
+ * split (new vertices where edges cross the plane, shared by both triangles
+ * of an edge).
+ */
+export function clipMesh(positions: Float32Array, indices: Uint32Array, clip: Clip): { positions: Float32Array; indices: Uint32Array } {
+  let kept = indices;
+  if (clip.box) {
+    const [x0, y0, z0, x1, y1, z1] = clip.box;
+    const out: number[] = [];
+    for (let t = 0; t < indices.length; t += 3) {
+      const a = 3 * indices[t],
+        b = 3 * indices[t + 1],
+        c = 3 * indices[t + 2];
+      // the cell holding the centroid: inside the box when its lower corner is in [lo, hi - 1]
+      const cx = Math.floor((positions[a] + positions[b] + positions[c]) / 3);
+      const cy = Math.floor((positions[a + 1] + positions[b + 1] + positions[c + 1]) / 3);
+      const cz = Math.floor((positions[a + 2] + positions[b + 2] + positions[c + 2]) / 3);
+      if (cx >= x0 && cx + 1 <= x1 && cy >= y0 && cy + 1 <= y1 && cz >= z0 && cz + 1 <= z1)
+        out.push(indices[t], indices[t + 1], indices[t + 2]);
+    }
+    kept = Uint32Array.from(out);
+  }
+  if (!clip.plane) return { positions, indices: kept };
+  const [nx, ny, nz] = clip.plane.normal;
+  const d = clip.plane.d;
+  const side = (v: number) => nx * positions[3 * v] + ny * positions[3 * v + 1] + nz * positions[3 * v + 2] - d;
+  const extra: number[] = [];
+  const crossings = new Map<string, number>();
+  const base = positions.length / 3;
+  /** The vertex where edge (a, b) crosses the plane, made once per edge. */
+  const cross = (a: number, b: number, sa: number, sb: number): number => {
+    const key = a < b ? `${a},${b}` : `${b},${a}`;
+    let v = crossings.get(key);
+    if (v === undefined) {
+      const [p, q, sp, sq] = a < b ? [a, b, sa, sb] : [b, a, sb, sa];
+      const t = sp / (sp - sq);
+      for (let k = 0; k < 3; k++) extra.push(positions[3 * p + k] + t * (positions[3 * q + k] - positions[3 * p + k]));
+      v = base + extra.length / 3 - 1;
+      crossings.set(key, v);
+    }
+    return v;
+  };
+  const out: number[] = [];
+  const tri = [0, 0, 0];
+  const s = [0, 0, 0];
+  for (let t = 0; t < kept.length; t += 3) {
+    let inside = 0;
+    for (let k = 0; k < 3; k++) {
+      tri[k] = kept[t + k];
+      s[k] = side(tri[k]);
+      if (s[k] >= 0) inside++;
+    }
+    if (inside === 3) out.push(tri[0], tri[1], tri[2]);
+    if (inside === 0 || inside === 3) continue;
+    // rotate so the corners keep their winding: the odd one out first
+    const odd = inside === 1 ? s.findIndex((x) => x >= 0) : s.findIndex((x) => x < 0);
+    const a = tri[odd],
+      b = tri[(odd + 1) % 3],
+      c = tri[(odd + 2) % 3];
+    const sa = s[odd],
+      sb = s[(odd + 1) % 3],
+      sc = s[(odd + 2) % 3];
+    const ab = cross(a, b, sa, sb);
+    const ca = cross(c, a, sc, sa);
+    if (inside === 1) out.push(a, ab, ca);
+    else out.push(ab, b, c, ab, c, ca);
+  }
+  const all = new Float32Array(positions.length + extra.length);
+  all.set(positions);
+  all.set(extra, positions.length);
+  return { positions: all, indices: Uint32Array.from(out) };
+}
+
+/**
+ * Whether the clip removes every cell of a region (level-0 voxels [lo, hi]
+ * on each axis, hi the region's last grid point): a chunk so clipped is
+ * neither fetched nor drawn.
+ */
+export function regionClipped(lo: readonly number[], hi: readonly number[], clip: Clip | undefined): boolean {
+  if (!clip) return false;
+  if (clip.box) {
+    const b = clip.box;
+    for (let a = 0; a < 3; a++) if (hi[a] <= b[a] || lo[a] >= b[a + 3]) return true;
+  }
+  if (clip.plane) {
+    // the region's corner farthest along the normal is still behind the plane
+    const n = clip.plane.normal;
+    let best = 0;
+    for (let a = 0; a < 3; a++) best += n[a] * (n[a] >= 0 ? hi[a] : lo[a]);
+    if (best < clip.plane.d) return true;
+  }
+  return false;
+}
+
+/** The clip's planes as (n, -d) rows with n . x - d >= 0 inside: the box's six, then the free one. */
+export function clipPlanes(clip: Clip | undefined): [number, number, number, number][] {
+  const planes: [number, number, number, number][] = [];
+  if (clip?.box) {
+    const b = clip.box;
+    planes.push([1, 0, 0, -b[0]], [0, 1, 0, -b[1]], [0, 0, 1, -b[2]], [-1, 0, 0, b[3]], [0, -1, 0, b[4]], [0, 0, -1, b[5]]);
+  }
+  if (clip?.plane) planes.push([...clip.plane.normal, -clip.plane.d] as [number, number, number, number]);
+  return planes;
+}

@@ -1,0 +1,67 @@
+// clipMesh and regionClipped on shapes known by hand: a unit cube's surface
+// cut by the plane x >= 0.5 keeps the face x = 1 and half of four faces
+// (area 3), split triangles keep their winding and share their cut vertices;
+// a box of whole cells keeps the triangles whose centroid lies in it; a
+// region wholly outside the box or behind the plane is clipped.
+import { describe, expect, it } from 'vitest';
+import { clipMesh, clipPlanes, regionClipped } from '../../../src/core/clip.ts';
+import { measureSurface } from '../../../src/mc/mesh-measure.ts';
+
+const CORNERS = [0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1];
+const FACES = [
+  [0, 3, 2, 1],
+  [4, 5, 6, 7],
+  [0, 1, 5, 4],
+  [2, 3, 7, 6],
+  [1, 2, 6, 5],
+  [0, 4, 7, 3],
+];
+const cube = () => ({
+  positions: new Float32Array(CORNERS),
+  indices: new Uint32Array(FACES.flatMap(([a, b, c, d]) => [a, b, c, a, c, d])),
+});
+
+describe('clipMesh', () => {
+  it('a plane keeps the positive side, split where it crosses', () => {
+    const { positions, indices } = cube();
+    const cut = clipMesh(positions, indices, { plane: { normal: [1, 0, 0], d: 0.5 } });
+    const m = measureSurface(cut.positions, cut.indices);
+    expect(m.area).toBeCloseTo(3, 12);
+    // the cut is an open square rim of 4 edges, each split edge welded once
+    expect(m.closed).toBe(false);
+    expect(m.openEdges).toBe(8);
+    for (const v of cut.indices) expect(cut.positions[3 * v]).toBeGreaterThanOrEqual(0.5);
+    // winding kept: the kept half-cube's volume with the cut closed by hand would be 0.5; the signed
+    // area vector of the kept part points along +x by the missing face's area (1)
+    let sx = 0;
+    for (let t = 0; t < cut.indices.length; t += 3) {
+      const [a, b, c] = [0, 1, 2].map((k) => 3 * cut.indices[t + k]);
+      const u = [1, 2].map((k) => cut.positions[b + k] - cut.positions[a + k]);
+      const v = [1, 2].map((k) => cut.positions[c + k] - cut.positions[a + k]);
+      sx += 0.5 * (u[0] * v[1] - u[1] * v[0]);
+    }
+    expect(sx).toBeCloseTo(1, 12);
+    expect(clipMesh(positions, indices, { plane: { normal: [1, 0, 0], d: 2 } }).indices.length).toBe(0);
+    expect(clipMesh(positions, indices, { plane: { normal: [1, 0, 0], d: -1 } }).indices).toEqual(indices);
+  });
+
+  it('a box keeps the triangles of its cells', () => {
+    // two triangles, centroids in cells (0,0,0) and (2,0,0)
+    const positions = new Float32Array([0.2, 0.2, 0.5, 0.8, 0.2, 0.5, 0.5, 0.8, 0.5, 2.2, 0.2, 0.5, 2.8, 0.2, 0.5, 2.5, 0.8, 0.5]);
+    const indices = new Uint32Array([0, 1, 2, 3, 4, 5]);
+    expect(Array.from(clipMesh(positions, indices, { box: [0, 0, 0, 2, 1, 1] }).indices)).toEqual([0, 1, 2]);
+    expect(Array.from(clipMesh(positions, indices, { box: [1, 0, 0, 3, 1, 1] }).indices)).toEqual([3, 4, 5]);
+    expect(Array.from(clipMesh(positions, indices, { box: [0, 0, 0, 3, 1, 1] }).indices)).toEqual([0, 1, 2, 3, 4, 5]);
+  });
+});
+
+describe('regionClipped', () => {
+  it('outside the box or behind the plane', () => {
+    expect(regionClipped([0, 0, 0], [64, 64, 64], { box: [64, 0, 0, 128, 10, 10] })).toBe(true);
+    expect(regionClipped([0, 0, 0], [64, 64, 64], { box: [63, 0, 0, 128, 10, 10] })).toBe(false);
+    expect(regionClipped([0, 0, 0], [64, 64, 64], { plane: { normal: [-1, 0, 0], d: -10 } })).toBe(false);
+    expect(regionClipped([0, 0, 0], [64, 64, 64], { plane: { normal: [1, 1, 0], d: 129 } })).toBe(true);
+    expect(regionClipped([0, 0, 0], [64, 64, 64], undefined)).toBe(false);
+    expect(clipPlanes({ box: [1, 2, 3, 4, 5, 6] })).toHaveLength(6);
+  });
+});
