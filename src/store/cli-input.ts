@@ -4,6 +4,7 @@
 // at level L only, each isovalue fetches the chunks its surface needs (8
 // requests in flight) into the level's GPU pool of compressed chunks; by a
 // view, every level the cut uses. The record says how much came over.
+import type { Clip } from '../core/clip.ts';
 import { existsSync, mkdirSync, readFileSync, rmSync, statSync, writeFileSync } from 'node:fs';
 import { dirname, join } from 'node:path';
 import type { GpuContext } from '../gpu/device.ts';
@@ -68,6 +69,8 @@ export interface StoreInputOptions {
   ranges?: string;
   /** Refine by this view instead of streaming one level (--view-box, --view): a mixed-level surface (src/store/view/). */
   view?: ViewRequest;
+  /** Cuts the surfaces open: chunks it removes whole are neither fetched nor drawn. */
+  clip?: Clip;
 }
 
 export async function openStoreInput(gpu: GpuContext, input: string, opts: StoreInputOptions): Promise<StoreInput> {
@@ -106,6 +109,7 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
       stream.retryFailed = false; // the CLI reports a chunk that failed (after the store's own retries)
       stream.skirts = opts.view?.skirts ?? true;
       stream.snapshots = false; // nothing is drawn while it refines: the surfaces are read once it ends
+      if (opts.clip) void stream.setClip(opts.clip); // before the first isovalue: only plans
     },
   });
   const { store } = session;

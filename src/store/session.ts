@@ -60,6 +60,8 @@ export interface StoreRecord {
   gpuVertexBytes: number;
   /** The most GPU bytes held at once so far. */
   gpuPeakBytes: number;
+  /** Chunks a surface needed by their ranges that a clip (--clip, --plane) left out: neither fetched nor drawn. */
+  clippedChunks: number;
   /** Requests tried again after a transient failure, requests that failed for good, and what the failed tries saw. */
   retries: number;
   failedRequests: number;
@@ -211,6 +213,7 @@ export class StoreSession {
       gpuCacheBytes: gpu.cache,
       gpuVertexBytes: gpu.vertices,
       gpuPeakBytes: this.port.meter.peak,
+      clippedChunks: this.stream.clippedChunks,
       retries: store.retries.retries,
       failedRequests: store.retries.failed,
       faults: { ...store.retries.faults },

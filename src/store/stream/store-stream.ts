@@ -10,6 +10,7 @@
 // refinement stops there and says why, the coarser step staying on screen.
 // The budget may be shared (the page's, gpu/budget.ts): a lower limit frees
 // at once; a suspended stream holds nothing but the copies it draws.
+import type { Clip } from '../../core/clip.ts';
 import { GpuBudget } from '../../gpu/budget.ts';
 import type { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
 import { LearntRanges } from '../learnt-ranges.ts';
@@ -195,6 +196,17 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   /** Whether suspend() stopped it (a new isovalue resumes it). */
   get suspended(): boolean {
     return this.#suspended;
+  }
+
+  /** Cuts the surfaces open: chunks the clip removes whole are left out, the plan made again (the renderer clips the rest). */
+  setClip(clip: Clip | undefined): Promise<void> {
+    this.#pools.clip = clip;
+    return Number.isFinite(this.#iso) && (this.#view || !this.planner.needsView) ? this.setIsovalue(this.#iso) : Promise.resolve();
+  }
+
+  /** Chunks a surface needed by their ranges that the clip left out, so far. */
+  get clippedChunks(): number {
+    return this.#pools.clipped.size;
   }
 
   /** A new camera (or tolerance): the cut is planned again at the current isovalue; resolves when that refinement ends. */

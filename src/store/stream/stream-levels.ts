@@ -13,6 +13,7 @@ import {
   residentChunkBytes,
   storeValueRange,
 } from '../level-state.ts';
+import { type Clip, clipIsEmpty, regionClipped } from '../../core/clip.ts';
 import { chunkNeeded } from '../plan.ts';
 import type { LevelSurface, StreamGpu } from '../stream-port.ts';
 import type { ChunkIndex } from '../types.ts';
@@ -29,6 +30,10 @@ export class StreamLevels<V extends RoleVolume> {
   readonly #surfaceCost: (number | undefined)[] = [];
   /** The readbacks of learnt ranges in flight (learnSettled). */
   #learning: Promise<void> = Promise.resolve();
+  /** Cuts the surfaces open (level-0 voxels): a chunk whose cells it removes whole is never needed. */
+  clip: Clip | undefined;
+  /** Chunks (level, index) a surface needed by their ranges that the clip left out. */
+  readonly clipped = new Set<number>();
 
   constructor(
     readonly store: ZfpStore,
@@ -56,6 +61,29 @@ export class StreamLevels<V extends RoleVolume> {
 
   /** Which chunks of level L the surface at `iso` needs, or null while its range array is unread. */
   needs(L: number, iso: number): ((c: ChunkIndex) => boolean) | null {
+    const byRange = this.#needsByRange(L, iso);
+    const clip = this.clip;
+    if (!byRange || clipIsEmpty(clip)) return byRange;
+    return (c) => {
+      if (!byRange(c)) return false;
+      if (!this.#clippedAway(L, c, clip!)) return true;
+      this.clipped.add(key(L, c));
+      return false;
+    };
+  }
+
+  /** Whether the clip removes every cell of chunk c of level L (its voxels and the next chunk's first, in level-0 voxels, one of its voxels of slack). */
+  #clippedAway(L: number, c: ChunkIndex, clip: Clip): boolean {
+    const { chunkGrid, chunkEdge } = this.levels[L].layout;
+    const scale = this.store.levelScales[L];
+    const offset = this.store.levelOffsets[L] ?? [0, 0, 0];
+    const at = [c % chunkGrid[0], Math.floor(c / chunkGrid[0]) % chunkGrid[1], Math.floor(c / (chunkGrid[0] * chunkGrid[1]))];
+    const lo = at.map((g, a) => offset[a] + (g * chunkEdge - 1) * scale[a]);
+    const hi = at.map((g, a) => offset[a] + ((g + 1) * chunkEdge + 1) * scale[a]);
+    return regionClipped(lo, hi, clip);
+  }
+
+  #needsByRange(L: number, iso: number): ((c: ChunkIndex) => boolean) | null {
     const lv = this.levels[L];
     if (this.store.levels[L].unusable) return null;
     // read from the neighbourhood ranges per chunk asked: nothing made per level (a level may have 2^24 chunks)

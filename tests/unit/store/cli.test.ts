@@ -90,6 +90,50 @@ print(int(need.sum()))
     );
   });
 
+  it('extract --clip: chunks the box removes whole are not fetched; the same clipped triangles as in-core', () => {
+    const box = '40,0,10,150,256,200';
+    const a = cli('extract', store, '--level', '0', '--iso', '90', '--clip', box, '--json', join(work, 'clip-store.json'));
+    expect(a.status, a.stderr).toBe(0);
+    const b = cli('extract', oneStream, '--iso', '90', '--clip', box, '--json', join(work, 'clip-incore.json'));
+    expect(b.status, b.stderr).toBe(0);
+    const s = JSON.parse(readFileSync(join(work, 'clip-store.json'), 'utf8'));
+    const c = JSON.parse(readFileSync(join(work, 'clip-incore.json'), 'utf8'));
+    expect(s.isosurfaces[0].clippedTriangles).toBe(c.isosurfaces[0].clippedTriangles);
+    expect(s.isosurfaces[0].clippedTriangles).toBeGreaterThan(1000);
+    // NumPy: chunks the surface needs (27-neighbourhood ranges), split by whether the box meets their cells (one voxel of slack)
+    const [kept, clipped] = JSON.parse(
+      converterPython(
+        `
+import sys, json, zarr, numpy as np
+v = zarr.open_array(sys.argv[1] + '/0', mode='r')[:]     # z, y, x
+c = 32
+g = [n // c for n in v.shape]
+blocks = v.reshape(g[0], c, g[1], c, g[2], c)
+lo, hi = blocks.min(axis=(1, 3, 5)), blocks.max(axis=(1, 3, 5))
+def nb(a, f, fill):
+    p = np.pad(a, 1, constant_values=fill)
+    out = a.copy()
+    for dz in range(3):
+        for dy in range(3):
+            for dx in range(3):
+                out = f(out, p[dz:dz + g[0], dy:dy + g[1], dx:dx + g[2]])
+    return out
+iso = np.float32(90)
+need = (nb(lo, np.minimum, np.inf) < iso) & (iso <= nb(hi, np.maximum, -np.inf))
+b = [float(x) for x in sys.argv[2].split(',')]
+gz, gy, gx = np.meshgrid(*[np.arange(n) for n in g], indexing='ij')
+meets = np.ones(need.shape, bool)
+for a, gi in enumerate([gx, gy, gz]):
+    meets &= ((gi + 1) * c + 1 > b[a]) & (gi * c - 1 < b[a + 3])
+print(json.dumps([int((need & meets).sum()), int((need & ~meets).sum())]))
+`,
+        [store, box],
+      ),
+    );
+    expect(clipped).toBeGreaterThan(0);
+    expect(s.store).toMatchObject({ chunks: kept, clippedChunks: clipped });
+  });
+
   it('bench --level 1 runs on the level; a damaged chunk is reported naming it', () => {
     const r = cli('bench', store, '--level', '1', '--count', '3', '--modes', 'random', '--json', join(work, 'bench.json'));
     expect(r.status, r.stderr).toBe(0);
