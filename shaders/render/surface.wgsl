@@ -19,6 +19,8 @@ struct Surface {
   voxel_size: vec4f,   // xyz: world size of a voxel
   origin: vec4f,       // xyz: where voxel (0, 0, 0) sits, in voxels (a store level's OME translation)
   tint: vec4f,         // rgb: multiplies the base colours (a store refined by the view: the level tint; 1 otherwise); a: opacity
+  clip_count: vec4u,   // x: planes in use (src/core/clip.ts: a box's six, then the free plane)
+  clip: array<vec4f, 7>, // world space: a fragment at w is kept where dot(xyz, w) + w_ >= 0 for every plane
 };
 @group(1) @binding(0) var<uniform> surface: Surface;
 
@@ -75,9 +77,24 @@ fn to_srgb(c: vec3f) -> vec3f {
   return pow(clamp(c, vec3f(0.0), vec3f(1.0)), vec3f(1.0 / 2.2));
 }
 
+// Cut open: outside any clip plane, nothing is drawn.
+fn clipped(world: vec3f) -> bool {
+  for (var i = 0u; i < min(surface.clip_count.x, 7u); i++) {
+    let p = surface.clip[i];
+    if (dot(p.xyz, world) + p.w < 0.0) {
+      return true;
+    }
+  }
+  return false;
+}
+
 @fragment
 fn fs(in: VsOut, @builtin(front_facing) front_facing: bool) -> @location(0) vec4f {
-  return vec4f(shade(in, front_facing), 1.0);
+  let colour = shade(in, front_facing); // first: derivatives need uniform control flow
+  if (clipped(in.world)) {
+    discard;
+  }
+  return vec4f(colour, 1.0);
 }
 
 // One layer of a see-through surface: the nearest fragment behind the layer
@@ -89,7 +106,7 @@ fn fs(in: VsOut, @builtin(front_facing) front_facing: bool) -> @location(0) vec4
 fn fs_peel(in: VsOut, @builtin(front_facing) front_facing: bool) -> @location(0) vec4f {
   let colour = shade(in, front_facing); // first: derivatives need uniform control flow
   let pixel = vec2i(in.clip.xy);
-  if (in.clip.z <= textureLoad(peeled_depth, pixel, 0) || in.clip.z >= textureLoad(opaque_depth, pixel, 0)) {
+  if (clipped(in.world) || in.clip.z <= textureLoad(peeled_depth, pixel, 0) || in.clip.z >= textureLoad(opaque_depth, pixel, 0)) {
     discard;
   }
   let a = surface.tint.a;

@@ -14,6 +14,8 @@ export interface ControlActions {
   saveGlb: () => void;
   copyLink: () => void;
   stepIso: (steps: number) => void;
+  /** Moves the clip plane along its normal (, and .). */
+  stepClipPlane: (steps: number) => void;
   setBoxVisible: (on: boolean) => void;
   setSmooth: (on: boolean) => void;
   setColors: (front: string, back: string) => void;
@@ -94,6 +96,14 @@ export function wireControls(a: ControlActions): void {
     // The canvas handles its own keys (R, F, +, -) when focused.
     const onCanvas = e.target instanceof HTMLCanvasElement;
     switch (e.key) {
+      case ',':
+      case '<':
+        a.stepClipPlane(e.shiftKey ? -10 : -1);
+        break;
+      case '.':
+      case '>':
+        a.stepClipPlane(e.shiftKey ? 10 : 1);
+        break;
       case '[':
       case '{':
         a.stepIso(e.shiftKey ? -10 : -1);

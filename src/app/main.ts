@@ -15,6 +15,8 @@ import { byId } from './dom.ts';
 import { copyLink, measureShown, saveGlb, savePly, savePng } from './exports.ts';
 import { type MeasuredSurface, MeasurePanel } from './ui/measure-panel.ts';
 import { SurfaceSet } from './surfaces/surface-set.ts';
+import { ClipControl } from './ui/clip-control.ts';
+import type { Clip } from '../core/clip.ts';
 import { SurfacesPanel } from './ui/surfaces-panel.ts';
 import { setInfoList } from './info-list.ts';
 import { chooseIsovalue } from './iso-choice.ts';
@@ -76,6 +78,8 @@ async function start(): Promise<void> {
   let viewer!: Viewer;
   let surface!: SurfaceLayer;
   let box!: BoxLayer;
+  /** The clip box's outline (shown while a clip box is on). */
+  let clipBox!: BoxLayer;
   let boxVisible = true;
   /** Told after every camera change (the store view re-plans its cut). */
   const cameraListeners = new Set<() => void>();
@@ -92,7 +96,7 @@ async function start(): Promise<void> {
     });
     // Y up, as in ParaView and vtk.js (and CT scans like the bonsai); the Display section changes it.
     viewer.upAxis = old?.up ?? 'y';
-    [box, surface] = await Promise.all([BoxLayer.create(viewer), SurfaceLayer.create(viewer)]);
+    [box, surface, clipBox] = await Promise.all([BoxLayer.create(viewer), SurfaceLayer.create(viewer), BoxLayer.create(viewer)]);
     if (old) {
       surface.style = old.style;
       surface.voxelSize = old.voxelSize;
@@ -129,9 +133,10 @@ async function start(): Promise<void> {
     },
     (iso) => surfaces.setIsovalue(iso),
   );
-  const spacing = new SpacingControl([byId('spacing-x'), byId('spacing-y'), byId('spacing-z')], byId('spacing-note'), (s) =>
-    session.setSpacing(s),
-  );
+  const spacing = new SpacingControl([byId('spacing-x'), byId('spacing-y'), byId('spacing-z')], byId('spacing-note'), (s) => {
+    session.setSpacing(s);
+    showClipBox();
+  });
   // The page's one GPU memory budget: every store streams against it (a lower one frees at once, a store being
   // replaced holds only what it draws); an in-core volume's cache and vertices are capped by the same figure.
   const pageBudget = new GpuBudget(defaultBudgetBytes(gpu.limits));
@@ -224,6 +229,55 @@ async function start(): Promise<void> {
     byId('surfaces-note'),
     () => surfaces,
   );
+  // The clip: every surface layer cuts its fragments, a store leaves out chunks it removes whole, exports cut the mesh.
+  let clip: Clip | undefined;
+  const showClipBox = () => {
+    viewer.removeLayer(clipBox);
+    const v = session.current;
+    if (!clip?.box || !v) return;
+    const s = spacing.value;
+    const o = v.opened.origin ?? [0, 0, 0];
+    const b = clip.box;
+    clipBox.setBounds(
+      {
+        min: [0, 1, 2].map((a) => (b[a] + o[a]) * s[a]) as [number, number, number],
+        max: [0, 1, 2].map((a) => (b[a + 3] + o[a]) * s[a]) as [number, number, number],
+      },
+      [0.95, 0.68, 0.25, 1],
+    );
+    viewer.addLayer(clipBox);
+  };
+  const applyClip = (c: Clip | undefined): void => {
+    clip = c;
+    surface.clip = c;
+    session.clip = c;
+    storeView?.setClip(c);
+    link?.setClip(c);
+    state.clip = c;
+    showClipBox();
+    viewer.requestFrame();
+  };
+  const clipControl = new ClipControl(
+    {
+      boxOn: byId<HTMLInputElement>('clip-box-on'),
+      box: ['x0', 'x1', 'y0', 'y1', 'z0', 'z1'].map((k) => byId<HTMLInputElement>(`clip-${k}`)),
+      boxLabels: ['x', 'y', 'z'].map((k) => byId(`clip-${k}-label`)),
+      planeOn: byId<HTMLInputElement>('clip-plane-on'),
+      planeAxis: byId<HTMLSelectElement>('clip-plane-axis'),
+      planeOffset: byId<HTMLInputElement>('clip-plane-offset'),
+      planeLabel: byId('clip-plane-label'),
+      planeFlip: byId<HTMLButtonElement>('clip-plane-flip'),
+    },
+    applyClip,
+    () => {
+      // away from the eye, in voxel coordinates (a world direction times the voxel size)
+      const c = camera.getState();
+      const eye = camera.eyePosition();
+      const s = spacing.value;
+      return [0, 1, 2].map((a) => (c.target[a] - eye[a]) * s[a]) as [number, number, number];
+    },
+    messages,
+  );
   const measure = new MeasurePanel(
     byId<HTMLButtonElement>('measure-surface'),
     byId('surface-measure'),
@@ -249,8 +303,10 @@ async function start(): Promise<void> {
       volumeInfo: byId('volume-info'),
       measure,
       surfaces,
+      clip: clipControl,
     });
   let session = makeSession();
+  session.pendingClip = initialView.clip;
   surfacesPanel.render();
   session.pendingCamera = initialView.camera;
   session.pendingSpacing = initialView.spacing;
@@ -325,6 +381,7 @@ async function start(): Promise<void> {
       void copyLink(link!, messages);
     },
     stepIso: (steps) => isoControl.step(steps),
+    stepClipPlane: (steps) => clipControl.stepPlane(steps),
     setBoxVisible: (on) => {
       boxVisible = on;
       if (on) viewer.addLayer(box);
@@ -385,6 +442,7 @@ async function start(): Promise<void> {
     gpu = next;
     await mountGraphics(gpu);
     session = makeSession();
+    session.pendingClip = clip;
     session.pendingCamera = view;
     session.pendingSpacing = userSpacing;
     pendingIso = iso;

@@ -7,6 +7,7 @@ import type { CameraState } from '../render/camera.ts';
 import type { Dims } from '../core/naming.ts';
 import type { MeasuredSurface } from './ui/measure-panel.ts';
 import type { SurfaceSpec } from './url-state.ts';
+import type { Clip } from '../core/clip.ts';
 
 export interface PageVolumeState {
   name: string;
@@ -40,6 +41,8 @@ export interface PageState {
   bench?: BenchResult;
   /** The surfaces (several for an in-core volume), the one the slider moves, and the bytes their copies hold. */
   surfaces?: { entries: (SurfaceSpec & { triangles?: number })[]; selected: number; copyBytes: number };
+  /** The clip on screen (src/core/clip.ts), undefined when nothing is cut. */
+  clip?: Clip;
   /** The last "Measure" of the surface (cleared when another volume opens). */
   measure?: MeasuredSurface;
   benchRunning: boolean;

@@ -17,6 +17,8 @@ import type { BenchPanel } from './ui/bench-panel.ts';
 import type { BudgetControl } from './ui/budget-control.ts';
 import type { Hud } from './ui/hud.ts';
 import type { IsoControl } from './ui/iso-control.ts';
+import type { Clip } from '../core/clip.ts';
+import type { ClipControl } from './ui/clip-control.ts';
 import type { MeasurePanel } from './ui/measure-panel.ts';
 import type { SurfaceSet } from './surfaces/surface-set.ts';
 import type { Spacing, SpacingControl } from './ui/spacing-control.ts';
@@ -40,6 +42,7 @@ export interface SessionParts {
   measure: MeasurePanel;
   /** The volume's surfaces (the selected one is `surface`'s). */
   surfaces: SurfaceSet;
+  clip: ClipControl;
 }
 
 export class Session {
@@ -48,6 +51,10 @@ export class Session {
   pendingCamera: CameraState | undefined;
   /** Voxel size to use for the first volume instead of the file's (from the link). */
   pendingSpacing: Spacing | undefined;
+  /** The clip for the first volume (from the link, or what was on screen before a lost device). */
+  pendingClip: Clip | undefined;
+  /** The clip on screen (exports and measurements cut the mesh the same way). */
+  clip: Clip | undefined;
   private requestedAt = new Map<number, number>();
   private lastLatency: number | undefined;
 
@@ -66,6 +73,9 @@ export class Session {
     this.requestedAt.clear();
     if (old !== v) p.measure.clear();
     p.surfaces.install(v, v.initialIso);
+    // a new volume starts uncut, unless the link (or a lost device's page) gave a clip that meets it
+    p.clip.setVolume(v.iso.info.dims, this.pendingClip);
+    this.pendingClip = undefined;
     const { info } = v.iso;
     v.iso.onStats((s) => {
       if (this.current === v) this.showStats(s);

@@ -1,12 +1,14 @@
 // The view in the URL hash, so a link reopens the same surface and camera:
 // #iso=0.5&cam=qx,qy,qz,qw,tx,ty,tz,d[&vox=sx,sy,sz] (vox: a voxel size the
 // user set, over the file's); several surfaces: iso=a,b,c with op=.. (opacity),
-// col=rrggbb,.. (colour), vis=1,0,.. (shown) and sel=k (the one the slider moves); for stores also level=L, and for stores of
+// col=rrggbb,.. (colour), vis=1,0,.. (shown) and sel=k (the one the slider moves);
+// clip=x0,y0,z0,x1,y1,z1 and plane=nx,ny,nz,d (src/core/clip.ts, level-0 voxels); for stores also level=L, and for stores of
 // lossless chunks rate=R (their bricks' GPU rate), t=T and c=C (time point
 // and channel), cut=1|0 (refine by the view or level by level) with px=W,H
 // (the canvas) and tol=T (pixels), tint=1 (tint by level). The volume itself comes from ?url=... (same
 // origin) or is the built-in default.
 import type { CameraState } from '../render/camera.ts';
+import { type Clip, parseClipBox, parseClipPlane } from '../core/clip.ts';
 
 /** One surface of several (src/app/surfaces/). */
 export interface SurfaceSpec {
@@ -22,6 +24,8 @@ export interface ViewState {
   /** Several surfaces (absent: one, at `iso`); `iso` is surfaces[selected].iso. */
   surfaces?: SurfaceSpec[];
   selected?: number;
+  /** The clip box and plane (level-0 voxels). */
+  clip?: Clip;
   camera?: CameraState;
   /** Voxel size set by the user (absent: the file's own). */
   spacing?: [number, number, number];
@@ -63,6 +67,8 @@ export function encodeViewState(s: ViewState): string {
     const c = s.camera;
     parts.push(`cam=${[...c.rotation, ...c.target, c.distance].map(round).join(',')}`);
   }
+  if (s.clip?.box) parts.push(`clip=${s.clip.box.map(round).join(',')}`);
+  if (s.clip?.plane) parts.push(`plane=${[...s.clip.plane.normal, s.clip.plane.d].map(round).join(',')}`);
   if (s.spacing) parts.push(`vox=${s.spacing.map(round).join(',')}`);
   if (s.level !== undefined) parts.push(`level=${s.level}`);
   if (s.storeRate !== undefined) parts.push(`rate=${round(s.storeRate)}`);
@@ -104,6 +110,14 @@ export function decodeViewState(hash: string): ViewState {
       rotation: [cam[0], cam[1], cam[2], cam[3]],
       target: [cam[4], cam[5], cam[6]],
       distance: cam[7],
+    };
+  }
+  const box = params.has('clip') ? parseClipBox(params.get('clip')!) : undefined;
+  const plane = params.has('plane') ? parseClipPlane(params.get('plane')!) : undefined;
+  if ((box && typeof box !== 'string') || (plane && typeof plane !== 'string')) {
+    out.clip = {
+      ...(box && typeof box !== 'string' ? { box } : {}),
+      ...(plane && typeof plane !== 'string' ? { plane } : {}),
     };
   }
   const vox = params.get('vox')?.split(',').map(Number);

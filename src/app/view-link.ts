@@ -9,6 +9,7 @@ export class ViewLink {
   private timer: ReturnType<typeof setTimeout> | undefined;
   private iso: number | undefined;
   private surfaces: Pick<ViewState, 'surfaces' | 'selected'> = {};
+  private clip: ViewState['clip'];
   private spacing: [number, number, number] | undefined;
   private level: number | undefined;
   private storeChoice: Pick<ViewState, 'storeRate' | 'time' | 'channel'> = {};
@@ -39,6 +40,12 @@ export class ViewLink {
   /** Several surfaces (one: the link keeps only iso=). */
   setSurfaces(surfaces: ViewState['surfaces'], selected: number): void {
     this.surfaces = { surfaces, selected };
+    this.schedule();
+  }
+
+  /** The clip box and plane (undefined: none). */
+  setClip(clip: ViewState['clip']): void {
+    this.clip = clip;
     this.schedule();
   }
 
@@ -77,6 +84,7 @@ export class ViewLink {
     return {
       iso: this.iso,
       ...this.surfaces,
+      clip: this.clip,
       camera: this.camera.getState(),
       spacing: this.spacing,
       level: this.level,

@@ -12,6 +12,7 @@ import vertexFormatWgsl from '../../shaders/isosurface/vertex_format.wgsl?raw';
 import { createShaderModule } from '../gpu/wgsl.ts';
 import type { IsosurfaceDrawData } from '../isosurface/types.ts';
 import type { ArcballCamera } from './camera.ts';
+import { type Clip, clipPlanes } from '../core/clip.ts';
 import { PEEL_TARGET, peelBindGroupLayout } from './depth-peel.ts';
 import { DEPTH_FORMAT, frameSnippet, type RenderLayer } from './viewer.ts';
 
@@ -52,7 +53,7 @@ export const DEFAULT_SURFACE_STYLE: SurfaceStyle = {
   opacity: 1,
 };
 
-const UNIFORM_BYTES = 128;
+const UNIFORM_BYTES = 128 + 16 + 7 * 16;
 const UNIT_SCALE = [1, 1, 1] as const;
 
 /**
@@ -85,6 +86,16 @@ export class SurfaceLayer implements RenderLayer {
    * 4 = 0.375 of its own voxels for level 2.
    */
   origin: [number, number, number] = [0, 0, 0];
+  #clip: Clip | undefined;
+  #clipPlanes: [number, number, number, number][] = [];
+  /** Cuts the surface open (level-0 voxel coordinates: src/core/clip.ts); drawn where every plane keeps it. */
+  get clip(): Clip | undefined {
+    return this.#clip;
+  }
+  set clip(clip: Clip | undefined) {
+    this.#clip = clip;
+    this.#clipPlanes = clipPlanes(clip);
+  }
   private data: IsosurfaceDrawData | undefined;
   /** The single surface as its own scene for the depth cue (one object, reused: a frame allocates nothing). */
   private readonly singleScene: { data: IsosurfaceDrawData | undefined; scale: readonly number[]; origin: readonly number[] } = {
@@ -233,6 +244,17 @@ export class SurfaceLayer implements RenderLayer {
     f32[29] = tint ? tint[1] : 1;
     f32[30] = tint ? tint[2] : 1;
     f32[31] = s.opacity;
+    // the clip (level-0 voxel coordinates, n . x + w >= 0) in world space: x = world / voxel size - origin
+    const planes = this.#clipPlanes;
+    u32[32] = planes.length;
+    for (let i = 0; i < planes.length; i++) {
+      const [nx, ny, nz, w] = planes[i];
+      const o = 36 + 4 * i;
+      f32[o] = nx / this.voxelSize[0];
+      f32[o + 1] = ny / this.voxelSize[1];
+      f32[o + 2] = nz / this.voxelSize[2];
+      f32[o + 3] = w - (nx * this.origin[0] + ny * this.origin[1] + nz * this.origin[2]);
+    }
     this.target.device.queue.writeBuffer(into, 0, this.scratch);
   }
 

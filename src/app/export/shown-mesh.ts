@@ -2,9 +2,11 @@
 // (i, j, k) at ((i, j, k) + origin) * voxel size (the file's, or what the user
 // set). An in-core volume: the GPU's welded mesh (one vertex per cut grid edge,
 // as VTK's merged points); a store: the step on screen, every level in
-// level-0 voxels. Shared by the PLY and glTF exports and the measurement.
+// level-0 voxels; cut by the page's clip as the renderer cuts it. Shared by
+// the PLY and glTF exports and the measurement.
 import { meshPositions } from '../../isosurface/vertex-format.ts';
 import type { SurfaceSnapshot } from '../../isosurface/snapshot.ts';
+import { clipMesh } from '../../core/clip.ts';
 import type { Session } from '../session.ts';
 
 export interface ShownMesh {
@@ -33,6 +35,8 @@ export async function readShownMesh(session: Session, copy?: { snapshot: Surface
     const surface = await v.iso.readMesh();
     mesh = { positions: meshPositions(surface), indices: surface.indices };
   }
+  // what is shown: cut by the page's clip (level-0 voxel coordinates, as these positions)
+  if (session.clip) mesh = clipMesh(mesh.positions, mesh.indices, session.clip);
   const voxelSize: [number, number, number] = [...session.spacing];
   const origin: [number, number, number] = [...(v.opened.origin ?? [0, 0, 0])];
   const voxelUnits = voxelSize.every((s) => s === 1) && origin.every((o) => o === 0);

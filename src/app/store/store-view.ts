@@ -9,6 +9,7 @@
 // or channel) allocates, and ends once the new one is drawn. Errors name the
 // store; the current surface stays. Its parts that are not behaviour:
 // store-open.ts.
+import type { Clip } from '../../core/clip.ts';
 import type { AsyncReadable } from '@zarrita/storage';
 import { type LevelValues, readLevelValues } from '../../store/level-values.ts';
 import { storeRateChooser } from '../../store/rate.ts';
@@ -48,6 +49,8 @@ export class StoreView {
   #keepIso: number | undefined;
   /** The panel's refinement choice, over the link's and the default, for the stores opened from now on. */
   #cutChoice: { cut?: boolean; tolerancePx?: number; tint?: boolean } = {};
+  /** The page's clip (setClip). */
+  #clip: Clip | undefined;
 
   constructor(private readonly d: StoreViewDeps) {
     // a new limit: the stream gives back what it must at once (its own listener); its refinement for the new limit,
@@ -77,6 +80,13 @@ export class StoreView {
     const o = this.#open;
     if (!o) return null;
     return { iso: o.iso, open: () => this.openStore(o.source, o.url, o.choice, o.ranges) };
+  }
+
+  /** The page's clip: the store on screen (and those opened later) leave out the chunks it removes whole. */
+  setClip(clip: Clip | undefined): void {
+    this.#clip = clip;
+    const o = this.#open;
+    if (o) void o.session.stream.setClip(clip);
   }
 
   /** Another volume is on screen now: the open store ends (requests, decodes, timers) and gives back its GPU memory. */
@@ -211,6 +221,7 @@ export class StoreView {
     stream.onProgress((p) => this.#progress(o, p));
     stream.onShown((s) => this.#shown(o, s));
     stream.onError((e) => this.d.onError(e.message));
+    void stream.setClip(this.#clip); // before the first isovalue: only kept for the plans
     this.#publish(o);
 
     // The isovalue: the link's (or the one kept over a reopen) as given, even outside a provisional range; else

@@ -300,11 +300,13 @@ export class SurfaceSet {
   #switched(): void {
     if (--this.#switches > 0) return;
     this.#target = undefined;
-    if (this.#pendingIso === undefined) return;
-    const iso = this.#pendingIso;
-    this.#pendingIso = undefined;
-    this.selectedEntry.iso = iso;
-    this.d.setLiveIsovalue(iso);
+    if (this.#pendingIso !== undefined) {
+      const iso = this.#pendingIso;
+      this.#pendingIso = undefined;
+      this.selectedEntry.iso = iso;
+      this.d.setLiveIsovalue(iso);
+    }
+    this.d.onChange(); // adding and reordering are possible again
   }
 
   /** Before each frame: styles, visibility and placement of every layer. */
@@ -320,6 +322,7 @@ export class SurfaceSet {
       draw.layer.style = { ...live.style, front: e.color, opacity: e.opacity };
       draw.layer.voxelSize = live.voxelSize;
       draw.layer.origin = live.origin;
+      if (draw.layer.clip !== live.clip) draw.layer.clip = live.clip;
       // the selected surface's copy shows until the live one has its surface
       draw.layer.visible = e.visible && (e !== sel || !this.#liveReady);
     }

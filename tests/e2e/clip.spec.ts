@@ -1,0 +1,55 @@
+// Cutting the surface open in the page: a clip box from the link draws less
+// and exports exactly the CLI's clipped triangles (the unit tests hold the
+// CLI's clip to VTK's vtkExtractVOI); the plane from the panel, stepped with
+// the keys, measured as the CLI measures the same cut; the link keeps both;
+// a clip box outside the volume is refused with a message and nothing cut.
+import { readFileSync } from 'node:fs';
+import { expect, test } from '@playwright/test';
+import { parsePly } from '../../src/mc/ply.ts';
+import { runCli } from './cli.ts';
+import { nonBackgroundFraction, openApp, waitForFrames } from './page.ts';
+
+interface Rec {
+  clippedTriangles: number;
+  area: number;
+}
+
+test('a clip box and a plane cut the surface, its exports and measures; a box outside the volume is refused', async ({ page, context }) => {
+  await openApp(page, '/#iso=0.43');
+  await waitForFrames(page, 2);
+  const whole = await nonBackgroundFraction(page);
+
+  const cut = await context.newPage();
+  await openApp(cut, '/#iso=0.43&clip=0,0,0,64,127,127');
+  expect(await cut.evaluate(() => window.zfpiso!.clip)).toEqual({ box: [0, 0, 0, 64, 127, 127] });
+  await expect(cut.locator('#clip-box-on')).toBeChecked();
+  await waitForFrames(cut, 2);
+  expect(await nonBackgroundFraction(cut)).toBeLessThan(whole * 0.8);
+  const [box] = (await runCli<{ isosurfaces: Rec[] }>(['extract', 'default', '--iso', '0.43', '--clip', '0,0,0,64,127,127'])).isosurfaces;
+  const [ply] = await Promise.all([cut.waitForEvent('download'), cut.locator('#save-ply').click()]);
+  const mesh = parsePly(new Uint8Array(readFileSync((await ply.path())!)));
+  expect(mesh.indices.length / 3).toBe(box.clippedTriangles);
+
+  // the plane: normal z at 40, stepped twice with '.', then Shift+',' (-10): z >= 32
+  await cut.locator('#clip-box-on').uncheck();
+  await cut.locator('#clip-plane-axis').selectOption('z');
+  await cut.locator('#clip-plane-offset').fill('40');
+  await cut.locator('body').press('.');
+  await cut.locator('body').press('.');
+  await cut.locator('body').press('Shift+<');
+  await expect.poll(() => cut.evaluate(() => window.zfpiso!.clip)).toEqual({ plane: { normal: [0, 0, 1], d: 32 } });
+  await cut.waitForFunction(() => location.hash.includes('plane=0,0,1,32') && !location.hash.includes('clip='));
+  const [plane] = (await runCli<{ isosurfaces: Rec[] }>(['extract', 'default', '--iso', '0.43', '--plane', '0,0,1,32'])).isosurfaces;
+  await cut.locator('#measure-surface').click();
+  await cut.waitForFunction(() => window.zfpiso!.measure !== undefined);
+  const m = (await cut.evaluate(() => window.zfpiso!.measure))!;
+  expect(m.triangles).toBe(plane.clippedTriangles);
+  expect(m.area).toBeCloseTo(plane.area, 6);
+  expect(m.enclosedVolume).toBeNull();
+
+  // a box that holds no cell: a message, nothing cut
+  const bad = await context.newPage();
+  await openApp(bad, '/#iso=0.43&clip=200,0,0,300,10,10');
+  await expect(bad.locator('#messages')).toContainText('Clip box 200,0,0,300,10,10: the box holds no cell of the volume');
+  expect(await bad.evaluate(() => window.zfpiso!.clip)).toBeUndefined();
+});
