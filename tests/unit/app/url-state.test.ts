@@ -23,6 +23,40 @@ describe('view state in the URL hash', () => {
     expect(decodeViewState('#vox=1,0,2').spacing).toBeUndefined();
     expect(decodeViewState('#vox=1,2').spacing).toBeUndefined();
   });
+  it('round-trips several surfaces: isovalues, opacity, colour, visibility and the selected one', () => {
+    const hash = encodeViewState({
+      iso: 120,
+      selected: 1,
+      surfaces: [
+        { iso: 50.5, color: [1, 0, 0], opacity: 0.35, visible: true },
+        { iso: 120, color: [0, 0.5, 1], opacity: 1, visible: false },
+      ],
+    });
+    expect(hash).toBe('iso=50.5,120&op=0.35,1&col=ff0000,0080ff&vis=1,0&sel=1');
+    const back = decodeViewState(`#${hash}`);
+    expect(back.iso).toBe(120);
+    expect(back.selected).toBe(1);
+    expect(back.surfaces).toEqual([
+      { iso: 50.5, color: [1, 0, 0], opacity: 0.35 },
+      { iso: 120, color: [0, 128 / 255, 1], opacity: 1, visible: false },
+    ]);
+    // one surface: the one-value form, as before
+    expect(encodeViewState({ iso: 3, surfaces: [{ iso: 3, opacity: 1 }] })).toBe('iso=3');
+    expect(decodeViewState('#iso=3').surfaces).toBeUndefined();
+    // malformed: a list with a non-number, more than 8, a selection out of range
+    expect(decodeViewState('#iso=1,x')).toEqual({});
+    expect(decodeViewState('#iso=1,2,3,4,5,6,7,8,9')).toEqual({});
+    expect(decodeViewState('#iso=1,2&sel=5').selected).toBe(0);
+  });
+  it('round-trips the clip box and plane; refuses malformed ones', () => {
+    const clip = { box: [1, 2, 3, 40, 50, 60] as const, plane: { normal: [0, 0.6, 0.8] as [number, number, number], d: 12.5 } };
+    const hash = encodeViewState({ iso: 1, clip });
+    expect(hash).toBe('iso=1&clip=1,2,3,40,50,60&plane=0,0.6,0.8,12.5');
+    expect(decodeViewState(`#${hash}`).clip).toEqual(clip);
+    expect(decodeViewState('#clip=5,0,0,1,1,1').clip).toBeUndefined(); // lower above upper
+    expect(decodeViewState('#plane=0,0,0,4').clip).toBeUndefined(); // no direction
+    expect(decodeViewState('#clip=0,0,0,1,1').clip).toBeUndefined();
+  });
   it('ignores malformed values', () => {
     expect(decodeViewState('#iso=abc&cam=1,2,3')).toEqual({});
     expect(decodeViewState('')).toEqual({});
