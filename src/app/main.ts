@@ -16,6 +16,9 @@ import { copyLink, measureShown, saveGlb, savePly, savePng } from './exports.ts'
 import { type MeasuredSurface, MeasurePanel } from './ui/measure-panel.ts';
 import { SurfaceSet } from './surfaces/surface-set.ts';
 import { ClipControl } from './ui/clip-control.ts';
+import { PickPanel } from './ui/pick-panel.ts';
+import { probeFor } from '../zfp/probe.ts';
+import { ZfpGpuStream } from '../zfp/gpu-stream.ts';
 import type { Clip } from '../core/clip.ts';
 import { SurfacesPanel } from './ui/surfaces-panel.ts';
 import { setInfoList } from './info-list.ts';
@@ -80,6 +83,8 @@ async function start(): Promise<void> {
   let box!: BoxLayer;
   /** The clip box's outline (shown while a clip box is on). */
   let clipBox!: BoxLayer;
+  /** Picking (made once the session exists; the viewer's clicks go to it). */
+  let pickPanel: PickPanel | undefined;
   let boxVisible = true;
   /** Told after every camera change (the store view re-plans its cut). */
   const cameraListeners = new Set<() => void>();
@@ -89,6 +94,7 @@ async function start(): Promise<void> {
     viewer?.destroy();
     viewer = new Viewer(g.device, canvas, {
       camera,
+      onClick: (u, v) => void pickPanel?.click(u, v),
       onCameraChange: () => {
         link?.schedule();
         for (const l of cameraListeners) l();
@@ -277,6 +283,25 @@ async function start(): Promise<void> {
       return [0, 1, 2].map((a) => (c.target[a] - eye[a]) * s[a]) as [number, number, number];
     },
     messages,
+  );
+  pickPanel = new PickPanel(
+    byId<HTMLInputElement>('pick-points'),
+    byId('pick-info'),
+    async (u, v) => {
+      const hit = await viewer.pick(u, v);
+      const vol = session.current;
+      if (!hit || !vol) return null;
+      const s = spacing.value;
+      const o = vol.opened.origin ?? [0, 0, 0];
+      const voxel = [0, 1, 2].map((a) => hit.world[a] / s[a] - o[a]) as [number, number, number];
+      // in-core volumes: the value from the stream's decoded voxels; a store's chunks are not at hand here
+      const stream = vol.opened.stream;
+      const value = stream instanceof ZfpGpuStream ? await (await probeFor(gpu.device)).sample(stream, voxel) : null;
+      return { voxel, world: hit.world, value };
+    },
+    (points, distance) => {
+      state.picks = { points, distance };
+    },
   );
   const measure = new MeasurePanel(
     byId<HTMLButtonElement>('measure-surface'),

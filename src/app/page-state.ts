@@ -8,6 +8,7 @@ import type { Dims } from '../core/naming.ts';
 import type { MeasuredSurface } from './ui/measure-panel.ts';
 import type { SurfaceSpec } from './url-state.ts';
 import type { Clip } from '../core/clip.ts';
+import type { PickedPoint } from './ui/pick-panel.ts';
 
 export interface PageVolumeState {
   name: string;
@@ -41,6 +42,8 @@ export interface PageState {
   bench?: BenchResult;
   /** The surfaces (several for an in-core volume), the one the slider moves, and the bytes their copies hold. */
   surfaces?: { entries: (SurfaceSpec & { triangles?: number })[]; selected: number; copyBytes: number };
+  /** Points picked on the surface (Pick points) and the distance between the two. */
+  picks?: { points: PickedPoint[]; distance: number | null };
   /** The clip on screen (src/core/clip.ts), undefined when nothing is cut. */
   clip?: Clip;
   /** The last "Measure" of the surface (cleared when another volume opens). */

@@ -12,6 +12,8 @@ export interface CameraControlsOptions {
   onChange: () => void;
   /** Fit to the data (F key); defaults to reset. */
   onFit?: () => void;
+  /** A left click that did not drag (moved under 4 px): where, as fractions of the element from its top left. */
+  onClick?: (u: number, v: number) => void;
 }
 
 export class CameraControls {
@@ -21,6 +23,8 @@ export class CameraControls {
   /** Two fingers down: their distance (pixels) and midpoint (NDC) at the last move. */
   private pinch: { distance: number; mid: [number, number] } | undefined;
   private readonly disposers: (() => void)[] = [];
+  /** Where a left button went down (client pixels): a release there is a click. */
+  private press: { id: number; x: number; y: number; moved: boolean } | undefined;
 
   constructor(
     private readonly element: HTMLElement,
@@ -72,6 +76,7 @@ export class CameraControls {
     }
     if (this.drag) return;
     const pan = e.button === 2 || e.button === 1 || e.shiftKey;
+    this.press = !pan && e.button === 0 ? { id: e.pointerId, x: e.clientX, y: e.clientY, moved: false } : undefined;
     this.startDrag(pan ? 'pan' : 'rotate', e.pointerId, e.clientX, e.clientY);
     this.capture(e);
   }
@@ -109,6 +114,10 @@ export class CameraControls {
     }
     const d = this.drag;
     if (!d || d.id !== e.pointerId) return;
+    const p = this.press;
+    if (p && p.id === e.pointerId && Math.hypot(e.clientX - p.x, e.clientY - p.y) >= 4) p.moved = true;
+    // a click's own few pixels of jitter do not turn the camera
+    if (p && p.id === e.pointerId && !p.moved) return;
     const [x, y] = this.ndc(e.clientX, e.clientY);
     if (d.mode === 'rotate') this.camera.rotateArcball(d.x, d.y, x, y);
     else this.camera.pan(x - d.x, y - d.y);
@@ -128,6 +137,12 @@ export class CameraControls {
       }
     } else if (this.drag?.id === e.pointerId) {
       this.drag = undefined;
+      const p = this.press;
+      this.press = undefined;
+      if (p && p.id === e.pointerId && !p.moved && this.options.onClick) {
+        const r = this.element.getBoundingClientRect();
+        this.options.onClick((e.clientX - r.left) / r.width, (e.clientY - r.top) / r.height);
+      }
     } else return;
     if (this.element.hasPointerCapture(e.pointerId)) this.element.releasePointerCapture(e.pointerId);
   }

@@ -46,6 +46,8 @@ export interface PeelInputs {
   /** Bind group 0 of every layer (the frame uniforms). */
   frameBindGroup: GPUBindGroup;
   layers: readonly RenderLayer[];
+  /** A pick: called after the first peel with its depth (the nearest see-through fragment per pixel; 1 where none). */
+  pick?: (encoder: GPUCommandEncoder, nearest: GPUTextureView) => void;
 }
 
 interface Targets {
@@ -176,6 +178,7 @@ export class DepthPeeler {
       peel.setBindGroup(2, t.peelGroups[k % 2]);
       for (const layer of inputs.layers) if (layer.transparent) layer.drawPeel?.(peel);
       peel.end();
+      if (k === 0) inputs.pick?.(encoder, t.depthViews[0]);
       const under = encoder.beginRenderPass({
         label: `DepthPeeler.under${k}`,
         colorAttachments: [{ view: t.accumView, loadOp: 'load', storeOp: 'store' }],

@@ -2,12 +2,13 @@
 // an on-demand frame loop. Drawable things implement `RenderLayer`; work that
 // must be submitted before a frame (compute) goes in `beforeFrame` hooks.
 
-import { mat4, vec3 } from 'gl-matrix';
+import { mat4, vec3, vec4 } from 'gl-matrix';
 import frameWgsl from '../../shaders/render/frame.wgsl?raw';
 import type { WgslPart } from '../gpu/wgsl.ts';
 import { ArcballCamera, type Bounds, type UpAxis } from './camera.ts';
 import { CameraControls } from './camera-controls.ts';
 import { DepthPeeler, PEEL_DEPTH_FORMAT } from './depth-peel.ts';
+import { DepthProbe } from './depth-probe.ts';
 
 export const frameSnippet: WgslPart = { name: 'shaders/render/frame.wgsl', code: frameWgsl };
 
@@ -54,6 +55,20 @@ export function frameUniformData(
   return out;
 }
 
+/** What a pick found: the world point under the pixel and its depth (0 near .. 1 far). */
+export interface PickHit {
+  world: [number, number, number];
+  depth: number;
+}
+
+/** NDC (x, y in -1..1, z the depth in 0..1) -> world, through the inverse of `viewProj`. */
+export function unproject(viewProj: mat4, ndc: readonly number[]): [number, number, number] {
+  const inv = mat4.create();
+  if (!mat4.invert(inv, viewProj)) return [Number.NaN, Number.NaN, Number.NaN];
+  const p = vec4.transformMat4(vec4.create(), vec4.fromValues(ndc[0], ndc[1], ndc[2], 1), inv);
+  return [p[0] / p[3], p[1] / p[3], p[2] / p[3]];
+}
+
 export interface RenderLayer {
   /** Records draws into the frame's render pass (group 0 = frame uniforms is already set): the opaque part. */
   draw(pass: GPURenderPassEncoder): void;
@@ -69,6 +84,8 @@ export interface ViewerOptions {
   onCameraChange?: () => void;
   /** The camera to drive (default: a new one); a viewer made again on a new device keeps the old one's. */
   camera?: ArcballCamera;
+  /** A left click that did not drag (CameraControls.onClick). */
+  onClick?: (u: number, v: number) => void;
 }
 
 export class Viewer {
@@ -102,6 +119,10 @@ export class Viewer {
   private readonly scratch = new Float32Array(FRAME_UNIFORM_BYTES / 4);
   private destroyed = false;
   private bounds: Bounds | undefined;
+  /** Reads a depth texel for pick() (made by the first pick). */
+  private depthProbe: DepthProbe | undefined;
+  /** A pick waiting for the next frame (pick()). */
+  private pendingPick: { x: number; y: number; resolve: (p: PickHit | null) => void; reject: (e: Error) => void } | undefined;
   /** Made when a see-through layer first appears. */
   private peeler: DepthPeeler | undefined;
   private peelerMaking = false;
@@ -145,6 +166,7 @@ export class Viewer {
         options.onCameraChange?.();
       },
       onFit: () => this.fitView(),
+      onClick: options.onClick,
     });
 
     this.resizeObserver = new ResizeObserver((entries) => {
@@ -261,6 +283,16 @@ export class Viewer {
     pass.setBindGroup(0, this.frameBindGroup);
     for (const layer of this.layers) layer.draw(pass);
     pass.end();
+    const pick = this.pendingPick;
+    this.pendingPick = undefined;
+    // a pick reads the opaque depth (f32 0) and the nearest see-through one (f32 1: 1 unless peeled)
+    const probe = this.depthProbe;
+    const pickRead = pick && probe ? this.#pickBuffers() : undefined;
+    const probeUniforms: GPUBuffer[] = [];
+    if (pick && probe && pickRead) {
+      this.device.queue.writeBuffer(pickRead.values, 0, Float32Array.of(1, 1));
+      probeUniforms.push(probe.encode(encoder, depthView, pick.x, pick.y, pickRead.values, 0));
+    }
     if (DepthPeeler.anyTransparent(this.layers)) {
       if (this.peeler) {
         const { width, height } = this.canvas;
@@ -271,6 +303,12 @@ export class Viewer {
           height,
           frameBindGroup: this.frameBindGroup,
           layers: this.layers,
+          ...(pick && probe && pickRead
+            ? {
+                pick: (e: GPUCommandEncoder, nearest: GPUTextureView) =>
+                  probeUniforms.push(probe.encode(e, nearest, pick.x, pick.y, pickRead.values, 1)),
+              }
+            : {}),
         });
       } else this.makePeeler();
     }
@@ -278,6 +316,62 @@ export class Viewer {
     this.device.queue.submit(this.submitList);
     this.submitList.length = 0;
     this.framesDrawn++;
+    if (pick && pickRead) {
+      for (const u of probeUniforms) u.destroy();
+      this.resolvePick(pick, pickRead.values, pickRead.readback);
+    } else pick?.resolve(null);
+  }
+
+  /**
+   * The nearest surface under a point of the canvas (u, v: fractions from its
+   * top left), see-through ones included, as drawn by the next frame; null
+   * where the ray meets none.
+   */
+  async pick(u: number, v: number): Promise<PickHit | null> {
+    this.depthProbe ??= await DepthProbe.create(this.device);
+    const { width, height } = this.canvas;
+    const x = Math.min(width - 1, Math.max(0, Math.floor(u * width)));
+    const y = Math.min(height - 1, Math.max(0, Math.floor(v * height)));
+    this.pendingPick?.resolve(null); // a newer pick replaces one not yet drawn
+    return new Promise((resolve, reject) => {
+      this.pendingPick = { x, y, resolve, reject };
+      this.requestFrame();
+    });
+  }
+
+  /** The pick's small buffers: the probed depths (STORAGE) and their readback. */
+  #pickBuffers(): { values: GPUBuffer; readback: GPUBuffer } {
+    return {
+      values: this.device.createBuffer({
+        label: 'Viewer.pick',
+        size: 8,
+        usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST,
+      }),
+      readback: this.device.createBuffer({ label: 'Viewer.pickRead', size: 8, usage: GPUBufferUsage.COPY_DST | GPUBufferUsage.MAP_READ }),
+    };
+  }
+
+  private resolvePick(pick: NonNullable<Viewer['pendingPick']>, values: GPUBuffer, readback: GPUBuffer): void {
+    const { width, height } = this.canvas;
+    const viewProj = this.camera.viewProjection(mat4.create());
+    const encoder = this.device.createCommandEncoder({ label: 'Viewer.pickRead' });
+    encoder.copyBufferToBuffer(values, 0, readback, 0, 8);
+    this.device.queue.submit([encoder.finish()]);
+    values.destroy();
+    readback.mapAsync(GPUMapMode.READ).then(
+      () => {
+        const f = new Float32Array(readback.getMappedRange());
+        const depth = Math.min(f[0], f[1]);
+        readback.destroy();
+        if (!(depth < 1)) return pick.resolve(null);
+        const ndc = [((pick.x + 0.5) / width) * 2 - 1, 1 - ((pick.y + 0.5) / height) * 2, depth];
+        pick.resolve({ world: unproject(viewProj, ndc), depth });
+      },
+      (e: Error) => {
+        readback.destroy();
+        pick.reject(e);
+      },
+    );
   }
 
   /** The depth peeler, made once (the see-through layers appear from the frame after). */
