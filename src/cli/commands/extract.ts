@@ -17,6 +17,7 @@
 import { writeFileSync } from 'node:fs';
 import { basename } from 'node:path';
 import { describeAdapter } from '../../gpu/device.ts';
+import { meteredGpu } from '../../gpu/memory-meter.ts';
 import { encodePly, soupOf } from '../../mc/ply.ts';
 import { formatMB } from '../../isosurface/budget.ts';
 import { IsosurfaceBudgetError } from '../../isosurface/types.ts';
@@ -187,7 +188,9 @@ export const extractCommand: CliCommand = {
     const glbSurfaces: GlbSurface[] = [];
     const clip = clipOption(args);
     const saveRanges = stringOption(args, 'save-ranges');
-    const gpu = await ctx.gpu();
+    const device = await ctx.gpu();
+    // everything this command makes on the GPU is metered: the record's peak
+    const { gpu, meter } = meteredGpu(device);
     const volume = await openInputSurface(ctx, gpu, input, {
       rate: numberOption(args, 'rate'),
       level: numberOption(args, 'level'),
@@ -320,6 +323,9 @@ export const extractCommand: CliCommand = {
       ...(glbPath !== undefined ? { glb: glbPath } : {}),
       notes: volume.notes,
       adapter: describeAdapter(gpu.adapter),
+      // the surfaces computed one after another over one block cache, and (--glb) written together
+      drawnTogether: records.filter((r): r is ExtractRecord => !('error' in r)).map((r) => r.iso),
+      gpuPeakBytes: meter.peak,
       memoryBudgetBytes: iso.memoryBudget,
       isosurfaces: records,
       ...(storeRecord ? { store: storeRecord } : {}),

@@ -200,7 +200,11 @@ print(json.dumps(measure(f, (1, 1, 1), ${JSON.stringify(isos)})))
     const out = join(dir, 'neghip.json');
     const r = cli('extract', file, '--iso', isos.join(','), '--rate', '20', '--json', out);
     expect(r.status, r.stderr).toBe(0);
-    const recs = JSON.parse(readFileSync(out, 'utf8')).isosurfaces as Rec[];
+    const result = JSON.parse(readFileSync(out, 'utf8'));
+    // both over one cache; the GPU's peak holds at least the stream and both surfaces' cache and vertices
+    expect(result.drawnTogether).toEqual(isos);
+    expect(result.gpuPeakBytes).toBeGreaterThan(66 ** 3);
+    const recs = result.isosurfaces as Rec[];
     recs.forEach((rec, i) => {
       const v = vtkFigures[i];
       expect(rec.triangles).toBe(v.triangles);
