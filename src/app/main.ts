@@ -16,6 +16,7 @@ import { copyLink, measureShown, saveGlb, savePly, savePng } from './exports.ts'
 import { type MeasuredSurface, MeasurePanel } from './ui/measure-panel.ts';
 import { SurfaceSet } from './surfaces/surface-set.ts';
 import { ClipControl } from './ui/clip-control.ts';
+import { CapLayer } from '../render/cap-layer.ts';
 import { PickPanel } from './ui/pick-panel.ts';
 import { probeFor } from '../zfp/probe.ts';
 import { ZfpGpuStream } from '../zfp/gpu-stream.ts';
@@ -83,6 +84,8 @@ async function start(): Promise<void> {
   let box!: BoxLayer;
   /** The clip box's outline (shown while a clip box is on). */
   let clipBox!: BoxLayer;
+  /** The caps where the clip cuts an in-core volume open (coloured by its values). */
+  let caps!: CapLayer;
   /** Picking (made once the session exists; the viewer's clicks go to it). */
   let pickPanel: PickPanel | undefined;
   let boxVisible = true;
@@ -102,13 +105,20 @@ async function start(): Promise<void> {
     });
     // Y up, as in ParaView and vtk.js (and CT scans like the bonsai); the Display section changes it.
     viewer.upAxis = old?.up ?? 'y';
-    [box, surface, clipBox] = await Promise.all([BoxLayer.create(viewer), SurfaceLayer.create(viewer), BoxLayer.create(viewer)]);
+    [box, surface, clipBox, caps] = await Promise.all([
+      BoxLayer.create(viewer),
+      SurfaceLayer.create(viewer),
+      BoxLayer.create(viewer),
+      CapLayer.create(viewer),
+    ]);
     if (old) {
       surface.style = old.style;
       surface.voxelSize = old.voxelSize;
     }
     viewer.addLayer(surface);
+    viewer.addLayer(caps);
     if (boxVisible) viewer.addLayer(box);
+
     state.adapter = g.adapter;
     setInfoList(byId('gpu-info'), [
       ['adapter', describeAdapter(g.adapter)],
@@ -256,6 +266,10 @@ async function start(): Promise<void> {
   const applyClip = (c: Clip | undefined): void => {
     clip = c;
     surface.clip = c;
+    const stream = session.current?.opened.stream;
+    // caps for volumes opened whole (a store's chunks are not decoded here)
+    caps.setClip(stream instanceof ZfpGpuStream ? stream : undefined, c);
+    state.capBlocks = caps.blocks;
     session.clip = c;
     storeView?.setClip(c);
     link?.setClip(c);
@@ -303,6 +317,7 @@ async function start(): Promise<void> {
       state.picks = { points, distance };
     },
   );
+  byId('clip-caps').addEventListener('change', () => viewer.requestFrame());
   const measure = new MeasurePanel(
     byId<HTMLButtonElement>('measure-surface'),
     byId('surface-measure'),
@@ -329,6 +344,8 @@ async function start(): Promise<void> {
       measure,
       surfaces,
       clip: clipControl,
+      caps: () => caps,
+      capsOn: () => byId<HTMLInputElement>('clip-caps').checked,
     });
   let session = makeSession();
   session.pendingClip = initialView.clip;

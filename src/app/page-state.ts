@@ -44,6 +44,8 @@ export interface PageState {
   surfaces?: { entries: (SurfaceSpec & { triangles?: number })[]; selected: number; copyBytes: number };
   /** Points picked on the surface (Pick points) and the distance between the two. */
   picks?: { points: PickedPoint[]; distance: number | null };
+  /** Blocks decoded for the caps of the clip (0: no caps). */
+  capBlocks?: number;
   /** The clip on screen (src/core/clip.ts), undefined when nothing is cut. */
   clip?: Clip;
   /** The last "Measure" of the surface (cleared when another volume opens). */

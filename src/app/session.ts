@@ -19,6 +19,7 @@ import type { Hud } from './ui/hud.ts';
 import type { IsoControl } from './ui/iso-control.ts';
 import type { Clip } from '../core/clip.ts';
 import type { ClipControl } from './ui/clip-control.ts';
+import type { CapLayer } from '../render/cap-layer.ts';
 import type { MeasurePanel } from './ui/measure-panel.ts';
 import type { SurfaceSet } from './surfaces/surface-set.ts';
 import type { Spacing, SpacingControl } from './ui/spacing-control.ts';
@@ -43,6 +44,9 @@ export interface SessionParts {
   /** The volume's surfaces (the selected one is `surface`'s). */
   surfaces: SurfaceSet;
   clip: ClipControl;
+  caps: () => CapLayer;
+  /** The Caps checkbox. */
+  capsOn: () => boolean;
 }
 
 export class Session {
@@ -62,6 +66,14 @@ export class Session {
     p.viewer.addBeforeFrame(() => {
       p.surface.setDrawData(this.current?.iso.drawData);
       p.surfaces.beforeFrame();
+      // the caps: inside the outermost visible surface, placed as the surfaces, coloured over the volume's values
+      const caps = p.caps();
+      const shown = p.surfaces.entries.filter((e) => e.visible && Number.isFinite(e.iso));
+      caps.visible = p.capsOn() && shown.length > 0;
+      caps.threshold = Math.min(...shown.map((e) => e.iso));
+      caps.voxelSize = p.surface.voxelSize;
+      caps.origin = p.surface.origin;
+      if (this.current) caps.range = this.current.iso.info.valueRange;
       p.surface.setParts(this.current?.iso.drawParts?.());
     });
   }

@@ -152,3 +152,108 @@ export function clipPlanes(clip: Clip | undefined): [number, number, number, num
   if (clip?.plane) planes.push([...clip.plane.normal, -clip.plane.d] as [number, number, number, number]);
   return planes;
 }
+
+/**
+ * The caps of a clip: per plane of the clip, the convex polygon where it
+ * cuts the volume's box [0, dims - 1] and every other plane keeps it (level-0
+ * voxel coordinates, corners in order around the polygon). Empty planes
+ * (outside the box or cut away by the others) are left out.
+ */
+export function capPolygons(
+  clip: Clip | undefined,
+  dims: readonly number[],
+): { plane: [number, number, number, number]; corners: number[][] }[] {
+  const planes = clipPlanes(clip);
+  const box = [0, 1, 2].map((a) => Math.max(0, dims[a] - 1));
+  const out: { plane: [number, number, number, number]; corners: number[][] }[] = [];
+  planes.forEach((plane, i) => {
+    let poly = planeInBox(plane, box);
+    for (let j = 0; j < planes.length && poly.length >= 3; j++) if (j !== i) poly = keepSide(poly, planes[j]);
+    if (poly.length >= 3) out.push({ plane, corners: poly });
+  });
+  return out;
+}
+
+/** The polygon where n . x + w = 0 cuts the box [0, hi]: its crossings of the 12 edges, in order around their centre. */
+function planeInBox(plane: readonly number[], hi: readonly number[]): number[][] {
+  const [nx, ny, nz, w] = plane;
+  const f = (p: readonly number[]) => nx * p[0] + ny * p[1] + nz * p[2] + w;
+  const corners = [0, 1, 2, 3, 4, 5, 6, 7].map((k) => [k & 1 ? hi[0] : 0, k & 2 ? hi[1] : 0, k & 4 ? hi[2] : 0]);
+  const points: number[][] = [];
+  for (let a = 0; a < 8; a++) {
+    for (const bit of [1, 2, 4]) {
+      if (a & bit) continue;
+      const p = corners[a],
+        q = corners[a | bit];
+      const fp = f(p),
+        fq = f(q);
+      if (fp === 0) points.push(p);
+      if ((fp < 0 && fq > 0) || (fp > 0 && fq < 0)) {
+        const t = fp / (fp - fq);
+        points.push(p.map((v, k) => v + t * (q[k] - v)));
+      }
+    }
+  }
+  const unique = points.filter((p, i) => points.findIndex((q) => q.every((v, k) => Math.abs(v - p[k]) < 1e-9)) === i);
+  if (unique.length < 3) return [];
+  // order around the centre, in the plane's own axes
+  const c = [0, 1, 2].map((k) => unique.reduce((s, p) => s + p[k], 0) / unique.length);
+  const n = [nx, ny, nz];
+  const u = Math.abs(n[0]) < 0.9 ? cross(n, [1, 0, 0]) : cross(n, [0, 1, 0]);
+  const v = cross(n, u);
+  const angle = (p: number[]) => Math.atan2(dot(sub(p, c), v), dot(sub(p, c), u));
+  return unique.sort((a, b) => angle(a) - angle(b));
+}
+
+/** Sutherland-Hodgman: the part of a convex polygon with n . x + w >= 0. */
+function keepSide(poly: number[][], plane: readonly number[]): number[][] {
+  const f = (p: number[]) => plane[0] * p[0] + plane[1] * p[1] + plane[2] * p[2] + plane[3];
+  const out: number[][] = [];
+  for (let i = 0; i < poly.length; i++) {
+    const p = poly[i],
+      q = poly[(i + 1) % poly.length];
+    const fp = f(p),
+      fq = f(q);
+    if (fp >= 0) out.push(p);
+    if (fp >= 0 !== fq >= 0) {
+      const t = fp / (fp - fq);
+      out.push(p.map((v, k) => v + t * (q[k] - v)));
+    }
+  }
+  return out;
+}
+
+const dot = (a: readonly number[], b: readonly number[]) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+const sub = (a: readonly number[], b: readonly number[]) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+const cross = (a: readonly number[], b: readonly number[]) => [
+  a[1] * b[2] - a[2] * b[1],
+  a[2] * b[0] - a[0] * b[2],
+  a[0] * b[1] - a[1] * b[0],
+];
+
+/**
+ * The 4^3 blocks whose voxels a trilinear sample on the caps can read: those
+ * within one voxel of a cap polygon's plane, inside the polygon's bounds.
+ * Sorted block ids (raster order over `blockGrid`).
+ */
+export function capBlocks(caps: { plane: readonly number[]; corners: number[][] }[], dims: readonly number[]): Uint32Array {
+  const grid = dims.map((n) => Math.ceil(n / 4));
+  const ids = new Set<number>();
+  for (const cap of caps) {
+    const [nx, ny, nz, w] = cap.plane;
+    const lo = [0, 1, 2].map((a) => Math.max(0, Math.floor((Math.min(...cap.corners.map((p) => p[a])) - 1) / 4)));
+    const hi = [0, 1, 2].map((a) => Math.min(grid[a] - 1, Math.floor((Math.max(...cap.corners.map((p) => p[a])) + 1) / 4)));
+    // a sample at x reads voxels within 1 of it on each axis: a block is needed when the plane meets its
+    // voxels' box [4b, 4b + 3] grown by 1, centre 4b + 1.5, half-extent 2.5
+    const reach = 2.5 * (Math.abs(nx) + Math.abs(ny) + Math.abs(nz));
+    for (let bz = lo[2]; bz <= hi[2]; bz++) {
+      for (let by = lo[1]; by <= hi[1]; by++) {
+        for (let bx = lo[0]; bx <= hi[0]; bx++) {
+          const distance = Math.abs(nx * (4 * bx + 1.5) + ny * (4 * by + 1.5) + nz * (4 * bz + 1.5) + w);
+          if (distance <= reach) ids.add(bx + grid[0] * (by + grid[1] * bz));
+        }
+      }
+    }
+  }
+  return Uint32Array.from([...ids].sort((a, b) => a - b));
+}

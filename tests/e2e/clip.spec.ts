@@ -2,6 +2,7 @@
 // and exports exactly the CLI's clipped triangles (the unit tests hold the
 // CLI's clip to VTK's vtkExtractVOI); the plane from the panel, stepped with
 // the keys, measured as the CLI measures the same cut; the link keeps both;
+// caps (unit-tested against NumPy) are drawn and can be turned off;
 // a clip box outside the volume is refused with a message and nothing cut.
 import { readFileSync } from 'node:fs';
 import { expect, test } from '@playwright/test';
@@ -23,8 +24,16 @@ test('a clip box and a plane cut the surface, its exports and measures; a box ou
   await openApp(cut, '/#iso=0.43&clip=0,0,0,64,127,127');
   expect(await cut.evaluate(() => window.zfpiso!.clip)).toEqual({ box: [0, 0, 0, 64, 127, 127] });
   await expect(cut.locator('#clip-box-on')).toBeChecked();
+  // the caps: the blocks along the box's faces decoded, drawn where the cut is inside the surface
+  expect(await cut.evaluate(() => window.zfpiso!.capBlocks)).toBeGreaterThan(0);
   await waitForFrames(cut, 2);
+  const withCaps = await cut.locator('#view').screenshot();
+  await cut.locator('#clip-caps').uncheck();
+  await waitForFrames(cut, 2);
+  expect(Buffer.compare(await cut.locator('#view').screenshot(), withCaps)).not.toBe(0);
+  // without caps, less of the surface is drawn than uncut
   expect(await nonBackgroundFraction(cut)).toBeLessThan(whole * 0.8);
+  await cut.locator('#clip-caps').check();
   const [box] = (await runCli<{ isosurfaces: Rec[] }>(['extract', 'default', '--iso', '0.43', '--clip', '0,0,0,64,127,127'])).isosurfaces;
   const [ply] = await Promise.all([cut.waitForEvent('download'), cut.locator('#save-ply').click()]);
   const mesh = parsePly(new Uint8Array(readFileSync((await ply.path())!)));
