@@ -16,6 +16,7 @@ import { copyLink, measureShown, saveGlb, savePly, savePng } from './exports.ts'
 import { type MeasuredSurface, MeasurePanel } from './ui/measure-panel.ts';
 import { SurfaceSet } from './surfaces/surface-set.ts';
 import { ClipControl } from './ui/clip-control.ts';
+import { ClipBoxDrag } from './clip-drag.ts';
 import { CapLayer } from '../render/cap-layer.ts';
 import { PickPanel } from './ui/pick-panel.ts';
 import { probeFor } from '../zfp/probe.ts';
@@ -88,6 +89,8 @@ async function start(): Promise<void> {
   let caps!: CapLayer;
   /** Picking (made once the session exists; the viewer's clicks go to it). */
   let pickPanel: PickPanel | undefined;
+  /** Ctrl-drags on the clip box's faces (made with the clip control). */
+  let clipDrag: ClipBoxDrag | undefined;
   let boxVisible = true;
   /** Told after every camera change (the store view re-plans its cut). */
   const cameraListeners = new Set<() => void>();
@@ -98,6 +101,11 @@ async function start(): Promise<void> {
     viewer = new Viewer(g.device, canvas, {
       camera,
       onClick: (u, v) => void pickPanel?.click(u, v),
+      grab: {
+        grab: (u, v) => clipDrag?.grab(u, v) ?? false,
+        grabMove: (u, v) => clipDrag?.move(u, v),
+        grabEnd: () => clipDrag?.end(),
+      },
       onCameraChange: () => {
         link?.schedule();
         for (const l of cameraListeners) l();
@@ -318,6 +326,13 @@ async function start(): Promise<void> {
     },
   );
   byId('clip-caps').addEventListener('change', () => viewer.requestFrame());
+  clipDrag = new ClipBoxDrag({
+    camera,
+    size: () => ({ width: canvas.width, height: canvas.height }),
+    box: () => clip?.box,
+    placement: () => ({ voxelSize: spacing.value, origin: session.current?.opened.origin ?? [0, 0, 0] }),
+    setFace: (axis, side, value) => clipControl.setBoxFace(axis, side, value),
+  });
   const measure = new MeasurePanel(
     byId<HTMLButtonElement>('measure-surface'),
     byId('surface-measure'),

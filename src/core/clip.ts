@@ -257,3 +257,53 @@ export function capBlocks(caps: { plane: readonly number[]; corners: number[][] 
   }
   return Uint32Array.from([...ids].sort((a, b) => a - b));
 }
+
+/**
+ * Where a ray (level-0 voxels) first meets a box: the face's axis and side
+ * (0 lower, 1 upper) and the point; null when it misses or starts inside.
+ */
+export function boxEntryFace(
+  box: ClipBox,
+  origin: readonly number[],
+  dir: readonly number[],
+): { axis: number; side: 0 | 1; point: [number, number, number] } | null {
+  let tNear = -Infinity,
+    tFar = Infinity,
+    axis = -1,
+    side: 0 | 1 = 0;
+  for (let a = 0; a < 3; a++) {
+    const lo = box[a],
+      hi = box[a + 3];
+    if (dir[a] === 0) {
+      if (origin[a] < lo || origin[a] > hi) return null;
+      continue;
+    }
+    let t0 = (lo - origin[a]) / dir[a],
+      t1 = (hi - origin[a]) / dir[a];
+    let s: 0 | 1 = 0;
+    if (t0 > t1) {
+      [t0, t1] = [t1, t0];
+      s = 1;
+    }
+    if (t0 > tNear) {
+      tNear = t0;
+      axis = a;
+      side = s;
+    }
+    tFar = Math.min(tFar, t1);
+  }
+  if (axis < 0 || tNear > tFar || tNear < 0) return null;
+  return { axis, side, point: [0, 1, 2].map((k) => origin[k] + tNear * dir[k]) as [number, number, number] };
+}
+
+/** Along the line through `point` parallel to `axis`: the parameter of the point nearest to the ray (origin, dir). */
+export function nearestOnAxis(point: readonly number[], axis: number, origin: readonly number[], dir: readonly number[]): number {
+  // lines p + s e and o + t d: s = (b e' - c d') / (a c - b^2) with a = 1 (e a unit axis)
+  const w = [point[0] - origin[0], point[1] - origin[1], point[2] - origin[2]];
+  const b = dir[axis];
+  const c = dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2];
+  const dw = w[axis];
+  const ew = dir[0] * w[0] + dir[1] * w[1] + dir[2] * w[2];
+  const den = c - b * b;
+  return den <= 1e-12 * c ? 0 : (b * ew - c * dw) / den;
+}

@@ -14,10 +14,18 @@ export interface CameraControlsOptions {
   onFit?: () => void;
   /** A left click that did not drag (moved under 4 px): where, as fractions of the element from its top left. */
   onClick?: (u: number, v: number) => void;
+  /**
+   * Ctrl- (or Cmd-) left-drag: the owner's, not the camera's, when `grab`
+   * takes it (true: something under the pointer was grabbed, e.g. a clip box
+   * face); then `grabMove` follows the pointer and `grabEnd` ends it.
+   */
+  grab?: (u: number, v: number) => boolean;
+  grabMove?: (u: number, v: number) => void;
+  grabEnd?: () => void;
 }
 
 export class CameraControls {
-  private drag: { mode: 'rotate' | 'pan'; x: number; y: number; id: number } | undefined;
+  private drag: { mode: 'rotate' | 'pan' | 'grab'; x: number; y: number; id: number } | undefined;
   /** Fingers on the element (client pixels), by pointer id. */
   private readonly touches = new Map<number, [number, number]>();
   /** Two fingers down: their distance (pixels) and midpoint (NDC) at the last move. */
@@ -75,10 +83,25 @@ export class CameraControls {
       return;
     }
     if (this.drag) return;
+    if (e.button === 0 && (e.ctrlKey || e.metaKey) && this.options.grab) {
+      const [u, v] = this.fractions(e);
+      if (this.options.grab(u, v)) {
+        this.drag = { mode: 'grab', x: u, y: v, id: e.pointerId };
+        this.press = undefined;
+        this.capture(e);
+        return;
+      }
+    }
     const pan = e.button === 2 || e.button === 1 || e.shiftKey;
     this.press = !pan && e.button === 0 ? { id: e.pointerId, x: e.clientX, y: e.clientY, moved: false } : undefined;
     this.startDrag(pan ? 'pan' : 'rotate', e.pointerId, e.clientX, e.clientY);
     this.capture(e);
+  }
+
+  /** Where the pointer is, as fractions of the element from its top left. */
+  private fractions(e: PointerEvent): [number, number] {
+    const r = this.element.getBoundingClientRect();
+    return [(e.clientX - r.left) / r.width, (e.clientY - r.top) / r.height];
   }
 
   private startDrag(mode: 'rotate' | 'pan', id: number, clientX: number, clientY: number): void {
@@ -114,6 +137,10 @@ export class CameraControls {
     }
     const d = this.drag;
     if (!d || d.id !== e.pointerId) return;
+    if (d.mode === 'grab') {
+      this.options.grabMove?.(...this.fractions(e));
+      return;
+    }
     const p = this.press;
     if (p && p.id === e.pointerId && Math.hypot(e.clientX - p.x, e.clientY - p.y) >= 4) p.moved = true;
     // a click's own few pixels of jitter do not turn the camera
@@ -136,13 +163,11 @@ export class CameraControls {
         this.startDrag('rotate', id, x, y);
       }
     } else if (this.drag?.id === e.pointerId) {
+      if (this.drag.mode === 'grab') this.options.grabEnd?.();
       this.drag = undefined;
       const p = this.press;
       this.press = undefined;
-      if (p && p.id === e.pointerId && !p.moved && this.options.onClick) {
-        const r = this.element.getBoundingClientRect();
-        this.options.onClick((e.clientX - r.left) / r.width, (e.clientY - r.top) / r.height);
-      }
+      if (p && p.id === e.pointerId && !p.moved && this.options.onClick) this.options.onClick(...this.fractions(e));
     } else return;
     if (this.element.hasPointerCapture(e.pointerId)) this.element.releasePointerCapture(e.pointerId);
   }

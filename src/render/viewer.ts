@@ -6,7 +6,7 @@ import { mat4, vec3, vec4 } from 'gl-matrix';
 import frameWgsl from '../../shaders/render/frame.wgsl?raw';
 import type { WgslPart } from '../gpu/wgsl.ts';
 import { ArcballCamera, type Bounds, type UpAxis } from './camera.ts';
-import { CameraControls } from './camera-controls.ts';
+import { CameraControls, type CameraControlsOptions } from './camera-controls.ts';
 import { DepthPeeler, PEEL_DEPTH_FORMAT } from './depth-peel.ts';
 import { DepthProbe } from './depth-probe.ts';
 
@@ -86,6 +86,8 @@ export interface ViewerOptions {
   camera?: ArcballCamera;
   /** A left click that did not drag (CameraControls.onClick). */
   onClick?: (u: number, v: number) => void;
+  /** Ctrl-drags the owner takes (CameraControls.grab). */
+  grab?: Pick<CameraControlsOptions, 'grab' | 'grabMove' | 'grabEnd'>;
 }
 
 export class Viewer {
@@ -167,6 +169,7 @@ export class Viewer {
       },
       onFit: () => this.fitView(),
       onClick: options.onClick,
+      ...options.grab,
     });
 
     this.resizeObserver = new ResizeObserver((entries) => {

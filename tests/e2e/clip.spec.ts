@@ -2,11 +2,14 @@
 // and exports exactly the CLI's clipped triangles (the unit tests hold the
 // CLI's clip to VTK's vtkExtractVOI); the plane from the panel, stepped with
 // the keys, measured as the CLI measures the same cut; the link keeps both;
-// caps (unit-tested against NumPy) are drawn and can be turned off;
+// caps (unit-tested against NumPy) are drawn and can be turned off; a
+// Ctrl-drag on the box moves the face under the pointer, not the camera;
 // a clip box outside the volume is refused with a message and nothing cut.
 import { readFileSync } from 'node:fs';
 import { expect, test } from '@playwright/test';
+import { mat4, vec4 } from 'gl-matrix';
 import { parsePly } from '../../src/mc/ply.ts';
+import { ArcballCamera } from '../../src/render/camera.ts';
 import { runCli } from './cli.ts';
 import { nonBackgroundFraction, openApp, waitForFrames } from './page.ts';
 
@@ -38,6 +41,27 @@ test('a clip box and a plane cut the surface, its exports and measures; a box ou
   const [ply] = await Promise.all([cut.waitForEvent('download'), cut.locator('#save-ply').click()]);
   const mesh = parsePly(new Uint8Array(readFileSync((await ply.path())!)));
   expect(mesh.indices.length / 3).toBe(box.clippedTriangles);
+
+  // Ctrl-drag on the box: the face under the pointer follows it (one coordinate of the box changes)
+  const state = await cut.evaluate(() => ({
+    camera: window.zfpiso!.camera!(),
+    size: [document.querySelector('canvas')!.width, document.querySelector('canvas')!.height],
+  }));
+  const cam = new ArcballCamera();
+  cam.setState(state.camera);
+  cam.aspect = state.size[0] / state.size[1];
+  const centre = vec4.transformMat4(vec4.create(), [32, 63.5, 63.5, 1], cam.viewProjection(mat4.create()));
+  const rect = (await cut.locator('#view').boundingBox())!;
+  const at = { x: rect.x + ((centre[0] / centre[3] + 1) / 2) * rect.width, y: rect.y + ((1 - centre[1] / centre[3]) / 2) * rect.height };
+  await cut.mouse.move(at.x, at.y);
+  await cut.keyboard.down('Control');
+  await cut.mouse.down();
+  await cut.mouse.move(at.x + 60, at.y + 30, { steps: 4 });
+  await cut.mouse.up();
+  await cut.keyboard.up('Control');
+  const dragged = (await cut.evaluate(() => window.zfpiso!.clip))!.box!;
+  expect(dragged.filter((v, i) => v !== [0, 0, 0, 64, 127, 127][i])).toHaveLength(1);
+  expect(await cut.evaluate(() => window.zfpiso!.camera!())).toEqual(state.camera); // the camera did not turn
 
   // the plane: normal z at 40, stepped twice with '.', then Shift+',' (-10): z >= 32
   await cut.locator('#clip-box-on').uncheck();

@@ -120,6 +120,16 @@ export class ClipControl {
     return true;
   }
 
+  /** Moves one face of the box (axis 0..2, side 0 lower or 1 upper) to `value`, kept inside the volume and the other face. */
+  setBoxFace(axis: number, side: 0 | 1, value: number): void {
+    const lo = this.els.box[2 * axis],
+      hi = this.els.box[2 * axis + 1];
+    if (side === 0) lo.value = String(Math.max(0, Math.min(Number(hi.value) - 1, value)));
+    else hi.value = String(Math.min(this.#dims[axis] - 1, Math.max(Number(lo.value) + 1, value)));
+    this.els.boxOn.checked = true;
+    this.#changed();
+  }
+
   /** Moves the plane along its normal by `steps` voxels (keys , and .). */
   stepPlane(steps: number): void {
     if (!this.els.planeOn.checked) return;
