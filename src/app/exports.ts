@@ -11,7 +11,7 @@ import { describePlacement, readShownMesh, type ShownMesh } from './export/shown
 import type { SurfaceSet } from './surfaces/surface-set.ts';
 import { formatBytes } from './format.ts';
 import type { Messages } from './messages.ts';
-import type { MeasuredSurface } from './ui/measure-panel.ts';
+import { type MeasuredSurface, measuresToCsv } from './ui/measure-panel.ts';
 import type { Session } from './session.ts';
 import type { ViewLink } from './view-link.ts';
 
@@ -102,16 +102,52 @@ export async function saveGlb(session: Session, surfaces: SurfaceSet, messages: 
   }
 }
 
-/** Area and enclosed volume of the surface on screen (world units); null when nothing is open or it failed (the message says why). */
-export async function measureShown(session: Session, messages: Messages): Promise<MeasuredSurface | null> {
+/** Area and enclosed volume of every visible surface (world units, cut by the clip); null when nothing is open or it failed (the message says why). */
+export async function measureShown(session: Session, surfaces: SurfaceSet, messages: Messages): Promise<MeasuredSurface[] | null> {
   try {
-    const mesh = await readShownMesh(session);
-    if (!mesh) return null;
-    return { ...measureSurface(mesh.positions, mesh.indices), iso: mesh.iso, voxelUnits: mesh.voxelUnits };
+    const out: MeasuredSurface[] = [];
+    for (const entry of surfaces.entries) {
+      if (!entry.visible) continue;
+      const snapshot = surfaces.copyOf(entry);
+      const mesh = await readShownMesh(session, snapshot ? { snapshot, iso: entry.iso } : undefined);
+      if (!mesh) return null;
+      out.push({
+        ...measureSurface(mesh.positions, mesh.indices),
+        iso: mesh.iso,
+        voxelUnits: mesh.voxelUnits,
+        selected: entry === surfaces.selectedEntry,
+        color: entry.color,
+        opacity: entry.opacity,
+      });
+    }
+    return out;
   } catch (e) {
     messages.show(`Measure: ${(e as Error).message}`);
     return null;
   }
+}
+
+/** The measurements (and the picked points, the clip and the volume) as JSON, or the surfaces as CSV. */
+export function saveMeasures(
+  session: Session,
+  format: 'json' | 'csv',
+  all: MeasuredSurface[],
+  extra: { clip: unknown; picks: unknown },
+): void {
+  const name = `${baseName(session)}_measures.${format}`;
+  if (format === 'csv') {
+    download(new Blob([measuresToCsv(all)], { type: 'text/csv' }), name);
+    return;
+  }
+  const v = session.current;
+  const record = {
+    volume: v ? { name: v.opened.name, dims: v.iso.info.dims, voxelSize: session.spacing, origin: v.opened.origin ?? [0, 0, 0] } : null,
+    units: all[0]?.voxelUnits ? 'voxel' : 'world (voxel size applied)',
+    clip: extra.clip ?? null,
+    surfaces: all,
+    picks: extra.picks ?? null,
+  };
+  download(new Blob([`${JSON.stringify(record, null, 2)}\n`], { type: 'application/json' }), name);
 }
 
 export async function copyLink(link: ViewLink, messages: Messages): Promise<void> {

@@ -12,7 +12,7 @@ import { SurfaceLayer } from '../render/surface-layer.ts';
 import { Viewer } from '../render/viewer.ts';
 import { acceptDrops, hexToRgb, wireControls } from './controls.ts';
 import { byId } from './dom.ts';
-import { copyLink, measureShown, saveGlb, savePly, savePng } from './exports.ts';
+import { copyLink, measureShown, saveGlb, saveMeasures, savePly, savePng } from './exports.ts';
 import { type MeasuredSurface, MeasurePanel } from './ui/measure-panel.ts';
 import { SurfaceSet } from './surfaces/surface-set.ts';
 import { ClipControl } from './ui/clip-control.ts';
@@ -334,12 +334,18 @@ async function start(): Promise<void> {
     setFace: (axis, side, value) => clipControl.setBoxFace(axis, side, value),
   });
   const measure = new MeasurePanel(
-    byId<HTMLButtonElement>('measure-surface'),
-    byId('surface-measure'),
-    (): Promise<MeasuredSurface | null> => measureShown(session, messages),
-    (m) => {
-      state.measure = m;
+    {
+      button: byId<HTMLButtonElement>('measure-surface'),
+      list: byId('surface-measure'),
+      json: byId<HTMLButtonElement>('measures-json'),
+      csv: byId<HTMLButtonElement>('measures-csv'),
     },
+    (): Promise<MeasuredSurface[] | null> => measureShown(session, surfaces, messages),
+    (all) => {
+      state.measures = all;
+      state.measure = all.find((m) => m.selected) ?? all[0];
+    },
+    (format, all) => saveMeasures(session, format, all, { clip, picks: state.picks }),
   );
   const makeSession = () =>
     new Session({

@@ -48,6 +48,8 @@ export interface PageState {
   capBlocks?: number;
   /** The clip on screen (src/core/clip.ts), undefined when nothing is cut. */
   clip?: Clip;
+  /** The last "Measure": every visible surface (empty while measuring or after another volume opened). */
+  measures?: MeasuredSurface[];
   /** The last "Measure" of the surface (cleared when another volume opens). */
   measure?: MeasuredSurface;
   benchRunning: boolean;

@@ -2,8 +2,10 @@
 // first stays as it was (its copy keeps its triangles; the CLI, held to VTK
 // by the unit tests, gives the same counts for both isovalues), the cache
 // shared (going back to the first decodes nothing), a see-through surface,
+// Measure gives every visible surface (downloaded as CSV and JSON),
 // the link reopens the same surfaces, a surface can be removed; a link with
 // an isovalue outside the volume's values says so and keeps what it could.
+import { readFileSync } from 'node:fs';
 import { expect, test } from '@playwright/test';
 import { runCli } from './cli.ts';
 import { openApp, waitForFrames } from './page.ts';
@@ -44,6 +46,33 @@ test('two surfaces: each keeps its own, one see-through; the link reopens them; 
   await waitForFrames(page, 2);
   expect((await surfacesOf(page)).entries[1].opacity).toBe(0.35);
   await page.waitForFunction(() => location.hash.includes('iso=0.43,0.62') && location.hash.includes('op=1,0.35'));
+
+  // Measure: every visible surface; the CSV has a row each, the JSON the same figures
+  await page.locator('#measure-surface').click();
+  await page.waitForFunction(() => (window.zfpiso!.measures?.length ?? 0) === 2);
+  const measures = (await page.evaluate(() => window.zfpiso!.measures))!;
+  expect(measures.map((m) => [m.iso, m.triangles, m.selected])).toEqual([
+    [0.43, t043, true],
+    [0.62, (await surfacesOf(page)).entries[1].triangles, false],
+  ]);
+  const [csv] = await Promise.all([page.waitForEvent('download'), page.locator('#measures-csv').click()]);
+  const rows = readFileSync((await csv.path())!, 'utf8')
+    .trim()
+    .split('\n');
+  expect(rows[0]).toBe('iso,selected,color,opacity,triangles,area,enclosed_volume,open_edges,units');
+  expect(rows.slice(1).map((r) => r.split(',').slice(0, 5))).toEqual(
+    measures.map((m) => [
+      String(m.iso),
+      m.selected ? '1' : '0',
+      expect.stringMatching(/^[0-9a-f]{6}$/),
+      String(m.opacity),
+      String(m.triangles),
+    ]),
+  );
+  const [json] = await Promise.all([page.waitForEvent('download'), page.locator('#measures-json').click()]);
+  const record = JSON.parse(readFileSync((await json.path())!, 'utf8'));
+  expect(record.surfaces.map((m: { area: number }) => m.area)).toEqual(measures.map((m) => m.area));
+  expect(record.volume.dims).toEqual([128, 128, 128]);
 
   const other = await context.newPage();
   await openApp(other, page.url().replace(/^https?:\/\/[^/]+/, ''));
