@@ -9,7 +9,7 @@
 // textures follow the target's size.
 import peelWgsl from '../../shaders/render/peel.wgsl?raw';
 import { createShaderModule } from '../gpu/wgsl.ts';
-import type { RenderLayer } from './viewer.ts';
+import type { RenderLayer } from './layer.ts';
 
 /** Depth of every target the viewer draws (opaque pass and peels): float32, so a peeled depth compares exactly with the fragment's. */
 export const PEEL_DEPTH_FORMAT: GPUTextureFormat = 'depth32float';

@@ -8,6 +8,7 @@ import type { WgslPart } from '../gpu/wgsl.ts';
 import { ArcballCamera, type Bounds, type UpAxis } from './camera.ts';
 import { CameraControls, type CameraControlsOptions } from './camera-controls.ts';
 import { DepthPeeler, PEEL_DEPTH_FORMAT } from './depth-peel.ts';
+import type { RenderLayer } from './layer.ts';
 import { DepthProbe } from './depth-probe.ts';
 
 export const frameSnippet: WgslPart = { name: 'shaders/render/frame.wgsl', code: frameWgsl };
@@ -69,14 +70,7 @@ export function unproject(viewProj: mat4, ndc: readonly number[]): [number, numb
   return [p[0] / p[3], p[1] / p[3], p[2] / p[3]];
 }
 
-export interface RenderLayer {
-  /** Records draws into the frame's render pass (group 0 = frame uniforms is already set): the opaque part. */
-  draw(pass: GPURenderPassEncoder): void;
-  /** Has see-through content this frame (drawn by drawPeel, not draw). */
-  readonly transparent?: boolean;
-  /** The see-through part, once per depth-peel pass (group 0 the frame, group 2 the peel's depths: src/render/depth-peel.ts). */
-  drawPeel?(pass: GPURenderPassEncoder): void;
-}
+export type { RenderLayer };
 
 export interface ViewerOptions {
   clearColor?: GPUColor;
