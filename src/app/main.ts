@@ -201,6 +201,8 @@ async function start(): Promise<void> {
     },
     onRunning: (running) => {
       state.benchRunning = running;
+      // the benchmark drives the pipeline: no surface is added, selected or removed meanwhile
+      byId('surfaces-section').inert = running;
       isoControl.setEnabled(!running && session.current !== undefined);
       byId<HTMLInputElement>('budget-mb').disabled = running;
       if (!running && session.current) surfaces.setIsovalue(isoControl.value);
