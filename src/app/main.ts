@@ -16,6 +16,7 @@ import { copyLink, measureShown, saveGlb, saveMeasures, savePly, savePng } from 
 import { type MeasuredSurface, MeasurePanel } from './ui/measure-panel.ts';
 import { SurfaceSet } from './surfaces/surface-set.ts';
 import { ClipControl } from './ui/clip-control.ts';
+import { clipProblems } from './url-state.ts';
 import { ClipBoxDrag } from './clip-drag.ts';
 import { CapLayer } from '../render/cap-layer.ts';
 import { PickPanel } from './ui/pick-panel.ts';
@@ -372,6 +373,7 @@ async function start(): Promise<void> {
     });
   let session = makeSession();
   session.pendingClip = initialView.clip;
+  for (const problem of clipProblems(location.hash)) messages.show(problem);
   surfacesPanel.render();
   session.pendingCamera = initialView.camera;
   session.pendingSpacing = initialView.spacing;

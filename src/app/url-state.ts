@@ -143,6 +143,17 @@ export function decodeViewState(hash: string): ViewState {
   return out;
 }
 
+/** Why a link's clip= or plane= was not used (decodeViewState leaves them out), one sentence each. */
+export function clipProblems(hash: string): string[] {
+  const params = new URLSearchParams(hash.replace(/^#/, ''));
+  const out: string[] = [];
+  const box = params.has('clip') ? parseClipBox(params.get('clip')!) : undefined;
+  if (typeof box === 'string') out.push(`The link's clip=${params.get('clip')} is not a clip box (${box}); nothing is cut by it.`);
+  const plane = params.has('plane') ? parseClipPlane(params.get('plane')!) : undefined;
+  if (typeof plane === 'string') out.push(`The link's plane=${params.get('plane')} is not a plane (${plane}); nothing is cut by it.`);
+  return out;
+}
+
 /** Updates the hash without adding history entries (scrubbing would flood it). */
 export function writeViewState(s: ViewState): void {
   const hash = encodeViewState(s);

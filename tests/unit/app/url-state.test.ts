@@ -1,5 +1,5 @@
 import { describe, expect, it } from 'vitest';
-import { decodeViewState, encodeViewState } from '../../../src/app/url-state.ts';
+import { clipProblems, decodeViewState, encodeViewState } from '../../../src/app/url-state.ts';
 
 describe('view state in the URL hash', () => {
   it('round-trips isovalue and camera', () => {
@@ -56,6 +56,11 @@ describe('view state in the URL hash', () => {
     expect(decodeViewState('#clip=5,0,0,1,1,1').clip).toBeUndefined(); // lower above upper
     expect(decodeViewState('#plane=0,0,0,4').clip).toBeUndefined(); // no direction
     expect(decodeViewState('#clip=0,0,0,1,1').clip).toBeUndefined();
+    expect(clipProblems('#plane=0,0,0,4&clip=0,0,0,1,1')).toEqual([
+      "The link's clip=0,0,0,1,1 is not a clip box (six numbers x0,y0,z0,x1,y1,z1); nothing is cut by it.",
+      "The link's plane=0,0,0,4 is not a plane (the normal (nx, ny, nz) is zero: a plane needs a direction); nothing is cut by it.",
+    ]);
+    expect(clipProblems('#clip=0,0,0,1,1,1&plane=1,0,0,2')).toEqual([]);
   });
   it('ignores malformed values', () => {
     expect(decodeViewState('#iso=abc&cam=1,2,3')).toEqual({});
