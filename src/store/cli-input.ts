@@ -109,7 +109,7 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
       stream.retryFailed = false; // the CLI reports a chunk that failed (after the store's own retries)
       stream.skirts = opts.view?.skirts ?? true;
       stream.snapshots = false; // nothing is drawn while it refines: the surfaces are read once it ends
-      if (opts.clip) void stream.setClip(opts.clip); // before the first isovalue: only plans
+      if (opts.clip) stream.setClip(opts.clip);
     },
   });
   const { store } = session;

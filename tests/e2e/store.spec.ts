@@ -22,6 +22,7 @@ interface StoreState {
   reason: string | null;
   levels: { storedBytes: number; chunks: number; chunkBytes: number; chunksFetched: number; chunkBytesFetched: number }[];
   gpu: { total: number; budget: number };
+  clippedChunks?: number;
 }
 const storeState = (page: import('@playwright/test').Page) =>
   page.evaluate(() => (window as unknown as { zfpisoStore: unknown }).zfpisoStore) as Promise<StoreState>;
@@ -111,6 +112,29 @@ test('the link keeps the level: #level=1 stops at level 1, and the hash says lev
   expect(st.reason).toBe('the link asks for level 1');
   await page.waitForFunction(() => /(^|&|#)level=1(&|$)/.test(location.hash) && /iso=80/.test(location.hash), null, { timeout: 10_000 });
   expect(new URL(page.url()).searchParams.get('store')).toBe('/stores/neghip-e2e.zarr');
+});
+
+test('a clip on a store: the chunks it removes whole are not fetched, as the CLI leaves them out', async ({ page }) => {
+  test.setTimeout(300_000);
+  await openApp(page, '/?store=/stores/neghip-e2e.zarr#iso=80&clip=0,0,0,30,65,65');
+  await page.waitForFunction(() => (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore?.done === true, null, {
+    timeout: 240_000,
+  });
+  const st = await storeState(page);
+  expect(st.shownLevels).toEqual([3, 2, 1, 0]);
+  expect(st.clippedChunks).toBeGreaterThan(0);
+  const cli = await runCli<{ store: { chunks: number; clippedChunks: number } }>([
+    'extract',
+    store,
+    '--level',
+    '0',
+    '--iso',
+    '80',
+    '--clip',
+    '0,0,0,30,65,65',
+  ]);
+  expect(cli.store.clippedChunks).toBeGreaterThan(0);
+  expect(st.levels[0].chunksFetched).toBe(cli.store.chunks);
 });
 
 test('another volume replaces the store: its GPU side goes, no WebGPU error, and the store stops publishing', async ({ page }) => {

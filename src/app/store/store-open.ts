@@ -191,6 +191,7 @@ export function updatePageFigures(st: StorePageState, session: StoreSession): vo
     peak: budget.meter.peak,
     budget: budget.bytes,
   };
+  st.clippedChunks = stream.clippedChunks;
   const queue = store.decodeQueue?.();
   if (queue) st.decodeQueue = queue;
   st.retries = store.retries.retries;

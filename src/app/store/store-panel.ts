@@ -57,6 +57,8 @@ export interface StorePageState {
   stepsShown: number;
   /** A store of lossless chunks: bricks in the decode workers now (asked for, not yet answered), and the most there were at once. */
   decodeQueue?: { queued: number; maxQueued: number };
+  /** Chunks the surface needed by their ranges that the clip left out (never fetched). */
+  clippedChunks?: number;
   /**
    * Refined by the view (null: level by level): the pixel tolerance, the
    * level tint, and per level the chunks on screen that hold surface

@@ -86,7 +86,10 @@ export class StoreView {
   setClip(clip: Clip | undefined): void {
     this.#clip = clip;
     const o = this.#open;
-    if (o) void o.session.stream.setClip(clip);
+    if (!o || sameClip(o.session.stream.clip, clip)) return;
+    o.session.stream.setClip(clip);
+    // planned again as any other change (the page waits on this refinement)
+    if (Number.isFinite(o.iso)) void this.#refine(o, o.iso);
   }
 
   /** Another volume is on screen now: the open store ends (requests, decodes, timers) and gives back its GPU memory. */
@@ -221,7 +224,7 @@ export class StoreView {
     stream.onProgress((p) => this.#progress(o, p));
     stream.onShown((s) => this.#shown(o, s));
     stream.onError((e) => this.d.onError(e.message));
-    void stream.setClip(this.#clip); // before the first isovalue: only kept for the plans
+    stream.setClip(this.#clip);
     this.#publish(o);
 
     // The isovalue: the link's (or the one kept over a reopen) as given, even outside a provisional range; else
@@ -482,4 +485,9 @@ export class StoreView {
     this.d.line.hidden = text === '';
     this.d.line.textContent = text;
   }
+}
+
+/** Two clips that cut the same (both absent, or the same box and plane). */
+function sameClip(a: Clip | undefined, b: Clip | undefined): boolean {
+  return JSON.stringify(a ?? null) === JSON.stringify(b ?? null);
 }

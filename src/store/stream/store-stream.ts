@@ -198,10 +198,13 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     return this.#suspended;
   }
 
-  /** Cuts the surfaces open: chunks the clip removes whole are left out, the plan made again (the renderer clips the rest). */
-  setClip(clip: Clip | undefined): Promise<void> {
+  /** Cuts the surfaces open from the next plan on (setIsovalue): chunks the clip removes whole are left out (the renderer clips the rest). */
+  setClip(clip: Clip | undefined): void {
     this.#pools.clip = clip;
-    return Number.isFinite(this.#iso) && (this.#view || !this.planner.needsView) ? this.setIsovalue(this.#iso) : Promise.resolve();
+  }
+
+  get clip(): Clip | undefined {
+    return this.#pools.clip;
   }
 
   /** Chunks a surface needed by their ranges that the clip left out, so far. */
