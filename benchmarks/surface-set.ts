@@ -4,7 +4,7 @@
 // SurfaceLayer; see-through ones depth peeled (src/render/depth-peel.ts).
 // Per configuration (1 opaque surface; 2 and 4 surfaces with the first at
 // opacity 0.35), off screen at SIZE x SIZE, the camera fitted:
-//   - frame ms: the whole frame (opaque pass, 8 peels and composites) between
+//   - frame ms: the whole frame (opaque pass, the peels the scene needs and their composites) between
 //     GPU timestamps (queue wall time without timestamp-query), median of
 //     FRAMES after a discarded first;
 //   - new surface ms: moving the live surface by small steps (the others stay
@@ -54,12 +54,14 @@ const depth = device.createTexture({
 const target = colour.createView();
 const depthView = depth.createView();
 const peeler = await DepthPeeler.create(device, format);
+peeler.adaptive = true; // as the page peels: one layer past the deepest that drew, up to 8
 const querySet = timed ? device.createQuerySet({ type: 'timestamp', count: 2 }) : undefined;
 const resolve = device.createBuffer({ size: 16, usage: GPUBufferUsage.QUERY_RESOLVE | GPUBufferUsage.COPY_SRC });
 const read = device.createBuffer({ size: 16, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
 
 async function frameMs(layers: SurfaceLayer[]): Promise<number> {
   const encoder = device.createCommandEncoder();
+  peeler.lastLayers = 0;
   const pass = encoder.beginRenderPass({
     colorAttachments: [{ view: target, clearValue: { r: 0, g: 0, b: 0, a: 1 }, loadOp: 'clear', storeOp: 'store' }],
     depthStencilAttachment: { view: depthView, depthClearValue: 1, depthLoadOp: 'clear', depthStoreOp: 'store' },
@@ -80,6 +82,7 @@ async function frameMs(layers: SurfaceLayer[]): Promise<number> {
   device.queue.submit([encoder.finish()]);
   await device.queue.onSubmittedWorkDone();
   const wall = performance.now() - start;
+  await new Promise((r) => setTimeout(r, 0)); // the peel counts are read back
   if (!querySet) return wall;
   await read.mapAsync(GPUMapMode.READ);
   const t = new BigUint64Array(read.getMappedRange().slice(0));
@@ -93,6 +96,8 @@ interface Row {
   triangles: number;
   copyBytes: number;
   frameMs: number;
+  /** Layers the last frame peeled (0: nothing see-through). */
+  peels: number;
   newSurfaceMs: number;
 }
 const rows: Row[] = [];
@@ -137,6 +142,7 @@ for (const { n, seeThrough } of configs) {
     triangles,
     copyBytes: copies.reduce((a, c) => a + c.byteSize, 0),
     frameMs: frame.median,
+    peels: peeler.lastLayers,
     newSurfaceMs: summarize(perSurface).median,
   });
   for (const l of layers) l.destroy();
@@ -146,8 +152,8 @@ for (const { n, seeThrough } of configs) {
 const adapter = describeAdapter(gpu.adapter);
 printTable(
   `${file}, ${size}x${size}, isovalues ${values(isos)}: median of ${frames} frames and ${steps} surfaces after a discarded first (${timed ? 'GPU timestamps' : 'queue wall time'}), ${adapter}`,
-  ['surfaces', 'see-through', 'triangles', 'copies MiB', 'frame ms', 'new surface ms'],
-  rows.map((r) => [r.surfaces, r.seeThrough, r.triangles, r.copyBytes / 2 ** 20, r.frameMs, r.newSurfaceMs]),
+  ['surfaces', 'see-through', 'triangles', 'copies MiB', 'frame ms', 'peels', 'new surface ms'],
+  rows.map((r) => [r.surfaces, r.seeThrough, r.triangles, r.copyBytes / 2 ** 20, r.frameMs, r.peels, r.newSurfaceMs]),
 );
 writeJson(`${here}/benchmarks/results/surface-set-${timed ? 'ts' : 'wall'}-${adapter.split(' ')[0].toLowerCase()}.json`, {
   file,

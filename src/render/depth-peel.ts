@@ -50,6 +50,14 @@ export interface PeelInputs {
   pick?: (encoder: GPUCommandEncoder, nearest: GPUTextureView) => void;
 }
 
+/** Per peel, the samples it drew (occlusion queries), resolved and read back; one frame's in flight. */
+interface OcclusionCounts {
+  set: GPUQuerySet;
+  resolve: GPUBuffer;
+  read: GPUBuffer;
+  busy: boolean;
+}
+
 interface Targets {
   width: number;
   height: number;
@@ -67,8 +75,20 @@ interface Targets {
 }
 
 export class DepthPeeler {
-  /** Layers peeled per frame: surfaces a ray crosses beyond this many are not drawn. */
+  /** Layers peeled per frame at most: surfaces a ray crosses beyond this many are not drawn. */
   layers = 8;
+  /**
+   * Peel only as deep as the scene needs (the viewer's frames): an occlusion
+   * query per peel counts what it drew, read back a frame or two later; the
+   * next frames peel one layer past the deepest that drew anything (so a
+   * deeper scene is seen and followed), up to `layers`.
+   */
+  adaptive = false;
+  /** Layers the last frame peeled. */
+  lastLayers = 0;
+  /** Layers the last counted frame drew something in (adaptive). */
+  #needed: number | undefined;
+  #queries: OcclusionCounts | undefined;
   #targets: Targets | undefined;
 
   private constructor(
@@ -168,15 +188,22 @@ export class DepthPeeler {
         depthStencilAttachment: { view: t.depthViews[1], depthClearValue: 0, depthLoadOp: 'clear', depthStoreOp: 'store' },
       })
       .end();
-    for (let k = 0; k < this.layers; k++) {
+    const count = this.adaptive && this.#needed !== undefined ? Math.min(this.layers, this.#needed + 1) : this.layers;
+    this.lastLayers = count;
+    const queries = this.adaptive ? this.#queryBuffers() : undefined;
+    const counting = queries !== undefined && !queries.busy;
+    for (let k = 0; k < count; k++) {
       const peel = encoder.beginRenderPass({
         label: `DepthPeeler.peel${k}`,
         colorAttachments: [{ view: t.layerView, clearValue: clear, loadOp: 'clear', storeOp: 'store' }],
         depthStencilAttachment: { view: t.depthViews[k % 2], depthClearValue: 1, depthLoadOp: 'clear', depthStoreOp: 'store' },
+        ...(counting ? { occlusionQuerySet: queries.set } : {}),
       });
       peel.setBindGroup(0, inputs.frameBindGroup);
       peel.setBindGroup(2, t.peelGroups[k % 2]);
+      if (counting) peel.beginOcclusionQuery(k);
       for (const layer of inputs.layers) if (layer.transparent) layer.drawPeel?.(peel);
+      if (counting) peel.endOcclusionQuery();
       peel.end();
       if (k === 0) inputs.pick?.(encoder, t.depthViews[0]);
       const under = encoder.beginRenderPass({
@@ -196,6 +223,60 @@ export class DepthPeeler {
     over.setBindGroup(0, t.overGroup);
     over.draw(3);
     over.end();
+    if (counting) {
+      encoder.resolveQuerySet(queries.set, 0, count, queries.resolve, 0);
+      encoder.copyBufferToBuffer(queries.resolve, 0, queries.read, 0, 8 * count);
+      queries.busy = true;
+      // read once the frame is submitted (the caller submits this encoder in this task)
+      queueMicrotask(() => this.#readCounts(queries, count));
+    }
+  }
+
+  /** The occlusion query set and its buffers (one frame's counts in flight at a time). */
+  #queryBuffers(): OcclusionCounts {
+    if (!this.#queries || this.#queries.set.count < this.layers) {
+      this.#destroyQueries();
+      const { device } = this;
+      this.#queries = {
+        set: device.createQuerySet({ label: 'DepthPeeler.occlusion', type: 'occlusion', count: this.layers }),
+        resolve: device.createBuffer({
+          label: 'DepthPeeler.counts',
+          size: 8 * this.layers,
+          usage: GPUBufferUsage.QUERY_RESOLVE | GPUBufferUsage.COPY_SRC,
+        }),
+        read: device.createBuffer({
+          label: 'DepthPeeler.countsRead',
+          size: 8 * this.layers,
+          usage: GPUBufferUsage.COPY_DST | GPUBufferUsage.MAP_READ,
+        }),
+        busy: false,
+      };
+    }
+    return this.#queries;
+  }
+
+  #readCounts(q: OcclusionCounts, count: number): void {
+    q.read.mapAsync(GPUMapMode.READ, 0, 8 * count).then(
+      () => {
+        const samples = new BigUint64Array(q.read.getMappedRange(0, 8 * count));
+        let deepest = 0;
+        for (let k = 0; k < count; k++) if (samples[k] > 0n) deepest = k + 1;
+        q.read.unmap();
+        q.busy = false;
+        this.#needed = deepest;
+      },
+      () => {
+        q.busy = false; // destroyed meanwhile: peel every layer
+        this.#needed = undefined;
+      },
+    );
+  }
+
+  #destroyQueries(): void {
+    this.#queries?.set.destroy();
+    this.#queries?.resolve.destroy();
+    this.#queries?.read.destroy();
+    this.#queries = undefined;
   }
 
   #destroyTargets(): void {
@@ -209,5 +290,6 @@ export class DepthPeeler {
 
   destroy(): void {
     this.#destroyTargets();
+    this.#destroyQueries();
   }
 }

@@ -378,6 +378,7 @@ export class Viewer {
     void DepthPeeler.create(this.device, this.format).then(
       (p) => {
         if (this.destroyed) return p.destroy();
+        p.adaptive = true; // as deep as the scene needs (at most 8)
         this.peeler = p;
         this.requestFrame();
       },

@@ -103,10 +103,16 @@ function cpuComposite(frags: { z: number; s: number }[][]): Float64Array {
   return out;
 }
 
-async function renderGpu(device: GPUDevice, layers: SurfaceLayer[], camera: ArcballCamera, peelLayers: number): Promise<Uint8Array> {
+async function renderGpu(
+  device: GPUDevice,
+  layers: SurfaceLayer[],
+  camera: ArcballCamera,
+  peelLayers: number,
+  given?: DepthPeeler,
+): Promise<Uint8Array> {
   const format: GPUTextureFormat = 'rgba8unorm';
   const frameLayout = createFrameBindGroupLayout(device);
-  const peeler = await DepthPeeler.create(device, format);
+  const peeler = given ?? (await DepthPeeler.create(device, format));
   peeler.layers = peelLayers;
   const colour = device.createTexture({ size: [W, H], format, usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC });
   const depth = device.createTexture({
@@ -139,7 +145,7 @@ async function renderGpu(device: GPUDevice, layers: SurfaceLayer[], camera: Arcb
   const out = new Uint8Array(W * H * 4);
   for (let y = 0; y < H; y++) out.set(rows.subarray(y * bytesPerRow, y * bytesPerRow + W * 4), y * W * 4);
   for (const x of [colour, depth, uniforms, read]) x.destroy();
-  peeler.destroy();
+  if (!given) peeler.destroy();
   return out;
 }
 
@@ -195,6 +201,16 @@ describe('DepthPeeler', () => {
     // pixel centres on triangle edges and silhouettes may fall either way: at most 0.2% of the pixels (1 here;
     // blending each layer over instead of under gives 53)
     expect(bad, `${bad} of ${W * H} pixels differ`).toBeLessThanOrEqual(0.002 * W * H);
+    // adaptive (the page's): the first frame peels all 8, the next ones one past the deepest that drew (4 here)
+    const adaptive = await DepthPeeler.create(device, 'rgba8unorm');
+    adaptive.adaptive = true;
+    for (let frame = 0; frame < 3; frame++) {
+      const img = await renderGpu(device, layers, camera, 8, adaptive);
+      await new Promise((r) => setTimeout(r, 50)); // the counts are read back after the frame
+      expect(mismatches(img, reference)).toBe(bad);
+    }
+    expect(adaptive.lastLayers).toBe(5);
+    adaptive.destroy();
     // one peel keeps only the nearest layer: far from the reference
     expect(mismatches(await renderGpu(device, layers, camera, 1), reference)).toBeGreaterThan(0.05 * W * H);
 
