@@ -12,7 +12,7 @@
 //     median after a discarded first;
 //   - GPU bytes of the copies.
 // FILE (default bonsai rate 4), ISOS (4 values), SIZE, FRAMES from the
-// environment; JSON to benchmarks/results/surface-set-<adapter>.json.
+// environment; JSON to benchmarks/results/surface-set-<swiftshader or the GPU>.json.
 import { readFileSync } from 'node:fs';
 import { fileURLToPath } from 'node:url';
 import { describeAdapter } from '../src/gpu/device.ts';
@@ -155,7 +155,7 @@ printTable(
   ['surfaces', 'see-through', 'triangles', 'copies MiB', 'frame ms', 'peels', 'new surface ms'],
   rows.map((r) => [r.surfaces, r.seeThrough, r.triangles, r.copyBytes / 2 ** 20, r.frameMs, r.peels, r.newSurfaceMs]),
 );
-writeJson(`${here}/benchmarks/results/surface-set-${timed ? 'ts' : 'wall'}-${adapter.split(' ')[0].toLowerCase()}.json`, {
+writeJson(`${here}/benchmarks/results/surface-set-${/swiftshader/i.test(adapter) ? 'swiftshader' : adapter.split(' / ')[0].replace(/\W+/g, '-').toLowerCase()}`, {
   file,
   size,
   frames,
