@@ -155,17 +155,20 @@ printTable(
   ['surfaces', 'see-through', 'triangles', 'copies MiB', 'frame ms', 'peels', 'new surface ms'],
   rows.map((r) => [r.surfaces, r.seeThrough, r.triangles, r.copyBytes / 2 ** 20, r.frameMs, r.peels, r.newSurfaceMs]),
 );
-writeJson(`${here}/benchmarks/results/surface-set-${/swiftshader/i.test(adapter) ? 'swiftshader' : adapter.split(' / ')[0].replace(/\W+/g, '-').toLowerCase()}`, {
-  file,
-  size,
-  frames,
-  steps,
-  isovalues: isos,
-  adapter,
-  timing: timed ? 'timestamp-query' : 'queue wall time',
-  peelLayers: peeler.layers,
-  rows,
-});
+writeJson(
+  `${here}/benchmarks/results/surface-set-${/swiftshader/i.test(adapter) ? 'swiftshader' : adapter.split(' / ')[0].replace(/\W+/g, '-').toLowerCase()}.json`,
+  {
+    file,
+    size,
+    frames,
+    steps,
+    isovalues: isos,
+    adapter,
+    timing: timed ? 'timestamp-query' : 'queue wall time',
+    peelLayers: peeler.layers,
+    rows,
+  },
+);
 peeler.destroy();
 iso.destroy();
 stream.destroy();
