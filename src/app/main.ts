@@ -167,8 +167,16 @@ async function start(): Promise<void> {
   const pageBudget = new GpuBudget(defaultBudgetBytes(gpu.limits));
   const budget = new BudgetControl(byId('budget-mb'), byId('budget-bar'), byId('budget-note'), pageBudget.bytes, (bytes) => {
     pageBudget.bytes = bytes;
-    // an in-core volume's pipeline: what the copies of its other surfaces leave
-    session.current?.iso.setMemoryBudget(Math.max(1, bytes - surfaces.copyBytes));
+    // an in-core volume: the copies of its other surfaces go if they no longer fit (the pipeline gets what
+    // they leave), and the caps are made again within what is left
+    const dropped = surfaces.fitBudget();
+    if (dropped.length > 0)
+      messages.show(
+        `The surfaces at ${dropped.join(', ')} are no longer kept within ${(bytes / 2 ** 20).toFixed(0)} MiB: select one to draw it again.`,
+        'info',
+        8000,
+      );
+    if (clip) applyClip(clip);
   });
   const frames = {
     get fps() {
@@ -277,9 +285,12 @@ async function start(): Promise<void> {
   const applyClip = (c: Clip | undefined): void => {
     clip = c;
     surface.clip = c;
-    const stream = session.current?.opened.stream;
-    // caps for volumes opened whole (a store's chunks are not decoded here)
-    caps.setClip(stream instanceof ZfpGpuStream ? stream : undefined, c);
+    const v = session.current;
+    const stream = v?.opened.stream;
+    // caps for volumes opened whole (a store's chunks are not decoded here), within what the budget leaves
+    const left = budget.bytes - (v?.iso.budgetedBytes ?? 0) - surfaces.copyBytes;
+    const noCaps = caps.setClip(stream instanceof ZfpGpuStream ? stream : undefined, c, left);
+    if (noCaps) messages.show(`No caps: ${noCaps}.`, 'info', 6000);
     state.capBlocks = caps.blocks;
     session.clip = c;
     storeView?.setClip(c);

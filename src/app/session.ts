@@ -222,7 +222,7 @@ export class Session {
     }
     p.stats.update(s, v.iso.info.blockCount, this.lastLatency);
     // a streamed store's meter is what the page holds on the GPU (the store view sets it)
-    if (!v.iso.drawParts) p.budget.setUsed(s.cacheBytes + s.vertexBytes + p.surfaces.copyBytes);
+    if (!v.iso.drawParts) p.budget.setUsed(s.cacheBytes + s.vertexBytes + p.surfaces.copyBytes + p.caps().byteSize);
     p.budget.clearError();
     p.hud.setSurface(formatIso(s.isovalue, v.iso.info.valueRange), s.triangles, s.gpuMs);
     p.state.stats = s;

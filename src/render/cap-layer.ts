@@ -91,20 +91,24 @@ export class CapLayer implements RenderLayer {
 
   /**
    * The caps of `clip` on `stream`'s volume (undefined: none): polygons made
-   * and the blocks near them decoded now (on the GPU, in queue order).
+   * and the blocks near them decoded now (on the GPU, in queue order), when
+   * they fit `maxBytes`; else none, and why.
    */
-  setClip(stream: ZfpGpuStream | undefined, clip: Clip | undefined): void {
+  setClip(stream: ZfpGpuStream | undefined, clip: Clip | undefined, maxBytes = Number.POSITIVE_INFINITY): string | null {
     this.#release();
     this.#stream = stream;
-    if (!stream || !clip) return;
+    if (!stream || !clip) return null;
     const { dims } = stream.info;
     const caps = capPolygons(clip, dims);
-    if (caps.length === 0) return;
+    if (caps.length === 0) return null;
     const triangles: number[] = [];
     for (const cap of caps) {
       for (let i = 1; i + 1 < cap.corners.length; i++) triangles.push(...cap.corners[0], ...cap.corners[i], ...cap.corners[i + 1]);
     }
     const ids = capBlocks(caps, dims);
+    const needed = 260 * ids.length + 4 * triangles.length;
+    if (needed > maxBytes)
+      return `the caps need ${(needed / 2 ** 20).toFixed(1)} MiB for the ${ids.length.toLocaleString('en-US')} blocks along the cut, more than the GPU memory budget leaves (${(Math.max(0, maxBytes) / 2 ** 20).toFixed(1)} MiB)`;
     const { device } = this;
     const make = (label: string, size: number, usage: number) =>
       device.createBuffer({ label: `CapLayer.${label}`, size: Math.max(16, size), usage });
@@ -147,6 +151,7 @@ export class CapLayer implements RenderLayer {
         { binding: 2, resource: { buffer: this.#values } },
       ],
     });
+    return null;
   }
 
   draw(pass: GPURenderPassEncoder): void {

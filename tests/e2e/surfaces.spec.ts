@@ -74,6 +74,16 @@ test('two surfaces: each keeps its own, one see-through, measured; the link reop
   expect(record.surfaces.map((m: { area: number }) => m.area)).toEqual(measures.map((m) => m.area));
   expect(record.volume.dims).toEqual([128, 128, 128]);
 
+  // a budget too small for the copies: they go (the surface stays listed, not drawn), with a message
+  const mb = await page.locator('#budget-mb').inputValue();
+  await page.locator('#budget-mb').fill('1');
+  await page.locator('#budget-mb').press('Enter');
+  await page.waitForFunction(() => window.zfpiso!.surfaces!.copyBytes === 0);
+  await expect(page.locator('#messages')).toContainText('The surfaces at 0.62 are no longer kept within 1 MiB');
+  await expect(page.locator('#surface-list li').nth(1)).toContainText('not kept');
+  await page.locator('#budget-mb').fill(mb);
+  await page.locator('#budget-mb').press('Enter');
+
   const other = await context.newPage();
   await openApp(other, page.url().replace(/^https?:\/\/[^/]+/, ''));
   await other.waitForFunction(() => window.zfpiso!.surfaces!.entries.length === 2 && window.zfpiso!.surfaces!.selected === 0, null, {

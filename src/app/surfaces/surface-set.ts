@@ -348,6 +348,35 @@ export class SurfaceSet {
     this.d.viewer().requestFrame();
   }
 
+  /** Whether a surface is drawn: the selected one, or one whose copy is kept. */
+  isDrawn(entry: SurfaceEntry): boolean {
+    return entry === this.selectedEntry || this.#copies.has(entry.id);
+  }
+
+  /**
+   * A lowered budget: copies go, largest first, until the copies and the
+   * pipeline fit it (their surfaces stay in the list, undrawn; selecting one
+   * computes it again). The isovalues let go, for the message.
+   */
+  fitBudget(): number[] {
+    const v = this.d.current();
+    const dropped: number[] = [];
+    if (v && v === this.#volume) {
+      const budget = this.d.budgetBytes();
+      const pipeline = v.iso.budgetedBytes ?? 0;
+      while (this.#copies.size > 0 && this.copyBytes + pipeline > budget) {
+        let largest: [number, CopyDraw] | undefined;
+        for (const c of this.#copies) if (!largest || c[1].copy.byteSize > largest[1].copy.byteSize) largest = c;
+        const entry = this.entries.find((e) => e.id === largest![0]);
+        if (entry) dropped.push(entry.iso);
+        this.#dropCopy(largest![0]);
+      }
+    }
+    this.#applyBudget();
+    if (dropped.length > 0) this.d.onChange();
+    return dropped;
+  }
+
   /** The pipeline's cap: the page's budget less what the copies hold. */
   #applyBudget(): void {
     const v = this.d.current();

@@ -39,7 +39,8 @@ export class SurfacesPanel {
       remove.addEventListener('click', () => void set.remove(i));
       const iso = el('span', {
         className: 'surface-iso',
-        textContent: Number.isFinite(e.iso) ? String(Number(e.iso.toPrecision(6))) : '—',
+        // a copy let go for the budget: listed, not drawn until selected again
+        textContent: `${Number.isFinite(e.iso) ? String(Number(e.iso.toPrecision(6))) : '—'}${set.isDrawn(e) ? '' : ' (not kept: select)'}`,
       });
       const row = el(
         'li',

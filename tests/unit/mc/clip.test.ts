@@ -6,20 +6,9 @@
 import { describe, expect, it } from 'vitest';
 import { boxEntryFace, capPolygons, clipMesh, clipPlanes, nearestOnAxis, regionClipped } from '../../../src/core/clip.ts';
 import { measureSurface } from '../../../src/mc/mesh-measure.ts';
+import { unitCube } from './unit-cube.ts';
 
-const CORNERS = [0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1];
-const FACES = [
-  [0, 3, 2, 1],
-  [4, 5, 6, 7],
-  [0, 1, 5, 4],
-  [2, 3, 7, 6],
-  [1, 2, 6, 5],
-  [0, 4, 7, 3],
-];
-const cube = () => ({
-  positions: new Float32Array(CORNERS),
-  indices: new Uint32Array(FACES.flatMap(([a, b, c, d]) => [a, b, c, a, c, d])),
-});
+const cube = () => unitCube();
 
 describe('clipMesh', () => {
   it('a plane keeps the positive side, split where it crosses', () => {

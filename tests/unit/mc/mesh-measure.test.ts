@@ -4,32 +4,10 @@
 // and two pieces whose seam differs by one float32 step.
 import { describe, expect, it } from 'vitest';
 import { measureSurface, weldByPosition } from '../../../src/mc/mesh-measure.ts';
+import { CUBE_FACES, unitCube } from './unit-cube.ts';
 
-// corners of [0,1]^3, triangles wound counter-clockwise seen from outside
-const CORNERS = [
-  [0, 0, 0],
-  [1, 0, 0],
-  [1, 1, 0],
-  [0, 1, 0],
-  [0, 0, 1],
-  [1, 0, 1],
-  [1, 1, 1],
-  [0, 1, 1],
-];
-const FACES = [
-  [0, 3, 2, 1],
-  [4, 5, 6, 7],
-  [0, 1, 5, 4],
-  [2, 3, 7, 6],
-  [1, 2, 6, 5],
-  [0, 4, 7, 3],
-];
-
-function cube(faces = FACES): { positions: Float32Array; indices: Uint32Array } {
-  const indices: number[] = [];
-  for (const [a, b, c, d] of faces) indices.push(a, b, c, a, c, d);
-  return { positions: new Float32Array(CORNERS.flat()), indices: new Uint32Array(indices) };
-}
+const FACES = CUBE_FACES;
+const cube = unitCube;
 
 /** Every triangle with its own three vertices (no sharing at all): welding by position must rebuild the edges. */
 function soupOf(m: { positions: Float32Array; indices: Uint32Array }) {

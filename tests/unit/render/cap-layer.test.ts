@@ -95,6 +95,12 @@ print(json.dumps(out))
       // pixels on the threshold's outline or the polygon's edge may fall either way
       expect(bad, `${bad} of ${W * H} pixels differ (${covered} on the cap)`).toBeLessThan(0.02 * covered);
     }
+    // caps that do not fit what the budget leaves are not made, and say why
+    expect(layer.setClip(stream, { plane: { normal: [0, 0, 1], d: 64.5 } }, 1000)).toMatch(
+      /^the caps need [\d.]+ MiB for the [\d,]+ blocks along the cut/,
+    );
+    expect(layer.blocks).toBe(0);
+    expect(layer.byteSize).toBe(0);
     layer.destroy();
     stream.destroy();
   });

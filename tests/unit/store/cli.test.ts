@@ -22,6 +22,24 @@ function rangeBytes(root: string): number {
   return total;
 }
 
+/** NumPy over level 0 (argv[1]: the store): per 32^3 chunk its range (lo, hi) and nb(), the 27-neighbourhood reduction. */
+const CHUNK_NEIGHBOURHOODS = `
+import sys, zarr, numpy as np
+v = zarr.open_array(sys.argv[1] + '/0', mode='r')[:]     # z, y, x
+c = 32
+g = [n // c for n in v.shape]
+blocks = v.reshape(g[0], c, g[1], c, g[2], c)
+lo, hi = blocks.min(axis=(1, 3, 5)), blocks.max(axis=(1, 3, 5))
+def nb(a, f, fill):
+    p = np.pad(a, 1, constant_values=fill)
+    out = a.copy()
+    for dz in range(3):
+        for dy in range(3):
+            for dx in range(3):
+                out = f(out, p[dz:dz + g[0], dy:dy + g[1], dx:dx + g[2]])
+    return out
+`;
+
 beforeAll(() => {
   convert('volumes/bonsai_256x256x256_float32.rate4.zfp', store, ['--chunk', '32', '--rate', '4', '--shard', '2']);
   // the converter's input: bonsai decoded by zfpy; the same volume as one stream at rate 4
@@ -56,21 +74,7 @@ describe('CLI on stores', () => {
     const chunkBytes = 12 + 8 ** 3 * 32 + 4; // 32^3 at rate 4: 512 blocks of 256 bits, header padded
     const needed = Number(
       converterPython(
-        `
-import sys, zarr, numpy as np
-v = zarr.open_array(sys.argv[1] + '/0', mode='r')[:]     # z, y, x
-c = 32
-g = [n // c for n in v.shape]
-blocks = v.reshape(g[0], c, g[1], c, g[2], c)
-lo, hi = blocks.min(axis=(1, 3, 5)), blocks.max(axis=(1, 3, 5))
-def nb(a, f, fill):
-    p = np.pad(a, 1, constant_values=fill)
-    out = a.copy()
-    for dz in range(3):
-        for dy in range(3):
-            for dx in range(3):
-                out = f(out, p[dz:dz + g[0], dy:dy + g[1], dx:dx + g[2]])
-    return out
+        `${CHUNK_NEIGHBOURHOODS}
 nlo, nhi = nb(lo, np.minimum, np.inf), nb(hi, np.maximum, -np.inf)
 need = np.zeros(lo.shape, bool)
 for iso in [np.float32(x) for x in sys.argv[2].split(',')]:
@@ -103,21 +107,8 @@ print(int(need.sum()))
     // NumPy: chunks the surface needs (27-neighbourhood ranges), split by whether the box meets their cells (one voxel of slack)
     const [kept, clipped] = JSON.parse(
       converterPython(
-        `
-import sys, json, zarr, numpy as np
-v = zarr.open_array(sys.argv[1] + '/0', mode='r')[:]     # z, y, x
-c = 32
-g = [n // c for n in v.shape]
-blocks = v.reshape(g[0], c, g[1], c, g[2], c)
-lo, hi = blocks.min(axis=(1, 3, 5)), blocks.max(axis=(1, 3, 5))
-def nb(a, f, fill):
-    p = np.pad(a, 1, constant_values=fill)
-    out = a.copy()
-    for dz in range(3):
-        for dy in range(3):
-            for dx in range(3):
-                out = f(out, p[dz:dz + g[0], dy:dy + g[1], dx:dx + g[2]])
-    return out
+        `${CHUNK_NEIGHBOURHOODS}
+import json
 iso = np.float32(90)
 need = (nb(lo, np.minimum, np.inf) < iso) & (iso <= nb(hi, np.maximum, -np.inf))
 b = [float(x) for x in sys.argv[2].split(',')]
