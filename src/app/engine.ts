@@ -32,8 +32,14 @@ export interface PageIsosurface {
   readBlockRanges(): Promise<Float32Array>;
   /** A surface of several pieces (a store refined by the view: one per level): what the layer draws instead of drawData. */
   drawParts?(): SurfacePart[];
-  /** Such a surface's mesh as one, in its voxel index space (voxel (i, j, k) at (i, j, k)), for exports. */
-  readPositions?(): Promise<{ positions: Float32Array; indices: Uint32Array }>;
+  /** Such a surface's mesh as one, in its voxel index space (voxel (i, j, k) at (i, j, k)), for exports; `iso`: one of its other surfaces. */
+  readPositions?(iso?: number): Promise<{ positions: Float32Array; indices: Uint32Array }>;
+  /** A store's stream: the other isovalues (the page's other surfaces) every step draws with the next setIsovalue's. */
+  setOtherIsovalues?(isos: readonly number[]): void;
+  /** Such a surface's pieces at one of the isovalues of the step on screen (none: not drawn by it). */
+  partsAt?(iso: number): SurfacePart[] | undefined;
+  /** Triangles of the step on screen at one of its isovalues. */
+  trianglesAt?(iso: number): number | undefined;
   destroy(): void;
 }
 

@@ -67,8 +67,7 @@ export async function saveGlb(session: Session, surfaces: SurfaceSet, messages: 
     let about: ShownMesh | undefined;
     for (const entry of surfaces.entries) {
       if (!entry.visible) continue;
-      const snapshot = surfaces.copyOf(entry);
-      const mesh = await readShownMesh(session, snapshot ? { snapshot, iso: entry.iso } : undefined);
+      const mesh = await readShownMesh(session, surfaces.meshOf(entry));
       if (!mesh) return;
       about ??= mesh;
       if (mesh.indices.length === 0) continue;
@@ -108,8 +107,7 @@ export async function measureShown(session: Session, surfaces: SurfaceSet, messa
     const out: MeasuredSurface[] = [];
     for (const entry of surfaces.entries) {
       if (!entry.visible) continue;
-      const snapshot = surfaces.copyOf(entry);
-      const mesh = await readShownMesh(session, snapshot ? { snapshot, iso: entry.iso } : undefined);
+      const mesh = await readShownMesh(session, surfaces.meshOf(entry));
       if (!mesh) return null;
       out.push({
         ...measureSurface(mesh.positions, mesh.indices),

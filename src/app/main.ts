@@ -245,13 +245,12 @@ async function start(): Promise<void> {
     enumerable: true,
     get: () => ({
       entries: surfaces.entries.map((e) => {
-        const copy = surfaces.copyOf(e);
         return {
           iso: e.iso,
           color: e.color,
           opacity: e.opacity,
           visible: e.visible,
-          triangles: copy ? copy.triangles : state.stats?.triangles,
+          triangles: surfaces.trianglesOf(e) ?? (e === surfaces.selectedEntry ? state.stats?.triangles : undefined),
         };
       }),
       selected: surfaces.selected,

@@ -36,8 +36,11 @@ export type InputSurface = Pick<Isosurface, 'info' | 'compute' | 'resetCache' | 
   (
     | Pick<Isosurface, 'readMesh'>
     | {
-        readPositions(): Promise<{ positions: Float32Array; indices: Uint32Array }>;
-        cutRecord(): Promise<CutChunkRecord[] | undefined>;
+        /** The mesh at `iso` (one of those drawn together; default the last computed). */
+        readPositions(iso?: number): Promise<{ positions: Float32Array; indices: Uint32Array }>;
+        cutRecord(iso?: number): Promise<CutChunkRecord[] | undefined>;
+        /** Isovalues drawn together in one refinement (StoreStreamSurface.together). */
+        together(isos: readonly number[]): void;
       }
   );
 

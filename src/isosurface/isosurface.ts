@@ -448,6 +448,18 @@ export class Isosurface {
     copy.capture(this.pipeline.parts.shards, this.drawData, this.lastStats);
   }
 
+  /** A new copy of the surface computed last (newCopy + copyInto): a store's other surfaces of a step. */
+  copy(): SurfaceSnapshot {
+    const copy = this.newCopy();
+    try {
+      this.copyInto(copy);
+    } catch (e) {
+      copy.destroy();
+      throw e;
+    }
+    return copy;
+  }
+
   /** What present() copied last, or null before the first present(). */
   get presented(): IsosurfaceDrawData | null {
     return this.snapshot?.drawData ?? null;

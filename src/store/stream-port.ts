@@ -59,6 +59,18 @@ export interface LevelSurface<S extends LevelStats = LevelStats> {
    * computed on the surface any more.
    */
   release?(): void;
+  /**
+   * A copy of the last computed surface that the caller owns (Isosurface:
+   * newCopy + copyInto): the other surfaces of a step (several isovalues
+   * drawn from the same resident chunks) are copies made one after another.
+   */
+  copy?(): SurfaceCopy;
+  destroy(): void;
+}
+/** A copy of a computed surface (SurfaceSnapshot): held until destroyed. */
+export interface SurfaceCopy {
+  /** Bytes it holds. */
+  readonly byteSize: number;
   destroy(): void;
 }
 /** The GPU side, injected (the real one: gpu-port.ts; tests: a CPU fake). */

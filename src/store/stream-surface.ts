@@ -33,6 +33,8 @@ export interface CutChunkRecord {
 
 export class StoreStreamSurface {
   readonly info: VolumeInfo;
+  /** Isovalues computed together (together()): one refinement draws them all. */
+  #together: number[] = [];
   #reason: string | null = null;
   #overBudget = false;
   #errors: string[] = [];
@@ -73,17 +75,33 @@ export class StoreStreamSurface {
   }
 
   /**
+   * Several isovalues drawn together (the page's several surfaces): the
+   * first compute() of one of them refines them all at once (a chunk is
+   * fetched when any of them needs it; one block cache), and the others are
+   * then read from that step without computing again.
+   */
+  together(isos: readonly number[]): void {
+    this.#together = isos.map((v) => Math.fround(v));
+  }
+
+  /**
    * Refines `iso` to the end of the plan (the pinned level, or the view's
    * whole cut) and waits for the ranges its surfaces read to be learnt (the
    * next isovalue plans with them); the statistics are the levels' summed.
    */
   async compute(iso: number): Promise<IsosurfaceStats> {
-    this.#reason = null;
-    await this.stream.setIsovalue(iso);
-    await this.stream.learnSettled();
-    const shown = this.stream.shown;
-    const reached = shown?.final && shown.iso === iso && (this.pinned === null || shown.levels.every((l) => l.level === this.pinned));
-    if (!shown || !reached) {
+    const f = Math.fround(iso);
+    const together = this.#together.includes(f) ? this.#together : [f];
+    let shown = this.stream.shown;
+    // drawn already with the others of its step
+    if (!(this.#reached(shown) && shown!.others.length === together.length - 1 && this.#isoIndex(f) !== undefined)) {
+      this.#reason = null;
+      await this.stream.setIsovalue(together[0], together.slice(1));
+      await this.stream.learnSettled();
+      shown = this.stream.shown;
+    }
+    const k = this.#isoIndex(f);
+    if (!shown || !this.#reached(shown) || k === undefined) {
       const what =
         this.pinned === null ? `the view's cut at isovalue ${iso} was not reached` : `level ${this.pinned}: no surface at isovalue ${iso}`;
       throw new LevelStoppedError(this.#reason ?? what, this.#overBudget);
@@ -92,13 +110,24 @@ export class StoreStreamSurface {
     if (this.info.valueRange[0] === this.info.valueRange[1]) this.info.valueRange = this.stream.valueRange ?? this.info.valueRange;
     return sumStats(
       iso,
-      shown.levels.map((l) => l.stats),
+      shown.levels.map((l) => (k < 0 ? l.stats : l.others[k].stats)),
     );
   }
 
-  /** The shown levels' meshes as one: positions in level-0 voxels (a view), or in the pinned level's own voxels. */
-  readPositions(): Promise<{ positions: Float32Array; indices: Uint32Array }> {
-    const levels = this.stream.shown?.levels ?? [];
+  /** Whether the step on screen is the end of the plan (at the pinned level). */
+  #reached(shown: ChunkStoreStream['shown']): boolean {
+    return !!shown?.final && (this.pinned === null || shown.levels.every((l) => l.level === this.pinned));
+  }
+
+  /** Where the step on screen has `iso`: -1 its own isovalue, k its k-th other, undefined not at all. */
+  #isoIndex(iso: number): number | undefined {
+    return isoIndexOf(this.stream.shown, iso);
+  }
+
+  /** The shown levels' meshes at `iso` (default: the step's own) as one: positions in level-0 voxels (a view), or in the pinned level's own voxels. */
+  readPositions(iso?: number): Promise<{ positions: Float32Array; indices: Uint32Array }> {
+    const k = iso === undefined ? -1 : (this.#isoIndex(Math.fround(iso)) ?? -1);
+    const levels = levelsAt(this.stream, this.stream.shown, k);
     const { levelOffsets, levelScales } = this.stream.store;
     if (this.pinned === null) return joinLevelMeshes(levels, levelOffsets, levelScales);
     return joinLevelMeshes(
@@ -108,9 +137,14 @@ export class StoreStreamSurface {
     );
   }
 
-  /** A view's cut on screen: per drawn chunk that holds part of the surface, its triangles (from the GPU's per-block counts); none for a pinned level. */
-  async cutRecord(): Promise<CutChunkRecord[] | undefined> {
+  /**
+   * A view's cut on screen: per drawn chunk that holds part of the surface,
+   * its triangles (from the GPU's per-block counts); none for a pinned level,
+   * nor for the other isovalues of a step (their copies keep no per-block counts).
+   */
+  async cutRecord(iso?: number): Promise<CutChunkRecord[] | undefined> {
     if (this.pinned !== null) return undefined;
+    if (iso !== undefined && this.#isoIndex(Math.fround(iso)) !== -1) return undefined;
     const out: CutChunkRecord[] = [];
     for (const l of this.stream.shown?.levels ?? []) out.push(...(await chunkTriangles(l)));
     return out;
@@ -123,6 +157,26 @@ export class StoreStreamSurface {
   destroy(): void {
     this.stream.destroy();
   }
+}
+
+/** Where a step has `iso` (float32): -1 its own isovalue, k its k-th other, undefined not at all. */
+export function isoIndexOf(shown: { iso: number; others: readonly number[] } | null | undefined, iso: number): number | undefined {
+  if (!shown) return undefined;
+  if (shown.iso === iso) return -1;
+  const k = shown.others.indexOf(iso);
+  return k >= 0 ? k : undefined;
+}
+
+/** A step's levels at its own isovalue (k = -1) or its k-th other (read from that copy), for joinLevelMeshes. */
+export function levelsAt(
+  stream: Pick<ChunkStoreStream, 'levels'>,
+  shown: ChunkStoreStream['shown'],
+  k: number,
+): { level: number; surface: Pick<Isosurface, 'readDrawnMesh'> }[] {
+  return (shown?.levels ?? []).map((l) => ({
+    level: l.level,
+    surface: k < 0 ? l.surface : { readDrawnMesh: () => l.others[k].copy.readMesh(stream.levels[l.level].layout.dims) },
+  }));
 }
 
 /** A shown level's drawn chunks with their triangles (the surface's per-block counts summed per chunk), in chunk order. */

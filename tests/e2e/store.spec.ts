@@ -137,6 +137,68 @@ test('a clip on a store: the chunks it removes whole are not fetched, as the CLI
   expect(st.levels[0].chunksFetched).toBe(cli.store.chunks);
 });
 
+test('two surfaces of a store: each step draws both from the same chunks (the CLI union), each with its own triangles', async ({
+  page,
+}) => {
+  test.setTimeout(300_000);
+  const errors = watchErrors(page);
+  await openApp(page, '/?store=/stores/neghip-e2e.zarr#iso=80,40&level=0');
+  const both = () =>
+    page.waitForFunction(
+      () => {
+        const s = (window as unknown as { zfpisoStore?: { done: boolean; shownLevel: number } }).zfpisoStore;
+        const e = window.zfpiso?.surfaces?.entries ?? [];
+        return s?.done === true && s.shownLevel === 0 && e.length === 2 && e.every((x) => x.triangles !== undefined);
+      },
+      null,
+      { timeout: 240_000 },
+    );
+  await both();
+  const cli = await runCli<{ drawnTogether: number[]; store: { chunks: number }; isosurfaces: { iso: number; triangles: number }[] }>([
+    'extract',
+    store,
+    '--level',
+    '0',
+    '--iso',
+    '80,40',
+  ]);
+  expect(cli.drawnTogether).toEqual([80, 40]);
+  const s = isoTriangles(await page.evaluate(() => window.zfpiso!.surfaces!));
+  expect(s).toEqual(cli.isosurfaces.map((r) => [r.iso, r.triangles]));
+  // level 0: the chunks either surface needs, each fetched once (the CLI's count, held to NumPy by the unit tests)
+  expect((await storeState(page)).levels[0].chunksFetched).toBe(cli.store.chunks);
+
+  // the second surface moved: the first keeps its triangles; the link holds both
+  await page.locator('#surface-list li').nth(1).locator('input[type=radio]').check();
+  await page.waitForFunction(() => window.zfpiso!.surfaces!.selected === 1);
+  await page.locator('#iso-value').fill('120');
+  await page.locator('#iso-value').press('Enter');
+  await page.waitForFunction(
+    () => {
+      const e = window.zfpiso?.surfaces?.entries ?? [];
+      const st = (window as unknown as { zfpisoStore?: { done: boolean } }).zfpisoStore;
+      return st?.done === true && e[1]?.iso === 120 && e[1].triangles !== undefined && e[0].triangles !== undefined;
+    },
+    null,
+    { timeout: 240_000 },
+  );
+  const cli120 = await runCli<{ isosurfaces: { triangles: number }[] }>(['extract', store, '--level', '0', '--iso', '120']);
+  expect(isoTriangles(await page.evaluate(() => window.zfpiso!.surfaces!))).toEqual([
+    [80, cli.isosurfaces[0].triangles],
+    [120, cli120.isosurfaces[0].triangles],
+  ]);
+  await page.waitForFunction(() => location.hash.includes('iso=80,120'));
+  // hidden: the stream no longer draws it (its triangles are gone from the step)
+  await page.locator('#surface-list li').nth(0).locator('input[type=checkbox]').uncheck();
+  await page.waitForFunction(() => window.zfpiso?.surfaces?.entries[0].triangles === undefined, null, { timeout: 120_000 });
+  expect(errors).toEqual([]);
+});
+
+/** [iso, triangles] per surface. */
+function isoTriangles(s: { entries: { iso: number; triangles?: number }[] }): [number, number | undefined][] {
+  return s.entries.map((e) => [e.iso, e.triangles]);
+}
+
 test('another volume replaces the store: its GPU side goes, no WebGPU error, and the store stops publishing', async ({ page }) => {
   test.setTimeout(300_000);
   const errors = watchErrors(page);

@@ -5,7 +5,6 @@
 // level-0 voxels; cut by the page's clip as the renderer cuts it. Shared by
 // the PLY and glTF exports and the measurement.
 import { meshPositions } from '../../isosurface/vertex-format.ts';
-import type { SurfaceSnapshot } from '../../isosurface/snapshot.ts';
 import { clipMesh } from '../../core/clip.ts';
 import type { Session } from '../session.ts';
 
@@ -22,15 +21,20 @@ export interface ShownMesh {
   dims: readonly number[];
 }
 
-/** Null when no volume is open. `copy`: one of the other surfaces (src/app/surfaces/), drawn from its copy, at `iso`. */
-export async function readShownMesh(session: Session, copy?: { snapshot: SurfaceSnapshot; iso: number }): Promise<ShownMesh | null> {
+/**
+ * Null when no volume is open. `copy`: one of the other surfaces
+ * (src/app/surfaces/: SurfaceSet.meshOf), at `iso`, read from its copy or
+ * the store's step.
+ */
+export async function readShownMesh(
+  session: Session,
+  copy?: { iso: number; read: () => Promise<{ positions: Float32Array; indices: Uint32Array }> },
+): Promise<ShownMesh | null> {
   const v = session.current;
   if (!v) return null;
   let mesh: { positions: Float32Array; indices: Uint32Array };
-  if (copy) {
-    const surface = await copy.snapshot.readMesh(v.iso.info.dims);
-    mesh = { positions: meshPositions(surface), indices: surface.indices };
-  } else if (v.iso.readPositions) mesh = await v.iso.readPositions();
+  if (copy) mesh = await copy.read();
+  else if (v.iso.readPositions) mesh = await v.iso.readPositions();
   else {
     const surface = await v.iso.readMesh();
     mesh = { positions: meshPositions(surface), indices: surface.indices };

@@ -3,14 +3,18 @@
 // whichever planner made it (by the view, or level by level): one piece per
 // level of the step (SurfaceLayer parts: level L at its scale times the voxel
 // size, placed by its OME translation, optionally tinted by level), each
-// drawn from the copy its step was shown with. Exports read that step: the
+// drawn from the copy its step was shown with. Several surfaces: the step
+// also draws the page's other isovalues (setOtherIsovalues), each level's
+// copy of its surface at each; every isovalue of the step has its pieces
+// (partsAt), so a layer per surface draws the step's own geometry for it and
+// nothing a replaced step held. Exports read that step: the
 // stream shows no other while they read (StoreStream.readShown). The stream
 // owns the GPU side; destroying this only detaches it and tells the store
 // view.
 import type { IsosurfaceDrawData, IsosurfaceStats, SurfaceMesh, VolumeInfo } from '../../isosurface/types.ts';
 import type { Rgb, SurfacePart } from '../../render/surface-layer.ts';
 import type { ChunkStoreStream } from '../../store/gpu-port.ts';
-import { joinLevelMeshes, sumStats } from '../../store/stream-surface.ts';
+import { isoIndexOf, joinLevelMeshes, levelsAt, sumStats } from '../../store/stream-surface.ts';
 import type { ShownCut } from '../../store/stream/store-stream.ts';
 import type { Isosurface } from '../../isosurface/isosurface.ts';
 import type { ChunkedVolume } from '../../zfp/chunked-volume.ts';
@@ -31,8 +35,15 @@ export const LEVEL_TINTS: readonly Rgb[] = [
 export class StoreIsosurface implements PageIsosurface {
   readonly info: VolumeInfo;
   #tint = false;
-  /** The pieces drawn, made when the step or the tint changes (the layer asks every frame). */
+  /** The pieces drawn, made when the step or the tint changes (the layer asks every frame): the step's own isovalue's. */
   #parts: SurfacePart[] = [];
+  /** Per isovalue of the step (its own and its others), its pieces. */
+  #partsByIso = new Map<number, SurfacePart[]>();
+  /** The isovalue the page asked for last (the selected surface), and what its layer drew last. */
+  #wanted = Number.NaN;
+  #liveParts: SurfacePart[] = [];
+  /** The other isovalues each step draws (several surfaces). */
+  #others: readonly number[] = [];
   #stats = new Set<(s: IsosurfaceStats) => void>();
   #errors = new Set<(e: Error) => void>();
   #submits = new Set<(iso: number) => void>();
@@ -44,13 +55,15 @@ export class StoreIsosurface implements PageIsosurface {
     private readonly stream: ChunkStoreStream,
     shown: ShownStep,
     valueRange: [number, number],
-    /** A new isovalue for the store (newest wins). */
-    private readonly request: (iso: number) => Promise<void>,
+    /** A new isovalue for the store, with the others drawn with it (newest wins). */
+    private readonly request: (iso: number, others: readonly number[]) => Promise<void>,
     /** Called once, when the session lets the store go. */
     private readonly onRelease: () => void,
   ) {
     this.#shown = shown;
-    this.#parts = this.#makeParts();
+    this.#others = [...shown.others];
+    this.#wanted = shown.iso;
+    this.#makeParts();
     const { dims } = stream.levels[0].layout;
     const blockGrid = dims.map((n) => Math.ceil(n / 4)) as [number, number, number];
     this.info = { dims: [...dims], blockGrid, blockCount: blockGrid[0] * blockGrid[1] * blockGrid[2], valueRange };
@@ -64,7 +77,7 @@ export class StoreIsosurface implements PageIsosurface {
   /** The stream showed another step (a new isovalue, a new view, a finer step): statistics, and a frame. */
   showAgain(s: ShownStep): void {
     this.#shown = s;
-    this.#parts = this.#makeParts();
+    this.#makeParts();
     const stats = this.stats;
     for (const l of this.#stats) l(stats);
     for (const l of this.#submits) l(s.iso);
@@ -83,7 +96,24 @@ export class StoreIsosurface implements PageIsosurface {
 
   /** The finest level's drawn copy (what a single draw would take; none when the step holds no surface); the layer draws drawParts. */
   get drawData(): IsosurfaceDrawData | undefined {
-    return this.#parts[0]?.data;
+    return this.drawParts()[0]?.data;
+  }
+
+  /** The other isovalues every step draws from now on (the next setIsovalue plans for them all). */
+  setOtherIsovalues(isos: readonly number[]): void {
+    this.#others = [...isos];
+  }
+
+  /** The pieces of the step on screen at `iso` (its own isovalue or one of its others); none when it has no such surface. */
+  partsAt(iso: number): SurfacePart[] | undefined {
+    return this.#partsByIso.get(iso);
+  }
+
+  /** Triangles of the step on screen at `iso`, or undefined. */
+  trianglesAt(iso: number): number | undefined {
+    const k = isoIndexOf(this.#shown, iso);
+    if (k === undefined) return undefined;
+    return this.#shown.levels.reduce((a, l) => a + (k < 0 ? l.stats : l.others[k].stats).triangles, 0);
   }
 
   /** Tint the surface by level (the panel's toggle). */
@@ -92,11 +122,17 @@ export class StoreIsosurface implements PageIsosurface {
   }
   set tint(on: boolean) {
     this.#tint = on;
-    this.#parts = this.#makeParts();
+    this.#makeParts();
   }
 
+  /**
+   * The selected surface's pieces: the step's at the isovalue asked for; while
+   * a step at a new isovalue is on its way, what was drawn for it last.
+   */
   drawParts(): SurfacePart[] {
-    return this.#parts;
+    const p = this.#partsByIso.get(this.#wanted);
+    if (p) this.#liveParts = p;
+    return this.#liveParts;
   }
 
   /** Where each piece is drawn: level, scale (level-0 voxels per voxel) and origin (in its own voxels). */
@@ -108,28 +144,38 @@ export class StoreIsosurface implements PageIsosurface {
     }));
   }
 
-  #makeParts(): SurfacePart[] {
+  /** The step's pieces at each of its isovalues (a replaced step's copies are gone: nothing keeps them). */
+  #makeParts(): void {
     const { levelOffsets, levelScales } = this.stream.store;
-    return this.#shown.levels.map((l) => {
-      const k = levelScales[l.level] ?? [2 ** l.level, 2 ** l.level, 2 ** l.level];
-      const off = levelOffsets[l.level] ?? [0, 0, 0];
-      return {
-        // the copy the step was shown with (the surface itself may be computing the next step, or be released)
-        data: l.surface.presented ?? l.surface.drawData,
-        scale: k,
-        origin: [off[0] / k[0], off[1] / k[1], off[2] / k[2]],
-        ...(this.#tint ? { tint: LEVEL_TINTS[l.level % LEVEL_TINTS.length] } : {}),
-      };
-    });
+    const s = this.#shown;
+    const at = (k: number): SurfacePart[] =>
+      s.levels.map((l) => {
+        const scale = levelScales[l.level] ?? [2 ** l.level, 2 ** l.level, 2 ** l.level];
+        const off = levelOffsets[l.level] ?? [0, 0, 0];
+        return {
+          // the copy the step was shown with (the surface itself may be computing the next step, or be released)
+          data: k < 0 ? (l.surface.presented ?? l.surface.drawData) : l.others[k].copy.drawData,
+          scale,
+          origin: [off[0] / scale[0], off[1] / scale[1], off[2] / scale[2]],
+          ...(this.#tint ? { tint: LEVEL_TINTS[l.level % LEVEL_TINTS.length] } : {}),
+        };
+      });
+    this.#parts = at(-1);
+    this.#partsByIso = new Map([[s.iso, this.#parts]]);
+    s.others.forEach((iso, k) => this.#partsByIso.set(iso, at(k)));
+    // what the selected surface's layer drew may have been a replaced step's copy
+    this.#liveParts = this.#partsByIso.get(this.#wanted) ?? this.#parts;
   }
 
   setIsovalue(iso: number): void {
-    void this.request(iso);
+    this.#wanted = iso;
+    void this.request(iso, this.#others);
   }
 
   /** The surface at `iso` refined to the end of its plan (the in-page benchmark). */
   async compute(iso: number): Promise<IsosurfaceStats> {
-    await this.request(iso);
+    this.#wanted = iso;
+    await this.request(iso, this.#others);
     const s = this.stream.shown;
     if (!s || s.iso !== iso) throw new Error(`the store shows no surface at isovalue ${iso}`);
     return sumStats(
@@ -165,10 +211,16 @@ export class StoreIsosurface implements PageIsosurface {
     return mesh ?? { vertices: new Uint32Array(0), indices: new Uint32Array(0), dims: [...this.info.dims] };
   }
 
-  /** The step on screen, every level's mesh as one in level-0 voxel index space (the PLY export); the stream shows no other step meanwhile. */
-  async readPositions(): Promise<{ positions: Float32Array; indices: Uint32Array }> {
+  /**
+   * The step on screen, every level's mesh as one in level-0 voxel index
+   * space (the PLY export), at `iso` (default: the selected surface's); the
+   * stream shows no other step meanwhile.
+   */
+  async readPositions(iso = this.#wanted): Promise<{ positions: Float32Array; indices: Uint32Array }> {
     const { levelOffsets, levelScales } = this.stream.store;
-    const read = await this.stream.readShown((s) => joinLevelMeshes(s.levels, levelOffsets, levelScales));
+    const read = await this.stream.readShown((s) =>
+      joinLevelMeshes(levelsAt(this.stream, s, isoIndexOf(s, iso) ?? -1), levelOffsets, levelScales),
+    );
     return read ?? { positions: new Float32Array(0), indices: new Uint32Array(0) };
   }
 

@@ -271,8 +271,12 @@ export class StoreView {
     if (Number.isFinite(o.iso)) void this.#refine(o, o.iso);
   }
 
-  /** One isovalue's refinement (for the view now), with `done` and the line kept current. */
-  async #refine(o: OpenStore, iso: number, view = false): Promise<void> {
+  /**
+   * One isovalue's refinement (for the view now), with `done` and the line
+   * kept current; `others`: the page's other surfaces, drawn with it (default:
+   * those drawn until now).
+   */
+  async #refine(o: OpenStore, iso: number, view = false, others?: readonly number[]): Promise<void> {
     if (this.#open !== o || o.suspended) return; // ended, or suspended while another store opens
     o.iso = iso;
     o.running++;
@@ -281,7 +285,7 @@ export class StoreView {
     this.#publish(o);
     try {
       if (view) await o.session.stream.setView(pageViewSpec(this.d.camera(), o.store, o.cut!.tolerancePx, undefined, true));
-      else await o.session.stream.setIsovalue(iso);
+      else await o.session.stream.setIsovalue(iso, others);
     } finally {
       o.running--;
     }
@@ -320,7 +324,7 @@ export class StoreView {
         stream,
         s,
         o.valueRange,
-        (value) => this.#refine(o, value),
+        (value, others) => this.#refine(o, value, false, others),
         () => {
           // the page let the store go (another volume or store is on screen)
           if (this.#open === o) this.close();

@@ -11,10 +11,16 @@
 // The copies count against the page's budget: the pipeline's own cap is the
 // budget less what the copies hold, and a copy that does not fit is refused.
 //
-// A store's stream draws one surface (its steps are one isovalue's): there,
-// the set holds one entry and the panel says so.
+// A store's stream draws every visible surface in each of its steps, from
+// the same resident chunks (a chunk is fetched when any of them needs it):
+// there the set tells the stream the other isovalues, and each surface but
+// the selected one has a layer drawing the step's pieces at its isovalue
+// (StoreIsosurface.partsAt). Moving one surface plans the step again for all;
+// the stream keeps the copies of the others where the step's chunks did not
+// change. Their memory is the stream's: the store's budget counts it.
 import { SURFACE_PALETTE } from '../../mc/glb.ts';
 import type { SurfaceSnapshot } from '../../isosurface/snapshot.ts';
+import { meshPositions } from '../../isosurface/vertex-format.ts';
 import type { Rgb, SurfaceLayer } from '../../render/surface-layer.ts';
 import type { Viewer } from '../../render/viewer.ts';
 import type { LoadedVolume } from '../loading/loader.ts';
@@ -22,6 +28,9 @@ import type { Messages } from '../messages.ts';
 import type { SurfaceSpec } from '../url-state.ts';
 
 export const MAX_SURFACES = 8;
+
+/** Whether a volume can show several surfaces: copies of its pipeline's (in-core) or several per step (a store's stream). */
+const severalOf = (v: LoadedVolume) => v.iso.newCopy !== undefined || v.iso.setOtherIsovalues !== undefined;
 
 export interface SurfaceEntry {
   /** Stable while the entry lives (panel rows, copies). */
@@ -61,6 +70,8 @@ export class SurfaceSet {
   selected = 0;
   #nextId = 1;
   readonly #copies = new Map<number, CopyDraw>();
+  /** A store's surfaces but the selected one: a layer each, drawing the step's pieces at its isovalue. */
+  readonly #storeLayers = new Map<number, SurfaceLayer>();
   /** The volume the copies were computed from. */
   #volume: LoadedVolume | undefined;
   /** Selection changes run one at a time, in order; while any is on its way the slider's values wait in #pendingIso. */
@@ -85,10 +96,10 @@ export class SurfaceSet {
     return this.#target ?? this.selectedEntry;
   }
 
-  /** Several surfaces need a pipeline that copies its surfaces (in-core volumes). */
+  /** Several surfaces need a pipeline that copies its surfaces (in-core volumes) or a stream that draws several (stores). */
   get canAdd(): boolean {
     const v = this.d.current();
-    return v !== undefined && v.iso.newCopy !== undefined && this.entries.length < MAX_SURFACES && this.#switches === 0;
+    return v !== undefined && severalOf(v) && this.entries.length < MAX_SURFACES && this.#switches === 0;
   }
 
   /** Bytes the copies hold. */
@@ -147,16 +158,33 @@ export class SurfaceSet {
       return;
     }
     this.selectedEntry.iso = iso;
+    this.#storeOthers();
     this.d.setLiveIsovalue(iso);
     this.d.onChange();
+  }
+
+  /** A store: the stream's next step draws every visible surface but the selected one as its others. */
+  #storeOthers(): void {
+    const v = this.d.current();
+    if (!v?.iso.setOtherIsovalues || v !== this.#volume) return;
+    const sel = this.selectedEntry;
+    v.iso.setOtherIsovalues(this.entries.filter((e) => e !== sel && e.visible && Number.isFinite(e.iso)).map((e) => e.iso));
+  }
+
+  /** A store's surfaces changed (one removed, hidden or shown): the step is planned again for them. */
+  #replanStore(): void {
+    const v = this.d.current();
+    if (!v?.iso.setOtherIsovalues || v !== this.#volume || this.#switches > 0) return;
+    this.#storeOthers();
+    if (Number.isFinite(this.selectedEntry.iso)) this.d.setLiveIsovalue(this.selectedEntry.iso);
   }
 
   /** Adds a surface at `iso` (default: a tenth of the value range above the selected one) and selects it. */
   async add(iso?: number, style: Partial<Pick<SurfaceEntry, 'color' | 'opacity' | 'visible'>> = {}): Promise<boolean> {
     const v = this.d.current();
     if (!v) return false;
-    if (!v.iso.newCopy) {
-      this.d.messages.show('Several surfaces are for volumes opened whole; a streamed store shows one surface.', 'info', 5000);
+    if (!severalOf(v)) {
+      this.d.messages.show('This volume shows one surface.', 'info', 5000);
       return false;
     }
     if (this.entries.length >= MAX_SURFACES) {
@@ -197,6 +225,7 @@ export class SurfaceSet {
     if (i < this.selected) this.selected--;
     this.#dropCopy(entry.id);
     this.#applyBudget();
+    this.#replanStore();
     this.d.onChange();
     this.d.viewer().requestFrame();
   }
@@ -214,7 +243,10 @@ export class SurfaceSet {
   setStyle(index: number, style: Partial<Pick<SurfaceEntry, 'color' | 'opacity' | 'visible'>>): void {
     const e = this.entries[index];
     if (!e) return;
+    const shown = style.visible !== undefined && style.visible !== e.visible;
     Object.assign(e, style);
+    // a store computes only the visible surfaces
+    if (shown && e !== this.selectedEntry) this.#replanStore();
     this.d.onChange();
     this.d.viewer().requestFrame();
   }
@@ -242,7 +274,9 @@ export class SurfaceSet {
     const left = this.selectedEntry;
     if (entry === left) return true;
     const v = this.d.current();
-    if (!this.entries.includes(entry) || !v || v !== this.#volume || !v.iso.newCopy || !v.iso.copyInto) return false;
+    if (!this.entries.includes(entry) || !v || v !== this.#volume) return false;
+    if (v.iso.setOtherIsovalues) return this.#switchStore(v, left, entry);
+    if (!v.iso.newCopy || !v.iso.copyInto) return false;
     if (Number.isFinite(left.iso)) {
       // the surface left: computed once more (its blocks are cached) so its copy holds exactly it
       let stats;
@@ -287,6 +321,32 @@ export class SurfaceSet {
     return true;
   }
 
+  /**
+   * A store: the surface left gets a layer of its own (the step's pieces at
+   * its isovalue) and the chosen one is drawn by the live layer; the next
+   * step draws the chosen one as its own isovalue and the others with it.
+   */
+  async #switchStore(v: LoadedVolume, left: SurfaceEntry, entry: SurfaceEntry): Promise<boolean> {
+    if (!this.#storeLayers.has(left.id)) {
+      const layer = await this.d.makeLayer();
+      if (this.d.current() !== v || !this.entries.includes(left)) {
+        layer.destroy();
+        return false;
+      }
+      this.#storeLayers.set(left.id, layer);
+      this.d.viewer().addLayer(layer);
+    }
+    this.selected = this.entries.indexOf(entry);
+    if (this.#target === entry && this.#pendingIso !== undefined) {
+      entry.iso = this.#pendingIso;
+      this.#pendingIso = undefined;
+    }
+    this.#storeOthers();
+    if (Number.isFinite(entry.iso)) this.d.setLiveIsovalue(entry.iso);
+    this.d.onChange();
+    return true;
+  }
+
   /** The selection stays where it was: the slider shows that surface again. */
   #refused(): false {
     this.#target = undefined;
@@ -304,6 +364,7 @@ export class SurfaceSet {
       const iso = this.#pendingIso;
       this.#pendingIso = undefined;
       this.selectedEntry.iso = iso;
+      this.#storeOthers();
       this.d.setLiveIsovalue(iso);
     }
     this.d.onChange(); // adding and reordering are possible again
@@ -326,6 +387,51 @@ export class SurfaceSet {
       // the selected surface's copy shows until the live one has its surface
       draw.layer.visible = e.visible && (e !== sel || !this.#liveReady);
     }
+    const v = this.d.current();
+    for (const e of this.entries) {
+      const layer = this.#storeLayers.get(e.id);
+      if (!layer) continue;
+      const parts = e !== sel && v === this.#volume ? v?.iso.partsAt?.(e.iso) : undefined;
+      layer.style = { ...live.style, front: e.color, opacity: e.opacity };
+      layer.voxelSize = live.voxelSize;
+      layer.origin = live.origin;
+      if (layer.clip !== live.clip) layer.clip = live.clip;
+      layer.setParts(parts);
+      layer.visible = e.visible && parts !== undefined;
+    }
+  }
+
+  /** Triangles drawn of a surface now (its copy's, or a store step's at its isovalue); undefined for the live one of an in-core volume. */
+  trianglesOf(entry: SurfaceEntry): number | undefined {
+    const copy = this.copyOf(entry);
+    if (copy) return copy.triangles;
+    const v = this.d.current();
+    return v?.iso.trianglesAt?.(entry.iso);
+  }
+
+  /**
+   * Where an export reads a surface that is not the live one: its copy (an
+   * in-core volume), or the store's step at its isovalue; undefined: the
+   * live surface (readShownMesh's default).
+   */
+  meshOf(entry: SurfaceEntry): { iso: number; read: () => Promise<{ positions: Float32Array; indices: Uint32Array }> } | undefined {
+    const copy = this.copyOf(entry);
+    const v = this.d.current();
+    if (copy) {
+      const dims = v?.iso.info.dims ?? [0, 0, 0];
+      return {
+        iso: entry.iso,
+        read: async () => {
+          const mesh = await copy.readMesh(dims);
+          return { positions: meshPositions(mesh), indices: mesh.indices };
+        },
+      };
+    }
+    if (v?.iso.partsAt && entry !== this.selectedEntry && v.iso.readPositions) {
+      const read = v.iso.readPositions.bind(v.iso);
+      return { iso: entry.iso, read: () => read(entry.iso) };
+    }
+    return undefined;
   }
 
   /** Every surface's copy (not the selected one's, which is live): for exports. */
@@ -348,9 +454,9 @@ export class SurfaceSet {
     this.d.viewer().requestFrame();
   }
 
-  /** Whether a surface is drawn: the selected one, or one whose copy is kept. */
+  /** Whether a surface is kept drawn: the selected one, one whose copy is kept, or any of a store's (its steps draw them all). */
   isDrawn(entry: SurfaceEntry): boolean {
-    return entry === this.selectedEntry || this.#copies.has(entry.id);
+    return entry === this.selectedEntry || this.#copies.has(entry.id) || this.d.current()?.iso.setOtherIsovalues !== undefined;
   }
 
   /**
@@ -389,6 +495,12 @@ export class SurfaceSet {
   }
 
   #dropCopy(id: number): void {
+    const layer = this.#storeLayers.get(id);
+    if (layer) {
+      this.d.viewer().removeLayer(layer);
+      layer.destroy();
+      this.#storeLayers.delete(id);
+    }
     const draw = this.#copies.get(id);
     if (!draw) return;
     this.d.viewer().removeLayer(draw.layer);
@@ -398,7 +510,7 @@ export class SurfaceSet {
   }
 
   #dropCopies(): void {
-    for (const id of [...this.#copies.keys()]) this.#dropCopy(id);
+    for (const id of [...this.#copies.keys(), ...this.#storeLayers.keys()]) this.#dropCopy(id);
   }
 
   destroy(): void {

@@ -63,7 +63,7 @@ export class SurfacesPanel {
         ? `${MAX_SURFACES} surfaces at most.`
         : set.canAdd || set.entries.length > 1
           ? ''
-          : 'A streamed store shows one surface.';
+          : 'This volume shows one surface.';
   }
 }
 

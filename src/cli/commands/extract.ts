@@ -212,6 +212,8 @@ export const extractCommand: CliCommand = {
     const records: (ExtractRecord | { iso: number; error: string; overBudget?: boolean })[] = [];
     let storeRecord: ReturnType<NonNullable<typeof volume.store>> | undefined;
     let savedRanges: { path: string; known: number; bricks: number } | undefined;
+    // a store draws its isovalues together: one refinement, a chunk fetched when any of them needs it
+    if ('together' in iso) iso.together(isovalues);
     try {
       for (const value of isovalues) {
         let stats;
@@ -229,8 +231,8 @@ export const extractCommand: CliCommand = {
         let cut: CutChunkRecord[] | undefined;
         if ('readPositions' in iso) {
           // a store: positions in the pinned level's voxels, or (a view's cut) in level-0 voxels with each level placed by its metadata, and the cut
-          ({ positions: welded, indices } = await iso.readPositions());
-          cut = await iso.cutRecord();
+          ({ positions: welded, indices } = await iso.readPositions(value));
+          cut = await iso.cutRecord(value);
         } else {
           const surface = await iso.readMesh();
           welded = meshPositions(surface);
@@ -323,7 +325,7 @@ export const extractCommand: CliCommand = {
       ...(glbPath !== undefined ? { glb: glbPath } : {}),
       notes: volume.notes,
       adapter: describeAdapter(gpu.adapter),
-      // the surfaces computed one after another over one block cache, and (--glb) written together
+      // the surfaces computed over one block cache (a store: in one refinement, from the same resident chunks), and (--glb) written together
       drawnTogether: records.filter((r): r is ExtractRecord => !('error' in r)).map((r) => r.iso),
       gpuPeakBytes: meter.peak,
       memoryBudgetBytes: iso.memoryBudget,

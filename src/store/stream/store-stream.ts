@@ -29,6 +29,7 @@ import { StreamLevels } from './stream-levels.ts';
 import { StreamSurfaces } from './stream-surfaces.ts';
 import {
   type BudgetStop,
+  copiesOf,
   type CutLevelShown,
   DEFAULT_TOLERANCE_PX,
   type LevelState,
@@ -56,6 +57,8 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   #finestUsable = 0;
   #view: ViewSpec | null = null;
   #iso = Number.NaN;
+  /** Other isovalues drawn with #iso from the same resident chunks (several surfaces). */
+  #others: readonly number[] = [];
   #gen = 0;
   #destroyed = false;
   /** Stopped and holding only the copies it draws (the page opens another store); a new isovalue resumes it. */
@@ -218,12 +221,24 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     return Number.isFinite(this.#iso) ? this.setIsovalue(this.#iso) : Promise.resolve();
   }
 
-  /** Newest wins: resolves when this isovalue's refinement (for the current view) ends: the whole plan shown, stopped, or superseded. */
-  async setIsovalue(iso: number): Promise<void> {
+  /** The other isovalues each step draws besides the current one (several surfaces). */
+  get otherIsovalues(): readonly number[] {
+    return this.#others;
+  }
+
+  /**
+   * Newest wins: resolves when this isovalue's refinement (for the current
+   * view) ends: the whole plan shown, stopped, or superseded. `others`: the
+   * isovalues drawn with it (several surfaces; default: those of the last
+   * call): every step draws them all from the same resident chunks, and a
+   * chunk is needed when any of them needs it.
+   */
+  async setIsovalue(iso: number, others: readonly number[] = this.#others): Promise<void> {
     if (this.#destroyed) return;
     this.#suspended = false;
     const gen = ++this.#gen;
     this.#iso = iso;
+    this.#others = others.filter((o, i) => o !== iso && others.indexOf(o) === i);
     this.#fetch.supersede();
     if (!this.#view && this.planner.needsView) throw new Error('StoreStream: setView before setIsovalue');
     // A step that does not fit (a pool that cannot grow, a surface over its cap) is tried once more with
@@ -231,7 +246,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     // (the cost model) and less of the budget each time; the coarser step stays on screen meanwhile.
     let share = PLAN_SHARE;
     for (let attempt = 0; ; attempt++) {
-      const r = await this.#refine(iso, gen, share);
+      const r = await this.#refine(iso, this.#others, gen, share);
       if (r === 'done' || gen !== this.#gen || this.#destroyed) return;
       // what the step that did not fit made goes; what is on screen stays
       this.#releaseUnshown();
@@ -245,10 +260,10 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   }
 
   /** Plans with `share` of the budget and shows the plan's steps; 'done', or a step that did not fit. */
-  async #refine(iso: number, gen: number, share: number): Promise<'done' | BudgetStop> {
+  async #refine(iso: number, others: readonly number[], gen: number, share: number): Promise<'done' | BudgetStop> {
     const stale = () => gen !== this.#gen || this.#destroyed;
     for (;;) {
-      const plan = this.#plan(iso, share);
+      const plan = this.#plan([iso, ...others], share);
       if (plan.steps.length === 0) {
         // nothing the plan can draw: a level it cannot reach, or range arrays to read first
         if (plan.wantsRanges.length === 0) {
@@ -262,7 +277,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       const complete = plan.wantsRanges.length === 0 && !plan.refused;
       // a camera move that leaves the plan as it is on screen: nothing to fetch or compute, and
       // what a superseded step was still fetching is aborted (its chunks are no longer needed)
-      if (complete && showsStep(this.#shown, steps[steps.length - 1], iso)) {
+      if (complete && showsStep(this.#shown, steps[steps.length - 1], iso, others)) {
         this.fetcher.wantAll([]);
         this.#shown = { ...this.#shown!, cut: plan.cut, final: true };
         return 'done';
@@ -278,8 +293,8 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       for (let i = first; i < steps.length; i++) {
         if (stale()) return 'done';
         // on screen already (a plan that goes on once a finer level's range array was read)
-        if (showsStep(this.#shown, steps[i], iso)) continue;
-        const r = await this.#show(steps[i], plan.cut, iso, gen, complete && i === steps.length - 1);
+        if (showsStep(this.#shown, steps[i], iso, others)) continue;
+        const r = await this.#show(steps[i], plan.cut, iso, others, gen, complete && i === steps.length - 1);
         if (r === true) continue;
         if (r === false) return 'done';
         // a coarser step than the one on screen that finds no room (the finer one holds it): the finer stays
@@ -299,11 +314,16 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     }
   }
 
-  /** The plan at `iso` with the store's levels, ranges, the view and `share` of the budget. */
-  #plan(iso: number, share: number): StreamPlan {
+  /** The plan at `isos` (a chunk is needed when any needs it) with the store's levels, ranges, the view and `share` of the budget. */
+  #plan(isos: readonly number[], share: number): StreamPlan {
     const needs = new Map<number, ((c: ChunkIndex) => boolean) | null>();
+    const anyNeeds = (L: number) => {
+      const each = isos.map((iso) => this.#pools.needs(L, iso));
+      if (each.some((n) => n === null)) return null;
+      return each.length === 1 ? each[0] : (c: ChunkIndex) => each.some((n) => n!(c));
+    };
     return this.planner.plan({
-      iso,
+      iso: isos[0],
       view: this.#view,
       voxelSize: this.store.voxelSize,
       layouts: this.levels.map((l) => l.layout),
@@ -313,7 +333,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       coarsest: this.coarsest,
       unusable: (L) => this.store.levels[L].unusable,
       needs: (L) => {
-        if (!needs.has(L)) needs.set(L, this.#pools.needs(L, iso));
+        if (!needs.has(L)) needs.set(L, anyNeeds(L));
         return needs.get(L)!;
       },
       chunkCost: (L) => this.#pools.chunkCost(L),
@@ -341,7 +361,14 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
    * first), then shows it: true; false when stale or stopped; a BudgetStop
    * when it does not fit (the caller coarsens the cut or stops).
    */
-  async #show(step: Step, cut: ViewCut | null, iso: number, gen: number, final: boolean): Promise<boolean | BudgetStop> {
+  async #show(
+    step: Step,
+    cut: ViewCut | null,
+    iso: number,
+    others: readonly number[],
+    gen: number,
+    final: boolean,
+  ): Promise<boolean | BudgetStop> {
     const stale = () => gen !== this.#gen || this.#destroyed;
     const shownWanted = wantedOnScreen(this.#shown, this.levels.length);
     // pools: room for what the step wants and what is on screen now
@@ -370,7 +397,15 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     const computed = await computeStep(
       step,
       iso,
-      { pools: this.#pools, surfaces: this.#surfaces, memory: this.#memory, skirts: this.skirts, snapshots: this.snapshots },
+      others,
+      {
+        pools: this.#pools,
+        surfaces: this.#surfaces,
+        memory: this.#memory,
+        skirts: this.skirts,
+        snapshots: this.snapshots,
+        previous: this.#shown,
+      },
       stale,
     );
     if ('stale' in computed) return false;
@@ -382,19 +417,32 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     }
     const { levels } = computed;
     const used = step.levels;
+    // the other surfaces' copies this step made (not those it keeps from the step on screen) go if it is not shown
+    const dropNew = () => {
+      const keep = copiesOf(this.#shown);
+      for (const c of copiesOf({ levels })) if (!keep.has(c)) c.destroy();
+    };
     // A snapshot: the frames until now drew the copies of the step before (whole, whatever was computed in
     // place since); the copies of this step's surfaces are made together now and drawn from here on.
     const noCopies = this.snapshots ? this.#memory.copiesRefusal(used, levels) : null;
-    if (noCopies) return { level: step.finest, reason: noCopies };
+    if (noCopies) {
+      dropNew();
+      return { level: step.finest, reason: noCopies };
+    }
     // readers of the step on screen (an export) finish before it is replaced
     while (this.#holds.length > 0) {
       await Promise.allSettled(this.#holds);
-      if (stale()) return false;
+      if (stale()) {
+        dropNew();
+        return false;
+      }
     }
     // levels this step does not draw: their surfaces go, their pools' chunks become idle
     for (const L of this.#surfaces.letGoOutside(used)) this.levels[L].volume?.setRoles(new Set(), new Set());
     if (this.snapshots) for (const l of levels) l.surface.present?.();
-    this.#shown = { iso, step: step.finest, final, levels, cut, leaves: step.leaves };
+    const before = this.#shown;
+    this.#shown = { iso, others: [...others], step: step.finest, final, levels, cut, leaves: step.leaves };
+    this.#dropCopiesOf(before);
     // learning is asked for before listeners hear of the step, so their learnSettled() waits for it
     this.#pools.learn(levels, (l) => !this.#destroyed && !this.#suspended && this.#surfaces.get(l.level) === l.surface);
     this.#events.shown(this.#shown);
@@ -451,7 +499,9 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       if (this.#memory.over) this.#releaseToCopies();
       // the copies alone are over: listeners hear that nothing is drawn until the next step
       if (this.#memory.over && this.#shown && this.#shown.levels.length > 0) {
+        const before = this.#shown;
         this.#shown = this.#memory.releaseAll(this.#shown);
+        this.#dropCopiesOf(before);
         if (this.#shown) this.#events.shown(this.#shown);
       }
     }
@@ -460,6 +510,12 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     queueMicrotask(() => {
       if (gen === this.#gen && !this.#destroyed && !this.#suspended && Number.isFinite(this.#iso)) void this.setIsovalue(this.#iso);
     });
+  }
+
+  /** The other surfaces' copies a step held that the step on screen does not (it replaced that step). */
+  #dropCopiesOf(replaced: ShownCut<V, S, F> | null): void {
+    const keep = copiesOf(this.#shown);
+    for (const c of copiesOf(replaced)) if (!keep.has(c)) c.destroy();
   }
 
   /** Whatever is being fetched or computed is no longer wanted (it becomes stale). */
@@ -505,7 +561,9 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     this.#fetch.end();
     this.#surfaces.destroy();
     this.#pools.destroy();
+    const before = this.#shown;
     this.#shown = null;
+    this.#dropCopiesOf(before);
   }
 }
 

@@ -2,7 +2,7 @@
 // draws (chunk roles), the steps its planner makes (planner.ts), the view,
 // the step on screen, and its per-level state.
 import type { ChunkRoleOptions } from '../../zfp/chunked-volume.ts';
-import type { LevelVolume } from '../stream-port.ts';
+import type { LevelVolume, SurfaceCopy } from '../stream-port.ts';
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
 import type { ViewCut } from '../view/cut.ts';
 import type { Step } from '../view/step.ts';
@@ -15,12 +15,25 @@ export interface RoleVolume extends LevelVolume {
   setRoles(drawn: ReadonlySet<ChunkIndex> | null, ghosts: ReadonlySet<ChunkIndex>, options?: ChunkRoleOptions): void;
 }
 
+/** The copy type a level's surface makes (LevelSurface.copy): Isosurface's is a SurfaceSnapshot. */
+export type CopyOf<F> = F extends { copy?(): infer C } ? C : SurfaceCopy;
+
+/** Another surface of a level of the step: the level's surface at `iso`, copied (ShownCut.others). */
+export interface LevelOther<S, C> {
+  iso: number;
+  stats: S;
+  copy: C;
+}
+
 /** One level of the surface on screen. */
 export interface CutLevelShown<V, S, F> {
   level: number;
   volume: V;
+  /** At the step's `iso`, drawn from its present() copy (or live: the CLI). */
   surface: F;
   stats: S;
+  /** The step's other isovalues (ShownCut.others, in that order), each a copy of this level's surface at it. */
+  others: LevelOther<S, CopyOf<F>>[];
   /** Chunks drawn at this level that hold part of the surface (the others have none). */
   drawn: ChunkIndex[];
   ghosts: ChunkIndex[];
@@ -28,6 +41,8 @@ export interface CutLevelShown<V, S, F> {
 
 export interface ShownCut<V, S, F> {
   iso: number;
+  /** Other isovalues drawn from the same resident chunks (several surfaces): each level's `others`. */
+  others: number[];
   /** The finest level of this step; `final` when it is the plan's last step. */
   step: number;
   final: boolean;
@@ -69,17 +84,31 @@ export interface Waiting {
   keep: Set<number>[];
 }
 
-/** Whether `shown` is this step at this isovalue (the same levels, drawn chunks and ghosts per level). */
-export function showsStep(shown: ShownCut<unknown, unknown, unknown> | null, step: Step, iso: number): boolean {
+/** Whether `shown` is this step at these isovalues (the same levels, drawn chunks and ghosts per level). */
+export function showsStep(
+  shown: ShownCut<unknown, unknown, unknown> | null,
+  step: Step,
+  iso: number,
+  others: readonly number[] = [],
+): boolean {
   if (!shown || shown.frozen || shown.iso !== iso || shown.levels.length !== step.levels.length) return false;
-  return shown.levels.every(
-    (l) =>
-      step.levels.includes(l.level) &&
-      l.drawn.length === step.drawn[l.level].size &&
-      l.ghosts.length === step.ghosts[l.level].size &&
-      l.drawn.every((c) => step.drawn[l.level].has(c)) &&
-      l.ghosts.every((c) => step.ghosts[l.level].has(c)),
+  if (shown.others.length !== others.length || shown.others.some((o, i) => o !== others[i])) return false;
+  return shown.levels.every((l) => step.levels.includes(l.level) && sameRoles(l, step, l.level));
+}
+
+/** Whether a level shown had the step's drawn chunks and ghosts at level L. */
+export function sameRoles(l: { drawn: readonly ChunkIndex[]; ghosts: readonly ChunkIndex[] }, step: Step, L: number): boolean {
+  return (
+    l.drawn.length === step.drawn[L].size &&
+    l.ghosts.length === step.ghosts[L].size &&
+    l.drawn.every((c) => step.drawn[L].has(c)) &&
+    l.ghosts.every((c) => step.ghosts[L].has(c))
   );
+}
+
+/** The copies of the other surfaces a step holds. */
+export function copiesOf<C>(shown: { levels: readonly { others: readonly { copy: C }[] }[] } | null): Set<C> {
+  return new Set((shown?.levels ?? []).flatMap((l) => l.others.map((o) => o.copy)));
 }
 
 /** Per level (of `levels`), the chunks the step on screen reads (drawn and ghosts); none when it is frozen (its pools are gone). */
