@@ -55,7 +55,7 @@ open(sys.argv[2], 'wb').write(zfpy.compress_numpy(np.ascontiguousarray(a, dtype=
 afterAll(() => rmSync(work, { recursive: true, force: true }));
 
 describe('CLI on stores', () => {
-  it('extract --level 0: the in-core triangles, chunk bytes counted once', () => {
+  it('extract --level 0 --iso a,b,c: drawn together, the in-core triangles, the chunks any surface needs fetched once', () => {
     const isos = '40.5,90,150';
     const a = cli('extract', store, '--level', '0', '--iso', isos, '--json', join(work, 'store.json'));
     expect(a.status, a.stderr).toBe(0);
@@ -64,6 +64,8 @@ describe('CLI on stores', () => {
     const s = JSON.parse(readFileSync(join(work, 'store.json'), 'utf8'));
     const c = JSON.parse(readFileSync(join(work, 'incore.json'), 'utf8'));
     expect(s.dims).toEqual([256, 256, 256]);
+    // the store's three surfaces in one refinement, from the same resident chunks
+    expect(s.drawnTogether).toEqual([40.5, 90, 150]);
     const tri = (r: { isosurfaces: { triangles: number }[] }) => r.isosurfaces.map((x) => x.triangles);
     expect(tri(s)).toEqual(tri(c));
     // the same triangles, summed in another order (only the chunks fetched are in the pool)
