@@ -174,6 +174,18 @@ export function capPolygons(
   return out;
 }
 
+/** The free plane's polygon (capPolygons): where it meets the volume's box and the clip box; empty when it misses them. */
+export function freePlanePolygon(clip: Clip | undefined, dims: readonly number[]): number[][] {
+  if (!clip?.plane) return [];
+  const last = capPolygons(clip, dims).at(-1);
+  // the free plane is the last of clipPlanes; a box face's polygon is last when the plane's was left out
+  return last && samePlane(last.plane, clip.plane) ? last.corners : [];
+}
+
+function samePlane(row: readonly number[], plane: ClipPlane): boolean {
+  return row[0] === plane.normal[0] && row[1] === plane.normal[1] && row[2] === plane.normal[2] && row[3] === -plane.d;
+}
+
 /** The polygon where n . x + w = 0 cuts the box [0, hi]: its crossings of the 12 edges, in order around their centre. */
 function planeInBox(plane: readonly number[], hi: readonly number[]): number[][] {
   const [nx, ny, nz, w] = plane;
