@@ -1,7 +1,9 @@
 // Mouse, touch and keyboard habits of 3D viewers for an ArcballCamera:
 // left-drag rotates, right-drag / shift-drag / middle-drag pans, wheel (or
 // trackpad pinch) zooms, double-click or R resets, F fits; on touch screens
-// one finger rotates and two pinch to zoom and move together to pan. Calls
+// one finger rotates and two pinch to zoom and move together to pan; a left
+// press the owner grabs (a handle under it, or Ctrl/Cmd on a face) drags
+// that instead of the camera. Calls
 // `onChange` after every camera change so the owner can redraw and update
 // the URL.
 
@@ -15,13 +17,16 @@ export interface CameraControlsOptions {
   /** A left click that did not drag (moved under 4 px): where, as fractions of the element from its top left. */
   onClick?: (u: number, v: number) => void;
   /**
-   * Ctrl- (or Cmd-) left-drag: the owner's, not the camera's, when `grab`
-   * takes it (true: something under the pointer was grabbed, e.g. a clip box
-   * face); then `grabMove` follows the pointer and `grabEnd` ends it.
+   * A left press (mouse or pen; not Shift, which pans): the owner's drag, not
+   * the camera's, when `grab` takes it (true: something under the pointer
+   * was grabbed, e.g. a handle, or a clip box face when `modifier`, Ctrl or
+   * Cmd, is held); then `grabMove` follows the pointer and `grabEnd` ends it.
    */
-  grab?: (u: number, v: number) => boolean;
+  grab?: (u: number, v: number, modifier: boolean) => boolean;
   grabMove?: (u: number, v: number) => void;
   grabEnd?: () => void;
+  /** The mouse moves with no button down: the cursor to show there ('' the default; undefined leaves it). */
+  hover?: (u: number, v: number) => string | undefined;
 }
 
 export class CameraControls {
@@ -83,11 +88,12 @@ export class CameraControls {
       return;
     }
     if (this.drag) return;
-    if (e.button === 0 && (e.ctrlKey || e.metaKey) && this.options.grab) {
+    if (e.button === 0 && !e.shiftKey && this.options.grab) {
       const [u, v] = this.fractions(e);
-      if (this.options.grab(u, v)) {
+      if (this.options.grab(u, v, e.ctrlKey || e.metaKey)) {
         this.drag = { mode: 'grab', x: u, y: v, id: e.pointerId };
         this.press = undefined;
+        this.element.style.cursor = 'grabbing';
         this.capture(e);
         return;
       }
@@ -136,6 +142,10 @@ export class CameraControls {
       }
     }
     const d = this.drag;
+    if (!d && e.pointerType === 'mouse' && this.options.hover) {
+      const cursor = this.options.hover(...this.fractions(e));
+      if (cursor !== undefined) this.element.style.cursor = cursor;
+    }
     if (!d || d.id !== e.pointerId) return;
     if (d.mode === 'grab') {
       this.options.grabMove?.(...this.fractions(e));
@@ -163,7 +173,10 @@ export class CameraControls {
         this.startDrag('rotate', id, x, y);
       }
     } else if (this.drag?.id === e.pointerId) {
-      if (this.drag.mode === 'grab') this.options.grabEnd?.();
+      if (this.drag.mode === 'grab') {
+        this.options.grabEnd?.();
+        this.element.style.cursor = this.options.hover?.(...this.fractions(e)) ?? '';
+      }
       this.drag = undefined;
       const p = this.press;
       this.press = undefined;

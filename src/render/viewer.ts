@@ -80,8 +80,8 @@ export interface ViewerOptions {
   camera?: ArcballCamera;
   /** A left click that did not drag (CameraControls.onClick). */
   onClick?: (u: number, v: number) => void;
-  /** Ctrl-drags the owner takes (CameraControls.grab). */
-  grab?: Pick<CameraControlsOptions, 'grab' | 'grabMove' | 'grabEnd'>;
+  /** Drags the owner takes (handles, Ctrl-drags: CameraControls.grab) and the pointer's hover. */
+  grab?: Pick<CameraControlsOptions, 'grab' | 'grabMove' | 'grabEnd' | 'hover'>;
 }
 
 export class Viewer {
@@ -107,6 +107,11 @@ export class Viewer {
   private readonly encoderDescriptor: GPUCommandEncoderDescriptor = { label: 'Viewer.frame' };
   private readonly submitList: GPUCommandBuffer[] = [];
   private readonly layers: RenderLayer[] = [];
+  /** Drawn over the finished scene (see-through layers included) in a pass without depth: handles. */
+  private readonly overlays: RenderLayer[] = [];
+  private readonly overlayAttachment: GPURenderPassColorAttachment;
+  private readonly overlayDescriptor: GPURenderPassDescriptor;
+  private withoutOverlays = false;
   private readonly beforeFrame: ((encoder: GPUCommandEncoder) => void)[] = [];
   private frameRequested = false;
   private readonly onAnimationFrame = (t: number): void => this.frame(t);
@@ -143,6 +148,8 @@ export class Viewer {
       depthStoreOp: 'store',
     };
     this.passDescriptor = { label: 'Viewer.pass', colorAttachments: [this.colorAttachment], depthStencilAttachment: this.depthAttachment };
+    this.overlayAttachment = { view: undefined as unknown as GPUTextureView, loadOp: 'load', storeOp: 'store' };
+    this.overlayDescriptor = { label: 'Viewer.overlayPass', colorAttachments: [this.overlayAttachment] };
 
     this.frameUniforms = device.createBuffer({
       label: 'Viewer.frameUniforms',
@@ -195,6 +202,18 @@ export class Viewer {
     this.requestFrame();
   }
 
+  /** A layer drawn over everything else, without depth (its pipeline has no depth-stencil state). */
+  addOverlay(layer: RenderLayer): void {
+    if (!this.overlays.includes(layer)) this.overlays.push(layer);
+    this.requestFrame();
+  }
+
+  removeOverlay(layer: RenderLayer): void {
+    const i = this.overlays.indexOf(layer);
+    if (i >= 0) this.overlays.splice(i, 1);
+    this.requestFrame();
+  }
+
   /** Runs `hook` at the start of each frame's command encoder. */
   addBeforeFrame(hook: (encoder: GPUCommandEncoder) => void): () => void {
     this.beforeFrame.push(hook);
@@ -234,10 +253,15 @@ export class Viewer {
 
   /**
    * Draws a frame at once (not at the next animation frame): read the canvas
-   * right after it in the same task, e.g. for a screenshot.
+   * right after it in the same task, e.g. for a screenshot (without the
+   * overlays: handles are not part of the picture).
    */
   drawNow(): void {
-    if (!this.destroyed) this.frame(performance.now());
+    if (this.destroyed) return;
+    this.withoutOverlays = true;
+    this.frame(performance.now());
+    this.withoutOverlays = false;
+    if (this.overlays.length > 0) this.requestFrame();
   }
 
   private ensureDepthView(): GPUTextureView {
@@ -308,6 +332,13 @@ export class Viewer {
             : {}),
         });
       } else this.makePeeler();
+    }
+    if (this.overlays.length > 0 && !this.withoutOverlays) {
+      this.overlayAttachment.view = target;
+      const over = encoder.beginRenderPass(this.overlayDescriptor);
+      over.setBindGroup(0, this.frameBindGroup);
+      for (const layer of this.overlays) layer.draw(over);
+      over.end();
     }
     this.submitList[0] = encoder.finish();
     this.device.queue.submit(this.submitList);
