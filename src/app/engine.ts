@@ -6,6 +6,7 @@ import { Isosurface } from '../isosurface/isosurface.ts';
 import type { IsosurfaceDrawData, IsosurfaceOptions, IsosurfaceStats, SurfaceMesh, VolumeInfo } from '../isosurface/types.ts';
 import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
 import type { SurfaceSnapshot } from '../isosurface/snapshot.ts';
+import type { VolumeProbe } from '../zfp/probe.ts';
 
 export interface PageIsosurface {
   readonly info: VolumeInfo;
@@ -38,6 +39,8 @@ export interface PageIsosurface {
   setOtherIsovalues?(isos: readonly number[]): void;
   /** Such a surface's pieces at one of the isovalues of the step on screen (none: not drawn by it). */
   partsAt?(iso: number): SurfacePart[] | undefined;
+  /** A store's value at a point (level-0 voxels) of the step on screen, and the level it came from; null where no level holds it. */
+  valueAt?(p: readonly [number, number, number], probe: VolumeProbe): Promise<{ value: number; level: number } | null>;
   /** Triangles of the step on screen at one of its isovalues. */
   trianglesAt?(iso: number): number | undefined;
   destroy(): void;

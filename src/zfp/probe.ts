@@ -3,10 +3,14 @@
 // is made from them. The cell's 8 corners lie in at most 8 blocks, decoded
 // on the GPU from the stream as the cache decodes them (ZfpDecoder
 // .encodeDecodeBlocks) into a small buffer of its own and read back: one
-// round trip per pick, nothing allocated per call once made.
+// round trip per pick, nothing allocated per call once made. The source is a
+// whole stream (blocks named by their raster index) or a level's pool of
+// chunks (a store: blocks named by slot, chunkBlockId; a block whose chunk
+// is not resident has no value there).
 import { perDevice } from '../gpu/per-device.ts';
 import { ZfpDecoder } from './decoder.ts';
-import type { ZfpGpuStream } from './gpu-stream.ts';
+import type { ChunkedVolume } from './chunked-volume.ts';
+import type { BlockSource } from './gpu-stream.ts';
 
 const MAX_BLOCKS = 8;
 
@@ -43,17 +47,27 @@ export class VolumeProbe {
 
   /**
    * The trilinear value at `p` (voxel index coordinates, voxel (i, j, k) at
-   * (i, j, k)) of the stream's decoded volume; a point outside the volume
-   * is moved onto its nearest cell.
+   * (i, j, k)) of the source's decoded volume; a point outside the volume
+   * is moved onto its nearest cell. `idOf`: the decoder's name of a block
+   * given its raster index (a pool: chunkBlockId), undefined when it cannot
+   * be decoded; then the value is null.
    */
-  sample(stream: ZfpGpuStream, p: readonly [number, number, number]): Promise<number> {
-    const run = () => this.#sample(stream, p);
+  sample(
+    stream: BlockSource,
+    p: readonly [number, number, number],
+    idOf: (block: number) => number | undefined = (b) => b,
+  ): Promise<number | null> {
+    const run = () => this.#sample(stream, p, idOf);
     const next = this.queue.then(run, run);
     this.queue = next.catch(() => undefined);
     return next;
   }
 
-  async #sample(stream: ZfpGpuStream, p: readonly [number, number, number]): Promise<number> {
+  async #sample(
+    stream: BlockSource,
+    p: readonly [number, number, number],
+    idOf: (block: number) => number | undefined,
+  ): Promise<number | null> {
     const { dims, blockGrid } = stream.info;
     if (!p.every(Number.isFinite)) throw new RangeError(`VolumeProbe: point ${p.join(', ')} is not finite`);
     // the cell: its lower corner within [0, n - 2] (a 1-voxel axis: the voxel itself), the fraction within [0, 1]
@@ -65,8 +79,10 @@ export class VolumeProbe {
     }
     const blockOf = (c: readonly number[]) => (c[0] >> 2) + blockGrid[0] * ((c[1] >> 2) + blockGrid[1] * (c[2] >> 2));
     const blocks = [...new Set(corners.map(blockOf))];
+    const ids = blocks.map(idOf);
+    if (ids.some((id) => id === undefined)) return null;
     const { device } = this;
-    device.queue.writeBuffer(this.blockIds, 0, Uint32Array.from(blocks));
+    device.queue.writeBuffer(this.blockIds, 0, Uint32Array.from(ids as number[]));
     device.queue.writeBuffer(this.count, 0, Uint32Array.of(blocks.length));
     const encoder = device.createCommandEncoder({ label: 'VolumeProbe' });
     this.decoder.encodeDecodeBlocks(encoder, {
@@ -95,6 +111,24 @@ export class VolumeProbe {
     for (const b of [this.blockIds, this.slotIds, this.count, this.slots, this.readback]) b.destroy();
     this.decoder.destroy();
   }
+}
+
+/**
+ * A pool's name for block `block` (raster index over the level's block
+ * grid): its chunk's slot times the blocks per chunk plus its index within
+ * the chunk (shaders/zfp/pool_address.wgsl); undefined when the chunk is
+ * not resident.
+ */
+export function chunkBlockId(pool: ChunkedVolume, block: number): number | undefined {
+  const { chunkGrid, chunkEdge } = pool.layout;
+  const grid = pool.info.blockGrid;
+  const b = [block % grid[0], Math.floor(block / grid[0]) % grid[1], Math.floor(block / (grid[0] * grid[1]))];
+  const per = chunkEdge / 4;
+  const c = b.map((x) => Math.floor(x / per));
+  const slot = pool.slotOfChunk(c[0] + chunkGrid[0] * (c[1] + chunkGrid[1] * c[2]));
+  if (slot === undefined) return undefined;
+  const local = (b[0] % per) + per * ((b[1] % per) + per * (b[2] % per));
+  return slot * pool.blocksPerChunk + local;
 }
 
 /** The probe of a device, made on first use. */

@@ -18,6 +18,8 @@ import { isoIndexOf, joinLevelMeshes, levelsAt, sumStats } from '../../store/str
 import type { ShownCut } from '../../store/stream/store-stream.ts';
 import type { Isosurface } from '../../isosurface/isosurface.ts';
 import type { ChunkedVolume } from '../../zfp/chunked-volume.ts';
+import type { VolumeProbe } from '../../zfp/probe.ts';
+import { shownValueAt, type ShownValue } from '../../store/shown-value.ts';
 import type { PageIsosurface } from '../engine.ts';
 
 export type ShownStep = ShownCut<ChunkedVolume, IsosurfaceStats, Isosurface>;
@@ -222,6 +224,12 @@ export class StoreIsosurface implements PageIsosurface {
       joinLevelMeshes(levelsAt(this.stream, s, isoIndexOf(s, iso) ?? -1), levelOffsets, levelScales),
     );
     return read ?? { positions: new Float32Array(0), indices: new Uint32Array(0) };
+  }
+
+  /** The value at `p` (level-0 voxels) of the step on screen, from the finest level holding it (a picked point); the stream shows no other step meanwhile. */
+  async valueAt(p: readonly [number, number, number], probe: VolumeProbe): Promise<ShownValue | null> {
+    const { levelOffsets, levelScales } = this.stream.store;
+    return this.stream.readShown((s) => shownValueAt(probe, s, levelOffsets, levelScales, p));
   }
 
   /** The coarsest level's block ranges (the slider's block profile); none once the step was released to its copies. */

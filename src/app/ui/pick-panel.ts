@@ -1,7 +1,8 @@
 // Picking: with "Pick points" on, a click on a surface (see-through ones
 // included) shows the point in voxels of level 0 and in world units and the
 // volume's value there (the trilinear value of the decoded voxels around it:
-// zfp/probe.ts; a streamed store's points have no value here); a second
+// zfp/probe.ts; a streamed store: from the finest level of the step on
+// screen holding the point, and which level that was); a second
 // click the second point and the distance between them (world units, voxel
 // size applied). A third click starts again.
 import { setInfoList } from '../info-list.ts';
@@ -10,8 +11,10 @@ export interface PickedPoint {
   /** Level-0 voxel coordinates. */
   voxel: [number, number, number];
   world: [number, number, number];
-  /** Null where the volume's values are not at hand (a streamed store). */
+  /** Null where the volume's values are not at hand (a store's step let go of its chunks). */
   value: number | null;
+  /** A store: the level the value was read from. */
+  level?: number;
 }
 
 export class PickPanel {
@@ -55,7 +58,8 @@ export class PickPanel {
       const name = i === 0 ? 'A' : 'B';
       rows.push([`${name} voxel`, p.voxel.map(fmt).join(', ')]);
       rows.push([`${name} world`, p.world.map(fmt).join(', ')]);
-      rows.push([`${name} value`, p.value === null ? '— (streamed store)' : fmt(p.value)]);
+      const from = p.level !== undefined && p.level > 0 ? ` (level ${p.level})` : '';
+      rows.push([`${name} value`, p.value === null ? '— (not resident)' : `${fmt(p.value)}${from}`]);
     });
     const d = this.distance;
     if (d !== null) rows.push(['distance', fmt(d)]);

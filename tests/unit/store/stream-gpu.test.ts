@@ -18,7 +18,11 @@ import { chunksNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
 import { openStore } from '../../../src/store/zarr/open-store.ts';
 import { loadZfpStream } from '../../../src/zfp/gpu-stream.ts';
+import { meshPositions } from '../../../src/isosurface/vertex-format.ts';
+import { shownValueAt } from '../../../src/store/shown-value.ts';
+import { VolumeProbe } from '../../../src/zfp/probe.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
+import { runPython, sharedData } from '../../helpers/python.ts';
 import { convert, converterPython, zarrPythonStore } from './stores.ts';
 
 const work = mkdtempSync(join(tmpdir(), 'store-stream-gpu-'));
@@ -117,6 +121,47 @@ print(json.dumps(out))
     expect(fetcher.counters.bytesFetched).toBe(needed.reduce((a, b) => a + b, 0));
     expect(fetcher.counters.bytesFetched / store.levels.reduce((a, l) => a + l.storedBytes, 0)).toBeLessThan(0.15);
     expect(errors).toEqual([]);
+
+    // picked values on the step (shown-value.ts): at points of its surface, NumPy's trilinear value over zfpy's
+    // decode of level 0 compressed as one stream at the store's rate (zfp codes each block alone); none where
+    // no chunk of the step is resident
+    const step = c.stream.shown!;
+    const mesh = meshPositions(await step.levels[0].surface.readDrawnMesh());
+    const n = mesh.length / 3;
+    const points = Array.from({ length: 8 }, (_, i) => {
+      const v = Math.floor(((i + 0.5) * n) / 8);
+      return [mesh[3 * v], mesh[3 * v + 1], mesh[3 * v + 2]] as [number, number, number];
+    });
+    const probe = await VolumeProbe.create(gpu.device);
+    const ours = await Promise.all(points.map((p) => shownValueAt(probe, step, store.levelOffsets, store.levelScales, p)));
+    const numpy = JSON.parse(
+      runPython(
+        `
+import sys, json, zfpy, numpy as np
+a = np.fromfile(sys.argv[1], dtype=np.float32).reshape(128, 128, 128)
+v = zfpy.decompress_numpy(zfpy.compress_numpy(a, rate=8)).astype(np.float64)   # z, y, x
+out = []
+for p in json.loads(sys.argv[2]):
+    lo = [min(int(np.floor(p[a])), 126) for a in range(3)]
+    s = 0.0
+    for k in range(8):
+        c = [lo[a] + ((k >> a) & 1) for a in range(3)]
+        s += np.prod([p[a] - lo[a] if (k >> a) & 1 else 1 - (p[a] - lo[a]) for a in range(3)]) * v[c[2], c[1], c[0]]
+    out.append(s)
+print(json.dumps(out))
+`,
+        [join(sharedData, 'volumes/hydrogen_atom_128x128x128_float32.raw'), JSON.stringify(points)],
+      ),
+    );
+    ours.forEach((o, i) => {
+      expect(o?.level, `point ${points[i].join(', ')}`).toBe(0);
+      expect(o!.value).toBeCloseTo(numpy[i], 3);
+      // a point of the surface at 200: its value is the isovalue, up to the mesh's float32 positions
+      expect(Math.abs(o!.value - 200)).toBeLessThan(1);
+    });
+    // a corner far from the atom: its chunk holds no surface, so no level of the step has it
+    expect(await shownValueAt(probe, step, store.levelOffsets, store.levelScales, [1, 1, 1])).toBeNull();
+    probe.destroy();
     c.destroy();
   });
 
