@@ -17,7 +17,8 @@ import { type MeasuredSurface, MeasurePanel } from './ui/measure-panel.ts';
 import { SurfaceSet } from './surfaces/surface-set.ts';
 import { ClipControl } from './ui/clip-control.ts';
 import { clipProblems } from './url-state.ts';
-import { ClipBoxDrag } from './clip-drag.ts';
+import { ClipDrag } from './clip-drag.ts';
+import { ClipHandleLayer } from '../render/clip-handles.ts';
 import { CapLayer } from '../render/cap-layer.ts';
 import { PickPanel } from './ui/pick-panel.ts';
 import { probeFor } from '../zfp/probe.ts';
@@ -86,12 +87,14 @@ async function start(): Promise<void> {
   let box!: BoxLayer;
   /** The clip box's outline (shown while a clip box is on). */
   let clipBox!: BoxLayer;
+  /** The clip's handles (an overlay, shown while a box or plane is on). */
+  let clipHandles!: ClipHandleLayer;
   /** The caps where the clip cuts an in-core volume open (coloured by its values). */
   let caps!: CapLayer;
   /** Picking (made once the session exists; the viewer's clicks go to it). */
   let pickPanel: PickPanel | undefined;
-  /** Ctrl-drags on the clip box's faces (made with the clip control). */
-  let clipDrag: ClipBoxDrag | undefined;
+  /** Drags on the clip's handles, Ctrl-drags on the box's faces (made with the clip control). */
+  let clipDrag: ClipDrag | undefined;
   let boxVisible = true;
   /** Told after every camera change (the store view re-plans its cut). */
   const cameraListeners = new Set<() => void>();
@@ -103,9 +106,10 @@ async function start(): Promise<void> {
       camera,
       onClick: (u, v) => void pickPanel?.click(u, v),
       grab: {
-        grab: (u, v) => clipDrag?.grab(u, v) ?? false,
+        grab: (u, v, modifier) => clipDrag?.grab(u, v, modifier) ?? false,
         grabMove: (u, v) => clipDrag?.move(u, v),
         grabEnd: () => clipDrag?.end(),
+        hover: (u, v) => clipDrag?.hover(u, v),
       },
       onCameraChange: () => {
         link?.schedule();
@@ -114,11 +118,12 @@ async function start(): Promise<void> {
     });
     // Y up, as in ParaView and vtk.js (and CT scans like the bonsai); the Display section changes it.
     viewer.upAxis = old?.up ?? 'y';
-    [box, surface, clipBox, caps] = await Promise.all([
+    [box, surface, clipBox, caps, clipHandles] = await Promise.all([
       BoxLayer.create(viewer),
       SurfaceLayer.create(viewer),
       BoxLayer.create(viewer),
       CapLayer.create(viewer),
+      ClipHandleLayer.create(viewer),
     ]);
     if (old) {
       surface.style = old.style;
@@ -267,6 +272,8 @@ async function start(): Promise<void> {
   let clip: Clip | undefined;
   const showClipBox = () => {
     viewer.removeLayer(clipBox);
+    viewer.removeOverlay(clipHandles);
+    if (session.current && clipDrag?.refresh()) viewer.addOverlay(clipHandles);
     const v = session.current;
     if (!clip?.box || !v) return;
     const s = spacing.value;
@@ -305,6 +312,7 @@ async function start(): Promise<void> {
       boxLabels: ['x', 'y', 'z'].map((k) => byId(`clip-${k}-label`)),
       planeOn: byId<HTMLInputElement>('clip-plane-on'),
       planeAxis: byId<HTMLSelectElement>('clip-plane-axis'),
+      planeNormal: byId<HTMLInputElement>('clip-plane-normal'),
       planeOffset: byId<HTMLInputElement>('clip-plane-offset'),
       planeLabel: byId('clip-plane-label'),
       planeFlip: byId<HTMLButtonElement>('clip-plane-flip'),
@@ -339,12 +347,16 @@ async function start(): Promise<void> {
     },
   );
   byId('clip-caps').addEventListener('change', () => viewer.requestFrame());
-  clipDrag = new ClipBoxDrag({
+  clipDrag = new ClipDrag({
     camera,
     size: () => ({ width: canvas.width, height: canvas.height }),
-    box: () => clip?.box,
+    clip: () => clip,
+    dims: () => clipControl.dims,
     placement: () => ({ voxelSize: spacing.value, origin: session.current?.opened.origin ?? [0, 0, 0] }),
     setFace: (axis, side, value) => clipControl.setBoxFace(axis, side, value),
+    setPlane: (plane) => clipControl.setPlane(plane),
+    layer: () => clipHandles,
+    requestFrame: () => viewer.requestFrame(),
   });
   const measure = new MeasurePanel(
     {

@@ -1,7 +1,8 @@
 // The clip: a box (a lower and an upper slider per axis, in voxels of the
-// volume's level 0) and one free plane (its normal along x, y, z or the view
-// direction, its offset on a slider, flipped with a button; `,` and `.` step
-// it along its normal, Shift x10). Every change calls onChange with the clip
+// volume's level 0) and one free plane (its normal along x, y, z, the view
+// direction or any direction, typed as nx,ny,nz or set by its handles in the
+// view; its offset on a slider, flipped with a button; `,` and `.` step it
+// along its normal, Shift x10). Every change calls onChange with the clip
 // (src/core/clip.ts) or undefined when both are off. A clip from the link is
 // checked against the volume: one that holds no cell of it is refused with a
 // message and the clip stays as it was.
@@ -15,6 +16,8 @@ export interface ClipElements {
   boxLabels: HTMLElement[];
   planeOn: HTMLInputElement;
   planeAxis: HTMLSelectElement;
+  /** The normal's components, shown and typed (nx, ny, nz; made unit length). */
+  planeNormal: HTMLInputElement;
   planeOffset: HTMLInputElement;
   planeLabel: HTMLElement;
   planeFlip: HTMLButtonElement;
@@ -52,6 +55,22 @@ export class ClipControl {
       els.planeOn.checked = true;
       this.#changed();
     });
+    els.planeNormal.addEventListener('change', () => {
+      const v = els.planeNormal.value
+        .split(/[\s,]+/)
+        .filter((t) => t !== '')
+        .map(Number);
+      const len = Math.hypot(v[0], v[1], v[2]);
+      if (v.length !== 3 || !(len > 0) || !Number.isFinite(len)) {
+        this.messages.show(`Plane normal "${els.planeNormal.value}": three numbers nx, ny, nz, not all zero; the plane stays as it was.`);
+        this.#showNormal();
+        return;
+      }
+      this.#setNormal([v[0] / len, v[1] / len, v[2] / len]);
+      els.planeAxis.value = this.#axisName(this.#normal);
+      els.planeOn.checked = true;
+      this.#changed();
+    });
     els.planeOffset.addEventListener('input', () => {
       els.planeOn.checked = true;
       this.#changed();
@@ -63,6 +82,11 @@ export class ClipControl {
       els.planeOn.checked = true;
       this.#changed();
     });
+  }
+
+  /** The volume's level-0 grid points per axis (setVolume's; the same array until the next volume). */
+  get dims(): readonly number[] {
+    return this.#dims;
   }
 
   /** The clip now (undefined: nothing clipped). */
@@ -130,6 +154,18 @@ export class ClipControl {
     this.#changed();
   }
 
+  /** A plane from the view's handles: any normal (made unit length), its offset as given (the slider's range follows the normal). */
+  setPlane(plane: ClipPlane): void {
+    const n = plane.normal;
+    const len = Math.hypot(n[0], n[1], n[2]);
+    if (!(len > 0)) return;
+    this.#setNormal([n[0] / len, n[1] / len, n[2] / len]);
+    this.els.planeOffset.value = String(plane.d / len);
+    this.els.planeAxis.value = this.#axisName(this.#normal);
+    this.els.planeOn.checked = true;
+    this.#changed();
+  }
+
   /** Moves the plane along its normal by `steps` voxels (keys , and .). */
   stepPlane(steps: number): void {
     if (!this.els.planeOn.checked) return;
@@ -150,6 +186,7 @@ export class ClipControl {
   #axisNormal(axis: string): [number, number, number] {
     if (axis === 'y') return [0, 1, 0];
     if (axis === 'z') return [0, 0, 1];
+    if (axis === 'free') return this.#normal;
     if (axis === 'view') {
       const v = this.viewDirection();
       const len = Math.hypot(v[0], v[1], v[2]) || 1;
@@ -160,7 +197,7 @@ export class ClipControl {
 
   #axisName(n: readonly number[]): string {
     const named = ['x', 'y', 'z'].find((_, a) => n[a] === 1);
-    return named ?? 'view';
+    return named ?? 'free';
   }
 
   /** A new normal: the offset slider spans n . x over the volume's corners, the offset kept inside. */
@@ -178,6 +215,11 @@ export class ClipControl {
     o.max = String(Math.ceil(hi));
     o.step = 'any';
     o.value = String(Math.min(hi, Math.max(lo, Number(o.value))));
+    this.#showNormal();
+  }
+
+  #showNormal(): void {
+    this.els.planeNormal.value = this.#normal.map((v) => Number(v.toFixed(4))).join(', ');
   }
 
   #changed(): void {

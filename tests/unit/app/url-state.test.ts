@@ -62,6 +62,15 @@ describe('view state in the URL hash', () => {
     ]);
     expect(clipProblems('#clip=0,0,0,1,1,1&plane=1,0,0,2')).toEqual([]);
   });
+  it('keeps a plane turned by its knob (any unit normal) to 7 digits, and the same link again', () => {
+    const n = [1, -2, 3].map((v) => v / Math.sqrt(14)) as [number, number, number];
+    const hash = encodeViewState({ iso: 1, clip: { plane: { normal: n, d: 40.123456789 } } });
+    expect(hash).toBe('iso=1&plane=0.2672612,-0.5345225,0.8017837,40.12346');
+    const back = decodeViewState(`#${hash}`).clip!.plane!;
+    back.normal.forEach((v, a) => expect(v).toBeCloseTo(n[a], 7));
+    expect(back.d).toBeCloseTo(40.12346, 9);
+    expect(encodeViewState({ iso: 1, clip: { plane: back } })).toBe(hash);
+  });
   it('ignores malformed values', () => {
     expect(decodeViewState('#iso=abc&cam=1,2,3')).toEqual({});
     expect(decodeViewState('')).toEqual({});
