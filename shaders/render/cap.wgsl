@@ -4,7 +4,10 @@
 // threshold (inside the outermost surface), and left open elsewhere. The
 // voxels come from the blocks near the caps, decoded once per clip
 // (src/render/cap-layer.ts): `cap_blocks` lists their ids in increasing
-// order, `cap_values` holds 64 values per listed block (x + 4y + 16z).
+// order, `cap_values` holds 64 values per listed block (x + 4y + 16z),
+// `cap_owned` whether this piece draws the cells of a listed block (a store's
+// level draws only its own regions; cells of blocks it does not own are
+// another level's).
 struct Cap {
   dims: vec4i,        // voxels per axis; w: listed blocks
   grid: vec4u,        // blocks per axis
@@ -15,6 +18,7 @@ struct Cap {
 @group(1) @binding(0) var<uniform> cap: Cap;
 @group(1) @binding(1) var<storage, read> cap_blocks: array<u32>;
 @group(1) @binding(2) var<storage, read> cap_values: array<f32>;
+@group(1) @binding(3) var<storage, read> cap_owned: array<u32>;
 
 struct VsOut {
   @builtin(position) clip: vec4f,
@@ -78,6 +82,11 @@ fn colour_map(t: f32) -> vec3f {
 fn fs(in: VsOut) -> @location(0) vec4f {
   let lower = vec3i(floor(in.voxel));
   let f = in.voxel - vec3f(lower);
+  let own = vec3u(clamp(lower, vec3i(0), cap.dims.xyz - vec3i(1))) / 4u;
+  let k_own = listed(own.x + cap.grid.x * (own.y + cap.grid.y * own.z));
+  if (k_own < 0 || cap_owned[u32(k_own)] == 0u) {
+    discard;
+  }
   var value = 0.0;
   for (var k = 0u; k < 8u; k++) {
     let o = vec3u(k & 1u, (k >> 1u) & 1u, (k >> 2u) & 1u);

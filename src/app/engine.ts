@@ -7,6 +7,8 @@ import type { IsosurfaceDrawData, IsosurfaceOptions, IsosurfaceStats, SurfaceMes
 import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
 import type { SurfaceSnapshot } from '../isosurface/snapshot.ts';
 import type { VolumeProbe } from '../zfp/probe.ts';
+import type { Clip } from '../core/clip.ts';
+import type { CapPiece } from '../render/cap-layer.ts';
 
 export interface PageIsosurface {
   readonly info: VolumeInfo;
@@ -41,6 +43,8 @@ export interface PageIsosurface {
   partsAt?(iso: number): SurfacePart[] | undefined;
   /** A store's value at a point (level-0 voxels) of the step on screen, and the level it came from; null where no level holds it. */
   valueAt?(p: readonly [number, number, number], probe: VolumeProbe): Promise<{ value: number; level: number } | null>;
+  /** A store's caps of a clip on the step on screen: a piece per level (CapLayer.setPieces). */
+  capPieces?(clip: Clip): CapPiece[];
   /** Triangles of the step on screen at one of its isovalues. */
   trianglesAt?(iso: number): number | undefined;
   destroy(): void;

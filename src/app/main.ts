@@ -288,16 +288,26 @@ async function start(): Promise<void> {
     );
     viewer.addLayer(clipBox);
   };
+  // The caps within what the budget leaves: an in-core volume's from its stream; a store's from the pools of the
+  // step on screen, a piece per level (made again as each step shows); why none, or null.
+  const makeCaps = (): string | null => {
+    const v = session.current;
+    const stream = v?.opened.stream;
+    let noCaps: string | null;
+    if (v?.iso.capPieces) {
+      noCaps = caps.setPieces(clip ? v.iso.capPieces(clip) : [], pageBudget.bytes - pageBudget.heldBytes);
+    } else {
+      const left = budget.bytes - (v?.iso.budgetedBytes ?? 0) - surfaces.copyBytes;
+      noCaps = caps.setClip(stream instanceof ZfpGpuStream ? stream : undefined, clip, left);
+    }
+    state.capBlocks = caps.blocks;
+    return noCaps;
+  };
   const applyClip = (c: Clip | undefined): void => {
     clip = c;
     surface.clip = c;
-    const v = session.current;
-    const stream = v?.opened.stream;
-    // caps for volumes opened whole (a store's chunks are not decoded here), within what the budget leaves
-    const left = budget.bytes - (v?.iso.budgetedBytes ?? 0) - surfaces.copyBytes;
-    const noCaps = caps.setClip(stream instanceof ZfpGpuStream ? stream : undefined, c, left);
+    const noCaps = makeCaps();
     if (noCaps) messages.show(`No caps: ${noCaps}.`, 'info', 6000);
-    state.capBlocks = caps.blocks;
     session.clip = c;
     storeView?.setClip(c);
     link?.setClip(c);
@@ -337,16 +347,22 @@ async function start(): Promise<void> {
       const s = spacing.value;
       const o = vol.opened.origin ?? [0, 0, 0];
       const voxel = [0, 1, 2].map((a) => hit.world[a] / s[a] - o[a]) as [number, number, number];
-      // in-core volumes: the value from the stream's decoded voxels; a store's chunks are not at hand here
+      // in-core volumes: the value from the stream's decoded voxels; a store: from the finest level of the step on screen holding it
       const stream = vol.opened.stream;
-      const value = stream instanceof ZfpGpuStream ? await (await probeFor(gpu.device)).sample(stream, voxel) : null;
-      return { voxel, world: hit.world, value };
+      const probe = await probeFor(gpu.device);
+      if (stream instanceof ZfpGpuStream) return { voxel, world: hit.world, value: await probe.sample(stream, voxel) };
+      const read = (await vol.iso.valueAt?.(voxel, probe)) ?? null;
+      return { voxel, world: hit.world, value: read?.value ?? null, ...(read ? { level: read.level } : {}) };
     },
     (points, distance) => {
       state.picks = { points, distance };
     },
   );
-  byId('clip-caps').addEventListener('change', () => viewer.requestFrame());
+  byId('clip-caps').addEventListener('change', () => {
+    // a store fetches the chunks the caps read only while they are drawn
+    storeView?.setCaps(byId<HTMLInputElement>('clip-caps').checked);
+    viewer.requestFrame();
+  });
   clipDrag = new ClipDrag({
     camera,
     size: () => ({ width: canvas.width, height: canvas.height }),
@@ -557,6 +573,10 @@ async function start(): Promise<void> {
     // a store's first step with a surface becomes the volume on screen (level 0's frame); its later steps update it
     install: (v) => {
       session.install(v);
+      // each step of the store: its caps from its own pools (the step before's chunks may be gone)
+      v.iso.onStats(() => {
+        if (clip && session.current === v) makeCaps();
+      });
       const view = storeView!;
       reopen = async () => {
         const again = view.reopener();
@@ -584,6 +604,7 @@ async function start(): Promise<void> {
     linkStoreChoice: () => ({ storeRate: initialView.storeRate, time: initialView.time, channel: initialView.channel }),
     setStoreChoice: (choice) => link?.setStoreChoice(choice),
   });
+  storeView.setCaps(byId<HTMLInputElement>('clip-caps').checked);
   if (storeUrl) {
     await storeView.open(storeUrl, rangesParameter());
   } else if (url) {

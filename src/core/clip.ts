@@ -319,3 +319,43 @@ export function nearestOnAxis(point: readonly number[], axis: number, origin: re
   const den = c - b * b;
   return den <= 1e-12 * c ? 0 : (b * ew - c * dw) / den;
 }
+
+/**
+ * The clip in the voxels of a level whose voxel spans `scale` level-0
+ * voxels and whose voxel (0, 0, 0) lies at `offset` (level-0 voxels): the
+ * same cut, for that level's caps. A plane's normal is then scaled (not unit).
+ */
+export function clipInLevel(clip: Clip, scale: readonly number[], offset: readonly number[]): Clip {
+  const out: Clip = {};
+  if (clip.box) {
+    const b = clip.box;
+    out.box = [0, 1, 2, 3, 4, 5].map((i) => (b[i] - offset[i % 3]) / scale[i % 3]) as unknown as ClipBox;
+  }
+  if (clip.plane) {
+    const n = clip.plane.normal;
+    out.plane = {
+      normal: [n[0] * scale[0], n[1] * scale[1], n[2] * scale[2]],
+      d: clip.plane.d - (n[0] * offset[0] + n[1] * offset[1] + n[2] * offset[2]),
+    };
+  }
+  return out;
+}
+
+/**
+ * Whether a cap of the clip can lie in the region [lo, hi] (level-0
+ * voxels): one of the clip's planes passes through it and the clip keeps
+ * part of it (a chunk the caps read).
+ */
+export function regionOnCap(lo: readonly number[], hi: readonly number[], clip: Clip | undefined): boolean {
+  if (!clip || regionClipped(lo, hi, clip)) return false;
+  return clipPlanes(clip).some(([nx, ny, nz, w]) => {
+    const n = [nx, ny, nz];
+    let min = w;
+    let max = w;
+    for (let a = 0; a < 3; a++) {
+      min += n[a] * (n[a] >= 0 ? lo[a] : hi[a]);
+      max += n[a] * (n[a] >= 0 ? hi[a] : lo[a]);
+    }
+    return min <= 0 && max >= 0;
+  });
+}

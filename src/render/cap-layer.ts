@@ -4,20 +4,53 @@
 // wherever the value there is at least the threshold. The blocks near the
 // caps are decoded from the stream by the zfp decoder the cache uses, once
 // per clip (a slab per plane: about 2 block layers), into buffers of this
-// layer; a new threshold or colour range only rewrites the uniforms.
+// layer; a new threshold or colour range only rewrites the uniforms. A
+// store's caps come in pieces, one per level of the step on screen: each
+// decoded from that level's pool (the blocks of its resident chunks, named
+// by slot), drawn at the level's scale and place, and only over the cells of
+// the chunks that level draws (the cut's regions do not overlap).
 import capWgsl from '../../shaders/render/cap.wgsl?raw';
 import { type Clip, capBlocks, capPolygons } from '../core/clip.ts';
 import { createShaderModule } from '../gpu/wgsl.ts';
 import { ZfpDecoder } from '../zfp/decoder.ts';
-import type { ZfpGpuStream } from '../zfp/gpu-stream.ts';
+import type { BlockSource } from '../zfp/gpu-stream.ts';
 import type { RenderTarget } from './surface-layer.ts';
 import { DEPTH_FORMAT, frameSnippet, type RenderLayer } from './viewer.ts';
 
 const UNIFORM_BYTES = 80;
 
+/** One piece of the caps: a volume (a level) and the clip in its voxels. */
+export interface CapPiece {
+  source: BlockSource;
+  /** The clip in the source's voxel coordinates (core/clip.ts clipInLevel). */
+  clip: Clip;
+  /** The decoder's name of a block given its raster index (a pool: chunkBlockId); undefined: not decodable (left out). Default: the index. */
+  idOf?: (block: number) => number | undefined;
+  /** Whether the piece draws the cells of a block (a level draws only its own regions). Default: every block. */
+  owns?: (block: number) => boolean;
+  /** Level-0 voxels one of its voxels spans, and where its voxel (0, 0, 0) lies in level-0 voxels. */
+  scale?: readonly [number, number, number];
+  offset?: readonly [number, number, number];
+}
+
+interface PieceBuffers {
+  dims: readonly number[];
+  grid: readonly number[];
+  scale: readonly number[];
+  offset: readonly number[];
+  vertices: GPUBuffer;
+  vertexCount: number;
+  blocks: GPUBuffer;
+  values: GPUBuffer;
+  owned: GPUBuffer;
+  listed: number;
+  uniforms: GPUBuffer;
+  bindGroup: GPUBindGroup;
+}
+
 export class CapLayer implements RenderLayer {
   visible = true;
-  /** World size of a voxel and where voxel (0, 0, 0) sits (as the surface layer's). */
+  /** World size of a level-0 voxel and where voxel (0, 0, 0) sits (as the surface layer's). */
   voxelSize: [number, number, number] = [1, 1, 1];
   origin: [number, number, number] = [0, 0, 0];
   /** Drawn where the value is at least this (the outermost surface's isovalue). */
@@ -25,14 +58,7 @@ export class CapLayer implements RenderLayer {
   /** The values the colour map spans. */
   range: [number, number] = [0, 1];
 
-  #stream: ZfpGpuStream | undefined;
-  #vertices: GPUBuffer | undefined;
-  #vertexCount = 0;
-  #blocks: GPUBuffer | undefined;
-  #values: GPUBuffer | undefined;
-  #listed = 0;
-  #bindGroup: GPUBindGroup | undefined;
-  readonly #uniforms: GPUBuffer;
+  #pieces: PieceBuffers[] = [];
   readonly #scratch = new ArrayBuffer(UNIFORM_BYTES);
   readonly #i32 = new Int32Array(this.#scratch);
   readonly #u32 = new Uint32Array(this.#scratch);
@@ -42,23 +68,23 @@ export class CapLayer implements RenderLayer {
     private readonly device: GPUDevice,
     private readonly pipeline: GPURenderPipeline,
     private readonly decoder: ZfpDecoder,
-  ) {
-    this.#uniforms = device.createBuffer({
-      label: 'CapLayer.uniforms',
-      size: UNIFORM_BYTES,
-      usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
-    });
-  }
+  ) {}
 
   static async create(target: RenderTarget): Promise<CapLayer> {
     const { device } = target;
     const module = await createShaderModule(device, 'CapLayer.shader', [frameSnippet, { name: 'shaders/render/cap.wgsl', code: capWgsl }]);
+    const fragmentStorage = (binding: number): GPUBindGroupLayoutEntry => ({
+      binding,
+      visibility: GPUShaderStage.FRAGMENT,
+      buffer: { type: 'read-only-storage' },
+    });
     const layout = device.createBindGroupLayout({
       label: 'CapLayer.layout',
       entries: [
         { binding: 0, visibility: GPUShaderStage.VERTEX | GPUShaderStage.FRAGMENT, buffer: { type: 'uniform' } },
-        { binding: 1, visibility: GPUShaderStage.FRAGMENT, buffer: { type: 'read-only-storage' } },
-        { binding: 2, visibility: GPUShaderStage.FRAGMENT, buffer: { type: 'read-only-storage' } },
+        fragmentStorage(1),
+        fragmentStorage(2),
+        fragmentStorage(3),
       ],
     });
     const [pipeline, decoder] = await Promise.all([
@@ -79,14 +105,19 @@ export class CapLayer implements RenderLayer {
     return new CapLayer(device, pipeline, decoder);
   }
 
-  /** Bytes the caps hold on the GPU (polygons, decoded blocks and their list). */
+  /** Bytes the caps hold on the GPU (polygons, decoded blocks and their lists). */
   get byteSize(): number {
-    return (this.#vertices?.size ?? 0) + (this.#blocks?.size ?? 0) + (this.#values?.size ?? 0);
+    return this.#pieces.reduce((a, p) => a + p.vertices.size + p.blocks.size + p.values.size + p.owned.size, 0);
   }
 
   /** Blocks decoded for the caps now. */
   get blocks(): number {
-    return this.#listed;
+    return this.#pieces.reduce((a, p) => a + p.listed, 0);
+  }
+
+  /** Pieces drawn now. */
+  get pieces(): number {
+    return this.#pieces.length;
   }
 
   /**
@@ -94,101 +125,147 @@ export class CapLayer implements RenderLayer {
    * and the blocks near them decoded now (on the GPU, in queue order), when
    * they fit `maxBytes`; else none, and why.
    */
-  setClip(stream: ZfpGpuStream | undefined, clip: Clip | undefined, maxBytes = Number.POSITIVE_INFINITY): string | null {
+  setClip(stream: BlockSource | undefined, clip: Clip | undefined, maxBytes = Number.POSITIVE_INFINITY): string | null {
+    return this.setPieces(stream && clip ? [{ source: stream, clip }] : [], maxBytes);
+  }
+
+  /** The caps of several pieces (a store's levels), all or none within `maxBytes`; why none, or null. */
+  setPieces(pieces: readonly CapPiece[], maxBytes = Number.POSITIVE_INFINITY): string | null {
     this.#release();
-    this.#stream = stream;
-    if (!stream || !clip) return null;
-    const { dims } = stream.info;
-    const caps = capPolygons(clip, dims);
+    const plans = pieces.map((p) => this.#plan(p));
+    const needed = plans.reduce((a, p) => a + (p ? 264 * p.ids.length + 4 * p.triangles.length : 0), 0);
+    const blocks = plans.reduce((a, p) => a + (p?.ids.length ?? 0), 0);
+    if (needed > maxBytes)
+      return `the caps need ${(needed / 2 ** 20).toFixed(1)} MiB for the ${blocks.toLocaleString('en-US')} blocks along the cut, more than the GPU memory budget leaves (${(Math.max(0, maxBytes) / 2 ** 20).toFixed(1)} MiB)`;
+    plans.forEach((plan, i) => {
+      if (plan) this.#pieces.push(this.#make(pieces[i], plan));
+    });
+    return null;
+  }
+
+  /** A piece's polygons (triangles) and the blocks its samples read that can be decoded; null: no cap. */
+  #plan(piece: CapPiece): { triangles: number[]; ids: number[]; decoderIds: number[]; owned: number[] } | null {
+    const { dims } = piece.source.info;
+    const caps = capPolygons(piece.clip, dims);
     if (caps.length === 0) return null;
     const triangles: number[] = [];
     for (const cap of caps) {
       for (let i = 1; i + 1 < cap.corners.length; i++) triangles.push(...cap.corners[0], ...cap.corners[i], ...cap.corners[i + 1]);
     }
-    const ids = capBlocks(caps, dims);
-    const needed = 260 * ids.length + 4 * triangles.length;
-    if (needed > maxBytes)
-      return `the caps need ${(needed / 2 ** 20).toFixed(1)} MiB for the ${ids.length.toLocaleString('en-US')} blocks along the cut, more than the GPU memory budget leaves (${(Math.max(0, maxBytes) / 2 ** 20).toFixed(1)} MiB)`;
+    const ids: number[] = [];
+    const decoderIds: number[] = [];
+    const owned: number[] = [];
+    for (const id of capBlocks(caps, dims)) {
+      const named = piece.idOf ? piece.idOf(id) : id;
+      if (named === undefined) continue;
+      ids.push(id);
+      decoderIds.push(named);
+      owned.push(!piece.owns || piece.owns(id) ? 1 : 0);
+    }
+    return { triangles, ids, decoderIds, owned };
+  }
+
+  #make(piece: CapPiece, plan: { triangles: number[]; ids: number[]; decoderIds: number[]; owned: number[] }): PieceBuffers {
     const { device } = this;
     const make = (label: string, size: number, usage: number) =>
       device.createBuffer({ label: `CapLayer.${label}`, size: Math.max(16, size), usage });
-    this.#vertices = make('vertices', 4 * triangles.length, GPUBufferUsage.VERTEX | GPUBufferUsage.COPY_DST);
-    device.queue.writeBuffer(this.#vertices, 0, Float32Array.from(triangles));
-    this.#vertexCount = triangles.length / 3;
+    const vertices = make('vertices', 4 * plan.triangles.length, GPUBufferUsage.VERTEX | GPUBufferUsage.COPY_DST);
+    device.queue.writeBuffer(vertices, 0, Float32Array.from(plan.triangles));
     const storage = GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST | GPUBufferUsage.COPY_SRC;
-    this.#blocks = make('blocks', 4 * ids.length, storage);
-    device.queue.writeBuffer(this.#blocks, 0, ids as Uint32Array<ArrayBuffer>);
-    this.#values = make('values', 256 * ids.length, storage);
-    this.#listed = ids.length;
-    if (ids.length > 0) {
-      // slot k of the decoded values is listed block k
-      const slots = make('slots', 4 * ids.length, storage);
+    const n = plan.ids.length;
+    const blocks = make('blocks', 4 * n, storage);
+    device.queue.writeBuffer(blocks, 0, Uint32Array.from(plan.ids));
+    const owned = make('owned', 4 * n, storage);
+    device.queue.writeBuffer(owned, 0, Uint32Array.from(plan.owned));
+    const values = make('values', 256 * n, storage);
+    if (n > 0) {
+      // slot k of the decoded values is listed block k, decoded under the source's name for it
+      const decodeIds = make('decodeIds', 4 * n, storage);
+      device.queue.writeBuffer(decodeIds, 0, Uint32Array.from(plan.decoderIds));
+      const slots = make('slots', 4 * n, storage);
       device.queue.writeBuffer(
         slots,
         0,
-        Uint32Array.from({ length: ids.length }, (_, k) => k),
+        Uint32Array.from({ length: n }, (_, k) => k),
       );
       const count = make('count', 16, storage);
-      device.queue.writeBuffer(count, 0, Uint32Array.of(ids.length));
+      device.queue.writeBuffer(count, 0, Uint32Array.of(n));
       const encoder = device.createCommandEncoder({ label: 'CapLayer.decode' });
       this.decoder.encodeDecodeBlocks(encoder, {
-        stream,
-        blockIds: this.#blocks,
+        stream: piece.source,
+        blockIds: decodeIds,
         slotIds: slots,
         count: { buffer: count, offset: 0 },
-        slots: this.#values,
+        slots: values,
       });
       device.queue.submit([encoder.finish()]);
-      slots.destroy();
-      count.destroy();
+      for (const b of [decodeIds, slots, count]) b.destroy();
     }
-    this.#bindGroup = device.createBindGroup({
+    const uniforms = device.createBuffer({
+      label: 'CapLayer.uniforms',
+      size: UNIFORM_BYTES,
+      usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
+    });
+    const bindGroup = device.createBindGroup({
       label: 'CapLayer.bindGroup',
       layout: this.pipeline.getBindGroupLayout(1),
       entries: [
-        { binding: 0, resource: { buffer: this.#uniforms } },
-        { binding: 1, resource: { buffer: this.#blocks } },
-        { binding: 2, resource: { buffer: this.#values } },
+        { binding: 0, resource: { buffer: uniforms } },
+        { binding: 1, resource: { buffer: blocks } },
+        { binding: 2, resource: { buffer: values } },
+        { binding: 3, resource: { buffer: owned } },
       ],
     });
-    return null;
+    const { dims, blockGrid } = piece.source.info;
+    return {
+      dims: [...dims],
+      grid: [...blockGrid],
+      scale: piece.scale ?? [1, 1, 1],
+      offset: piece.offset ?? [0, 0, 0],
+      vertices,
+      vertexCount: plan.triangles.length / 3,
+      blocks,
+      values,
+      owned,
+      listed: n,
+      uniforms,
+      bindGroup,
+    };
   }
 
   draw(pass: GPURenderPassEncoder): void {
-    const stream = this.#stream;
-    if (!this.visible || !stream || !this.#bindGroup || this.#vertexCount === 0) return;
+    if (!this.visible || this.#pieces.length === 0) return;
     const i32 = this.#i32,
       u32 = this.#u32,
       f32 = this.#f32;
-    const { dims, blockGrid } = stream.info;
-    for (let a = 0; a < 3; a++) {
-      i32[a] = dims[a];
-      u32[4 + a] = blockGrid[a];
-      f32[8 + a] = this.voxelSize[a];
-      f32[12 + a] = this.origin[a];
-    }
-    i32[3] = this.#listed;
-    f32[11] = this.threshold;
-    f32[16] = this.range[0];
-    f32[17] = this.range[1];
-    this.device.queue.writeBuffer(this.#uniforms, 0, this.#scratch);
     pass.setPipeline(this.pipeline);
-    pass.setBindGroup(1, this.#bindGroup);
-    pass.setVertexBuffer(0, this.#vertices!);
-    pass.draw(this.#vertexCount);
+    for (const p of this.#pieces) {
+      if (p.vertexCount === 0) continue;
+      for (let a = 0; a < 3; a++) {
+        i32[a] = p.dims[a];
+        u32[4 + a] = p.grid[a];
+        // a level's voxel spans scale level-0 voxels; its voxel 0 lies at offset: world = (x + origin) * size
+        f32[8 + a] = this.voxelSize[a] * p.scale[a];
+        f32[12 + a] = (this.origin[a] + p.offset[a]) / p.scale[a];
+      }
+      i32[3] = p.listed;
+      f32[11] = this.threshold;
+      f32[16] = this.range[0];
+      f32[17] = this.range[1];
+      this.device.queue.writeBuffer(p.uniforms, 0, this.#scratch);
+      pass.setBindGroup(1, p.bindGroup);
+      pass.setVertexBuffer(0, p.vertices);
+      pass.draw(p.vertexCount);
+    }
   }
 
   #release(): void {
-    for (const b of [this.#vertices, this.#blocks, this.#values]) b?.destroy();
-    this.#vertices = this.#blocks = this.#values = undefined;
-    this.#bindGroup = undefined;
-    this.#vertexCount = 0;
-    this.#listed = 0;
+    for (const p of this.#pieces) for (const b of [p.vertices, p.blocks, p.values, p.owned, p.uniforms]) b.destroy();
+    this.#pieces = [];
   }
 
   destroy(): void {
     this.#release();
-    this.#uniforms.destroy();
     this.decoder.destroy();
   }
 }

@@ -19,6 +19,9 @@ import type { ShownCut } from '../../store/stream/store-stream.ts';
 import type { Isosurface } from '../../isosurface/isosurface.ts';
 import type { ChunkedVolume } from '../../zfp/chunked-volume.ts';
 import type { VolumeProbe } from '../../zfp/probe.ts';
+import type { Clip } from '../../core/clip.ts';
+import { storeCapPieces } from './store-caps.ts';
+import type { CapPiece } from '../../render/cap-layer.ts';
 import { shownValueAt, type ShownValue } from '../../store/shown-value.ts';
 import type { PageIsosurface } from '../engine.ts';
 
@@ -230,6 +233,11 @@ export class StoreIsosurface implements PageIsosurface {
   async valueAt(p: readonly [number, number, number], probe: VolumeProbe): Promise<ShownValue | null> {
     const { levelOffsets, levelScales } = this.stream.store;
     return this.stream.readShown((s) => shownValueAt(probe, s, levelOffsets, levelScales, p));
+  }
+
+  /** The caps of `clip` on the step on screen (store-caps.ts); none once the step was released to its copies. */
+  capPieces(clip: Clip): CapPiece[] {
+    return storeCapPieces(this.stream.store, this.#shown, clip);
   }
 
   /** The coarsest level's block ranges (the slider's block profile); none once the step was released to its copies. */

@@ -51,6 +51,8 @@ export class StoreView {
   #cutChoice: { cut?: boolean; tolerancePx?: number; tint?: boolean } = {};
   /** The page's clip (setClip). */
   #clip: Clip | undefined;
+  /** Whether the page draws the clip's caps (setCaps). */
+  #caps = false;
 
   constructor(private readonly d: StoreViewDeps) {
     // a new limit: the stream gives back what it must at once (its own listener); its refinement for the new limit,
@@ -90,6 +92,15 @@ export class StoreView {
     o.session.stream.setClip(clip);
     // planned again as any other change (the page waits on this refinement)
     if (Number.isFinite(o.iso)) void this.#refine(o, o.iso);
+  }
+
+  /** Whether the page draws the clip's caps: the store on screen (and those opened later) fetch the chunks they read. */
+  setCaps(on: boolean): void {
+    this.#caps = on;
+    const o = this.#open;
+    if (!o || o.session.stream.caps === on) return;
+    o.session.stream.setCaps(on);
+    if (o.session.stream.clip && Number.isFinite(o.iso)) void this.#refine(o, o.iso);
   }
 
   /** Another volume is on screen now: the open store ends (requests, decodes, timers) and gives back its GPU memory. */
@@ -225,6 +236,7 @@ export class StoreView {
     stream.onShown((s) => this.#shown(o, s));
     stream.onError((e) => this.d.onError(e.message));
     stream.setClip(this.#clip);
+    stream.setCaps(this.#caps);
     this.#publish(o);
 
     // The isovalue: the link's (or the one kept over a reopen) as given, even outside a provisional range; else

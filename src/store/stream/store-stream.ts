@@ -210,6 +210,15 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     return this.#pools.clip;
   }
 
+  /** Whether the clip's caps are drawn: from the next plan on, the chunks they read are needed too (StreamLevels.capNeeds). */
+  setCaps(on: boolean): void {
+    this.#pools.caps = on;
+  }
+
+  get caps(): boolean {
+    return this.#pools.caps;
+  }
+
   /** Chunks a surface needed by their ranges that the clip left out, so far. */
   get clippedChunks(): number {
     return this.#pools.clipped.size;
@@ -317,9 +326,13 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   /** The plan at `isos` (a chunk is needed when any needs it) with the store's levels, ranges, the view and `share` of the budget. */
   #plan(isos: readonly number[], share: number): StreamPlan {
     const needs = new Map<number, ((c: ChunkIndex) => boolean) | null>();
+    // the caps read the chunks along the cut where the values reach the outermost surface's isovalue
+    const threshold = Math.min(...isos);
     const anyNeeds = (L: number) => {
       const each = isos.map((iso) => this.#pools.needs(L, iso));
       if (each.some((n) => n === null)) return null;
+      const caps = this.#pools.capNeeds(L, threshold);
+      if (caps) each.push(caps);
       return each.length === 1 ? each[0] : (c: ChunkIndex) => each.some((n) => n!(c));
     };
     return this.planner.plan({

@@ -13,7 +13,7 @@ import {
   residentChunkBytes,
   storeValueRange,
 } from '../level-state.ts';
-import { type Clip, clipIsEmpty, regionClipped } from '../../core/clip.ts';
+import { type Clip, clipIsEmpty, regionClipped, regionOnCap } from '../../core/clip.ts';
 import { chunkNeeded } from '../plan.ts';
 import type { LevelSurface, StreamGpu } from '../stream-port.ts';
 import type { ChunkIndex } from '../types.ts';
@@ -34,6 +34,8 @@ export class StreamLevels<V extends RoleVolume> {
   clip: Clip | undefined;
   /** Chunks (level, index) a surface needed by their ranges that the clip left out. */
   readonly clipped = new Set<number>();
+  /** Whether the clip's caps are drawn: the chunks they read are needed too (capNeeds). */
+  caps = false;
 
   constructor(
     readonly store: ZfpStore,
@@ -72,14 +74,39 @@ export class StreamLevels<V extends RoleVolume> {
     };
   }
 
-  /** Whether the clip removes every cell of chunk c of level L (its voxels and the next chunk's first, in level-0 voxels, one of its voxels of slack). */
-  #clippedAway(L: number, c: ChunkIndex, clip: Clip): boolean {
+  /**
+   * The chunks of level L the clip's caps read (none without caps or a
+   * clip): a clip plane passes through their cells and the clip keeps part
+   * of them, where their neighbourhood's values reach `threshold` (a cap is
+   * drawn where the value is at least the outermost surface's isovalue; any
+   * chunk while its ranges are unknown).
+   */
+  capNeeds(L: number, threshold: number): ((c: ChunkIndex) => boolean) | null {
+    const clip = this.clip;
+    if (!this.caps || clipIsEmpty(clip) || this.store.levels[L].unusable) return null;
+    const nb = this.levels[L].nb;
+    return (c) => {
+      if (nb && !(nb[2 * c + 1] >= threshold)) return false;
+      const { lo, hi } = this.#chunkRegion(L, c);
+      return regionOnCap(lo, hi, clip);
+    };
+  }
+
+  /** Chunk c of level L in level-0 voxels: its voxels and the next chunk's first (the cells it holds), one of its voxels of slack. */
+  #chunkRegion(L: number, c: ChunkIndex): { lo: number[]; hi: number[] } {
     const { chunkGrid, chunkEdge } = this.levels[L].layout;
     const scale = this.store.levelScales[L];
     const offset = this.store.levelOffsets[L] ?? [0, 0, 0];
     const at = [c % chunkGrid[0], Math.floor(c / chunkGrid[0]) % chunkGrid[1], Math.floor(c / (chunkGrid[0] * chunkGrid[1]))];
-    const lo = at.map((g, a) => offset[a] + (g * chunkEdge - 1) * scale[a]);
-    const hi = at.map((g, a) => offset[a] + ((g + 1) * chunkEdge + 1) * scale[a]);
+    return {
+      lo: at.map((g, a) => offset[a] + (g * chunkEdge - 1) * scale[a]),
+      hi: at.map((g, a) => offset[a] + ((g + 1) * chunkEdge + 1) * scale[a]),
+    };
+  }
+
+  /** Whether the clip removes every cell of chunk c of level L (its voxels and the next chunk's first, in level-0 voxels, one of its voxels of slack). */
+  #clippedAway(L: number, c: ChunkIndex, clip: Clip): boolean {
+    const { lo, hi } = this.#chunkRegion(L, c);
     return regionClipped(lo, hi, clip);
   }
 

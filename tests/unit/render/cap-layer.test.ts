@@ -3,7 +3,10 @@
 // trilinear value of zfpy's decode at the point where the pixel's ray meets
 // the plane (background where that value is under the threshold or the
 // point is outside the volume). An oblique plane as well as an axis plane.
-import { mkdtempSync, readFileSync, writeFileSync } from 'node:fs';
+// A store's caps too: pieces from the pool of a stream's step with caps on
+// (the chunks along the cut fetched for them), the same image as NumPy's
+// over zfpy's decode of the level compressed at the store's rate.
+import { mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { mat4 } from 'gl-matrix';
@@ -13,6 +16,12 @@ import { ArcballCamera } from '../../../src/render/camera.ts';
 import { CapLayer } from '../../../src/render/cap-layer.ts';
 import { createFrameBindGroupLayout, DEPTH_FORMAT, FRAME_UNIFORM_BYTES, frameUniformData, unproject } from '../../../src/render/viewer.ts';
 import { loadZfpStream } from '../../../src/zfp/gpu-stream.ts';
+import { storeCapPieces } from '../../../src/app/store/store-caps.ts';
+import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
+import { createChunkStream } from '../../../src/store/gpu-port.ts';
+import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
+import { openStore } from '../../../src/store/zarr/open-store.ts';
+import { convert } from '../store/stores.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
 import { runPython, sharedData } from '../../helpers/python.ts';
 
@@ -39,31 +48,97 @@ describe('CapLayer', () => {
     ] as Clip['plane'][]) {
       layer.setClip(stream, { plane });
       expect(layer.blocks).toBeGreaterThan(0);
-      const image = await render(device, layer, camera, frameLayout);
-      // each pixel's ray meets the plane at
-      camera.aspect = W / H;
-      const viewProj = camera.viewProjection(mat4.create());
-      const points: (number[] | null)[] = [];
-      for (let y = 0; y < H; y++) {
-        for (let x = 0; x < W; x++) {
-          const ndc = [((x + 0.5) / W) * 2 - 1, 1 - ((y + 0.5) / H) * 2];
-          const a = unproject(viewProj, [...ndc, 0]);
-          const b = unproject(viewProj, [...ndc, 1]);
-          const n = plane!.normal;
-          const fa = n[0] * a[0] + n[1] * a[1] + n[2] * a[2] - plane!.d;
-          const fb = n[0] * b[0] + n[1] * b[1] + n[2] * b[2] - plane!.d;
-          const t = fa / (fa - fb);
-          const p = a.map((v, k) => v + t * (b[k] - v));
-          points.push(fa * fb < 0 && p.every((v) => v >= 0 && v <= 127) ? p : null);
-        }
+      await expectCapImage(device, layer, camera, frameLayout, plane!, `zfpy.decompress_numpy(open('${file}', 'rb').read())`);
+    }
+    // caps that do not fit what the budget leaves are not made, and say why
+    expect(layer.setClip(stream, { plane: { normal: [0, 0, 1], d: 64.5 } }, 1000)).toMatch(
+      /^the caps need [\d.]+ MiB for the [\d,]+ blocks along the cut/,
+    );
+    expect(layer.blocks).toBe(0);
+    expect(layer.byteSize).toBe(0);
+    layer.destroy();
+    stream.destroy();
+  });
+
+  gpuTest("a store's caps: a piece per level of the step from its pool, the chunks along the cut fetched for them", async ({ gpu }) => {
+    const { device } = gpu;
+    const work = mkdtempSync(join(tmpdir(), 'store-caps-'));
+    const path = join(work, 'hydrogen.zarr');
+    // chunks of 8^3: the surface's 27-neighbourhoods leave chunks deep inside it (27 along this cut)
+    convert('volumes/hydrogen_atom_128x128x128_float32.raw', path, ['--chunk', '8', '--rate', '8', '--levels', '2']);
+    const store = await openStore(storeForLocation(path), path);
+    const fetcher = new ChunkFetcher(store, { maxInFlight: 8 });
+    const c = await createChunkStream(store, fetcher, gpu, 256 << 20);
+    const plane = { normal: [0, 0, 1], d: 64.5 } as const;
+    c.stream.finest = 0;
+    c.stream.coarsest = 0;
+    c.stream.setClip({ plane });
+    // the surface at the caps' threshold: without caps, the chunks deep inside it (no surface in their
+    // neighbourhood) are not fetched, and the cap would have holes there
+    await c.setIsovalue(THRESHOLD);
+    const withoutCaps = fetcher.counters.bytesFetched;
+    c.stream.setCaps(true);
+    await c.setIsovalue(THRESHOLD);
+    expect(fetcher.counters.bytesFetched).toBeGreaterThan(withoutCaps);
+    const frameLayout = createFrameBindGroupLayout(device);
+    const camera = new ArcballCamera();
+    camera.fit({ min: [0, 0, 0], max: [127, 127, 127] });
+    camera.setState({ ...camera.getState(), rotation: [0.15, 0.2, 0.02, 0.968] });
+    const layer = await CapLayer.create({ device, format: 'rgba8unorm', frameBindGroupLayout: frameLayout, camera });
+    layer.threshold = THRESHOLD;
+    layer.range = RANGE;
+    expect(layer.setPieces(storeCapPieces(store, c.stream.shown!, { plane }))).toBeNull();
+    expect(layer.pieces).toBe(1);
+    const raw = join(sharedData, 'volumes/hydrogen_atom_128x128x128_float32.raw');
+    await expectCapImage(
+      device,
+      layer,
+      camera,
+      frameLayout,
+      plane,
+      `zfpy.decompress_numpy(zfpy.compress_numpy(np.fromfile('${raw}', dtype=np.float32).reshape(128, 128, 128), rate=8))`,
+    );
+    layer.destroy();
+    c.destroy();
+    rmSync(work, { recursive: true, force: true });
+  });
+});
+
+/** The cap of `plane` drawn by `layer` against NumPy's colour-mapped trilinear values of the volume `load` (Python, z y x) gives. */
+async function expectCapImage(
+  device: GPUDevice,
+  layer: CapLayer,
+  camera: ArcballCamera,
+  frameLayout: GPUBindGroupLayout,
+  plane: NonNullable<Clip['plane']>,
+  load: string,
+): Promise<void> {
+  {
+    const image = await render(device, layer, camera, frameLayout);
+    // each pixel's ray meets the plane at
+    camera.aspect = W / H;
+    const viewProj = camera.viewProjection(mat4.create());
+    const points: (number[] | null)[] = [];
+    for (let y = 0; y < H; y++) {
+      for (let x = 0; x < W; x++) {
+        const ndc = [((x + 0.5) / W) * 2 - 1, 1 - ((y + 0.5) / H) * 2];
+        const a = unproject(viewProj, [...ndc, 0]);
+        const b = unproject(viewProj, [...ndc, 1]);
+        const n = plane.normal;
+        const fa = n[0] * a[0] + n[1] * a[1] + n[2] * a[2] - plane.d;
+        const fb = n[0] * b[0] + n[1] * b[1] + n[2] * b[2] - plane.d;
+        const t = fa / (fa - fb);
+        const p = a.map((v, k) => v + t * (b[k] - v));
+        points.push(fa * fb < 0 && p.every((v) => v >= 0 && v <= 127) ? p : null);
       }
-      const pointsFile = join(mkdtempSync(join(tmpdir(), 'caps-')), 'points.json');
-      writeFileSync(pointsFile, JSON.stringify(points));
-      const expected: (number[] | null)[] = JSON.parse(
-        runPython(
-          `
+    }
+    const pointsFile = join(mkdtempSync(join(tmpdir(), 'caps-')), 'points.json');
+    writeFileSync(pointsFile, JSON.stringify(points));
+    const expected: (number[] | null)[] = JSON.parse(
+      runPython(
+        `
 import sys, json, zfpy, numpy as np
-v = zfpy.decompress_numpy(open(sys.argv[1], 'rb').read()).astype(np.float64)   # z, y, x
+v = (${load}).astype(np.float64)   # z, y, x
 stops = np.array([[0.15, 0.1, 0.4], [0.2, 0.35, 0.6], [0.15, 0.6, 0.55], [0.5, 0.8, 0.3], [0.98, 0.9, 0.15]])
 lo_v, hi_v, threshold = float(sys.argv[3]), float(sys.argv[4]), float(sys.argv[5])
 out = []
@@ -80,31 +155,22 @@ for p in json.load(open(sys.argv[2])):
     out.append((stops[i] + (x - i) * (stops[i + 1] - stops[i])).tolist())
 print(json.dumps(out))
 `,
-          [file, pointsFile, String(RANGE[0]), String(RANGE[1]), String(THRESHOLD)],
-        ),
-      );
-      let covered = 0;
-      let bad = 0;
-      expected.forEach((c, i) => {
-        const got = [image[4 * i], image[4 * i + 1], image[4 * i + 2]];
-        const want = c ? c.map((v) => Math.round(255 * v)) : [0, 0, 0];
-        if (c) covered++;
-        if (got.some((g, k) => Math.abs(g - want[k]) > 2)) bad++;
-      });
-      expect(covered).toBeGreaterThan(0.05 * W * H);
-      // pixels on the threshold's outline or the polygon's edge may fall either way
-      expect(bad, `${bad} of ${W * H} pixels differ (${covered} on the cap)`).toBeLessThan(0.02 * covered);
-    }
-    // caps that do not fit what the budget leaves are not made, and say why
-    expect(layer.setClip(stream, { plane: { normal: [0, 0, 1], d: 64.5 } }, 1000)).toMatch(
-      /^the caps need [\d.]+ MiB for the [\d,]+ blocks along the cut/,
+        ['', pointsFile, String(RANGE[0]), String(RANGE[1]), String(THRESHOLD)],
+      ),
     );
-    expect(layer.blocks).toBe(0);
-    expect(layer.byteSize).toBe(0);
-    layer.destroy();
-    stream.destroy();
-  });
-});
+    let covered = 0;
+    let bad = 0;
+    expected.forEach((c, i) => {
+      const got = [image[4 * i], image[4 * i + 1], image[4 * i + 2]];
+      const want = c ? c.map((v) => Math.round(255 * v)) : [0, 0, 0];
+      if (c) covered++;
+      if (got.some((g, k) => Math.abs(g - want[k]) > 2)) bad++;
+    });
+    expect(covered).toBeGreaterThan(0.05 * W * H);
+    // pixels on the threshold's outline or the polygon's edge may fall either way
+    expect(bad, `${bad} of ${W * H} pixels differ (${covered} on the cap)`).toBeLessThan(0.02 * covered);
+  }
+}
 
 async function render(device: GPUDevice, layer: CapLayer, camera: ArcballCamera, layout: GPUBindGroupLayout): Promise<Uint8Array> {
   const colour = device.createTexture({
