@@ -539,6 +539,9 @@ async function start(): Promise<void> {
     const iso = store ? store.iso : session.drawnIsovalue;
     const view = camera.getState();
     const userSpacing = session.current ? spacing.value : undefined;
+    // the surfaces: the selected one reopens with the volume, the others are made again around it
+    const shownSurfaces = surfaces.specs();
+    const selectedSurface = surfaces.selected;
     loader.cancel();
     storeView?.close();
     session.destroy();
@@ -555,7 +558,7 @@ async function start(): Promise<void> {
     if (!session.current) {
       nextUrl = undefined;
       await loader.loadDefault();
-    }
+    } else if (shownSurfaces.length > 1) await surfaces.restore(shownSurfaces, selectedSurface);
     if ((state.status as PageState['status']) !== 'error') {
       state.status = 'ready';
       document.body.dataset.status = 'ready';

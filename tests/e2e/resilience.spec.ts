@@ -75,10 +75,20 @@ test('a refused shard: the coarser level stays, the reason names the chunk and t
   expect((await storeState(page)).shownLevel).toBe(1);
 });
 
-test('a lost device: a new one, and the built-in volume again at the same isovalue and view', async ({ page }) => {
+test('a lost device: a new one, and the built-in volume again at the same isovalue, surfaces and view', async ({ page }) => {
   test.setTimeout(300_000);
   const errors = watchErrors(page);
-  await openApp(page, '/#iso=0.42');
+  await openApp(page, '/#iso=0.42,0.6&op=1,0.5&sel=0');
+  const bothDrawn = () =>
+    page.waitForFunction(
+      () => {
+        const s = window.zfpiso?.surfaces;
+        return s?.entries.length === 2 && s.selected === 0 && s.entries.every((e) => e.triangles !== undefined);
+      },
+      null,
+      { timeout: 120_000 },
+    );
+  await bothDrawn();
   await page.mouse.move(500, 300);
   await page.mouse.down();
   await page.mouse.move(560, 340, { steps: 5 });
@@ -88,6 +98,7 @@ test('a lost device: a new one, and the built-in volume again at the same isoval
     iso: window.zfpiso!.stats!.isovalue,
     triangles: window.zfpiso!.stats!.triangles,
     loads: window.zfpiso!.loads,
+    surfaces: window.zfpiso!.surfaces!.entries.map((e) => [e.iso, e.opacity, e.triangles]),
   }));
   await page.evaluate(() => window.zfpiso!.loseDevice!());
   await page.waitForFunction(
@@ -95,6 +106,9 @@ test('a lost device: a new one, and the built-in volume again at the same isoval
     before.loads,
     { timeout: 120_000 },
   );
+  // the other surface made again around the one the volume reopened with; the slider back on the first
+  await bothDrawn();
+  await page.waitForFunction((iso) => window.zfpiso!.stats!.isovalue === iso, before.iso, { timeout: 120_000 });
   const after = await page.evaluate(() => ({
     camera: window.zfpiso!.camera!(),
     iso: window.zfpiso!.stats!.isovalue,
@@ -104,6 +118,7 @@ test('a lost device: a new one, and the built-in volume again at the same isoval
   expect(after.iso).toBe(before.iso);
   expect(after.triangles).toBe(before.triangles);
   expect(after.camera).toEqual(before.camera);
+  expect(await page.evaluate(() => window.zfpiso!.surfaces!.entries.map((e) => [e.iso, e.opacity, e.triangles]))).toEqual(before.surfaces);
   await expect(page.locator('#messages')).toContainText('A new GPU device is being started');
   await expect(page.locator('#fatal')).toHaveCount(0);
   // it keeps drawing on the new device
