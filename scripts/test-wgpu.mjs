@@ -51,6 +51,7 @@ export const WGPU_TESTS = [
   'tests/unit/volume/tiff-isosurface.test.ts',
   'tests/unit/app/surface-layer.test.ts',
   'tests/unit/render/pipelines.test.ts',
+  'tests/unit/raycast/cell-root.test.ts',
 ];
 
 function findDeno() {

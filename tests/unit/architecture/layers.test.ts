@@ -25,6 +25,7 @@ const LAYERS: Record<string, number> = {
   isosurface: 6,
   render: 7,
   store: 7, // streaming Zarr stores: above the pipeline it feeds, beside the renderer
+  raycast: 7, // ray casting in the block cache (issue 46): above the cache it reads, beside the renderer
   bench: 8,
   app: 9,
   examples: 10,
