@@ -25,7 +25,7 @@
 // into .cache/bench-surfaces/. LEVEL (default 1), RATE (the GPU's zfp rate
 // of lossless chunks, default 8), BUDGET_MB (default: the CLI's), STORE_ISOS
 // (4 values). Per configuration (1, 2, 4 surfaces, the first at opacity 0.35
-// for 2 and 4; the last is the selected one, StoreStream.setIsovalue(selected,
+// for 2 and 4; the first is the selected one, StoreStream.setIsovalue(selected,
 // others)), each on a fresh session:
 //   - first step ms: the cold step (every chunk fetched, every surface computed);
 //   - step ms: the whole step for a new value of the selected surface (wall,
@@ -174,7 +174,8 @@ async function coreSection(): Promise<Record<string, unknown>> {
   const scene = sceneFor(stream.info.dims.map((n) => n - 1) as [number, number, number]);
   const rows: Row[] = [];
   for (const { n, seeThrough } of configs) {
-    const values = isos.slice(0, n);
+    // the first isovalue is the selected (live) one in every configuration, so its rows compare
+    const values = [...isos.slice(1, n), isos[0]];
     const copies: SurfaceSnapshot[] = [];
     const layers: SurfaceLayer[] = [];
     let triangles = 0;
@@ -193,7 +194,7 @@ async function coreSection(): Promise<Record<string, unknown>> {
     }
     const frame = await timeFrames(layers, scene);
     // moving the live surface: small steps around its isovalue (cache warm)
-    const live = values[n - 1];
+    const live = isos[0];
     const perSurface: number[] = [];
     for (let k = 0; k <= steps; k++) perSurface.push((await iso.compute(live + (k % 2 === 0 ? 1 : -1) * (1 + k) * 0.25)).gpuMs);
     rows.push({
@@ -357,9 +358,10 @@ async function storeSection(): Promise<Record<string, unknown>> {
     how = o.how;
     dims = [...o.stream.levels[0].layout.dims] as [number, number, number];
     const scene = sceneFor(dims.map((d) => d - 1) as [number, number, number]);
+    // the first isovalue is the selected one in every configuration, so its rows compare
     const values = storeIsos.slice(0, n);
-    const live = values[n - 1];
-    const others = values.slice(0, n - 1);
+    const live = values[0];
+    const others = values.slice(1);
     const first = await step(o, live, others);
     // each surface a layer drawing the step's pieces at its isovalue, as the page's
     const page = new StoreIsosurface(
@@ -404,7 +406,7 @@ async function storeSection(): Promise<Record<string, unknown>> {
   }
   const name = process.env.STORE ?? `ball ${storeSize}^3 uint8 (tests/fixtures/ball-store.py)`;
   printTable(
-    `${name}, level ${level} pinned, ${size}x${size}, isovalues ${storeIsos.join(', ')} (the last selected): median of ${frames} frames and ${steps} steps after a discarded first, ${adapter}`,
+    `${name}, level ${level} pinned, ${size}x${size}, isovalues ${storeIsos.join(', ')} (the first selected): median of ${frames} frames and ${steps} steps after a discarded first, ${adapter}`,
     [
       'surfaces',
       'see-through',
@@ -491,7 +493,7 @@ async function storeSection(): Promise<Record<string, unknown>> {
     frames,
     steps,
     isovalues: storeIsos,
-    selected: 'the last of each configuration',
+    selected: 'the first isovalue in every configuration',
     timing: {
       step: "wall ms from setIsovalue to its step shown (learnt ranges settled after, untimed); GPU ms: the step's surfaces' statistics",
       frame: timed ? 'timestamp-query' : 'queue wall time',

@@ -9,7 +9,12 @@ import { type Clip, clipInLevel } from '../../core/clip.ts';
 import type { CapPiece } from '../../render/cap-layer.ts';
 import type { ZfpStore } from '../../store/zarr/store.ts';
 import { chunkBlockId } from '../../zfp/probe.ts';
-import type { ShownStep } from './store-isosurface.ts';
+import type { IsosurfaceStats } from '../../isosurface/types.ts';
+import type { Isosurface } from '../../isosurface/isosurface.ts';
+import type { ShownCut } from '../../store/stream/stream-types.ts';
+import type { ChunkedVolume } from '../../zfp/chunked-volume.ts';
+
+type ShownStep = ShownCut<ChunkedVolume, IsosurfaceStats, Isosurface>;
 
 export function storeCapPieces(store: Pick<ZfpStore, 'levelOffsets' | 'levelScales'>, shown: ShownStep, clip: Clip): CapPiece[] {
   if (shown.frozen) return [];

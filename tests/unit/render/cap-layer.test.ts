@@ -6,6 +6,7 @@
 // A store's caps too: pieces from the pool of a stream's step with caps on
 // (the chunks along the cut fetched for them), the same image as NumPy's
 // over zfpy's decode of the level compressed at the store's rate.
+import { execFileSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
@@ -21,9 +22,8 @@ import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
 import { createChunkStream } from '../../../src/store/gpu-port.ts';
 import { storeForLocation } from '../../../src/store/zarr/node-store.ts';
 import { openStore } from '../../../src/store/zarr/open-store.ts';
-import { convert } from '../store/stores.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
-import { runPython, sharedData } from '../../helpers/python.ts';
+import { repoRoot, runPython, sharedData } from '../../helpers/python.ts';
 
 const W = 96;
 const H = 96;
@@ -63,13 +63,31 @@ describe('CapLayer', () => {
   gpuTest("a store's caps: a piece per level of the step from its pool, the chunks along the cut fetched for them", async ({ gpu }) => {
     const { device } = gpu;
     const work = mkdtempSync(join(tmpdir(), 'store-caps-'));
-    const path = join(work, 'hydrogen.zarr');
-    // chunks of 8^3: the surface's 27-neighbourhoods leave chunks deep inside it (27 along this cut)
-    convert('volumes/hydrogen_atom_128x128x128_float32.raw', path, ['--chunk', '8', '--rate', '8', '--levels', '2']);
+    const path = join(work, 'ball.zarr');
+    // a ball 64^3 (NumPy), in chunks of 8^3: the surface's 27-neighbourhoods leave chunks deep inside it
+    const raw = join(work, 'ball_64x64x64_float32.raw');
+    runPython(
+      `
+import sys, numpy as np
+z, y, x = np.mgrid[0:64, 0:64, 0:64].astype(np.float64)
+r = np.sqrt((x - 31.5) ** 2 + (y - 30) ** 2 + (z - 33) ** 2)
+f = 60 * np.clip(1 - r / 28, 0, 1) + 4 * np.sin(x / 5) * np.cos(y / 7)
+f.astype(np.float32).tofile(sys.argv[1])
+`,
+      [raw],
+    );
+    execFileSync(
+      process.execPath,
+      [join(repoRoot, 'scripts/convert.mjs'), raw, '--out', path, '--quiet', '--chunk', '8', '--rate', '8', '--levels', '1'],
+      {
+        cwd: repoRoot,
+        stdio: 'pipe',
+      },
+    );
     const store = await openStore(storeForLocation(path), path);
     const fetcher = new ChunkFetcher(store, { maxInFlight: 8 });
     const c = await createChunkStream(store, fetcher, gpu, 256 << 20);
-    const plane = { normal: [0, 0, 1], d: 64.5 } as const;
+    const plane = { normal: [0.1, 0, 1], d: 35.5 } as const;
     c.stream.finest = 0;
     c.stream.coarsest = 0;
     c.stream.setClip({ plane });
@@ -82,21 +100,21 @@ describe('CapLayer', () => {
     expect(fetcher.counters.bytesFetched).toBeGreaterThan(withoutCaps);
     const frameLayout = createFrameBindGroupLayout(device);
     const camera = new ArcballCamera();
-    camera.fit({ min: [0, 0, 0], max: [127, 127, 127] });
+    camera.fit({ min: [0, 0, 0], max: [63, 63, 63] });
     camera.setState({ ...camera.getState(), rotation: [0.15, 0.2, 0.02, 0.968] });
     const layer = await CapLayer.create({ device, format: 'rgba8unorm', frameBindGroupLayout: frameLayout, camera });
     layer.threshold = THRESHOLD;
     layer.range = RANGE;
     expect(layer.setPieces(storeCapPieces(store, c.stream.shown!, { plane }))).toBeNull();
     expect(layer.pieces).toBe(1);
-    const raw = join(sharedData, 'volumes/hydrogen_atom_128x128x128_float32.raw');
     await expectCapImage(
       device,
       layer,
       camera,
       frameLayout,
       plane,
-      `zfpy.decompress_numpy(zfpy.compress_numpy(np.fromfile('${raw}', dtype=np.float32).reshape(128, 128, 128), rate=8))`,
+      `zfpy.decompress_numpy(zfpy.compress_numpy(np.fromfile('${raw}', dtype=np.float32).reshape(64, 64, 64), rate=8))`,
+      64,
     );
     layer.destroy();
     c.destroy();
@@ -112,6 +130,7 @@ async function expectCapImage(
   frameLayout: GPUBindGroupLayout,
   plane: NonNullable<Clip['plane']>,
   load: string,
+  size = 128,
 ): Promise<void> {
   {
     const image = await render(device, layer, camera, frameLayout);
@@ -129,7 +148,7 @@ async function expectCapImage(
         const fb = n[0] * b[0] + n[1] * b[1] + n[2] * b[2] - plane.d;
         const t = fa / (fa - fb);
         const p = a.map((v, k) => v + t * (b[k] - v));
-        points.push(fa * fb < 0 && p.every((v) => v >= 0 && v <= 127) ? p : null);
+        points.push(fa * fb < 0 && p.every((v) => v >= 0 && v <= size - 1) ? p : null);
       }
     }
     const pointsFile = join(mkdtempSync(join(tmpdir(), 'caps-')), 'points.json');
@@ -145,7 +164,7 @@ out = []
 for p in json.load(open(sys.argv[2])):
     if p is None:
         out.append(None); continue
-    lo = [min(max(int(np.floor(p[a])), 0), 126) for a in range(3)]
+    lo = [min(max(int(np.floor(p[a])), 0), v.shape[2 - a] - 2) for a in range(3)]
     f = [p[a] - lo[a] for a in range(3)]
     s = sum(np.prod([f[a] if (k >> a) & 1 else 1 - f[a] for a in range(3)]) * v[lo[2] + ((k >> 2) & 1), lo[1] + ((k >> 1) & 1), lo[0] + (k & 1)] for k in range(8))
     if s < threshold:
