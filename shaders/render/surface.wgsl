@@ -73,10 +73,6 @@ fn vs_depth(@location(0) v: vec2u) -> DepthOut {
   return DepthOut(frame.view_proj * vec4f(world_of(p), 1.0));
 }
 
-fn to_srgb(c: vec3f) -> vec3f {
-  return pow(clamp(c, vec3f(0.0), vec3f(1.0)), vec3f(1.0 / 2.2));
-}
-
 // Cut open: outside any clip plane, nothing is drawn.
 fn clipped(world: vec3f) -> bool {
   for (var i = 0u; i < min(surface.clip_count.x, 7u); i++) {
@@ -146,23 +142,5 @@ fn shade(in: VsOut, front_facing: bool) -> vec3f {
       n = -n;
     }
   }
-  // Camera axes in world space (rows of the view rotation).
-  let right = vec3f(frame.view[0].x, frame.view[1].x, frame.view[2].x);
-  let up = vec3f(frame.view[0].y, frame.view[1].y, frame.view[2].y);
-  // Headlight, a little above and left of the eye, and a dim fill from below right.
-  let key = normalize(to_eye + 0.45 * up - 0.3 * right);
-  let fill = normalize(to_eye - 0.6 * up + 0.5 * right);
-  let diffuse = max(dot(n, key), 0.0) * 0.78 + max(dot(n, fill), 0.0) * 0.18;
-  let h = normalize(key + to_eye);
-  let specular = pow(max(dot(n, h), 0.0), 60.0) * surface.back.a;
-  let rim = pow(1.0 - max(dot(n, to_eye), 0.0), 3.0) * surface.extra.x;
-  let ambient = surface.front.a;
-  // base colour in linear light
-  let albedo = pow(base, vec3f(2.2));
-  var c = albedo * (ambient + diffuse) + vec3f(specular + rim * 0.6);
-  // Depth cue: far parts fade a little toward the background.
-  let dist = length(frame.eye.xyz - in.world);
-  let far_t = clamp((dist - surface.extra.z) / max(surface.extra.w - surface.extra.z, 1e-6), 0.0, 1.0);
-  c = mix(c, c * 0.55, far_t * surface.extra.y);
-  return to_srgb(c);
+  return lit(base, n, in.world, surface.front.a, surface.back.a, surface.extra.x, surface.extra.yzw);
 }

@@ -90,6 +90,7 @@ export class IsosurfacePipeline {
       info,
       slotData: parts.cache.slotData,
       blockToSlot: parts.cache.blockToSlot,
+      neighbourhoodRanges: parts.active.neighbourhoodRanges,
       version: 0,
     };
   }

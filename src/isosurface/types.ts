@@ -146,6 +146,12 @@ export interface IsosurfaceDrawData {
    * moved on: treat 0xffffffff as "no data" when shading.)
    */
   blockToSlot: GPUBuffer;
+  /**
+   * Per block, [min, max] over its 27-block neighbourhood (2 f32): a block is
+   * active at iso when min < iso <= max (the ray caster skips the others). A
+   * pipeline's own draw data has it; copies do not.
+   */
+  neighbourhoodRanges?: GPUBuffer;
   /** Increases whenever any buffer above is replaced (after growth): re-create bind groups then. */
   version: number;
 }

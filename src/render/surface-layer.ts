@@ -7,6 +7,7 @@
 // draws its depth alone, for a volume renderer that stops its rays there.
 
 import { vec3 } from 'gl-matrix';
+import lightingWgsl from '../../shaders/render/lighting.wgsl?raw';
 import surfaceWgsl from '../../shaders/render/surface.wgsl?raw';
 import vertexFormatWgsl from '../../shaders/isosurface/vertex_format.wgsl?raw';
 import { createShaderModule } from '../gpu/wgsl.ts';
@@ -358,6 +359,7 @@ async function makeSurfacePipelines(target: RenderTarget, depthPrepass: boolean)
   const module = await createShaderModule(device, 'SurfaceLayer.shader', [
     frameSnippet,
     { name: 'shaders/isosurface/vertex_format.wgsl', code: vertexFormatWgsl },
+    { name: 'shaders/render/lighting.wgsl', code: lightingWgsl },
     { name: 'shaders/render/surface.wgsl', code: surfaceWgsl },
   ]);
   const layout = device.createBindGroupLayout({
