@@ -20,6 +20,7 @@ import { clipProblems } from './url-state.ts';
 import { ClipDrag } from './clip-drag.ts';
 import { ClipHandleLayer } from '../render/clip-handles.ts';
 import { CapLayer } from '../render/cap-layer.ts';
+import { RayLayer } from '../render/ray-layer.ts';
 import { PickPanel } from './ui/pick-panel.ts';
 import { probeFor } from '../zfp/probe.ts';
 import { ZfpGpuStream } from '../zfp/gpu-stream.ts';
@@ -91,6 +92,8 @@ async function start(): Promise<void> {
   let clipHandles!: ClipHandleLayer;
   /** The caps where the clip cuts an in-core volume open (coloured by its values). */
   let caps!: CapLayer;
+  /** The selected surface ray cast in the block cache (Draw: rays; volumes opened whole). */
+  let rays!: RayLayer;
   /** Picking (made once the session exists; the viewer's clicks go to it). */
   let pickPanel: PickPanel | undefined;
   /** Drags on the clip's handles, Ctrl-drags on the box's faces (made with the clip control). */
@@ -118,18 +121,20 @@ async function start(): Promise<void> {
     });
     // Y up, as in ParaView and vtk.js (and CT scans like the bonsai); the Display section changes it.
     viewer.upAxis = old?.up ?? 'y';
-    [box, surface, clipBox, caps, clipHandles] = await Promise.all([
+    [box, surface, clipBox, caps, clipHandles, rays] = await Promise.all([
       BoxLayer.create(viewer),
       SurfaceLayer.create(viewer),
       BoxLayer.create(viewer),
       CapLayer.create(viewer),
       ClipHandleLayer.create(viewer),
+      RayLayer.create(viewer),
     ]);
     if (old) {
       surface.style = old.style;
       surface.voxelSize = old.voxelSize;
     }
     viewer.addLayer(surface);
+    viewer.addLayer(rays);
     viewer.addLayer(caps);
     if (boxVisible) viewer.addLayer(box);
 
@@ -148,6 +153,18 @@ async function start(): Promise<void> {
   state.loseDevice = () => gpu.device.destroy();
 
   const initialView = ViewLink.initial();
+  // Draw: the selected surface as triangles or ray cast in the block cache (the link's draw=rays)
+  let drawMode: 'mesh' | 'rays' = initialView.draw ?? 'mesh';
+  const drawSelect = byId<HTMLSelectElement>('draw-mode');
+  drawSelect.value = drawMode;
+  state.draw = drawMode;
+  drawSelect.addEventListener('change', () => {
+    drawMode = drawSelect.value === 'rays' ? 'rays' : 'mesh';
+    state.draw = drawMode;
+    link?.setDraw(drawMode === 'rays' ? 'rays' : undefined);
+    viewer.requestFrame();
+  });
+  if (drawMode === 'rays') link.setDraw('rays');
   let pendingIso = initialView.iso;
   let storeView: StoreView | undefined;
   let volumeUrl: string | undefined;
@@ -408,6 +425,8 @@ async function start(): Promise<void> {
       clip: clipControl,
       caps: () => caps,
       capsOn: () => byId<HTMLInputElement>('clip-caps').checked,
+      rays: () => rays,
+      drawMode: () => drawMode,
     });
   let session = makeSession();
   session.pendingClip = initialView.clip;

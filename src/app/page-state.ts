@@ -48,6 +48,8 @@ export interface PageState {
   capBlocks?: number;
   /** The clip on screen (src/core/clip.ts), undefined when nothing is cut. */
   clip?: Clip;
+  /** How the selected surface is drawn: its triangles, or ray cast in the block cache. */
+  draw?: 'mesh' | 'rays';
   /** The last "Measure": every visible surface (empty while measuring or after another volume opened). */
   measures?: MeasuredSurface[];
   /** The last "Measure" of the surface (cleared when another volume opens). */

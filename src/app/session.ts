@@ -4,6 +4,7 @@
 
 import { IsosurfaceBudgetError, type IsosurfaceStats } from '../isosurface/types.ts';
 import type { BoxLayer } from '../render/box-layer.ts';
+import type { RayLayer } from '../render/ray-layer.ts';
 import type { SurfaceLayer } from '../render/surface-layer.ts';
 import type { Viewer } from '../render/viewer.ts';
 import type { CameraState } from '../render/camera.ts';
@@ -29,6 +30,9 @@ import type { ViewLink } from './view-link.ts';
 export interface SessionParts {
   viewer: Viewer;
   surface: SurfaceLayer;
+  /** The selected surface ray cast in the block cache, when the page draws rays (drawMode). */
+  rays: () => RayLayer;
+  drawMode: () => 'mesh' | 'rays';
   box: BoxLayer;
   isoControl: IsoControl;
   spacing: SpacingControl;
@@ -60,6 +64,8 @@ export class Session {
   /** The clip on screen (exports and measurements cut the mesh the same way). */
   clip: Clip | undefined;
   private requestedAt = new Map<number, number>();
+  /** The isovalue last submitted to the volume's pipeline: its cache holds every block active at it (what rays read). */
+  private submittedIso = Number.NaN;
   private lastLatency: number | undefined;
 
   constructor(private readonly p: SessionParts) {
@@ -75,11 +81,39 @@ export class Session {
       caps.origin = p.surface.origin;
       if (this.current) caps.range = this.current.iso.info.valueRange;
       p.surface.setParts(this.current?.iso.drawParts?.());
+      this.syncRays();
     });
+  }
+
+  /**
+   * Rays instead of the selected surface's triangles (the others stay
+   * meshes): a volume opened whole, opaque (see-through rays are not peeled
+   * yet), at the isovalue last submitted (what the cache was computed for).
+   */
+  private syncRays(): void {
+    const { p } = this;
+    const rays = p.rays();
+    const v = this.current;
+    const data = v && !v.iso.drawParts ? v.iso.drawData : undefined;
+    const on = p.drawMode() === 'rays' && data?.neighbourhoodRanges !== undefined && p.surface.style.opacity >= 1;
+    rays.visible = on && p.surface.visible;
+    if (!on) {
+      rays.setDrawData(undefined);
+      return;
+    }
+    rays.setDrawData(data);
+    rays.iso = this.submittedIso;
+    rays.style = p.surface.style;
+    rays.voxelSize = p.surface.voxelSize;
+    rays.origin = p.surface.origin;
+    rays.clip = p.surface.clip;
+    p.surface.visible = false;
   }
 
   install(v: LoadedVolume): void {
     const { p } = this;
+    // the volume arrives with its first surface computed (at initialIso); later ones are heard in onSubmit
+    this.submittedIso = v.initialIso;
     const old = this.current;
     this.current = v;
     this.requestedAt.clear();
@@ -94,8 +128,10 @@ export class Session {
     });
     // The draw reads GPU-written arguments: the frame after the submission
     // shows the new surface; the statistics only update the panel.
-    v.iso.onSubmit(() => {
-      if (this.current === v) p.viewer.requestFrame();
+    v.iso.onSubmit((iso) => {
+      if (this.current !== v) return;
+      this.submittedIso = iso;
+      p.viewer.requestFrame();
     });
     v.iso.onError((e) => {
       if (this.current !== v) return;

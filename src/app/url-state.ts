@@ -5,7 +5,8 @@
 // clip=x0,y0,z0,x1,y1,z1 and plane=nx,ny,nz,d (src/core/clip.ts, level-0 voxels); for stores also level=L, and for stores of
 // lossless chunks rate=R (their bricks' GPU rate), t=T and c=C (time point
 // and channel), cut=1|0 (refine by the view or level by level) with px=W,H
-// (the canvas) and tol=T (pixels), tint=1 (tint by level). The volume itself comes from ?url=... (same
+// (the canvas) and tol=T (pixels), tint=1 (tint by level); draw=rays (the surface ray cast in the
+// block cache, not drawn as triangles). The volume itself comes from ?url=... (same
 // origin) or is the built-in default.
 import type { CameraState } from '../render/camera.ts';
 import { type Clip, parseClipBox, parseClipPlane } from '../core/clip.ts';
@@ -41,6 +42,8 @@ export interface ViewState {
   viewport?: { width: number; height: number };
   tolerancePx?: number;
   tint?: boolean;
+  /** How the surface is drawn: its triangles (mesh, the default) or ray cast in the block cache (draw=rays). */
+  draw?: 'mesh' | 'rays';
 }
 
 const round = (x: number) => Number(x.toPrecision(7));
@@ -78,6 +81,7 @@ export function encodeViewState(s: ViewState): string {
   if (s.viewport) parts.push(`px=${s.viewport.width},${s.viewport.height}`);
   if (s.tolerancePx !== undefined) parts.push(`tol=${round(s.tolerancePx)}`);
   if (s.tint) parts.push('tint=1');
+  if (s.draw === 'rays') parts.push('draw=rays');
   return parts.join('&');
 }
 
@@ -140,6 +144,7 @@ export function decodeViewState(hash: string): ViewState {
   const tol = Number(params.get('tol'));
   if (params.has('tol') && tol > 0 && tol <= 1000) out.tolerancePx = tol;
   if (params.get('tint') === '1') out.tint = true;
+  if (params.get('draw') === 'rays') out.draw = 'rays';
   return out;
 }
 

@@ -10,6 +10,7 @@ export class ViewLink {
   private iso: number | undefined;
   private surfaces: Pick<ViewState, 'surfaces' | 'selected'> = {};
   private clip: ViewState['clip'];
+  private draw: ViewState['draw'];
   private spacing: [number, number, number] | undefined;
   private level: number | undefined;
   private storeChoice: Pick<ViewState, 'storeRate' | 'time' | 'channel'> = {};
@@ -40,6 +41,12 @@ export class ViewLink {
   /** Several surfaces (one: the link keeps only iso=). */
   setSurfaces(surfaces: ViewState['surfaces'], selected: number): void {
     this.surfaces = { surfaces, selected };
+    this.schedule();
+  }
+
+  /** How the surface is drawn (mesh: not written). */
+  setDraw(draw: ViewState['draw']): void {
+    this.draw = draw;
     this.schedule();
   }
 
@@ -85,6 +92,7 @@ export class ViewLink {
       iso: this.iso,
       ...this.surfaces,
       clip: this.clip,
+      draw: this.draw,
       camera: this.camera.getState(),
       spacing: this.spacing,
       level: this.level,

@@ -8,7 +8,7 @@ import { join } from 'node:path';
 import { expect, test } from '@playwright/test';
 import { runPython } from '../helpers/python.ts';
 import { SHARED_VOLUMES_DIR } from './cli.ts';
-import { openApp, waitForFrames } from './page.ts';
+import { nonBackgroundFraction, openApp, waitForFrames } from './page.ts';
 
 const FILE = 'hydrogen_atom_128x128x128_float32.rate8.zfp';
 
@@ -60,4 +60,33 @@ print(json.dumps(out))
   await page.waitForFunction(() => window.zfpiso!.picks?.points.length === 1);
   const again = (await picks())!.points[0];
   for (let a = 0; a < 3; a++) expect(again.voxel[a]).toBeCloseTo(points[0].voxel[a], 3);
+});
+
+test('draw=rays: the surface ray cast in the block cache; a picked point lies on the trilinear surface exactly', async ({ page }) => {
+  await openApp(page, `/?url=/data/volumes/${FILE}#iso=20&draw=rays`);
+  await waitForFrames(page, 2);
+  expect(await page.evaluate(() => window.zfpiso!.draw)).toBe('rays');
+  await expect(page.locator('#draw-mode')).toHaveValue('rays');
+  const rays = await nonBackgroundFraction(page);
+  await page.locator('#pick-points').check();
+  const view = page.locator('#view');
+  const box = (await view.boundingBox())!;
+  await view.click({ position: { x: box.width / 2 + 25, y: box.height / 2 - 10 } });
+  await page.waitForFunction(() => window.zfpiso!.picks?.points.length === 1);
+  const onRays = (await page.evaluate(() => window.zfpiso!.picks!.points[0]))!;
+  // the rays stop at the interpolant's crossing: the value there is the isovalue (the depth buffer's float32 aside)
+  expect(Math.abs(onRays.value! - 20)).toBeLessThan(0.05);
+  // triangles again: the same picture within a few pixels' worth, the same point within a voxel
+  await page.locator('#draw-mode').selectOption('mesh');
+  await waitForFrames(page, 2);
+  expect(Math.abs((await nonBackgroundFraction(page)) - rays)).toBeLessThan(0.01 * rays + 0.002);
+  await page.locator('#pick-points').uncheck();
+  await page.locator('#pick-points').check();
+  await view.click({ position: { x: box.width / 2 + 25, y: box.height / 2 - 10 } });
+  await page.waitForFunction(() => window.zfpiso!.picks?.points.length === 1);
+  const onMesh = (await page.evaluate(() => window.zfpiso!.picks!.points[0]))!;
+  expect(Math.hypot(...[0, 1, 2].map((a) => onMesh.voxel[a] - onRays.voxel[a]))).toBeLessThan(1);
+  await page.waitForFunction(() => !location.hash.includes('draw='));
+  await page.locator('#draw-mode').selectOption('rays');
+  await page.waitForFunction(() => location.hash.includes('draw=rays'));
 });

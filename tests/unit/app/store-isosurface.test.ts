@@ -19,7 +19,7 @@ function fakeStream(): ChunkStoreStream {
 }
 
 const emptyCut = (iso: number): ShownStep => {
-  shown = { iso, step: 0, final: true, levels: [], cut: { levels: [], nodes: [] }, leaves: [[]] } as unknown as ShownStep;
+  shown = { iso, others: [], step: 0, final: true, levels: [], cut: { levels: [], nodes: [] }, leaves: [[]] } as unknown as ShownStep;
   return shown;
 };
 
