@@ -9,7 +9,9 @@
 // computation decoded every active block into the cache (slot_data, 64
 // values per slot; block_to_slot): the cache holds what the rays read.
 // The hit is lit as the mesh is (shaders/render/lighting.wgsl), with the
-// normal from the interpolant's gradient there, and writes its depth, so the
+// normal the mesh path computes (the central-difference gradient at the
+// cell's corners, interpolated at the hit; the interpolant's own gradient
+// where a neighbour voxel is not cached), and writes its depth, so the
 // box, other layers and picking composite with it. A hit the clip cuts away
 // is passed through (the ray goes on to the next cell).
 struct Rays {
@@ -148,7 +150,7 @@ fn fs(in: VsOut) -> FragOut {
           let hit = o + root * d;
           let world = world_of(hit);
           if (!ray_clipped(world)) {
-            return lit_hit(v, hit - lo_c, world);
+            return lit_hit(v, cell, hit - lo_c, world);
           }
         }
       }
@@ -159,12 +161,50 @@ fn fs(in: VsOut) -> FragOut {
   return FragOut(vec4f(0.0), 1.0);
 }
 
+// The central-difference gradient at voxel c (one-sided at the volume's
+// faces), as the mesh path's vertex normals; false when a neighbour is not cached.
+fn voxel_gradient(c: vec3u, out_g: ptr<function, vec3f>) -> bool {
+  let top = vec3u(rays.dims.xyz - vec3i(1));
+  var g = vec3f(0.0);
+  for (var a = 0u; a < 3u; a++) {
+    var e = vec3u(0u);
+    e[a] = 1u;
+    let lo = select(c - e, c, c[a] == 0u);
+    let hi = select(c + e, c, c[a] == top[a]);
+    var x0 = 0.0;
+    var x1 = 0.0;
+    if (!voxel(lo, &x0) || !voxel(hi, &x1)) {
+      return false;
+    }
+    g[a] = (x1 - x0) / max(f32(hi[a] - lo[a]), 1.0);
+  }
+  *out_g = g;
+  return true;
+}
+
+// The gradient at a point of the cell: the corners' central differences
+// interpolated trilinearly; the interpolant's own gradient when a neighbour is missing.
+fn hit_gradient(v: array<f32, 8>, cell: vec3u, local: vec3f) -> vec3f {
+  let f = clamp(local, vec3f(0.0), vec3f(1.0));
+  var g = vec3f(0.0);
+  for (var k = 0u; k < 8u; k++) {
+    let o = vec3u(k & 1u, (k >> 1u) & 1u, (k >> 2u) & 1u);
+    var gk = vec3f(0.0);
+    if (!voxel_gradient(cell + o, &gk)) {
+      return cell_gradient(v, f);
+    }
+    let w = select(1.0 - f, f, o == vec3u(1u));
+    g += w.x * w.y * w.z * gk;
+  }
+  return g;
+}
+
 // The hit lit as the mesh: outside colour where the eye sees the low side
 // (marching cubes' outside: out of the value >= iso region), the normal the
-// interpolant's gradient per world unit, toward the eye.
-fn lit_hit(v: array<f32, 8>, local: vec3f, world: vec3f) -> FragOut {
+// gradient per world unit, toward the eye.
+fn lit_hit(v: array<f32, 8>, cell: vec3u, local: vec3f, world: vec3f) -> FragOut {
   let to_eye = normalize(frame.eye.xyz - world);
-  let g = cell_gradient(v, clamp(local, vec3f(0.0), vec3f(1.0))) / rays.voxel_size.xyz;
+  let g = hit_gradient(v, cell, local) / rays.voxel_size.xyz;
   var n = -g;
   let gl = length(n);
   var base = rays.front.rgb;

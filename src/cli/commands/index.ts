@@ -7,6 +7,7 @@ import { extractCommand } from './extract.ts';
 import { gpuInfoCommand } from './gpu-info.ts';
 import { infoCommand } from './info.ts';
 import { lasCommand } from './las.ts';
+import { renderCommand } from './render.ts';
 import { tiffCommand } from './tiff.ts';
 
 export const commands: CliCommand[] = [
@@ -14,6 +15,7 @@ export const commands: CliCommand[] = [
   compressCommand,
   decompressCommand,
   extractCommand,
+  renderCommand,
   benchCommand,
   gpuInfoCommand,
   lasCommand,

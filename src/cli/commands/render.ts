@@ -1,0 +1,236 @@
+// `render IN --iso v --png OUT.png [--draw rays|mesh] [--size WxH]
+// [--view '#cam=..' | --view-box x0,y0,z0,x1,y1,z1] [--cache-budget MB]
+// [--depth OUT.f32] [--json REC]`: a figure without a browser, drawn by the
+// page's own layers on Dawn: the surface ray cast in the block cache
+// (render/ray-layer.ts; the default) or its triangles (surface-layer.ts),
+// lit as in the page, on the page's background. --depth writes each pixel's
+// hit distance from the eye along its ray, in voxels (float32, rows top to
+// bottom; +Infinity where nothing was hit). Volumes opened whole (a store's
+// surfaces: `extract --view-box`).
+import { writeFileSync } from 'node:fs';
+import { mat4, vec4 } from 'gl-matrix';
+import { describeAdapter } from '../../gpu/device.ts';
+import { meteredGpu } from '../../gpu/memory-meter.ts';
+import type { Isosurface } from '../../isosurface/isosurface.ts';
+import { ArcballCamera } from '../../render/camera.ts';
+import { RayLayer } from '../../render/ray-layer.ts';
+import { SurfaceLayer } from '../../render/surface-layer.ts';
+import { createFrameBindGroupLayout, DEPTH_FORMAT, FRAME_UNIFORM_BYTES, frameUniformData, type RenderLayer } from '../../render/viewer.ts';
+import { parseCam } from '../../store/view/camera.ts';
+import { parseViewBox } from '../../store/view/view-request.ts';
+import { type CliCommand, numberOption, requiredPositional, stringOption, UsageError } from '../command.ts';
+import { openInputSurface } from '../input.ts';
+import { encodePng } from '../png.ts';
+import { budgetOption } from './extract.ts';
+
+/** The page's background (render/viewer.ts's default clear colour). */
+const BACKGROUND = { r: 0.09, g: 0.1, b: 0.12, a: 1 };
+const MAX_SIDE = 8192;
+
+export const renderCommand: CliCommand = {
+  name: 'render',
+  summary: "an image of the surface (ray cast in the block cache, or its triangles) as PNG, with each pixel's hit distance",
+  usage:
+    "render IN --iso v --png OUT.png [--draw rays|mesh] [--size WxH] [--view '#cam=..' | --view-box x0,y0,z0,x1,y1,z1] [--rate R] [--cache-budget MB] [--depth OUT.f32] (IN: a volume opened whole, as extract's; rays by default)",
+  options: {
+    iso: { type: 'string' },
+    png: { type: 'string' },
+    draw: { type: 'string' },
+    size: { type: 'string' },
+    view: { type: 'string' },
+    'view-box': { type: 'string' },
+    rate: { type: 'string' },
+    'cache-budget': { type: 'string' },
+    depth: { type: 'string' },
+  },
+  async run(ctx, args) {
+    const input = requiredPositional(args, 0, 'IN (a zfp file or a raw volume)');
+    const iso = numberOption(args, 'iso');
+    if (iso === undefined) throw new UsageError('give the isovalue with --iso v');
+    const pngPath = stringOption(args, 'png');
+    if (!pngPath) throw new UsageError('give the image file with --png OUT.png');
+    const draw = stringOption(args, 'draw') ?? 'rays';
+    if (draw !== 'rays' && draw !== 'mesh') throw new UsageError(`--draw ${draw}: rays or mesh`);
+    const [width, height] = sizeOption(stringOption(args, 'size') ?? '1280x720');
+    const viewBox = stringOption(args, 'view-box');
+    const view = stringOption(args, 'view');
+    if (viewBox !== undefined && view !== undefined) throw new UsageError('give --view-box or --view, not both');
+    const box = viewBox === undefined ? undefined : parseViewBox(viewBox);
+    if (typeof box === 'string') throw new UsageError(`--view-box ${viewBox}: ${box}`);
+    const cam = view === undefined ? undefined : parseCam(new URLSearchParams(view.replace(/^.*#/, '')).get('cam') ?? '');
+    if (cam === null) throw new UsageError(`--view ${view}: the page's link, with its camera (#cam=qx,qy,qz,qw,tx,ty,tz,d)`);
+    const device = await ctx.gpu();
+    const { gpu, meter } = meteredGpu(device);
+    const opened = await openInputSurface(ctx, gpu, input, { rate: numberOption(args, 'rate'), budget: budgetOption(args) });
+    try {
+      if ('readPositions' in opened.iso)
+        throw new UsageError("render draws volumes opened whole; a store's surfaces: extract STORE --view-box .. (--ply, --glb)");
+      const surface = opened.iso as Isosurface;
+      const t0 = performance.now();
+      const stats = await surface.compute(iso);
+      const surfaceMs = performance.now() - t0;
+      const { dims } = surface.info;
+      const { voxelSize, origin } = opened.placement;
+      // the page's camera: fitted to the volume (or the box), or the link's; world = (voxel + origin) * voxel size
+      const camera = new ArcballCamera();
+      const lo = box ? box.slice(0, 3) : [0, 0, 0];
+      const hi = box ? box.slice(3, 6) : dims.map((n) => n - 1);
+      const world = (v: readonly number[]) => v.map((x, a) => (x + origin[a]) * voxelSize[a]) as [number, number, number];
+      camera.fit({ min: world(lo), max: world(hi) }, 'y');
+      if (cam) camera.setState(cam);
+      const frameLayout = createFrameBindGroupLayout(gpu.device);
+      const target = { device: gpu.device, format: 'rgba8unorm' as GPUTextureFormat, frameBindGroupLayout: frameLayout, camera };
+      let layer: RenderLayer & { destroy(): void };
+      if (draw === 'rays') {
+        const rays = await RayLayer.create(target);
+        rays.setDrawData(surface.drawData);
+        rays.iso = stats.isovalue;
+        rays.voxelSize = [...voxelSize];
+        rays.origin = [...origin];
+        layer = rays;
+      } else {
+        const mesh = await SurfaceLayer.create(target);
+        mesh.setDrawData(surface.drawData);
+        mesh.voxelSize = [...voxelSize];
+        mesh.origin = [...origin];
+        layer = mesh;
+      }
+      const image = await renderOffscreen(gpu.device, frameLayout, camera, width, height, layer);
+      layer.destroy();
+      writeFileSync(pngPath, encodePng(image.colour, width, height));
+      // each pixel's hit distance from the eye, in voxels (world / voxel size), along its ray
+      camera.aspect = width / height;
+      const inverse = mat4.invert(mat4.create(), camera.viewProjection(mat4.create()));
+      const eye = camera.eyePosition();
+      const distances = new Float32Array(width * height);
+      let covered = 0;
+      const p = vec4.create();
+      for (let y = 0; y < height; y++) {
+        for (let x = 0; x < width; x++) {
+          const i = y * width + x;
+          const z = image.depth[i];
+          if (!(z < 1) || !inverse) {
+            distances[i] = Number.POSITIVE_INFINITY;
+            continue;
+          }
+          covered++;
+          vec4.transformMat4(p, [((x + 0.5) / width) * 2 - 1, 1 - ((y + 0.5) / height) * 2, z, 1], inverse);
+          distances[i] = Math.hypot(
+            (p[0] / p[3] - eye[0]) / voxelSize[0],
+            (p[1] / p[3] - eye[1]) / voxelSize[1],
+            (p[2] / p[3] - eye[2]) / voxelSize[2],
+          );
+        }
+      }
+      const depthPath = stringOption(args, 'depth');
+      if (depthPath) writeFileSync(depthPath, new Uint8Array(distances.buffer));
+      ctx.log(
+        `${pngPath}: ${width} x ${height}, ${draw === 'rays' ? 'ray cast in the block cache' : `${stats.triangles} triangles`}, ${covered} pixels on the surface, image ${image.ms.toFixed(1)} ms (${image.timing})`,
+      );
+      return {
+        input,
+        how: opened.how,
+        rate: opened.rate,
+        iso: stats.isovalue,
+        draw,
+        size: [width, height],
+        camera: camera.getState(),
+        // the pixels' rays, for checking the depths elsewhere: ndc (x, y, z in [0, 1]) -> world by this matrix (column-major)
+        inverseViewProjection: inverse ? [...inverse] : null,
+        eye: [...eye],
+        png: pngPath,
+        ...(depthPath ? { depth: depthPath } : {}),
+        coveredPixels: covered,
+        // a volume opened whole is level 0 everywhere
+        levels: [0],
+        level0Fraction: covered > 0 ? 1 : 0,
+        activeBlocks: stats.activeBlocks,
+        triangles: draw === 'mesh' ? stats.triangles : 0,
+        surfaceMs,
+        surfaceGpuMs: stats.gpuMs,
+        imageMs: image.ms,
+        imageTiming: image.timing,
+        gpuPeakBytes: meter.peak,
+        adapter: describeAdapter(gpu.adapter),
+      };
+    } finally {
+      opened.destroy();
+    }
+  },
+};
+
+/** --size WxH -> [width, height]. */
+function sizeOption(text: string): [number, number] {
+  const m = /^(\d+)x(\d+)$/.exec(text);
+  const w = m ? Number(m[1]) : Number.NaN;
+  const h = m ? Number(m[2]) : Number.NaN;
+  if (!(w >= 1 && h >= 1 && w <= MAX_SIDE && h <= MAX_SIDE)) throw new UsageError(`--size ${text}: WxH, each 1..${MAX_SIDE}`);
+  return [w, h];
+}
+
+/** One frame of `layer` into an offscreen target: colour (RGBA8), depth, and its time (GPU timestamps where the adapter has them). */
+async function renderOffscreen(
+  device: GPUDevice,
+  frameLayout: GPUBindGroupLayout,
+  camera: ArcballCamera,
+  width: number,
+  height: number,
+  layer: RenderLayer,
+): Promise<{ colour: Uint8Array; depth: Float32Array; ms: number; timing: 'timestamp-query' | 'wall' }> {
+  const colour = device.createTexture({
+    size: [width, height],
+    format: 'rgba8unorm',
+    usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC,
+  });
+  const depth = device.createTexture({
+    size: [width, height],
+    format: DEPTH_FORMAT,
+    usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC,
+  });
+  const uniforms = device.createBuffer({ size: FRAME_UNIFORM_BYTES, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
+  device.queue.writeBuffer(uniforms, 0, frameUniformData(camera, width, height) as Float32Array<ArrayBuffer>);
+  const group = device.createBindGroup({ layout: frameLayout, entries: [{ binding: 0, resource: { buffer: uniforms } }] });
+  const colourRow = 256 * Math.ceil((4 * width) / 256);
+  const readColour = device.createBuffer({ size: colourRow * height, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+  const readDepth = device.createBuffer({ size: colourRow * height, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+  const timed = device.features.has('timestamp-query');
+  const querySet = timed ? device.createQuerySet({ type: 'timestamp', count: 2 }) : undefined;
+  const resolve = timed ? device.createBuffer({ size: 16, usage: GPUBufferUsage.QUERY_RESOLVE | GPUBufferUsage.COPY_SRC }) : undefined;
+  const readTimes = timed ? device.createBuffer({ size: 16, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST }) : undefined;
+  const encoder = device.createCommandEncoder({ label: 'render' });
+  const pass = encoder.beginRenderPass({
+    colorAttachments: [{ view: colour.createView(), clearValue: BACKGROUND, loadOp: 'clear', storeOp: 'store' }],
+    depthStencilAttachment: { view: depth.createView(), depthClearValue: 1, depthLoadOp: 'clear', depthStoreOp: 'store' },
+    ...(querySet ? { timestampWrites: { querySet, beginningOfPassWriteIndex: 0, endOfPassWriteIndex: 1 } } : {}),
+  });
+  pass.setBindGroup(0, group);
+  layer.draw(pass);
+  pass.end();
+  encoder.copyTextureToBuffer({ texture: colour }, { buffer: readColour, bytesPerRow: colourRow }, [width, height]);
+  encoder.copyTextureToBuffer({ texture: depth, aspect: 'depth-only' }, { buffer: readDepth, bytesPerRow: colourRow }, [width, height]);
+  if (querySet && resolve && readTimes) {
+    encoder.resolveQuerySet(querySet, 0, 2, resolve, 0);
+    encoder.copyBufferToBuffer(resolve, 0, readTimes, 0, 16);
+  }
+  const started = performance.now();
+  device.queue.submit([encoder.finish()]);
+  await Promise.all([readColour.mapAsync(GPUMapMode.READ), readDepth.mapAsync(GPUMapMode.READ), readTimes?.mapAsync(GPUMapMode.READ)]);
+  let ms = performance.now() - started;
+  if (readTimes) {
+    const t = new BigUint64Array(readTimes.getMappedRange());
+    if (t[1] > t[0]) ms = Number(t[1] - t[0]) / 1e6;
+    readTimes.unmap();
+  }
+  const c = new Uint8Array(readColour.getMappedRange());
+  const d = new Float32Array(readDepth.getMappedRange());
+  const out = { colour: new Uint8Array(4 * width * height), depth: new Float32Array(width * height) };
+  for (let y = 0; y < height; y++) {
+    out.colour.set(c.subarray(y * colourRow, y * colourRow + 4 * width), 4 * width * y);
+    out.depth.set(d.subarray((y * colourRow) / 4, (y * colourRow) / 4 + width), width * y);
+  }
+  readColour.unmap();
+  readDepth.unmap();
+  for (const x of [colour, depth, uniforms, readColour, readDepth, resolve, readTimes]) x?.destroy();
+  querySet?.destroy();
+  return { colour: out.colour, depth: out.depth, ms, timing: readTimes ? 'timestamp-query' : 'wall' };
+}
