@@ -19,13 +19,13 @@ const LAYERS: Record<string, number> = {
   primitives: 2,
   zfp: 3,
   mc: 3,
+  raycast: 3, // the exact ray-cell crossing (issue 46), a per-cell algorithm as marching cubes' tables; the layer that draws with it is render's
   loaders: 3,
   formats: 4,
   volume: 5,
   isosurface: 6,
   render: 7,
   store: 7, // streaming Zarr stores: above the pipeline it feeds, beside the renderer
-  raycast: 7, // ray casting in the block cache (issue 46): above the cache it reads, beside the renderer
   bench: 8,
   app: 9,
   examples: 10,
