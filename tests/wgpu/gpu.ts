@@ -7,6 +7,12 @@ import { formatName, test } from './vitest-shim.ts';
 
 export { finishTestGpu, type TestGpu };
 export const testLimits: 'adapter' | 'default' = 'adapter';
+/**
+ * The wgpu run is a rerun for another implementation and shader compiler:
+ * files that take their smallest case in reruns (tests/helpers/gpu.ts) do
+ * here too (every kernel still runs; the unit suite has the large sizes).
+ */
+export const codePathRerun = true;
 
 export async function createTestGpu(): Promise<TestGpu> {
   const failures: GpuFailure[] = [];
