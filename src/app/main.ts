@@ -307,12 +307,21 @@ async function start(): Promise<void> {
   };
   // The caps within what the budget leaves: an in-core volume's from its stream; a store's from the pools of the
   // step on screen, a piece per level (made again as each step shows); why none, or null.
+  // A store's caps are held against the page's budget (the stream plans within what they leave).
+  let storeCapsHeld = 0;
+  const holdStoreCaps = (bytes: number) => {
+    if (storeCapsHeld > 0) pageBudget.meter.remove(storeCapsHeld);
+    storeCapsHeld = bytes;
+    if (bytes > 0) pageBudget.meter.add(bytes);
+  };
   const makeCaps = (): string | null => {
     const v = session.current;
     const stream = v?.opened.stream;
     let noCaps: string | null;
+    holdStoreCaps(0);
     if (v?.iso.capPieces) {
       noCaps = caps.setPieces(clip ? v.iso.capPieces(clip) : [], pageBudget.bytes - pageBudget.heldBytes);
+      holdStoreCaps(caps.byteSize);
     } else {
       const left = budget.bytes - (v?.iso.budgetedBytes ?? 0) - surfaces.copyBytes;
       noCaps = caps.setClip(stream instanceof ZfpGpuStream ? stream : undefined, clip, left);
