@@ -120,15 +120,22 @@ export class VolumeProbe {
  * not resident.
  */
 export function chunkBlockId(pool: ChunkedVolume, block: number): number | undefined {
+  const { chunk, local } = chunkOfBlock(pool, block);
+  const slot = pool.slotOfChunk(chunk);
+  return slot === undefined ? undefined : slot * pool.blocksPerChunk + local;
+}
+
+/** The chunk holding block `block` (raster index over the level's block grid), and the block's index within it (raster, x fastest). */
+export function chunkOfBlock(pool: Pick<ChunkedVolume, 'layout' | 'info'>, block: number): { chunk: number; local: number } {
   const { chunkGrid, chunkEdge } = pool.layout;
   const grid = pool.info.blockGrid;
   const b = [block % grid[0], Math.floor(block / grid[0]) % grid[1], Math.floor(block / (grid[0] * grid[1]))];
   const per = chunkEdge / 4;
   const c = b.map((x) => Math.floor(x / per));
-  const slot = pool.slotOfChunk(c[0] + chunkGrid[0] * (c[1] + chunkGrid[1] * c[2]));
-  if (slot === undefined) return undefined;
-  const local = (b[0] % per) + per * ((b[1] % per) + per * (b[2] % per));
-  return slot * pool.blocksPerChunk + local;
+  return {
+    chunk: c[0] + chunkGrid[0] * (c[1] + chunkGrid[1] * c[2]),
+    local: (b[0] % per) + per * ((b[1] % per) + per * (b[2] % per)),
+  };
 }
 
 /** The probe of a device, made on first use. */

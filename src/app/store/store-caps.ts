@@ -8,7 +8,7 @@
 import { type Clip, clipInLevel } from '../../core/clip.ts';
 import type { CapPiece } from '../../render/cap-layer.ts';
 import type { ZfpStore } from '../../store/zarr/store.ts';
-import { chunkBlockId } from '../../zfp/probe.ts';
+import { chunkBlockId, chunkOfBlock } from '../../zfp/probe.ts';
 import type { IsosurfaceStats } from '../../isosurface/types.ts';
 import type { Isosurface } from '../../isosurface/isosurface.ts';
 import type { ShownCut } from '../../store/stream/stream-types.ts';
@@ -23,20 +23,11 @@ export function storeCapPieces(store: Pick<ZfpStore, 'levelOffsets' | 'levelScal
     const scale = store.levelScales[l.level] ?? [2 ** l.level, 2 ** l.level, 2 ** l.level];
     const offset = store.levelOffsets[l.level] ?? [0, 0, 0];
     const drawn = new Set(l.drawn);
-    const { chunkGrid, chunkEdge } = pool.layout;
-    const grid = pool.info.blockGrid;
-    const per = chunkEdge / 4;
-    const chunkOf = (b: number) => {
-      const bx = b % grid[0];
-      const by = Math.floor(b / grid[0]) % grid[1];
-      const bz = Math.floor(b / (grid[0] * grid[1]));
-      return Math.floor(bx / per) + chunkGrid[0] * (Math.floor(by / per) + chunkGrid[1] * Math.floor(bz / per));
-    };
     return {
       source: pool,
       clip: clipInLevel(clip, scale, offset),
       idOf: (b: number) => chunkBlockId(pool, b),
-      owns: (b: number) => drawn.has(chunkOf(b)),
+      owns: (b: number) => drawn.has(chunkOfBlock(pool, b).chunk),
       scale,
       offset,
     };

@@ -169,7 +169,7 @@ function sizeOption(text: string): [number, number] {
 }
 
 /** One frame of `layer` into an offscreen target: colour (RGBA8), depth, and its time (GPU timestamps where the adapter has them). */
-async function renderOffscreen(
+export async function renderOffscreen(
   device: GPUDevice,
   frameLayout: GPUBindGroupLayout,
   camera: ArcballCamera,

@@ -31,6 +31,7 @@
 //               crossing, and a clean crossing further on must not be missed.
 // The sphere cases also put every hit within the trilinear sampling error of
 // the analytic sphere (1 / (4 (R - sqrt 3)) for the distance |x - c|).
+import { mulberry32 } from '../../../src/util/random.ts';
 import { mkdtempSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
@@ -51,18 +52,6 @@ const TOLERANCE = 1e-4;
 interface Sphere {
   centre: CellVec3;
   radius: number;
-}
-
-/** mulberry32: uniform [0, 1), deterministic per seed. */
-function random(seed: number): () => number {
-  let a = seed >>> 0;
-  return () => {
-    a = (a + 0x6d2b79f5) >>> 0;
-    let t = a;
-    t = Math.imul(t ^ (t >>> 15), t | 1);
-    t ^= t + Math.imul(t ^ (t >>> 7), t | 61);
-    return ((t ^ (t >>> 14)) >>> 0) / 4294967296;
-  };
 }
 
 /** The parameter interval of origin + t dir inside the unit cube, or undefined. */
@@ -99,7 +88,7 @@ function cornersOf(k0: number, k1: CellVec3, k2: CellVec3, kxyz: number): number
 }
 
 function buildCases(): { data: Float32Array<ArrayBuffer>; kinds: string[]; spheres: Map<number, Sphere> } {
-  const r = random(46);
+  const r = mulberry32(46);
   const rows: number[][] = [];
   const kinds: string[] = [];
   const spheres = new Map<number, Sphere>();

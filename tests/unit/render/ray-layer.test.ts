@@ -24,7 +24,8 @@ import { cellFirstCrossing } from '../../../src/raycast/cell-root.ts';
 import { ArcballCamera } from '../../../src/render/camera.ts';
 import { RayLayer } from '../../../src/render/ray-layer.ts';
 import { SurfaceLayer } from '../../../src/render/surface-layer.ts';
-import { createFrameBindGroupLayout, DEPTH_FORMAT, FRAME_UNIFORM_BYTES, frameUniformData } from '../../../src/render/viewer.ts';
+import { createFrameBindGroupLayout } from '../../../src/render/viewer.ts';
+import { renderOffscreen } from '../../../src/cli/commands/render.ts';
 import { ZfpDecoder } from '../../../src/zfp/decoder.ts';
 import { loadZfpStream } from '../../../src/zfp/gpu-stream.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
@@ -67,8 +68,8 @@ describe('RayLayer', () => {
       const rays = await RayLayer.create(target);
       rays.setDrawData(surface.drawData);
       rays.iso = stats.isovalue;
-      const a = await render(device, frameLayout, camera, (pass) => mesh.draw(pass));
-      const b = await render(device, frameLayout, camera, (pass) => rays.draw(pass));
+      const a = await renderOffscreen(device, frameLayout, camera, W, H, mesh);
+      const b = await renderOffscreen(device, frameLayout, camera, W, H, rays);
       // per pixel, its ray (voxel coordinates: voxel size 1, origin 0) and the distance of a depth along it
       camera.aspect = W / H;
       const inverse = mat4.invert(mat4.create(), camera.viewProjection(mat4.create()))!;
@@ -167,51 +168,4 @@ function exactHit(volume: Float32Array, dims: readonly number[], iso: number, ne
     if (r >= 0) return [near[0] + r * d[0], near[1] + r * d[1], near[2] + r * d[2]];
   }
   return null;
-}
-
-async function render(
-  device: GPUDevice,
-  layout: GPUBindGroupLayout,
-  camera: ArcballCamera,
-  draw: (pass: GPURenderPassEncoder) => void,
-): Promise<{ colour: Uint8Array; depth: Float32Array }> {
-  const colour = device.createTexture({
-    size: [W, H],
-    format: 'rgba8unorm',
-    usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC,
-  });
-  const depth = device.createTexture({
-    size: [W, H],
-    format: DEPTH_FORMAT,
-    usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC,
-  });
-  const uniforms = device.createBuffer({ size: FRAME_UNIFORM_BYTES, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
-  device.queue.writeBuffer(uniforms, 0, frameUniformData(camera, W, H) as Float32Array<ArrayBuffer>);
-  const group = device.createBindGroup({ layout, entries: [{ binding: 0, resource: { buffer: uniforms } }] });
-  const bytesPerRow = 256 * Math.ceil((4 * W) / 256);
-  const readColour = device.createBuffer({ size: bytesPerRow * H, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
-  const readDepth = device.createBuffer({ size: bytesPerRow * H, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
-  const encoder = device.createCommandEncoder();
-  const pass = encoder.beginRenderPass({
-    colorAttachments: [{ view: colour.createView(), clearValue: { r: 0, g: 0, b: 0, a: 1 }, loadOp: 'clear', storeOp: 'store' }],
-    depthStencilAttachment: { view: depth.createView(), depthClearValue: 1, depthLoadOp: 'clear', depthStoreOp: 'store' },
-  });
-  pass.setBindGroup(0, group);
-  draw(pass);
-  pass.end();
-  encoder.copyTextureToBuffer({ texture: colour }, { buffer: readColour, bytesPerRow }, [W, H]);
-  encoder.copyTextureToBuffer({ texture: depth, aspect: 'depth-only' }, { buffer: readDepth, bytesPerRow }, [W, H]);
-  device.queue.submit([encoder.finish()]);
-  await Promise.all([readColour.mapAsync(GPUMapMode.READ), readDepth.mapAsync(GPUMapMode.READ)]);
-  const c = new Uint8Array(readColour.getMappedRange());
-  const d = new Float32Array(readDepth.getMappedRange());
-  const out = { colour: new Uint8Array(4 * W * H), depth: new Float32Array(W * H) };
-  for (let y = 0; y < H; y++) {
-    out.colour.set(c.subarray(y * bytesPerRow, y * bytesPerRow + 4 * W), 4 * W * y);
-    out.depth.set(d.subarray((y * bytesPerRow) / 4, (y * bytesPerRow) / 4 + W), W * y);
-  }
-  readColour.unmap();
-  readDepth.unmap();
-  for (const x of [colour, depth, uniforms, readColour, readDepth]) x.destroy();
-  return out;
 }
