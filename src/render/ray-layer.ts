@@ -40,6 +40,7 @@ export class RayLayer implements RenderLayer {
   readonly #viewProj = mat4.create();
   readonly #inverse = mat4.create();
   readonly #eye = vec3.create();
+  readonly #centre = [0, 0, 0];
 
   private constructor(
     private readonly target: RenderTarget,
@@ -127,7 +128,7 @@ export class RayLayer implements RenderLayer {
     const { dims } = data.info;
     const s = this.style;
     let r2 = 0;
-    const centre = [0, 0, 0];
+    const centre = this.#centre;
     for (let a = 0; a < 3; a++) {
       i32[16 + a] = dims[a];
       u32[20 + a] = Math.ceil(dims[a] / 4);
@@ -137,7 +138,12 @@ export class RayLayer implements RenderLayer {
     }
     i32[19] = 0;
     u32[23] = 0;
-    f32.set([s.front[0], s.front[1], s.front[2], s.ambient, s.back[0], s.back[1], s.back[2], s.specular], 24);
+    for (let a = 0; a < 3; a++) {
+      f32[24 + a] = s.front[a];
+      f32[28 + a] = s.back[a];
+    }
+    f32[27] = s.ambient;
+    f32[31] = s.specular;
     // depth cue over the volume's bounding sphere, as the surface layer's
     camera.eyePosition(this.#eye);
     const eyeDist = Math.hypot(this.#eye[0] - centre[0], this.#eye[1] - centre[1], this.#eye[2] - centre[2]);
