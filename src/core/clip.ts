@@ -248,26 +248,40 @@ const cross = (a: readonly number[], b: readonly number[]) => [
  * within one voxel of a cap polygon's plane, inside the polygon's bounds.
  * Sorted block ids (raster order over `blockGrid`).
  */
-export function capBlocks(caps: { plane: readonly number[]; corners: number[][] }[], dims: readonly number[]): Uint32Array {
+export function capBlocks(
+  caps: { plane: readonly number[]; corners: number[][] }[],
+  dims: readonly number[],
+  /** Only blocks within these block-index ranges (inclusive; a store's resident chunks): the walk is sized by them, not the level. */
+  within?: readonly { lo: readonly number[]; hi: readonly number[] }[],
+): Uint32Array {
   const grid = dims.map((n) => Math.ceil(n / 4));
   const ids = new Set<number>();
-  for (const cap of caps) {
-    const [nx, ny, nz, w] = cap.plane;
-    const lo = [0, 1, 2].map((a) => Math.max(0, Math.floor((Math.min(...cap.corners.map((p) => p[a])) - 1) / 4)));
-    const hi = [0, 1, 2].map((a) => Math.min(grid[a] - 1, Math.floor((Math.max(...cap.corners.map((p) => p[a])) + 1) / 4)));
-    // a sample at x reads voxels within 1 of it on each axis: a block is needed when the plane meets its
-    // voxels' box [4b, 4b + 3] grown by 1, centre 4b + 1.5, half-extent 2.5
-    const reach = 2.5 * (Math.abs(nx) + Math.abs(ny) + Math.abs(nz));
-    for (let bz = lo[2]; bz <= hi[2]; bz++) {
-      for (let by = lo[1]; by <= hi[1]; by++) {
-        for (let bx = lo[0]; bx <= hi[0]; bx++) {
-          const distance = Math.abs(nx * (4 * bx + 1.5) + ny * (4 * by + 1.5) + nz * (4 * bz + 1.5) + w);
-          if (distance <= reach) ids.add(bx + grid[0] * (by + grid[1] * bz));
-        }
+  const ranges = within ?? [{ lo: [0, 0, 0], hi: grid.map((g) => g - 1) }];
+  for (const cap of caps) for (const range of ranges) addCapBlocks(ids, cap, grid, range);
+  return Uint32Array.from([...ids].sort((a, b) => a - b));
+}
+
+/** capBlocks for one cap within one block range. */
+function addCapBlocks(
+  ids: Set<number>,
+  cap: { plane: readonly number[]; corners: number[][] },
+  grid: readonly number[],
+  range: { lo: readonly number[]; hi: readonly number[] },
+): void {
+  const [nx, ny, nz, w] = cap.plane;
+  const lo = [0, 1, 2].map((a) => Math.max(range.lo[a], 0, Math.floor((Math.min(...cap.corners.map((p) => p[a])) - 1) / 4)));
+  const hi = [0, 1, 2].map((a) => Math.min(range.hi[a], grid[a] - 1, Math.floor((Math.max(...cap.corners.map((p) => p[a])) + 1) / 4)));
+  // a sample at x reads voxels within 1 of it on each axis: a block is needed when the plane meets its
+  // voxels' box [4b, 4b + 3] grown by 1, centre 4b + 1.5, half-extent 2.5
+  const reach = 2.5 * (Math.abs(nx) + Math.abs(ny) + Math.abs(nz));
+  for (let bz = lo[2]; bz <= hi[2]; bz++) {
+    for (let by = lo[1]; by <= hi[1]; by++) {
+      for (let bx = lo[0]; bx <= hi[0]; bx++) {
+        const distance = Math.abs(nx * (4 * bx + 1.5) + ny * (4 * by + 1.5) + nz * (4 * bz + 1.5) + w);
+        if (distance <= reach) ids.add(bx + grid[0] * (by + grid[1] * bz));
       }
     }
   }
-  return Uint32Array.from([...ids].sort((a, b) => a - b));
 }
 
 /**

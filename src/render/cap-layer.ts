@@ -28,6 +28,8 @@ export interface CapPiece {
   idOf?: (block: number) => number | undefined;
   /** Whether the piece draws the cells of a block (a level draws only its own regions). Default: every block. */
   owns?: (block: number) => boolean;
+  /** Where its blocks can be (block-index ranges, inclusive: a store level's resident chunks); default the whole volume. */
+  within?: readonly { lo: readonly number[]; hi: readonly number[] }[];
   /** Level-0 voxels one of its voxels spans, and where its voxel (0, 0, 0) lies in level-0 voxels. */
   scale?: readonly [number, number, number];
   offset?: readonly [number, number, number];
@@ -155,7 +157,7 @@ export class CapLayer implements RenderLayer {
     const ids: number[] = [];
     const decoderIds: number[] = [];
     const owned: number[] = [];
-    for (const id of capBlocks(caps, dims)) {
+    for (const id of capBlocks(caps, dims, piece.within)) {
       const named = piece.idOf ? piece.idOf(id) : id;
       if (named === undefined) continue;
       ids.push(id);

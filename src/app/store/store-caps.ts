@@ -23,11 +23,18 @@ export function storeCapPieces(store: Pick<ZfpStore, 'levelOffsets' | 'levelScal
     const scale = store.levelScales[l.level] ?? [2 ** l.level, 2 ** l.level, 2 ** l.level];
     const offset = store.levelOffsets[l.level] ?? [0, 0, 0];
     const drawn = new Set(l.drawn);
+    // the blocks the caps can read are in the level's resident chunks (the walk is sized by them, not the level)
+    const per = pool.layout.chunkEdge / 4;
+    const within = [...l.drawn, ...l.ghosts].map((c) => {
+      const at = pool.chunkCoords(c);
+      return { lo: at.map((g) => g * per), hi: at.map((g) => (g + 1) * per - 1) };
+    });
     return {
       source: pool,
       clip: clipInLevel(clip, scale, offset),
       idOf: (b: number) => chunkBlockId(pool, b),
       owns: (b: number) => drawn.has(chunkOfBlock(pool, b).chunk),
+      within,
       scale,
       offset,
     };

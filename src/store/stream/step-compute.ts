@@ -18,7 +18,6 @@ import {
   type BudgetStop,
   type CopyOf,
   type CutLevelShown,
-  copiesOf,
   type LevelOther,
   type RoleVolume,
   type ShownCut,
@@ -57,7 +56,6 @@ export async function computeStep<V extends RoleVolume, S extends LevelStats, F 
   let computing = step.finest;
   // copies made here: let go unless the step is returned
   const made: CopyOf<F>[] = [];
-  const onScreen = copiesOf(previous);
   let done = false;
   try {
     for (const L of step.levels) {
@@ -74,7 +72,7 @@ export async function computeStep<V extends RoleVolume, S extends LevelStats, F 
       let otherBytes = 0;
       for (const other of others) {
         const same = kept?.others.find((o) => o.iso === other);
-        if (same && onScreen.has(same.copy)) {
+        if (same) {
           levelOthers.push(same);
           otherBytes += same.copy.byteSize;
           continue;
