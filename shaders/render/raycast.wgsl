@@ -8,6 +8,13 @@
 // corner of a crossing cell lies in an active block, and the surface's
 // computation decoded every active block into the cache (slot_data, 64
 // values per slot; block_to_slot): the cache holds what the rays read.
+// How blocks are named and which the ray may enter come from a snippet
+// composed before this file: ray_blocks_stream.wgsl (a volume opened whole:
+// raster ids, every block) or ray_blocks_pool.wgsl (a store's level: pool
+// ids through the level's page table; only the chunks the level draws, so
+// each level of a step is one draw and the depth test keeps the nearest
+// level's hit). The coordinates here are the drawn volume's (a level's own
+// voxels); uniforms place them in the world.
 // The hit is lit as the mesh is (shaders/render/lighting.wgsl), with the
 // normal the mesh path computes (the central-difference gradient at the
 // cell's corners, interpolated at the hit; the interpolant's own gradient
@@ -25,6 +32,8 @@ struct Rays {
   origin: vec4f,       // xyz: where voxel (0, 0, 0) sits, in voxels
   clip_count: vec4u,   // x: planes in use
   clip: array<vec4f, 7>, // world space: kept where dot(xyz, p) + w >= 0 for every plane
+  chunk_grid: vec4u,   // a pool: chunks per axis; w: the level's chunk count (where the slot table starts)
+  pool: vec4u,         // a pool: x blocks per chunk edge, y blocks a level reaches above its drawn chunks (seams)
 };
 @group(1) @binding(0) var<uniform> rays: Rays;
 @group(1) @binding(1) var<storage, read> slot_data: array<f32>;
@@ -32,6 +41,7 @@ struct Rays {
 @group(1) @binding(3) var<storage, read> neighbourhood_ranges: array<vec2f>;
 
 const NO_SLOT: u32 = 0xffffffffu;
+const NO_BLOCK: u32 = 0xffffffffu;
 /** At most this many cells and skipped blocks per ray (a 2048-voxel diagonal walks ~3 x 2048 cells). */
 const MAX_STEPS: u32 = 16384u;
 
@@ -62,15 +72,22 @@ fn ray_clipped(world: vec3f) -> bool {
 }
 
 fn block_active(b: vec3u) -> bool {
-  let r = neighbourhood_ranges[b.x + rays.grid.x * (b.y + rays.grid.y * b.z)];
+  let id = block_id(b);
+  if (id == NO_BLOCK) {
+    return false;
+  }
+  let r = neighbourhood_ranges[id];
   let iso = rays.voxel_size.w;
   return r.x < iso && iso <= r.y;
 }
 
 // A voxel's decoded value from the cache; false when its block is not cached.
 fn voxel(c: vec3u, out_value: ptr<function, f32>) -> bool {
-  let b = c / 4u;
-  let slot = block_to_slot[b.x + rays.grid.x * (b.y + rays.grid.y * b.z)];
+  let id = block_id(c / 4u);
+  if (id == NO_BLOCK) {
+    return false;
+  }
+  let slot = block_to_slot[id];
   if (slot == NO_SLOT) {
     return false;
   }
@@ -122,10 +139,13 @@ fn fs(in: VsOut) -> FragOut {
     let p = o + (t + eps) * d;
     let cell = min(vec3u(max(floor(p), vec3f(0.0))), last);
     let block = cell / 4u;
-    if (!block_active(block)) {
-      // past the block: its box's exit along the ray
-      let bhi = vec3f(min(block * 4u + 4u, last + vec3u(1u)));
-      let blo = vec3f(block * 4u);
+    let outside = region_skip(block);
+    if (outside > 0u || !block_active(block)) {
+      // past the block (or the whole region around it the ray may not enter): its box's exit along the ray
+      let edge = 4u * max(outside, 1u);
+      let blo_u = (cell / edge) * edge;
+      let bhi = vec3f(min(blo_u + edge, last + vec3u(1u)));
+      let blo = vec3f(blo_u);
       let e = select(blo, bhi, d > vec3f(0.0));
       let te = (e - o) * inv;
       t = max(min(min(select(1e30, te.x, d.x != 0.0), select(1e30, te.y, d.y != 0.0)), select(1e30, te.z, d.z != 0.0)), t + eps);

@@ -7,9 +7,16 @@
 // (IsosurfaceDrawData.slotData, blockToSlot). Lit as the mesh is, depth
 // written. The isovalue must be the one the cache was last computed for
 // (the page passes the drawn surface's): the cache holds every block active
-// at it. Opaque (see-through rays are not peeled yet); volumes opened whole.
+// at it. Opaque (see-through rays are not peeled yet). A volume opened whole
+// is one draw (setDrawData); a store's step is one draw per level
+// (setLevels: each level's pool and cache, only over the chunks the level
+// draws; shaders/render/ray_blocks_pool.wgsl), the depth test keeping the
+// nearest level's hit, so a ray leaving a level-0 brick for a level-2 brick
+// goes on in level 2.
 import { mat4, vec3 } from 'gl-matrix';
 import lightingWgsl from '../../shaders/render/lighting.wgsl?raw';
+import rayBlocksPoolWgsl from '../../shaders/render/ray_blocks_pool.wgsl?raw';
+import rayBlocksStreamWgsl from '../../shaders/render/ray_blocks_stream.wgsl?raw';
 import raycastWgsl from '../../shaders/render/raycast.wgsl?raw';
 import { type Clip, clipPlanes } from '../core/clip.ts';
 import { createShaderModule } from '../gpu/wgsl.ts';
@@ -18,21 +25,56 @@ import { cellRootSnippet } from '../raycast/cell-root-wgsl.ts';
 import { DEFAULT_SURFACE_STYLE, type RenderTarget, type SurfaceStyle } from './surface-layer.ts';
 import { DEPTH_FORMAT, frameSnippet, type RenderLayer } from './viewer.ts';
 
-const UNIFORM_BYTES = 64 + 8 * 16 + 7 * 16;
+const UNIFORM_BYTES = 64 + 8 * 16 + 7 * 16 + 2 * 16;
+
+/** One level of a store's step, as the rays read it. */
+export interface RayLevel {
+  /** The level's surface's own draw data (its cache, computed last at `iso`; the neighbourhood ranges). */
+  data: IsosurfaceDrawData;
+  /** The level's pool: its tables (ChunkedVolume.tables), chunks per axis, blocks per chunk edge. */
+  tables: GPUBuffer;
+  chunkGrid: readonly [number, number, number];
+  chunkBlocks: number;
+  /** Where the level's voxel j lies in level-0 voxels: j * scale + offset. */
+  scale: readonly [number, number, number];
+  offset: readonly [number, number, number];
+  /** Blocks the rays reach above the level's drawn chunks (into its ghosts): seams toward coarser levels. */
+  reachBlocks: number;
+}
+
+/** The blocks a level's rays reach above its drawn chunks so that no coarser level's seam shows background: its centres sit (2^(L-l) - 1) / 2 fine voxels higher. */
+export function seamReachBlocks(level: number, coarsest: number): number {
+  if (coarsest <= level) return 0;
+  return Math.ceil(((2 ** (coarsest - level) - 1) / 2 + 1) / 4);
+}
+
+/** What one draw reads: a whole volume (no pool) or a level. */
+interface RayPart {
+  data: IsosurfaceDrawData;
+  level?: RayLevel;
+  uniforms: GPUBuffer;
+  bindGroup?: GPUBindGroup;
+  boundVersion: number;
+  boundData?: IsosurfaceDrawData;
+  boundTables?: GPUBuffer;
+}
 
 export class RayLayer implements RenderLayer {
   visible = true;
   style: SurfaceStyle = { ...DEFAULT_SURFACE_STYLE };
-  /** World size of a voxel, and where voxel (0, 0, 0) sits (in voxels), as the surface layer's. */
+  /** World size of a level-0 voxel, and where voxel (0, 0, 0) sits (in voxels), as the surface layer's. */
   voxelSize: [number, number, number] = [1, 1, 1];
   origin: [number, number, number] = [0, 0, 0];
-  /** The isovalue the cache was computed for (the drawn surface's). */
+  /** The isovalue the caches were computed for (the drawn surface's). */
   iso = Number.NaN;
   #clipPlanes: [number, number, number, number][] = [];
+  /** A volume opened whole (setDrawData), or a store's levels (setLevels). */
   #data: IsosurfaceDrawData | undefined;
-  #bindGroup: GPUBindGroup | undefined;
-  #boundVersion = -1;
-  readonly #uniforms: GPUBuffer;
+  #levels: readonly RayLevel[] = [];
+  /** Level-0 voxels per axis of a store (the depth cue's sphere); a whole volume's are its own. */
+  #extent: readonly [number, number, number] | undefined;
+  /** Uniform buffers and bind groups per draw, kept between frames (grown, never shrunk while alive). */
+  readonly #parts: RayPart[] = [];
   readonly #scratch = new ArrayBuffer(UNIFORM_BYTES);
   readonly #f32 = new Float32Array(this.#scratch);
   readonly #i32 = new Int32Array(this.#scratch);
@@ -44,49 +86,67 @@ export class RayLayer implements RenderLayer {
 
   private constructor(
     private readonly target: RenderTarget,
-    private readonly pipeline: GPURenderPipeline,
-  ) {
-    this.#uniforms = target.device.createBuffer({
-      label: 'RayLayer.uniforms',
-      size: UNIFORM_BYTES,
-      usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
-    });
-  }
+    private readonly wholePipeline: GPURenderPipeline,
+    private readonly poolPipeline: GPURenderPipeline,
+  ) {}
 
   static async create(target: RenderTarget): Promise<RayLayer> {
     const { device } = target;
-    const module = await createShaderModule(device, 'RayLayer.shader', [
-      frameSnippet,
-      cellRootSnippet,
-      { name: 'shaders/render/lighting.wgsl', code: lightingWgsl },
-      { name: 'shaders/render/raycast.wgsl', code: raycastWgsl },
-    ]);
     const storage = (binding: number): GPUBindGroupLayoutEntry => ({
       binding,
       visibility: GPUShaderStage.FRAGMENT,
       buffer: { type: 'read-only-storage' },
     });
-    const layout = device.createBindGroupLayout({
-      label: 'RayLayer.layout',
-      entries: [{ binding: 0, visibility: GPUShaderStage.FRAGMENT, buffer: { type: 'uniform' } }, storage(1), storage(2), storage(3)],
-    });
-    const pipeline = await device.createRenderPipelineAsync({
-      label: 'RayLayer.pipeline',
-      layout: device.createPipelineLayout({ label: 'RayLayer', bindGroupLayouts: [target.frameBindGroupLayout, layout] }),
-      vertex: { module, entryPoint: 'vs' },
-      fragment: { module, entryPoint: 'fs', targets: [{ format: target.format }] },
-      primitive: { topology: 'triangle-list', cullMode: 'none' },
-      depthStencil: { format: DEPTH_FORMAT, depthWriteEnabled: true, depthCompare: 'less' },
-    });
-    return new RayLayer(target, pipeline);
+    const uniform: GPUBindGroupLayoutEntry = { binding: 0, visibility: GPUShaderStage.FRAGMENT, buffer: { type: 'uniform' } };
+    const pipelineOf = async (blocks: { name: string; code: string }, pool: boolean) => {
+      const label = pool ? 'RayLayer.pool' : 'RayLayer';
+      const module = await createShaderModule(device, `${label}.shader`, [
+        frameSnippet,
+        cellRootSnippet,
+        { name: 'shaders/render/lighting.wgsl', code: lightingWgsl },
+        { name: 'shaders/render/raycast.wgsl', code: raycastWgsl },
+        blocks,
+      ]);
+      const layout = device.createBindGroupLayout({
+        label: `${label}.layout`,
+        entries: [uniform, storage(1), storage(2), storage(3), ...(pool ? [storage(4)] : [])],
+      });
+      return device.createRenderPipelineAsync({
+        label: `${label}.pipeline`,
+        layout: device.createPipelineLayout({ label, bindGroupLayouts: [target.frameBindGroupLayout, layout] }),
+        vertex: { module, entryPoint: 'vs' },
+        fragment: { module, entryPoint: 'fs', targets: [{ format: target.format }] },
+        primitive: { topology: 'triangle-list', cullMode: 'none' },
+        depthStencil: { format: DEPTH_FORMAT, depthWriteEnabled: true, depthCompare: 'less' },
+      });
+    };
+    const [whole, pool] = await Promise.all([
+      pipelineOf({ name: 'shaders/render/ray_blocks_stream.wgsl', code: rayBlocksStreamWgsl }, false),
+      pipelineOf({ name: 'shaders/render/ray_blocks_pool.wgsl', code: rayBlocksPoolWgsl }, true),
+    ]);
+    return new RayLayer(target, whole, pool);
   }
 
-  /** The surface whose cache the rays read (a pipeline's own draw data: it has the neighbourhood ranges). */
+  /** The surface whose cache the rays read (a pipeline's own draw data: it has the neighbourhood ranges); replaces levels. */
   setDrawData(data: IsosurfaceDrawData | undefined): void {
-    if (data !== this.#data) {
-      this.#data = data;
-      this.#bindGroup = undefined;
-    }
+    this.#data = data;
+    this.#levels = [];
+    this.#extent = undefined;
+  }
+
+  /**
+   * A store's step: each level's pool and cache (every level computed last
+   * at `iso`), in level-0 voxels of `extent` per axis; replaces a whole volume.
+   */
+  setLevels(levels: readonly RayLevel[], extent: readonly [number, number, number]): void {
+    this.#data = undefined;
+    this.#levels = levels;
+    this.#extent = extent;
+  }
+
+  /** Whether there is something to draw (a surface or levels with their ranges). */
+  get hasVolume(): boolean {
+    return this.#data?.neighbourhoodRanges !== undefined || this.#levels.length > 0;
   }
 
   /** Cuts the surface open (level-0 voxel coordinates): a hit the clip removes lets the ray go on. */
@@ -95,29 +155,54 @@ export class RayLayer implements RenderLayer {
   }
 
   draw(pass: GPURenderPassEncoder): void {
-    const data = this.#data;
-    if (!this.visible || !data?.neighbourhoodRanges || !Number.isFinite(this.iso)) return;
-    if (!this.#bindGroup || this.#boundVersion !== data.version) {
-      this.#bindGroup = this.target.device.createBindGroup({
-        label: 'RayLayer.bindGroup',
-        layout: this.pipeline.getBindGroupLayout(1),
+    if (!this.visible || !Number.isFinite(this.iso)) return;
+    const whole = this.#data;
+    if (whole) {
+      if (!whole.neighbourhoodRanges) return;
+      this.#drawPart(pass, 0, whole, undefined);
+      return;
+    }
+    this.#levels.forEach((l, k) => {
+      if (l.data.neighbourhoodRanges) this.#drawPart(pass, k, l.data, l);
+    });
+  }
+
+  #drawPart(pass: GPURenderPassEncoder, k: number, data: IsosurfaceDrawData, level: RayLevel | undefined): void {
+    const { device } = this.target;
+    let part = this.#parts[k];
+    if (!part) {
+      part = {
+        data,
+        uniforms: device.createBuffer({ label: `RayLayer.uniforms[${k}]`, size: UNIFORM_BYTES, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST }),
+        boundVersion: -1,
+      };
+      this.#parts[k] = part;
+    }
+    const pipeline = level ? this.poolPipeline : this.wholePipeline;
+    if (!part.bindGroup || part.boundData !== data || part.boundVersion !== data.version || part.boundTables !== level?.tables) {
+      part.bindGroup = device.createBindGroup({
+        label: `RayLayer.bindGroup[${k}]`,
+        layout: pipeline.getBindGroupLayout(1),
         entries: [
-          { binding: 0, resource: { buffer: this.#uniforms } },
+          { binding: 0, resource: { buffer: part.uniforms } },
           { binding: 1, resource: { buffer: data.slotData } },
           { binding: 2, resource: { buffer: data.blockToSlot } },
-          { binding: 3, resource: { buffer: data.neighbourhoodRanges } },
+          { binding: 3, resource: { buffer: data.neighbourhoodRanges! } },
+          ...(level ? [{ binding: 4, resource: { buffer: level.tables } }] : []),
         ],
       });
-      this.#boundVersion = data.version;
+      part.boundData = data;
+      part.boundVersion = data.version;
+      part.boundTables = level?.tables;
     }
-    this.#writeUniforms(data);
-    pass.setPipeline(this.pipeline);
-    pass.setBindGroup(1, this.#bindGroup);
+    this.#writeUniforms(part.uniforms, data, level);
+    pass.setPipeline(pipeline);
+    pass.setBindGroup(1, part.bindGroup);
     pass.draw(3);
   }
 
   /** Written at every draw (the camera moves); nothing allocated. */
-  #writeUniforms(data: IsosurfaceDrawData): void {
+  #writeUniforms(buffer: GPUBuffer, data: IsosurfaceDrawData, level: RayLevel | undefined): void {
     const { camera } = this.target;
     const f32 = this.#f32,
       i32 = this.#i32,
@@ -126,15 +211,16 @@ export class RayLayer implements RenderLayer {
     mat4.invert(this.#inverse, this.#viewProj);
     f32.set(this.#inverse, 0);
     const { dims } = data.info;
+    const extent = this.#extent ?? dims;
     const s = this.style;
     let r2 = 0;
     const centre = this.#centre;
     for (let a = 0; a < 3; a++) {
       i32[16 + a] = dims[a];
       u32[20 + a] = Math.ceil(dims[a] / 4);
-      const extent = (dims[a] - 1) * this.voxelSize[a];
-      centre[a] = extent / 2 + this.origin[a] * this.voxelSize[a];
-      r2 += extent * extent;
+      const size = (extent[a] - 1) * this.voxelSize[a];
+      centre[a] = size / 2 + this.origin[a] * this.voxelSize[a];
+      r2 += size * size;
     }
     i32[19] = 0;
     u32[23] = 0;
@@ -152,31 +238,48 @@ export class RayLayer implements RenderLayer {
     f32[33] = s.depthCue;
     f32[34] = Math.max(0, eyeDist - radius);
     f32[35] = eyeDist + radius;
-    f32[36] = this.voxelSize[0];
-    f32[37] = this.voxelSize[1];
-    f32[38] = this.voxelSize[2];
+    // the drawn voxels in the world: a level's voxel j at (j * scale + offset + origin) * voxel size,
+    // that is (j + (offset + origin) / scale) * (voxel size * scale)
+    for (let a = 0; a < 3; a++) {
+      const scale = level?.scale[a] ?? 1;
+      f32[36 + a] = this.voxelSize[a] * scale;
+      f32[40 + a] = ((level?.offset[a] ?? 0) + this.origin[a]) / scale;
+    }
     f32[39] = this.iso;
-    f32[40] = this.origin[0];
-    f32[41] = this.origin[1];
-    f32[42] = this.origin[2];
     f32[43] = 0;
     // the clip in world space, as the surface layer's
     const planes = this.#clipPlanes;
     u32[44] = planes.length;
-    for (let i = 0; i < planes.length; i++) {
-      const [nx, ny, nz, w] = planes[i];
+    for (let i = 0; i < 7; i++) {
       const o = 48 + 4 * i;
+      const plane = planes[i];
+      if (!plane) {
+        f32.fill(0, o, o + 4);
+        continue;
+      }
+      const [nx, ny, nz, w] = plane;
       f32[o] = nx / this.voxelSize[0];
       f32[o + 1] = ny / this.voxelSize[1];
       f32[o + 2] = nz / this.voxelSize[2];
       f32[o + 3] = w - (nx * this.origin[0] + ny * this.origin[1] + nz * this.origin[2]);
     }
-    this.target.device.queue.writeBuffer(this.#uniforms, 0, this.#scratch);
+    // a level's pool (ray_blocks_pool.wgsl)
+    const grid = level?.chunkGrid ?? [0, 0, 0];
+    u32[76] = grid[0];
+    u32[77] = grid[1];
+    u32[78] = grid[2];
+    u32[79] = grid[0] * grid[1] * grid[2];
+    u32[80] = level?.chunkBlocks ?? 0;
+    u32[81] = level?.reachBlocks ?? 0;
+    u32[82] = 0;
+    u32[83] = 0;
+    this.target.device.queue.writeBuffer(buffer, 0, this.#scratch);
   }
 
   destroy(): void {
-    this.#uniforms.destroy();
+    for (const p of this.#parts) p.uniforms.destroy();
+    this.#parts.length = 0;
     this.#data = undefined;
-    this.#bindGroup = undefined;
+    this.#levels = [];
   }
 }

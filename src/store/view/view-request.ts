@@ -15,6 +15,10 @@ export interface ViewRequest {
   tolerancePx?: number;
   /** Cover level seams with skirts (default true; --no-skirts). */
   skirts?: boolean;
+  /** The canvas the view is drawn on (`render --size`): over the link's px=, over the default. */
+  viewport?: Viewport;
+  /** Neither a box nor a link: the page's Fit of the whole of level 0. */
+  whole?: boolean;
 }
 
 /** The view's canvas when neither the request nor the link says: 1280x800 at device pixel ratio 1. */
@@ -52,11 +56,13 @@ export function viewSpecFor(
 ): ViewSpec {
   // near and far as the page's while it shows this store: from the volume's radius (level 0's box)
   const sceneRadius = sceneRadiusOf(fitBox0(levels[0], 0), voxelSize);
-  if (req.box) {
+  const box = req.box ?? (req.whole && req.link === undefined ? fitBox0(levels[0], 0) : undefined);
+  if (box) {
     // framed as Fit frames a box (its direction and distance), in the page's scene of the whole volume
-    const framed = cameraForBox(req.box, voxelSize, DEFAULT_VIEWPORT);
+    const viewport = req.viewport ?? DEFAULT_VIEWPORT;
+    const framed = cameraForBox(box, voxelSize, viewport);
     return {
-      camera: cameraFromView(framed.state, DEFAULT_VIEWPORT, sceneRadius),
+      camera: cameraFromView(framed.state, viewport, sceneRadius),
       tolerancePx: req.tolerancePx ?? DEFAULT_TOLERANCE_PX,
     };
   }
@@ -65,7 +71,7 @@ export function viewSpecFor(
   const state = cam ? parseCam(cam) : null;
   if (!state) throw new RangeError(`the view link has no camera (cam=qx,qy,qz,qw,tx,ty,tz,d): ${hash}`);
   const fields = linkViewFields(hash.replace(/^.*#/, ''));
-  const viewport = fields.viewport ?? DEFAULT_VIEWPORT;
+  const viewport = req.viewport ?? fields.viewport ?? DEFAULT_VIEWPORT;
   return {
     camera: cameraFromView(state, viewport, sceneRadius),
     tolerancePx: req.tolerancePx ?? fields.tolerancePx ?? DEFAULT_TOLERANCE_PX,
