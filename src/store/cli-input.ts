@@ -17,7 +17,8 @@ import { StoreStreamSurface } from './stream-surface.ts';
 import { StoreError } from './zarr/errors.ts';
 import { isStoreUrl, storeForLocation } from './zarr/node-store.ts';
 import { rangesSidecarFiles } from './zarr/ranges-sidecar-files.ts';
-import type { ZfpStore } from './zarr/store.ts';
+import type { StoreTimeAxis, ZfpStore } from './zarr/store.ts';
+import { openStore } from './zarr/open-store.ts';
 import { isZipStoreName } from './zarr/zip-store.ts';
 
 /** --level names a level the store does not have (a wrong command line, not a data failure). */
@@ -144,6 +145,21 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
         }
       : {}),
   };
+}
+
+/**
+ * The store's t axis (how many time points, where the OME metadata put
+ * them), or null when it has none: its metadata only are read (no chunk, no
+ * rate chosen). Rejects with StoreError as opening does.
+ */
+export async function storeTimeAxis(input: string, opts: { deadlineMs?: number }): Promise<StoreTimeAxis | null> {
+  const store = await openStore(
+    storeForLocation(input),
+    input,
+    opts.deadlineMs === undefined ? {} : { retry: { deadlineMs: opts.deadlineMs } },
+  );
+  store.close?.();
+  return store.time ?? null;
 }
 
 /** Writes a ranges sidecar folder (ranges-sidecar-files.ts); an existing folder is replaced only when it is a ranges sidecar. */

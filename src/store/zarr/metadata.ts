@@ -169,3 +169,30 @@ export class MetadataMemo implements AsyncReadable {
     }
   }
 }
+
+/**
+ * The OME time axis of the first multiscale: its position among the axes,
+ * and the physical time of index 0 and per index (level 0's `translation`
+ * and `scale` along it), with its unit; null when the store names no axis
+ * `t` / `time` (or of type "time").
+ */
+export function omeTimeAxisOf(attrs: Json): { axis: number; scale: number | null; origin: number; unit: string | null } | null {
+  const ms = multiscaleOf(attrs);
+  const axes = ms && Array.isArray(ms.axes) ? (ms.axes as Array<Json | string>) : null;
+  if (!axes) return null;
+  const axis = axes.findIndex((a) =>
+    typeof a === 'string' ? a === 't' || a === 'time' : a?.name === 't' || a?.name === 'time' || a?.type === 'time',
+  );
+  if (axis < 0) return null;
+  const named = axes[axis];
+  const unit = typeof named !== 'string' && typeof named?.unit === 'string' ? named.unit : null;
+  const d0 = Array.isArray(ms!.datasets) && isObject((ms!.datasets as Json[])[0]) ? (ms!.datasets as Json[])[0] : undefined;
+  const list = d0 && Array.isArray(d0.coordinateTransformations) ? (d0.coordinateTransformations as Json[]) : [];
+  const along = (type: string): number | null => {
+    const v = list.find((x) => isObject(x) && x.type === type)?.[type] as unknown[] | undefined;
+    const n = Array.isArray(v) && v.length === axes.length ? Number(v[axis]) : Number.NaN;
+    return Number.isFinite(n) ? n : null;
+  };
+  const scale = along('scale');
+  return { axis, scale: scale !== null && scale > 0 ? scale : null, origin: along('translation') ?? 0, unit };
+}

@@ -6,7 +6,17 @@ import type { AbsolutePath } from '@zarrita/storage';
 import * as zarr from 'zarrita';
 import { checkRate } from '../../zfp/format.ts';
 import { describeTransportError, StoreError } from './errors.ts';
-import { isObject, type Json, levelPaths, pyramidChain, multiscaleOf, voxelSizeOf, levelOffsetsOf, zfpChunkBytes } from './metadata.ts';
+import {
+  isObject,
+  type Json,
+  levelPaths,
+  pyramidChain,
+  multiscaleOf,
+  omeTimeAxisOf,
+  voxelSizeOf,
+  levelOffsetsOf,
+  zfpChunkBytes,
+} from './metadata.ts';
 import type { MetadataMemo } from './metadata.ts';
 import type { OpenStoreOptions, StoreLevel, ZfpStore } from './store.ts';
 import { openRangesSidecar, type RangesSidecar } from './ranges-sidecar.ts';
@@ -265,6 +275,7 @@ export async function openSourceStore(
     levelOffsets: levelOffsetsOf(attrs, levels.length, chain.datasets),
     levelScales: levels.map((_, L) => chain.scales[L] ?? [2 ** L, 2 ** L, 2 ** L]),
     unit: axisUnit('x'),
+    ...(info!.axes.some((a) => a === 't' || a === 'time') ? { time: timeAxis(attrs, info!.time) } : {}),
     valueRange: null,
     isAbsent: () => false,
     close: () => reader.destroy?.(),
@@ -282,4 +293,10 @@ export async function openSourceStore(
     },
     readRanges: async (level, opts) => (levels[level].rangesPath && sidecar ? sidecar.read(level, opts) : null),
   };
+}
+
+/** The t axis shown (index, count) with its physical placement from the OME metadata. */
+function timeAxis(attrs: Json, shown: SourceInfo['time']): NonNullable<ZfpStore['time']> {
+  const ome = omeTimeAxisOf(attrs);
+  return { ...shown, step: ome?.scale ?? null, origin: ome?.origin ?? 0, unit: ome?.unit ?? null };
 }

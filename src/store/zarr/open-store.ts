@@ -20,6 +20,8 @@ import {
   type Json,
   levelPaths,
   MetadataMemo,
+  multiscaleOf,
+  omeTimeAxisOf,
   pyramidChain,
   voxelSizeOf,
   levelOffsetsOf,
@@ -72,13 +74,18 @@ function codecOf(name: string, meta: Json): { rate: number; shardChunks: number 
   return { rate, shardChunks };
 }
 
+/** A level as opened here: with the length of its t axis (1 without one). */
+type ZfpLevel = StoreLevel & { timeCount: number };
+
 async function openLevel(
   mem: MetadataMemo,
   storeName: string,
   index: number,
   path: string,
   rangesPath: string | null,
-): Promise<StoreLevel> {
+  omeAxes: string[] | null,
+  time: number | undefined,
+): Promise<ZfpLevel> {
   const name = `${storeName} level ${index}${path === String(index) || path === '' ? '' : ` (${path})`}`;
   const key = (path ? `/${path}/zarr.json` : '/zarr.json') as AbsolutePath;
   let meta: Json;
@@ -96,9 +103,27 @@ async function openLevel(
   const arr = await zarr.open.v3(zarr.root(mem).resolve(path || '/'), { kind: 'array' });
   const shape = arr.shape;
   const chunks = arr.chunks;
-  let lead = 0;
-  while (shape.length - lead > 3 && shape[lead] === 1 && chunks[lead] === 1) lead++;
-  if (shape.length - lead !== 3) throw new StoreError('layout', `${name}: shape [${shape.join(', ')}] is not a 3D volume`);
+  // axes before z, y, x: t (any length: the time point asked for) or of length 1, each in chunks of 1 (a chunk is one 3-D stream)
+  const lead = shape.length - 3;
+  if (lead < 0) throw new StoreError('layout', `${name}: shape [${shape.join(', ')}] is not a 3D volume`);
+  const dimNames = Array.isArray(meta.dimension_names) ? (meta.dimension_names as unknown[]).map(String) : null;
+  const axisNames = omeAxes?.length === shape.length ? omeAxes : dimNames?.length === shape.length ? dimNames : null;
+  const leadingIndex: number[] = [];
+  let timeCount = 1;
+  for (let i = 0; i < lead; i++) {
+    const isTime = axisNames?.[i] === 't' || axisNames?.[i] === 'time';
+    if (!isTime && shape[i] !== 1) throw new StoreError('layout', `${name}: shape [${shape.join(', ')}] is not a 3D volume`);
+    if (chunks[i] !== 1)
+      throw new StoreError(
+        'layout',
+        `${name}: chunks [${chunks.join(', ')}] hold ${chunks[i]} ${isTime ? 'time points' : 'planes of a leading axis'}; a zfp chunk here is one 3-D volume (chunks of 1 along ${axisNames?.[i] ?? `axis ${i}`}); ${CONVERT_HINT}`,
+      );
+    const index = isTime ? (time ?? 0) : 0;
+    if (!Number.isInteger(index) || index < 0 || index >= shape[i])
+      throw new StoreError('layout', `${name}: time point ${index} is outside 0..${shape[i] - 1}`);
+    if (isTime) timeCount = shape[i];
+    leadingIndex.push(index);
+  }
   const [z, y, x] = shape.slice(lead);
   const [cz, cy, cx] = chunks.slice(lead);
   if (cz !== cy || cy !== cx) throw new StoreError('layout', `${name}: chunks [${chunks.join(', ')}] are not cubes; ${CONVERT_HINT}`);
@@ -134,6 +159,8 @@ async function openLevel(
     storedBytes: chunkCount * chunkBytes,
     rangesPath,
     leadingAxes: lead,
+    leadingIndex,
+    timeCount,
     layout: { dims: [x, y, z], chunkEdge: C, chunkGrid, rate, chunkBytes, name },
   };
 }
@@ -210,7 +237,7 @@ export async function openStore(store: AsyncReadable, name: string, options: Ope
   if (firstPath === undefined) throw new StoreError('not-a-store', `${name}: a Zarr group without OME-Zarr multiscales or zfpzarr levels`);
   const first = kind === 'array' ? rootJson : await named(`/${firstPath}/zarr.json` as AbsolutePath);
   if (first && !isZfpArray(first)) return openSourceStore({ mem, metered, retrying }, name, 3, kind, attrs, options);
-  return openZfpLevels({ mem, metered, retrying }, name, rootJson);
+  return openZfpLevels({ mem, metered, retrying }, name, rootJson, options.time);
 }
 
 /** Whether a v3 array's chunks are numcodecs.zfpy streams (inside shards or not). */
@@ -229,14 +256,19 @@ interface StoreLayers {
   retrying: RetryingStore;
 }
 
-async function openZfpLevels({ mem, metered, retrying }: StoreLayers, name: string, rootJson: Json): Promise<ZfpStore> {
-  const levels: StoreLevel[] = [];
+async function openZfpLevels(
+  { mem, metered, retrying }: StoreLayers,
+  name: string,
+  rootJson: Json,
+  time: number | undefined,
+): Promise<ZfpStore> {
+  const levels: ZfpLevel[] = [];
   const notes: string[] = [];
   let attrs: Json = {};
   let chain: number[] | undefined;
   let scales: [number, number, number][] | undefined;
   if (rootJson.node_type === 'array') {
-    levels.push(await openLevel(mem, name, 0, '', null));
+    levels.push(await openLevel(mem, name, 0, '', null, null, time));
   } else {
     const group = await zarr.open.v3(zarr.root(mem), { kind: 'group' });
     attrs = (group.attrs ?? {}) as Json;
@@ -252,7 +284,7 @@ async function openZfpLevels({ mem, metered, retrying }: StoreLayers, name: stri
     if (pyramid.skipped) notes.push(pyramid.skipped);
     for (const [i, d] of chain.entries()) {
       const rp = ourLevels.find((l) => String(l.path) === paths[d])?.ranges;
-      levels.push(await openLevel(mem, name, i, paths[d], typeof rp === 'string' ? rp : null));
+      levels.push(await openLevel(mem, name, i, paths[d], typeof rp === 'string' ? rp : null, omeAxesOf(attrs), time));
     }
   }
   const unusable = levels.filter((l) => l.unusable);
@@ -293,7 +325,17 @@ async function openZfpLevels({ mem, metered, retrying }: StoreLayers, name: stri
     return a;
   };
   const ours = isObject(attrs.zfpzarr) ? attrs.zfpzarr : null;
-  const vr = ours?.value_range as number[] | undefined;
+  const timeCount = levels[0].timeCount;
+  const timeIndex = levels[0].leadingIndex?.[omeTimeAxisOf(attrs)?.axis ?? -1] ?? time ?? 0;
+  if (levels.some((l) => l.timeCount !== timeCount))
+    throw new StoreError(
+      'layout',
+      `${name}: its levels have ${levels.map((l) => l.timeCount).join(', ')} time points; each level holds every time point`,
+    );
+  // a series: the decoded range of the time point shown (the converter's value_ranges), else the store's
+  const perTime = ours?.value_ranges as unknown[] | undefined;
+  const vr = (Array.isArray(perTime) && perTime.length === timeCount ? perTime[timeIndex] : ours?.value_range) as number[] | undefined;
+  const omeTime = omeTimeAxisOf(attrs);
   return {
     name,
     levels,
@@ -306,6 +348,17 @@ async function openZfpLevels({ mem, metered, retrying }: StoreLayers, name: stri
     levelOffsets: levelOffsetsOf(attrs, levels.length, chain),
     levelScales: levels.map((_, L) => scales?.[L] ?? [2 ** L, 2 ** L, 2 ** L]),
     unit: typeof ours?.unit === 'string' ? ours.unit : null,
+    ...(levels[0].leadingAxes > 0 && (omeTime || timeCount > 1)
+      ? {
+          time: {
+            index: timeIndex,
+            count: timeCount,
+            step: omeTime?.scale ?? null,
+            origin: omeTime?.origin ?? 0,
+            unit: omeTime?.unit ?? null,
+          },
+        }
+      : {}),
     valueRange: Array.isArray(vr) && vr.length === 2 ? [Number(vr[0]), Number(vr[1])] : null,
     isAbsent(bytes) {
       for (const fill of fillChunks.values()) if (fill === bytes) return true;
@@ -319,7 +372,7 @@ async function openZfpLevels({ mem, metered, retrying }: StoreLayers, name: stri
       let arr;
       try {
         arr = await arrayOf(level);
-        got = await arr.getChunk([...new Array<number>(L.leadingAxes).fill(0), z, y, x], opts);
+        got = await arr.getChunk([...(L.leadingIndex ?? new Array<number>(L.leadingAxes).fill(0)), z, y, x], opts);
       } catch (e) {
         if (zarr.isZarritaError(e, 'CodecPipelineError'))
           throw new StoreError('corrupt', `${where}: ${e.message} (a damaged shard index?)`, { cause: e });
@@ -336,14 +389,17 @@ async function openZfpLevels({ mem, metered, retrying }: StoreLayers, name: stri
       try {
         const arr = await zarr.open.v3(zarr.root(mem).resolve(L.rangesPath), { kind: 'array' });
         const [gx, gy, gz] = L.layout.chunkGrid;
+        // a series: [t, cz, cy, cx, 2], the ranges of each time point
         const s = arr.shape;
-        if (arr.dtype !== 'float32' || s.length !== 4 || s[0] !== gz || s[1] !== gy || s[2] !== gx || s[3] !== 2) {
+        const series = L.timeCount > 1 || s.length === 5;
+        const want = [...(series ? [L.timeCount] : []), gz, gy, gx, 2];
+        if (arr.dtype !== 'float32' || s.length !== want.length || s.some((n, i) => n !== want[i])) {
           throw new StoreError(
             'corrupt',
-            `${L.layout.name}: its range array ${L.rangesPath} is ${arr.dtype} [${s.join(', ')}], expected float32 [${gz}, ${gy}, ${gx}, 2]`,
+            `${L.layout.name}: its range array ${L.rangesPath} is ${arr.dtype} [${s.join(', ')}], expected float32 [${want.join(', ')}]`,
           );
         }
-        const got = await zarr.get(arr, null, { opts });
+        const got = await zarr.get(arr, series ? [timeIndex, null, null, null, null] : null, { opts });
         return new Float32Array(got.data as Float32Array);
       } catch (e) {
         if (e instanceof StoreError && !(e instanceof RequestFailedError)) throw e;
@@ -353,4 +409,11 @@ async function openZfpLevels({ mem, metered, retrying }: StoreLayers, name: stri
       }
     },
   };
+}
+
+/** The OME axes' names of the first multiscale, or null. */
+function omeAxesOf(attrs: Json): string[] | null {
+  const ms = multiscaleOf(attrs);
+  const axes = ms && Array.isArray(ms.axes) ? (ms.axes as Array<Json | string>) : null;
+  return axes ? axes.map((a) => (typeof a === 'string' ? a : String(a?.name))) : null;
 }

@@ -20,10 +20,28 @@ export interface StoreLevel {
   storedBytes: number;
   /** Path of the per-chunk [min, max] array, or null (ranges come from the GPU as chunks arrive). */
   rangesPath: string | null;
-  /** Leading axes of length 1 (OME t, c) dropped from the array's shape. */
+  /** Leading axes (OME t, c; chunks of 1 along each) dropped from the array's shape. */
   leadingAxes: number;
+  /** The index read along each leading axis (the time point shown on t; 0 on axes of length 1); zeros when absent. */
+  leadingIndex?: number[];
   /** Why this level cannot be shown (a limit it exceeds), or null. */
   unusable: string | null;
+}
+
+/** A store's t axis: index `index` of `count`; its physical time is origin + index * step (in `unit`) when step is known. */
+export interface StoreTimeAxis {
+  index: number;
+  count: number;
+  /** OME scale along t (level 0), or null when the metadata give none. */
+  step: number | null;
+  /** OME translation along t (level 0), 0 when none. */
+  origin: number;
+  unit: string | null;
+}
+
+/** The physical time of a time point, or null when the store's metadata give no step. */
+export function timeValueOf(axis: StoreTimeAxis, index: number): number | null {
+  return axis.step === null ? null : axis.origin + index * axis.step;
 }
 
 export interface ZfpStore {
@@ -40,6 +58,8 @@ export interface ZfpStore {
    */
   levelScales: [number, number, number][];
   unit: string | null;
+  /** The store's time axis (absent when it has none): the time point shown, of how many, and where the OME metadata put it. */
+  time?: StoreTimeAxis;
   /** Decoded level-0 [min, max] from our attributes, else null. */
   valueRange: [number, number] | null;
   /** Things a user should know (an unfinished store, no range arrays). */
