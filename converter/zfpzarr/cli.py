@@ -17,6 +17,7 @@ EPILOG = """inputs:
   store.zarr[:array]           an existing Zarr array (v2 or v3, any codec)
   file.zfp                     zfp fixed-rate stream (with header, or shape and rate in the name)
   gen:XxYxZ                    a generated float32 test volume
+  'run/step_*.raw' --time      a time series: the files in name order (or a 4-D Zarr array: t, z, y, x)
 scheduler:
   (none)                       local threads (--workers N threads)
   local                        a dask.distributed LocalCluster of --workers processes
@@ -55,7 +56,13 @@ def parse_args(argv):
     p.add_argument("--ranges-only", action="store_true",
                    help="INPUT is a store of lossless chunks: write only its per-brick value ranges at --rate (default 8) "
                         "to --out, for the page's &ranges=URL and the CLI's --ranges")
-    p.add_argument("--time", type=int, default=0, help="with --ranges-only: the time point (default 0)")
+    p.add_argument("--time", nargs="?", const="series", default=None, metavar="T",
+                   help="alone: INPUT is a time series, a pattern of files ('run/step_*.raw', one time point each, in "
+                        "name order, all of one shape and type) or a Zarr array of 4 axes (t, z, y, x); the store gets "
+                        "a t axis (chunks of one time point, ranges per time point). With --ranges-only: the time "
+                        "point T (default 0)")
+    p.add_argument("--time-step", type=float, default=1.0, help="with --time: the time between time points (OME scale along t, default 1)")
+    p.add_argument("--time-unit", default=None, help="with --time: the unit of --time-step, e.g. second")
     p.add_argument("--channel", type=int, default=0, help="with --ranges-only: the channel (default 0)")
     a = p.parse_args(argv)
     try:
@@ -63,8 +70,19 @@ def parse_args(argv):
         levels = None if a.levels == "auto" else int(a.levels)
     except ValueError:
         p.error("--rate takes numbers, --levels a number or auto")
+    series = a.time == "series"
+    if a.ranges_only:
+        if series:
+            p.error("--ranges-only takes --time T, the time point whose ranges are written")
+        try:
+            a.time = int(a.time) if a.time is not None else 0
+        except ValueError:
+            p.error(f"--time {a.time}: a time point is a whole number")
+    elif a.time is not None and not series:
+        p.error(f"--time {a.time}: a time point is for --ranges-only; --time alone converts a time series")
     opts = Options(rate=rates, chunk=a.chunk, levels=levels, shard=a.shard, dims=a.dims, dtype=a.dtype,
-                   voxel_size=a.voxel_size, unit=a.unit, overwrite=a.overwrite)
+                   voxel_size=a.voxel_size, unit=a.unit, overwrite=a.overwrite, time=series,
+                   time_step=a.time_step, time_unit=a.time_unit)
     return a, opts
 
 
@@ -83,6 +101,7 @@ def connect(scheduler: str, workers: int | None, memory_limit: str):
 def format_summary(s: Summary) -> str:
     lines = [f"{s.out}: {'already complete, nothing to do' if s.state == 'complete' else 'complete'}"
              f"{' (resumed)' if s.state == 'resume' else ''}",
+             *([f"  {s.time_points} time points (t axis)"] if s.time_points else []),
              f"  {'level':>5}  {'dims (x y z)':>18}  {'rate':>5}  {'chunks':>8}  {'files written':>13}  {'skipped':>8}"]
     for l in s.levels:
         dims = f"{l.shape[2]}x{l.shape[1]}x{l.shape[0]}"

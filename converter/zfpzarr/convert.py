@@ -24,7 +24,7 @@ from dask.base import tokenize
 from dask.highlevelgraph import HighLevelGraph
 
 from .chunks import unit_ranges, write_unit
-from .inputs import InputError, Volume, open_input
+from .inputs import InputError, Series, Volume, open_input, open_series
 from .layout import LevelLayout, level_path, level_shapes
 from .levels import downsample
 from .rate import NonFiniteSample, RateChoice, choose_rate
@@ -44,6 +44,9 @@ class Options:
     voxel_size: tuple[float, float, float] | None = None  # x, y, z; overrides the input's
     unit: str | None = None
     overwrite: bool = False
+    time: bool = False  # a time series: a pattern of files or a 4-D input (inputs/series.py)
+    time_step: float = 1.0  # OME scale along t
+    time_unit: str | None = None
 
 
 @dataclass
@@ -67,6 +70,7 @@ class Summary:
     seconds: float = 0.0
     value_range: tuple[float, float] | None = None
     rate_choice: RateChoice | None = None  # when the rate was chosen from the data
+    time_points: int | None = None  # a time series: how many (levels' chunks and units count all of them)
 
     @property
     def ratio(self) -> float:
@@ -82,6 +86,8 @@ def check_options(opts: Options) -> None:
         raise InputError(f"--chunk {opts.chunk}: the chunk edge must be a positive multiple of 4")
     if opts.shard is not None and opts.shard < 1:
         raise InputError(f"--shard {opts.shard}: a shard holds N x N x N chunks, N >= 1")
+    if opts.time and not (np.isfinite(opts.time_step) and opts.time_step > 0):
+        raise InputError(f"--time-step {opts.time_step}: a positive number")
     if opts.levels is not None and opts.levels < 1:
         raise InputError(f"--levels {opts.levels}: at least 1")
     for r in opts.rate or []:
@@ -162,6 +168,12 @@ def convert(spec: str, out: str, opts: Options | None = None, client=None, worke
     start = time.perf_counter()
     out = os.path.abspath(out)
     work_dir = out + ".input"
+    if opts.time:
+        series = open_series(spec, opts.chunk, work_dir, dims=opts.dims, dtype=opts.dtype)
+        try:
+            return _convert_series(series, out, opts, client, workers, progress, start, work_dir)
+        finally:
+            series.close()
     volume = volume or open_input(spec, opts.chunk, work_dir, dims=opts.dims, dtype=opts.dtype)
     try:
         return _convert(volume, out, opts, client, workers, progress, start, work_dir)
@@ -237,3 +249,80 @@ def _histogram(out: str, level: int, lo: float, hi: float, client, workers) -> l
     counts, _ = da.histogram(arr, bins=HISTOGRAM_BINS, range=(lo, top))
     (result,) = compute([counts], client, workers)
     return [int(c) for c in result]
+
+
+def _convert_series(series: Series, out, opts, client, workers, progress, start, work_dir) -> Summary:
+    """A time series into one store with a t axis: each time point's levels
+    are built and written as a single volume's are (the same graph), into
+    chunks of one time point (c/t/z/y/x) and range arrays (T, cz, cy, cx, 2).
+    The rate chosen from the data is chosen from time point 0 and used for
+    every time point (one decode for the series)."""
+    first = series.volumes[0]
+    T = len(series.volumes)
+    shapes = level_shapes(tuple(first.array.shape), opts.chunk, opts.levels)
+    choice = None if opts.rate or first.default_rate else choose_volume_rate(first, client, workers)
+    rates = level_rates(opts, first, len(shapes), choice)
+    params = {
+        "source": series.source, "files": series.files, "time_points": T,
+        "source_tokens": [v.array.name for v in series.volumes], "shape": [T, *first.array.shape],
+        "source_dtype": str(first.array.dtype), "chunk": opts.chunk, "shard": opts.shard,
+        "levels": len(shapes), "rates": rates, "time_step": opts.time_step, "time_unit": opts.time_unit,
+    }
+    state = plan_store(out, params, opts.overwrite)
+    summary = Summary(out=out, source=series.source, state=state,
+                      bytes_in=int(sum(v.array.nbytes for v in series.volumes)), rate_choice=choice, time_points=T)
+    voxel = tuple(opts.voxel_size or first.voxel_size or (1.0, 1.0, 1.0))
+    unit = opts.unit or first.unit
+    if state == "create":
+        name = os.path.basename(series.source.rstrip("/"))
+        extra = {"voxel_size": list(voxel), "unit": unit, "axes": "tzyx", "time_points": T}
+        if choice is not None:
+            extra["rateChoice"] = {"rate": choice.rate, **choice.record()}
+        ome = ome_multiscales(name, shapes, voxel, unit, time={"step": opts.time_step, "unit": opts.time_unit})
+        create_store(out, params, shapes, rates, opts.chunk, opts.shard, ome, extra, time_points=T)
+    written = [0] * len(shapes)
+    skipped = [0] * len(shapes)
+    if state != "complete":
+        value_ranges = []
+        for t, volume in enumerate(series.volumes):
+            layouts = [LevelLayout(out, i, shapes[i], opts.chunk, rates[i], opts.shard, time=t) for i in range(len(shapes))]
+            level = volume.array.astype(np.float32).rechunk((opts.chunk,) * 3)
+            tasks = []
+            for layout in layouts:
+                if layout.level > 0:
+                    level = downsample(level, opts.chunk)
+                existing = layout.existing_units() if state == "resume" else set()
+                write = level if not opts.shard or opts.shard == 1 else level.rechunk((layout.unit_edge,) * 3)
+                tasks.append(unit_tasks(write, layout, existing))
+                written[layout.level] += int(np.prod(layout.unit_grid)) - len(existing)
+                skipped[layout.level] += len(existing)
+            if progress:
+                print(f"time point {t + 1} of {T}", flush=True)
+            ranges = compute(tasks, client, workers, progress)
+            for layout, r in zip(layouts, ranges):
+                write_ranges(out, layout.level, r, time=t)
+            value_ranges.append([float(np.min(ranges[0][..., 0])), float(np.max(ranges[0][..., 1]))])
+        if state == "resume":
+            _remove_partial_files(out)
+        lo, hi = min(r[0] for r in value_ranges), max(r[1] for r in value_ranges)
+        h_level = histogram_level(shapes)
+        counts = _histogram(out, h_level, lo, hi, client, workers)
+        finish_store(out, {
+            "levels": [{"path": level_path(i), "shape": list(shapes[i]), "time_points": T, "chunks": [opts.chunk] * 3,
+                        "rate": rates[i], "ranges": f"ranges/{i}"} for i in range(len(shapes))],
+            "value_range": [lo, hi],
+            "value_ranges": value_ranges,
+            "histogram": {"level": h_level, "range": [lo, hi], "bins": HISTOGRAM_BINS, "counts": counts},
+        })
+        shutil.rmtree(work_dir, ignore_errors=True)
+    else:
+        skipped = [T * int(np.prod(LevelLayout(out, i, shapes[i], opts.chunk, rates[i], opts.shard).unit_grid))
+                   for i in range(len(shapes))]
+    for i, shape in enumerate(shapes):
+        layout = LevelLayout(out, i, shape, opts.chunk, rates[i], opts.shard)
+        summary.levels.append(LevelSummary(i, shape, rates[i], T * int(np.prod(layout.chunk_grid)), written[i], skipped[i]))
+    attrs = zarr.open_group(store=out, mode="r").attrs["zfpzarr"]
+    summary.value_range = tuple(attrs["value_range"])
+    summary.bytes_out = _bytes_under(out)
+    summary.seconds = time.perf_counter() - start
+    return summary

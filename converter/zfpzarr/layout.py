@@ -44,6 +44,7 @@ class LevelLayout:
     chunk: int
     rate: float
     shard: int | None = None
+    time: int | None = None  # a time series: the time point this layout writes (chunk keys c/t/z/y/x)
 
     @property
     def chunk_grid(self) -> tuple[int, int, int]:
@@ -68,11 +69,15 @@ class LevelLayout:
 
     def unit_path(self, unit: tuple[int, int, int]) -> str:
         # Zarr v3 default chunk key encoding, separator "/": c/z/y/x
-        return os.path.join(self.store, level_path(self.level), "c", *(str(int(i)) for i in unit))
+        return os.path.join(self._chunk_root(), *(str(int(i)) for i in unit))
+
+    def _chunk_root(self) -> str:
+        base = os.path.join(self.store, level_path(self.level), "c")
+        return base if self.time is None else os.path.join(base, str(int(self.time)))
 
     def existing_units(self) -> set[tuple[int, int, int]]:
         """Units whose file exists (written whole by an earlier run)."""
-        base = os.path.join(self.store, level_path(self.level), "c")
+        base = self._chunk_root()
         found: set[tuple[int, int, int]] = set()
         if not os.path.isdir(base):
             return found

@@ -55,13 +55,21 @@ def plan_store(out: str, params: dict, overwrite: bool) -> str:
     return "complete" if ours.get("complete") else "resume"
 
 
-def ome_multiscales(name: str, shapes, voxel_size, unit) -> dict:
+def ome_multiscales(name: str, shapes, voxel_size, unit, time: dict | None = None) -> dict:
     """OME-Zarr 0.5 `multiscales`: axes z, y, x; per level a scale (voxel size
     times 2^level) and a translation (a coarse voxel's centre is the mean of
-    the fine voxels it covers)."""
+    the fine voxels it covers). A time series (`time`: step, unit) has a
+    first axis t, of scale `step` and translation 0 on every level."""
     vx = tuple(voxel_size) if voxel_size else (1.0, 1.0, 1.0)
     zyx = (vx[2], vx[1], vx[0])
     axes = []
+    if time is not None:
+        t_axis = {"name": "t", "type": "time"}
+        if time.get("unit"):
+            t_axis["unit"] = time["unit"]
+        axes.append(t_axis)
+    t_scale = [float(time["step"])] if time is not None else []
+    t_shift = [0.0] if time is not None else []
     for a in ("z", "y", "x"):
         axis = {"name": a, "type": "space"}
         if unit:
@@ -73,8 +81,8 @@ def ome_multiscales(name: str, shapes, voxel_size, unit) -> dict:
         datasets.append({
             "path": level_path(level),
             "coordinateTransformations": [
-                {"type": "scale", "scale": [s * f for s in zyx]},
-                {"type": "translation", "translation": [s * (f - 1) / 2 for s in zyx]},
+                {"type": "scale", "scale": [*t_scale, *(s * f for s in zyx)]},
+                {"type": "translation", "translation": [*t_shift, *(s * (f - 1) / 2 for s in zyx)]},
             ],
         })
     return {
@@ -89,32 +97,43 @@ def ome_multiscales(name: str, shapes, voxel_size, unit) -> dict:
     }
 
 
-def create_store(out: str, params: dict, shapes, rates, chunk: int, shard: int | None, ome: dict, extra: dict) -> None:
+def create_store(out: str, params: dict, shapes, rates, chunk: int, shard: int | None, ome: dict, extra: dict,
+                 time_points: int | None = None) -> None:
+    """The group and its empty arrays. A time series (`time_points` T): each
+    level (T, z, y, x) in chunks of one time point (1, C, C, C), each chunk
+    still one 3-D zfp stream; each range array (T, cz, cy, cx, 2)."""
     if os.path.exists(out):
         import shutil
 
         shutil.rmtree(out)
     attrs = {"ome": ome, ATTR: {"format": FORMAT_VERSION, "complete": False, "params": params, **extra}}
     group = zarr.create_group(store=out, zarr_format=3, attributes=attrs)
+    t_shape = (time_points,) if time_points else ()
+    t_chunk = (1,) if time_points else ()
+    t_name = ["t"] if time_points else []
     for level, (shape, rate) in enumerate(zip(shapes, rates)):
         group.create_array(
-            name=level_path(level), shape=shape, chunks=(chunk,) * 3,
-            shards=(chunk * shard,) * 3 if shard else None, dtype="float32",
+            name=level_path(level), shape=(*t_shape, *shape), chunks=(*t_chunk, *(chunk,) * 3),
+            shards=(*t_chunk, *(chunk * shard,) * 3) if shard else None, dtype="float32",
             serializer=ZFPY(mode=ZFP_MODE_FIXED_RATE, rate=rate), compressors=None, filters=None,
-            fill_value=0.0, dimension_names=["z", "y", "x"],
+            fill_value=0.0, dimension_names=[*t_name, "z", "y", "x"],
         )
     ranges = group.create_group(RANGES_GROUP)
     for level, shape in enumerate(shapes):
         grid = tuple(-(-n // chunk) for n in shape)
         ranges.create_array(
-            name=str(level), shape=(*grid, 2), chunks=(*(min(g, 64) for g in grid), 2), dtype="float32",
-            compressors=None, filters=None, fill_value=float("nan"), dimension_names=["z", "y", "x", "minmax"],
+            name=str(level), shape=(*t_shape, *grid, 2), chunks=(*t_chunk, *(min(g, 64) for g in grid), 2),
+            dtype="float32", compressors=None, filters=None, fill_value=float("nan"),
+            dimension_names=[*t_name, "z", "y", "x", "minmax"],
         )
 
 
-def write_ranges(out: str, level: int, ranges: np.ndarray) -> None:
+def write_ranges(out: str, level: int, ranges: np.ndarray, time: int | None = None) -> None:
     arr = zarr.open_array(store=out, path=ranges_path(level), mode="r+")
-    arr[...] = ranges
+    if time is None:
+        arr[...] = ranges
+    else:
+        arr[time] = ranges
 
 
 def finish_store(out: str, result: dict) -> None:

@@ -9,8 +9,9 @@ from .formats import is_zarr, open_generated, open_hdf5, open_netcdf, open_zarr
 from .raw import open_nrrd, open_raw
 from .tiff import TIFF_EXT, open_tiff, tiff_files
 from .zfp import MAGIC as ZFP_MAGIC, open_zfp
+from .series import Series, open_series  # noqa: E402  (series opens each file with open_input below)
 
-__all__ = ["InputError", "Volume", "open_input"]
+__all__ = ["InputError", "Series", "Volume", "open_input", "open_series"]
 
 _H5_EXT = (".h5", ".hdf5", ".he5", ".hdf")
 _NC_EXT = (".nc", ".nc4", ".netcdf", ".cdf")
