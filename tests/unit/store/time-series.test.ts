@@ -25,6 +25,8 @@ interface Manifest {
   n: number;
   timeStep: number;
   timeUnit: string;
+  /** The uint8 series as one raw file per time point (a pattern). */
+  steps: string;
   stores: Record<string, { store: string; raw: string; dtype: string; timePerChunk: number; sharded: boolean }>;
 }
 let manifest: Manifest;
@@ -166,6 +168,41 @@ describe('extract STORE --time SLICE: each time point of a series written by ngf
       for (let i = 1; i < at120.length; i++) expect(at120[i].ours).toBeGreaterThan(at120[i - 1].ours);
     }, 300_000);
   }
+
+  it("a store the converter made from one file per time point (convert 'step_*.raw' --time): --time 0:8:3 against zfpy + VTK at its rate", () => {
+    const out = join(work, 'converted.zarr');
+    execFileSync(
+      process.execPath,
+      [
+        join(repoRoot, 'scripts/convert.mjs'),
+        manifest.steps,
+        '--time',
+        '--time-step',
+        '0.5',
+        '--time-unit',
+        'second',
+        '--rate',
+        '8',
+        '--out',
+        out,
+        '--quiet',
+      ],
+      { cwd: repoRoot, stdio: 'pipe', timeout: 600_000 },
+    );
+    const json = join(work, 'converted.json');
+    const r = cli('extract', out, '--iso', ISOS.join(','), '--time', '0:8:3', '--json', json);
+    expect(r.status, r.stderr).toBe(0);
+    const record: SeriesRecord = JSON.parse(readFileSync(json, 'utf8'));
+    // a zfp store: its chunks' rate, and per time point its range arrays
+    expect(record.rate).toBe(8);
+    expect(record.time).toEqual({ selection: '0:8:3', count: manifest.t, indices: [0, 3, 6], unit: 'second' });
+    expect(record.timePoints.map((p) => p.gpuBytesAfter)).toEqual([0, 0, 0]);
+    const ref = reference(manifest.stores['ball_uint8_t1.ome.zarr'].raw, 'uint8', 8, [0, 3, 6], ISOS);
+    expect(record.isosurfaces.map((s) => [s.time, s.iso, s.triangles, s.timeValue])).toEqual(
+      ref.map((x) => [x.time, x.iso, x.flyingEdges, x.time * 0.5]),
+    );
+    for (const [i, s] of record.isosurfaces.entries()) expect(Math.abs(s.area - ref[i].area) / ref[i].area).toBeLessThan(1e-5);
+  }, 300_000);
 
   it('one time point (--time 5) as before: no time fields, the record of that time point', () => {
     const entry = manifest.stores['ball_uint8_t4.ome.zarr'];
