@@ -4,7 +4,7 @@
 // shaders/isosurface/blocks_pool.wgsl names them the same), found through
 // the level's page table; a block whose chunk is not resident has none.
 // The ray enters only the chunks this level draws in the step (role drawn),
-// and, on their upper sides, the first `rays.pool.y` blocks of the resident
+// and, on their upper sides, the first `rays.pool.y` cells of the resident
 // chunks above them: a coarser level's region starts half a coarse voxel
 // further up than a finer one's ends (its voxels' centres are offset), so
 // without that reach a ray would see background in the seam. Where the
@@ -40,26 +40,50 @@ fn block_id(b: vec3u) -> u32 {
 }
 
 // Blocks (per edge) of the aligned region around b the ray skips whole:
-// 0 when b is this level's to draw, 1 to skip the block alone, the chunk
-// edge to skip its whole chunk (not drawn, and no drawn chunk just below).
+// 0 when b is this level's to draw, REGION_PARTIAL when only its cells
+// within reach of a drawn chunk below are (cell_outside says which), 1 to
+// skip the block alone, the chunk edge to skip its whole chunk (not
+// resident, or not drawn and no drawn chunk just below).
 fn region_skip(b: vec3u) -> u32 {
   let cb = rays.pool.x;
   let q = vec3i(b / cb);
-  if (chunk_drawn(q)) {
+  let slot = chunk_slot(q);
+  if (slot == NO_BLOCK) {
+    return cb;
+  }
+  if ((pool_tables[rays.chunk_grid.w + slot] >> 30u) == ROLE_DRAWN_CODE) {
     return 0u;
   }
   let reach = rays.pool.y;
+  if (reach == 0u) {
+    return cb;
+  }
   var below_drawn = false;
   // the drawn chunks whose upper reach could hold b: b's chunk minus one on any set of axes
   for (var k = 1u; k < 8u; k++) {
     let axes = vec3<bool>((k & 1u) != 0u, (k & 2u) != 0u, (k & 4u) != 0u);
     if (chunk_drawn(q - select(vec3i(0), vec3i(1), axes))) {
       below_drawn = true;
-      // within reach on every axis it was lowered on
-      if (all(!axes | (b % cb < vec3u(reach)))) {
-        return 0u;
+      // within reach (its first cell) on every axis it was lowered on
+      if (all(!axes | (4u * (b % cb) < vec3u(reach)))) {
+        return REGION_PARTIAL;
       }
     }
   }
-  return select(cb, 1u, below_drawn && reach > 0u);
+  return select(cb, 1u, below_drawn);
+}
+
+// Whether the cell at c (in a block region_skip called partial) lies beyond
+// the reach of every drawn chunk below it.
+fn cell_outside(c: vec3u) -> bool {
+  let edge = 4u * rays.pool.x;
+  let q = vec3i(c / edge);
+  let near = c % edge < vec3u(rays.pool.y);
+  for (var k = 1u; k < 8u; k++) {
+    let axes = vec3<bool>((k & 1u) != 0u, (k & 2u) != 0u, (k & 4u) != 0u);
+    if (all(!axes | near) && chunk_drawn(q - select(vec3i(0), vec3i(1), axes))) {
+      return false;
+    }
+  }
+  return true;
 }

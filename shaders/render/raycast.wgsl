@@ -42,6 +42,8 @@ struct Rays {
 
 const NO_SLOT: u32 = 0xffffffffu;
 const NO_BLOCK: u32 = 0xffffffffu;
+/** region_skip: only some cells of the block are the level's (cell_outside says which). */
+const REGION_PARTIAL: u32 = 0xffffffffu;
 /** At most this many cells and skipped blocks per ray (a 2048-voxel diagonal walks ~3 x 2048 cells). */
 const MAX_STEPS: u32 = 16384u;
 
@@ -140,9 +142,10 @@ fn fs(in: VsOut) -> FragOut {
     let cell = min(vec3u(max(floor(p), vec3f(0.0))), last);
     let block = cell / 4u;
     let outside = region_skip(block);
-    if (outside > 0u || !block_active(block)) {
+    let partial = outside == REGION_PARTIAL;
+    if ((outside > 0u && !partial) || !block_active(block)) {
       // past the block (or the whole region around it the ray may not enter): its box's exit along the ray
-      let edge = 4u * max(outside, 1u);
+      let edge = 4u * select(max(outside, 1u), 1u, partial);
       let blo_u = (cell / edge) * edge;
       let bhi = vec3f(min(blo_u + edge, last + vec3u(1u)));
       let blo = vec3f(blo_u);
@@ -156,7 +159,7 @@ fn fs(in: VsOut) -> FragOut {
     let te = (e - o) * inv;
     let t_cell = max(min(min(min(select(1e30, te.x, d.x != 0.0), select(1e30, te.y, d.y != 0.0)), select(1e30, te.z, d.z != 0.0)), t_exit), t + eps);
     var v: array<f32, 8>;
-    if (cell_corners(cell, &v)) {
+    if (!(partial && cell_outside(cell)) && cell_corners(cell, &v)) {
       var lo = v[0];
       var hi_v = v[0];
       for (var k = 1u; k < 8u; k++) {

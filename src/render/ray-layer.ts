@@ -38,14 +38,20 @@ export interface RayLevel {
   /** Where the level's voxel j lies in level-0 voxels: j * scale + offset. */
   scale: readonly [number, number, number];
   offset: readonly [number, number, number];
-  /** Blocks the rays reach above the level's drawn chunks (into its ghosts): seams toward coarser levels. */
-  reachBlocks: number;
+  /** Cells the rays reach above the level's drawn chunks (into its ghosts): seams toward coarser levels (seamReachCells). */
+  reachCells: number;
 }
 
-/** The blocks a level's rays reach above its drawn chunks so that no coarser level's seam shows background: its centres sit (2^(L-l) - 1) / 2 fine voxels higher. */
-export function seamReachBlocks(level: number, coarsest: number): number {
+/**
+ * The cells a level's rays reach above its drawn chunks so that no coarser
+ * level's seam shows background: a level L's voxel centres sit
+ * (2^(L-l) - 1) / 2 level-l voxels above level l's (OME translations of
+ * averaged levels), so its region starts that far past the end of level l's;
+ * a quarter of a cell more keeps the rays' boundary tests off the seam.
+ */
+export function seamReachCells(level: number, coarsest: number): number {
   if (coarsest <= level) return 0;
-  return Math.ceil(((2 ** (coarsest - level) - 1) / 2 + 1) / 4);
+  return Math.ceil((2 ** (coarsest - level) - 1) / 2 + 0.25);
 }
 
 /** What one draw reads: a whole volume (no pool) or a level. */
@@ -173,7 +179,11 @@ export class RayLayer implements RenderLayer {
     if (!part) {
       part = {
         data,
-        uniforms: device.createBuffer({ label: `RayLayer.uniforms[${k}]`, size: UNIFORM_BYTES, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST }),
+        uniforms: device.createBuffer({
+          label: `RayLayer.uniforms[${k}]`,
+          size: UNIFORM_BYTES,
+          usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST,
+        }),
         boundVersion: -1,
       };
       this.#parts[k] = part;
@@ -270,7 +280,7 @@ export class RayLayer implements RenderLayer {
     u32[78] = grid[2];
     u32[79] = grid[0] * grid[1] * grid[2];
     u32[80] = level?.chunkBlocks ?? 0;
-    u32[81] = level?.reachBlocks ?? 0;
+    u32[81] = level?.reachCells ?? 0;
     u32[82] = 0;
     u32[83] = 0;
     this.target.device.queue.writeBuffer(buffer, 0, this.#scratch);

@@ -4,21 +4,26 @@
 // page's own layers on Dawn: the surface ray cast in the block cache
 // (render/ray-layer.ts; the default) or its triangles (surface-layer.ts),
 // lit as in the page, on the page's background. --depth writes each pixel's
-// hit distance from the eye along its ray, in voxels (float32, rows top to
-// bottom; +Infinity where nothing was hit). Volumes opened whole (a store's
-// surfaces: `extract --view-box`).
+// hit distance from the eye along its ray, in level-0 voxels (float32, rows
+// top to bottom; +Infinity where nothing was hit). IN: a volume opened
+// whole, or a Zarr store refined by the image's view (its cut for that
+// camera and size, as the page's): every level of the step drawn, and the
+// record says which level each covered pixel's hit lies in (level0Fraction).
 import { writeFileSync } from 'node:fs';
 import { mat4, vec4 } from 'gl-matrix';
 import { describeAdapter } from '../../gpu/device.ts';
 import { meteredGpu } from '../../gpu/memory-meter.ts';
 import type { Isosurface } from '../../isosurface/isosurface.ts';
+import type { IsosurfaceStats } from '../../isosurface/types.ts';
 import { ArcballCamera } from '../../render/camera.ts';
-import { RayLayer } from '../../render/ray-layer.ts';
-import { SurfaceLayer } from '../../render/surface-layer.ts';
+import { RayLayer, type RayLevel, seamReachCells } from '../../render/ray-layer.ts';
+import { SurfaceLayer, type SurfacePart } from '../../render/surface-layer.ts';
 import { createFrameBindGroupLayout, DEPTH_FORMAT, FRAME_UNIFORM_BYTES, frameUniformData, type RenderLayer } from '../../render/viewer.ts';
-import { parseCam } from '../../store/view/camera.ts';
-import { parseViewBox } from '../../store/view/view-request.ts';
-import { type CliCommand, numberOption, requiredPositional, stringOption, UsageError } from '../command.ts';
+import { isStoreInput } from '../../store/cli-input.ts';
+import type { StoreStreamSurface } from '../../store/stream-surface.ts';
+import { cameraForBox, fitBox0, parseCam } from '../../store/view/camera.ts';
+import { parseViewBox, type ViewRequest } from '../../store/view/view-request.ts';
+import { type CliCommand, InputError, numberOption, requiredPositional, stringOption, UsageError } from '../command.ts';
 import { openInputSurface } from '../input.ts';
 import { encodePng } from '../png.ts';
 import { budgetOption } from './extract.ts';
@@ -27,11 +32,22 @@ import { budgetOption } from './extract.ts';
 const BACKGROUND = { r: 0.09, g: 0.1, b: 0.12, a: 1 };
 const MAX_SIDE = 8192;
 
+type Layer = RenderLayer & { destroy(): void };
+
+/** What one run draws: the layer of everything, and per level of a store's step the layer of that level alone (which level each pixel shows). */
+interface Scene {
+  layer: Layer;
+  levelLayers: { level: number; layer: Layer }[];
+  stats: IsosurfaceStats;
+  /** A store's step: per level, the chunks drawn and their ghosts. */
+  levels: { level: number; drawnChunks: number; ghostChunks: number; triangles: number }[];
+}
+
 export const renderCommand: CliCommand = {
   name: 'render',
   summary: "an image of the surface (ray cast in the block cache, or its triangles) as PNG, with each pixel's hit distance",
   usage:
-    "render IN --iso v --png OUT.png [--draw rays|mesh] [--size WxH] [--view '#cam=..' | --view-box x0,y0,z0,x1,y1,z1] [--rate R] [--cache-budget MB] [--depth OUT.f32] (IN: a volume opened whole, as extract's; rays by default)",
+    "render IN --iso v --png OUT.png [--draw rays|mesh] [--size WxH] [--view '#cam=..' | --view-box x0,y0,z0,x1,y1,z1] [--tolerance PX] [--rate R] [--cache-budget MB] [--time T] [--channel C] [--depth OUT.f32] (IN: a volume opened whole, as extract's, or a Zarr store refined by the image's view; rays by default)",
   options: {
     iso: { type: 'string' },
     png: { type: 'string' },
@@ -39,12 +55,15 @@ export const renderCommand: CliCommand = {
     size: { type: 'string' },
     view: { type: 'string' },
     'view-box': { type: 'string' },
+    tolerance: { type: 'string' },
     rate: { type: 'string' },
     'cache-budget': { type: 'string' },
+    time: { type: 'string' },
+    channel: { type: 'string' },
     depth: { type: 'string' },
   },
   async run(ctx, args) {
-    const input = requiredPositional(args, 0, 'IN (a zfp file or a raw volume)');
+    const input = requiredPositional(args, 0, 'IN (a zfp file, a raw volume or a Zarr store)');
     const iso = numberOption(args, 'iso');
     if (iso === undefined) throw new UsageError('give the isovalue with --iso v');
     const pngPath = stringOption(args, 'png');
@@ -59,51 +78,74 @@ export const renderCommand: CliCommand = {
     if (typeof box === 'string') throw new UsageError(`--view-box ${viewBox}: ${box}`);
     const cam = view === undefined ? undefined : parseCam(new URLSearchParams(view.replace(/^.*#/, '')).get('cam') ?? '');
     if (cam === null) throw new UsageError(`--view ${view}: the page's link, with its camera (#cam=qx,qy,qz,qw,tx,ty,tz,d)`);
+    const tolerancePx = numberOption(args, 'tolerance');
+    if (tolerancePx !== undefined && !(tolerancePx > 0)) throw new UsageError('--tolerance must be a positive number of pixels');
+    const store = isStoreInput(input);
+    if (!store && tolerancePx !== undefined) throw new UsageError('--tolerance is for a Zarr store (the view refines it)');
+    // a store is refined by the image's own view: its camera on a canvas of the image's size
+    const viewRequest: ViewRequest | undefined = store
+      ? { ...(box ? { box } : view !== undefined ? { link: view } : { whole: true }), viewport: { width, height }, tolerancePx }
+      : undefined;
     const device = await ctx.gpu();
     const { gpu, meter } = meteredGpu(device);
-    const opened = await openInputSurface(ctx, gpu, input, { rate: numberOption(args, 'rate'), budget: budgetOption(args) });
+    const opened = await openInputSurface(ctx, gpu, input, {
+      rate: numberOption(args, 'rate'),
+      budget: budgetOption(args),
+      ...(store ? { view: viewRequest, time: numberOption(args, 'time'), channel: numberOption(args, 'channel') } : {}),
+    });
+    let scene: Scene | undefined;
     try {
-      if ('readPositions' in opened.iso)
-        throw new UsageError("render draws volumes opened whole; a store's surfaces: extract STORE --view-box .. (--ply, --glb)");
-      const surface = opened.iso as Isosurface;
-      const t0 = performance.now();
-      const stats = await surface.compute(iso);
-      const surfaceMs = performance.now() - t0;
-      const { dims } = surface.info;
       const { voxelSize, origin } = opened.placement;
-      // the page's camera: fitted to the volume (or the box), or the link's; world = (voxel + origin) * voxel size
       const camera = new ArcballCamera();
-      const lo = box ? box.slice(0, 3) : [0, 0, 0];
-      const hi = box ? box.slice(3, 6) : dims.map((n) => n - 1);
-      const world = (v: readonly number[]) => v.map((x, a) => (x + origin[a]) * voxelSize[a]) as [number, number, number];
-      camera.fit({ min: world(lo), max: world(hi) }, 'y');
-      if (cam) camera.setState(cam);
       const frameLayout = createFrameBindGroupLayout(gpu.device);
       const target = { device: gpu.device, format: 'rgba8unorm' as GPUTextureFormat, frameBindGroupLayout: frameLayout, camera };
-      let layer: RenderLayer & { destroy(): void };
-      if (draw === 'rays') {
-        const rays = await RayLayer.create(target);
-        rays.setDrawData(surface.drawData);
-        rays.iso = stats.isovalue;
-        rays.voxelSize = [...voxelSize];
-        rays.origin = [...origin];
-        layer = rays;
+      const world = (v: readonly number[]) => v.map((x, a) => (x + origin[a]) * voxelSize[a]) as [number, number, number];
+      const t0 = performance.now();
+      if ('readPositions' in opened.iso) {
+        const surface = opened.iso as StoreStreamSurface;
+        const stats = await computeOrExplain(surface, iso);
+        // the page's scene of a store (level 0's box: near and far), and the camera the cut was made for
+        // (viewSpecFor(viewRequest): Fit of the box or of the whole, or the link's, on this canvas)
+        const whole = fitBox0(surface.stream.store.levels[0].layout, 0);
+        camera.fit({ min: world(whole.slice(0, 3)), max: world(whole.slice(3, 6)) }, 'y');
+        camera.setState(cam ?? cameraForBox(box ?? whole, voxelSize, { width, height }).state);
+        scene = await storeScene(target, surface, stats, draw, voxelSize, origin);
       } else {
-        const mesh = await SurfaceLayer.create(target);
-        mesh.setDrawData(surface.drawData);
-        mesh.voxelSize = [...voxelSize];
-        mesh.origin = [...origin];
-        layer = mesh;
+        const surface = opened.iso as Isosurface;
+        const stats = await surface.compute(iso);
+        // the page's camera: fitted to the volume (or the box), or the link's; world = (voxel + origin) * voxel size
+        const { dims } = surface.info;
+        camera.fit({ min: world(box ? box.slice(0, 3) : [0, 0, 0]), max: world(box ? box.slice(3, 6) : dims.map((n) => n - 1)) }, 'y');
+        if (cam) camera.setState(cam);
+        scene = await wholeScene(target, surface, stats, draw, voxelSize, origin);
       }
-      const image = await renderOffscreen(gpu.device, frameLayout, camera, width, height, layer);
-      layer.destroy();
+      const surfaceMs = performance.now() - t0;
+      const { stats } = scene;
+      const image = await renderOffscreen(gpu.device, frameLayout, camera, width, height, scene.layer);
       writeFileSync(pngPath, encodePng(image.colour, width, height));
-      // each pixel's hit distance from the eye, in voxels (world / voxel size), along its ray
+      // which level each covered pixel shows: the level whose own image is nearest there (what the depth test kept)
+      const pixelLevel = new Int8Array(width * height).fill(-1);
+      if (scene.levelLayers.length === 1) {
+        for (let i = 0; i < pixelLevel.length; i++) if (image.depth[i] < 1) pixelLevel[i] = scene.levelLayers[0].level;
+      } else {
+        const nearest = new Float32Array(width * height).fill(1);
+        for (const { level, layer } of scene.levelLayers) {
+          const solo = await renderOffscreen(gpu.device, frameLayout, camera, width, height, layer);
+          for (let i = 0; i < nearest.length; i++) {
+            if (solo.depth[i] < nearest[i]) {
+              nearest[i] = solo.depth[i];
+              pixelLevel[i] = level;
+            }
+          }
+        }
+      }
+      // each pixel's hit distance from the eye, in level-0 voxels (world / voxel size), along its ray
       camera.aspect = width / height;
       const inverse = mat4.invert(mat4.create(), camera.viewProjection(mat4.create()));
       const eye = camera.eyePosition();
       const distances = new Float32Array(width * height);
       let covered = 0;
+      const pixelsPerLevel = new Map<number, number>();
       const p = vec4.create();
       for (let y = 0; y < height; y++) {
         for (let x = 0; x < width; x++) {
@@ -114,6 +156,7 @@ export const renderCommand: CliCommand = {
             continue;
           }
           covered++;
+          if (pixelLevel[i] >= 0) pixelsPerLevel.set(pixelLevel[i], (pixelsPerLevel.get(pixelLevel[i]) ?? 0) + 1);
           vec4.transformMat4(p, [((x + 0.5) / width) * 2 - 1, 1 - ((y + 0.5) / height) * 2, z, 1], inverse);
           distances[i] = Math.hypot(
             (p[0] / p[3] - eye[0]) / voxelSize[0],
@@ -124,8 +167,10 @@ export const renderCommand: CliCommand = {
       }
       const depthPath = stringOption(args, 'depth');
       if (depthPath) writeFileSync(depthPath, new Uint8Array(distances.buffer));
+      const level0 = pixelsPerLevel.get(0) ?? 0;
       ctx.log(
-        `${pngPath}: ${width} x ${height}, ${draw === 'rays' ? 'ray cast in the block cache' : `${stats.triangles} triangles`}, ${covered} pixels on the surface, image ${image.ms.toFixed(1)} ms (${image.timing})`,
+        `${pngPath}: ${width} x ${height}, ${draw === 'rays' ? 'ray cast in the block cache' : `${stats.triangles} triangles`}, ${covered} pixels on the surface` +
+          `${scene.levels.length > 0 ? ` (${covered > 0 ? ((100 * level0) / covered).toFixed(1) : '0'}% from level 0)` : ''}, image ${image.ms.toFixed(1)} ms (${image.timing})`,
       );
       return {
         input,
@@ -142,8 +187,10 @@ export const renderCommand: CliCommand = {
         ...(depthPath ? { depth: depthPath } : {}),
         coveredPixels: covered,
         // a volume opened whole is level 0 everywhere
-        levels: [0],
-        level0Fraction: covered > 0 ? 1 : 0,
+        levels: scene.levels.length > 0 ? scene.levels.map((l) => l.level) : [0],
+        ...(scene.levels.length > 0 ? { cut: scene.levels } : {}),
+        pixelsPerLevel: Object.fromEntries([...pixelsPerLevel].sort((a, b) => a[0] - b[0])),
+        level0Fraction: covered > 0 ? level0 / covered : 0,
         activeBlocks: stats.activeBlocks,
         triangles: draw === 'mesh' ? stats.triangles : 0,
         surfaceMs,
@@ -151,13 +198,120 @@ export const renderCommand: CliCommand = {
         imageMs: image.ms,
         imageTiming: image.timing,
         gpuPeakBytes: meter.peak,
+        ...(opened.store ? { store: opened.store() } : {}),
         adapter: describeAdapter(gpu.adapter),
       };
     } finally {
+      scene?.layer.destroy();
+      for (const l of scene?.levelLayers ?? []) if (l.layer !== scene?.layer) l.layer.destroy();
       opened.destroy();
     }
   },
 };
+
+type Target = Parameters<typeof RayLayer.create>[0];
+
+/** A volume opened whole: one layer, level 0 everywhere. */
+async function wholeScene(
+  target: Target,
+  surface: Isosurface,
+  stats: IsosurfaceStats,
+  draw: 'rays' | 'mesh',
+  voxelSize: [number, number, number],
+  origin: [number, number, number],
+): Promise<Scene> {
+  let layer: Layer;
+  if (draw === 'rays') {
+    const rays = await RayLayer.create(target);
+    rays.setDrawData(surface.drawData);
+    rays.iso = stats.isovalue;
+    rays.voxelSize = [...voxelSize];
+    rays.origin = [...origin];
+    layer = rays;
+  } else {
+    const mesh = await SurfaceLayer.create(target);
+    mesh.setDrawData(surface.drawData);
+    mesh.voxelSize = [...voxelSize];
+    mesh.origin = [...origin];
+    layer = mesh;
+  }
+  return { layer, levelLayers: [{ level: 0, layer }], stats, levels: [] };
+}
+
+/** A store's step on screen: every level at its scale and offset, from its live surface (the CLI's stream draws no copies). */
+async function storeScene(
+  target: Target,
+  surface: StoreStreamSurface,
+  stats: IsosurfaceStats,
+  draw: 'rays' | 'mesh',
+  voxelSize: [number, number, number],
+  origin: [number, number, number],
+): Promise<Scene> {
+  const { stream } = surface;
+  const shown = stream.shown!;
+  const { levelOffsets, levelScales } = stream.store;
+  const coarsest = Math.max(...shown.levels.map((l) => l.level));
+  const dims = stream.levels[0].layout.dims;
+  const placed = shown.levels.map((l) => ({
+    l,
+    scale: levelScales[l.level] ?? ([2 ** l.level, 2 ** l.level, 2 ** l.level] as [number, number, number]),
+    offset: levelOffsets[l.level] ?? ([0, 0, 0] as [number, number, number]),
+  }));
+  const make = async (which: typeof placed): Promise<Layer> => {
+    if (draw === 'rays') {
+      const rays = await RayLayer.create(target);
+      const levels: RayLevel[] = which.map(({ l, scale, offset }) => ({
+        data: l.surface.drawData,
+        tables: l.volume.tables,
+        chunkGrid: l.volume.layout.chunkGrid,
+        chunkBlocks: l.volume.chunkBlocks,
+        scale,
+        offset,
+        reachCells: seamReachCells(l.level, coarsest),
+      }));
+      rays.setLevels(levels, dims);
+      rays.iso = stats.isovalue;
+      rays.voxelSize = [...voxelSize];
+      rays.origin = [...origin];
+      return rays;
+    }
+    const mesh = await SurfaceLayer.create(target);
+    const parts: SurfacePart[] = which.map(({ scale, offset, l }) => ({
+      data: l.surface.drawData,
+      scale,
+      origin: [(offset[0] + origin[0]) / scale[0], (offset[1] + origin[1]) / scale[1], (offset[2] + origin[2]) / scale[2]],
+    }));
+    mesh.setParts(parts);
+    mesh.voxelSize = [...voxelSize];
+    return mesh;
+  };
+  const layer = await make(placed);
+  const levelLayers =
+    placed.length === 1
+      ? [{ level: placed[0].l.level, layer }]
+      : await Promise.all(placed.map(async (p) => ({ level: p.l.level, layer: await make([p]) })));
+  return {
+    layer,
+    levelLayers,
+    stats,
+    levels: shown.levels.map((l) => ({
+      level: l.level,
+      drawnChunks: l.drawn.length,
+      ghostChunks: l.ghosts.length,
+      triangles: l.stats.triangles,
+    })),
+  };
+}
+
+/** The store's surface at `iso`, or the stream's reason it stopped (a failed chunk, the budget) as an input error. */
+async function computeOrExplain(surface: StoreStreamSurface, iso: number): Promise<IsosurfaceStats> {
+  try {
+    return await surface.compute(iso);
+  } catch (e) {
+    if ((e as Error).name === 'LevelStoppedError') throw new InputError((e as Error).message, { cause: e });
+    throw e;
+  }
+}
 
 /** --size WxH -> [width, height]. */
 function sizeOption(text: string): [number, number] {
