@@ -80,6 +80,8 @@ export async function openInputSurface(
     view?: ViewRequest;
     /** Cuts the surfaces open (the caller clips the meshes); a store leaves out the chunks it removes whole. */
     clip?: Clip;
+    /** Surfaces of block caches only, no triangles (drawn by rays: `render`). */
+    cacheOnly?: boolean;
   },
 ): Promise<OpenedInput> {
   if (isStoreInput(path)) {
@@ -131,7 +133,10 @@ export async function openInputSurface(
   if (v.rateChoice) ctx.log(`note: ${v.fileName}: ${describeRateChoice(v.rateChoice)}`);
   let iso: Isosurface | undefined;
   try {
-    iso = await Isosurface.create(gpu, v.stream, opts.budget === undefined ? {} : { memoryBudgetBytes: opts.budget });
+    iso = await Isosurface.create(gpu, v.stream, {
+      ...(opts.budget === undefined ? {} : { memoryBudgetBytes: opts.budget }),
+      ...(opts.cacheOnly ? { cacheOnly: true } : {}),
+    });
     checkValueRange(v.fileName, iso.info.valueRange);
     checkClip(v.fileName, opts.clip, iso.info.dims);
   } catch (e) {

@@ -83,6 +83,8 @@ export class IsosurfacePipeline {
     readonly maxSlots: number,
     /** Welded vertices that fit one binding (the vertex buffer never grows beyond). */
     readonly maxWelded: number,
+    /** Only the cache: no triangles (IsosurfaceOptions.cacheOnly). */
+    readonly cacheOnly: boolean,
   ) {
     this.drawData = {
       vertices: parts.shards.vertices,
@@ -121,7 +123,8 @@ export class IsosurfacePipeline {
     if (perShard < 1) throw new RangeError(`maxVertexBindingBytes must hold at least one index (${INDEX_BYTES} bytes)`);
     const maxSlots = maxCacheSlots(limits, options.maxStorageBindingBytes);
     let slots = Math.max(1, Math.min(blockCount, maxSlots, options.initialCacheSlots ?? Math.ceil(blockCount / 10)));
-    let vertices = Math.max(1, options.initialVertexCapacity ?? Math.min(2 ** 22, Math.max(2 ** 16, blockCount * 8)));
+    // a cache-only surface makes no triangles: its vertex buffers stay at their smallest
+    let vertices = options.cacheOnly ? 1 : Math.max(1, options.initialVertexCapacity ?? Math.min(2 ** 22, Math.max(2 ** 16, blockCount * 8)));
     // The initial buffers must fit the budget too: shrink both (keeping their
     // ratio) until they do; the per-block and per-shard bytes do not shrink.
     const bytesAt = (s: number, v: number) => cacheBytesFor(s, blockCount) + vertexBytesFor(v, Math.min(maxWelded, weldedFor(v)), perShard);
@@ -242,6 +245,7 @@ export class IsosurfacePipeline {
       slots,
       maxSlots,
       maxWelded,
+      options.cacheOnly ?? false,
     );
     pipeline.writeShardCounters();
     return pipeline;
@@ -274,15 +278,17 @@ export class IsosurfacePipeline {
     s.mark(encoder, 2);
     if (!a.verticesOnly) cache.encodeDecode(encoder);
     s.mark(encoder, 3);
-    if (!a.verticesOnly) mc.encodeClassify(encoder, cache.slotData, shards);
+    // a cache-only surface stops here: the stages after it are timed as nothing
+    const mesh = !this.cacheOnly;
+    if (mesh && !a.verticesOnly) mc.encodeClassify(encoder, cache.slotData, shards);
     s.mark(encoder, 4);
     if (a.verticesOnly) counters.set('status', 0);
-    else mc.encodeScans(encoder);
-    mc.encodePlanVertices(encoder, cache.slotData, shards);
+    else if (mesh) mc.encodeScans(encoder);
+    if (mesh) mc.encodePlanVertices(encoder, cache.slotData, shards);
     s.mark(encoder, 5);
-    mc.encodeCellList(encoder, cache.slotData, shards);
+    if (mesh) mc.encodeCellList(encoder, cache.slotData, shards);
     s.mark(encoder, 6);
-    mc.encodeVertices(encoder, cache.slotData, shards);
+    if (mesh) mc.encodeVertices(encoder, cache.slotData, shards);
     s.mark(encoder, 7);
   }
 

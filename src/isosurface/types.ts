@@ -15,6 +15,13 @@ export interface IsosurfaceOptions {
    * Default: half of the device's maxBufferSize, at most 2 GiB.
    */
   memoryBudgetBytes?: number;
+  /**
+   * Only the cache (the ray caster's surface, render/ray-layer.ts): each
+   * surface selects its active blocks and decodes them into the cache, and
+   * makes no triangles (no classification, no vertex output; the vertex
+   * buffers stay at their smallest). Default false.
+   */
+  cacheOnly?: boolean;
   /** Largest index buffer binding (tests lower it to force several index shards). Default: the device limit. */
   maxVertexBindingBytes?: number;
   /**

@@ -72,6 +72,8 @@ export interface StoreInputOptions {
   view?: ViewRequest;
   /** Cuts the surfaces open: chunks it removes whole are neither fetched nor drawn. */
   clip?: Clip;
+  /** Surfaces of block caches only, no triangles (`render --draw rays`): the budget holds bricks, not vertices. */
+  cacheOnly?: boolean;
 }
 
 export async function openStoreInput(gpu: GpuContext, input: string, opts: StoreInputOptions): Promise<StoreInput> {
@@ -79,6 +81,7 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
   const budgetBytes = opts.budget ?? defaultMemoryBudget(gpu.device.limits);
   let view: ViewSpec | undefined;
   const session = await StoreSession.open(gpu, storeForLocation(input), input, {
+    cacheOnly: opts.cacheOnly,
     open: {
       ...(opts.deadlineMs === undefined ? {} : { retry: { deadlineMs: opts.deadlineMs } }),
       rate: opts.rate,

@@ -24,24 +24,26 @@ export interface ChunkedStreamGpu extends StreamGpu<ChunkedVolume, IsosurfaceSta
 }
 
 /**
- * The real GPU side. `budgetMeter`: the meter of the budget the stream holds
+ * The real GPU side. `cacheOnly`: surfaces that make no triangles, only
+ * their caches (a stream the ray caster draws: no vertex memory). `budgetMeter`: the meter of the budget the stream holds
  * against (a page's GpuBudget counts every store's buffers), the parent of
  * the port's own meter. `encoder` (made on the same device) encodes the
  * bricks of stores of lossless chunks into their slots; zfp stores need none.
  */
-export function chunkedGpu(gpu: GpuContext, budgetMeter?: GpuMemoryMeter, encoder?: ZfpEncoder): ChunkedStreamGpu {
+export function chunkedGpu(gpu: GpuContext, budgetMeter?: GpuMemoryMeter, encoder?: ZfpEncoder, cacheOnly = false): ChunkedStreamGpu {
   const meter = new GpuMemoryMeter(budgetMeter);
   const view = meteredGpu(gpu, meter).gpu;
   const maxShardBytes = maxShardBytesFor(gpu.device);
   return {
     meter,
+    cacheOnly,
     get allocatedBytes() {
       return meter.bytes;
     },
     poolBytesFor: (layout, poolChunks) => ChunkedVolume.bytesFor(layout, poolChunks, maxShardBytes),
     createVolume: (layout, poolChunks) =>
       ChunkedVolume.create(view, layout, { poolChunks: Math.min(poolChunks, ChunkedVolume.maxPoolChunks(view, layout)), encoder }),
-    createSurface: (volume, memoryBudgetBytes) => Isosurface.create(view, volume, { memoryBudgetBytes }),
+    createSurface: (volume, memoryBudgetBytes) => Isosurface.create(view, volume, { memoryBudgetBytes, cacheOnly }),
   };
 }
 

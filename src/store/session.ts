@@ -129,6 +129,8 @@ export interface StoreSessionOptions {
    * store): the open then fails and lets the store go.
    */
   view?: (store: ZfpStore) => ViewSpec | null;
+  /** Surfaces hold only their block caches, no triangles (drawn by rays: render/ray-layer.ts); default false. */
+  cacheOnly?: boolean;
   /** Called with the stream as soon as it is made, before its first view (the CLI turns off retries and snapshots here, and sets skirts). */
   setup?: (stream: ChunkStoreStream) => void;
 }
@@ -235,7 +237,7 @@ export class StoreSession {
       const fetched = new FetchedChunks(store);
       fetcher.onChunk((level, chunk, bytes, fromCache) => fetched.add(level, chunk, bytes, fromCache));
       const budget = typeof options.budget === 'number' ? new GpuBudget(options.budget) : options.budget;
-      const port = chunkedGpu(gpu, budget.meter, await storeEncoder(gpu, store));
+      const port = chunkedGpu(gpu, budget.meter, await storeEncoder(gpu, store), options.cacheOnly ?? false);
       const learnt = options.learnt?.(store);
       const view = options.view?.(store) ?? null;
       // one engine whichever way it is planned: by the view, or level by level

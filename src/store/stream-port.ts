@@ -81,6 +81,8 @@ export interface StreamGpu<
 > {
   createVolume(layout: ChunkLevelLayout, poolChunks: number): V;
   createSurface(volume: V, memoryBudgetBytes: number): Promise<F>;
+  /** Its surfaces hold only their caches (the ray caster's; IsosurfaceOptions.cacheOnly): the cost model guesses no vertices. */
+  readonly cacheOnly?: boolean;
   /** GPU bytes held now by everything made here (pools, surfaces and all their buffers): this stream's share of its budget. */
   readonly allocatedBytes: number;
   /** GPU bytes a pool of `poolChunks` chunks of this layout holds. */

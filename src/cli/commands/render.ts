@@ -8,7 +8,8 @@
 // top to bottom; +Infinity where nothing was hit). IN: a volume opened
 // whole, or a Zarr store refined by the image's view (its cut for that
 // camera and size, as the page's): every level of the step drawn, and the
-// record says which level each covered pixel's hit lies in (level0Fraction).
+// record says which level each covered pixel's hit lies in (level0Fraction;
+// --level-map writes it per pixel, a byte each, 255 where nothing was hit).
 import { writeFileSync } from 'node:fs';
 import { mat4, vec4 } from 'gl-matrix';
 import { describeAdapter } from '../../gpu/device.ts';
@@ -47,7 +48,7 @@ export const renderCommand: CliCommand = {
   name: 'render',
   summary: "an image of the surface (ray cast in the block cache, or its triangles) as PNG, with each pixel's hit distance",
   usage:
-    "render IN --iso v --png OUT.png [--draw rays|mesh] [--size WxH] [--view '#cam=..' | --view-box x0,y0,z0,x1,y1,z1] [--tolerance PX] [--rate R] [--cache-budget MB] [--time T] [--channel C] [--depth OUT.f32] (IN: a volume opened whole, as extract's, or a Zarr store refined by the image's view; rays by default)",
+    "render IN --iso v --png OUT.png [--draw rays|mesh] [--size WxH] [--view '#cam=..' | --view-box x0,y0,z0,x1,y1,z1] [--tolerance PX] [--mesh-cut] [--rate R] [--cache-budget MB] [--time T] [--channel C] [--depth OUT.f32] [--level-map OUT.u8] (IN: a volume opened whole, as extract's, or a Zarr store refined by the image's view; rays by default, over surfaces of block caches only, so a store's cut spends the budget on bricks; --mesh-cut: rays over the cut the mesh path makes, surfaces with triangles, to compare the two on one cut)",
   options: {
     iso: { type: 'string' },
     png: { type: 'string' },
@@ -56,11 +57,13 @@ export const renderCommand: CliCommand = {
     view: { type: 'string' },
     'view-box': { type: 'string' },
     tolerance: { type: 'string' },
+    'mesh-cut': { type: 'boolean' },
     rate: { type: 'string' },
     'cache-budget': { type: 'string' },
     time: { type: 'string' },
     channel: { type: 'string' },
     depth: { type: 'string' },
+    'level-map': { type: 'string' },
   },
   async run(ctx, args) {
     const input = requiredPositional(args, 0, 'IN (a zfp file, a raw volume or a Zarr store)');
@@ -81,6 +84,7 @@ export const renderCommand: CliCommand = {
     const tolerancePx = numberOption(args, 'tolerance');
     if (tolerancePx !== undefined && !(tolerancePx > 0)) throw new UsageError('--tolerance must be a positive number of pixels');
     const store = isStoreInput(input);
+    const meshCut = args.values['mesh-cut'] === true;
     if (!store && tolerancePx !== undefined) throw new UsageError('--tolerance is for a Zarr store (the view refines it)');
     // a store is refined by the image's own view: its camera on a canvas of the image's size
     const viewRequest: ViewRequest | undefined = store
@@ -91,6 +95,8 @@ export const renderCommand: CliCommand = {
     const opened = await openInputSurface(ctx, gpu, input, {
       rate: numberOption(args, 'rate'),
       budget: budgetOption(args),
+      // rays read the block caches only: no triangles, no vertex memory (unless asked for the mesh path's cut)
+      cacheOnly: draw === 'rays' && !meshCut,
       ...(store ? { view: viewRequest, time: numberOption(args, 'time'), channel: numberOption(args, 'channel') } : {}),
     });
     let scene: Scene | undefined;
@@ -167,6 +173,13 @@ export const renderCommand: CliCommand = {
       }
       const depthPath = stringOption(args, 'depth');
       if (depthPath) writeFileSync(depthPath, new Uint8Array(distances.buffer));
+      // each pixel's level (rows top to bottom; 255 where nothing was hit)
+      const levelMapPath = stringOption(args, 'level-map');
+      if (levelMapPath)
+        writeFileSync(
+          levelMapPath,
+          Uint8Array.from(pixelLevel, (L) => (L < 0 ? 255 : L)),
+        );
       const level0 = pixelsPerLevel.get(0) ?? 0;
       ctx.log(
         `${pngPath}: ${width} x ${height}, ${draw === 'rays' ? 'ray cast in the block cache' : `${stats.triangles} triangles`}, ${covered} pixels on the surface` +
@@ -185,6 +198,7 @@ export const renderCommand: CliCommand = {
         eye: [...eye],
         png: pngPath,
         ...(depthPath ? { depth: depthPath } : {}),
+        ...(levelMapPath ? { levelMap: levelMapPath } : {}),
         coveredPixels: covered,
         // a volume opened whole is level 0 everywhere
         levels: scene.levels.length > 0 ? scene.levels.map((l) => l.level) : [0],

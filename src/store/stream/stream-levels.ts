@@ -39,7 +39,7 @@ export class StreamLevels<V extends RoleVolume> {
 
   constructor(
     readonly store: ZfpStore,
-    readonly gpu: Pick<StreamGpu<V>, 'createVolume' | 'poolBytesFor'>,
+    readonly gpu: Pick<StreamGpu<V>, 'createVolume' | 'poolBytesFor' | 'cacheOnly'>,
     readonly learnt: LearntRanges,
   ) {
     this.#changes = store.levels.map(() => 0);
@@ -182,7 +182,7 @@ export class StreamLevels<V extends RoleVolume> {
    */
   chunkCost(L: number): number {
     const layout = this.levels[L].layout;
-    return residentChunkBytes(layout) + (this.#surfaceCost[L] ?? guessedSurfaceBytesPerChunk(layout));
+    return residentChunkBytes(layout) + (this.#surfaceCost[L] ?? guessedSurfaceBytesPerChunk(layout, this.gpu.cacheOnly));
   }
 
   /** What level L's surface took (or, `atLeast`, needed) per wanted chunk: the cost the next plan uses. */
