@@ -124,7 +124,9 @@ export class IsosurfacePipeline {
     const maxSlots = maxCacheSlots(limits, options.maxStorageBindingBytes);
     let slots = Math.max(1, Math.min(blockCount, maxSlots, options.initialCacheSlots ?? Math.ceil(blockCount / 10)));
     // a cache-only surface makes no triangles: its vertex buffers stay at their smallest
-    let vertices = options.cacheOnly ? 1 : Math.max(1, options.initialVertexCapacity ?? Math.min(2 ** 22, Math.max(2 ** 16, blockCount * 8)));
+    let vertices = options.cacheOnly
+      ? 1
+      : Math.max(1, options.initialVertexCapacity ?? Math.min(2 ** 22, Math.max(2 ** 16, blockCount * 8)));
     // The initial buffers must fit the budget too: shrink both (keeping their
     // ratio) until they do; the per-block and per-shard bytes do not shrink.
     const bytesAt = (s: number, v: number) => cacheBytesFor(s, blockCount) + vertexBytesFor(v, Math.min(maxWelded, weldedFor(v)), perShard);
