@@ -29,6 +29,7 @@ import { SurfacesPanel } from './ui/surfaces-panel.ts';
 import { setInfoList } from './info-list.ts';
 import { chooseIsovalue } from './iso-choice.ts';
 import { VolumeLoader } from './loading/loader.ts';
+import { keepPageView } from './store/keep-page.ts';
 import { mountStoreView, rangesParameter, storeParameter } from './store/mount.ts';
 import type { StoreView } from './store/store-view.ts';
 import { Messages, showFatal } from './messages.ts';
@@ -634,6 +635,7 @@ async function start(): Promise<void> {
     requestFrame: () => viewer.requestFrame(),
     linkStoreChoice: () => ({ storeRate: initialView.storeRate, time: initialView.time, channel: initialView.channel }),
     setStoreChoice: (choice) => link?.setStoreChoice(choice),
+    keepPage: (vox) => keepPageView({ session, camera: camera.getState(), clip, spacing: spacing.value, surfaces }, vox),
   });
   storeView.setCaps(byId<HTMLInputElement>('clip-caps').checked);
   if (storeUrl) {

@@ -55,6 +55,14 @@ export interface StoreViewDeps {
   /** What the link says of the refinement of the store open now. */
   setCut(cut: { cut?: boolean; tolerancePx?: number; tint?: boolean }): void;
   requestFrame(): void;
+  /**
+   * Before the store opens again at another time point (playback, the time
+   * slider): what to keep of the page (camera, clip, the voxel size set
+   * here, the other surfaces) over what a new volume resets; the function
+   * returned puts back the other surfaces once the time point is on screen.
+   * Absent: the page's defaults for a new volume.
+   */
+  keepPage?(voxelSize: readonly number[]): () => Promise<void>;
   line: HTMLElement;
   panel: HTMLElement;
 }
@@ -71,7 +79,7 @@ export function learntOf(store: ZfpStore, source: AsyncReadable) {
   if (id === undefined) sourceIds.set(source, (id = ++sourceCount));
   const values = store.source
     ? `${store.source.rate}|${store.source.time.index}|${store.source.channel.index}`
-    : String(store.levels[0].layout.rate);
+    : `${store.levels[0].layout.rate}|${store.time?.index ?? 0}`;
   return sessionRanges(
     `${id}|${values}`,
     store.levels.map((l) => l.layout.chunkGrid),
@@ -112,6 +120,12 @@ export interface OpenStore {
   lastProgress: StreamProgress | null;
   /** The isovalue asked for last. */
   iso: number;
+  /** Drawn only once its first refinement has ended (playback: the time point before stays drawn until then). */
+  whole: boolean;
+  /** Another time point of the store on screen: the page keeps its camera, clip, voxel size and surfaces (StoreViewDeps.keepPage). */
+  keepPage: boolean;
+  /** The page's other surfaces put back once it was installed (keepPage). */
+  restoring: Promise<void>;
 }
 
 /** The panel's figures when a store opens: nothing fetched or shown yet; the value range the store or its coarsest level gave. */
@@ -203,15 +217,18 @@ export function updatePageFigures(st: StorePageState, session: StoreSession): vo
   }
 }
 
-/** What the link says of a store of lossless chunks open now (rate, and time point and channel when it has several); empty for a zfp store. */
+/**
+ * What the link says of the store open now: the time point when it has
+ * several (any store: a zfp store's t axis too), and for a store of lossless
+ * chunks its rate and channel.
+ */
 export function storeChoiceOf(store: ZfpStore): StoreChoice {
-  return store.source
-    ? {
-        storeRate: store.source.rate,
-        ...(store.source.time.count > 1 ? { time: store.source.time.index } : {}),
-        ...(store.source.channel.count > 1 ? { channel: store.source.channel.index } : {}),
-      }
-    : {};
+  const time = store.time ?? store.source?.time;
+  return {
+    ...(store.source ? { storeRate: store.source.rate } : {}),
+    ...(time && time.count > 1 ? { time: time.index } : {}),
+    ...(store.source && store.source.channel.count > 1 ? { channel: store.source.channel.index } : {}),
+  };
 }
 
 /** The store behind a URL (same origin, or another one with CORS); a zipped store (.ozx) is read in place with range requests. */

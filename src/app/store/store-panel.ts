@@ -5,6 +5,7 @@
 // StorePageState is also what the page tests read (window.zfpisoStore).
 import type { FetchCounters } from '../../store/fetch/chunk-fetcher.ts';
 import type { ZfpStore } from '../../store/zarr/open-store.ts';
+import type { PlaybackState } from './playback.ts';
 
 /** A store of lossless chunks: the GPU rate of its bricks, the time point and channel shown. */
 export interface StoreChoice {
@@ -79,6 +80,8 @@ export interface StorePageState {
   valueRange?: { lo: number; hi: number; provisional: boolean; from: string };
   /** What the store is and how it is read (lossless chunks, the rate chosen, no range arrays, decode workers): information, not errors. */
   notes?: string[];
+  /** A store with several time points: the time point on screen, the playback's state and its achieved rate (playback.ts). */
+  playback?: PlaybackState;
 }
 
 /** The refinement controls' changes: by view or level by level, the pixel tolerance, the level tint. */
@@ -117,15 +120,16 @@ const escapeHtml = (s: string) => s.replace(/&/g, '&amp;').replace(/</g, '&lt;')
 /**
  * A store of lossless chunks: what it is (format, codecs, type, chunks, how
  * bricks are made, the GPU rate, what float32 does to the values) and the
- * controls that reopen it another way (rate, time point, channel). Made once
- * per store (the figures below it are redrawn on every change).
+ * controls that reopen it another way (rate, channel; the time point: the
+ * playback block, playback.ts). Made once per store (the figures below it
+ * are redrawn on every change).
  */
 function sourceBlock(store: ZfpStore, change: (next: StoreChoice) => void): HTMLElement | null {
   const src = store.source;
   if (!src) return null;
   const box = document.createElement('div');
   box.className = 'store-source';
-  const select = (key: 'time' | 'channel', label: string, v: { index: number; count: number }) =>
+  const select = (key: 'channel', label: string, v: { index: number; count: number }) =>
     v.count > 1
       ? `<label>${label} <select data-choice="${key}">${Array.from(
           { length: Math.min(v.count, 4096) },
@@ -141,8 +145,6 @@ function sourceBlock(store: ZfpStore, change: (next: StoreChoice) => void): HTML
     `<dt>ranges</dt><dd data-k="ranges">${store.levels[0].rangesPath ? 'per brick, from the ranges sidecar' : "none: a level's first surface reads all of it (convert --ranges-only writes them; &amp;ranges=URL)"}</dd>` +
     `</dl>` +
     `<p class="store-choice"><label>GPU rate <input data-choice="storeRate" type="number" min="1" max="32" step="1" value="${src.rate}" title="zfp bits per value of the bricks compressed on the GPU"></label> ` +
-    select('time', 'time', src.time) +
-    ' ' +
     select('channel', 'channel', src.channel) +
     `</p>`;
   box.addEventListener('change', (e) => {
@@ -165,10 +167,13 @@ export function renderStorePanel(
   c: FetchCounters,
   change: (next: StoreChoice) => void = () => {},
   changeCut: (next: CutChoice) => void = () => {},
+  playback: HTMLElement | null = null,
 ): void {
   let made = sourceBlocks.get(panel);
   if (!made || made.store !== store) {
-    panel.replaceChildren();
+    // the playback block stays (it outlives the store: each time point is a store opened again), first under the name
+    for (const child of [...panel.children]) if (child !== playback) child.remove();
+    if (playback && playback.parentElement !== panel) panel.prepend(playback);
     const figures = document.createElement('div');
     const block = sourceBlock(store, change);
     if (block) panel.append(block);

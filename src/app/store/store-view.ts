@@ -35,6 +35,8 @@ import {
 } from './store-open.ts';
 import { StoreIsosurface, type ShownStep } from './store-isosurface.ts';
 import { renderStorePanel, type StoreChoice, type StorePageState } from './store-panel.ts';
+import { Playback } from './playback.ts';
+import type { StoreTimeAxis } from '../../store/zarr/store.ts';
 
 export type { StoreViewDeps };
 
@@ -53,8 +55,21 @@ export class StoreView {
   #clip: Clip | undefined;
   /** Whether the page draws the clip's caps (setCaps). */
   #caps = false;
+  /** An isovalue the slider asked for while the store on screen was suspended (another time point opening): the new one takes it. */
+  #askedIso: number | undefined;
+  /** Refinements' ends waited on (whenIdle). */
+  #idle: (() => void)[] = [];
+  /** The playback of a store's time points (its block in the Store section). */
+  readonly playback: Playback;
 
   constructor(private readonly d: StoreViewDeps) {
+    this.playback = new Playback({
+      time: () => this.time,
+      showTime: (t) => this.showTime(t),
+      changed: () => {
+        if (this.#open) this.#publish(this.#open);
+      },
+    });
     // a new limit: the stream gives back what it must at once (its own listener); its refinement for the new limit,
     // asked for here once the streams have shed (a microtask later), is the one the page waits for
     d.budget.onChange(() =>
@@ -82,6 +97,44 @@ export class StoreView {
     const o = this.#open;
     if (!o) return null;
     return { iso: o.iso, open: () => this.openStore(o.source, o.url, o.choice, o.ranges) };
+  }
+
+  /** The time axis of the store open now (null: none, or no store). */
+  get time(): StoreTimeAxis | null {
+    return this.#open?.store.time ?? null;
+  }
+
+  /**
+   * Shows time point `t` of the store open now: the store opens again there
+   * through the one reopen path (the isovalue, the refinement, and with the
+   * page's keepPage its camera, clip, voxel size and surfaces kept), drawn
+   * only once its refinement has ended (the time point before stays drawn
+   * until then). True once it is on screen and every refinement asked
+   * meanwhile (a new isovalue) has ended; false when it was not shown (no
+   * store, no such time point, the open failed or another store opened).
+   */
+  async showTime(t: number): Promise<boolean> {
+    const o = this.#open;
+    const axis = o?.store.time;
+    if (!o || !axis || !Number.isInteger(t) || t < 0 || t >= axis.count) return false;
+    if (axis.index === t && o.current) {
+      await this.whenIdle();
+      return this.#open === o;
+    }
+    this.#keepIso = Number.isFinite(o.iso) ? o.iso : undefined;
+    await this.openStore(o.source, o.url, { ...o.choice, time: t }, o.ranges, { whole: true, keepPage: true });
+    const n = this.#open;
+    if (!n || n === o || n.store.time?.index !== t || !n.current) return false;
+    await n.restoring;
+    await this.whenIdle();
+    return this.#open === n && n.current !== null;
+  }
+
+  /** Resolves once the store open now has no refinement running (at once when none is). */
+  whenIdle(): Promise<void> {
+    const o = this.#open;
+    if (!o || o.running === 0) return Promise.resolve();
+    return new Promise((resolve) => this.#idle.push(resolve));
   }
 
   /** The page's clip: the store on screen (and those opened later) leave out the chunks it removes whole. */
@@ -112,6 +165,8 @@ export class StoreView {
     this.#end(o);
     this.#line('');
     this.d.panel.hidden = true;
+    this.playback.storeShown();
+    this.#settle();
   }
 
   /** Ends a store: nothing of it runs from now on, and every byte it held on the GPU is given back. */
@@ -128,15 +183,20 @@ export class StoreView {
    * channel) defaults to the link's. The store on screen gives back all but
    * what it draws first (it stays drawn until this one's first step is, and
    * goes on if this one fails to open). Resolves when the first isovalue's
-   * refinement ends.
+   * refinement ends. `how.whole`: the new store is drawn only once that
+   * refinement has ended (playback: never a time point half refined);
+   * `how.keepPage`: the page keeps its camera, clip, voxel size and surfaces
+   * (another time point of the same store).
    */
   async openStore(
     source: AsyncReadable,
     url: string,
     choice: StoreChoice = this.d.linkStoreChoice(),
     ranges?: { store: AsyncReadable; name: string },
+    how: { whole?: boolean; keepPage?: boolean } = {},
   ): Promise<void> {
     const gen = ++this.#gen;
+    this.#askedIso = undefined;
     let cut = null as OpenStore['cut'];
     this.#line(`Opening ${url}…`);
     let previous = this.#open;
@@ -219,6 +279,9 @@ export class StoreView {
       running: 0,
       lastProgress: null,
       iso: Number.NaN,
+      whole: how.whole ?? false,
+      keepPage: how.keepPage ?? false,
+      restoring: Promise.resolve(),
     };
     this.#open = o;
     this.d.setCut(cut ? { cut: true, tolerancePx: cut.tolerancePx, ...(cut.tint ? { tint: true } : {}) } : {});
@@ -242,8 +305,10 @@ export class StoreView {
     // The isovalue: the link's (or the one kept over a reopen) as given, even outside a provisional range; else
     // Otsu over the finest known ranges (a store without any: its coarsest level shown first gives them).
     const linkIso = (range: [number, number]) => {
-      const kept = this.#keepIso;
+      // the slider moved while this store opened (the one on screen suspended) is newest
+      const kept = this.#askedIso ?? this.#keepIso;
       this.#keepIso = undefined;
+      this.#askedIso = undefined;
       return kept !== undefined && Number.isFinite(kept) ? kept : this.d.linkIso(range);
     };
     let iso = stream.valueRange || coarse?.valueRange ? linkIso(o.valueRange) : undefined;
@@ -289,6 +354,8 @@ export class StoreView {
    * those drawn until now).
    */
   async #refine(o: OpenStore, iso: number, view = false, others?: readonly number[]): Promise<void> {
+    // suspended while another store (time point) opens: the slider's value goes to that one
+    if (o.suspended && !view && this.#open !== null && Number.isFinite(iso)) this.#askedIso = iso;
     if (this.#open !== o || o.suspended) return; // ended, or suspended while another store opens
     o.iso = iso;
     o.running++;
@@ -301,10 +368,29 @@ export class StoreView {
     } finally {
       o.running--;
     }
-    if (this.#open !== o || o.running > 0) return;
+    // drawn only when whole (playback): the refinement ended, so the step the stream shows now is drawn (it stopped short: where it stopped)
+    if (this.#open === o && o.whole && !o.current && o.running === 0) {
+      o.whole = false;
+      const shown = o.session.stream.shown as ShownStep | null;
+      if (shown) this.#shown(o, shown);
+    }
+    if (this.#open !== o || o.running > 0) {
+      this.#settle();
+      return;
+    }
     o.state.done = true;
     this.#endLine(o);
     this.#publish(o);
+    this.#settle();
+  }
+
+  /** Whoever waits for the open store's refinements to end (whenIdle) hears it once none runs. */
+  #settle(): void {
+    const o = this.#open;
+    if (o && o.running > 0) return;
+    const waiting = this.#idle;
+    this.#idle = [];
+    for (const resolve of waiting) resolve();
   }
 
   #progress(o: OpenStore, p: StreamProgress): void {
@@ -319,6 +405,8 @@ export class StoreView {
   /** The stream shows a step: the first with a surface becomes the volume on screen (level 0's frame), later ones update it. */
   #shown(o: OpenStore, s: ShownStep): void {
     if (this.#open !== o) return;
+    // drawn only when whole: the steps before the plan's last wait (the time point before stays drawn)
+    if (o.whole && !o.current && !s.final) return;
     const finest = s.levels[0]?.level ?? s.step;
     if (o.cut) {
       const levels = o.store.levels.map((_, L) => {
@@ -346,10 +434,18 @@ export class StoreView {
       iso.tint = o.cut?.tint ?? false;
       // level 0's volume: the pieces of coarser levels are drawn at their own scale and place (store-isosurface.ts)
       const ranges = stream.chunkRanges(finest) ?? stream.chunkRanges(stream.coarsest) ?? o.coarse?.blockRanges ?? null;
-      const volume = storeVolume(o, iso, s.iso, iso.stats, ranges);
+      // the slider moved while this store opened: it opens there (the step drawn now is at the value it was opened at)
+      const asked = this.#askedIso;
+      this.#askedIso = undefined;
+      const volume = storeVolume(o, iso, asked ?? s.iso, iso.stats, ranges);
+      // another time point: the page keeps its camera, clip, voxel size and surfaces over a new volume's defaults
+      const restore = o.keepPage ? this.d.keepPage?.(o.store.voxelSize) : undefined;
       this.d.install(volume);
       o.current = iso;
       o.installed = volume;
+      if (restore) o.restoring = restore().catch((e: Error) => this.d.onError(`${o.url}: ${e.message}`));
+      if (asked !== undefined && asked !== s.iso) void this.#refine(o, asked);
+      this.playback.storeShown();
       // the page's camera now (the link's, or Fit of the volume): plan the cut for it
       if (o.cut) this.#scheduleReplan(o);
     }
@@ -434,9 +530,11 @@ export class StoreView {
         void this.openStore(o.source, o.url, { ...o.choice, ...next }, o.ranges);
       },
       (next) => this.#changeCut(o, next),
+      this.playback.element,
     );
     this.d.publish({
       ...st,
+      playback: this.playback.state,
       levels: st.levels.map((l) => ({ ...l })),
       shownLevels: [...st.shownLevels],
       gpu: { ...st.gpu },
