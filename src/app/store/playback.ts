@@ -27,6 +27,8 @@ export interface PlaybackState {
   behind: boolean;
   /** Time points shown by playback or steps since the page opened. */
   framesShown: number;
+  /** A time point is on its way (asked for, not yet whole on screen), or the interval before the next is waited. */
+  busy: boolean;
 }
 
 export interface PlaybackHost {
@@ -134,6 +136,7 @@ export class Playback {
       achievedFps: achieved,
       behind: this.#behind(achieved),
       framesShown: this.#framesShown,
+      busy: this.#pumping,
     };
   }
 
