@@ -49,7 +49,7 @@ test.beforeAll(async () => {
     { timeout: 120_000 },
   );
   rmSync(work, { recursive: true, force: true });
-  const cli = await runCli<{ isosurfaces: { time: number; isovalue: number; triangles: number }[] }>([
+  const cli = await runCli<{ isosurfaces: { time: number; iso: number; triangles: number }[] }>([
     'extract',
     out,
     '--level',
@@ -59,7 +59,7 @@ test.beforeAll(async () => {
     '--iso',
     '100,60',
   ]);
-  for (const r of cli.isosurfaces) truth.set(`${r.time}|${r.isovalue}`, r.triangles);
+  for (const r of cli.isosurfaces) truth.set(`${r.time}|${r.iso}`, r.triangles);
 });
 
 interface Playback {
