@@ -79,11 +79,11 @@ export class Playback {
     box.hidden = true;
     box.innerHTML =
       `<p class="playback-buttons">` +
-      `<button type="button" data-play="back" title="step back (Alt+←)" aria-label="step back">⏮</button> ` +
+      `<button type="button" data-play="back" title="step back (Alt+←)" aria-label="step back">|◀</button> ` +
       `<button type="button" data-play="toggle" title="play / pause (Space)" aria-label="play">▶</button> ` +
-      `<button type="button" data-play="forward" title="step forward (Alt+→)" aria-label="step forward">⏭</button> ` +
-      `<label title="after the last time point, the first"><input type="checkbox" data-play="loop"> loop</label> ` +
-      `<label>speed <select data-play="fps">${PLAYBACK_SPEEDS.map(
+      `<button type="button" data-play="forward" title="step forward (Alt+→)" aria-label="step forward">▶|</button> ` +
+      `<label title="after the last time point, the first"><input type="checkbox" data-play="loop"> loop</label></p>` +
+      `<p class="playback-speed"><label>speed <select data-play="fps">${PLAYBACK_SPEEDS.map(
         (f) => `<option value="${f}">${f === 0 ? 'as fast as it arrives' : `${f} fps`}</option>`,
       ).join('')}</select></label></p>` +
       `<p class="playback-time"><input type="range" data-play="time" min="0" max="0" step="1" value="0" aria-label="time point"> ` +
@@ -325,7 +325,7 @@ export class Playback {
       const at = this.#asked ?? axis.index;
       if (document.activeElement !== e.slider || !this.#pumping) e.slider.value = String(at);
       this.#label(at);
-      e.toggle.textContent = this.#playing ? '⏸' : '▶';
+      e.toggle.textContent = this.#playing ? '❙❙' : '▶';
       e.toggle.setAttribute('aria-label', this.#playing ? 'pause' : 'play');
       e.toggle.dataset.state = this.#playing ? 'playing' : 'paused';
       const achieved = this.#achieved();
