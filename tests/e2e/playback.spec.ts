@@ -203,3 +203,27 @@ test('play, pause, step, loop, isovalue while playing, the link at t=5', async (
   await expect(page.locator('#store-playback [data-k="time"]')).toHaveText('t = 5 of 6 (2.5 second)');
   expect(errors).toEqual([]);
 });
+
+test('another time point keeps the surfaces, the clip and the voxel size', async ({ page }) => {
+  const errors = watchErrors(page);
+  await openApp(page, `/?store=/stores/${NAME}#iso=100,60&op=1,0.4&clip=0,0,0,20,31,31&vox=1,1,2`);
+  await page.waitForFunction(() => window.zfpiso?.surfaces?.entries.length === 2);
+  await settledAt(page, 0, 100);
+  const kept = () =>
+    page.evaluate(() => ({
+      surfaces: window.zfpiso!.surfaces!.entries.map((e) => ({ iso: e.iso, opacity: e.opacity, color: e.color })),
+      clip: window.zfpiso!.clip,
+      spacing: window.zfpiso!.volume!.spacing,
+    }));
+  const before = await kept();
+  await page.locator('#store-playback [data-play="forward"]').click();
+  await settledAt(page, 1, 100);
+  await page.waitForFunction(() => window.zfpiso!.surfaces!.entries[1]?.triangles !== undefined);
+  expect(await kept()).toEqual(before);
+  // the other surface is of time point 1 too
+  expect(await page.evaluate(() => window.zfpiso!.surfaces!.entries[1].triangles)).toBe(truth.get('1|60'));
+  await page.waitForFunction(
+    () => /vox=1,1,2/.test(location.hash) && /clip=0,0,0,20,31,31/.test(location.hash) && /t=1/.test(location.hash),
+  );
+  expect(errors).toEqual([]);
+});
