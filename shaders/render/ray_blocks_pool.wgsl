@@ -4,7 +4,7 @@
 // shaders/isosurface/blocks_pool.wgsl names them the same), found through
 // the level's page table; a block whose chunk is not resident has none.
 // The ray enters only the chunks this level draws in the step (role drawn),
-// and, on their upper sides, the first `rays.pool.y` cells of the resident
+// and, on their upper sides, the first `rays.pool.y` cells of the ghost
 // chunks above them: a coarser level's region starts half a coarse voxel
 // further up than a finer one's ends (its voxels' centres are offset), so
 // without that reach a ray would see background in the seam. Where the
@@ -14,6 +14,7 @@
 @group(1) @binding(4) var<storage, read> pool_tables: array<u32>;
 
 const ROLE_DRAWN_CODE: u32 = 0u;
+const ROLE_IDLE_CODE: u32 = 2u;
 
 // The pool slot of the chunk at coordinates q, NO_BLOCK when it is outside the level or not resident.
 fn chunk_slot(q: vec3i) -> u32 {
@@ -51,11 +52,13 @@ fn region_skip(b: vec3u) -> u32 {
   if (slot == NO_BLOCK) {
     return cb;
   }
-  if ((pool_tables[rays.chunk_grid.w + slot] >> 30u) == ROLE_DRAWN_CODE) {
+  let role = pool_tables[rays.chunk_grid.w + slot] >> 30u;
+  if (role == ROLE_DRAWN_CODE) {
     return 0u;
   }
+  // an idle chunk's slot may hold a chunk that arrived since its blocks were cached: only the step's ghosts are read
   let reach = rays.pool.y;
-  if (reach == 0u) {
+  if (reach == 0u || role == ROLE_IDLE_CODE) {
     return cb;
   }
   var below_drawn = false;

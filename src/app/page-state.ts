@@ -50,6 +50,8 @@ export interface PageState {
   clip?: Clip;
   /** How the selected surface is drawn: its triangles, or ray cast in the block cache. */
   draw?: 'mesh' | 'rays';
+  /** Whether the last frame drew the selected surface by rays (draw rays, and what they read holds the surface on screen). */
+  raysDrawn?: boolean;
   /** The last "Measure": every visible surface (empty while measuring or after another volume opened). */
   measures?: MeasuredSurface[];
   /** The last "Measure" of the surface (cleared when another volume opens). */

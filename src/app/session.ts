@@ -87,22 +87,34 @@ export class Session {
 
   /**
    * Rays instead of the selected surface's triangles (the others stay
-   * meshes): a volume opened whole, opaque (see-through rays are not peeled
-   * yet), at the isovalue last submitted (what the cache was computed for).
+   * meshes), opaque (see-through rays are not peeled yet): a volume opened
+   * whole at the isovalue last submitted (what the cache was computed for);
+   * a store's step on screen over its levels' pools and caches, once they
+   * hold it (StoreIsosurface.rayLevels: while the next step computes, its
+   * mesh copies are drawn, so no frame is empty).
    */
   private syncRays(): void {
     const { p } = this;
     const rays = p.rays();
     const v = this.current;
-    const data = v && !v.iso.drawParts ? v.iso.drawData : undefined;
-    const on = p.drawMode() === 'rays' && data?.neighbourhoodRanges !== undefined && p.surface.style.opacity >= 1;
+    const wanted = p.drawMode() === 'rays' && p.surface.style.opacity >= 1;
+    v?.iso.setRaysWanted?.(wanted);
+    const store = wanted && v?.iso.rayLevels ? v.iso.rayLevels() : undefined;
+    const data = wanted && v && !v.iso.drawParts ? v.iso.drawData : undefined;
+    const on = store !== undefined || data?.neighbourhoodRanges !== undefined;
     rays.visible = on && p.surface.visible;
+    p.state.raysDrawn = rays.visible;
     if (!on) {
       rays.setDrawData(undefined);
       return;
     }
-    rays.setDrawData(data);
-    rays.iso = this.submittedIso;
+    if (store) {
+      rays.setLevels(store.levels, store.extent);
+      rays.iso = store.iso;
+    } else {
+      rays.setDrawData(data);
+      rays.iso = this.submittedIso;
+    }
     rays.style = p.surface.style;
     rays.voxelSize = p.surface.voxelSize;
     rays.origin = p.surface.origin;

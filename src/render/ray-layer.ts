@@ -38,6 +38,8 @@ export interface RayLevel {
   /** Where the level's voxel j lies in level-0 voxels: j * scale + offset. */
   scale: readonly [number, number, number];
   offset: readonly [number, number, number];
+  /** Multiplies the surface's colours (the tint-by-level view); default none. */
+  tint?: readonly [number, number, number];
   /** Cells the rays reach above the level's drawn chunks (into its ghosts): seams toward coarser levels (seamReachCells). */
   reachCells: number;
 }
@@ -235,8 +237,9 @@ export class RayLayer implements RenderLayer {
     i32[19] = 0;
     u32[23] = 0;
     for (let a = 0; a < 3; a++) {
-      f32[24 + a] = s.front[a];
-      f32[28 + a] = s.back[a];
+      const tint = level?.tint?.[a] ?? 1;
+      f32[24 + a] = s.front[a] * tint;
+      f32[28 + a] = s.back[a] * tint;
     }
     f32[27] = s.ambient;
     f32[31] = s.specular;

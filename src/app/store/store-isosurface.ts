@@ -22,6 +22,7 @@ import type { VolumeProbe } from '../../zfp/probe.ts';
 import type { Clip } from '../../core/clip.ts';
 import { storeCapPieces } from './store-caps.ts';
 import type { CapPiece } from '../../render/cap-layer.ts';
+import { type RayLevel, seamReachCells } from '../../render/ray-layer.ts';
 import { shownValueAt, type ShownValue } from '../../store/shown-value.ts';
 import type { PageIsosurface } from '../engine.ts';
 
@@ -147,6 +148,37 @@ export class StoreIsosurface implements PageIsosurface {
       scale: [...this.#parts[i].scale] as [number, number, number],
       origin: [...this.#parts[i].origin] as [number, number, number],
     }));
+  }
+
+  /**
+   * The step on screen for the ray caster (render/ray-layer.ts): each
+   * level's pool and live block cache, at the step's own isovalue. None
+   * while those caches do not hold the step (StoreStream.cachesShown: a
+   * step being computed, caches emptied or released): the step's mesh
+   * copies are drawn meanwhile, so no frame is empty.
+   */
+  rayLevels(): { levels: RayLevel[]; extent: readonly [number, number, number]; iso: number } | undefined {
+    const s = this.#shown;
+    // the stream's step on screen (a camera move that keeps its plan renews the object, not its levels)
+    if (!this.stream.cachesShown || s.levels !== this.stream.shown?.levels) return undefined;
+    const { levelOffsets, levelScales } = this.stream.store;
+    const coarsest = Math.max(...s.levels.map((l) => l.level));
+    const levels = s.levels.map((l, i) => ({
+      data: l.surface.drawData,
+      tables: l.volume.tables,
+      chunkGrid: l.volume.layout.chunkGrid,
+      chunkBlocks: l.volume.chunkBlocks,
+      scale: levelScales[l.level] ?? ([2 ** l.level, 2 ** l.level, 2 ** l.level] as [number, number, number]),
+      offset: levelOffsets[l.level] ?? ([0, 0, 0] as [number, number, number]),
+      reachCells: seamReachCells(l.level, coarsest),
+      ...(this.#parts[i]?.tint ? { tint: this.#parts[i].tint } : {}),
+    }));
+    return { levels, extent: this.stream.levels[0].layout.dims, iso: s.iso };
+  }
+
+  /** Whether the page draws rays (rayLevels): the stream then keeps the step on screen's caches whole (StoreStream.setKeepCaches). */
+  setRaysWanted(on: boolean): void {
+    if (!this.#destroyed) this.stream.setKeepCaches(on);
   }
 
   /** The step's pieces at each of its isovalues (a replaced step's copies are gone: nothing keeps them). */

@@ -66,6 +66,13 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   /** Readers of the step on screen (exports): a new step is not shown before they are done. */
   #holds: Promise<unknown>[] = [];
   #shown: ShownCut<V, S, F> | null = null;
+  /**
+   * The block caches changed since the step on screen was computed: another
+   * step's surfaces were computed on them (shown or not), or they were
+   * emptied to give memory back. Its copies stay drawn either way.
+   */
+  #cachesChanged = false;
+  #keepCaches = false;
   readonly #surfaces: StreamSurfaces<V, S, F>;
   /** Pools and surfaces against the budget: room, giving back, figures. */
   readonly #memory: StreamMemory<V, S, F>;
@@ -177,6 +184,30 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     return this.#events.onError(l);
   }
 
+  /**
+   * Whether the live block caches of the step on screen hold what it was
+   * computed from (every block active at its isovalue): not while a step's
+   * surfaces are computed (the caches change on the GPU), nor once they
+   * were emptied to give memory back or the step was released to its
+   * copies. The ray caster reads them only then; the copies stay whole.
+   */
+  get cachesShown(): boolean {
+    return !this.#cachesChanged && this.#shown !== null && !this.#shown.frozen;
+  }
+
+  /**
+   * Whether something reads the live block caches of the step on screen
+   * (the page's ray caster): then a step on screen whose caches changed
+   * since (a superseded step computed on them, or they were emptied) is
+   * computed again rather than taken as shown, and turning this on asks
+   * for it at once. Off: the copies are all that is drawn.
+   */
+  setKeepCaches(on: boolean): void {
+    if (on === this.#keepCaches) return;
+    this.#keepCaches = on;
+    if (on && this.#cachesChanged && !this.#suspended && !this.#destroyed && Number.isFinite(this.#iso)) void this.setIsovalue(this.#iso);
+  }
+
   get shown(): ShownCut<V, S, F> | null {
     return this.#shown;
   }
@@ -286,7 +317,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       const complete = plan.wantsRanges.length === 0 && !plan.refused;
       // a camera move that leaves the plan as it is on screen: nothing to fetch or compute, and
       // what a superseded step was still fetching is aborted (its chunks are no longer needed)
-      if (complete && showsStep(this.#shown, steps[steps.length - 1], iso, others)) {
+      if (complete && this.#showsWhole(steps[steps.length - 1], iso, others)) {
         this.fetcher.wantAll([]);
         this.#shown = { ...this.#shown!, cut: plan.cut, final: true };
         return 'done';
@@ -302,7 +333,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       for (let i = first; i < steps.length; i++) {
         if (stale()) return 'done';
         // on screen already (a plan that goes on once a finer level's range array was read)
-        if (showsStep(this.#shown, steps[i], iso, others)) continue;
+        if (this.#showsWhole(steps[i], iso, others)) continue;
         const r = await this.#show(steps[i], plan.cut, iso, others, gen, complete && i === steps.length - 1);
         if (r === true) continue;
         if (r === false) return 'done';
@@ -407,6 +438,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     const arrived = await this.#fetch.fetch(step, missing, order, shownWanted, () => progress('fetching'));
     if (stale() || !arrived) return false; // superseded, or a chunk failed
     progress('computing');
+    this.#cachesChanged = true;
     const computed = await computeStep(
       step,
       iso,
@@ -455,6 +487,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     if (this.snapshots) for (const l of levels) l.surface.present?.();
     const before = this.#shown;
     this.#shown = { iso, others: [...others], step: step.finest, final, levels, cut, leaves: step.leaves };
+    this.#cachesChanged = false;
     this.#dropCopiesOf(before);
     // learning is asked for before listeners hear of the step, so their learnSettled() waits for it
     this.#pools.learn(levels, (l) => !this.#destroyed && !this.#suspended && this.#surfaces.get(l.level) === l.surface);
@@ -466,6 +499,11 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   /** Resolves when the learnt ranges asked for so far are recorded. */
   learnSettled(): Promise<void> {
     return this.#pools.learnSettled();
+  }
+
+  /** Whether the step on screen is `step` at these isovalues, with its live caches too when they are read (setKeepCaches). */
+  #showsWhole(step: Step, iso: number, others: readonly number[]): boolean {
+    return showsStep(this.#shown, step, iso, others) && !(this.#keepCaches && this.#cachesChanged);
   }
 
   /**
@@ -542,6 +580,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   /** Lets go of what the step on screen does not draw (StreamMemory.releaseUnshown). */
   #releaseUnshown(): void {
     this.#memory.releaseUnshown(this.#shown);
+    this.#cachesChanged = true;
   }
 
   /** Keeps only the copies the step on screen is drawn from (without copies, the CLI's, only what is not on screen goes). */
