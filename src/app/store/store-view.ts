@@ -117,10 +117,10 @@ export class StoreView {
     const o = this.#open;
     const axis = o?.store.time;
     if (!o || !axis || !Number.isInteger(t) || t < 0 || t >= axis.count) return false;
-    if (axis.index === t && o.current) {
-      await this.whenIdle();
-      return this.#open === o;
-    }
+    // the time point on screen first ends what was asked of it (a new isovalue): the next is asked for once it is whole
+    await this.whenIdle();
+    if (this.#open !== o) return false;
+    if (axis.index === t && o.current) return true;
     this.#keepIso = Number.isFinite(o.iso) ? o.iso : undefined;
     await this.openStore(o.source, o.url, { ...o.choice, time: t }, o.ranges, { whole: true, keepPage: true });
     const n = this.#open;
