@@ -157,11 +157,15 @@ async function start(): Promise<void> {
   // Draw: the selected surface as triangles or ray cast in the block cache (the link's draw=rays)
   let drawMode: 'mesh' | 'rays' = initialView.draw ?? 'mesh';
   const drawSelect = byId<HTMLSelectElement>('draw-mode');
+  // rays make no triangles: the panel says what still uses them
+  const drawNote = byId<HTMLElement>('draw-note');
   drawSelect.value = drawMode;
   state.draw = drawMode;
+  drawNote.hidden = drawMode !== 'rays';
   drawSelect.addEventListener('change', () => {
     drawMode = drawSelect.value === 'rays' ? 'rays' : 'mesh';
     state.draw = drawMode;
+    drawNote.hidden = drawMode !== 'rays';
     link?.setDraw(drawMode === 'rays' ? 'rays' : undefined);
     viewer.requestFrame();
   });
