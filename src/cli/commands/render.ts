@@ -17,8 +17,6 @@ import { meteredGpu } from '../../gpu/memory-meter.ts';
 import type { Isosurface } from '../../isosurface/isosurface.ts';
 import type { IsosurfaceStats } from '../../isosurface/types.ts';
 import { ArcballCamera } from '../../render/camera.ts';
-import { RayLayer, type RayLevel, seamReachCells } from '../../render/ray-layer.ts';
-import { SurfaceLayer, type SurfacePart } from '../../render/surface-layer.ts';
 import { createFrameBindGroupLayout, DEPTH_FORMAT, FRAME_UNIFORM_BYTES, frameUniformData, type RenderLayer } from '../../render/viewer.ts';
 import { isStoreInput } from '../../store/cli-input.ts';
 import type { StoreStreamSurface } from '../../store/stream-surface.ts';
@@ -27,22 +25,12 @@ import { parseViewBox, type ViewRequest } from '../../store/view/view-request.ts
 import { type CliCommand, InputError, numberOption, requiredPositional, stringOption, UsageError } from '../command.ts';
 import { openInputSurface } from '../input.ts';
 import { encodePng } from '../png.ts';
+import { destroyScene, levelPerPixel, type Scene, storeScene, wholeScene } from '../scene.ts';
 import { budgetOption } from './extract.ts';
 
 /** The page's background (render/viewer.ts's default clear colour). */
 const BACKGROUND = { r: 0.09, g: 0.1, b: 0.12, a: 1 };
 const MAX_SIDE = 8192;
-
-type Layer = RenderLayer & { destroy(): void };
-
-/** What one run draws: the layer of everything, and per level of a store's step the layer of that level alone (which level each pixel shows). */
-interface Scene {
-  layer: Layer;
-  levelLayers: { level: number; layer: Layer }[];
-  stats: IsosurfaceStats;
-  /** A store's step: per level, the chunks drawn and their ghosts. */
-  levels: { level: number; drawnChunks: number; ghostChunks: number; triangles: number }[];
-}
 
 export const renderCommand: CliCommand = {
   name: 'render',
@@ -129,22 +117,12 @@ export const renderCommand: CliCommand = {
       const { stats } = scene;
       const image = await renderOffscreen(gpu.device, frameLayout, camera, width, height, scene.layer);
       writeFileSync(pngPath, encodePng(image.colour, width, height));
-      // which level each covered pixel shows: the level whose own image is nearest there (what the depth test kept)
-      const pixelLevel = new Int8Array(width * height).fill(-1);
-      if (scene.levelLayers.length === 1) {
-        for (let i = 0; i < pixelLevel.length; i++) if (image.depth[i] < 1) pixelLevel[i] = scene.levelLayers[0].level;
-      } else {
-        const nearest = new Float32Array(width * height).fill(1);
-        for (const { level, layer } of scene.levelLayers) {
-          const solo = await renderOffscreen(gpu.device, frameLayout, camera, width, height, layer);
-          for (let i = 0; i < nearest.length; i++) {
-            if (solo.depth[i] < nearest[i]) {
-              nearest[i] = solo.depth[i];
-              pixelLevel[i] = level;
-            }
-          }
-        }
-      }
+      // which level each covered pixel shows
+      const pixelLevel = await levelPerPixel(
+        scene,
+        image.depth,
+        async (layer) => (await renderOffscreen(gpu.device, frameLayout, camera, width, height, layer)).depth,
+      );
       // each pixel's hit distance from the eye, in level-0 voxels (world / voxel size), along its ray
       camera.aspect = width / height;
       const inverse = mat4.invert(mat4.create(), camera.viewProjection(mat4.create()));
@@ -216,106 +194,11 @@ export const renderCommand: CliCommand = {
         adapter: describeAdapter(gpu.adapter),
       };
     } finally {
-      scene?.layer.destroy();
-      for (const l of scene?.levelLayers ?? []) if (l.layer !== scene?.layer) l.layer.destroy();
+      destroyScene(scene);
       opened.destroy();
     }
   },
 };
-
-type Target = Parameters<typeof RayLayer.create>[0];
-
-/** A volume opened whole: one layer, level 0 everywhere. */
-async function wholeScene(
-  target: Target,
-  surface: Isosurface,
-  stats: IsosurfaceStats,
-  draw: 'rays' | 'mesh',
-  voxelSize: [number, number, number],
-  origin: [number, number, number],
-): Promise<Scene> {
-  let layer: Layer;
-  if (draw === 'rays') {
-    const rays = await RayLayer.create(target);
-    rays.setDrawData(surface.drawData);
-    rays.iso = stats.isovalue;
-    rays.voxelSize = [...voxelSize];
-    rays.origin = [...origin];
-    layer = rays;
-  } else {
-    const mesh = await SurfaceLayer.create(target);
-    mesh.setDrawData(surface.drawData);
-    mesh.voxelSize = [...voxelSize];
-    mesh.origin = [...origin];
-    layer = mesh;
-  }
-  return { layer, levelLayers: [{ level: 0, layer }], stats, levels: [] };
-}
-
-/** A store's step on screen: every level at its scale and offset, from its live surface (the CLI's stream draws no copies). */
-async function storeScene(
-  target: Target,
-  surface: StoreStreamSurface,
-  stats: IsosurfaceStats,
-  draw: 'rays' | 'mesh',
-  voxelSize: [number, number, number],
-  origin: [number, number, number],
-): Promise<Scene> {
-  const { stream } = surface;
-  const shown = stream.shown!;
-  const { levelOffsets, levelScales } = stream.store;
-  const coarsest = Math.max(...shown.levels.map((l) => l.level));
-  const dims = stream.levels[0].layout.dims;
-  const placed = shown.levels.map((l) => ({
-    l,
-    scale: levelScales[l.level] ?? ([2 ** l.level, 2 ** l.level, 2 ** l.level] as [number, number, number]),
-    offset: levelOffsets[l.level] ?? ([0, 0, 0] as [number, number, number]),
-  }));
-  const make = async (which: typeof placed): Promise<Layer> => {
-    if (draw === 'rays') {
-      const rays = await RayLayer.create(target);
-      const levels: RayLevel[] = which.map(({ l, scale, offset }) => ({
-        data: l.surface.drawData,
-        tables: l.volume.tables,
-        chunkGrid: l.volume.layout.chunkGrid,
-        chunkBlocks: l.volume.chunkBlocks,
-        scale,
-        offset,
-        reachCells: seamReachCells(l.level, coarsest),
-      }));
-      rays.setLevels(levels, dims);
-      rays.iso = stats.isovalue;
-      rays.voxelSize = [...voxelSize];
-      rays.origin = [...origin];
-      return rays;
-    }
-    const mesh = await SurfaceLayer.create(target);
-    const parts: SurfacePart[] = which.map(({ scale, offset, l }) => ({
-      data: l.surface.drawData,
-      scale,
-      origin: [(offset[0] + origin[0]) / scale[0], (offset[1] + origin[1]) / scale[1], (offset[2] + origin[2]) / scale[2]],
-    }));
-    mesh.setParts(parts);
-    mesh.voxelSize = [...voxelSize];
-    return mesh;
-  };
-  const layer = await make(placed);
-  const levelLayers =
-    placed.length === 1
-      ? [{ level: placed[0].l.level, layer }]
-      : await Promise.all(placed.map(async (p) => ({ level: p.l.level, layer: await make([p]) })));
-  return {
-    layer,
-    levelLayers,
-    stats,
-    levels: shown.levels.map((l) => ({
-      level: l.level,
-      drawnChunks: l.drawn.length,
-      ghostChunks: l.ghosts.length,
-      triangles: l.stats.triangles,
-    })),
-  };
-}
 
 /** The store's surface at `iso`, or the stream's reason it stopped (a failed chunk, the budget) as an input error. */
 async function computeOrExplain(surface: StoreStreamSurface, iso: number): Promise<IsosurfaceStats> {

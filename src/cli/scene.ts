@@ -1,0 +1,150 @@
+// What `render` (and `bench:rays`) draw: a volume opened whole as one
+// layer, or a store's step on screen as one layer of all its levels plus one
+// per level alone (which level each pixel shows: the one whose own image is
+// nearest there, what the depth test kept), by rays over each level's pool
+// and cache (render/ray-layer.ts) or by its triangles (surface-layer.ts).
+import type { Isosurface } from '../isosurface/isosurface.ts';
+import type { IsosurfaceStats } from '../isosurface/types.ts';
+import { RayLayer, type RayLevel, seamReachCells } from '../render/ray-layer.ts';
+import { SurfaceLayer, type SurfacePart } from '../render/surface-layer.ts';
+import type { RenderLayer } from '../render/viewer.ts';
+import type { StoreStreamSurface } from '../store/stream-surface.ts';
+
+export type Layer = RenderLayer & { destroy(): void };
+
+/** What one run draws: the layer of everything, and per level of a store's step the layer of that level alone (which level each pixel shows). */
+export interface Scene {
+  layer: Layer;
+  levelLayers: { level: number; layer: Layer }[];
+  stats: IsosurfaceStats;
+  /** A store's step: per level, the chunks drawn and their ghosts. */
+  levels: { level: number; drawnChunks: number; ghostChunks: number; triangles: number }[];
+}
+
+export type Target = Parameters<typeof RayLayer.create>[0];
+
+/** A volume opened whole: one layer, level 0 everywhere. */
+export async function wholeScene(
+  target: Target,
+  surface: Isosurface,
+  stats: IsosurfaceStats,
+  draw: 'rays' | 'mesh',
+  voxelSize: [number, number, number],
+  origin: [number, number, number],
+): Promise<Scene> {
+  let layer: Layer;
+  if (draw === 'rays') {
+    const rays = await RayLayer.create(target);
+    rays.setDrawData(surface.drawData);
+    rays.iso = stats.isovalue;
+    rays.voxelSize = [...voxelSize];
+    rays.origin = [...origin];
+    layer = rays;
+  } else {
+    const mesh = await SurfaceLayer.create(target);
+    mesh.setDrawData(surface.drawData);
+    mesh.voxelSize = [...voxelSize];
+    mesh.origin = [...origin];
+    layer = mesh;
+  }
+  return { layer, levelLayers: [{ level: 0, layer }], stats, levels: [] };
+}
+
+/** A store's step on screen: every level at its scale and offset, from its live surface (the CLI's stream draws no copies). */
+export async function storeScene(
+  target: Target,
+  surface: StoreStreamSurface,
+  stats: IsosurfaceStats,
+  draw: 'rays' | 'mesh',
+  voxelSize: [number, number, number],
+  origin: [number, number, number],
+): Promise<Scene> {
+  const { stream } = surface;
+  const shown = stream.shown!;
+  const { levelOffsets, levelScales } = stream.store;
+  const coarsest = Math.max(...shown.levels.map((l) => l.level));
+  const dims = stream.levels[0].layout.dims;
+  const placed = shown.levels.map((l) => ({
+    l,
+    scale: levelScales[l.level] ?? ([2 ** l.level, 2 ** l.level, 2 ** l.level] as [number, number, number]),
+    offset: levelOffsets[l.level] ?? ([0, 0, 0] as [number, number, number]),
+  }));
+  const make = async (which: typeof placed): Promise<Layer> => {
+    if (draw === 'rays') {
+      const rays = await RayLayer.create(target);
+      const levels: RayLevel[] = which.map(({ l, scale, offset }) => ({
+        data: l.surface.drawData,
+        tables: l.volume.tables,
+        chunkGrid: l.volume.layout.chunkGrid,
+        chunkBlocks: l.volume.chunkBlocks,
+        scale,
+        offset,
+        reachCells: seamReachCells(l.level, coarsest),
+      }));
+      rays.setLevels(levels, dims);
+      rays.iso = stats.isovalue;
+      rays.voxelSize = [...voxelSize];
+      rays.origin = [...origin];
+      return rays;
+    }
+    const mesh = await SurfaceLayer.create(target);
+    const parts: SurfacePart[] = which.map(({ scale, offset, l }) => ({
+      data: l.surface.drawData,
+      scale,
+      origin: [(offset[0] + origin[0]) / scale[0], (offset[1] + origin[1]) / scale[1], (offset[2] + origin[2]) / scale[2]],
+    }));
+    mesh.setParts(parts);
+    mesh.voxelSize = [...voxelSize];
+    return mesh;
+  };
+  const layer = await make(placed);
+  const levelLayers =
+    placed.length === 1
+      ? [{ level: placed[0].l.level, layer }]
+      : await Promise.all(placed.map(async (p) => ({ level: p.l.level, layer: await make([p]) })));
+  return {
+    layer,
+    levelLayers,
+    stats,
+    levels: shown.levels.map((l) => ({
+      level: l.level,
+      drawnChunks: l.drawn.length,
+      ghostChunks: l.ghosts.length,
+      triangles: l.stats.triangles,
+    })),
+  };
+}
+
+/**
+ * Which level each pixel of a frame shows (-1: nothing): the scene's only
+ * level, or the level whose own image is nearest there. `render(layer)`
+ * draws one frame of a layer and returns its depth.
+ */
+export async function levelPerPixel(
+  scene: Scene,
+  depth: Float32Array,
+  render: (layer: RenderLayer) => Promise<Float32Array>,
+): Promise<Int8Array> {
+  const pixelLevel = new Int8Array(depth.length).fill(-1);
+  if (scene.levelLayers.length === 1) {
+    for (let i = 0; i < pixelLevel.length; i++) if (depth[i] < 1) pixelLevel[i] = scene.levelLayers[0].level;
+    return pixelLevel;
+  }
+  const nearest = new Float32Array(depth.length).fill(1);
+  for (const { level, layer } of scene.levelLayers) {
+    const solo = await render(layer);
+    for (let i = 0; i < nearest.length; i++) {
+      if (solo[i] < nearest[i]) {
+        nearest[i] = solo[i];
+        pixelLevel[i] = level;
+      }
+    }
+  }
+  return pixelLevel;
+}
+
+/** Destroys a scene's layers. */
+export function destroyScene(scene: Scene | undefined): void {
+  scene?.layer.destroy();
+  for (const l of scene?.levelLayers ?? []) if (l.layer !== scene?.layer) l.layer.destroy();
+}
