@@ -11,6 +11,15 @@
 //     indices (what only the triangles need).
 // FILES (comma list of shared volumes), ISOS (one per file), SIZE, FRAMES from
 // the environment; JSON to benchmarks/results/rays-<adapter>.json.
+// With STORE (a Zarr store, e.g. a converted gen:2048x2048x2048), also the
+// store refined by the view within STORE_BUDGET MB (default 256) at
+// STORE_ISO, Fit and framed on STORE_BOX (x0,y0,z0,x1,y1,z1, level-0
+// voxels), each mode planning its own cut (rays: surfaces of block caches
+// only, so the budget holds bricks, not vertices): time to the first image
+// (first step shown + a frame) and to the whole (last step + a frame), frame
+// ms (median of FRAMES at that camera after a discarded first), GPU peak,
+// the cut's level-0 chunks and level0Fraction (covered pixels that show a
+// level-0 hit).
 import { readFileSync } from 'node:fs';
 import { fileURLToPath } from 'node:url';
 import { describeAdapter } from '../src/gpu/device.ts';
@@ -21,6 +30,12 @@ import { RayLayer } from '../src/render/ray-layer.ts';
 import { SurfaceLayer } from '../src/render/surface-layer.ts';
 import { createFrameBindGroupLayout, DEPTH_FORMAT, FRAME_UNIFORM_BYTES, frameUniformData, type RenderLayer } from '../src/render/viewer.ts';
 import { loadZfpStream } from '../src/zfp/gpu-stream.ts';
+import { renderOffscreen } from '../src/cli/commands/render.ts';
+import { destroyScene, levelPerPixel, storeScene } from '../src/cli/scene.ts';
+import { meteredGpu } from '../src/gpu/memory-meter.ts';
+import { openStoreInput } from '../src/store/cli-input.ts';
+import { cameraForBox, fitBox0 } from '../src/store/view/camera.ts';
+import { parseViewBox } from '../src/store/view/view-request.ts';
 import { printTable, summarize, writeJson } from './lib/report.ts';
 
 const here = fileURLToPath(new URL('..', import.meta.url));
@@ -127,6 +142,87 @@ for (let f = 0; f < files.length; f++) {
   stream.destroy();
 }
 
+interface StoreRow {
+  view: string;
+  mode: 'mesh' | 'rays';
+  budgetMiB: number;
+  firstImageMs: number;
+  wholeImageMs: number;
+  frameMs: number;
+  gpuPeakBytes: number;
+  level0Chunks: number;
+  levels: string;
+  level0Fraction: number;
+  triangles: number;
+}
+const storeRows: StoreRow[] = [];
+const storePath = process.env.STORE;
+if (storePath) {
+  const budgetMiB = Number(process.env.STORE_BUDGET ?? 256);
+  const storeIso = Number(process.env.STORE_ISO ?? 2);
+  const box = process.env.STORE_BOX ? parseViewBox(process.env.STORE_BOX) : undefined;
+  if (typeof box === 'string') throw new Error(`STORE_BOX: ${box}`);
+  for (const view of box ? (['fit', 'box'] as const) : (['fit'] as const)) {
+    for (const mode of ['mesh', 'rays'] as const) {
+      const { gpu: metered, meter } = meteredGpu(gpu);
+      const opened = await openStoreInput(metered, storePath, {
+        view: { ...(view === 'box' ? { box: box! } : { whole: true }), viewport: { width, height } },
+        budget: budgetMiB * MiB,
+        cacheOnly: mode === 'rays',
+      });
+      const surface = opened.surface;
+      const t0 = performance.now();
+      let firstShown: number | undefined;
+      const unlisten = surface.stream.onProgress((p) => {
+        if (p.phase === 'shown' && firstShown === undefined) firstShown = performance.now() - t0;
+      });
+      const stats = await surface.compute(storeIso);
+      const whole = performance.now() - t0;
+      unlisten();
+      const camera = new ArcballCamera();
+      const fitted = fitBox0(surface.stream.store.levels[0].layout, 0);
+      const world = (v: readonly number[]) => v.map((x, a) => x * opened.voxelSize[a]) as [number, number, number];
+      camera.fit({ min: world(fitted.slice(0, 3)), max: world(fitted.slice(3, 6)) }, 'y');
+      camera.setState(cameraForBox(view === 'box' ? box! : fitted, opened.voxelSize, { width, height }).state);
+      const target = { device, format: 'rgba8unorm' as GPUTextureFormat, frameBindGroupLayout: frameLayout, camera };
+      const scene = await storeScene(target, surface, stats, mode, opened.voxelSize, [0, 0, 0]);
+      const all: number[] = [];
+      let last: Awaited<ReturnType<typeof renderOffscreen>> | undefined;
+      for (let k = 0; k <= frames; k++) {
+        last = await renderOffscreen(device, frameLayout, camera, width, height, scene.layer);
+        all.push(last.ms);
+      }
+      const pixelLevel = await levelPerPixel(
+        scene,
+        last!.depth,
+        async (layer) => (await renderOffscreen(device, frameLayout, camera, width, height, layer)).depth,
+      );
+      let covered = 0;
+      let level0 = 0;
+      for (const L of pixelLevel) {
+        if (L >= 0) covered++;
+        if (L === 0) level0++;
+      }
+      const frame = summarize(all.slice(1)).median;
+      storeRows.push({
+        view: view === 'box' ? `box ${process.env.STORE_BOX}` : 'fit',
+        mode,
+        budgetMiB,
+        firstImageMs: (firstShown ?? whole) + frame,
+        wholeImageMs: whole + frame,
+        frameMs: frame,
+        gpuPeakBytes: meter.peak,
+        level0Chunks: scene.levels.find((l) => l.level === 0)?.drawnChunks ?? 0,
+        levels: scene.levels.map((l) => `${l.level}:${l.drawnChunks}`).join(' '),
+        level0Fraction: covered > 0 ? level0 / covered : 0,
+        triangles: mode === 'mesh' ? stats.triangles : 0,
+      });
+      destroyScene(scene);
+      surface.destroy();
+    }
+  }
+}
+
 printTable(
   `triangles vs rays in the block cache, ${width}x${height}, median of ${frames} orbit frames after a discarded first (${timed ? 'GPU timestamps' : 'queue wall time'}), ${adapter}`,
   ['volume', 'iso', 'mode', 'surface GPU ms', 'first image ms', 'frame ms', 'cache MiB', 'vertex MiB (mesh only)', 'triangles'],
@@ -142,6 +238,34 @@ printTable(
     r.triangles,
   ]),
 );
+if (storeRows.length > 0)
+  printTable(
+    `a store refined by the view, mesh vs rays, each planning its cut within ${storeRows[0].budgetMiB} MiB, ${width}x${height}, median of ${frames} frames after a discarded first, ${storePath}`,
+    [
+      'view',
+      'mode',
+      'first image ms',
+      'whole image ms',
+      'frame ms',
+      'GPU peak MiB',
+      'level-0 chunks',
+      'cut (level:chunks)',
+      'level-0 share of pixels',
+      'triangles',
+    ],
+    storeRows.map((r) => [
+      r.view,
+      r.mode,
+      r.firstImageMs,
+      r.wholeImageMs,
+      r.frameMs,
+      r.gpuPeakBytes / MiB,
+      r.level0Chunks,
+      r.levels,
+      r.level0Fraction,
+      r.triangles,
+    ]),
+  );
 const name = /swiftshader/i.test(adapter)
   ? 'swiftshader'
   : adapter
@@ -153,6 +277,7 @@ writeJson(`${here}/benchmarks/results/rays-${name}.json`, {
   size: [width, height],
   frames,
   timing: timed ? 'timestamp-query' : 'wall',
-  note: 'the rays read the cache of a full surface computation (the triangles are still made; a cache-only computation is not built yet)',
+  note: 'volumes opened whole: the rays read the cache of a full surface computation (the same computation serves both); stores: rays over surfaces of block caches only (IsosurfaceOptions.cacheOnly)',
   rows,
+  ...(storePath ? { store: storePath, storeRows } : {}),
 });
