@@ -6,9 +6,13 @@ import { cellBytesFor, MC_BYTES_PER_SLOT } from './block-mc.ts';
 import { logBytesFor, SLOT_BYTES } from './layout.ts';
 import { SurfaceOutput } from './vertex-output.ts';
 
-/** Bytes the cache takes at `slots` slots: slot data, maps, the LRU log, per-active buffers, blockToSlot. */
-export function cacheBytesFor(slots: number, blockCount: number): number {
-  return slots * (CACHE_BYTES_PER_SLOT + MC_BYTES_PER_SLOT) + logBytesFor(slots) + blockCount * 4;
+/**
+ * Bytes the cache takes at `slots` slots: slot data, maps, the LRU log,
+ * per-active buffers (the classification's, unless the surface is cache
+ * only: IsosurfaceOptions.cacheOnly), blockToSlot.
+ */
+export function cacheBytesFor(slots: number, blockCount: number, cacheOnly = false): number {
+  return slots * (CACHE_BYTES_PER_SLOT + (cacheOnly ? 0 : MC_BYTES_PER_SLOT)) + logBytesFor(slots) + blockCount * 4;
 }
 
 /**

@@ -129,7 +129,9 @@ export class IsosurfacePipeline {
       : Math.max(1, options.initialVertexCapacity ?? Math.min(2 ** 22, Math.max(2 ** 16, blockCount * 8)));
     // The initial buffers must fit the budget too: shrink both (keeping their
     // ratio) until they do; the per-block and per-shard bytes do not shrink.
-    const bytesAt = (s: number, v: number) => cacheBytesFor(s, blockCount) + vertexBytesFor(v, Math.min(maxWelded, weldedFor(v)), perShard);
+    const cacheOnly = options.cacheOnly ?? false;
+    const bytesAt = (s: number, v: number) =>
+      cacheBytesFor(s, blockCount, cacheOnly) + vertexBytesFor(v, Math.min(maxWelded, weldedFor(v)), perShard);
     if (bytesAt(slots, vertices) > budget) {
       const smallest = bytesAt(1, 1);
       if (smallest > budget) {
@@ -228,7 +230,7 @@ export class IsosurfacePipeline {
         maxBindingBytes: limits.maxStorageBufferBindingSize,
         ids,
       },
-      slots,
+      cacheOnly ? 1 : slots,
       vertices,
     );
     const shards = new SurfaceOutput(device, perShard, vertices, Math.min(maxWelded, weldedFor(vertices)));
@@ -313,7 +315,7 @@ export class IsosurfacePipeline {
   // ---- growth
 
   private budgetError(iso: number, slots: number, indices: number, welded: number, need: number, budget: number): IsosurfaceBudgetError {
-    const cache = cacheBytesFor(slots, this.info.blockCount);
+    const cache = cacheBytesFor(slots, this.info.blockCount, this.cacheOnly);
     const verts = vertexBytesFor(indices, welded, this.parts.shards.perShard);
     return new IsosurfaceBudgetError(
       `the surface at iso ${iso} needs ${formatMB(need)} (cache: ${slots} blocks, ${formatMB(cache)}; ` +
@@ -364,7 +366,7 @@ export class IsosurfacePipeline {
       // at least the quarter of the indices a new output starts with
       welded = Math.min(this.maxWelded, Math.max(welded, weldedFor(indices)));
     }
-    const bytes = (s: number, i: number, v: number) => cacheBytesFor(s, blocks) + vertexBytesFor(i, v, perShard);
+    const bytes = (s: number, i: number, v: number) => cacheBytesFor(s, blocks, this.cacheOnly) + vertexBytesFor(i, v, perShard);
     const need = bytes(minSlots, minIndices, minWelded);
     if (need > budget) throw this.budgetError(iso, minSlots, minIndices, minWelded, need, budget);
     // Headroom only as far as the budget allows.
@@ -375,7 +377,8 @@ export class IsosurfacePipeline {
     }
     if (slots > this.parts.cache.capacity) {
       this.parts.cache.grow(slots);
-      this.parts.mc.resize(slots);
+      // a cache-only surface classifies nothing: its per-slot classification buffers stay at one slot
+      if (!this.cacheOnly) this.parts.mc.resize(slots);
     }
     if (indices > out.capacity) {
       out.resize(indices, Math.max(welded, out.weldedCapacity));
@@ -414,7 +417,7 @@ export class IsosurfacePipeline {
   /** Empties the cache and returns it to its initial capacity (queue-ordered after work in flight). */
   resetCache(): void {
     this.parts.cache.reset(this.initialSlots);
-    this.parts.mc.resize(this.initialSlots);
+    if (!this.cacheOnly) this.parts.mc.resize(this.initialSlots);
     this.refreshDrawData();
   }
 

@@ -35,10 +35,10 @@ export function residentChunkBytes(layout: ChunkLevelLayout): number {
  * A wanted chunk's share of its surface's cache and vertices before the
  * level's first surface says what it is: half its blocks active, each with
  * a cache slot and the vertices of a surface crossing it (384 B); a
- * cache-only surface (rays) only the slot and its bookkeeping (272 B).
+ * cache-only surface (rays) only the slot and its bookkeeping (280 B).
  */
 export function guessedSurfaceBytesPerChunk(layout: ChunkLevelLayout, cacheOnly = false): number {
-  return (layout.chunkEdge / 4) ** 3 * 0.5 * (cacheOnly ? 272 : 384);
+  return (layout.chunkEdge / 4) ** 3 * 0.5 * (cacheOnly ? 280 : 384);
 }
 
 /** What a stream knows of a level's chunk ranges: the range array (read once) and the neighbourhood ranges the plan uses. */
