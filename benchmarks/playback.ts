@@ -19,7 +19,7 @@
 // with 20 ms per request: a proxy in front of that server holding each
 // response back as SimulatedLinkStore (src/store/zarr/stores.ts) does, one
 // shared pipe (here in the server, since openStoreInput opens the store by
-// its URL as extract does). Median of REPEATS (default 3) after a
+// its URL as extract does). Median of REPEATS (default 4) after a
 // discarded first (compilation, the disk cache).
 // Inputs: by default a generated series (SERIES=NxT, default 128x8: a
 // Gaussian ball of float32 moving along x over T time points, NumPy raw
@@ -53,7 +53,7 @@ import { printTable, summarize, writeJson } from './lib/report.ts';
 
 const root = fileURLToPath(new URL('..', import.meta.url));
 const env = process.env;
-const repeats = Math.max(2, Number(env.REPEATS ?? 3));
+const repeats = Math.max(2, Number(env.REPEATS ?? 4));
 const budgetBytes = Number(env.BUDGET_MB ?? 256) * 2 ** 20;
 const isoFraction = Number(env.ISO_FRACTION ?? 0.5);
 const LINK = { mbitPerSecond: 100, latencyMs: 20 };
@@ -202,7 +202,9 @@ async function play(device: GpuContext, url: string, iso: number, times: number[
   };
 }
 
-const median = (xs: number[]) => summarize(xs).median;
+/** The median of all of `xs` (summarize drops the first by default: here the runs are dropped by `kept`). */
+const median = (xs: number[]) => summarize(xs, false).median;
+const stats = (xs: number[]) => summarize(xs, false);
 
 async function main() {
   const device = await requestNodeGpu({ label: 'bench.playback' });
@@ -251,8 +253,8 @@ async function main() {
           runs.push(run);
         }
         const kept = runs.slice(1);
-        const first = summarize(kept.map((x) => x.firstFrameMs));
-        const tps = summarize(kept.map((x) => x.timePointsPerSecond));
+        const first = stats(kept.map((x) => x.firstFrameMs));
+        const tps = stats(kept.map((x) => x.timePointsPerSecond));
         const bytes = median(kept.map((x) => median(x.bytesFetched)));
         const peak = Math.max(...kept.map((x) => x.gpuPeakBytes));
         const last = kept[kept.length - 1];
@@ -283,7 +285,7 @@ async function main() {
           storeChunkBytes: meta.levels.reduce((a, l) => a + l.storedBytes, 0),
           firstFrameMs: first,
           timePointsPerSecond: tps,
-          frameMsMedian: summarize(kept.map((x) => median(x.frameMs))),
+          frameMsMedian: stats(kept.map((x) => median(x.frameMs))),
           bytesPerTimePointMedian: bytes,
           firstTimePointBytes: median(kept.map((x) => x.bytesFetched[0])),
           requestsPerTimePointMedian: median(kept.map((x) => median(x.requests))),
