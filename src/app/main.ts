@@ -642,6 +642,7 @@ async function start(): Promise<void> {
     keepPage: (vox) => keepPageView({ session, camera: camera.getState(), clip, spacing: spacing.value, surfaces }, vox),
   });
   storeView.setCaps(byId<HTMLInputElement>('clip-caps').checked);
+  storeView.playback.setCapture({ canvas, draw: () => viewer.drawNow() }); // Record's movie frames (store/recorder.ts)
   if (storeUrl) {
     await storeView.open(storeUrl, rangesParameter());
   } else if (url) {

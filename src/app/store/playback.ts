@@ -9,8 +9,15 @@
 // refinement ended), and the one before stays drawn until then. At a fixed
 // speed the rest of the frame interval is waited; the achieved rate is shown,
 // with "falling behind" when it is below the one asked.
+//
+// Record plays the time points from the one on screen to the last (once, no
+// loop, at the speed chosen) and records a movie of the view, one video frame
+// per time point once it is whole (recorder.ts: WebM by the browser's
+// MediaRecorder), with a progress bar; any other playback action cancels it;
+// the file is then offered for download (STORE-tFROM-TO.webm).
 import { timeValueOf, type StoreTimeAxis } from '../../store/zarr/store.ts';
 import { isTyping } from '../dom.ts';
+import { cannotRecord, MovieRecorder, movieFileName, type ViewCapture, webmType } from './recorder.ts';
 
 /** What the page tests read (window.zfpisoStore.playback). */
 export interface PlaybackState {
@@ -29,6 +36,32 @@ export interface PlaybackState {
   framesShown: number;
   /** A time point is on its way (asked for, not yet whole on screen), or the interval before the next is waited. */
   busy: boolean;
+  /** The recording under way, else the last one (null: none yet). */
+  recording: RecordingState | null;
+}
+
+/** A movie of the time points (Record): its progress, then its file (no bytes: their count and the blob URL). */
+export interface RecordingState {
+  /** Recording now (frames are being taken). */
+  active: boolean;
+  /** The time points recorded: from `from` to `to`, each one video frame. */
+  from: number;
+  to: number;
+  /** Time points recorded so far, of `toRecord`. */
+  recorded: number;
+  toRecord: number;
+  /** Video frames handed to the recorder. */
+  frames: number;
+  /** The recorder's type, e.g. "video/webm;codecs=vp8", and the movie's size in pixels (the view's at the start). */
+  mimeType: string | null;
+  width: number;
+  height: number;
+  /** The file once written: its size in bytes, the blob URL its link offers and its name. */
+  size: number | null;
+  url: string | null;
+  fileName: string | null;
+  /** Why it stopped short, or why the browser cannot record (null: none). */
+  message: string | null;
 }
 
 export interface PlaybackHost {
@@ -61,6 +94,16 @@ export class Playback {
   #asked: number | null = null;
   /** The waiting of the frame interval (cut short by pause). */
   #wake: (() => void) | null = null;
+  /** Waiting for the pump to stop (a recording's start). */
+  #pumped: (() => void)[] = [];
+  /** The page's view, to record (setCapture). */
+  #capture: ViewCapture | null = null;
+  /** The movie being recorded (null: none). */
+  #recorder: MovieRecorder | null = null;
+  /** The recording under way or the last one. */
+  #rec: RecordingState | null = null;
+  /** Record was pressed and waits for the time point it starts at. */
+  #recStarting = false;
   readonly #els: {
     toggle: HTMLButtonElement;
     back: HTMLButtonElement;
@@ -70,6 +113,10 @@ export class Playback {
     slider: HTMLInputElement;
     label: HTMLElement;
     rate: HTMLElement;
+    record: HTMLButtonElement;
+    progress: HTMLProgressElement;
+    recordStatus: HTMLElement;
+    file: HTMLAnchorElement;
   };
 
   constructor(private readonly host: PlaybackHost) {
@@ -88,7 +135,10 @@ export class Playback {
       ).join('')}</select></label></p>` +
       `<p class="playback-time"><input type="range" data-play="time" min="0" max="0" step="1" value="0" aria-label="time point"> ` +
       `<span data-k="time"></span></p>` +
-      `<p class="playback-rate" data-k="playback-rate"></p>`;
+      `<p class="playback-rate" data-k="playback-rate"></p>` +
+      `<p class="playback-record"><button type="button" data-play="record" title="play from this time point to the last and record the view as a WebM movie, one frame per time point">● record</button> ` +
+      `<progress data-k="record-progress" max="1" value="0" hidden></progress> <span data-k="record-status"></span> ` +
+      `<a data-k="record-file" hidden></a></p>`;
     const q = <T extends HTMLElement>(sel: string) => box.querySelector(sel) as T;
     this.#els = {
       toggle: q('[data-play="toggle"]'),
@@ -99,12 +149,17 @@ export class Playback {
       slider: q('[data-play="time"]'),
       label: q('[data-k="time"]'),
       rate: q('[data-k="playback-rate"]'),
+      record: q('[data-play="record"]'),
+      progress: q('[data-k="record-progress"]'),
+      recordStatus: q('[data-k="record-status"]'),
+      file: q('[data-k="record-file"]'),
     };
     this.element = box;
     const e = this.#els;
     e.toggle.addEventListener('click', () => this.toggle());
     e.back.addEventListener('click', () => this.step(-1));
     e.forward.addEventListener('click', () => this.step(1));
+    e.record.addEventListener('click', () => void this.record());
     e.loop.addEventListener('change', () => {
       this.#loop = e.loop.checked;
       this.#update();
@@ -137,6 +192,7 @@ export class Playback {
       behind: this.#behind(achieved),
       framesShown: this.#framesShown,
       busy: this.#pumping,
+      recording: this.#rec ? { ...this.#rec } : null,
     };
   }
 
@@ -151,8 +207,149 @@ export class Playback {
       this.#playing = false;
       this.#target = null;
       this.#asked = null;
+      if (this.#recorder) void this.#stopRecording('Recording cancelled: the series is no longer on screen.');
     }
     this.#update();
+  }
+
+  /** The page's view, which Record films. */
+  setCapture(capture: ViewCapture): void {
+    this.#capture = capture;
+  }
+
+  get recording(): boolean {
+    return this.#recorder !== null;
+  }
+
+  /**
+   * Record (or, while recording, cancel): plays from the time point on
+   * screen (at the last one, from the first) to the last, once, and records
+   * one video frame of the view per time point once it is whole; then offers
+   * the WebM file.
+   */
+  async record(): Promise<void> {
+    if (this.#recorder) {
+      void this.#stopRecording('Recording cancelled.');
+      return;
+    }
+    if (this.#recStarting) return;
+    const why = cannotRecord(this.#capture);
+    let axis = this.host.time();
+    if (why || !axis || axis.count <= 1) {
+      if (why) this.#rec = this.#emptyRecording(0, 0, why);
+      this.#update();
+      return;
+    }
+    this.pause();
+    this.#target = null;
+    this.#recStarting = true;
+    let from = 0;
+    try {
+      await this.#whenPumped();
+      axis = this.host.time();
+      if (!axis || axis.count <= 1 || this.#recorder || this.#playing) return;
+      from = axis.index === axis.count - 1 ? 0 : axis.index;
+      if (axis.index !== from) {
+        this.go(from);
+        await this.#whenPumped();
+        if (this.host.time()?.index !== from || this.#recorder || this.#playing) return;
+      }
+    } finally {
+      this.#recStarting = false;
+    }
+    const to = axis.count - 1;
+    this.#clearFile();
+    const mimeType = webmType()!;
+    let recorder: MovieRecorder;
+    try {
+      recorder = new MovieRecorder(this.#capture!, mimeType);
+    } catch (e) {
+      this.#rec = this.#emptyRecording(from, to, `This browser cannot record the view: ${(e as Error).message}`);
+      this.#update();
+      return;
+    }
+    this.#recorder = recorder;
+    this.#rec = {
+      ...this.#emptyRecording(from, to, null),
+      active: true,
+      mimeType: recorder.mimeType,
+      width: recorder.width,
+      height: recorder.height,
+    };
+    this.#update();
+    // the time point on screen is the first frame, then each one played
+    await this.#recordFrame(from);
+    if (this.#recorder !== recorder) return;
+    this.#playing = true;
+    this.#arrivals = [];
+    this.#update();
+    void this.#pump();
+  }
+
+  /** A frame of the movie: time point `t`, on screen whole now. */
+  async #recordFrame(t: number): Promise<void> {
+    const recorder = this.#recorder;
+    const rec = this.#rec;
+    if (!recorder || !rec || t !== rec.from + rec.recorded) return;
+    await recorder.frame();
+    if (this.#recorder !== recorder) return;
+    rec.recorded++;
+    rec.frames = recorder.frames;
+    this.#update();
+  }
+
+  /** The recording ends: written whole (the file offered), or cut short with `message` (dropped). */
+  async #stopRecording(message: string | null): Promise<void> {
+    const recorder = this.#recorder;
+    const rec = this.#rec;
+    if (!recorder || !rec) return;
+    this.#recorder = null;
+    rec.active = false;
+    if (message !== null || rec.recorded < rec.toRecord) {
+      recorder.cancel();
+      rec.message = message ?? `Recording stopped at t = ${rec.from + rec.recorded}: the time point was not shown.`;
+      this.#update();
+      return;
+    }
+    this.#update();
+    try {
+      const blob = await recorder.finish();
+      if (this.#rec !== rec) return;
+      rec.size = blob.size;
+      rec.url = URL.createObjectURL(blob);
+      rec.fileName = movieFileName(storeName(), rec.from, rec.to);
+    } catch (e) {
+      if (this.#rec === rec) rec.message = `The recording failed: ${(e as Error).message}`;
+    }
+    this.#update();
+  }
+
+  #emptyRecording(from: number, to: number, message: string | null): RecordingState {
+    return {
+      active: false,
+      from,
+      to,
+      recorded: 0,
+      toRecord: to - from + 1,
+      frames: 0,
+      mimeType: null,
+      width: 0,
+      height: 0,
+      size: null,
+      url: null,
+      fileName: null,
+      message,
+    };
+  }
+
+  /** The last recording's file is let go (a new recording). */
+  #clearFile(): void {
+    if (this.#rec?.url) URL.revokeObjectURL(this.#rec.url);
+    this.#rec = null;
+  }
+
+  #whenPumped(): Promise<void> {
+    return this.#pumping ? new Promise((resolve) => this.#pumped.push(resolve)) : Promise.resolve();
   }
 
   play(): void {
@@ -167,6 +364,7 @@ export class Playback {
   }
 
   pause(): void {
+    if (this.#recorder) void this.#stopRecording('Recording cancelled.');
     if (!this.#playing) return;
     this.#playing = false;
     this.#wake?.();
@@ -174,7 +372,7 @@ export class Playback {
   }
 
   toggle(): void {
-    if (this.#playing) this.pause();
+    if (this.#playing || this.#recorder) this.pause();
     else this.play();
   }
 
@@ -235,6 +433,7 @@ export class Playback {
           continue;
         }
         this.#framesShown++;
+        if (playing && this.#playing && this.#recorder) await this.#recordFrame(next);
         if (playing && this.#playing) {
           this.#arrivals.push(performance.now());
           if (this.#arrivals.length > RATE_WINDOW + 1) this.#arrivals.shift();
@@ -244,6 +443,11 @@ export class Playback {
       }
     } finally {
       this.#pumping = false;
+      // a recording's last time point recorded (or one not shown): its end
+      if (this.#recorder && !this.#playing) void this.#stopRecording(null);
+      const waiting = this.#pumped;
+      this.#pumped = [];
+      for (const resolve of waiting) resolve();
       this.#update();
     }
   }
@@ -257,7 +461,8 @@ export class Playback {
     }
     const t = axis.index + 1;
     if (t < axis.count) return t;
-    if (this.#loop) return 0;
+    // a recording plays once
+    if (this.#loop && !this.#recorder) return 0;
     this.#playing = false;
     this.#update();
     return null;
@@ -336,6 +541,40 @@ export class Playback {
           : '';
       e.rate.classList.toggle('behind', behind);
     }
+    this.#showRecording();
     this.host.changed();
   }
+
+  /** The Record button, the progress bar, the message and the file's link. */
+  #showRecording(): void {
+    const e = this.#els;
+    const r = this.#rec;
+    const on = this.#recorder !== null;
+    e.record.textContent = on ? '■ cancel' : '● record';
+    e.record.dataset.state = on ? 'recording' : 'idle';
+    e.record.setAttribute('aria-label', on ? 'cancel the recording' : 'record a movie');
+    e.progress.hidden = !on;
+    if (r && on) {
+      e.progress.max = r.toRecord;
+      e.progress.value = r.recorded;
+    }
+    e.recordStatus.textContent = !r
+      ? ''
+      : on
+        ? `recording: ${r.recorded} of ${r.toRecord} time points`
+        : (r.message ?? (r.url ? '' : 'writing the movie…'));
+    e.recordStatus.classList.toggle('error', !on && !!r?.message);
+    const file = !on && r?.url && r.fileName ? r : null;
+    e.file.hidden = !file;
+    if (file) {
+      e.file.href = file.url!;
+      e.file.download = file.fileName!;
+      e.file.textContent = `download ${file.fileName} (${(file.size! / 1024).toFixed(0)} KiB, ${file.recorded} frames, ${file.width}×${file.height})`;
+    } else e.file.removeAttribute('href');
+  }
+}
+
+/** The store on screen's name as the page shows it (its URL or folder / file name). */
+function storeName(): string | undefined {
+  return (window as unknown as { zfpisoStore?: { url?: string } }).zfpisoStore?.url;
 }
