@@ -130,7 +130,7 @@ for (let f = 0; f < files.length; f++) {
       mode,
       surfaceGpuMs: stats.gpuMs,
       firstImageMs: stats.gpuMs + first,
-      frameMs: summarize(all.slice(1)).median,
+      frameMs: summarize(all).median,
       cacheBytes: stats.cacheBytes,
       vertexBytes: stats.vertexBytes,
       triangles: mode === 'mesh' ? stats.triangles : 0,
@@ -203,7 +203,7 @@ if (storePath) {
         if (L >= 0) covered++;
         if (L === 0) level0++;
       }
-      const frame = summarize(all.slice(1)).median;
+      const frame = summarize(all).median;
       storeRows.push({
         view: view === 'box' ? `box ${process.env.STORE_BOX}` : 'fit',
         mode,

@@ -174,8 +174,8 @@ async function main() {
           planned = ranges ? chunksNeeded(neighbourhoodRanges(store.levels[0].layout.chunkGrid, ranges), iso).length : NaN;
           c.destroy();
         }
-        const f = summarize(first.slice(1)),
-          g = summarize(full.slice(1));
+        const f = summarize(first),
+          g = summarize(full);
         const faultText = rate > 0 ? `${(rate * 100).toFixed(0)}%` : '0';
         rows.push([
           name,
@@ -237,7 +237,7 @@ async function main() {
       stream.destroy();
       times.push(performance.now() - t0);
     }
-    const t = summarize(times.slice(1));
+    const t = summarize(times);
     rows.push([name, 'in-core (level 0 as one stream from disk)', '', NaN, t.median, NaN, '', NaN, NaN, '', '', NaN]);
     records.push({ store: name, link: 'in-core', fullSurfaceMs: t });
   }
