@@ -144,6 +144,18 @@ def compute(arrays, client=None, workers: int | None = None, progress: bool = Fa
     return dask.compute(*arrays, scheduler="threads", num_workers=workers)
 
 
+def _level_tasks(source, layouts, opts, state: str):
+    """Per level (each downsampled from the one before): its layout, the units already written
+    (resuming), and the tasks that write the rest and return its chunk ranges."""
+    level = source.astype(np.float32).rechunk((opts.chunk,) * 3)
+    for layout in layouts:
+        if layout.level > 0:
+            level = downsample(level, opts.chunk)
+        existing = layout.existing_units() if state == "resume" else set()
+        write = level if not opts.shard or opts.shard == 1 else level.rechunk((layout.unit_edge,) * 3)
+        yield layout, existing, unit_tasks(write, layout, existing)
+
+
 def _remove_partial_files(out: str) -> None:
     """Files a killed run was writing (never renamed into place)."""
     for root, _, files in os.walk(out):
@@ -205,14 +217,9 @@ def _convert(volume: Volume, out, opts, client, workers, progress, start, work_d
                      ome_multiscales(name, shapes, voxel, unit), extra)
     layouts = [LevelLayout(out, i, shapes[i], opts.chunk, rates[i], opts.shard) for i in range(len(shapes))]
     if state != "complete":
-        level = source.astype(np.float32).rechunk((opts.chunk,) * 3)
         tasks = []
-        for layout in layouts:
-            if layout.level > 0:
-                level = downsample(level, opts.chunk)
-            existing = layout.existing_units() if state == "resume" else set()
-            write = level if not opts.shard or opts.shard == 1 else level.rechunk((layout.unit_edge,) * 3)
-            tasks.append(unit_tasks(write, layout, existing))
+        for layout, existing, task in _level_tasks(source, layouts, opts, state):
+            tasks.append(task)
             summary.levels.append(LevelSummary(layout.level, layout.shape, layout.rate,
                                                int(np.prod(layout.chunk_grid)),
                                                int(np.prod(layout.unit_grid)) - len(existing), len(existing)))
@@ -286,14 +293,9 @@ def _convert_series(series: Series, out, opts, client, workers, progress, start,
         value_ranges = []
         for t, volume in enumerate(series.volumes):
             layouts = [LevelLayout(out, i, shapes[i], opts.chunk, rates[i], opts.shard, time=t) for i in range(len(shapes))]
-            level = volume.array.astype(np.float32).rechunk((opts.chunk,) * 3)
             tasks = []
-            for layout in layouts:
-                if layout.level > 0:
-                    level = downsample(level, opts.chunk)
-                existing = layout.existing_units() if state == "resume" else set()
-                write = level if not opts.shard or opts.shard == 1 else level.rechunk((layout.unit_edge,) * 3)
-                tasks.append(unit_tasks(write, layout, existing))
+            for layout, existing, task in _level_tasks(volume.array, layouts, opts, state):
+                tasks.append(task)
                 written[layout.level] += int(np.prod(layout.unit_grid)) - len(existing)
                 skipped[layout.level] += len(existing)
             if progress:

@@ -98,7 +98,8 @@ def open_netcdf(path: str, variable: str | None, chunk: int) -> Volume:
     return vol
 
 
-def open_zarr(path: str, inner: str | None, chunk: int) -> Volume:
+def open_zarr_node(path: str, inner: str | None):
+    """The Zarr array at path[:inner] (an OME-Zarr group: its first dataset), and its name in messages."""
     import zarr
 
     try:
@@ -115,7 +116,11 @@ def open_zarr(path: str, inner: str | None, chunk: int) -> Volume:
         raise
     except Exception as e:  # zarr raises many kinds for stores it cannot open
         raise InputError(f"{path}: not a readable Zarr array ({e})") from None
-    name = f"{path}:{inner}" if inner else path
+    return node, (f"{path}:{inner}" if inner else path)
+
+
+def open_zarr(path: str, inner: str | None, chunk: int) -> Volume:
+    node, name = open_zarr_node(path, inner)
     shape, dtype = check_volume(name, node.shape, node.dtype)
     arr = da.from_zarr(node)
     if arr.ndim > 3:

@@ -9,7 +9,7 @@ import os
 from dataclasses import dataclass
 
 from .base import InputError, Volume, check_volume
-from .formats import is_zarr
+from .formats import is_zarr, open_zarr_node
 
 MAX_TIME_POINTS = 1 << 20
 
@@ -65,23 +65,8 @@ def open_series(spec: str, chunk: int, work_dir: str, dims=None, dtype=None) -> 
 
 def _zarr_series(path: str, inner: str | None) -> Series:
     import dask.array as da
-    import zarr
 
-    try:
-        node = zarr.open(path, mode="r")
-        if inner:
-            node = node[inner]
-        if isinstance(node, zarr.Group):
-            ome = node.attrs.get("ome", {}).get("multiscales") or node.attrs.get("multiscales")
-            if not ome:
-                raise InputError(f"{path}: a Zarr group; name the array as {path}:array/path")
-            inner = f"{inner + '/' if inner else ''}{ome[0]['datasets'][0]['path']}"
-            node = node[ome[0]["datasets"][0]["path"]]
-    except InputError:
-        raise
-    except Exception as e:  # zarr raises many kinds for stores it cannot open
-        raise InputError(f"{path}: not a readable Zarr array ({e})") from None
-    name = f"{path}:{inner}" if inner else path
+    node, name = open_zarr_node(path, inner)
     shape = tuple(int(n) for n in node.shape)
     while len(shape) > 4 and shape[0] == 1:
         shape = shape[1:]
