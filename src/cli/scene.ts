@@ -5,7 +5,7 @@
 // and cache (render/ray-layer.ts) or by its triangles (surface-layer.ts).
 import type { Isosurface } from '../isosurface/isosurface.ts';
 import type { IsosurfaceStats } from '../isosurface/types.ts';
-import { RayLayer, type RayLevel, seamReachCells } from '../render/ray-layer.ts';
+import { RayLayer, rayLevelsOf } from '../render/ray-layer.ts';
 import { SurfaceLayer, type SurfacePart } from '../render/surface-layer.ts';
 import type { RenderLayer } from '../render/viewer.ts';
 import type { StoreStreamSurface } from '../store/stream-surface.ts';
@@ -62,25 +62,13 @@ export async function storeScene(
   const { stream } = surface;
   const shown = stream.shown!;
   const { levelOffsets, levelScales } = stream.store;
-  const coarsest = Math.max(...shown.levels.map((l) => l.level));
   const dims = stream.levels[0].layout.dims;
-  const placed = shown.levels.map((l) => ({
-    l,
-    scale: levelScales[l.level] ?? ([2 ** l.level, 2 ** l.level, 2 ** l.level] as [number, number, number]),
-    offset: levelOffsets[l.level] ?? ([0, 0, 0] as [number, number, number]),
-  }));
+  const placed = shown.levels.map((l) => ({ l, scale: levelScales[l.level], offset: levelOffsets[l.level] }));
   const make = async (which: typeof placed): Promise<Layer> => {
     if (draw === 'rays') {
       const rays = await RayLayer.create(target);
-      const levels: RayLevel[] = which.map(({ l, scale, offset }) => ({
-        data: l.surface.drawData,
-        tables: l.volume.tables,
-        chunkGrid: l.volume.layout.chunkGrid,
-        chunkBlocks: l.volume.chunkBlocks,
-        scale,
-        offset,
-        reachCells: seamReachCells(l.level, coarsest),
-      }));
+      // the reach toward the step's coarsest level, also when one level is drawn alone
+      const levels = rayLevelsOf(shown.levels, levelScales, levelOffsets).filter((_, i) => which.some((w) => w.l === shown.levels[i]));
       rays.setLevels(levels, dims);
       rays.iso = stats.isovalue;
       rays.voxelSize = [...voxelSize];

@@ -56,6 +56,37 @@ export function seamReachCells(level: number, coarsest: number): number {
   return Math.ceil((2 ** (coarsest - level) - 1) / 2 + 0.25);
 }
 
+/** What a store's shown level gives the rays: its level, pool and surface (a step's CutLevelShown). */
+export interface RayLevelSource {
+  level: number;
+  volume: { tables: GPUBuffer; layout: { chunkGrid: readonly [number, number, number] }; chunkBlocks: number };
+  surface: { drawData: IsosurfaceDrawData };
+}
+
+/**
+ * A step's levels as the rays read them: each placed at its OME scale and
+ * offset (`levelScales`, `levelOffsets` in level-0 voxels), reaching into
+ * its ghosts toward the step's coarsest level, tinted by `tints[i]` if given.
+ */
+export function rayLevelsOf(
+  levels: readonly RayLevelSource[],
+  levelScales: readonly (readonly [number, number, number])[],
+  levelOffsets: readonly (readonly [number, number, number])[],
+  tints?: readonly (readonly [number, number, number] | undefined)[],
+): RayLevel[] {
+  const coarsest = Math.max(...levels.map((l) => l.level));
+  return levels.map((l, i) => ({
+    data: l.surface.drawData,
+    tables: l.volume.tables,
+    chunkGrid: l.volume.layout.chunkGrid,
+    chunkBlocks: l.volume.chunkBlocks,
+    scale: levelScales[l.level],
+    offset: levelOffsets[l.level],
+    reachCells: seamReachCells(l.level, coarsest),
+    ...(tints?.[i] ? { tint: tints[i] } : {}),
+  }));
+}
+
 /** What one draw reads: a whole volume (no pool) or a level. */
 interface RayPart {
   data: IsosurfaceDrawData;

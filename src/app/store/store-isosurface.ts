@@ -22,7 +22,7 @@ import type { VolumeProbe } from '../../zfp/probe.ts';
 import type { Clip } from '../../core/clip.ts';
 import { storeCapPieces } from './store-caps.ts';
 import type { CapPiece } from '../../render/cap-layer.ts';
-import { type RayLevel, seamReachCells } from '../../render/ray-layer.ts';
+import { type RayLevel, rayLevelsOf } from '../../render/ray-layer.ts';
 import { shownValueAt, type ShownValue } from '../../store/shown-value.ts';
 import type { PageIsosurface } from '../engine.ts';
 
@@ -162,17 +162,12 @@ export class StoreIsosurface implements PageIsosurface {
     // the stream's step on screen (a camera move that keeps its plan renews the object, not its levels)
     if (!this.stream.cachesShown || s.levels !== this.stream.shown?.levels) return undefined;
     const { levelOffsets, levelScales } = this.stream.store;
-    const coarsest = Math.max(...s.levels.map((l) => l.level));
-    const levels = s.levels.map((l, i) => ({
-      data: l.surface.drawData,
-      tables: l.volume.tables,
-      chunkGrid: l.volume.layout.chunkGrid,
-      chunkBlocks: l.volume.chunkBlocks,
-      scale: levelScales[l.level] ?? ([2 ** l.level, 2 ** l.level, 2 ** l.level] as [number, number, number]),
-      offset: levelOffsets[l.level] ?? ([0, 0, 0] as [number, number, number]),
-      reachCells: seamReachCells(l.level, coarsest),
-      ...(this.#parts[i]?.tint ? { tint: this.#parts[i].tint } : {}),
-    }));
+    const levels = rayLevelsOf(
+      s.levels,
+      levelScales,
+      levelOffsets,
+      this.#parts.map((p) => p.tint),
+    );
     return { levels, extent: this.stream.levels[0].layout.dims, iso: s.iso };
   }
 
