@@ -22,6 +22,7 @@ import { openStore } from './zarr/open-store.ts';
 import type { SourceInfo } from './zarr/source-store.ts';
 import type { OpenStoreOptions, ZfpStore } from './zarr/store.ts';
 import { MeteredStore } from './zarr/stores.ts';
+import type { PreparedTime } from './series/prefetch.ts';
 
 /** What a store session's figures say (the CLI's `store` record; the page's panel reads the same counters). */
 export interface StoreRecord {
@@ -131,6 +132,13 @@ export interface StoreSessionOptions {
   view?: (store: ZfpStore) => ViewSpec | null;
   /** Surfaces hold only their block caches, no triangles (drawn by rays: render/ray-layer.ts); default false. */
   cacheOnly?: boolean;
+  /**
+   * A time point made ready ahead (series/prefetch.ts): its store (opened
+   * with these options at that time point), metered source, fetcher with
+   * what it fetched and the chunks counted are taken over; `open` is not
+   * read again.
+   */
+  prepared?: PreparedTime;
   /** Called with the stream as soon as it is made, before its first view (the CLI turns off retries and snapshots here, and sets skirts). */
   setup?: (stream: ChunkStoreStream) => void;
 }
@@ -228,13 +236,16 @@ export class StoreSession {
    * has been fetched for a surface yet.
    */
   static async open(gpu: GpuContext, source: AsyncReadable, name: string, options: StoreSessionOptions): Promise<StoreSession> {
-    const metered = source instanceof MeteredStore ? source : new MeteredStore(source);
+    const prepared = options.prepared;
+    const metered = prepared?.metered ?? (source instanceof MeteredStore ? source : new MeteredStore(source));
     let store: ZfpStore | undefined;
     let stream: ChunkStoreStream | undefined;
     try {
-      store = await openStore(metered, name, options.open);
-      const fetcher = new ChunkFetcher(store, { maxInFlight: options.maxInFlight ?? 8 });
-      const fetched = new FetchedChunks(store);
+      store = prepared?.store ?? (await openStore(metered, name, options.open));
+      const fetcher = prepared?.fetcher ?? new ChunkFetcher(store, { maxInFlight: options.maxInFlight ?? 8 });
+      // a prepared fetcher asked fewer at once: the session asks as many as its own would
+      fetcher.maxInFlight = options.maxInFlight ?? 8;
+      const fetched = prepared?.fetched ?? new FetchedChunks(store);
       fetcher.onChunk((level, chunk, bytes, fromCache) => fetched.add(level, chunk, bytes, fromCache));
       const budget = typeof options.budget === 'number' ? new GpuBudget(options.budget) : options.budget;
       const port = chunkedGpu(gpu, budget.meter, await storeEncoder(gpu, store), options.cacheOnly ?? false);

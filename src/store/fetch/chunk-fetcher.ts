@@ -58,7 +58,8 @@ export type ChunkErrorListener = (level: number, chunk: ChunkIndex, error: Store
 const key = (level: number, chunk: ChunkIndex) => `${level}:${chunk}`;
 
 export class ChunkFetcher {
-  readonly maxInFlight: number;
+  /** Requests in flight at most (may be raised: a prefetch's fetcher taken over by the session that shows its time point). */
+  maxInFlight: number;
   readonly #coolDownMs: number;
   readonly #now: () => number;
   readonly #cache: ByteLru<string>;

@@ -354,13 +354,50 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     }
   }
 
-  /** The plan at `isos` (a chunk is needed when any needs it) with the store's levels, ranges, the view and `share` of the budget. */
-  #plan(isos: readonly number[], share: number): StreamPlan {
+  /**
+   * The chunks another time point of this store would want now, most urgent
+   * first (its plan's steps coarse to fine, each chunk once): the plan this
+   * stream makes at its isovalues and view, with `needsAt(L, iso)` (that
+   * time point's ranges) saying which chunks hold surface; a level whose
+   * needs are unknown (null) counts every chunk. Null before an isovalue
+   * (or, planned by the view, a view). What a series prefetches
+   * (../series/prefetch.ts): the next time point's session makes the same
+   * plan unless the surface moved far.
+   */
+  wantedAhead(needsAt: (L: number, iso: number) => ((c: ChunkIndex) => boolean) | null): { level: number; chunk: ChunkIndex }[] | null {
+    if (this.#destroyed || !Number.isFinite(this.#iso) || (!this.#view && this.planner.needsView)) return null;
+    const plan = this.#plan([this.#iso, ...this.#others], PLAN_SHARE, (L, iso) => {
+      const byRange = needsAt(L, iso) ?? (() => true);
+      // the clip leaves out the same chunks at every time point
+      return (c) => byRange(c) && !this.#pools.clippedAway(L, c);
+    });
+    const seen = new Set<number>();
+    const out: { level: number; chunk: ChunkIndex }[] = [];
+    for (const step of plan.steps)
+      for (let L = step.wanted.length - 1; L >= 0; L--)
+        for (const chunk of step.wanted[L]) {
+          const k = L * 2 ** 32 + chunk;
+          if (seen.has(k)) continue;
+          seen.add(k);
+          out.push({ level: L, chunk });
+        }
+    return out;
+  }
+
+  /**
+   * The plan at `isos` (a chunk is needed when any needs it) with the store's levels, ranges (or those
+   * `needsOf` gives), the view and `share` of the budget.
+   */
+  #plan(
+    isos: readonly number[],
+    share: number,
+    needsOf: (L: number, iso: number) => ((c: ChunkIndex) => boolean) | null = (L, iso) => this.#pools.needs(L, iso),
+  ): StreamPlan {
     const needs = new Map<number, ((c: ChunkIndex) => boolean) | null>();
     // the caps read the chunks along the cut where the values reach the outermost surface's isovalue
     const threshold = Math.min(...isos);
     const anyNeeds = (L: number) => {
-      const each = isos.map((iso) => this.#pools.needs(L, iso));
+      const each = isos.map((iso) => needsOf(L, iso));
       if (each.some((n) => n === null)) return null;
       const caps = this.#pools.capNeeds(L, threshold);
       if (caps) each.push(caps);

@@ -105,6 +105,12 @@ export class StreamLevels<V extends RoleVolume> {
   }
 
   /** Whether the clip removes every cell of chunk c of level L (its voxels and the next chunk's first, in level-0 voxels, one of its voxels of slack). */
+  /** Whether the clip removes chunk c of level L whole (nothing counted: the plan ahead of a series uses it). */
+  clippedAway(L: number, c: ChunkIndex): boolean {
+    const clip = this.clip;
+    return !clipIsEmpty(clip) && this.#clippedAway(L, c, clip!);
+  }
+
   #clippedAway(L: number, c: ChunkIndex, clip: Clip): boolean {
     const { lo, hi } = this.#chunkRegion(L, c);
     return regionClipped(lo, hi, clip);
