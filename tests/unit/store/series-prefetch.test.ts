@@ -47,7 +47,18 @@ for t in range(T):
   );
   execFileSync(
     process.execPath,
-    ['scripts/convert.mjs', join(work, 'step_*_128x128x128_float32.raw'), '--time', '--out', store, '--chunk', '16', '--rate', '8', '--quiet'],
+    [
+      'scripts/convert.mjs',
+      join(work, 'step_*_128x128x128_float32.raw'),
+      '--time',
+      '--out',
+      store,
+      '--chunk',
+      '16',
+      '--rate',
+      '8',
+      '--quiet',
+    ],
     { cwd: repoRoot, stdio: 'pipe', timeout: 300_000 },
   );
   expected = JSON.parse(
