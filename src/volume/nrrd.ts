@@ -132,9 +132,19 @@ async function gunzipPrefix(bytes: Uint8Array, need: number): Promise<Uint8Array
   return out.subarray(0, filled);
 }
 
-/** Parses a NRRD file with attached data; throws NrrdError with the reason. */
-export async function parseNrrd(bytes: Uint8Array): Promise<NrrdVolume> {
-  const { fields, dataOffset } = parseNrrdHeader(bytes);
+/** What a NRRD header says about its samples (attached data, 3-D, a type the compressor takes). */
+export interface NrrdLayout {
+  dims: Dims;
+  dtype: DType;
+  gzip: boolean;
+  bigEndian: boolean;
+  /** Bytes of samples (checked against NRRD_MAX_DATA_BYTES). */
+  need: number;
+  spacing?: [number, number, number];
+}
+
+/** The samples' layout from a header's fields; throws NrrdError with the reason. */
+export function nrrdLayout(fields: Record<string, string>): NrrdLayout {
   if (fields['data file'] || fields.datafile)
     throw new NrrdError('detached data files (.nhdr + data file) are not supported; save as a single .nrrd');
   const typeName = (fields.type ?? '').toLowerCase();
@@ -164,6 +174,15 @@ export async function parseNrrd(bytes: Uint8Array): Promise<NrrdVolume> {
       `${dims.join('x')} ${dtype} is ${need} bytes of samples, more than the ${NRRD_MAX_DATA_BYTES} bytes (4 GiB) this reader takes`,
     );
   }
+  const bigEndian = (fields.endian ?? 'little').toLowerCase() === 'big' && width > 1;
+  return { dims, dtype, gzip, bigEndian, need, spacing: parseSpacing(fields, 3) };
+}
+
+/** Parses a NRRD file with attached data; throws NrrdError with the reason. */
+export async function parseNrrd(bytes: Uint8Array): Promise<NrrdVolume> {
+  const { fields, dataOffset } = parseNrrdHeader(bytes);
+  const { dims, dtype, gzip, bigEndian, need, spacing } = nrrdLayout(fields);
+  const width = DTYPE_BYTES[dtype];
   const stored = bytes.subarray(dataOffset);
   const payload = gzip ? await gunzipPrefix(stored, need) : stored;
   if (payload.length < need) {
@@ -172,9 +191,8 @@ export async function parseNrrd(bytes: Uint8Array): Promise<NrrdVolume> {
     );
   }
   const data = payload.length === need && gzip ? payload : payload.slice(0, need);
-  const endian = (fields.endian ?? 'little').toLowerCase();
-  if (endian === 'big' && width > 1) {
+  if (bigEndian) {
     for (let i = 0; i < data.length; i += width) data.subarray(i, i + width).reverse();
   }
-  return { dims, dtype, data, spacing: parseSpacing(fields, 3), fields };
+  return { dims, dtype, data, spacing, fields };
 }
