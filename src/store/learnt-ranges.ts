@@ -31,6 +31,11 @@ export class LearntRanges {
     this.#known = grids.map(() => 0);
   }
 
+  /** Bytes its ranges take (the levels learnt so far). */
+  get bytes(): number {
+    return this.#levels.reduce((a, r) => a + (r?.byteLength ?? 0), 0);
+  }
+
   /** Whether these are ranges of levels with these chunk grids. */
   fits(grids: readonly Grid[]): boolean {
     return grids.length === this.grids.length && grids.every((g, L) => g.every((n, a) => n === this.grids[L][a]));
@@ -137,16 +142,28 @@ export async function learnSlotRanges(
  * The ranges learnt for a store in this session, by a key naming the store
  * and what its values are (the source it was opened from, rate, time point, channel): a store opened
  * again (a new rate and back, the refinement switched) keeps what it learnt.
- * The last STORES_KEPT stores are kept.
+ * Bounded in bytes (SESSION_RANGES_BYTES), least recently opened let go
+ * first, the last STORES_KEPT always kept: every time point of a series
+ * keeps its own (a second pass over the series neither fetches nor keeps a
+ * chunk a first pass found without surface).
  */
 export function sessionRanges(key: string, grids: readonly Grid[]): LearntRanges {
   const kept = session.get(key);
   session.delete(key);
   const r = kept?.fits(grids) ? kept : new LearntRanges(grids);
   session.set(key, r);
-  while (session.size > STORES_KEPT) session.delete(session.keys().next().value!);
+  let bytes = 0;
+  for (const v of session.values()) bytes += v.bytes;
+  for (const [k, v] of session) {
+    if (session.size <= STORES_KEPT || bytes <= SESSION_RANGES_BYTES) break;
+    session.delete(k);
+    bytes -= v.bytes;
+  }
   return r;
 }
 
+/** Stores whose learnt ranges are kept whatever their bytes. */
 const STORES_KEPT = 4;
+/** Bytes of learnt ranges kept in a session beyond those (a 2048^3 store's level 0 in 64^3 chunks: 256 KiB a time point). */
+export const SESSION_RANGES_BYTES = 64 * 2 ** 20;
 const session = new Map<string, LearntRanges>();

@@ -13,7 +13,7 @@ import { join } from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import { ChunkFetcher } from '../../../src/store/fetch/chunk-fetcher.ts';
 import { chunkedGpu, createChunkStream, storeEncoder } from '../../../src/store/gpu-port.ts';
-import { LearntRanges, MAX_LEARNT_CHUNKS, sessionRanges } from '../../../src/store/learnt-ranges.ts';
+import { LearntRanges, MAX_LEARNT_CHUNKS, SESSION_RANGES_BYTES, sessionRanges } from '../../../src/store/learnt-ranges.ts';
 import { chunkNeeded, neighbourhoodRanges } from '../../../src/store/plan.ts';
 import { cameraForBox, cameraFromView, fitBox0, sceneRadiusOf } from '../../../src/store/view/camera.ts';
 import { DEFAULT_VIEWPORT } from '../../../src/store/view/view-request.ts';
@@ -105,7 +105,7 @@ describe('LearntRanges', () => {
 });
 
 describe('sessionRanges', () => {
-  it('the same store and values get the ranges learnt before; other chunk grids start afresh; the last 4 stores are kept', () => {
+  it('the same store and values get the ranges learnt before; other chunk grids start afresh', () => {
     const grids: [number, number, number][] = [[3, 2, 1]];
     const a = sessionRanges('s.zarr|8|0|0', grids);
     a.record(0, 4, 1, 2);
@@ -115,8 +115,26 @@ describe('sessionRanges', () => {
     const other = sessionRanges('s.zarr|8|0|0', [[3, 2, 2]]);
     expect(other).not.toBe(a);
     expect(other.has(0, 4)).toBe(false);
-    for (const k of ['b', 'c', 'd', 'e']) sessionRanges(k, grids);
-    expect(sessionRanges('s.zarr|8|0|0', [[3, 2, 2]])).not.toBe(other);
+    // small stores: every one kept (the time points of a series, each its own)
+    for (let t = 0; t < 50; t++) sessionRanges(`series|8|${t}`, grids).record(0, 1, t, t + 1);
+    expect(sessionRanges('s.zarr|8|0|0', [[3, 2, 2]])).toBe(other);
+    for (let t = 0; t < 50; t++) expect(sessionRanges(`series|8|${t}`, grids).get(0, 1)).toEqual([t, t + 1]);
+  });
+
+  it('bounded in bytes: the least recently opened go first, the last 4 always kept', () => {
+    // 2 Mi chunks: 16 MiB of ranges once one is learnt
+    const big: [number, number, number][] = [[128, 128, 128]];
+    const made = ['a', 'b', 'c', 'd', 'e', 'f'].map((k) => {
+      const r = sessionRanges(`big|${k}`, big);
+      r.record(0, 7, 0, 1);
+      expect(r.bytes).toBe(16 * 2 ** 20);
+      return r;
+    });
+    // 96 MiB > SESSION_RANGES_BYTES: a and b were let go (64 MiB left), c..f kept
+    expect(SESSION_RANGES_BYTES).toBe(64 * 2 ** 20);
+    expect(sessionRanges('big|f', big)).toBe(made[5]);
+    expect(sessionRanges('big|c', big)).toBe(made[2]);
+    expect(sessionRanges('big|a', big)).not.toBe(made[0]);
   });
 });
 
