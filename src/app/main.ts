@@ -44,6 +44,8 @@ import { ProgressView } from './ui/progress.ts';
 import { SpacingControl } from './ui/spacing-control.ts';
 import { StatsPanel } from './ui/stats-panel.ts';
 import { VolumeForm } from './ui/volume-form.ts';
+import { SeriesDialog } from './ui/series-dialog.ts';
+import { FileSeriesOpener } from './loading/file-series.ts';
 import { ViewLink } from './view-link.ts';
 
 /** ?url= of this page, if any. */
@@ -452,10 +454,11 @@ async function start(): Promise<void> {
   let nextUrl: string | undefined;
   /** Opens what is on screen again (set whenever a volume or a store's first level is installed). */
   let reopen: (() => Promise<void>) | undefined;
+  const volumeForm = new VolumeForm(byId<HTMLDialogElement>('volume-form'));
   const loader = new VolumeLoader({
     gpu: () => gpu,
     progress: new ProgressView(byId('progress')),
-    form: new VolumeForm(byId<HTMLDialogElement>('volume-form')),
+    form: volumeForm,
     memoryBudget: () => budget.bytes,
     chooseIso: (opened, iso, ranges) => {
       const [lo, hi] = iso.info.valueRange;
@@ -490,11 +493,35 @@ async function start(): Promise<void> {
     nextUrl = undefined;
     void load();
   };
-  const openFiles = (files: File[]): void => {
+  const openFilesAsBefore = (files: File[]): void => {
     const stack = files.length > 1 && files.every((f) => /\.tiff?$/i.test(f.name));
     if (files.length > 1 && !stack)
       messages.show(`Opening ${files[0].name} (one volume at a time; ${files.length - 1} other file(s) ignored).`, 'info', 4000);
     open(() => loader.loadFiles(files));
+  };
+  // numbered volume files dropped together play as a time series, through the store path (loading/file-series.ts)
+  const seriesDialog = new SeriesDialog();
+  const series = new FileSeriesOpener({
+    askShape: (facts) => volumeForm.ask(facts),
+    askSeries: (n, first, last, why) => seriesDialog.ask(n, first, last, why),
+    onError: (m) => messages.show(m),
+    onNotice: (m) => messages.show(m, 'info', 4000),
+    openStore: (store, name, rate) => storeView!.openStore(store, name, rate === undefined ? {} : { storeRate: rate }),
+  });
+  const openFiles = (files: File[]): void => {
+    series.supersede();
+    seriesDialog.cancel();
+    if (files.length < 2 || bench.isRunning) {
+      openFilesAsBefore(files);
+      return;
+    }
+    void series.open(files).then(
+      (r) => {
+        if (r.kind === 'files') openFilesAsBefore(files);
+        else if (r.kind === 'first') open(() => loader.loadFile(r.file));
+      },
+      (e: Error) => messages.show(e.message),
+    );
   };
   acceptDrops(byId('drop-overlay'), openFiles);
   wireControls({
