@@ -6,14 +6,15 @@
 // in zfpy's decode of NumPy's array of that time point at the rate the page
 // chose (read from the link), which differ from time point to time point. A
 // set whose second file is one plane short is refused naming that file, no
-// page error, and the series on screen stays.
+// page error, and the series on screen stays. Names that leave it open ask:
+// Escape cancels, "Open the first only" opens one volume.
 import { mkdtempSync, readdirSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { expect, type Page, test } from '@playwright/test';
 import { runPython } from '../helpers/python.ts';
 import { openApp, watchErrors } from './page.ts';
-import { trianglesShown } from './volume-page.ts';
+import { acceptVolumeForm, trianglesShown } from './volume-page.ts';
 
 const work = mkdtempSync(join(tmpdir(), 'file-series-e2e-'));
 test.afterAll(() => rmSync(work, { recursive: true, force: true }));
@@ -158,5 +159,20 @@ test('a numbered raw series and a TIFF series play; a mismatched set is refused 
   expect(after?.playback?.index).toBe(2);
   expect(await page.evaluate(() => window.zfpiso!.loads)).toBe(loadsBefore);
   expect(await trianglesShown(page)).toBe(tifWant[2]);
+
+  // names that leave it open (not numbered alike): the page asks; Escape cancels, "the first only" opens one volume
+  const unsure = [join(work, 'bad/bad_0_48x48x48_uint8.raw'), raw[3]];
+  await page.setInputFiles('#file-input', unsure);
+  const dialog = page.locator('#series-dialog');
+  await expect(dialog).toBeVisible();
+  await expect(dialog).toContainText('Open these 2 files as a time series');
+  await page.keyboard.press('Escape');
+  await expect(dialog).toBeHidden();
+  expect((await storeState(page))?.url).toBe('t1.tif … t3.tif (3 time points)');
+  await page.setInputFiles('#file-input', unsure);
+  await dialog.getByRole('button', { name: 'Open the first only' }).click();
+  await acceptVolumeForm(page); // as for any one raw file: its rate
+  await page.waitForFunction((n) => window.zfpiso!.loads > n && !window.zfpiso!.loading, loadsBefore, { timeout: 60_000 });
+  expect(await page.evaluate(() => window.zfpiso!.volume?.name)).toBe('bad_0_48x48x48_uint8.raw');
   expect(errors).toEqual([]);
 });
