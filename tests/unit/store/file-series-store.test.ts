@@ -133,7 +133,7 @@ describe('a series of volume files as a Zarr store', () => {
     await readsAll(new FileSeriesStore(series, 'nrrd', X * Y * 4 * 32), 'nrrd', 'float32');
   });
 
-  it('TIFF: 3-D stacks (one per time point) read as tifffile reads them, decoded once each', async () => {
+  it('TIFF: 3-D stacks (one per time point) read as tifffile reads them', async () => {
     const files = filesIn('tif', /\.tif$/);
     expect(await tiffPageCount(files[0])).toBe(10);
     const series = await tiffSeries(files);
