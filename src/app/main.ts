@@ -30,7 +30,7 @@ import { setInfoList } from './info-list.ts';
 import { chooseIsovalue } from './iso-choice.ts';
 import { VolumeLoader } from './loading/loader.ts';
 import { keepPageView } from './store/keep-page.ts';
-import { mountStoreView, rangesParameter, storeParameter } from './store/mount.ts';
+import { mountStoreView, prefetchParameter, rangesParameter, storeParameter } from './store/mount.ts';
 import type { StoreView } from './store/store-view.ts';
 import { Messages, showFatal } from './messages.ts';
 import { type PageState, publishPageState } from './page-state.ts';
@@ -631,6 +631,7 @@ async function start(): Promise<void> {
   storeView = mountStoreView({
     gpu: () => gpu,
     budget: pageBudget,
+    prefetchBytes: prefetchParameter(),
     onError: (m) => messages.show(m),
     onNotice: (m) => messages.show(m, 'info', 8000),
     // a store's first step with a surface becomes the volume on screen (level 0's frame); its later steps update it

@@ -88,24 +88,29 @@ async function settledAt(page: Page, t: number, iso: number): Promise<void> {
   expect(await trianglesShown(page)).toBe(truth.get(`${t}|${iso}`));
 }
 
-/** Every volume installed since: the time point, the level it showed, the isovalue (recorded each animation frame). */
+/**
+ * Every volume installed since: the time point, the level it showed, the
+ * isovalue, as the store's state published first after it says
+ * (window.zfpisoStore is set anew at each publication).
+ */
 async function recordInstalls(page: Page): Promise<void> {
   await page.evaluate(() => {
-    const w = window as unknown as {
-      installs: { t: number; level: number | null; iso?: number }[];
-      zfpisoStore?: { shownLevel: number | null; playback?: Playback };
-    };
+    type S = { shownLevel: number | null; playback?: Playback };
+    const w = window as unknown as { installs: { t: number; level: number | null; iso?: number }[] };
     w.installs = [];
     let loads = window.zfpiso!.loads;
-    const tick = () => {
-      const now = window.zfpiso!.loads;
-      if (now !== loads) {
+    let current = (window as unknown as { zfpisoStore?: S }).zfpisoStore;
+    Object.defineProperty(window, 'zfpisoStore', {
+      configurable: true,
+      get: () => current,
+      set: (s: S) => {
+        current = s;
+        const now = window.zfpiso!.loads;
+        if (now === loads) return;
         loads = now;
-        w.installs.push({ t: w.zfpisoStore?.playback?.index ?? -1, level: w.zfpisoStore?.shownLevel ?? null, iso: window.zfpiso!.iso });
-      }
-      requestAnimationFrame(tick);
-    };
-    requestAnimationFrame(tick);
+        w.installs.push({ t: s.playback?.index ?? -1, level: s.shownLevel, iso: window.zfpiso!.iso });
+      },
+    });
   });
 }
 /** Moves the time slider to `t` and lets go. */
@@ -225,5 +230,88 @@ test('another time point keeps the surfaces, the clip and the voxel size', async
   await page.waitForFunction(
     () => /vox=1,1,2/.test(location.hash) && /clip=0,0,0,20,31,31/.test(location.hash) && /t=1/.test(location.hash),
   );
+  expect(errors).toEqual([]);
+});
+
+interface Prefetched {
+  time: number;
+  wanted: number;
+  asked: number;
+  arrived: number;
+  bytes: number;
+  full: boolean;
+  done: boolean;
+  error: string | null;
+}
+
+/**
+ * Per time point shown from now on (each publication of the store's state is
+ * seen: window.zfpisoStore is set anew each time), its last state: its
+ * level, what was fetched ahead for it and the chunks its session fetched.
+ */
+async function recordPrefetch(page: Page): Promise<void> {
+  await page.evaluate(() => {
+    type S = {
+      shownLevel: number | null;
+      chunksFetched: number;
+      done: boolean;
+      playback?: { index: number; prefetch: { shown: unknown } };
+    };
+    const w = window as unknown as { shownAhead: Record<number, unknown> };
+    w.shownAhead = {};
+    let current = (window as unknown as { zfpisoStore?: S }).zfpisoStore;
+    Object.defineProperty(window, 'zfpisoStore', {
+      configurable: true,
+      get: () => current,
+      set: (s: S) => {
+        current = s;
+        const t = s.playback?.index ?? -1;
+        if (s.done) w.shownAhead[t] = { t, level: s.shownLevel, shown: s.playback?.prefetch.shown ?? null, chunks: s.chunksFetched };
+      },
+    });
+  });
+}
+
+test('while playing, the next time point is fetched ahead; a bound too small for it still plays every time point whole and says so', async ({
+  page,
+}) => {
+  test.setTimeout(120_000);
+  const errors = watchErrors(page);
+  const shownAhead = () =>
+    page.evaluate(() =>
+      Object.values(
+        (window as unknown as { shownAhead: Record<number, { t: number; level: number | null; shown: Prefetched | null; chunks: number }> })
+          .shownAhead,
+      ),
+    );
+  for (const bound of [null, 0.01]) {
+    await openApp(page, `/?store=/stores/${NAME}${bound === null ? '' : `&prefetch=${bound}`}#iso=100`);
+    await settledAt(page, 0, 100);
+    await recordPrefetch(page);
+    await page.locator('#store-playback [data-play="toggle"]').click();
+    await settledAt(page, 5, 100);
+    const shown = (await shownAhead()).filter((s) => s.t > 0);
+    // every time point after the first shown once, whole (level 0)
+    expect(shown.map((s) => s.t)).toEqual([1, 2, 3, 4, 5]);
+    expect(shown.filter((s) => s.level !== 0)).toEqual([]);
+    for (const s of shown) {
+      expect(s.shown).toMatchObject({ time: s.t, done: true, error: null });
+      const p = s.shown!;
+      if (bound === null) {
+        // the whole time point was there ahead: its session fetched no chunk itself (the plan ahead was its plan)
+        expect(p).toMatchObject({ full: false, asked: p.wanted, arrived: p.wanted });
+        expect(p.wanted).toBeGreaterThan(0);
+        expect(s.chunks).toBe(p.arrived);
+      } else {
+        // 10 KiB: two chunks ahead, the rest fetched when shown, none twice
+        expect(p.full).toBe(true);
+        expect(p.asked).toBeLessThan(p.wanted);
+        expect(s.chunks).toBeGreaterThan(p.arrived);
+      }
+    }
+    await expect(page.locator('#store-playback [data-k="playback-prefetch"]')).toContainText(
+      bound === null ? 't = 5 was fetched ahead' : 'prefetch bound, the rest is fetched when shown',
+    );
+  }
   expect(errors).toEqual([]);
 });

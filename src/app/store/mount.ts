@@ -9,6 +9,13 @@ export function storeParameter(): string | null {
   return new URLSearchParams(location.search).get('store');
 }
 
+/** `?prefetch=MiB`: CPU bytes a series' next time point may take when fetched ahead (0: none); undefined: the default. */
+export function prefetchParameter(): number | undefined {
+  const v = new URLSearchParams(location.search).get('prefetch');
+  const n = v === null || v.trim() === '' ? Number.NaN : Number(v);
+  return Number.isFinite(n) && n >= 0 ? n * 2 ** 20 : undefined;
+}
+
 /** `?store=URL&ranges=URL`: per-brick ranges of a store of lossless chunks, written apart (convert --ranges-only). */
 export function rangesParameter(): string | null {
   return new URLSearchParams(location.search).get('ranges');

@@ -15,6 +15,7 @@
 // per time point once it is whole (recorder.ts: WebM by the browser's
 // MediaRecorder), with a progress bar; any other playback action cancels it;
 // the file is then offered for download (STORE-tFROM-TO.webm).
+import type { PrefetchState } from '../../store/series/prefetch.ts';
 import { timeValueOf, type StoreTimeAxis } from '../../store/zarr/store.ts';
 import { isTyping } from '../dom.ts';
 import { cannotRecord, MovieRecorder, movieFileName, type ViewCapture, webmType } from './recorder.ts';
@@ -38,6 +39,8 @@ export interface PlaybackState {
   busy: boolean;
   /** The recording under way, else the last one (null: none yet). */
   recording: RecordingState | null;
+  /** The next time point fetched ahead (null: none), and what was fetched ahead for the one on screen (null: nothing). */
+  prefetch: { ahead: PrefetchState | null; shown: PrefetchState | null };
 }
 
 /** A movie of the time points (Record): its progress, then its file (no bytes: their count and the blob URL). */
@@ -67,8 +70,14 @@ export interface RecordingState {
 export interface PlaybackHost {
   /** The time axis of the store on screen (null: none, or no store). */
   time(): StoreTimeAxis | null;
-  /** Shows time point `t` (the store opened again there); true once it is on screen whole, false when it was not shown (failed, superseded). */
-  showTime(t: number): Promise<boolean>;
+  /**
+   * Shows time point `t` (the store opened again there); true once it is on
+   * screen whole, false when it was not shown (failed, superseded). `next`:
+   * the time point playback asks for after it (fetched ahead meanwhile), null when none.
+   */
+  showTime(t: number, next: number | null): Promise<boolean>;
+  /** What is fetched ahead now, and what was for the time point on screen. */
+  prefetch(): { ahead: PrefetchState | null; shown: PrefetchState | null };
   /** The playback's state changed (the panel's figures and window.zfpisoStore). */
   changed(): void;
 }
@@ -104,6 +113,8 @@ export class Playback {
   #rec: RecordingState | null = null;
   /** Record was pressed and waits for the time point it starts at. */
   #recStarting = false;
+  /** A prefetch line update is waiting for the next frame. */
+  #prefetchPending = false;
   readonly #els: {
     toggle: HTMLButtonElement;
     back: HTMLButtonElement;
@@ -113,6 +124,7 @@ export class Playback {
     slider: HTMLInputElement;
     label: HTMLElement;
     rate: HTMLElement;
+    prefetch: HTMLElement;
     record: HTMLButtonElement;
     progress: HTMLProgressElement;
     recordStatus: HTMLElement;
@@ -136,6 +148,7 @@ export class Playback {
       `<p class="playback-time"><input type="range" data-play="time" min="0" max="0" step="1" value="0" aria-label="time point"> ` +
       `<span data-k="time"></span></p>` +
       `<p class="playback-rate" data-k="playback-rate"></p>` +
+      `<p class="playback-prefetch" data-k="playback-prefetch"></p>` +
       `<p class="playback-record"><button type="button" data-play="record" title="play from this time point to the last and record the view as a WebM movie, one frame per time point">● record</button> ` +
       `<progress data-k="record-progress" max="1" value="0" hidden></progress> <span data-k="record-status"></span> ` +
       `<a data-k="record-file" hidden></a></p>`;
@@ -149,6 +162,7 @@ export class Playback {
       slider: q('[data-play="time"]'),
       label: q('[data-k="time"]'),
       rate: q('[data-k="playback-rate"]'),
+      prefetch: q('[data-k="playback-prefetch"]'),
       record: q('[data-play="record"]'),
       progress: q('[data-k="record-progress"]'),
       recordStatus: q('[data-k="record-status"]'),
@@ -193,6 +207,7 @@ export class Playback {
       framesShown: this.#framesShown,
       busy: this.#pumping,
       recording: this.#rec ? { ...this.#rec } : null,
+      prefetch: this.host.prefetch(),
     };
   }
 
@@ -210,6 +225,17 @@ export class Playback {
       if (this.#recorder) void this.#stopRecording('Recording cancelled: the series is no longer on screen.');
     }
     this.#update();
+  }
+
+  /** The prefetch of the next time point moved on (a chunk arrived, started, taken): its line. */
+  prefetchChanged(): void {
+    if (this.#prefetchPending) return;
+    // at most one panel update per frame: chunks arrive by the hundred
+    this.#prefetchPending = true;
+    requestAnimationFrame(() => {
+      this.#prefetchPending = false;
+      this.#update();
+    });
   }
 
   /** The page's view, which Record films. */
@@ -421,7 +447,8 @@ export class Playback {
         }
         this.#asked = next;
         this.#update();
-        const shown = await this.host.showTime(next);
+        // the one after is fetched ahead (playing, or a step forward likely followed by another)
+        const shown = await this.host.showTime(next, this.#following(next));
         if (!shown) {
           // not shown (failed, or another store opened): playback stops there
           if (this.host.time()?.index !== next) {
@@ -450,6 +477,14 @@ export class Playback {
       for (const resolve of waiting) resolve();
       this.#update();
     }
+  }
+
+  /** The time point playing asks for after `t` (none past the end without loop, nor after a recording's last). */
+  #following(t: number): number | null {
+    const axis = this.host.time();
+    if (!axis || axis.count <= 1) return null;
+    if (t + 1 < axis.count) return t + 1;
+    return this.#loop && !this.#recorder ? 0 : null;
   }
 
   /** While playing: the time point after the one on screen; at the end, the first with loop, else playback stops. */
@@ -540,6 +575,9 @@ export class Playback {
           ? `${achieved === null ? '…' : achieved.toFixed(1)} time points/s${this.#fps > 0 ? ` of ${this.#fps} asked` : ''}${behind ? ' — falling behind' : ''}`
           : '';
       e.rate.classList.toggle('behind', behind);
+      e.prefetch.textContent = prefetchLine(this.host.prefetch());
+      const pf = this.host.prefetch();
+      e.prefetch.classList.toggle('behind', !!(pf.ahead ?? pf.shown)?.full);
     }
     this.#showRecording();
     this.host.changed();
@@ -577,4 +615,22 @@ export class Playback {
 /** The store on screen's name as the page shows it (its URL or folder / file name). */
 function storeName(): string | undefined {
   return (window as unknown as { zfpisoStore?: { url?: string } }).zfpisoStore?.url;
+}
+
+/**
+ * The panel's line on what is fetched ahead: the next time point's chunks
+ * there, else what was fetched ahead for the one on screen; and when the
+ * bound held only part of it (the rest came when it was shown).
+ */
+export function prefetchLine(p: { ahead: PrefetchState | null; shown: PrefetchState | null }): string {
+  const a = p.ahead ?? p.shown;
+  if (!a) return '';
+  const mb = (b: number) => `${(b / 2 ** 20).toFixed(2)} MiB`;
+  if (a.error) return `t = ${a.time} not fetched ahead: ${a.error}`;
+  if (p.ahead && a.wanted === 0 && !a.done) return `fetching t = ${a.time} ahead…`;
+  const part = a.full
+    ? ` — only ${a.asked} of ${a.wanted} fit the ${mb(a.capacityBytes)} prefetch bound, the rest is fetched when shown`
+    : '';
+  const head = p.ahead ? `t = ${a.time} ahead: ${a.arrived} of ${a.asked} chunks` : `t = ${a.time} was fetched ahead: ${a.arrived} chunks`;
+  return `${head}, ${mb(a.bytes)}${p.ahead && a.done ? ' (ready)' : ''}${part}`;
 }

@@ -26,6 +26,8 @@ export interface StoreViewDeps {
   gpu: () => GpuContext;
   /** The page's one GPU memory budget: every store holds against it. */
   budget: GpuBudget;
+  /** CPU bytes a series' next time point may take when fetched ahead (the link's prefetch=MiB; 0: none; default series/prefetch.ts's). */
+  prefetchBytes?: number;
   /** Puts a store on screen as the current volume (Session.install), once per opened store. */
   install(volume: LoadedVolume): void;
   /** The store level the link reopens (level by level: the level on screen), or undefined (the view decides). */

@@ -36,6 +36,8 @@ import {
 import { StoreIsosurface, type ShownStep } from './store-isosurface.ts';
 import { renderStorePanel, type StoreChoice, type StorePageState } from './store-panel.ts';
 import { Playback } from './playback.ts';
+import { type PrefetchState, type PreparedTime, SeriesPrefetch } from '../../store/series/prefetch.ts';
+import { openStore as openZarrStore } from '../../store/zarr/open-store.ts';
 import type { StoreTimeAxis } from '../../store/zarr/store.ts';
 
 export type { StoreViewDeps };
@@ -61,15 +63,23 @@ export class StoreView {
   #idle: (() => void)[] = [];
   /** The playback of a store's time points (its block in the Store section). */
   readonly playback: Playback;
+  /** The next time point played, fetched ahead while the one before is computed and on screen (series/prefetch.ts). */
+  readonly #prefetch = new SeriesPrefetch();
+  /** The time point asked for after the one opening (playback; -1: the one after it, a series just opened; null: none). */
+  #next: number | null = null;
+  /** What was fetched ahead for the time point on screen (taken over by its session), or null. */
+  #prefetched: PrefetchState | null = null;
 
   constructor(private readonly d: StoreViewDeps) {
     this.playback = new Playback({
       time: () => this.time,
-      showTime: (t) => this.showTime(t),
+      showTime: (t, next) => this.showTime(t, next),
+      prefetch: () => ({ ahead: this.#prefetch.state, shown: this.#prefetched }),
       changed: () => {
         if (this.#open) this.#publish(this.#open);
       },
     });
+    this.#prefetch.onChange(() => this.playback.prefetchChanged());
     // a new limit: the stream gives back what it must at once (its own listener); its refinement for the new limit,
     // asked for here once the streams have shed (a microtask later), is the one the page waits for
     d.budget.onChange(() =>
@@ -112,17 +122,30 @@ export class StoreView {
    * until then). True once it is on screen and every refinement asked
    * meanwhile (a new isovalue) has ended; false when it was not shown (no
    * store, no such time point, the open failed or another store opened).
+   * `next`: the time point asked for after this one (playback): it is
+   * fetched ahead once this one's refinement has started, within the
+   * prefetch bound; what was fetched ahead for `t` is taken over here.
    */
-  async showTime(t: number): Promise<boolean> {
+  async showTime(t: number, next: number | null = null): Promise<boolean> {
     const o = this.#open;
     const axis = o?.store.time;
     if (!o || !axis || !Number.isInteger(t) || t < 0 || t >= axis.count) return false;
+    this.#next = next !== null && Number.isInteger(next) && next >= 0 && next < axis.count && next !== t ? next : null;
     // the time point on screen first ends what was asked of it (a new isovalue): the next is asked for once it is whole
     await this.whenIdle();
     if (this.#open !== o) return false;
-    if (axis.index === t && o.current) return true;
+    if (axis.index === t && o.current) {
+      this.#ahead(o);
+      return true;
+    }
     this.#keepIso = Number.isFinite(o.iso) ? o.iso : undefined;
-    await this.openStore(o.source, o.url, { ...o.choice, time: t }, o.ranges, { whole: true, keepPage: true });
+    const prepared = await this.#prefetch.take(t, o.source);
+    if (this.#open !== o) {
+      prepared?.fetcher.cancelAll();
+      prepared?.store.close?.();
+      return false;
+    }
+    await this.openStore(o.source, o.url, { ...o.choice, time: t }, o.ranges, { whole: true, keepPage: true, prepared });
     const n = this.#open;
     if (!n || n === o || n.store.time?.index !== t || !n.current) return false;
     await n.restoring;
@@ -159,6 +182,8 @@ export class StoreView {
   /** Another volume is on screen now: the open store ends (requests, decodes, timers) and gives back its GPU memory. */
   close(): void {
     this.#gen++;
+    this.#prefetch.cancel();
+    this.#prefetched = null;
     const o = this.#open;
     this.#open = null;
     if (!o) return;
@@ -193,9 +218,16 @@ export class StoreView {
     url: string,
     choice: StoreChoice = this.d.linkStoreChoice(),
     ranges?: { store: AsyncReadable; name: string },
-    how: { whole?: boolean; keepPage?: boolean } = {},
+    how: { whole?: boolean; keepPage?: boolean; prepared?: PreparedTime | null } = {},
   ): Promise<void> {
     const gen = ++this.#gen;
+    // another store (not a time point of this one): nothing fetched ahead is of use; a series' next time point
+    // is fetched ahead once this one's refinement starts (as playback asks for each one it shows)
+    if (!how.keepPage) {
+      this.#prefetch.cancel();
+      this.#next = -1;
+    }
+    this.#prefetched = how.prepared?.state ?? null;
     this.#askedIso = undefined;
     let cut = null as OpenStore['cut'];
     this.#line(`Opening ${url}…`);
@@ -211,6 +243,7 @@ export class StoreView {
     try {
       const asked = { ...this.d.linkCut(), ...this.#cutChoice };
       session = await StoreSession.open(this.d.gpu(), source, url, {
+        prepared: how.prepared ?? undefined,
         open: {
           rate: choice.storeRate,
           chooseRate: storeRateChooser(this.d.gpu()),
@@ -294,6 +327,12 @@ export class StoreView {
       state.levels[level].chunksFetched++;
       state.levels[level].chunkBytesFetched += bytes;
     });
+    // fetched ahead (a time point played): counted as the session's own
+    for (let L = 0; L < store.levels.length; L++) {
+      state.chunksFetched += session.fetched.chunks(L);
+      state.levels[L].chunksFetched += session.fetched.chunks(L);
+      state.levels[L].chunkBytesFetched += session.fetched.bytes(L);
+    }
     // a chunk that failed is tried again by the stream once it has cooled down (the coarser surface stays meanwhile)
     stream.onProgress((p) => this.#progress(o, p));
     stream.onShown((s) => this.#shown(o, s));
@@ -363,8 +402,12 @@ export class StoreView {
     o.state.shownLevels = o.state.shownLevel === null ? [] : [o.state.shownLevel];
     this.#publish(o);
     try {
-      if (view) await o.session.stream.setView(pageViewSpec(this.d.camera(), o.store, o.cut!.tolerancePx, undefined, true));
-      else await o.session.stream.setIsovalue(iso, others);
+      const refined = view
+        ? o.session.stream.setView(pageViewSpec(this.d.camera(), o.store, o.cut!.tolerancePx, undefined, true))
+        : o.session.stream.setIsovalue(iso, others);
+      // the stream has its isovalue and view now: the next time point played is planned from them
+      this.#ahead(o);
+      await refined;
     } finally {
       o.running--;
     }
@@ -382,6 +425,37 @@ export class StoreView {
     this.#endLine(o);
     this.#publish(o);
     this.#settle();
+  }
+
+  /**
+   * Fetches the next time point played ahead (#next), from the plan of the
+   * store on screen at its isovalue and view with that time point's ranges,
+   * within the prefetch bound (the link's prefetch=MiB; 0: none).
+   */
+  #ahead(o: OpenStore): void {
+    const axis = o.store.time;
+    // a series just opened: the time point after the one shown
+    if (this.#next === -1) this.#next = axis && axis.index + 1 < axis.count ? axis.index + 1 : null;
+    const t = this.#next;
+    const bound = this.d.prefetchBytes ?? undefined;
+    if (this.#open !== o || t === null || bound === 0 || !o.store.time || t === o.store.time.index) return;
+    const { stream } = o.session;
+    const choice = { ...o.choice, time: t };
+    this.#prefetch.start(o.source, {
+      time: t,
+      open: (metered) =>
+        openZarrStore(metered, o.url, {
+          rate: choice.storeRate,
+          time: t,
+          channel: choice.channel,
+          ranges: o.ranges,
+          decodeWorkers: true,
+        }),
+      wanted: (needsAt) => stream.wantedAhead(needsAt),
+      learnt: (store) => learntOf(store, o.source),
+      levels: o.store.levels.map((_, L) => L).filter((L) => L >= stream.finest),
+      capacityBytes: bound,
+    });
   }
 
   /** Whoever waits for the open store's refinements to end (whenIdle) hears it once none runs. */
@@ -416,6 +490,9 @@ export class StoreView {
       o.state.cut = { tolerancePx: o.cut.tolerancePx, tint: o.cut.tint, levels, final: s.final };
     }
     if (o.state.reason && !o.state.reason.startsWith('the link')) o.state.reason = null;
+    let installed = false;
+    /** The slider's value asked while this store opened: refined once its state says what it shows. */
+    let reask: number | undefined;
     if (o.current) {
       o.current.showAgain(s);
     } else if (s.levels.length > 0) {
@@ -444,8 +521,8 @@ export class StoreView {
       o.current = iso;
       o.installed = volume;
       if (restore) o.restoring = restore().catch((e: Error) => this.d.onError(`${o.url}: ${e.message}`));
-      if (asked !== undefined && asked !== s.iso) void this.#refine(o, asked);
-      this.playback.storeShown();
+      installed = true;
+      if (asked !== undefined && asked !== s.iso) reask = asked;
       // the page's camera now (the link's, or Fit of the volume): plan the cut for it
       if (o.cut) this.#scheduleReplan(o);
     }
@@ -458,6 +535,9 @@ export class StoreView {
     o.state.steps.push({ iso: s.iso, triangles: sum((l) => l.stats.triangles), vertices: sum((l) => l.stats.vertices) });
     if (o.state.steps.length > 64) o.state.steps.shift();
     o.state.stepsShown++;
+    // the playback follows the store on screen once its state says what it shows
+    if (installed) this.playback.storeShown();
+    if (reask !== undefined) void this.#refine(o, reask);
     this.d.requestFrame();
     this.#widen(o);
     this.#publish(o);

@@ -22,7 +22,7 @@
 import type { AsyncReadable } from '@zarrita/storage';
 import { ChunkFetcher } from '../fetch/chunk-fetcher.ts';
 import { chunkNeeded, neighbourhoodRanges } from '../plan.ts';
-import { FetchedChunks } from '../session.ts';
+import { FetchedChunks } from '../fetched-chunks.ts';
 import type { ChunkIndex } from '../types.ts';
 import type { ZfpStore } from '../zarr/store.ts';
 import { MeteredStore } from '../zarr/stores.ts';
