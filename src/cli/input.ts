@@ -9,7 +9,8 @@ import { readFileSync } from 'node:fs';
 import { basename } from 'node:path';
 import type { GpuContext } from '../gpu/device.ts';
 import { Isosurface } from '../isosurface/isosurface.ts';
-import { isStoreInput, NoSuchLevelError, openStoreInput, type StoreRecord } from '../store/cli-input.ts';
+import { isStoreInput, NoSuchLevelError, openStoreInput, type SeriesAhead, type StoreRecord } from '../store/cli-input.ts';
+import type { PreparedTime } from '../store/series/prefetch.ts';
 import type { ViewRequest } from '../store/view/view-request.ts';
 import { type Clip, parseClipBox } from '../core/clip.ts';
 import type { CutChunkRecord } from '../store/stream-surface.ts';
@@ -57,6 +58,8 @@ export interface OpenedInput {
   store?: () => StoreRecord;
   /** A store of lossless chunks: writes the brick ranges known now as a ranges sidecar (--save-ranges). */
   saveRanges?: (dir: string) => Promise<{ known: number; bricks: number }>;
+  /** A store: its plan, as a series' next time point is fetched ahead from it (extract --time). */
+  ahead?: SeriesAhead;
   destroy(): void;
 }
 
@@ -82,6 +85,8 @@ export async function openInputSurface(
     clip?: Clip;
     /** Surfaces of block caches only, no triangles (drawn by rays: `render`). */
     cacheOnly?: boolean;
+    /** A store's time point fetched ahead (extract --time): taken over. */
+    prepared?: PreparedTime;
   },
 ): Promise<OpenedInput> {
   if (isStoreInput(path)) {
@@ -96,6 +101,7 @@ export async function openInputSurface(
         placement: { voxelSize: s.voxelSize, origin: [0, 0, 0], unit: s.unit },
         store: s.record,
         ...(s.saveRanges ? { saveRanges: s.saveRanges } : {}),
+        ahead: s.ahead,
         destroy: () => s.surface.destroy(),
       };
     } catch (e) {

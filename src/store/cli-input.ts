@@ -13,6 +13,8 @@ import { storeRateChooser } from './rate.ts';
 import { type StoreRecord, StoreSession } from './session.ts';
 import { type ViewRequest, viewSpecFor } from './view/view-request.ts';
 import type { ViewSpec } from './stream/store-stream.ts';
+import type { ChunkStoreStream } from './gpu-port.ts';
+import type { PreparedTime } from './series/prefetch.ts';
 import { StoreStreamSurface } from './stream-surface.ts';
 import { StoreError } from './zarr/errors.ts';
 import { isStoreUrl, storeForLocation } from './zarr/node-store.ts';
@@ -53,6 +55,35 @@ export interface StoreInput {
    * folder (--save-ranges); absent for a zfp store.
    */
   saveRanges?(dir: string): Promise<{ known: number; bricks: number }>;
+  /** What the next time point of a series would want (series/prefetch.ts), once this one's stream has planned. */
+  ahead: SeriesAhead;
+}
+
+/** The plan of the time point open now, as a series' next one is fetched ahead from it. */
+export interface SeriesAhead {
+  /** Resolves once the stream has its isovalue (its first plan made). */
+  planned: Promise<void>;
+  wanted: ChunkStoreStream['wantedAhead'];
+  /** The levels its plans may read (those of their range arrays read ahead). */
+  levels: number[];
+}
+
+/** The session's stream seen as a series' plan ahead. */
+function aheadOf(session: StoreSession): SeriesAhead {
+  const { stream } = session;
+  // its first progress (or a step shown: a plan with nothing to fetch) says the plan is made
+  const planned = new Promise<void>((resolve) => {
+    const offs = [stream.onProgress(done), stream.onShown(done)];
+    function done() {
+      for (const off of offs) off();
+      resolve();
+    }
+  });
+  return {
+    planned,
+    wanted: (needsAt) => stream.wantedAhead(needsAt),
+    levels: session.store.levels.map((_, L) => L).filter((L) => L >= stream.finest),
+  };
 }
 
 export interface StoreInputOptions {
@@ -74,6 +105,8 @@ export interface StoreInputOptions {
   clip?: Clip;
   /** Surfaces of block caches only, no triangles (`render --draw rays`): the budget holds bricks, not vertices. */
   cacheOnly?: boolean;
+  /** This time point fetched ahead (extract --time): taken over, store and all. */
+  prepared?: PreparedTime;
 }
 
 export async function openStoreInput(gpu: GpuContext, input: string, opts: StoreInputOptions): Promise<StoreInput> {
@@ -82,6 +115,7 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
   let view: ViewSpec | undefined;
   const session = await StoreSession.open(gpu, storeForLocation(input), input, {
     cacheOnly: opts.cacheOnly,
+    prepared: opts.prepared,
     open: {
       ...(opts.deadlineMs === undefined ? {} : { retry: { deadlineMs: opts.deadlineMs } }),
       rate: opts.rate,
@@ -140,6 +174,7 @@ export async function openStoreInput(gpu: GpuContext, input: string, opts: Store
     voxelSize: store.voxelSize.map((s, a) => s * store.levelScales[L][a]) as [number, number, number],
     unit: store.unit,
     record: () => session.record(L, L, L),
+    ahead: aheadOf(session),
     // levels with range arrays: those; the others: what was learnt as bricks arrived, a level learnt in part included
     ...(store.source
       ? {
@@ -211,6 +246,7 @@ function viewInput(input: string, session: StoreSession, view: ViewSpec): StoreI
     voxelSize: [...store.voxelSize],
     unit: store.unit,
     record: () => session.record(Math.min(...(stream.shown?.levels.map((l) => l.level) ?? [0])), 0),
+    ahead: aheadOf(session),
     ...(store.source ? { saveRanges } : {}),
   };
 }

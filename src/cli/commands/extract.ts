@@ -31,6 +31,9 @@ import { type Clip, clipMesh, parseClipBox, parseClipPlane } from '../../core/cl
 import { LevelStoppedError } from '../../store/stream-surface.ts';
 import { type OpenedInput, openInputSurface } from '../input.ts';
 import { isStoreInput, storeTimeAxis } from '../../store/cli-input.ts';
+import { type PrefetchState, SeriesPrefetch } from '../../store/series/prefetch.ts';
+import { storeForLocation } from '../../store/zarr/node-store.ts';
+import { openStore } from '../../store/zarr/open-store.ts';
 import { type StoreTimeAxis, timeValueOf } from '../../store/zarr/store.ts';
 import { StoreError } from '../../store/zarr/errors.ts';
 import { ZfpFormatError } from '../../zfp/format.ts';
@@ -166,7 +169,7 @@ export const extractCommand: CliCommand = {
   summary:
     'isosurfaces on the GPU (block cache kept between isovalues): counts, area, enclosed volume, bbox, GPU time; --ply soups, --glb glTF',
   usage:
-    "extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--glb FILE] [--clip x0,y0,z0,x1,y1,z1] [--plane nx,ny,nz,d] [--level L] [--deadline S] [--time T | start:stop[:step]] [--channel C] [--ranges RANGES.zarr] [--view-box x0,y0,z0,x1,y1,z1 | --view '#iso=..&cam=..'] [--tolerance PX] [--no-skirts] [--save-ranges OUT.zarr] (--level, --view-box, --view, --deadline, --time, --channel, --ranges: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8; --save-ranges: a store of lossless chunks, the brick ranges learnt by these surfaces written as a ranges sidecar; --time start:stop[:step]: the time points of a store's t axis by Python's slice rule (0:20:2, ::-1, --time=-4: when it starts with '-'), one record per time point and isovalue with its `time`, --ply PREFIX-tT-isoV.ply per time point, a store of lossless chunks at the rate of the first time point unless --rate)",
+    "extract IN --iso a,b,c [--rate R | --stream-budget MB] [--cache-budget MB] [--ply PREFIX] [--glb FILE] [--clip x0,y0,z0,x1,y1,z1] [--plane nx,ny,nz,d] [--level L] [--deadline S] [--time T | start:stop[:step]] [--channel C] [--ranges RANGES.zarr] [--view-box x0,y0,z0,x1,y1,z1 | --view '#iso=..&cam=..'] [--tolerance PX] [--no-skirts] [--save-ranges OUT.zarr] (--level, --view-box, --view, --deadline, --time, --channel, --ranges: IN a Zarr store URL or folder; --rate for a store: its lossless chunks' GPU rate, default 8; --save-ranges: a store of lossless chunks, the brick ranges learnt by these surfaces written as a ranges sidecar; --time start:stop[:step]: the time points of a store's t axis by Python's slice rule (0:20:2, ::-1, --time=-4: when it starts with '-'), one record per time point and isovalue with its `time`, --ply PREFIX-tT-isoV.ply per time point, a store of lossless chunks at the rate of the first time point unless --rate; the next time point's chunks fetched while one is computed, within --prefetch MB of CPU memory, default 256, 0: none)",
   options: {
     level: { type: 'string' },
     deadline: { type: 'string' },
@@ -186,6 +189,7 @@ export const extractCommand: CliCommand = {
     clip: { type: 'string' },
     plane: { type: 'string' },
     'save-ranges': { type: 'string' },
+    prefetch: { type: 'string' },
   },
   async run(ctx, args) {
     const input = requiredPositional(args, 0, 'IN (a zfp file or a raw volume)');
@@ -438,6 +442,11 @@ async function extractSeries(ctx: CliContext, args: ParsedArgs, input: string, i
   const glbSurfaces: GlbSurface[] = [];
   const clip = clipOption(args);
   const askedRate = numberOption(args, 'rate');
+  // --prefetch MB: CPU bytes the next time point may take when fetched ahead (0: none)
+  const prefetchMb = numberOption(args, 'prefetch');
+  if (prefetchMb !== undefined && !(prefetchMb >= 0)) throw new UsageError('--prefetch must be MB, 0 or more');
+  const noPrefetch = prefetchMb === 0;
+  const prefetchBytes = prefetchMb === undefined ? undefined : prefetchMb * 2 ** 20;
   const deadlineMs = deadlineOption(args);
   const opts = {
     level: numberOption(args, 'level'),
@@ -480,43 +489,74 @@ async function extractSeries(ctx: CliContext, args: ParsedArgs, input: string, i
   const timePoints: Record<string, unknown>[] = [];
   let first: { volume: OpenedInput; dims: unknown; blockGrid: unknown; memoryBudget: number } | undefined;
   let seriesRate = askedRate;
-  for (const t of times) {
-    const opened = performance.now();
-    const volume = await openInputSurface(quiet, gpu, input, { ...opts, rate: seriesRate, time: t });
-    const when: TimeOfRecord = { time: t };
-    const value = axis ? timeValueOf(axis, t) : null;
-    if (value !== null) when.timeValue = value;
-    if (axis?.unit) when.timeUnit = axis.unit;
-    const label = `t ${t}${value === null ? '' : ` (${value}${axis?.unit ? ` ${axis.unit}` : ''})`}: `;
-    let storeRecord: ReturnType<NonNullable<OpenedInput['store']>> | undefined;
-    try {
-      ctx.log(`${label}${volume.how}`);
-      // a store of lossless chunks: the rate chosen from the data at the first time point is the series' rate
-      if (seriesRate === undefined && volume.store?.().source) seriesRate = volume.rate;
-      const made = await surfacesOf(ctx, volume, isovalues, {
-        input,
-        clip,
-        ply: plyPrefix === undefined ? undefined : (isoValue) => `${plyPrefix}-t${t}-iso${isoValue}.ply`,
-        glb: glbPath === undefined ? undefined : { surfaces: glbSurfaces, name: (isoValue) => `t ${t} iso ${isoValue}` },
-        logPrefix: label,
-      });
-      const ms = performance.now() - opened;
-      storeRecord = volume.store?.();
-      for (const r of made) records.push({ ...r, ...when, bytesFetched: storeRecord?.bytesFetched, msToSurface: ms });
-      if (!first)
-        first = { volume, dims: volume.iso.info.dims, blockGrid: volume.iso.info.blockGrid, memoryBudget: volume.iso.memoryBudget };
-      timePoints.push({
-        ...when,
-        rate: volume.rate,
-        valueRange: volume.iso.info.valueRange,
-        msToSurfaces: ms,
-        notes: volume.notes,
-        ...(storeRecord ? { store: storeRecord } : {}),
-      });
-    } finally {
-      volume.destroy();
+  // the next time point's chunks are fetched while this one's surfaces are computed (series/prefetch.ts)
+  const source = storeForLocation(input);
+  const prefetch = new SeriesPrefetch();
+  const prefetched: (PrefetchState | null)[] = [];
+  try {
+    for (const [i, t] of times.entries()) {
+      const opened = performance.now();
+      const prepared = await prefetch.take(t, source);
+      prefetched[i] = prepared?.state ?? null;
+      const volume = await openInputSurface(quiet, gpu, input, { ...opts, rate: seriesRate, time: t, prepared: prepared ?? undefined });
+      const when: TimeOfRecord = { time: t };
+      const value = axis ? timeValueOf(axis, t) : null;
+      if (value !== null) when.timeValue = value;
+      if (axis?.unit) when.timeUnit = axis.unit;
+      const label = `t ${t}${value === null ? '' : ` (${value}${axis?.unit ? ` ${axis.unit}` : ''})`}: `;
+      let storeRecord: ReturnType<NonNullable<OpenedInput['store']>> | undefined;
+      try {
+        ctx.log(`${label}${volume.how}`);
+        // a store of lossless chunks: the rate chosen from the data at the first time point is the series' rate
+        if (seriesRate === undefined && volume.store?.().source) seriesRate = volume.rate;
+        const next = times[i + 1];
+        const ahead = volume.ahead;
+        if (next !== undefined && ahead && !noPrefetch)
+          prefetch.start(source, {
+            time: next,
+            open: (metered) =>
+              openStore(metered, input, {
+                ...(deadlineMs === undefined ? {} : { retry: { deadlineMs } }),
+                rate: seriesRate,
+                time: next,
+                channel: opts.channel,
+                ...(opts.ranges === undefined ? {} : { ranges: { store: storeForLocation(opts.ranges), name: opts.ranges } }),
+              }),
+            wanted: async (needsAt) => {
+              await ahead.planned;
+              return ahead.wanted(needsAt);
+            },
+            levels: ahead.levels,
+            ...(prefetchBytes === undefined ? {} : { capacityBytes: prefetchBytes }),
+          });
+        const made = await surfacesOf(ctx, volume, isovalues, {
+          input,
+          clip,
+          ply: plyPrefix === undefined ? undefined : (isoValue) => `${plyPrefix}-t${t}-iso${isoValue}.ply`,
+          glb: glbPath === undefined ? undefined : { surfaces: glbSurfaces, name: (isoValue) => `t ${t} iso ${isoValue}` },
+          logPrefix: label,
+        });
+        const ms = performance.now() - opened;
+        storeRecord = volume.store?.();
+        for (const r of made) records.push({ ...r, ...when, bytesFetched: storeRecord?.bytesFetched, msToSurface: ms });
+        if (!first)
+          first = { volume, dims: volume.iso.info.dims, blockGrid: volume.iso.info.blockGrid, memoryBudget: volume.iso.memoryBudget };
+        timePoints.push({
+          ...when,
+          ...(prefetched[i] ? { prefetched: prefetched[i] } : {}),
+          rate: volume.rate,
+          valueRange: volume.iso.info.valueRange,
+          msToSurfaces: ms,
+          notes: volume.notes,
+          ...(storeRecord ? { store: storeRecord } : {}),
+        });
+      } finally {
+        volume.destroy();
+      }
+      timePoints[timePoints.length - 1].gpuBytesAfter = meter.bytes;
     }
-    timePoints[timePoints.length - 1].gpuBytesAfter = meter.bytes;
+  } finally {
+    prefetch.cancel();
   }
   if (glbPath !== undefined && first) await writeGlb(ctx, glbPath, glbSurfaces, input, first.volume.placement);
   const v = first!.volume;

@@ -72,7 +72,7 @@ export interface PrefetchSpec {
   wanted(
     needsAt: (L: number, iso: number) => ((c: ChunkIndex) => boolean) | null,
     store: ZfpStore,
-  ): { level: number; chunk: ChunkIndex }[] | null;
+  ): { level: number; chunk: ChunkIndex }[] | null | Promise<{ level: number; chunk: ChunkIndex }[] | null>;
   /** Ranges learnt in this session for that time point's store (a store without range arrays), if any. */
   learnt?(store: ZfpStore): { learns(L: number): boolean; needs(L: number, iso: number, c: ChunkIndex): boolean } | undefined;
   /** The levels whose ranges the plan may read: their range arrays are read before planning. */
@@ -220,7 +220,7 @@ export class SeriesPrefetch {
       if (!lv.rangesPath && learnt?.learns(L)) return (c) => learnt.needs(L, iso, c);
       return null;
     };
-    const wanted = spec.wanted(needsAt, store);
+    const wanted = await spec.wanted(needsAt, store);
     if (r.cancelled) return;
     if (!wanted) throw new Error(`time point ${spec.time}: nothing to plan ahead yet`);
     // as many as the bound holds, in the plan's order
