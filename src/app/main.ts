@@ -37,6 +37,7 @@ import { type PageState, publishPageState } from './page-state.ts';
 import { Session } from './session.ts';
 import { startGpu } from './start-gpu.ts';
 import { BenchPanel } from './ui/bench-panel.ts';
+import type { SurfaceEngine } from '../bench/harness.ts';
 import { BudgetControl, defaultBudgetBytes } from './ui/budget-control.ts';
 import { Hud } from './ui/hud.ts';
 import { IsoControl } from './ui/iso-control.ts';
@@ -221,8 +222,19 @@ async function start(): Promise<void> {
     context: () => {
       const v = session.current;
       if (!v) return undefined;
+      // draw=rays: a frame per surface, timed (the rays read the cache the surface left; the page's canvas)
+      const iso = v.iso;
+      const engine: SurfaceEngine =
+        drawMode === 'rays'
+          ? {
+              resetCache: () => iso.resetCache(),
+              compute: (value) => iso.compute(value),
+              draw: async () => (await viewer.timeNextFrame()).totalMs,
+            }
+          : iso;
       return {
-        engine: v.iso,
+        engine,
+        draw: drawMode,
         baseName: (v.opened.kind === 'default' ? 'default' : v.opened.name).replace(/[^\w.-]+/g, '_'),
         valueRange: v.iso.info.valueRange,
         volume: {

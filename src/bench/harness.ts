@@ -1,6 +1,9 @@
 // The isosurface benchmark harness, shared by the page and `cli bench`: runs
 // each mode's sequence on a fresh cache, records every isovalue, discards the
-// first (pipeline warm-up) from the summaries.
+// first (pipeline warm-up) from the summaries. An engine that can draw
+// (`SurfaceEngine.draw`) also has one image drawn after each surface: the
+// records then hold the frame's GPU time and the time per image (surface +
+// frame), the summaries their mean and median, the CSV two more columns.
 import { summarize } from './stats.ts';
 import { isovalueSequence, type BenchMode } from './sequences.ts';
 import { hitRate } from '../isosurface/types.ts';
@@ -21,6 +24,13 @@ export interface SurfaceEngine {
   resetCache(): Promise<void> | void;
   /** Computes the surface at `iso` and resolves with its statistics. */
   compute(iso: number): Promise<SurfaceStats>;
+  /**
+   * Draws one image of the surface computed last (after compute resolved)
+   * and resolves with that frame's GPU time in ms (timestamps around its
+   * render pass where the device has them, else the queue's wall time from
+   * submit to done). Without it the harness times surfaces only.
+   */
+  draw?(): Promise<number>;
 }
 
 export interface BenchRecord extends SurfaceStats {
@@ -33,6 +43,10 @@ export interface BenchRecord extends SurfaceStats {
   wallMs: number;
   /** The first record of each mode is excluded from the summary. */
   discarded: boolean;
+  /** An engine that draws: the GPU ms of the image drawn after this surface. */
+  frameMs?: number;
+  /** An engine that draws: the time per image, surface + frame (gpuMs + frameMs). */
+  imageMs?: number;
 }
 
 export interface BenchSummary {
@@ -46,6 +60,11 @@ export interface BenchSummary {
   meanNewBlocks: number;
   meanOccupiedBlocks: number;
   meanTriangles: number;
+  /** An engine that draws: mean and median of frameMs and of imageMs (surface + frame). */
+  meanFrameMs?: number;
+  medianFrameMs?: number;
+  meanImageMs?: number;
+  medianImageMs?: number;
 }
 
 export interface BenchOptions {
@@ -71,6 +90,19 @@ export function summarizeMode(mode: BenchMode, records: BenchRecord[]): BenchSum
     kept.map((r) => r.gpuMs),
     false,
   );
+  const drawn = kept.length > 0 && kept.every((r) => r.frameMs !== undefined);
+  const frame = drawn
+    ? summarize(
+        kept.map((r) => r.frameMs ?? 0),
+        false,
+      )
+    : undefined;
+  const image = drawn
+    ? summarize(
+        kept.map((r) => r.imageMs ?? 0),
+        false,
+      )
+    : undefined;
   return {
     mode,
     count: kept.length,
@@ -82,6 +114,9 @@ export function summarizeMode(mode: BenchMode, records: BenchRecord[]): BenchSum
     meanNewBlocks: mean((r) => r.newBlocks),
     meanOccupiedBlocks: mean((r) => r.occupiedBlocks),
     meanTriangles: mean((r) => r.triangles),
+    ...(frame && image
+      ? { meanFrameMs: frame.mean, medianFrameMs: frame.median, meanImageMs: image.mean, medianImageMs: image.median }
+      : {}),
   };
 }
 
@@ -96,14 +131,18 @@ export async function runBenchmark(engine: SurfaceEngine, options: BenchOptions)
       const iso = isovalues[index];
       const start = performance.now();
       const stats = await engine.compute(iso);
+      const wallMs = performance.now() - start;
+      // one image of that surface, after it (the surface's wall time leaves the frame out)
+      const frameMs = engine.draw ? await engine.draw() : undefined;
       const record: BenchRecord = {
         mode,
         index,
         iso,
         ...stats,
         hitRate: hitRate(stats.activeBlocks, stats.newBlocks),
-        wallMs: performance.now() - start,
+        wallMs,
         discarded: index === 0,
+        ...(frameMs === undefined ? {} : { frameMs, imageMs: stats.gpuMs + frameMs }),
       };
       records.push(record);
       options.onProgress?.(records.length, total, record);
@@ -127,8 +166,11 @@ const CSV_COLUMNS: (keyof BenchRecord)[] = [
   'discarded',
 ];
 
+/** Records that carry frame times (an engine that draws) get frameMs and imageMs after the other columns. */
 export function recordsToCsv(records: BenchRecord[]): string {
-  const lines = [CSV_COLUMNS.join(',')];
-  for (const r of records) lines.push(CSV_COLUMNS.map((c) => String(r[c])).join(','));
+  const drawn = records.length > 0 && records.every((r) => r.frameMs !== undefined);
+  const columns: (keyof BenchRecord)[] = drawn ? [...CSV_COLUMNS, 'frameMs', 'imageMs'] : CSV_COLUMNS;
+  const lines = [columns.join(',')];
+  for (const r of records) lines.push(columns.map((c) => String(r[c])).join(','));
   return lines.join('\n') + '\n';
 }

@@ -5,6 +5,7 @@
 // and cache (render/ray-layer.ts) or by its triangles (surface-layer.ts).
 import type { Isosurface } from '../isosurface/isosurface.ts';
 import type { IsosurfaceStats } from '../isosurface/types.ts';
+import type { ArcballCamera } from '../render/camera.ts';
 import { RayLayer, rayLevelsOf } from '../render/ray-layer.ts';
 import { SurfaceLayer, type SurfacePart } from '../render/surface-layer.ts';
 import type { RenderLayer } from '../render/viewer.ts';
@@ -48,6 +49,33 @@ export async function wholeScene(
     layer = mesh;
   }
   return { layer, levelLayers: [{ level: 0, layer }], stats, levels: [] };
+}
+
+/**
+ * The same scene of a volume opened whole at the surface's newer isovalue
+ * (computed since on the same pipeline): the rays read the cache at it, the
+ * triangles are the drawn data's own. A benchmark draws one image per
+ * isovalue without making the layer's pipelines again.
+ */
+export function wholeSceneAt(scene: Scene, stats: IsosurfaceStats): void {
+  scene.stats = stats;
+  if (scene.layer instanceof RayLayer) scene.layer.iso = stats.isovalue;
+}
+
+/**
+ * The page's view of a volume opened whole (Fit, y up) on `camera`: fitted to
+ * the voxel box [min, max] (default the whole volume, `dims`), where voxel
+ * (i, j, k) lies at ((i, j, k) + origin) * voxelSize.
+ */
+export function fitWhole(
+  camera: ArcballCamera,
+  dims: readonly number[],
+  voxelSize: readonly number[],
+  origin: readonly number[],
+  box?: readonly number[],
+): void {
+  const world = (v: readonly number[]) => v.map((x, a) => (x + origin[a]) * voxelSize[a]) as [number, number, number];
+  camera.fit({ min: world(box ? box.slice(0, 3) : [0, 0, 0]), max: world(box ? box.slice(3, 6) : dims.map((n) => n - 1)) }, 'y');
 }
 
 /** A store's step on screen: every level at its scale and offset, from its live surface (the CLI's stream draws no copies). */

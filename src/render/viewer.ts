@@ -4,6 +4,7 @@
 
 import { mat4, vec3, vec4 } from 'gl-matrix';
 import frameWgsl from '../../shaders/render/frame.wgsl?raw';
+import { GpuTimer, type SubmissionTiming } from '../gpu/timing.ts';
 import type { WgslPart } from '../gpu/wgsl.ts';
 import { ArcballCamera, type Bounds, type UpAxis } from './camera.ts';
 import { CameraControls, type CameraControlsOptions } from './camera-controls.ts';
@@ -124,6 +125,10 @@ export class Viewer {
   private depthProbe: DepthProbe | undefined;
   /** A pick waiting for the next frame (pick()). */
   private pendingPick: { x: number; y: number; resolve: (p: PickHit | null) => void; reject: (e: Error) => void } | undefined;
+  /** Waiting for the next frame's time (timeNextFrame). */
+  private frameTimings: { resolve: (t: SubmissionTiming) => void; reject: (e: Error) => void }[] = [];
+  /** Times frames that are asked for (made by the first). */
+  private frameTimer: GpuTimer | undefined;
   /** Made when a see-through layer first appears. */
   private peeler: DepthPeeler | undefined;
   private peelerMaking = false;
@@ -285,9 +290,25 @@ export class Viewer {
     this.device.queue.writeBuffer(this.frameUniforms, 0, u as Float32Array<ArrayBuffer>);
   }
 
+  /**
+   * The time of the next frame, once drawn (a frame is requested): its main
+   * pass (every opaque layer, rays included) by GPU timestamps where the
+   * device has them, else the queue's wall time from the frame's submission
+   * to done (the whole frame). The benchmark's time per image.
+   */
+  timeNextFrame(): Promise<SubmissionTiming> {
+    if (this.destroyed) return Promise.reject(new Error('the viewer is gone'));
+    return new Promise((resolve, reject) => {
+      this.frameTimings.push({ resolve, reject });
+      this.requestFrame();
+    });
+  }
+
   private frame(time: number): void {
     this.frameRequested = false;
     if (this.destroyed) return;
+    const waiting = this.frameTimings.splice(0);
+    const timing = waiting.length > 0 ? (this.frameTimer ??= new GpuTimer(this.device, 1)).begin() : undefined;
     this.fpsWindow.push(time);
     while (this.fpsWindow.length > 0 && time - this.fpsWindow[0] > 1000) this.fpsWindow.shift();
     this.fps = this.fpsWindow.length > 1 ? ((this.fpsWindow.length - 1) * 1000) / (time - this.fpsWindow[0]) : 0;
@@ -300,7 +321,10 @@ export class Viewer {
     this.colorAttachment.clearValue = this.clearColor;
     const depthView = this.ensureDepthView();
     this.depthAttachment.view = depthView;
+    const timestampWrites = timing?.renderPass('frame');
+    if (timestampWrites) this.passDescriptor.timestampWrites = timestampWrites;
     const pass = encoder.beginRenderPass(this.passDescriptor);
+    delete this.passDescriptor.timestampWrites;
     pass.setBindGroup(0, this.frameBindGroup);
     for (const layer of this.layers) layer.draw(pass);
     pass.end();
@@ -340,10 +364,22 @@ export class Viewer {
       for (const layer of this.overlays) layer.draw(over);
       over.end();
     }
+    timing?.resolve(encoder);
     this.submitList[0] = encoder.finish();
     this.device.queue.submit(this.submitList);
     this.submitList.length = 0;
     this.framesDrawn++;
+    if (timing) {
+      timing.submitted();
+      timing.read().then(
+        (t) => {
+          for (const w of waiting) w.resolve(t);
+        },
+        (e: Error) => {
+          for (const w of waiting) w.reject(e);
+        },
+      );
+    }
     if (pick && pickRead) {
       for (const u of probeUniforms) u.destroy();
       this.resolvePick(pick, pickRead.values, pickRead.readback);
@@ -422,6 +458,8 @@ export class Viewer {
 
   destroy(): void {
     this.destroyed = true;
+    for (const w of this.frameTimings.splice(0)) w.reject(new Error('the viewer is gone'));
+    this.frameTimer?.destroy();
     this.peeler?.destroy();
     this.resizeObserver.disconnect();
     this.controls.dispose();

@@ -1,12 +1,15 @@
 // The in-page benchmark: a short run (10 isovalues per sequence) shows its
 // progress, a summary table and a chart, and offers JSON and CSV whose
-// records are the CLI's for the same volume, seed and range.
+// records are the CLI's for the same volume, seed and range. With draw=rays
+// (issue 46) a frame is drawn and timed per surface: the table shows the
+// frame and image times.
 import { readFileSync } from 'node:fs';
 import { join } from 'node:path';
 import { expect, test } from '@playwright/test';
 import type { BenchRecord } from '../../src/bench/harness.ts';
 import { runCli, SHARED_VOLUMES_DIR } from './cli.ts';
 import { SHARED_VOLUMES } from './volume-page.ts';
+import { watchErrors } from './page.ts';
 
 const FILE = 'hydrogen_atom_128x128x128_float32.rate8.zfp';
 const SEED = 7;
@@ -96,4 +99,32 @@ test("a short benchmark runs in the page and its records are the CLI's", async (
   // Same isovalues, blocks, cache behaviour and triangles as the CLI.
   const headless = await cli;
   expect(result.records.map(comparable)).toEqual(headless.records.map(comparable));
+});
+
+test('draw=rays: the benchmark times a ray-cast frame per surface; the table shows frame and image times', async ({ page }) => {
+  test.setTimeout(180_000);
+  const errors = watchErrors(page);
+  await page.goto(`/?url=${SHARED_VOLUMES}${FILE}#iso=20&draw=rays`);
+  await expect(page.locator('body')).toHaveAttribute('data-status', 'ready', { timeout: 120_000 });
+  await page.waitForFunction(() => window.zfpiso!.raysDrawn === true, null, { timeout: 60_000 });
+  await page.locator('#bench-section summary').click();
+  for (const mode of ['sweep-up', 'sweep-down']) await page.locator(`#bench-section input[value="${mode}"]`).uncheck();
+  await page.locator('#bench-count').fill('3');
+  await page.locator('#bench-seed').fill(String(SEED));
+  await page.locator('#bench-run').click();
+  await page.waitForFunction(() => window.zfpiso!.bench !== undefined && !window.zfpiso!.benchRunning, null, { timeout: 150_000 });
+  await expect(page.locator('#bench-status')).toHaveText('Done: 3 surfaces.');
+  const bench = (await page.evaluate(() => window.zfpiso!.bench)) as unknown as { draw: string; records: BenchRecord[] };
+  expect(bench.draw).toBe('rays');
+  expect(bench.records).toHaveLength(3);
+  for (const r of bench.records) {
+    expect(r.frameMs).toBeGreaterThan(0);
+    expect(r.imageMs).toBeCloseTo(r.gpuMs + r.frameMs!, 6);
+  }
+  // the rows of frame and image time, a time in each
+  const rows = page.locator('#bench-table tbody tr');
+  await expect(rows.locator('th')).toContainText(['mean frame', 'median frame', 'mean image', 'median image']);
+  for (const name of ['mean frame', 'mean image']) await expect(rows.filter({ hasText: name }).locator('td')).toHaveText(/^\d[\d.]* m?s$/);
+  expect(await page.evaluate(() => window.zfpiso!.raysDrawn)).toBe(true);
+  expect(errors).toEqual([]);
 });

@@ -2,7 +2,9 @@
 // sweep-down sequences of isovalues over a chosen range, seeded, each from an
 // empty cache, the first of each left out of the summary. Progress while it
 // runs; a summary table, a chart, and the records as JSON or CSV. The same
-// harness (src/bench/harness.ts) runs headless in `cli bench`.
+// harness (src/bench/harness.ts) runs headless in `cli bench`. When the page
+// draws rays, the engine also draws (and times) one frame after each surface:
+// the table then has the frame and the image (surface + frame) times.
 
 import { recordsToCsv, runBenchmark, type BenchResult, type BenchSummary, type SurfaceEngine } from '../../bench/harness.ts';
 import { BENCH_MODES, isBenchMode, type BenchMode } from '../../bench/sequences.ts';
@@ -17,6 +19,8 @@ export interface BenchContext {
   adapter: Record<string, unknown>;
   baseName: string;
   valueRange: [number, number];
+  /** How the frames the engine draws (engine.draw) show the surface, written into the JSON. */
+  draw?: 'rays' | 'mesh';
 }
 
 export interface BenchPanelHooks {
@@ -133,7 +137,7 @@ export class BenchPanel {
         cancelled: () => this.cancelRequested,
         onProgress: (done, total, r) => {
           fill.style.width = `${((done / total) * 100).toFixed(1)}%`;
-          this.status.textContent = `${r.mode} ${r.index + 1}/${count} · ${formatMs(r.gpuMs)} · hit ${formatPercent(r.hitRate)}`;
+          this.status.textContent = `${r.mode} ${r.index + 1}/${count} · ${formatMs(r.gpuMs)}${r.frameMs === undefined ? '' : ` + frame ${formatMs(r.frameMs)}`} · hit ${formatPercent(r.hitRate)}`;
           this.hooks.onSurface(r.iso);
         },
       });
@@ -143,6 +147,7 @@ export class BenchPanel {
         baseName: ctx.baseName,
         volume: ctx.volume,
         adapter: ctx.adapter,
+        ...(ctx.engine.draw && ctx.draw ? { draw: ctx.draw } : {}),
         ...result,
       };
       this.last = full;
@@ -170,6 +175,15 @@ export class BenchPanel {
       ['mean GPU', (s) => formatMs(s.meanMs)],
       ['median GPU', (s) => formatMs(s.medianMs)],
       ['mean wall', (s) => formatMs(s.meanWallMs)],
+      // frames timed (the page draws rays): a frame per surface, and the time per image (surface + frame)
+      ...(summaries.some((s) => s.meanFrameMs !== undefined)
+        ? ([
+            ['mean frame', (s) => formatMs(s.meanFrameMs ?? Number.NaN)],
+            ['median frame', (s) => formatMs(s.medianFrameMs ?? Number.NaN)],
+            ['mean image', (s) => formatMs(s.meanImageMs ?? Number.NaN)],
+            ['median image', (s) => formatMs(s.medianImageMs ?? Number.NaN)],
+          ] as [string, (s: BenchSummary) => string][])
+        : []),
       ['hit rate', (s) => formatPercent(s.meanHitRate)],
       ['active', (s) => formatCount(s.meanActiveBlocks)],
       ['new', (s) => formatCount(s.meanNewBlocks)],

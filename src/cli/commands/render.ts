@@ -25,7 +25,7 @@ import { parseViewBox, type ViewRequest } from '../../store/view/view-request.ts
 import { type CliCommand, InputError, numberOption, requiredPositional, stringOption, UsageError } from '../command.ts';
 import { openInputSurface } from '../input.ts';
 import { encodePng } from '../png.ts';
-import { destroyScene, levelPerPixel, type Scene, storeScene, wholeScene } from '../scene.ts';
+import { destroyScene, fitWhole, levelPerPixel, type Scene, storeScene, wholeScene } from '../scene.ts';
 import { budgetOption } from './extract.ts';
 
 /** The page's background (render/viewer.ts's default clear colour). */
@@ -109,7 +109,7 @@ export const renderCommand: CliCommand = {
         const stats = await surface.compute(iso);
         // the page's camera: fitted to the volume (or the box), or the link's; world = (voxel + origin) * voxel size
         const { dims } = surface.info;
-        camera.fit({ min: world(box ? box.slice(0, 3) : [0, 0, 0]), max: world(box ? box.slice(3, 6) : dims.map((n) => n - 1)) }, 'y');
+        fitWhole(camera, dims, voxelSize, origin, box);
         if (cam) camera.setState(cam);
         scene = await wholeScene(target, surface, stats, draw, voxelSize, origin);
       }
@@ -210,8 +210,8 @@ async function computeOrExplain(surface: StoreStreamSurface, iso: number): Promi
   }
 }
 
-/** --size WxH -> [width, height]. */
-function sizeOption(text: string): [number, number] {
+/** --size WxH -> [width, height] (render, bench --draw). */
+export function sizeOption(text: string): [number, number] {
   const m = /^(\d+)x(\d+)$/.exec(text);
   const w = m ? Number(m[1]) : Number.NaN;
   const h = m ? Number(m[2]) : Number.NaN;
@@ -219,7 +219,12 @@ function sizeOption(text: string): [number, number] {
   return [w, h];
 }
 
-/** One frame of `layer` into an offscreen target: colour (RGBA8), depth, and its time (GPU timestamps where the adapter has them). */
+/**
+ * One frame of `layer` into an offscreen target: colour (RGBA8), depth, and
+ * its time (GPU timestamps where the adapter has them, else the wall time to
+ * the read back). `pixels: false` (a benchmark's frame): nothing read back,
+ * colour and depth empty, the wall time to the queue's done.
+ */
 export async function renderOffscreen(
   device: GPUDevice,
   frameLayout: GPUBindGroupLayout,
@@ -227,6 +232,7 @@ export async function renderOffscreen(
   width: number,
   height: number,
   layer: RenderLayer,
+  { pixels = true }: { pixels?: boolean } = {},
 ): Promise<{ colour: Uint8Array; depth: Float32Array; ms: number; timing: 'timestamp-query' | 'wall' }> {
   const colour = device.createTexture({
     size: [width, height],
@@ -242,8 +248,9 @@ export async function renderOffscreen(
   device.queue.writeBuffer(uniforms, 0, frameUniformData(camera, width, height) as Float32Array<ArrayBuffer>);
   const group = device.createBindGroup({ layout: frameLayout, entries: [{ binding: 0, resource: { buffer: uniforms } }] });
   const colourRow = 256 * Math.ceil((4 * width) / 256);
-  const readColour = device.createBuffer({ size: colourRow * height, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
-  const readDepth = device.createBuffer({ size: colourRow * height, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+  const readBytes = pixels ? colourRow * height : 4;
+  const readColour = device.createBuffer({ size: readBytes, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+  const readDepth = device.createBuffer({ size: readBytes, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
   const timed = device.features.has('timestamp-query');
   const querySet = timed ? device.createQuerySet({ type: 'timestamp', count: 2 }) : undefined;
   const resolve = timed ? device.createBuffer({ size: 16, usage: GPUBufferUsage.QUERY_RESOLVE | GPUBufferUsage.COPY_SRC }) : undefined;
@@ -257,20 +264,31 @@ export async function renderOffscreen(
   pass.setBindGroup(0, group);
   layer.draw(pass);
   pass.end();
-  encoder.copyTextureToBuffer({ texture: colour }, { buffer: readColour, bytesPerRow: colourRow }, [width, height]);
-  encoder.copyTextureToBuffer({ texture: depth, aspect: 'depth-only' }, { buffer: readDepth, bytesPerRow: colourRow }, [width, height]);
+  if (pixels) {
+    encoder.copyTextureToBuffer({ texture: colour }, { buffer: readColour, bytesPerRow: colourRow }, [width, height]);
+    encoder.copyTextureToBuffer({ texture: depth, aspect: 'depth-only' }, { buffer: readDepth, bytesPerRow: colourRow }, [width, height]);
+  }
   if (querySet && resolve && readTimes) {
     encoder.resolveQuerySet(querySet, 0, 2, resolve, 0);
     encoder.copyBufferToBuffer(resolve, 0, readTimes, 0, 16);
   }
   const started = performance.now();
   device.queue.submit([encoder.finish()]);
-  await Promise.all([readColour.mapAsync(GPUMapMode.READ), readDepth.mapAsync(GPUMapMode.READ), readTimes?.mapAsync(GPUMapMode.READ)]);
+  await Promise.all(
+    pixels
+      ? [readColour.mapAsync(GPUMapMode.READ), readDepth.mapAsync(GPUMapMode.READ), readTimes?.mapAsync(GPUMapMode.READ)]
+      : [device.queue.onSubmittedWorkDone(), readTimes?.mapAsync(GPUMapMode.READ)],
+  );
   let ms = performance.now() - started;
   if (readTimes) {
     const t = new BigUint64Array(readTimes.getMappedRange());
     if (t[1] > t[0]) ms = Number(t[1] - t[0]) / 1e6;
     readTimes.unmap();
+  }
+  if (!pixels) {
+    for (const x of [colour, depth, uniforms, readColour, readDepth, resolve, readTimes]) x?.destroy();
+    querySet?.destroy();
+    return { colour: new Uint8Array(0), depth: new Float32Array(0), ms, timing: readTimes ? 'timestamp-query' : 'wall' };
   }
   const c = new Uint8Array(readColour.getMappedRange());
   const d = new Float32Array(readDepth.getMappedRange());

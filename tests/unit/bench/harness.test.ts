@@ -1,6 +1,6 @@
 import { describe, expect, it } from 'vitest';
 import { isovalueSequence } from '../../../src/bench/sequences.ts';
-import { runBenchmark, type SurfaceEngine } from '../../../src/bench/harness.ts';
+import { recordsToCsv, runBenchmark, type SurfaceEngine } from '../../../src/bench/harness.ts';
 
 describe('benchmark sequences', () => {
   it('random is seeded, in range and float32', () => {
@@ -32,5 +32,44 @@ describe('benchmark sequences', () => {
     expect(up.meanHitRate).toBe(1);
     const down = r.summaries[1];
     expect(down.meanHitRate).toBeCloseTo(0.75); // iso 0.5 -> 1, iso 0 -> 0.5
+  });
+  it('an engine that draws: a frame after each surface, frame and image (surface + frame) times, two more CSV columns', async () => {
+    const calls: string[] = [];
+    let frame = 0;
+    const surface = (iso: number) => ({ activeBlocks: 10, newBlocks: 0, occupiedBlocks: 4, triangles: 100, gpuMs: iso * 10 });
+    const engine: SurfaceEngine = {
+      resetCache: () => void calls.push('reset'),
+      compute: async (iso) => {
+        calls.push(`iso ${iso}`);
+        return surface(iso);
+      },
+      draw: async () => {
+        calls.push('draw');
+        return ++frame;
+      },
+    };
+    const r = await runBenchmark(engine, { modes: ['sweep-up'], count: 4, range: [0, 1.5], seed: 0 });
+    expect(calls).toEqual(['reset', 'iso 0', 'draw', 'iso 0.5', 'draw', 'iso 1', 'draw', 'iso 1.5', 'draw']);
+    expect(r.records.map((x) => [x.frameMs, x.imageMs])).toEqual([
+      [1, 1],
+      [2, 7],
+      [3, 13],
+      [4, 19],
+    ]);
+    // the first left out, as for the surfaces
+    expect(r.summaries[0]).toMatchObject({ meanFrameMs: 3, medianFrameMs: 3, meanImageMs: 13, medianImageMs: 13, meanMs: 10 });
+    const csv = recordsToCsv(r.records).trim().split('\n');
+    expect(csv[0]).toBe('mode,index,iso,gpuMs,wallMs,hitRate,activeBlocks,newBlocks,occupiedBlocks,triangles,discarded,frameMs,imageMs');
+    expect(csv[2].endsWith(',false,2,7')).toBe(true);
+    // an engine that does not draw: the records, summaries and CSV as before
+    const plain = await runBenchmark(
+      { resetCache: () => {}, compute: async (iso) => surface(iso) },
+      { modes: ['sweep-up'], count: 2, range: [0, 1], seed: 0 },
+    );
+    expect(plain.records.every((x) => !('frameMs' in x) && !('imageMs' in x))).toBe(true);
+    expect(plain.summaries[0].meanFrameMs).toBeUndefined();
+    expect(recordsToCsv(plain.records).split('\n')[0]).toBe(
+      'mode,index,iso,gpuMs,wallMs,hitRate,activeBlocks,newBlocks,occupiedBlocks,triangles,discarded',
+    );
   });
 });
