@@ -22,18 +22,31 @@
 // its URL as extract does). Median of REPEATS (default 4) after a
 // discarded first (compilation, the disk cache).
 // Inputs: by default a generated series (SERIES=NxT, default 128x8: a
-// Gaussian ball of float32 moving along x over T time points, NumPy raw
-// files converted with `convert 'step_*.raw' --time`, rate chosen from the
-// data) in a temporary folder, removed at the end; STORES=path,path (folders
-// or URLs of stores with a t axis) plays those instead. BUDGET_MB (default
-// 256), ISO (default ISO_FRACTION=0.5 of the store's value range), TIME
-// (a start:stop[:step] slice, default all), LINKS=localhost,link, JSON
-// (default benchmarks/results/playback-swiftshader.json). The issue's
-// 1024^3 x 8 series (SERIES=1024x8) takes ~32 GB of raw float32 input
-// (4 GiB a time point) and its conversion; it is left to a machine with
-// the disk.
+// Gaussian ball moving along x over T time points, NumPy raw files converted
+// with `convert 'step_*.raw' --time`, rate chosen from the data) in a
+// temporary folder, removed at the end; STORES=path,path (folders or URLs
+// of stores with a t axis) plays those instead. Environment:
+// - SERIES=NxT: the generated series' edge and time points (the issue's
+//   sizes: 256x20 and 1024x8);
+// - DTYPE=float32|uint8: its raw input (default float32 below 512^3, as the
+//   committed 128^3 results; uint8 from 512^3: the field times 255, rounded,
+//   1 GiB a time point at 1024^3 instead of 4; the store is float32 zfp
+//   either way, at the rate chosen from that input);
+// - RATE: the converter's --rate instead of the rate chosen from the data;
+// - KEEP=path.zarr: the generated store is kept there and reused by a later
+//   run with the same SERIES (a complete store there of another shape is
+//   refused); a conversion that failed or was interrupted leaves its raw
+//   input in path.zarr.raw/ and the next run resumes it. Generation and
+//   conversion seconds go into the JSON's `series` when this run made it;
+// - BUDGET_MB (default 256), ISO (default ISO_FRACTION=0.5 of the store's
+//   value range), TIME (a start:stop[:step] slice, default all),
+//   LINKS=localhost,link, REPEATS (default 4, at least 2: the first is
+//   discarded), JSON (default benchmarks/results/playback-swiftshader.json:
+//   give another path for trial runs).
+// Running the issue's sizes (times, disk, what SwiftShader manages):
+// benchmarks/README.md.
 import { execFileSync } from 'node:child_process';
-import { mkdtempSync, rmSync } from 'node:fs';
+import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, statSync } from 'node:fs';
 import { createServer, type Server } from 'node:http';
 import { tmpdir } from 'node:os';
 import { basename, dirname, join, resolve } from 'node:path';
@@ -61,33 +74,130 @@ const linkName = `${LINK.mbitPerSecond} Mbit/s + ${LINK.latencyMs} ms`;
 const links = (env.LINKS ?? 'localhost,link').split(',').map((l) => (l === 'link' ? linkName : 'localhost'));
 const jsonOut = env.JSON ?? join(root, 'benchmarks/results/playback-swiftshader.json');
 const [seriesN, seriesT] = (env.SERIES ?? '128x8').split('x').map(Number);
+// float32 below 512^3 (the committed 128^3 results' input), uint8 from there (a quarter of the bytes)
+const seriesDtype = env.DTYPE ?? (seriesN >= 512 ? 'uint8' : 'float32');
 
-/** A moving ball, SERIES=NxT: step_TTT_NxNxN_float32.raw written by NumPy, converted to one store with a t axis. */
-function generateSeries(dir: string, n: number, t: number): string {
-  console.log(`writing a ${n}^3 x ${t} series (moving ball, float32) in ${dir}`);
-  runPython(
-    `
+/** What SERIES / KEEP made: the store and, when it was made by this run, how long that took. */
+interface Generated {
+  store: string;
+  dtype: string;
+  /** Reused from KEEP (complete, the same size and time points): nothing was generated. */
+  reused: boolean;
+  /** A conversion a previous run left unfinished, resumed from its raw files (kept under KEEP). */
+  resumed?: boolean;
+  /** Writing the raw input with NumPy, s. */
+  writeSeconds?: number;
+  /** `convert 'step_*.raw' --time`, s. */
+  convertSeconds?: number;
+  rawBytes?: number;
+}
+
+/** The converter's attributes of the store at `path` (zarr.json's zfpzarr), or null where there is none. */
+function storeAttributes(path: string): { complete?: boolean; params?: { shape?: number[]; source_dtype?: string } } | null {
+  if (!existsSync(join(path, 'zarr.json'))) return null;
+  return JSON.parse(readFileSync(join(path, 'zarr.json'), 'utf8')).attributes?.zfpzarr ?? null;
+}
+
+const rawName = (i: number, n: number, dtype: string) => `step_${String(i).padStart(3, '0')}_${n}x${n}x${n}_${dtype}.raw`;
+
+/**
+ * A moving ball, SERIES=NxT: step_TTT_NxNxN_DTYPE.raw written by NumPy (z
+ * slabs of at most 16M voxels, so a 1024^3 time point never sits in memory
+ * whole) in OUT.raw/, converted to one store with a t axis at `out`.
+ * float32: exp(-d^2/r^2), r = N/6; uint8: the same field times 255,
+ * rounded (a quarter of the bytes: 1 GiB a time point at 1024^3). The
+ * converter reads either and writes float32 zfp chunks. The raw files are
+ * removed once the store is complete; under KEEP a failed or interrupted
+ * conversion leaves them, and the next run converts them again, which
+ * resumes the store (`resume`: they are there, so they are not rewritten:
+ * the converter knows its input by path, size and mtime).
+ */
+function generateSeries(out: string, n: number, t: number, dtype: string, resume = false): Generated {
+  const dir = `${out}.raw`;
+  const rawBytes = n ** 3 * t * (dtype === 'uint8' ? 1 : 4);
+  let converted = false;
+  try {
+    const t0 = performance.now();
+    if (!resume) {
+      mkdirSync(dir, { recursive: true });
+      console.log(`writing a ${n}^3 x ${t} series (moving ball, ${dtype}, ${(rawBytes / 2 ** 30).toFixed(2)} GiB of raw input) in ${dir}`);
+      runPython(
+        `
 import sys, numpy as np
-d, n, T = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+d, n, T, dtype = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
 ax = np.arange(n, dtype=np.float32)
-z, y, x = np.meshgrid(ax, ax, ax, indexing='ij')
 r = n / 6
+slab = max(1, (1 << 24) // (n * n))
 for t in range(T):
     cx = n * (0.3 + 0.4 * t / max(T - 1, 1))
-    d2 = (x - cx) ** 2 + (y - n / 2) ** 2 + (z - n / 2) ** 2
-    np.exp(-d2 / (r * r)).astype(np.float32).tofile(f'{d}/step_{t:03d}_{n}x{n}x{n}_float32.raw')
+    with open(f'{d}/step_{t:03d}_{n}x{n}x{n}_{dtype}.raw', 'wb') as f:
+        for z0 in range(0, n, slab):
+            z, y, x = np.meshgrid(ax[z0:z0 + slab], ax, ax, indexing='ij')
+            v = np.exp(-((x - cx) ** 2 + (y - n / 2) ** 2 + (z - n / 2) ** 2) / (r * r)).astype(np.float32)
+            if dtype == 'uint8':
+                v = np.rint(v * 255).astype(np.uint8)
+            v.tofile(f)
 `,
-    [dir, String(n), String(t)],
-    1_800_000,
-  );
-  const out = join(dir, 'series.zarr');
-  execFileSync(
-    process.execPath,
-    [join(root, 'scripts/convert.mjs'), join(dir, `step_*_${n}x${n}x${n}_float32.raw`), '--time', '--out', out, '--quiet'],
-    { stdio: 'inherit' },
-  );
-  for (let i = 0; i < t; i++) rmSync(join(dir, `step_${String(i).padStart(3, '0')}_${n}x${n}x${n}_float32.raw`));
-  return out;
+        [dir, String(n), String(t), dtype],
+        3_600_000,
+      );
+      console.log(`  written in ${((performance.now() - t0) / 1000).toFixed(1)} s`);
+    } else console.log(`resuming the conversion of ${dir} into ${out}`);
+    const t1 = performance.now();
+    console.log(`converting to ${out}${env.RATE ? ` at rate ${env.RATE}` : ', rate chosen from the data'}`);
+    execFileSync(
+      process.execPath,
+      [
+        join(root, 'scripts/convert.mjs'),
+        join(dir, `step_*_${n}x${n}x${n}_${dtype}.raw`),
+        '--time',
+        '--out',
+        out,
+        ...(env.RATE ? ['--rate', env.RATE] : []),
+        ...(n >= 512 ? [] : ['--quiet']),
+      ],
+      { stdio: 'inherit' },
+    );
+    converted = true;
+    const t2 = performance.now();
+    console.log(`  converted in ${((t2 - t1) / 1000).toFixed(1)} s`);
+    return {
+      store: out,
+      dtype,
+      reused: false,
+      ...(resume ? { resumed: true } : { writeSeconds: (t1 - t0) / 1000 }),
+      convertSeconds: (t2 - t1) / 1000,
+      rawBytes,
+    };
+  } finally {
+    if (converted || !env.KEEP) rmSync(dir, { recursive: true, force: true });
+  }
+}
+
+/**
+ * SERIES in KEEP: reused when KEEP holds it complete, its conversion resumed
+ * when a run left it incomplete with its raw files, else generated there;
+ * without KEEP, generated in a temporary folder.
+ */
+function seriesStore(n: number, t: number, dtype: string, temp: () => string): Generated {
+  if (dtype !== 'float32' && dtype !== 'uint8') throw new Error(`DTYPE=${dtype}: float32 or uint8`);
+  if (!env.KEEP) return generateSeries(join(temp(), 'series.zarr'), n, t, dtype);
+  const keep = resolve(env.KEEP);
+  const attrs = storeAttributes(keep);
+  const shape = attrs?.params?.shape ?? [];
+  if (attrs && shape.join('x') !== [t, n, n, n].join('x'))
+    throw new Error(`KEEP=${keep} holds a ${shape.join('x')} (t, z, y, x) store, not SERIES=${n}x${t}: remove it or name another`);
+  if (attrs?.complete) {
+    console.log(`reusing ${keep} (${n}^3 x ${t}, complete)`);
+    return { store: keep, dtype: attrs.params?.source_dtype ?? '?', reused: true };
+  }
+  if (attrs || existsSync(keep)) {
+    const raw = [...Array(t).keys()].map((i) => join(`${keep}.raw`, rawName(i, n, dtype)));
+    if (raw.every((f) => existsSync(f) && statSync(f).size === n ** 3 * (dtype === 'uint8' ? 1 : 4)))
+      return generateSeries(keep, n, t, dtype, true);
+    throw new Error(`KEEP=${keep} is an unfinished store whose raw ${dtype} input (${keep}.raw/) is gone: remove it, then run again`);
+  }
+  return generateSeries(keep, n, t, dtype);
 }
 
 async function listen(server: Server): Promise<number> {
@@ -210,17 +320,21 @@ async function main() {
   const device = await requestNodeGpu({ label: 'bench.playback' });
   let temp: string | undefined;
   let stores: string[];
-  if (env.STORES) stores = env.STORES.split(',').map((s) => (isStoreUrl(s) ? s : resolve(s)));
-  else {
-    temp = mkdtempSync(join(tmpdir(), 'bench-playback-'));
-    stores = [generateSeries(temp, seriesN, seriesT)];
-  }
+  let generated: Generated | undefined;
   const slice = env.TIME ? parseTimeSlice(env.TIME) : null;
   if (typeof slice === 'string') throw new Error(`TIME=${env.TIME}: ${slice}`);
   const rows: (string | number)[][] = [];
   const records: Record<string, unknown>[] = [];
   const servers: Server[] = [];
   try {
+    if (env.STORES) stores = env.STORES.split(',').map((s) => (isStoreUrl(s) ? s : resolve(s)));
+    else {
+      generated = seriesStore(seriesN, seriesT, seriesDtype, () => {
+        temp = mkdtempSync(join(tmpdir(), 'bench-playback-'));
+        return temp;
+      });
+      stores = [generated.store];
+    }
     for (const store of stores) {
       // a folder: served over localhost HTTP from its parent; a URL: as given
       let base: string;
@@ -306,7 +420,7 @@ async function main() {
   }
   const adapter = describeAdapter(device.adapter);
   printTable(
-    `bench:playback, ${adapter}, median of ${repeats - 1} after a discarded first; each time point opened and its level-0 surface computed in turn (extract --time); budget ${budgetBytes / 2 ** 20} MiB; ${stores.length === 1 && !env.STORES ? `a ${seriesN}^3 x ${seriesT} moving ball (float32)` : 'STORES'}`,
+    `bench:playback, ${adapter}, median of ${repeats - 1} after a discarded first; each time point opened and its level-0 surface computed in turn (extract --time); budget ${budgetBytes / 2 ** 20} MiB; ${generated ? `a ${seriesN}^3 x ${seriesT} moving ball (${generated.dtype} input${generated.reused ? `, kept in ${generated.store}` : ''})` : 'STORES'}`,
     [
       'store',
       'level 0 x time points',
@@ -324,7 +438,22 @@ async function main() {
   writeJson(jsonOut, {
     date: new Date().toISOString(),
     adapter,
-    series: env.STORES ? null : { size: seriesN, timePoints: seriesT, field: 'Gaussian ball exp(-d^2/(n/6)^2) moving along x, float32' },
+    series: generated
+      ? {
+          size: seriesN,
+          timePoints: seriesT,
+          field: `Gaussian ball exp(-d^2/(n/6)^2) moving along x, ${generated.dtype === 'uint8' ? 'times 255 rounded to uint8' : generated.dtype}`,
+          ...(env.KEEP ? { kept: generated.store } : {}),
+          reused: generated.reused,
+          ...(generated.reused
+            ? {}
+            : {
+                rawBytes: generated.rawBytes,
+                ...(generated.resumed ? { resumed: true } : { writeSeconds: generated.writeSeconds }),
+                convertSeconds: generated.convertSeconds,
+              }),
+        }
+      : null,
     link: LINK,
     repeats,
     budgetBytes,
