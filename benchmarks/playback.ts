@@ -21,6 +21,8 @@
 // shared pipe (here in the server, since openStoreInput opens the store by
 // its URL as extract does). Median of REPEATS (default 4) after a
 // discarded first (compilation, the disk cache).
+// PREFETCH=MB[,MB...] (default 256): the next time point fetched while one
+// is computed, within that many MiB of CPU memory (0: none), each a run.
 // Inputs: by default a generated series (SERIES=NxT, default 128x8: a
 // Gaussian ball moving along x over T time points, NumPy raw files converted
 // with `convert 'step_*.raw' --time`, rate chosen from the data) in a
@@ -59,6 +61,7 @@ import type { GpuContext } from '../src/gpu/device.ts';
 import { meteredGpu } from '../src/gpu/memory-meter.ts';
 import { requestNodeGpu } from '../src/gpu/node-gpu.ts';
 import { storeTimeAxis } from '../src/store/cli-input.ts';
+import { SeriesPrefetch } from '../src/store/series/prefetch.ts';
 import { isStoreUrl, storeForLocation } from '../src/store/zarr/node-store.ts';
 import { openStore } from '../src/store/zarr/open-store.ts';
 import { runPython } from '../tests/helpers/python.ts';
@@ -71,6 +74,9 @@ const budgetBytes = Number(env.BUDGET_MB ?? 256) * 2 ** 20;
 const isoFraction = Number(env.ISO_FRACTION ?? 0.5);
 const LINK = { mbitPerSecond: 100, latencyMs: 20 };
 const linkName = `${LINK.mbitPerSecond} Mbit/s + ${LINK.latencyMs} ms`;
+/** PREFETCH=MB[,MB...]: CPU bytes the next time point may take when fetched ahead, each a run of its own (0: none; default 256). */
+const prefetchMbs = (env.PREFETCH ?? '256').split(',').map(Number);
+if (prefetchMbs.some((m) => !(m >= 0))) throw new Error(`PREFETCH=${env.PREFETCH}: MB, 0 or more`);
 const links = (env.LINKS ?? 'localhost,link').split(',').map((l) => (l === 'link' ? linkName : 'localhost'));
 const jsonOut = env.JSON ?? join(root, 'benchmarks/results/playback-swiftshader.json');
 const [seriesN, seriesT] = (env.SERIES ?? '128x8').split('x').map(Number);
@@ -265,8 +271,12 @@ interface Run {
   rate: number;
 }
 
-/** One playback of `url` at `iso`: extractSeries' loop, timed. */
-async function play(device: GpuContext, url: string, iso: number, times: number[] | null): Promise<Run> {
+/**
+ * One playback of `url` at `iso`: extractSeries' loop, timed, with the next
+ * time point fetched ahead while one is computed (series/prefetch.ts) within
+ * `prefetchBytes` (0: none), as `extract --time --prefetch MB` does.
+ */
+async function play(device: GpuContext, url: string, iso: number, times: number[] | null, prefetchBytes: number): Promise<Run> {
   const { gpu, meter } = meteredGpu(device);
   const quiet = { log: () => {} };
   const t0 = performance.now();
@@ -279,23 +289,48 @@ async function play(device: GpuContext, url: string, iso: number, times: number[
   let firstFrameAt = NaN,
     rate = NaN,
     seriesRate: number | undefined;
-  for (const t of indices) {
-    const opened = performance.now();
-    const volume = await openInputSurface(quiet, gpu, url, { budget: budgetBytes, rate: seriesRate, time: t });
-    try {
-      if (seriesRate === undefined && volume.store?.().source) seriesRate = volume.rate;
-      rate = volume.rate;
-      const stats = await volume.iso.compute(iso);
-      const now = performance.now();
-      if (Number.isNaN(firstFrameAt)) firstFrameAt = now;
-      frameMs.push(now - opened);
-      const record = volume.store!();
-      bytesFetched.push(record.bytesFetched);
-      requests.push(record.requests);
-      triangles.push(stats.triangles);
-    } finally {
-      volume.destroy();
+  const source = storeForLocation(url);
+  const prefetch = new SeriesPrefetch();
+  try {
+    for (const [i, t] of indices.entries()) {
+      const opened = performance.now();
+      const prepared = await prefetch.take(t, source);
+      const volume = await openInputSurface(quiet, gpu, url, {
+        budget: budgetBytes,
+        rate: seriesRate,
+        time: t,
+        prepared: prepared ?? undefined,
+      });
+      try {
+        if (seriesRate === undefined && volume.store?.().source) seriesRate = volume.rate;
+        rate = volume.rate;
+        const next = indices[i + 1];
+        const ahead = volume.ahead;
+        if (next !== undefined && ahead && prefetchBytes > 0)
+          prefetch.start(source, {
+            time: next,
+            open: (metered) => openStore(metered, url, { rate: seriesRate, time: next }),
+            wanted: async (needsAt) => {
+              await ahead.planned;
+              return ahead.wanted(needsAt);
+            },
+            levels: ahead.levels,
+            capacityBytes: prefetchBytes,
+          });
+        const stats = await volume.iso.compute(iso);
+        const now = performance.now();
+        if (Number.isNaN(firstFrameAt)) firstFrameAt = now;
+        frameMs.push(now - opened);
+        const record = volume.store!();
+        bytesFetched.push(record.bytesFetched);
+        requests.push(record.requests);
+        triangles.push(stats.triangles);
+      } finally {
+        volume.destroy();
+      }
     }
+  } finally {
+    prefetch.cancel();
   }
   const restMs = performance.now() - firstFrameAt;
   return {
@@ -351,65 +386,68 @@ async function main() {
       const [lo, hi] = meta.valueRange ?? [0, 1];
       const iso = env.ISO !== undefined ? Number(env.ISO) : lo + isoFraction * (hi - lo);
       const lv0 = meta.levels[0].layout;
-      for (const link of links) {
-        let url = base;
-        if (link !== 'localhost') {
-          const proxy = linkProxy(new URL(base).origin);
-          servers.push(proxy);
-          url = `http://127.0.0.1:${await listen(proxy)}${new URL(base).pathname}`;
+      for (const prefetchMb of prefetchMbs)
+        for (const link of links) {
+          let url = base;
+          if (link !== 'localhost') {
+            const proxy = linkProxy(new URL(base).origin);
+            servers.push(proxy);
+            url = `http://127.0.0.1:${await listen(proxy)}${new URL(base).pathname}`;
+          }
+          const runs: Run[] = [];
+          for (let r = 0; r < repeats; r++) {
+            const run = await play(device, url, iso, times, prefetchMb * 2 ** 20);
+            console.log(
+              `${basename(store)}, ${link}, prefetch ${prefetchMb} MiB, run ${r + 1}/${repeats}${r === 0 ? ' (discarded)' : ''}: first frame ${run.firstFrameMs.toFixed(0)} ms, ${run.timePointsPerSecond.toFixed(2)} time points/s after, ${(median(run.bytesFetched) / 2 ** 20).toFixed(2)} MiB per time point, GPU peak ${(run.gpuPeakBytes / 2 ** 20).toFixed(1)} MiB`,
+            );
+            runs.push(run);
+          }
+          const kept = runs.slice(1);
+          const first = stats(kept.map((x) => x.firstFrameMs));
+          const tps = stats(kept.map((x) => x.timePointsPerSecond));
+          const bytes = median(kept.map((x) => median(x.bytesFetched)));
+          const peak = Math.max(...kept.map((x) => x.gpuPeakBytes));
+          const last = kept[kept.length - 1];
+          const timePoints = last.frameMs.length;
+          rows.push([
+            basename(store),
+            `${lv0.dims.join('x')} x ${timePoints}`,
+            link,
+            prefetchMb,
+            first.median,
+            tps.median,
+            median(kept.map((x) => median(x.frameMs))),
+            (bytes / 2 ** 20).toFixed(2),
+            (median(kept.map((x) => x.bytesFetched[0])) / 2 ** 20).toFixed(2),
+            (peak / 2 ** 20).toFixed(1),
+            median(last.triangles),
+          ]);
+          records.push({
+            store: isStoreUrl(store) ? store : basename(store),
+            link,
+            prefetchBytes: prefetchMb * 2 ** 20,
+            dims: lv0.dims,
+            chunkEdge: lv0.chunkEdge,
+            levels: meta.levels.length,
+            timePoints,
+            timeCount: count,
+            ...(slice ? { time: formatTimeSlice(slice) } : {}),
+            iso,
+            rate: last.rate,
+            storeChunkBytes: meta.levels.reduce((a, l) => a + l.storedBytes, 0),
+            firstFrameMs: first,
+            timePointsPerSecond: tps,
+            frameMsMedian: stats(kept.map((x) => median(x.frameMs))),
+            bytesPerTimePointMedian: bytes,
+            firstTimePointBytes: median(kept.map((x) => x.bytesFetched[0])),
+            requestsPerTimePointMedian: median(kept.map((x) => median(x.requests))),
+            gpuPeakBytes: peak,
+            gpuBytesAfter: Math.max(...kept.map((x) => x.gpuBytesAfter)),
+            budgetBytes,
+            trianglesMedian: median(last.triangles),
+            runs: kept,
+          });
         }
-        const runs: Run[] = [];
-        for (let r = 0; r < repeats; r++) {
-          const run = await play(device, url, iso, times);
-          console.log(
-            `${basename(store)}, ${link}, run ${r + 1}/${repeats}${r === 0 ? ' (discarded)' : ''}: first frame ${run.firstFrameMs.toFixed(0)} ms, ${run.timePointsPerSecond.toFixed(2)} time points/s after, ${(median(run.bytesFetched) / 2 ** 20).toFixed(2)} MiB per time point, GPU peak ${(run.gpuPeakBytes / 2 ** 20).toFixed(1)} MiB`,
-          );
-          runs.push(run);
-        }
-        const kept = runs.slice(1);
-        const first = stats(kept.map((x) => x.firstFrameMs));
-        const tps = stats(kept.map((x) => x.timePointsPerSecond));
-        const bytes = median(kept.map((x) => median(x.bytesFetched)));
-        const peak = Math.max(...kept.map((x) => x.gpuPeakBytes));
-        const last = kept[kept.length - 1];
-        const timePoints = last.frameMs.length;
-        rows.push([
-          basename(store),
-          `${lv0.dims.join('x')} x ${timePoints}`,
-          link,
-          first.median,
-          tps.median,
-          median(kept.map((x) => median(x.frameMs))),
-          (bytes / 2 ** 20).toFixed(2),
-          (median(kept.map((x) => x.bytesFetched[0])) / 2 ** 20).toFixed(2),
-          (peak / 2 ** 20).toFixed(1),
-          median(last.triangles),
-        ]);
-        records.push({
-          store: isStoreUrl(store) ? store : basename(store),
-          link,
-          dims: lv0.dims,
-          chunkEdge: lv0.chunkEdge,
-          levels: meta.levels.length,
-          timePoints,
-          timeCount: count,
-          ...(slice ? { time: formatTimeSlice(slice) } : {}),
-          iso,
-          rate: last.rate,
-          storeChunkBytes: meta.levels.reduce((a, l) => a + l.storedBytes, 0),
-          firstFrameMs: first,
-          timePointsPerSecond: tps,
-          frameMsMedian: stats(kept.map((x) => median(x.frameMs))),
-          bytesPerTimePointMedian: bytes,
-          firstTimePointBytes: median(kept.map((x) => x.bytesFetched[0])),
-          requestsPerTimePointMedian: median(kept.map((x) => median(x.requests))),
-          gpuPeakBytes: peak,
-          gpuBytesAfter: Math.max(...kept.map((x) => x.gpuBytesAfter)),
-          budgetBytes,
-          trianglesMedian: median(last.triangles),
-          runs: kept,
-        });
-      }
     }
   } finally {
     for (const s of servers) {
@@ -420,11 +458,12 @@ async function main() {
   }
   const adapter = describeAdapter(device.adapter);
   printTable(
-    `bench:playback, ${adapter}, median of ${repeats - 1} after a discarded first; each time point opened and its level-0 surface computed in turn (extract --time); budget ${budgetBytes / 2 ** 20} MiB; ${generated ? `a ${seriesN}^3 x ${seriesT} moving ball (${generated.dtype} input${generated.reused ? `, kept in ${generated.store}` : ''})` : 'STORES'}`,
+    `bench:playback, ${adapter}, median of ${repeats - 1} after a discarded first; each time point opened and its level-0 surface computed in turn, the next fetched meanwhile within the prefetch bound (extract --time); budget ${budgetBytes / 2 ** 20} MiB; ${generated ? `a ${seriesN}^3 x ${seriesT} moving ball (${generated.dtype} input${generated.reused ? `, kept in ${generated.store}` : ''})` : 'STORES'}`,
     [
       'store',
       'level 0 x time points',
       'link',
+      'prefetch MiB',
       'first frame ms',
       'time points/s',
       'ms per time point',
