@@ -264,11 +264,13 @@ export async function tiffSeries(files: readonly File[]): Promise<SeriesFiles> {
 /**
  * Time points decoded whole, the most recent kept (CACHE_ENTRIES, within
  * CACHE_BYTES, at least one); concurrent requests of one time point share
- * its decoding; a failed decoding is not kept.
+ * its decoding, decodings run one at a time; a failed decoding is not kept.
  */
 export class DecodedCache {
   readonly #entries = new Map<number, Promise<Uint8Array>>();
   readonly #max: number;
+  /** The decoding under way (or done): the next starts after it. */
+  #queue: Promise<void> = Promise.resolve();
   /** Decodings started (tests). */
   decoded = 0;
 
@@ -288,7 +290,13 @@ export class DecodedCache {
       return p;
     }
     this.decoded++;
-    p = this.decode(t);
+    // one decoding at a time: the TIFF decoder is one Wasm instance (two time points decoded at once, the
+    // one shown and the next fetched ahead, mixed their planes), and two time points whole are memory enough
+    p = this.#queue.then(() => this.decode(t));
+    this.#queue = p.then(
+      () => undefined,
+      () => undefined,
+    );
     this.#entries.set(t, p);
     p.catch(() => {
       if (this.#entries.get(t) === p) this.#entries.delete(t);
