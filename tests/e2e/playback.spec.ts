@@ -89,15 +89,23 @@ async function settledAt(page: Page, t: number, iso: number): Promise<void> {
 }
 
 /**
- * Every volume installed since: the time point, the level it showed, the
- * isovalue, as the store's state published first after it says
- * (window.zfpisoStore is set anew at each publication).
+ * Watches every publication of the store's state from now on
+ * (window.zfpisoStore is set anew each time): `installs`, per volume
+ * installed, the time point, level and isovalue the first publication after
+ * it gives; `shownAhead`, per time point, the last state of it once done:
+ * its level, what was fetched ahead for it and the chunks its session fetched.
  */
-async function recordInstalls(page: Page): Promise<void> {
+async function recordPublished(page: Page): Promise<void> {
   await page.evaluate(() => {
-    type S = { shownLevel: number | null; playback?: Playback };
-    const w = window as unknown as { installs: { t: number; level: number | null; iso?: number }[] };
+    type S = {
+      shownLevel: number | null;
+      chunksFetched: number;
+      done: boolean;
+      playback?: { index: number; prefetch: { shown: unknown } };
+    };
+    const w = window as unknown as { installs: { t: number; level: number | null; iso?: number }[]; shownAhead: Record<number, unknown> };
     w.installs = [];
+    w.shownAhead = {};
     let loads = window.zfpiso!.loads;
     let current = (window as unknown as { zfpisoStore?: S }).zfpisoStore;
     Object.defineProperty(window, 'zfpisoStore', {
@@ -105,10 +113,12 @@ async function recordInstalls(page: Page): Promise<void> {
       get: () => current,
       set: (s: S) => {
         current = s;
+        const t = s.playback?.index ?? -1;
+        if (s.done) w.shownAhead[t] = { t, level: s.shownLevel, shown: s.playback?.prefetch.shown ?? null, chunks: s.chunksFetched };
         const now = window.zfpiso!.loads;
         if (now === loads) return;
         loads = now;
-        w.installs.push({ t: s.playback?.index ?? -1, level: s.shownLevel, iso: window.zfpiso!.iso });
+        w.installs.push({ t, level: s.shownLevel, iso: window.zfpiso!.iso });
       },
     });
   });
@@ -131,7 +141,7 @@ test('play, pause, step, loop, isovalue while playing, the link at t=5', async (
   const label = page.locator('#store-playback [data-k="time"]');
   await expect(page.locator('#store-playback')).toBeVisible();
   await expect(label).toHaveText('t = 0 of 6 (0 second)');
-  await recordInstalls(page);
+  await recordPublished(page);
   const camera = await page.evaluate(() => window.zfpiso!.camera!());
 
   // step forward and back: the buttons, and Alt+arrows anywhere but a text field
@@ -244,34 +254,6 @@ interface Prefetched {
   error: string | null;
 }
 
-/**
- * Per time point shown from now on (each publication of the store's state is
- * seen: window.zfpisoStore is set anew each time), its last state: its
- * level, what was fetched ahead for it and the chunks its session fetched.
- */
-async function recordPrefetch(page: Page): Promise<void> {
-  await page.evaluate(() => {
-    type S = {
-      shownLevel: number | null;
-      chunksFetched: number;
-      done: boolean;
-      playback?: { index: number; prefetch: { shown: unknown } };
-    };
-    const w = window as unknown as { shownAhead: Record<number, unknown> };
-    w.shownAhead = {};
-    let current = (window as unknown as { zfpisoStore?: S }).zfpisoStore;
-    Object.defineProperty(window, 'zfpisoStore', {
-      configurable: true,
-      get: () => current,
-      set: (s: S) => {
-        current = s;
-        const t = s.playback?.index ?? -1;
-        if (s.done) w.shownAhead[t] = { t, level: s.shownLevel, shown: s.playback?.prefetch.shown ?? null, chunks: s.chunksFetched };
-      },
-    });
-  });
-}
-
 test('while playing, the next time point is fetched ahead; a bound too small for it still plays every time point whole and says so', async ({
   page,
 }) => {
@@ -287,7 +269,7 @@ test('while playing, the next time point is fetched ahead; a bound too small for
   for (const bound of [null, 0.01]) {
     await openApp(page, `/?store=/stores/${NAME}${bound === null ? '' : `&prefetch=${bound}`}#iso=100`);
     await settledAt(page, 0, 100);
-    await recordPrefetch(page);
+    await recordPublished(page);
     await page.locator('#store-playback [data-play="toggle"]').click();
     await settledAt(page, 5, 100);
     const shown = (await shownAhead()).filter((s) => s.t > 0);
