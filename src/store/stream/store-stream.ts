@@ -302,7 +302,10 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   /** Plans with `share` of the budget and shows the plan's steps; 'done', or a step that did not fit. */
   async #refine(iso: number, others: readonly number[], gen: number, share: number): Promise<'done' | BudgetStop> {
     const stale = () => gen !== this.#gen || this.#destroyed;
+    let relearnt = 0;
     for (;;) {
+      // what a wanted chunk of each level cost when this plan was made (the cost model learns as surfaces are made)
+      const plannedCosts = this.levels.map((_, L) => this.#pools.chunkCost(L));
       const plan = this.#plan([iso, ...others], share);
       if (plan.steps.length === 0) {
         // nothing the plan can draw: a level it cannot reach, or range arrays to read first
@@ -350,8 +353,21 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
         this.#stop(plan.refused.level, plan.refused.reason, 'limit');
         return 'done';
       }
+      // A cut the budget held back, planned with costs its surfaces turned out to be well under (a first
+      // guess; a cache-only surface's few active blocks): planned again with what they took, so the
+      // budget left over goes to finer chunks where the view wants them.
+      if (complete && relearnt < MAX_RELEARNS && plan.cut?.limitedByBudget && this.#overestimated(plan, plannedCosts)) {
+        relearnt++;
+        continue;
+      }
       if (plan.wantsRanges.length === 0 || !(await this.#readWanted(plan, gen))) return 'done';
     }
+  }
+
+  /** Whether some level the plan draws now costs well under what the plan counted per wanted chunk. */
+  #overestimated(plan: StreamPlan, plannedCosts: readonly number[]): boolean {
+    const last = plan.steps[plan.steps.length - 1];
+    return last.wanted.some((w, L) => w.length > 0 && this.#pools.chunkCost(L) < RELEARN_RATIO * plannedCosts[L]);
   }
 
   /**
@@ -658,5 +674,9 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
 
 /** The share of the budget (less the reserve) the cut is planned with: room for surfaces replaced while a step computes. */
 const PLAN_SHARE = 0.8;
+/** How many times a cut held back by the budget is planned again with the costs its surfaces taught (`#overestimated`). */
+const MAX_RELEARNS = 2;
+/** A level's cost per wanted chunk under this fraction of what a plan counted makes that plan worth making again. */
+const RELEARN_RATIO = 0.8;
 /** How many times a cut that does not fit is planned again, coarser, before the refinement stops. */
 const MAX_COARSENINGS = 6;

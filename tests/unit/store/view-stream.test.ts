@@ -313,6 +313,24 @@ describe('StoreStream', () => {
     expect(shown.at(-1)!.cut!.limitedByBudget).toBe(true);
     stream.destroy();
   });
+
+  it('a cut the budget held back, whose surfaces took far less than first guessed, is planned again with what they took: finer, within the budget', async () => {
+    // the stand-in's surfaces take a few KiB, far under the first guess (half of each chunk's blocks active)
+    const budget = 1536 << 10;
+    const { stream, shown, fake, view } = await setup(budget);
+    await stream.setView(view([100, 100, 100, 127, 127, 127]));
+    await stream.setIsovalue(ISO);
+    // each plan's last step is shown whole (final); the second plan's draws more of level 0 than the first's
+    const finals = shown.filter((s) => s.final);
+    expect(finals.length).toBeGreaterThanOrEqual(2);
+    const last = shown.at(-1)!;
+    expect(last).toBe(finals.at(-1));
+    const level0 = (s: (typeof shown)[number]) => s.cut!.levels[0].drawn.length;
+    expect(level0(last)).toBeGreaterThan(level0(finals[0]));
+    expect(coverage(stream.store, last.leaves).every((n) => n === 1)).toBe(true);
+    expect(fake.peak()).toBeLessThanOrEqual(budget);
+    stream.destroy();
+  });
 });
 
 describe('StoreStream within a budget its surfaces outgrow', () => {
