@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import threading
 
 import dask.array as da
 import numpy as np
@@ -48,6 +49,12 @@ def open_hdf5(path: str, dataset: str | None, chunk: int) -> Volume:
     return Volume(arr, f"{path}:{dataset}", "hdf5")
 
 
+# The netCDF-C library is not thread-safe: two of Dask's threads opening or
+# closing a file at once failed with "NetCDF: HDF error". One read at a time
+# per process (h5py holds its own lock; a cluster's processes each have theirs).
+_NETCDF_LOCK = threading.Lock()
+
+
 class NetcdfSource(LazySource):
     def __init__(self, path: str, variable: str, shape, dtype):
         self.path, self.variable, self.shape, self.dtype = path, variable, tuple(shape), np.dtype(dtype)
@@ -55,7 +62,7 @@ class NetcdfSource(LazySource):
     def read(self, key):
         import xarray as xr
 
-        with xr.open_dataset(self.path, cache=False, mask_and_scale=False) as ds:
+        with _NETCDF_LOCK, xr.open_dataset(self.path, cache=False, mask_and_scale=False) as ds:
             v = ds[self.variable]
             full = (0,) * (v.ndim - 3) + tuple(key)
             return np.asarray(v[full].values)
