@@ -6,12 +6,9 @@ fn block_id(b: vec3u) -> u32 {
   return b.x + rays.grid.x * (b.y + rays.grid.y * b.z);
 }
 
-// Blocks (per edge) of the aligned region around b the ray skips whole: never (0).
-fn region_skip(b: vec3u) -> u32 {
-  return 0u;
-}
-
-// Never called: region_skip is never partial.
-fn cell_outside(c: vec3u) -> bool {
-  return false;
+// The whole volume is this draw's: traced everywhere, one box.
+fn region_box(p: vec3f, lo: ptr<function, vec3f>, hi: ptr<function, vec3f>) -> bool {
+  *lo = vec3f(-1e30);
+  *hi = vec3f(1e30);
+  return true;
 }

@@ -11,10 +11,10 @@
 // How blocks are named and which the ray may enter come from a snippet
 // composed before this file: ray_blocks_stream.wgsl (a volume opened whole:
 // raster ids, every block) or ray_blocks_pool.wgsl (a store's level: pool
-// ids through the level's page table; only the chunks the level draws, so
-// each level of a step is one draw and the depth test keeps the nearest
-// level's hit). The coordinates here are the drawn volume's (a level's own
-// voxels); uniforms place them in the world.
+// ids through the level's page table; only the regions of the step the
+// level owns, so each level of a step is one draw and the depth test keeps
+// the nearest level's hit). The coordinates here are the drawn volume's (a
+// level's own voxels); uniforms place them in the world.
 // The hit is lit as the mesh is (shaders/render/lighting.wgsl), with the
 // normal the mesh path computes (the central-difference gradient at the
 // cell's corners, interpolated at the hit; the interpolant's own gradient
@@ -33,7 +33,11 @@ struct Rays {
   clip_count: vec4u,   // x: planes in use
   clip: array<vec4f, 7>, // world space: kept where dot(xyz, p) + w >= 0 for every plane
   chunk_grid: vec4u,   // a pool: chunks per axis; w: the level's chunk count (where the slot table starts)
-  pool: vec4u,         // a pool: x blocks per chunk edge, y blocks a level reaches above its drawn chunks (seams)
+  pool: vec4u,         // a pool: x blocks per chunk edge, y cells a level reaches above its own regions (seams)
+  region_grid: vec4u,  // a pool: the step's region grid, cells per axis; w: this draw's level
+  region_edge: vec4f,  // a pool: a region cell's edge in level-0 voxels
+  level_scale: vec4f,  // a pool: level-0 voxels per voxel of this level
+  level_offset: vec4f, // a pool: where this level's voxel 0 lies in level-0 voxels
 };
 @group(1) @binding(0) var<uniform> rays: Rays;
 @group(1) @binding(1) var<storage, read> slot_data: array<f32>;
@@ -42,8 +46,6 @@ struct Rays {
 
 const NO_SLOT: u32 = 0xffffffffu;
 const NO_BLOCK: u32 = 0xffffffffu;
-/** region_skip: only some cells of the block are the level's (cell_outside says which). */
-const REGION_PARTIAL: u32 = 0xffffffffu;
 /** At most this many cells and skipped blocks per ray (a 2048-voxel diagonal walks ~3 x 2048 cells). */
 const MAX_STEPS: u32 = 16384u;
 
@@ -139,16 +141,24 @@ fn fs(in: VsOut) -> FragOut {
   var t = t_enter;
   for (var step = 0u; step < MAX_STEPS && t < t_exit; step++) {
     let p = o + (t + eps) * d;
+    // the box around p where this draw's region (region_box: a store's level owns some of the step's
+    // regions) is the same: passed whole when the ray is not this draw's to trace there
+    var rlo: vec3f;
+    var rhi: vec3f;
+    let traced = region_box(p, &rlo, &rhi);
+    let re = select(rlo, rhi, d > vec3f(0.0));
+    let tr = (re - o) * inv;
+    let t_region = max(min(min(select(1e30, tr.x, d.x != 0.0), select(1e30, tr.y, d.y != 0.0)), select(1e30, tr.z, d.z != 0.0)), t + eps);
+    if (!traced) {
+      t = t_region;
+      continue;
+    }
     let cell = min(vec3u(max(floor(p), vec3f(0.0))), last);
     let block = cell / 4u;
-    let outside = region_skip(block);
-    let partial = outside == REGION_PARTIAL;
-    if ((outside > 0u && !partial) || !block_active(block)) {
-      // past the block (or the whole region around it the ray may not enter): its box's exit along the ray
-      let edge = 4u * select(max(outside, 1u), 1u, partial);
-      let blo_u = (cell / edge) * edge;
-      let bhi = vec3f(min(blo_u + edge, last + vec3u(1u)));
-      let blo = vec3f(blo_u);
+    if (!block_active(block)) {
+      // past the block: its box's exit along the ray
+      let blo = vec3f(block * 4u);
+      let bhi = vec3f(min(block * 4u + 4u, last + vec3u(1u)));
       let e = select(blo, bhi, d > vec3f(0.0));
       let te = (e - o) * inv;
       t = max(min(min(select(1e30, te.x, d.x != 0.0), select(1e30, te.y, d.y != 0.0)), select(1e30, te.z, d.z != 0.0)), t + eps);
@@ -157,9 +167,10 @@ fn fs(in: VsOut) -> FragOut {
     let lo_c = vec3f(cell);
     let e = select(lo_c, lo_c + 1.0, d > vec3f(0.0));
     let te = (e - o) * inv;
-    let t_cell = max(min(min(min(select(1e30, te.x, d.x != 0.0), select(1e30, te.y, d.y != 0.0)), select(1e30, te.z, d.z != 0.0)), t_exit), t + eps);
+    // the cell's exit, or the region's where the ray leaves it inside the cell (a coarse cell spans regions)
+    let t_cell = max(min(min(min(min(select(1e30, te.x, d.x != 0.0), select(1e30, te.y, d.y != 0.0)), select(1e30, te.z, d.z != 0.0)), t_exit), t_region), t + eps);
     var v: array<f32, 8>;
-    if (!(partial && cell_outside(cell)) && cell_corners(cell, &v)) {
+    if (cell_corners(cell, &v)) {
       var lo = v[0];
       var hi_v = v[0];
       for (var k = 1u; k < 8u; k++) {

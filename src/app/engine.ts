@@ -1,7 +1,7 @@
 // What the page needs from the isosurface pipeline (src/isosurface/): the
 // `Isosurface` class satisfies this; the page only talks to this interface.
 import type { SurfacePart } from '../render/surface-layer.ts';
-import type { RayLevel } from '../render/ray-layer.ts';
+import type { RayLevel, RayRegions } from '../render/ray-layer.ts';
 import type { GpuContext } from '../gpu/device.ts';
 import { Isosurface } from '../isosurface/isosurface.ts';
 import type { IsosurfaceDrawData, IsosurfaceOptions, IsosurfaceStats, SurfaceMesh, VolumeInfo } from '../isosurface/types.ts';
@@ -37,7 +37,7 @@ export interface PageIsosurface {
   /** A surface of several pieces (a store refined by the view: one per level): what the layer draws instead of drawData. */
   drawParts?(): SurfacePart[];
   /** A store: its step on screen for the ray caster, when its live caches hold it (StoreIsosurface.rayLevels). */
-  rayLevels?(): { levels: RayLevel[]; extent: readonly [number, number, number]; iso: number } | undefined;
+  rayLevels?(): { levels: RayLevel[]; extent: readonly [number, number, number]; iso: number; regions: RayRegions } | undefined;
   /** A store: whether the page draws it by rays (its live caches are then kept whole). */
   setRaysWanted?(on: boolean): void;
   /** Such a surface's mesh as one, in its voxel index space (voxel (i, j, k) at (i, j, k)), for exports; `iso`: one of its other surfaces. */

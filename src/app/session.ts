@@ -109,7 +109,7 @@ export class Session {
       return;
     }
     if (store) {
-      rays.setLevels(store.levels, store.extent);
+      rays.setLevels(store.levels, store.extent, store.regions);
       rays.iso = store.iso;
     } else {
       rays.setDrawData(data);

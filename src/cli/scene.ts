@@ -10,6 +10,7 @@ import { RayLayer, rayLevelsOf } from '../render/ray-layer.ts';
 import { SurfaceLayer, type SurfacePart } from '../render/surface-layer.ts';
 import type { RenderLayer } from '../render/viewer.ts';
 import type { StoreStreamSurface } from '../store/stream-surface.ts';
+import { regionOwners } from '../store/view/regions.ts';
 
 export type Layer = RenderLayer & { destroy(): void };
 
@@ -92,12 +93,18 @@ export async function storeScene(
   const { levelOffsets, levelScales } = stream.store;
   const dims = stream.levels[0].layout.dims;
   const placed = shown.levels.map((l) => ({ l, scale: levelScales[l.level], offset: levelOffsets[l.level] }));
+  // which level draws each region (a cut for rays keeps coarse chunks drawn under finer ones)
+  const regions = regionOwners(
+    shown.leaves,
+    stream.levels.map((l) => l.layout),
+    levelScales,
+  ) ?? { grid: [0, 0, 0] as [number, number, number], edge: [1, 1, 1] as [number, number, number], owner: new Uint8Array(0) };
   const make = async (which: typeof placed): Promise<Layer> => {
     if (draw === 'rays') {
       const rays = await RayLayer.create(target);
       // the reach toward the step's coarsest level, also when one level is drawn alone
       const levels = rayLevelsOf(shown.levels, levelScales, levelOffsets).filter((_, i) => which.some((w) => w.l === shown.levels[i]));
-      rays.setLevels(levels, dims);
+      rays.setLevels(levels, dims, regions);
       rays.iso = stats.isovalue;
       rays.voxelSize = [...voxelSize];
       rays.origin = [...origin];

@@ -25,10 +25,12 @@ import { cellRootSnippet } from '../raycast/cell-root-wgsl.ts';
 import { DEFAULT_SURFACE_STYLE, type RenderTarget, type SurfaceStyle } from './surface-layer.ts';
 import { DEPTH_FORMAT, frameSnippet, type RenderLayer } from './viewer.ts';
 
-const UNIFORM_BYTES = 64 + 8 * 16 + 7 * 16 + 2 * 16;
+const UNIFORM_BYTES = 64 + 8 * 16 + 7 * 16 + 6 * 16;
 
 /** One level of a store's step, as the rays read it. */
 export interface RayLevel {
+  /** The store's level (which regions of the step's grid it owns). */
+  level: number;
   /** The level's surface's own draw data (its cache, computed last at `iso`; the neighbourhood ranges). */
   data: IsosurfaceDrawData;
   /** The level's pool: its tables (ChunkedVolume.tables), chunks per axis, blocks per chunk edge. */
@@ -56,6 +58,17 @@ export function seamReachCells(level: number, coarsest: number): number {
   return Math.ceil((2 ** (coarsest - level) - 1) / 2 + 0.25);
 }
 
+/**
+ * Which level draws each region of a store's step (src/store/view/regions.ts
+ * makes it from the step's leaves): a grid of cells `edge` level-0 voxels
+ * wide, one byte per cell (x fastest), the owning level or 255.
+ */
+export interface RayRegions {
+  grid: readonly [number, number, number];
+  edge: readonly [number, number, number];
+  owner: Uint8Array;
+}
+
 /** What a store's shown level gives the rays: its level, pool and surface (a step's CutLevelShown). */
 export interface RayLevelSource {
   level: number;
@@ -76,6 +89,7 @@ export function rayLevelsOf(
 ): RayLevel[] {
   const coarsest = Math.max(...levels.map((l) => l.level));
   return levels.map((l, i) => ({
+    level: l.level,
     data: l.surface.drawData,
     tables: l.volume.tables,
     chunkGrid: l.volume.layout.chunkGrid,
@@ -110,6 +124,10 @@ export class RayLayer implements RenderLayer {
   /** A volume opened whole (setDrawData), or a store's levels (setLevels). */
   #data: IsosurfaceDrawData | undefined;
   #levels: readonly RayLevel[] = [];
+  #regions: RayRegions | undefined;
+  /** The regions on the GPU (packed 4 to a word), grown, never shrunk while alive. */
+  #regionBuffer: GPUBuffer | undefined;
+  #regionsUploaded: RayRegions | undefined;
   /** Level-0 voxels per axis of a store (the depth cue's sphere); a whole volume's are its own. */
   #extent: readonly [number, number, number] | undefined;
   /** Uniform buffers and bind groups per draw, kept between frames (grown, never shrunk while alive). */
@@ -148,7 +166,7 @@ export class RayLayer implements RenderLayer {
       ]);
       const layout = device.createBindGroupLayout({
         label: `${label}.layout`,
-        entries: [uniform, storage(1), storage(2), storage(3), ...(pool ? [storage(4)] : [])],
+        entries: [uniform, storage(1), storage(2), storage(3), ...(pool ? [storage(4), storage(5)] : [])],
       });
       return device.createRenderPipelineAsync({
         label: `${label}.pipeline`,
@@ -175,12 +193,14 @@ export class RayLayer implements RenderLayer {
 
   /**
    * A store's step: each level's pool and cache (every level computed last
-   * at `iso`), in level-0 voxels of `extent` per axis; replaces a whole volume.
+   * at `iso`), in level-0 voxels of `extent` per axis, each drawn over the
+   * step's `regions` it owns; replaces a whole volume.
    */
-  setLevels(levels: readonly RayLevel[], extent: readonly [number, number, number]): void {
+  setLevels(levels: readonly RayLevel[], extent: readonly [number, number, number], regions: RayRegions): void {
     this.#data = undefined;
     this.#levels = levels;
     this.#extent = extent;
+    this.#regions = regions;
   }
 
   /** Whether there is something to draw (a surface or levels with their ranges). */
@@ -201,9 +221,31 @@ export class RayLayer implements RenderLayer {
       this.#drawPart(pass, 0, whole, undefined);
       return;
     }
+    if (this.#levels.length > 0) this.#uploadRegions();
     this.#levels.forEach((l, k) => {
       if (l.data.neighbourhoodRanges) this.#drawPart(pass, k, l.data, l);
     });
+  }
+
+  /** The step's region grid into its buffer, once per setLevels. */
+  #uploadRegions(): void {
+    const regions = this.#regions!;
+    if (this.#regionsUploaded === regions) return;
+    const bytes = Math.max(4, Math.ceil(regions.owner.length / 4) * 4);
+    if (!this.#regionBuffer || this.#regionBuffer.size < bytes) {
+      this.#regionBuffer?.destroy();
+      this.#regionBuffer = this.target.device.createBuffer({
+        label: 'RayLayer.regionOwner',
+        size: bytes,
+        usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
+      });
+      // bind groups name the buffer: made again
+      for (const p of this.#parts) p.bindGroup = undefined;
+    }
+    const packed = new Uint8Array(bytes);
+    packed.set(regions.owner);
+    this.target.device.queue.writeBuffer(this.#regionBuffer, 0, packed);
+    this.#regionsUploaded = regions;
   }
 
   #drawPart(pass: GPURenderPassEncoder, k: number, data: IsosurfaceDrawData, level: RayLevel | undefined): void {
@@ -231,7 +273,12 @@ export class RayLayer implements RenderLayer {
           { binding: 1, resource: { buffer: data.slotData } },
           { binding: 2, resource: { buffer: data.blockToSlot } },
           { binding: 3, resource: { buffer: data.neighbourhoodRanges! } },
-          ...(level ? [{ binding: 4, resource: { buffer: level.tables } }] : []),
+          ...(level
+            ? [
+                { binding: 4, resource: { buffer: level.tables } },
+                { binding: 5, resource: { buffer: this.#regionBuffer! } },
+              ]
+            : []),
         ],
       });
       part.boundData = data;
@@ -317,12 +364,28 @@ export class RayLayer implements RenderLayer {
     u32[81] = level?.reachCells ?? 0;
     u32[82] = 0;
     u32[83] = 0;
+    // the step's regions this level owns (ray_blocks_pool.wgsl)
+    const regions = this.#regions;
+    for (let a = 0; a < 3; a++) {
+      u32[84 + a] = level && regions ? regions.grid[a] : 0;
+      f32[88 + a] = level && regions ? regions.edge[a] : 1;
+      f32[92 + a] = level?.scale[a] ?? 1;
+      f32[96 + a] = level?.offset[a] ?? 0;
+    }
+    u32[87] = level?.level ?? 0;
+    f32[91] = 0;
+    f32[95] = 0;
+    f32[99] = 0;
     this.target.device.queue.writeBuffer(buffer, 0, this.#scratch);
   }
 
   destroy(): void {
     for (const p of this.#parts) p.uniforms.destroy();
     this.#parts.length = 0;
+    this.#regionBuffer?.destroy();
+    this.#regionBuffer = undefined;
+    this.#regionsUploaded = undefined;
+    this.#regions = undefined;
     this.#data = undefined;
     this.#levels = [];
   }

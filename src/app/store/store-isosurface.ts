@@ -22,7 +22,8 @@ import type { VolumeProbe } from '../../zfp/probe.ts';
 import type { Clip } from '../../core/clip.ts';
 import { storeCapPieces } from './store-caps.ts';
 import type { CapPiece } from '../../render/cap-layer.ts';
-import { type RayLevel, rayLevelsOf } from '../../render/ray-layer.ts';
+import { type RayLevel, type RayRegions, rayLevelsOf } from '../../render/ray-layer.ts';
+import { regionOwners } from '../../store/view/regions.ts';
 import { shownValueAt, type ShownValue } from '../../store/shown-value.ts';
 import type { PageIsosurface } from '../engine.ts';
 
@@ -157,7 +158,7 @@ export class StoreIsosurface implements PageIsosurface {
    * step being computed, caches emptied or released): the step's mesh
    * copies are drawn meanwhile, so no frame is empty.
    */
-  rayLevels(): { levels: RayLevel[]; extent: readonly [number, number, number]; iso: number } | undefined {
+  rayLevels(): { levels: RayLevel[]; extent: readonly [number, number, number]; iso: number; regions: RayRegions } | undefined {
     const s = this.#shown;
     // the stream's step on screen (a camera move that keeps its plan renews the object, not its levels)
     if (!this.stream.cachesShown || s.levels !== this.stream.shown?.levels) return undefined;
@@ -168,7 +169,12 @@ export class StoreIsosurface implements PageIsosurface {
       levelOffsets,
       this.#parts.map((p) => p.tint),
     );
-    return { levels, extent: this.stream.levels[0].layout.dims, iso: s.iso };
+    const regions = regionOwners(
+      s.leaves,
+      this.stream.levels.map((l) => l.layout),
+      levelScales,
+    ) ?? { grid: [0, 0, 0], edge: [1, 1, 1], owner: new Uint8Array(0) };
+    return { levels, extent: this.stream.levels[0].layout.dims, iso: s.iso, regions };
   }
 
   /** Whether the page draws rays (rayLevels): the stream then keeps the step on screen's caches whole (StoreStream.setKeepCaches). */
