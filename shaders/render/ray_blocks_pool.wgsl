@@ -50,26 +50,30 @@ fn region_owner_at(q: vec3i) -> u32 {
   return (region_owner[i >> 2u] >> (8u * (i & 3u))) & 0xffu;
 }
 
-// Whether the ray at p (this level's voxels) is this level's to trace, and
-// the box around p (this level's voxels) where that answer holds: the part
-// of p's region cell within reach of the cells below it (or beyond that
-// reach), within p's chunk of this level.
-fn region_box(p: vec3f, lo: ptr<function, vec3f>, hi: ptr<function, vec3f>) -> bool {
+// Whether cell c (this level's voxels) is this level's to trace, and the
+// box of whole cells around it (this level's voxels) where that answer
+// holds. A cell goes with the region its lowest corner (a voxel) lies in, as
+// a chunk's cells go with the chunk: a coarse level's last cell before a
+// finer region overlaps it by the levels' offset, and a level reaches
+// `rays.pool.y` cells into the region above its own. Only p's chunk of this
+// level, and only if the step has it (drawn or ghost).
+fn region_box(c: vec3u, lo: ptr<function, vec3f>, hi: ptr<function, vec3f>) -> bool {
   let s = rays.level_scale.xyz;
   let off = rays.level_offset.xyz;
   let edge = rays.region_edge.xyz;
-  let p0 = p * s + off;
+  let corner = vec3f(c);
+  let p0 = corner * s + off;
   let q = vec3i(floor(p0 / edge));
   let qlo = vec3f(q) * edge;
   let reach = min(f32(rays.pool.y) * s, edge);
   let near = p0 - qlo < reach;
   let blo = select(qlo + reach, qlo, near);
   let bhi = select(qlo + edge, qlo + reach, near);
-  // p's chunk of this level
+  // the cells whose lowest corner lies in [blo, bhi), within c's chunk
   let chunk_edge = f32(4u * rays.pool.x);
-  let cq = floor(p / chunk_edge);
-  *lo = max((blo - off) / s, cq * chunk_edge);
-  *hi = min((bhi - off) / s, (cq + 1.0) * chunk_edge);
+  let cq = floor(corner / chunk_edge);
+  *lo = min(max(ceil((blo - off) / s), cq * chunk_edge), corner);
+  *hi = max(min(ceil((bhi - off) / s), (cq + 1.0) * chunk_edge), corner + 1.0);
   let slot = chunk_slot(vec3i(cq));
   if (slot == NO_BLOCK || (pool_tables[rays.chunk_grid.w + slot] >> 30u) == ROLE_IDLE_CODE) {
     return false;
@@ -78,7 +82,7 @@ fn region_box(p: vec3f, lo: ptr<function, vec3f>, hi: ptr<function, vec3f>) -> b
   if (region_owner_at(q) == level) {
     return true;
   }
-  // the reach of this level's regions just below p, on every axis p is near
+  // the reach of this level's regions just below, on every axis c is near
   for (var k = 1u; k < 8u; k++) {
     let axes = vec3<bool>((k & 1u) != 0u, (k & 2u) != 0u, (k & 4u) != 0u);
     if (all(!axes | near) && region_owner_at(q - select(vec3i(0), vec3i(1), axes)) == level) {

@@ -7,7 +7,7 @@ fn block_id(b: vec3u) -> u32 {
 }
 
 // The whole volume is this draw's: traced everywhere, one box.
-fn region_box(p: vec3f, lo: ptr<function, vec3f>, hi: ptr<function, vec3f>) -> bool {
+fn region_box(c: vec3u, lo: ptr<function, vec3f>, hi: ptr<function, vec3f>) -> bool {
   *lo = vec3f(-1e30);
   *hi = vec3f(1e30);
   return true;

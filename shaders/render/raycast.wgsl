@@ -141,11 +141,12 @@ fn fs(in: VsOut) -> FragOut {
   var t = t_enter;
   for (var step = 0u; step < MAX_STEPS && t < t_exit; step++) {
     let p = o + (t + eps) * d;
-    // the box around p where this draw's region (region_box: a store's level owns some of the step's
-    // regions) is the same: passed whole when the ray is not this draw's to trace there
+    let cell = min(vec3u(max(floor(p), vec3f(0.0))), last);
+    // the cells around this one where this draw's region (region_box: a store's level owns some of the
+    // step's regions) is the same: passed whole when they are not this draw's to trace
     var rlo: vec3f;
     var rhi: vec3f;
-    let traced = region_box(p, &rlo, &rhi);
+    let traced = region_box(cell, &rlo, &rhi);
     let re = select(rlo, rhi, d > vec3f(0.0));
     let tr = (re - o) * inv;
     let t_region = max(min(min(select(1e30, tr.x, d.x != 0.0), select(1e30, tr.y, d.y != 0.0)), select(1e30, tr.z, d.z != 0.0)), t + eps);
@@ -153,7 +154,6 @@ fn fs(in: VsOut) -> FragOut {
       t = t_region;
       continue;
     }
-    let cell = min(vec3u(max(floor(p), vec3f(0.0))), last);
     let block = cell / 4u;
     if (!block_active(block)) {
       // past the block: its box's exit along the ray
@@ -167,7 +167,6 @@ fn fs(in: VsOut) -> FragOut {
     let lo_c = vec3f(cell);
     let e = select(lo_c, lo_c + 1.0, d > vec3f(0.0));
     let te = (e - o) * inv;
-    // the cell's exit, or the region's where the ray leaves it inside the cell (a coarse cell spans regions)
     let t_cell = max(min(min(min(min(select(1e30, te.x, d.x != 0.0), select(1e30, te.y, d.y != 0.0)), select(1e30, te.z, d.z != 0.0)), t_exit), t_region), t + eps);
     var v: array<f32, 8>;
     if (cell_corners(cell, &v)) {

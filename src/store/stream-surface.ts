@@ -100,6 +100,25 @@ export class StoreStreamSurface {
       await this.stream.learnSettled();
       shown = this.stream.shown;
     }
+    return this.#statsAt(iso);
+  }
+
+  /**
+   * The surface at its isovalue refined again where an image's rays found it
+   * (StoreStream.setSeen: per level-0 chunk); its stats once that refinement ends.
+   */
+  async guide(seen: Uint8Array): Promise<IsosurfaceStats> {
+    const iso = this.stream.shown?.iso;
+    if (iso === undefined) throw new Error('StoreStreamSurface.guide: compute an isovalue first');
+    this.#reason = null;
+    await this.stream.setSeen(seen);
+    await this.stream.learnSettled();
+    return this.#statsAt(iso);
+  }
+
+  #statsAt(iso: number): IsosurfaceStats {
+    const f = Math.fround(iso);
+    const shown = this.stream.shown;
     const k = this.#isoIndex(f);
     if (!shown || !this.#reached(shown) || k === undefined) {
       const what =

@@ -24,6 +24,7 @@ export class CutPlanner implements Planner {
       needs: (L) => input.needs(L),
       chunkBytes: (L) => input.chunkCost(L),
       budgetBytes: input.budgetBytes,
+      seen: input.seen ?? null,
     });
     if (cut.wantsRanges.length > 0) return { steps: [], wantsRanges: cut.wantsRanges, coarsenable: false, cut };
     const step = (k: number): Step => cutStep(cut, k, layouts, input.scales, (L) => input.needs(L), view.camera.eye, input.voxelSize);

@@ -56,6 +56,8 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   /** The finest level the cut may use: levels below it, or one between, cannot be drawn. */
   #finestUsable = 0;
   #view: ViewSpec | null = null;
+  /** Where an image's rays found the surface, per level-0 chunk (a cut for rays; setSeen), or null. */
+  #seen: Uint8Array | null = null;
   #iso = Number.NaN;
   /** Other isovalues drawn with #iso from the same resident chunks (several surfaces). */
   #others: readonly number[] = [];
@@ -258,6 +260,20 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   /** A new camera (or tolerance): the cut is planned again at the current isovalue; resolves when that refinement ends. */
   setView(view: ViewSpec): Promise<void> {
     this.#view = view;
+    // what the rays saw was seen from the old camera
+    this.#seen = null;
+    return Number.isFinite(this.#iso) ? this.setIsovalue(this.#iso) : Promise.resolve();
+  }
+
+  /**
+   * Where an image's rays found the surface (per level-0 chunk, x fastest: 1
+   * where a first hit lay; null: none): the cut is planned again for rays at
+   * the current isovalue and view (CutInput.seen: finer chunks only there,
+   * nested over coarser ones), until the next camera or isovalue; resolves
+   * when that refinement ends. For surfaces the rays draw (cache-only).
+   */
+  setSeen(seen: Uint8Array | null): Promise<void> {
+    this.#seen = seen;
     return Number.isFinite(this.#iso) ? this.setIsovalue(this.#iso) : Promise.resolve();
   }
 
@@ -277,6 +293,8 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     if (this.#destroyed) return;
     this.#suspended = false;
     const gen = ++this.#gen;
+    // what the rays saw was the surface of another isovalue
+    if (iso !== this.#iso) this.#seen = null;
     this.#iso = iso;
     this.#others = others.filter((o, i) => o !== iso && others.indexOf(o) === i);
     this.#fetch.supersede();
@@ -437,6 +455,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       // some room for the surfaces being replaced while a step is computed; what others hold against the
       // budget (the page's store being replaced) and the copies this stream's next step replaces are not for it
       budgetBytes: this.#memory.planBytes(share),
+      seen: this.#seen,
     });
   }
 

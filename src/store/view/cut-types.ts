@@ -61,6 +61,15 @@ export interface CutInput {
   chunkBytes: (level: number) => number;
   /** What the wanted chunks of all levels may cost together (Infinity: no limit). */
   budgetBytes: number;
+  /**
+   * A cut for rays (issue 46): per chunk of level 0 (x fastest), 1 where an
+   * image's rays found the surface (and a little before and after it along
+   * the ray). The cut then refines only nodes holding a seen chunk, draws only
+   * the seen children of a split, keeps the node drawn for the rest of its
+   * region (the cut is nested: regions.ts says which level owns what), and is
+   * not 2:1 balanced. Absent: the cut by the view alone.
+   */
+  seen?: Uint8Array | null;
 }
 
 /** A leaf of the cut: one chunk drawn at its level. */
@@ -78,7 +87,7 @@ export interface CutNode {
 }
 
 export interface CutLevelSets {
-  /** Leaf chunks at this level (needed or not), ascending. */
+  /** Leaf chunks at this level (needed or not), ascending; in a cut for rays also the chunks split with some children undrawn. */
   drawn: ChunkIndex[];
   /**
    * Chunks the surface needs that are not drawn but have a drawn chunk among

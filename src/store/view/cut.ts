@@ -51,6 +51,14 @@
 // (forced splits, which ignore error and frustum). A split with its forced
 // splits that would make the wanted chunks cost more than the budget is undone
 // whole, and the queue goes on.
+//
+// A cut for rays (`CutInput.seen`, issue 46: where an image's rays found the
+// surface). Rays need no 2:1 balance (each ray goes on in whatever level owns
+// the next region) and no finer brick where no ray hits: a node is queued
+// only when a seen level-0 chunk lies inside it, a split draws only its seen
+// children, and a node split so keeps being drawn (PARTIAL) for the rest of
+// its region: the cut is nested, each region drawn by the finest level
+// whose drawn chunk covers it (regions.ts). No balance, no forced splits.
 
 import type { ChunkIndex } from '../types.ts';
 import type { CutInput, CutLevelSets, CutNode, ViewCut } from './cut-types.ts';
@@ -61,6 +69,8 @@ export type { CutCamera, CutInput, CutLevel, CutLevelSets, CutNode, ViewCut } fr
 const ABSENT = 0;
 const LEAF = 1;
 const SPLIT = 2;
+/** Split for rays, only some children drawn: still drawn itself, for the regions its undrawn children leave. */
+const PARTIAL = 3;
 
 interface LevelState {
   gx: number;
@@ -97,6 +107,27 @@ export function viewCut(input: CutInput): ViewCut {
   const E = levels.map((l, L) => scale[L].map((f) => l.chunkEdge * f) as [number, number, number]);
   const voxelEdge = scale.map((f) => Math.max(f[0] * sx, f[1] * sy, f[2] * sz));
   const notes: string[] = [];
+  // a cut for rays: per level, whether a seen level-0 chunk lies inside each chunk
+  const seen = input.seen ?? null;
+  const seenAt: (Uint8Array | undefined)[] = new Array(n);
+  const seenIn = (L: number, c: number): boolean => {
+    let m = seenAt[L];
+    if (!m) {
+      const [gx, gy, gz] = levels[L].chunkGrid;
+      const [hx, hy] = levels[0].chunkGrid;
+      m = new Uint8Array(gx * gy * gz);
+      for (let i = 0; i < seen!.length; i++) {
+        if (!seen![i]) continue;
+        const q = [i % hx, Math.floor(i / hx) % hy, Math.floor(i / (hx * hy))];
+        const x = Math.floor((q[0] * E[0][0]) / E[L][0]);
+        const y = Math.floor((q[1] * E[0][1]) / E[L][1]);
+        const z = Math.floor((q[2] * E[0][2]) / E[L][2]);
+        if (x < gx && y < gy && z < gz) m[x + gx * (y + gy * z)] = 1;
+      }
+      seenAt[L] = m;
+    }
+    return m[c] === 1;
+  };
 
   // k[L]: children per axis when level L splits into L-1 (null: level L is final)
   const k: ([number, number, number] | null)[] = new Array(n).fill(null);
@@ -241,9 +272,13 @@ export function viewCut(input: CutInput): ViewCut {
   };
   const split = (L: number, c: number): void => {
     const s = lv[L]!;
-    s.state[c] = SPLIT;
-    changeDrawn(s, c, -1);
-    forChildren(L, c, drawChild);
+    let all = true;
+    forChildren(L, c, (cs, child) => {
+      if (seen === null || seenIn(L - 1, child)) drawChild(cs, child);
+      else all = false;
+    });
+    s.state[c] = all ? SPLIT : PARTIAL;
+    if (all) changeDrawn(s, c, -1);
     logL.push(L);
     logC.push(c);
   };
@@ -251,10 +286,13 @@ export function viewCut(input: CutInput): ViewCut {
     while (logL.length > mark) {
       const L = logL.pop()!;
       const c = logC.pop()!;
-      forChildren(L, c, undrawChild);
+      // a rays' split drew only its seen children
+      forChildren(L, c, (cs, child) => {
+        if (cs.state[child] === LEAF) undrawChild(cs, child);
+      });
       const s = lv[L]!;
+      if (s.state[c] === SPLIT) changeDrawn(s, c, 1);
       s.state[c] = LEAF;
-      changeDrawn(s, c, 1);
     }
   };
 
@@ -307,7 +345,8 @@ export function viewCut(input: CutInput): ViewCut {
     const cy = Math.floor(c / s.gx) % s.gy;
     const cz = Math.floor(c / (s.gx * s.gy));
     if (!canSplit(L, cx, cy, cz)) return false;
-    balanceAround(L, cx, cy, cz);
+    // rays need no balance: a ray goes on in whichever level owns the next region
+    if (seen === null) balanceAround(L, cx, cy, cz);
     split(L, c);
     return true;
   };
@@ -364,6 +403,8 @@ export function viewCut(input: CutInput): ViewCut {
   /** Queues leaf (L, c) if it asks to be split. */
   const consider = (L: number, c: number): void => {
     if (L <= finest || k[L] === null) return;
+    // a cut for rays refines only where the rays found the surface
+    if (seen !== null && !seenIn(L, c)) return;
     const s = lv[L]!;
     const cx = c % s.gx;
     const cy = Math.floor(c / s.gx) % s.gy;
@@ -433,7 +474,7 @@ export function viewCut(input: CutInput): ViewCut {
     if (!s || s.leaves === 0) continue;
     const { state } = s;
     const drawn = sets[L].drawn;
-    for (let c = 0; c < state.length; c++) if (state[c] === LEAF) drawn.push(c);
+    for (let c = 0; c < state.length; c++) if (state[c] === LEAF || state[c] === PARTIAL) drawn.push(c);
   }
   const unsorted: CutNode[] = [];
   const dist: number[] = [];
@@ -474,7 +515,7 @@ export function viewCut(input: CutInput): ViewCut {
             wanted.push(u);
             evalNode(L, cx + dx, cy + dy, cz + dz);
             wd.push(nDist);
-            if (state[u] !== LEAF) set.ghosts.push(u);
+            if (state[u] !== LEAF && state[u] !== PARTIAL) set.ghosts.push(u);
           }
     }
     set.ghosts.sort((a, b) => a - b);

@@ -32,7 +32,8 @@ export function regionOwners(
 ): RegionOwners | null {
   const levels = leaves.map((l, L) => (l.length > 0 ? L : -1)).filter((L) => L >= 0);
   if (levels.length === 0) return null;
-  if (levels[levels.length - 1] >= NO_OWNER) throw new RangeError(`regionOwners: level ${levels[levels.length - 1]} cannot be named in a byte`);
+  if (levels[levels.length - 1] >= NO_OWNER)
+    throw new RangeError(`regionOwners: level ${levels[levels.length - 1]} cannot be named in a byte`);
   const f = levels[0];
   const grid = [...layouts[f].chunkGrid] as [number, number, number];
   const edge = scales[f].map((s) => s * layouts[f].chunkEdge) as [number, number, number];

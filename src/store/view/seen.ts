@@ -1,0 +1,71 @@
+// Where an image's rays found the surface, as a cut for rays asks for it
+// (CutInput.seen, issue 46): per level-0 chunk, 1 where a first hit lies, or
+// a point GUARD_VOXELS voxels of the hit's level before or after it along
+// its ray. The hit of a coarse level is where the finer surface is to be
+// found to within about a coarse voxel, in front of it or behind: the guard
+// asks for the finer chunks on both sides, so that the next image's hit does
+// not land in a chunk nobody asked for (it would be asked for by that image).
+import type { RegionOwners } from './regions.ts';
+import { NO_OWNER } from './regions.ts';
+
+/** Voxels of the hit's level, before and after the hit along the ray, whose level-0 chunks count as seen. */
+export const GUARD_VOXELS = 2;
+
+export interface SeenLevel0 {
+  dims: readonly [number, number, number];
+  chunkEdge: number;
+  chunkGrid: readonly [number, number, number];
+}
+
+/**
+ * The seen level-0 chunks of `into` (a copy; all zero when absent) and of the
+ * hits: `hits` x, y, z per hit in level-0 voxels, `dirs` each hit's ray's unit
+ * direction in level-0 voxels; `regions` the step's region grid (which level
+ * a hit is in: its guard), `scales[L]` level-0 voxels per voxel of L.
+ * `added`: chunks not seen in `into`.
+ */
+export function seenChunks(
+  hits: Float64Array,
+  dirs: Float64Array,
+  level0: SeenLevel0,
+  regions: RegionOwners | null,
+  scales: readonly (readonly [number, number, number])[],
+  into?: Uint8Array,
+): { seen: Uint8Array; added: number } {
+  const [gx, gy, gz] = level0.chunkGrid;
+  const [dx, dy, dz] = level0.dims;
+  const e = level0.chunkEdge;
+  const seen = new Uint8Array(gx * gy * gz);
+  if (into) {
+    if (into.length !== seen.length) throw new RangeError(`seenChunks: ${into.length} chunks seen before, level 0 has ${seen.length}`);
+    seen.set(into);
+  }
+  let added = 0;
+  const mark = (x: number, y: number, z: number) => {
+    if (!(x >= 0 && y >= 0 && z >= 0 && x < dx && y < dy && z < dz)) return;
+    const c = Math.floor(x / e) + gx * (Math.floor(y / e) + gy * Math.floor(z / e));
+    if (seen[c] === 0) {
+      seen[c] = 1;
+      added++;
+    }
+  };
+  const levelAt = (x: number, y: number, z: number): number => {
+    if (!regions) return 0;
+    const [rx, ry, rz] = regions.grid;
+    const q = [Math.floor(x / regions.edge[0]), Math.floor(y / regions.edge[1]), Math.floor(z / regions.edge[2])];
+    if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= rx || q[1] >= ry || q[2] >= rz) return 0;
+    const L = regions.owner[q[0] + rx * (q[1] + ry * q[2])];
+    return L === NO_OWNER ? 0 : L;
+  };
+  for (let i = 0; i + 2 < hits.length; i += 3) {
+    const x = hits[i];
+    const y = hits[i + 1];
+    const z = hits[i + 2];
+    if (!(Number.isFinite(x) && Number.isFinite(y) && Number.isFinite(z))) continue;
+    const s = scales[levelAt(x, y, z)] ?? [1, 1, 1];
+    const guard = GUARD_VOXELS * Math.max(s[0], s[1], s[2]);
+    mark(x, y, z);
+    for (const g of [-guard, guard]) mark(x + g * dirs[i], y + g * dirs[i + 1], z + g * dirs[i + 2]);
+  }
+  return { seen, added };
+}
