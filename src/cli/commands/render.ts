@@ -121,10 +121,12 @@ export const renderCommand: CliCommand = {
       // rays over a store: refined again where the image's rays found the surface, until they find it in no
       // chunk not asked for yet (a cut for rays: finer bricks only there, nested over coarser ones)
       const guided = { passes: 0, seenChunks: 0, ms: 0 };
+      let guide = false;
       if (draw === 'rays' && !meshCut && args.values['no-guide'] !== true && 'readPositions' in opened.iso) {
         const surface = opened.iso as StoreStreamSurface;
         const { stream } = surface;
         const level0 = stream.levels[0].layout;
+        guide = true;
         const g0 = performance.now();
         let seen: Uint8Array | undefined;
         for (let pass = 0; pass < MAX_GUIDED_PASSES; pass++) {
@@ -221,7 +223,7 @@ export const renderCommand: CliCommand = {
         surfaceMs,
         surfaceGpuMs: stats.gpuMs,
         // rays over a store: the passes refined where the rays found the surface, level-0 chunks seen, their time (surfaces and images)
-        ...(draw === 'rays' && !meshCut && scene.levels.length > 0 ? { guided } : {}),
+        ...(guide ? { guided } : {}),
         imageMs: image.ms,
         imageTiming: image.timing,
         gpuPeakBytes: meter.peak,

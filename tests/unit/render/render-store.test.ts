@@ -12,8 +12,12 @@
 //     level's offset leaves a crack there (hundreds of such pixels at this
 //     view: checked when the reach was written);
 //   - the record: which level each pixel shows, level 0's share, within the budget;
-//   - rays by default hold no vertices (surfaces of block caches only): at
-//     the same budget and view their cut is finer, and within the budget.
+//   - rays by default hold no vertices (surfaces of block caches only) and
+//     are refined again where an image's rays found the surface (a nested
+//     cut for rays): at the same budget, level 0 on >= 98% of the covered
+//     pixels (the view's cut alone: under half), and against level 0
+//     everywhere (a budget without limit) the same coverage, the same depth
+//     on level 0's pixels, no background in the seams of the nested cut.
 import { spawnSync } from 'node:child_process';
 import { existsSync, mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -128,16 +132,58 @@ describe('cli render STORE', () => {
     }
   }, 900_000);
 
-  it('rays by default: surfaces of block caches only, so at the same budget the cut holds more fine chunks, within the budget', () => {
-    const rays = render('rays');
-    // the first test's mesh record (made here when that test was not run)
+  it('rays by default: surfaces of block caches only, refined where the rays found the surface: level 0 on almost every pixel within the budget, as level 0 everywhere draws it', () => {
+    const guided = render('rays');
+    const unguided = render('rays', '--no-guide');
+    // level 0 everywhere (no budget to speak of, every region refined): the reference, from the same level-0 bricks
+    const reference = render('rays', '--cache-budget', '4096', '--tolerance', '0.01', '--no-guide');
+    expect(reference.record.level0Fraction).toBe(1);
+    // it takes more than the budget the others are held to
+    expect(reference.record.gpuPeakBytes).toBeGreaterThan(BUDGET_MB * 2 ** 20);
+    for (const r of [guided, unguided]) {
+      expect(r.record.cut.every((l: { triangles: number }) => l.triangles === 0)).toBe(true);
+      expect(r.record.gpuPeakBytes).toBeLessThanOrEqual(BUDGET_MB * 2 ** 20);
+    }
+    // the view's cut alone spends the budget on chunks no ray sees; refined where the rays hit, level 0 almost everywhere
+    expect(guided.record.guided.passes).toBeGreaterThanOrEqual(1);
+    expect(unguided.record.guided).toBeUndefined();
+    expect(unguided.record.level0Fraction).toBeLessThan(0.5);
+    expect(guided.record.level0Fraction).toBeGreaterThanOrEqual(0.98);
+    // the mesh path's at the same budget (the first test's record, made here when that test was not run)
     const mesh = existsSync(join(work, 'mesh.json')) ? JSON.parse(readFileSync(join(work, 'mesh.json'), 'utf8')) : render('mesh').record;
-    const fine = (r: { cut: { level: number; drawnChunks: number }[] }) =>
-      r.cut.filter((l) => l.level <= 1).reduce((a, l) => a + l.drawnChunks * 8 ** (1 - l.level), 0);
-    // level-0 chunks, counting a level-1 chunk as the 8 it would be
-    expect(fine(rays.record)).toBeGreaterThan(fine(mesh));
-    expect(rays.record.cut.every((l: { triangles: number }) => l.triangles === 0)).toBe(true);
-    expect(rays.record.gpuPeakBytes).toBeLessThanOrEqual(BUDGET_MB * 2 ** 20);
-    expect(rays.record.coveredPixels).toBeGreaterThan(0.3 * W * H);
+    expect(guided.record.level0Fraction).toBeGreaterThan(mesh.level0Fraction);
+    // against level 0 everywhere: the same coverage, the same depth where the pixel is level 0's, and not one
+    // pixel of background inside the reference's surface (the nested cut's seams between levels)
+    const levelAt = new Uint8Array(readFileSync(join(work, 'rays.u8')));
+    const hit = (d: Float32Array, i: number) => Number.isFinite(d[i]);
+    let union = 0;
+    let both = 0;
+    let level0 = 0;
+    let same = 0;
+    let holes = 0;
+    for (let y = 0; y < H; y++) {
+      for (let x = 0; x < W; x++) {
+        const i = y * W + x;
+        const g = hit(guided.depth, i);
+        const r = hit(reference.depth, i);
+        if (g || r) union++;
+        if (g && r) {
+          both++;
+          if (levelAt[i] === 0) {
+            level0++;
+            if (Math.abs(guided.depth[i] - reference.depth[i]) <= 1e-3) same++;
+          }
+        }
+        if (!g && r && x > 0 && y > 0 && x < W - 1 && y < H - 1) {
+          let inside = true;
+          for (let dy = -1; dy <= 1 && inside; dy++) for (let dx = -1; dx <= 1; dx++) inside &&= hit(reference.depth, i + dy * W + dx);
+          if (inside) holes++;
+        }
+      }
+    }
+    expect(both).toBeGreaterThan(0.3 * W * H);
+    expect(both / union).toBeGreaterThanOrEqual(0.99);
+    expect(same / level0).toBeGreaterThanOrEqual(0.99);
+    expect(holes).toBe(0);
   }, 900_000);
 });
