@@ -15,8 +15,10 @@
 // store refined by the view within STORE_BUDGET MB (default 256) at
 // STORE_ISO, Fit and framed on STORE_BOX (x0,y0,z0,x1,y1,z1, level-0
 // voxels), each mode planning its own cut (rays: surfaces of block caches
-// only, so the budget holds bricks, not vertices): time to the first image
-// (first step shown + a frame) and to the whole (last step + a frame), frame
+// only, so the budget holds bricks, not vertices; then refined where the
+// image's rays found the surface, src/cli/guide-rays.ts): time to the first
+// image (first step shown + a frame) and to the whole (last step + a frame,
+// and for rays the guided passes, each a refinement and an image), frame
 // ms (median of FRAMES at that camera after a discarded first), GPU peak,
 // the cut's level-0 chunks and level0Fraction (covered pixels that show a
 // level-0 hit).
@@ -31,6 +33,7 @@ import { SurfaceLayer } from '../src/render/surface-layer.ts';
 import { createFrameBindGroupLayout, DEPTH_FORMAT, FRAME_UNIFORM_BYTES, frameUniformData, type RenderLayer } from '../src/render/viewer.ts';
 import { loadZfpStream } from '../src/zfp/gpu-stream.ts';
 import { renderOffscreen } from '../src/cli/commands/render.ts';
+import { guideRays } from '../src/cli/guide-rays.ts';
 import { destroyScene, levelPerPixel, storeScene } from '../src/cli/scene.ts';
 import { meteredGpu } from '../src/gpu/memory-meter.ts';
 import { openStoreInput } from '../src/store/cli-input.ts';
@@ -148,6 +151,8 @@ interface StoreRow {
   budgetMiB: number;
   firstImageMs: number;
   wholeImageMs: number;
+  /** Rays: the refinements where an image's rays found the surface (guide-rays.ts). */
+  guidedPasses: number;
   frameMs: number;
   gpuPeakBytes: number;
   level0Chunks: number;
@@ -185,7 +190,26 @@ if (storePath) {
       camera.fit({ min: world(fitted.slice(0, 3)), max: world(fitted.slice(3, 6)) }, 'y');
       camera.setState(cameraForBox(view === 'box' ? box! : fitted, opened.voxelSize, { width, height }).state);
       const target = { device, format: 'rgba8unorm' as GPUTextureFormat, frameBindGroupLayout: frameLayout, camera };
-      const scene = await storeScene(target, surface, stats, mode, opened.voxelSize, [0, 0, 0]);
+      let scene = await storeScene(target, surface, stats, mode, opened.voxelSize, [0, 0, 0]);
+      const draw = (layer: RenderLayer) => renderOffscreen(device, frameLayout, camera, width, height, layer);
+      // rays: refined again where the first image's rays found the surface (as `render` does)
+      let guided = { passes: 0, seenChunks: 0, ms: 0 };
+      if (mode === 'rays') {
+        const g = await guideRays(
+          surface,
+          scene,
+          await draw(scene.layer),
+          camera,
+          [width, height],
+          opened.voxelSize,
+          [0, 0, 0],
+          (st) => storeScene(target, surface, st, mode, opened.voxelSize, [0, 0, 0]),
+          draw,
+          () => {},
+        );
+        scene = g.scene;
+        guided = { passes: g.passes, seenChunks: g.seenChunks, ms: g.ms };
+      }
       const all: number[] = [];
       let last: Awaited<ReturnType<typeof renderOffscreen>> | undefined;
       for (let k = 0; k <= frames; k++) {
@@ -209,7 +233,9 @@ if (storePath) {
         mode,
         budgetMiB,
         firstImageMs: (firstShown ?? whole) + frame,
-        wholeImageMs: whole + frame,
+        // the view's cut and its image; rays: then the guided passes (each a refinement and its image)
+        wholeImageMs: whole + frame + (mode === 'rays' ? guided.ms : 0),
+        guidedPasses: guided.passes,
         frameMs: frame,
         gpuPeakBytes: meter.peak,
         level0Chunks: scene.levels.find((l) => l.level === 0)?.drawnChunks ?? 0,
@@ -246,6 +272,7 @@ if (storeRows.length > 0)
       'mode',
       'first image ms',
       'whole image ms',
+      'guided passes',
       'frame ms',
       'GPU peak MiB',
       'level-0 chunks',
@@ -258,6 +285,7 @@ if (storeRows.length > 0)
       r.mode,
       r.firstImageMs,
       r.wholeImageMs,
+      r.guidedPasses,
       r.frameMs,
       r.gpuPeakBytes / MiB,
       r.level0Chunks,

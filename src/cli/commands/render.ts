@@ -21,12 +21,11 @@ import { createFrameBindGroupLayout, DEPTH_FORMAT, FRAME_UNIFORM_BYTES, frameUni
 import { isStoreInput } from '../../store/cli-input.ts';
 import type { StoreStreamSurface } from '../../store/stream-surface.ts';
 import { cameraForBox, fitBox0, parseCam } from '../../store/view/camera.ts';
-import { regionOwners } from '../../store/view/regions.ts';
-import { seenChunks } from '../../store/view/seen.ts';
 import { parseViewBox, type ViewRequest } from '../../store/view/view-request.ts';
 import { type CliCommand, InputError, numberOption, requiredPositional, stringOption, UsageError } from '../command.ts';
 import { openInputSurface } from '../input.ts';
 import { encodePng } from '../png.ts';
+import { type Guided, guideRays } from '../guide-rays.ts';
 import { destroyScene, fitWhole, levelPerPixel, type Scene, storeScene, wholeScene } from '../scene.ts';
 import { budgetOption } from './extract.ts';
 
@@ -120,35 +119,26 @@ export const renderCommand: CliCommand = {
       let image = await renderOffscreen(gpu.device, frameLayout, camera, width, height, scene.layer);
       // rays over a store: refined again where the image's rays found the surface, until they find it in no
       // chunk not asked for yet (a cut for rays: finer bricks only there, nested over coarser ones)
-      const guided = { passes: 0, seenChunks: 0, ms: 0 };
-      let guide = false;
+      let guided: Guided | undefined;
       if (draw === 'rays' && !meshCut && args.values['no-guide'] !== true && 'readPositions' in opened.iso) {
         const surface = opened.iso as StoreStreamSurface;
-        const { stream } = surface;
-        const level0 = stream.levels[0].layout;
-        guide = true;
-        const g0 = performance.now();
-        let seen: Uint8Array | undefined;
-        for (let pass = 0; pass < MAX_GUIDED_PASSES; pass++) {
-          const shown = stream.shown!;
-          const regions = regionOwners(
-            shown.leaves,
-            stream.levels.map((l) => l.layout),
-            stream.store.levelScales,
-          );
-          const { hits, dirs } = hitsOf(image.depth, camera, width, height, voxelSize, origin);
-          const next = seenChunks(hits, dirs, level0, regions, stream.store.levelScales, seen);
-          seen = next.seen;
-          if (next.added === 0) break;
-          const stats = await guideOrExplain(surface, seen);
-          destroyScene(scene);
-          scene = undefined;
-          scene = await storeScene(target, surface, stats, draw, voxelSize, origin);
-          image = await renderOffscreen(gpu.device, frameLayout, camera, width, height, scene.layer);
-          guided.passes++;
-        }
-        guided.seenChunks = seen ? seen.reduce((a, b) => a + b, 0) : 0;
-        guided.ms = performance.now() - g0;
+        const g = await guideRays(
+          surface,
+          scene,
+          image,
+          camera,
+          [width, height],
+          voxelSize,
+          origin,
+          (stats) => storeScene(target, surface, stats, draw, voxelSize, origin),
+          (layer) => renderOffscreen(gpu.device, frameLayout, camera, width, height, layer),
+          (s) => {
+            scene = s;
+          },
+        );
+        scene = g.scene;
+        image = g.image;
+        guided = { passes: g.passes, seenChunks: g.seenChunks, ms: g.ms };
       }
       const { stats } = scene;
       writeFileSync(pngPath, encodePng(image.colour, width, height));
@@ -223,7 +213,7 @@ export const renderCommand: CliCommand = {
         surfaceMs,
         surfaceGpuMs: stats.gpuMs,
         // rays over a store: the passes refined where the rays found the surface, level-0 chunks seen, their time (surfaces and images)
-        ...(guide ? { guided } : {}),
+        ...(guided ? { guided } : {}),
         imageMs: image.ms,
         imageTiming: image.timing,
         gpuPeakBytes: meter.peak,
@@ -236,57 +226,6 @@ export const renderCommand: CliCommand = {
     }
   },
 };
-
-/** How many times at most `render` refines a store again where the rays found the surface (each an image more). */
-const MAX_GUIDED_PASSES = 4;
-
-/** Each covered pixel's first hit in level-0 voxels (x, y, z) and its ray's unit direction there, from an image's depth. */
-function hitsOf(
-  depth: Float32Array,
-  camera: ArcballCamera,
-  width: number,
-  height: number,
-  voxelSize: readonly number[],
-  origin: readonly number[],
-): { hits: Float64Array; dirs: Float64Array } {
-  camera.aspect = width / height;
-  const inverse = mat4.invert(mat4.create(), camera.viewProjection(mat4.create()));
-  const eye = camera.eyePosition();
-  const e = [0, 1, 2].map((a) => eye[a] / voxelSize[a] - origin[a]);
-  let covered = 0;
-  for (let i = 0; i < depth.length; i++) if (depth[i] < 1) covered++;
-  const hits = new Float64Array(3 * covered);
-  const dirs = new Float64Array(3 * covered);
-  if (!inverse) return { hits: new Float64Array(0), dirs: new Float64Array(0) };
-  const p = vec4.create();
-  let k = 0;
-  for (let y = 0; y < height; y++)
-    for (let x = 0; x < width; x++) {
-      const z = depth[y * width + x];
-      if (!(z < 1)) continue;
-      vec4.transformMat4(p, [((x + 0.5) / width) * 2 - 1, 1 - ((y + 0.5) / height) * 2, z, 1], inverse);
-      let len = 0;
-      for (let a = 0; a < 3; a++) {
-        hits[k + a] = p[a] / p[3] / voxelSize[a] - origin[a];
-        dirs[k + a] = hits[k + a] - e[a];
-        len += dirs[k + a] * dirs[k + a];
-      }
-      len = Math.sqrt(len) || 1;
-      for (let a = 0; a < 3; a++) dirs[k + a] /= len;
-      k += 3;
-    }
-  return { hits, dirs };
-}
-
-/** The store's surface refined where the rays found it, or the stream's reason it stopped, as an input error. */
-async function guideOrExplain(surface: StoreStreamSurface, seen: Uint8Array): Promise<IsosurfaceStats> {
-  try {
-    return await surface.guide(seen);
-  } catch (e) {
-    if ((e as Error).name === 'LevelStoppedError') throw new InputError((e as Error).message, { cause: e });
-    throw e;
-  }
-}
 
 /** The store's surface at `iso`, or the stream's reason it stopped (a failed chunk, the budget) as an input error. */
 async function computeOrExplain(surface: StoreStreamSurface, iso: number): Promise<IsosurfaceStats> {
