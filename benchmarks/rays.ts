@@ -32,7 +32,7 @@ import { RayLayer } from '../src/render/ray-layer.ts';
 import { SurfaceLayer } from '../src/render/surface-layer.ts';
 import { createFrameBindGroupLayout, DEPTH_FORMAT, FRAME_UNIFORM_BYTES, frameUniformData, type RenderLayer } from '../src/render/viewer.ts';
 import { loadZfpStream } from '../src/zfp/gpu-stream.ts';
-import { renderOffscreen } from '../src/cli/commands/render.ts';
+import { renderOffscreen } from '../src/render/offscreen.ts';
 import { guideRays } from '../src/cli/guide-rays.ts';
 import { destroyScene, levelPerPixel, storeScene } from '../src/cli/scene.ts';
 import { meteredGpu } from '../src/gpu/memory-meter.ts';

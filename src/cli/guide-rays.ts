@@ -5,12 +5,12 @@
 // nested over coarser ones: CutInput.seen) and refines; the scene is made
 // again and drawn, until an image's rays hit no chunk not asked for yet, or
 // MAX_GUIDED_PASSES. What `render` and `bench:rays` do after the view's cut.
-import { mat4, vec4 } from 'gl-matrix';
+import { mat4 } from 'gl-matrix';
 import type { IsosurfaceStats } from '../isosurface/types.ts';
 import type { ArcballCamera } from '../render/camera.ts';
 import type { StoreStreamSurface } from '../store/stream-surface.ts';
 import { regionOwners } from '../store/view/regions.ts';
-import { seenChunks } from '../store/view/seen.ts';
+import { hitsFromDepth, seenChunks } from '../store/view/seen.ts';
 import { InputError } from './command.ts';
 import { destroyScene, type Layer, type Scene } from './scene.ts';
 
@@ -71,41 +71,18 @@ export async function guideRays<I extends { depth: Float32Array }>(
   return { scene, image, passes, seenChunks: seenCount, ms: performance.now() - t0 };
 }
 
-/** Each covered pixel's first hit in level-0 voxels (x, y, z) and its ray's unit direction there, from an image's depth. */
+/** Each covered pixel's first hit in level-0 voxels and its ray's direction, from an image's depth seen by `camera`. */
 export function hitsOf(
   depth: Float32Array,
   camera: ArcballCamera,
-  [width, height]: readonly [number, number],
+  size: readonly [number, number],
   voxelSize: readonly number[],
   origin: readonly number[],
 ): { hits: Float64Array; dirs: Float64Array } {
-  camera.aspect = width / height;
+  camera.aspect = size[0] / size[1];
   const inverse = mat4.invert(mat4.create(), camera.viewProjection(mat4.create()));
   if (!inverse) return { hits: new Float64Array(0), dirs: new Float64Array(0) };
-  const eye = camera.eyePosition();
-  const e = [0, 1, 2].map((a) => eye[a] / voxelSize[a] - origin[a]);
-  let covered = 0;
-  for (let i = 0; i < depth.length; i++) if (depth[i] < 1) covered++;
-  const hits = new Float64Array(3 * covered);
-  const dirs = new Float64Array(3 * covered);
-  const p = vec4.create();
-  let k = 0;
-  for (let y = 0; y < height; y++)
-    for (let x = 0; x < width; x++) {
-      const z = depth[y * width + x];
-      if (!(z < 1)) continue;
-      vec4.transformMat4(p, [((x + 0.5) / width) * 2 - 1, 1 - ((y + 0.5) / height) * 2, z, 1], inverse);
-      let len = 0;
-      for (let a = 0; a < 3; a++) {
-        hits[k + a] = p[a] / p[3] / voxelSize[a] - origin[a];
-        dirs[k + a] = hits[k + a] - e[a];
-        len += dirs[k + a] * dirs[k + a];
-      }
-      len = Math.sqrt(len) || 1;
-      for (let a = 0; a < 3; a++) dirs[k + a] /= len;
-      k += 3;
-    }
-  return { hits, dirs };
+  return hitsFromDepth(depth, size, inverse, camera.eyePosition(), voxelSize, origin);
 }
 
 /** The store's surface refined where the rays found it, or the stream's reason it stopped, as an input error. */

@@ -9,10 +9,10 @@
 // (the page passes the drawn surface's): the cache holds every block active
 // at it. Opaque (see-through rays are not peeled yet). A volume opened whole
 // is one draw (setDrawData); a store's step is one draw per level
-// (setLevels: each level's pool and cache, only over the chunks the level
-// draws; shaders/render/ray_blocks_pool.wgsl), the depth test keeping the
-// nearest level's hit, so a ray leaving a level-0 brick for a level-2 brick
-// goes on in level 2.
+// (setLevels: each level's pool and cache, only over the regions of the
+// step it owns, by the step's region grid; shaders/render/ray_blocks_pool.wgsl),
+// the depth test keeping the nearest level's hit, so a ray leaving a level-0
+// brick for a level-2 brick goes on in level 2.
 import { mat4, vec3 } from 'gl-matrix';
 import lightingWgsl from '../../shaders/render/lighting.wgsl?raw';
 import rayBlocksPoolWgsl from '../../shaders/render/ray_blocks_pool.wgsl?raw';
@@ -42,7 +42,7 @@ export interface RayLevel {
   offset: readonly [number, number, number];
   /** Multiplies the surface's colours (the tint-by-level view); default none. */
   tint?: readonly [number, number, number];
-  /** Cells the rays reach above the level's drawn chunks (into its ghosts): seams toward coarser levels (seamReachCells). */
+  /** Cells the rays reach above the level's own regions (into its ghosts): seams toward coarser levels (seamReachCells). */
   reachCells: number;
 }
 

@@ -21,7 +21,8 @@ import { BENCH_MODES, isBenchMode, type BenchMode } from '../../bench/sequences.
 import { numberListOption, numberOption, requiredPositional, stringOption, UsageError, type CliCommand } from '../command.ts';
 import { openInputSurface } from '../input.ts';
 import { destroyScene, fitWhole, type Scene, wholeScene, wholeSceneAt } from '../scene.ts';
-import { renderOffscreen, sizeOption } from './render.ts';
+import { renderOffscreen } from '../../render/offscreen.ts';
+import { sizeOption } from './render.ts';
 import { budgetOption, deadlineOption, streamBudgetOption } from './extract.ts';
 import { rateErrorRecord } from '../../zfp/rate-choice.ts';
 

@@ -17,7 +17,8 @@ import { meteredGpu } from '../../gpu/memory-meter.ts';
 import type { Isosurface } from '../../isosurface/isosurface.ts';
 import type { IsosurfaceStats } from '../../isosurface/types.ts';
 import { ArcballCamera } from '../../render/camera.ts';
-import { createFrameBindGroupLayout, DEPTH_FORMAT, FRAME_UNIFORM_BYTES, frameUniformData, type RenderLayer } from '../../render/viewer.ts';
+import { renderOffscreen } from '../../render/offscreen.ts';
+import { createFrameBindGroupLayout } from '../../render/viewer.ts';
 import { isStoreInput } from '../../store/cli-input.ts';
 import type { StoreStreamSurface } from '../../store/stream-surface.ts';
 import { cameraForBox, fitBox0, parseCam } from '../../store/view/camera.ts';
@@ -30,7 +31,6 @@ import { destroyScene, fitWhole, levelPerPixel, type Scene, storeScene, wholeSce
 import { budgetOption } from './extract.ts';
 
 /** The page's background (render/viewer.ts's default clear colour). */
-const BACKGROUND = { r: 0.09, g: 0.1, b: 0.12, a: 1 };
 const MAX_SIDE = 8192;
 
 export const renderCommand: CliCommand = {
@@ -244,89 +244,4 @@ export function sizeOption(text: string): [number, number] {
   const h = m ? Number(m[2]) : Number.NaN;
   if (!(w >= 1 && h >= 1 && w <= MAX_SIDE && h <= MAX_SIDE)) throw new UsageError(`--size ${text}: WxH, each 1..${MAX_SIDE}`);
   return [w, h];
-}
-
-/**
- * One frame of `layer` into an offscreen target: colour (RGBA8), depth, and
- * its time (GPU timestamps where the adapter has them, else the wall time to
- * the read back). `pixels: false` (a benchmark's frame): nothing read back,
- * colour and depth empty, the wall time to the queue's done.
- */
-export async function renderOffscreen(
-  device: GPUDevice,
-  frameLayout: GPUBindGroupLayout,
-  camera: ArcballCamera,
-  width: number,
-  height: number,
-  layer: RenderLayer,
-  { pixels = true }: { pixels?: boolean } = {},
-): Promise<{ colour: Uint8Array; depth: Float32Array; ms: number; timing: 'timestamp-query' | 'wall' }> {
-  const colour = device.createTexture({
-    size: [width, height],
-    format: 'rgba8unorm',
-    usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC,
-  });
-  const depth = device.createTexture({
-    size: [width, height],
-    format: DEPTH_FORMAT,
-    usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC,
-  });
-  const uniforms = device.createBuffer({ size: FRAME_UNIFORM_BYTES, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
-  device.queue.writeBuffer(uniforms, 0, frameUniformData(camera, width, height) as Float32Array<ArrayBuffer>);
-  const group = device.createBindGroup({ layout: frameLayout, entries: [{ binding: 0, resource: { buffer: uniforms } }] });
-  const colourRow = 256 * Math.ceil((4 * width) / 256);
-  const readBytes = pixels ? colourRow * height : 4;
-  const readColour = device.createBuffer({ size: readBytes, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
-  const readDepth = device.createBuffer({ size: readBytes, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
-  const timed = device.features.has('timestamp-query');
-  const querySet = timed ? device.createQuerySet({ type: 'timestamp', count: 2 }) : undefined;
-  const resolve = timed ? device.createBuffer({ size: 16, usage: GPUBufferUsage.QUERY_RESOLVE | GPUBufferUsage.COPY_SRC }) : undefined;
-  const readTimes = timed ? device.createBuffer({ size: 16, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST }) : undefined;
-  const encoder = device.createCommandEncoder({ label: 'render' });
-  const pass = encoder.beginRenderPass({
-    colorAttachments: [{ view: colour.createView(), clearValue: BACKGROUND, loadOp: 'clear', storeOp: 'store' }],
-    depthStencilAttachment: { view: depth.createView(), depthClearValue: 1, depthLoadOp: 'clear', depthStoreOp: 'store' },
-    ...(querySet ? { timestampWrites: { querySet, beginningOfPassWriteIndex: 0, endOfPassWriteIndex: 1 } } : {}),
-  });
-  pass.setBindGroup(0, group);
-  layer.draw(pass);
-  pass.end();
-  if (pixels) {
-    encoder.copyTextureToBuffer({ texture: colour }, { buffer: readColour, bytesPerRow: colourRow }, [width, height]);
-    encoder.copyTextureToBuffer({ texture: depth, aspect: 'depth-only' }, { buffer: readDepth, bytesPerRow: colourRow }, [width, height]);
-  }
-  if (querySet && resolve && readTimes) {
-    encoder.resolveQuerySet(querySet, 0, 2, resolve, 0);
-    encoder.copyBufferToBuffer(resolve, 0, readTimes, 0, 16);
-  }
-  const started = performance.now();
-  device.queue.submit([encoder.finish()]);
-  await Promise.all(
-    pixels
-      ? [readColour.mapAsync(GPUMapMode.READ), readDepth.mapAsync(GPUMapMode.READ), readTimes?.mapAsync(GPUMapMode.READ)]
-      : [device.queue.onSubmittedWorkDone(), readTimes?.mapAsync(GPUMapMode.READ)],
-  );
-  let ms = performance.now() - started;
-  if (readTimes) {
-    const t = new BigUint64Array(readTimes.getMappedRange());
-    if (t[1] > t[0]) ms = Number(t[1] - t[0]) / 1e6;
-    readTimes.unmap();
-  }
-  if (!pixels) {
-    for (const x of [colour, depth, uniforms, readColour, readDepth, resolve, readTimes]) x?.destroy();
-    querySet?.destroy();
-    return { colour: new Uint8Array(0), depth: new Float32Array(0), ms, timing: readTimes ? 'timestamp-query' : 'wall' };
-  }
-  const c = new Uint8Array(readColour.getMappedRange());
-  const d = new Float32Array(readDepth.getMappedRange());
-  const out = { colour: new Uint8Array(4 * width * height), depth: new Float32Array(width * height) };
-  for (let y = 0; y < height; y++) {
-    out.colour.set(c.subarray(y * colourRow, y * colourRow + 4 * width), 4 * width * y);
-    out.depth.set(d.subarray((y * colourRow) / 4, (y * colourRow) / 4 + width), width * y);
-  }
-  readColour.unmap();
-  readDepth.unmap();
-  for (const x of [colour, depth, uniforms, readColour, readDepth, resolve, readTimes]) x?.destroy();
-  querySet?.destroy();
-  return { colour: out.colour, depth: out.depth, ms, timing: readTimes ? 'timestamp-query' : 'wall' };
 }

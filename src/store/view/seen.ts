@@ -69,3 +69,46 @@ export function seenChunks(
   }
   return { seen, added };
 }
+
+/**
+ * Each covered pixel's first hit in level-0 voxels (x, y, z) and its ray's
+ * unit direction there, from an image's depth (`size` pixels, rows top to
+ * bottom, WebGPU depth in [0, 1], 1 where nothing was hit): `inverseViewProj`
+ * (column-major) takes clip space to the world, where level-0 voxel v lies at
+ * (v + origin) * voxelSize, and `eye` is the camera in the world.
+ */
+export function hitsFromDepth(
+  depth: Float32Array,
+  [width, height]: readonly [number, number],
+  inverseViewProj: ArrayLike<number>,
+  eye: ArrayLike<number>,
+  voxelSize: readonly number[],
+  origin: readonly number[],
+): { hits: Float64Array; dirs: Float64Array } {
+  const m = inverseViewProj;
+  const e = [0, 1, 2].map((a) => eye[a] / voxelSize[a] - origin[a]);
+  let covered = 0;
+  for (let i = 0; i < width * height; i++) if (depth[i] < 1) covered++;
+  const hits = new Float64Array(3 * covered);
+  const dirs = new Float64Array(3 * covered);
+  let k = 0;
+  for (let y = 0; y < height; y++)
+    for (let x = 0; x < width; x++) {
+      const z = depth[y * width + x];
+      if (!(z < 1)) continue;
+      const nx = ((x + 0.5) / width) * 2 - 1;
+      const ny = 1 - ((y + 0.5) / height) * 2;
+      const w = m[3] * nx + m[7] * ny + m[11] * z + m[15];
+      let len = 0;
+      for (let a = 0; a < 3; a++) {
+        const world = (m[a] * nx + m[4 + a] * ny + m[8 + a] * z + m[12 + a]) / w;
+        hits[k + a] = world / voxelSize[a] - origin[a];
+        dirs[k + a] = hits[k + a] - e[a];
+        len += dirs[k + a] * dirs[k + a];
+      }
+      len = Math.sqrt(len) || 1;
+      for (let a = 0; a < 3; a++) dirs[k + a] /= len;
+      k += 3;
+    }
+  return { hits, dirs };
+}

@@ -25,7 +25,7 @@ import { ArcballCamera } from '../../../src/render/camera.ts';
 import { RayLayer } from '../../../src/render/ray-layer.ts';
 import { SurfaceLayer } from '../../../src/render/surface-layer.ts';
 import { createFrameBindGroupLayout } from '../../../src/render/viewer.ts';
-import { renderOffscreen } from '../../../src/cli/commands/render.ts';
+import { renderOffscreen } from '../../../src/render/offscreen.ts';
 import { ZfpDecoder } from '../../../src/zfp/decoder.ts';
 import { loadZfpStream } from '../../../src/zfp/gpu-stream.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
