@@ -11,6 +11,18 @@ import type { VolumeProbe } from '../zfp/probe.ts';
 import type { Clip } from '../core/clip.ts';
 import type { CapPiece } from '../render/cap-layer.ts';
 
+/** A store's step as the page's rays draw it (StoreIsosurface.rayLevels). */
+export interface PageRayLevels {
+  levels: RayLevel[];
+  extent: readonly [number, number, number];
+  iso: number;
+  regions: RayRegions;
+  /** Whether the step is its plan's last (the rays then read their depth to refine it: guideRays). */
+  final: boolean;
+  /** The step's identity (the same while its levels are). */
+  step: unknown;
+}
+
 export interface PageIsosurface {
   readonly info: VolumeInfo;
   /** What to draw now (the newest surface computed so far); none for a surface of pieces that holds none (drawParts). */
@@ -37,7 +49,9 @@ export interface PageIsosurface {
   /** A surface of several pieces (a store refined by the view: one per level): what the layer draws instead of drawData. */
   drawParts?(): SurfacePart[];
   /** A store: its step on screen for the ray caster, when its live caches hold it (StoreIsosurface.rayLevels). */
-  rayLevels?(): { levels: RayLevel[]; extent: readonly [number, number, number]; iso: number; regions: RayRegions } | undefined;
+  rayLevels?(): PageRayLevels | undefined;
+  /** A store: where an image of its final step's rays found the surface, to refine there (StoreIsosurface.guideRays); whether it asked. */
+  guideRays?(seenHits: { hits: Float64Array; dirs: Float64Array }): boolean;
   /** A store: whether the page draws it by rays (its live caches are then kept whole). */
   setRaysWanted?(on: boolean): void;
   /** Such a surface's mesh as one, in its voxel index space (voxel (i, j, k) at (i, j, k)), for exports; `iso`: one of its other surfaces. */

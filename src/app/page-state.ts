@@ -52,6 +52,8 @@ export interface PageState {
   draw?: 'mesh' | 'rays';
   /** Whether the last frame drew the selected surface by rays (draw rays, and what they read holds the surface on screen). */
   raysDrawn?: boolean;
+  /** How many times a store's rays were read back and asked for finer chunks where they hit (a cut for rays). */
+  raysGuided?: number;
   /** The last "Measure": every visible surface (empty while measuring or after another volume opened). */
   measures?: MeasuredSurface[];
   /** The last "Measure" of the surface (cleared when another volume opens). */

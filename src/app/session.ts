@@ -26,6 +26,7 @@ import type { SurfaceSet } from './surfaces/surface-set.ts';
 import type { Spacing, SpacingControl } from './ui/spacing-control.ts';
 import { StatsPanel, volumeRows } from './ui/stats-panel.ts';
 import type { ViewLink } from './view-link.ts';
+import { RayGuidance } from './ray-guidance.ts';
 
 export interface SessionParts {
   viewer: Viewer;
@@ -67,8 +68,11 @@ export class Session {
   /** The isovalue last submitted to the volume's pipeline: its cache holds every block active at it (what rays read). */
   private submittedIso = Number.NaN;
   private lastLatency: number | undefined;
+  /** A store's rays read back to refine where they found the surface. */
+  private readonly guidance: RayGuidance;
 
   constructor(private readonly p: SessionParts) {
+    this.guidance = new RayGuidance(p.viewer, p.rays);
     p.viewer.addBeforeFrame(() => {
       p.surface.setDrawData(this.current?.iso.drawData);
       p.surfaces.beforeFrame();
@@ -104,8 +108,10 @@ export class Session {
     const on = store !== undefined || data?.neighbourhoodRanges !== undefined;
     rays.visible = on && p.surface.visible;
     p.state.raysDrawn = rays.visible;
+    p.state.raysGuided = this.guidance.asked;
     if (!on) {
       rays.setDrawData(undefined);
+      this.guidance.cancel();
       return;
     }
     if (store) {
@@ -120,6 +126,9 @@ export class Session {
     rays.origin = p.surface.origin;
     rays.clip = p.surface.clip;
     p.surface.visible = false;
+    // a store's rays refined where they found the surface, once its final step is drawn
+    if (store && v) this.guidance.drew(v.iso, store, p.surface.voxelSize, p.surface.origin);
+    else this.guidance.cancel();
   }
 
   install(v: LoadedVolume): void {

@@ -10,12 +10,9 @@ import type { IsosurfaceStats } from '../isosurface/types.ts';
 import type { ArcballCamera } from '../render/camera.ts';
 import type { StoreStreamSurface } from '../store/stream-surface.ts';
 import { regionOwners } from '../store/view/regions.ts';
-import { hitsFromDepth, seenChunks } from '../store/view/seen.ts';
+import { hitsFromDepth, MAX_GUIDED_PASSES, seenChunks } from '../store/view/seen.ts';
 import { InputError } from './command.ts';
 import { destroyScene, type Layer, type Scene } from './scene.ts';
-
-/** How many times at most a store's rays are refined again where they found the surface (each an image more). */
-export const MAX_GUIDED_PASSES = 4;
 
 /** What the guided passes did: how many, the level-0 chunks seen in all, their time (surfaces and images), ms. */
 export interface Guided {

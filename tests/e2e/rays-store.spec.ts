@@ -2,8 +2,10 @@
 // is ray cast over its levels' pools and block caches once they hold it
 // (while the next step computes, its mesh copies are drawn, so no frame is
 // empty); scrubbing the isovalue, orbiting and zooming go on drawing frames
-// and settle on rays again; switching to triangles shows the same picture
-// (within a few pixels' worth); no page error.
+// and settle on rays again; the rays of a final step are read back and the
+// stream refines where they hit (raysGuided), with the same picture;
+// switching to triangles shows the same picture (within a few pixels'
+// worth); no page error.
 import { execFileSync } from 'node:child_process';
 import { mkdirSync, rmSync } from 'node:fs';
 import { join } from 'node:path';
@@ -53,6 +55,14 @@ test('draw=rays on a store: rays over the levels once settled; scrub, orbit, zoo
   await waitForFrames(page, 2);
   const rays = await nonBackgroundFraction(page);
   expect(rays).toBeGreaterThan(0.05);
+
+  // once the final step rests, the rays are read back and the stream refines where they hit (a cut for
+  // rays, nested): the picture stays (frames go on, the same coverage within a few pixels' worth)
+  await page.waitForFunction(() => (window.zfpiso!.raysGuided ?? 0) >= 1, null, { timeout: 120_000 });
+  await settled(page);
+  await waitForFrames(page, 2);
+  const guided = await nonBackgroundFraction(page);
+  expect(Math.abs(guided - rays)).toBeLessThan(0.02 * rays + 0.002);
 
   // scrub the isovalue: frames go on (mesh copies while the next step computes), then rays again
   const frames = () => page.evaluate(() => window.zfpiso!.framesDrawn());

@@ -22,10 +22,11 @@ import type { VolumeProbe } from '../../zfp/probe.ts';
 import type { Clip } from '../../core/clip.ts';
 import { storeCapPieces } from './store-caps.ts';
 import type { CapPiece } from '../../render/cap-layer.ts';
-import { type RayLevel, type RayRegions, rayLevelsOf } from '../../render/ray-layer.ts';
+import { type RayRegions, rayLevelsOf } from '../../render/ray-layer.ts';
 import { regionOwners } from '../../store/view/regions.ts';
+import { MAX_GUIDED_PASSES, seenChunks } from '../../store/view/seen.ts';
 import { shownValueAt, type ShownValue } from '../../store/shown-value.ts';
-import type { PageIsosurface } from '../engine.ts';
+import type { PageIsosurface, PageRayLevels } from '../engine.ts';
 
 export type ShownStep = ShownCut<ChunkedVolume, IsosurfaceStats, Isosurface>;
 
@@ -57,6 +58,10 @@ export class StoreIsosurface implements PageIsosurface {
   #detach: (() => void)[] = [];
   #destroyed = false;
   #shown: ShownStep;
+  /** The region grid of the step on screen (rayLevels). */
+  #regions: { leaves: unknown; regions: RayRegions } | undefined;
+  /** Refinements asked for by the rays since the stream last forgot what they saw (a new camera or isovalue). */
+  #guidedPasses = 0;
 
   constructor(
     private readonly stream: ChunkStoreStream,
@@ -158,7 +163,7 @@ export class StoreIsosurface implements PageIsosurface {
    * step being computed, caches emptied or released): the step's mesh
    * copies are drawn meanwhile, so no frame is empty.
    */
-  rayLevels(): { levels: RayLevel[]; extent: readonly [number, number, number]; iso: number; regions: RayRegions } | undefined {
+  rayLevels(): PageRayLevels | undefined {
     const s = this.#shown;
     // the stream's step on screen (a camera move that keeps its plan renews the object, not its levels)
     if (!this.stream.cachesShown || s.levels !== this.stream.shown?.levels) return undefined;
@@ -169,17 +174,57 @@ export class StoreIsosurface implements PageIsosurface {
       levelOffsets,
       this.#parts.map((p) => p.tint),
     );
-    const regions = regionOwners(
-      s.leaves,
-      this.stream.levels.map((l) => l.layout),
-      levelScales,
-    ) ?? { grid: [0, 0, 0], edge: [1, 1, 1], owner: new Uint8Array(0) };
-    return { levels, extent: this.stream.levels[0].layout.dims, iso: s.iso, regions };
+    // made once per step (the rays upload it when it changes)
+    if (this.#regions?.leaves !== s.leaves)
+      this.#regions = {
+        leaves: s.leaves,
+        regions: regionOwners(
+          s.leaves,
+          this.stream.levels.map((l) => l.layout),
+          levelScales,
+        ) ?? { grid: [0, 0, 0], edge: [1, 1, 1], owner: new Uint8Array(0) },
+      };
+    const { regions } = this.#regions;
+    return { levels, extent: this.stream.levels[0].layout.dims, iso: s.iso, regions, final: s.final, step: s.levels };
   }
 
   /** Whether the page draws rays (rayLevels): the stream then keeps the step on screen's caches whole (StoreStream.setKeepCaches). */
   setRaysWanted(on: boolean): void {
-    if (!this.#destroyed) this.stream.setKeepCaches(on);
+    if (this.#destroyed) return;
+    this.stream.setKeepCaches(on);
+    // a cut for rays is nested (coarse chunks drawn under finer ones): triangles go back to the view's cut
+    if (!on && this.stream.seen) void this.stream.setSeen(null);
+  }
+
+  /**
+   * Where the rays of an image of the final step on screen found the surface
+   * (hitsFromDepth): their level-0 chunks, with those seen since the last
+   * camera or isovalue, go to the stream, which refines there (a cut for
+   * rays), at most MAX_GUIDED_PASSES times per view. Whether it asked.
+   */
+  guideRays(seenHits: { hits: Float64Array; dirs: Float64Array }): boolean {
+    const { stream } = this;
+    const shown = stream.shown;
+    if (this.#destroyed || !shown?.final || shown.levels !== this.#shown.levels) return false;
+    if (!stream.seen) this.#guidedPasses = 0;
+    if (this.#guidedPasses >= MAX_GUIDED_PASSES) return false;
+    const regions = regionOwners(
+      shown.leaves,
+      stream.levels.map((l) => l.layout),
+      stream.store.levelScales,
+    );
+    const next = seenChunks(
+      seenHits.hits,
+      seenHits.dirs,
+      stream.levels[0].layout,
+      regions,
+      stream.store.levelScales,
+      stream.seen ?? undefined,
+    );
+    if (next.added === 0) return false;
+    this.#guidedPasses++;
+    void stream.setSeen(next.seen);
+    return true;
   }
 
   /** The step's pieces at each of its isovalues (a replaced step's copies are gone: nothing keeps them). */

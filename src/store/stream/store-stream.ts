@@ -272,6 +272,11 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
    * nested over coarser ones), until the next camera or isovalue; resolves
    * when that refinement ends. For surfaces the rays draw (cache-only).
    */
+  /** What the rays saw since the last camera or isovalue (setSeen), or null. */
+  get seen(): Uint8Array | null {
+    return this.#seen;
+  }
+
   setSeen(seen: Uint8Array | null): Promise<void> {
     this.#seen = seen;
     return Number.isFinite(this.#iso) ? this.setIsovalue(this.#iso) : Promise.resolve();

@@ -8,6 +8,9 @@
 import type { RegionOwners } from './regions.ts';
 import { NO_OWNER } from './regions.ts';
 
+/** How many times at most a view is refined again where its rays found the surface (each an image more). */
+export const MAX_GUIDED_PASSES = 4;
+
 /** Voxels of the hit's level, before and after the hit along the ray, whose level-0 chunks count as seen. */
 export const GUARD_VOXELS = 2;
 
