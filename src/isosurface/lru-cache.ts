@@ -363,10 +363,10 @@ export class BlockCache {
    */
   reset(capacity = this.capacity): void {
     if (capacity !== this.capacity) {
-      const old = this.slots;
+      // nothing is kept: the old slots go before the new are made (never both held)
+      this.destroySlots(this.slots);
       this.slots = this.allocate(capacity);
       this.groups = this.makeGroups();
-      this.destroySlots(old);
       this.logScan.grow(this.slots.logSize);
       this.parts.scan.grow(capacity);
     }

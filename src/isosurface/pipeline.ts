@@ -376,7 +376,12 @@ export class IsosurfacePipeline {
       welded = minWelded;
     }
     if (slots > this.parts.cache.capacity) {
-      this.parts.cache.grow(slots);
+      // growing keeps the cached blocks by copying them into the larger cache, so the old cache and the
+      // new are held at once; where the budget has no room for both, the cache is made anew (the blocks
+      // the retry needs are decoded again) and the old one goes first
+      const oldCache = cacheBytesFor(this.parts.cache.capacity, blocks, this.cacheOnly);
+      if (bytes(slots, indices, welded) + oldCache <= budget) this.parts.cache.grow(slots);
+      else this.parts.cache.reset(slots);
       // a cache-only surface classifies nothing: its per-slot classification buffers stay at one slot
       if (!this.cacheOnly) this.parts.mc.resize(slots);
     }

@@ -10,6 +10,8 @@ import { readF32, readU32 } from '../../../src/gpu/buffers.ts';
 import { Isosurface } from '../../../src/isosurface/isosurface.ts';
 import type { IsosurfaceDrawData } from '../../../src/isosurface/types.ts';
 import { gpuTest } from '../../helpers/gpu.ts';
+import { meteredGpu } from '../../../src/gpu/memory-meter.ts';
+import { cacheBytesFor } from '../../../src/isosurface/budget.ts';
 import { compressVolume, makeField, testKernelOptions } from './helpers.ts';
 
 const NONE = 0xffffffff;
@@ -61,6 +63,52 @@ describe('Isosurface cacheOnly', () => {
         full.destroy();
         only.destroy();
       }
+    }
+  });
+
+  gpuTest('a cache that grows holds its old and new slots at once only where the budget has room for both', async ({ gpu }) => {
+    const dims: [number, number, number] = [65, 57, 49];
+    const field = makeField(dims, 11, 'blobs');
+    const stream = await compressVolume(gpu.device, field, dims, 16);
+    const options = { ...testKernelOptions, cacheOnly: true, initialCacheSlots: 8 };
+    // the blocks each isovalue makes active (a surface without a budget to speak of)
+    const probe = await Isosurface.create(gpu, stream, options);
+    const [lo, hi] = probe.info.valueRange;
+    const few = lo + 0.75 * (hi - lo);
+    const many = lo + 0.35 * (hi - lo);
+    const fewActive = (await probe.compute(few)).activeBlocks;
+    const manyActive = (await probe.compute(many)).activeBlocks;
+    probe.destroy();
+    expect(fewActive).toBeGreaterThan(100);
+    expect(manyActive).toBeGreaterThan(2 * fewActive);
+    // a budget the larger surface fits in, but not beside the smaller one's cache
+    const { gpu: metered, meter } = meteredGpu(gpu);
+    const made = await Isosurface.create(metered, stream, options);
+    const vertexBytes = made.budgetedBytes - cacheBytesFor(8, made.info.blockCount, true);
+    made.destroy();
+    const budget = vertexBytes + cacheBytesFor(manyActive, made.info.blockCount, true) + 1024;
+    meter.resetPeak();
+    const before = meter.bytes;
+    const surface = await Isosurface.create(metered, stream, { ...options, memoryBudgetBytes: budget });
+    // what the surface holds besides its cache and vertices (per-block state), made once
+    const fixed = meter.bytes - before - surface.budgetedBytes;
+    try {
+      expect((await surface.compute(few)).activeBlocks).toBe(fewActive);
+      const grown = await surface.compute(many);
+      expect(grown.activeBlocks).toBe(manyActive);
+      expect(surface.budgetedBytes).toBeLessThanOrEqual(budget);
+      // the peak: never the old cache beside the new (the statistics' staging buffers aside)
+      expect(meter.peak - before - fixed).toBeLessThanOrEqual(budget + 16 * 1024);
+      // and what it cached is what a surface without a budget caches
+      const free = await Isosurface.create(gpu, stream, options);
+      await free.compute(many);
+      const a = await cached(gpu.device, free.drawData);
+      const b = await cached(gpu.device, surface.drawData);
+      expect([...b.keys()].sort((x, y) => x - y)).toEqual([...a.keys()].sort((x, y) => x - y));
+      free.destroy();
+    } finally {
+      surface.destroy();
+      stream.destroy();
     }
   });
 });
