@@ -84,7 +84,7 @@ export const renderCommand: CliCommand = {
     const { gpu, meter } = meteredGpu(device);
     const opened = await openInputSurface(ctx, gpu, input, {
       rate: numberOption(args, 'rate'),
-      budget: budgetOption(args),
+      budget: storeBudget(budgetOption(args), store, width, height),
       // rays read the block caches only: no triangles, no vertex memory (unless asked for the mesh path's cut)
       cacheOnly: draw === 'rays' && !meshCut,
       ...(store ? { view: viewRequest, time: numberOption(args, 'time'), channel: numberOption(args, 'channel') } : {}),
@@ -226,6 +226,21 @@ export const renderCommand: CliCommand = {
     }
   },
 };
+
+/**
+ * A store's stream holds what the budget leaves beside the image's read-back
+ * (colour and depth, each row padded to 256 bytes: 7 MiB at 1280x720), so
+ * that the run's GPU peak stays within the budget.
+ */
+function storeBudget(budget: number | undefined, store: boolean, width: number, height: number): number | undefined {
+  if (budget === undefined || !store) return budget;
+  const readBack = 2 * 256 * Math.ceil((4 * width) / 256) * height;
+  if (budget <= 2 * readBack)
+    throw new UsageError(
+      `--cache-budget: ${(budget / 2 ** 20).toFixed(1)} MB leaves no room beside the image's read-back (${(readBack / 2 ** 20).toFixed(1)} MB at ${width}x${height})`,
+    );
+  return budget - readBack;
+}
 
 /** The store's surface at `iso`, or the stream's reason it stopped (a failed chunk, the budget) as an input error. */
 async function computeOrExplain(surface: StoreStreamSurface, iso: number): Promise<IsosurfaceStats> {
