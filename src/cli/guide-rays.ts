@@ -69,7 +69,7 @@ export async function guideRays<I extends { depth: Float32Array }>(
 }
 
 /** Each covered pixel's first hit in level-0 voxels and its ray's direction, from an image's depth seen by `camera`. */
-export function hitsOf(
+function hitsOf(
   depth: Float32Array,
   camera: ArcballCamera,
   size: readonly [number, number],
