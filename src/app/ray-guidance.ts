@@ -1,7 +1,9 @@
 // The page's rays over a store refined where they found the surface (issue
 // 46), as `render` does headless (src/cli/guide-rays.ts): once the rays draw
 // a plan's final step and the view has rested a moment, they are drawn once
-// more offscreen at half the canvas' size and their depth read back; each
+// more offscreen, smaller, in the canvas' shape, and their depth alone read
+// back (READ_BYTES at most: within the budget's reserve for short-lived
+// buffers, RESERVE_BYTES); each
 // covered pixel's first hit (src/store/view/seen.ts) goes to the store's
 // surface (StoreIsosurface.guideRays), which has the stream refine there: a
 // cut for rays, finer chunks only where the rays hit. The next final step
@@ -16,6 +18,8 @@ import type { PageIsosurface, PageRayLevels } from './engine.ts';
 
 /** How long a final step is on screen, still, before its rays are read. */
 const GUIDE_DELAY_MS = 300;
+/** Bytes of depth read back at most (rows padded to 256 bytes). */
+const READ_BYTES = 512 * 1024;
 
 export class RayGuidance {
   /** The step last read (or waiting to be). */
@@ -53,10 +57,15 @@ export class RayGuidance {
     this.#busy = true;
     try {
       const camera = viewer.camera;
-      const width = Math.max(16, Math.round(viewer.canvas.width / 2));
-      const height = Math.max(16, Math.round((width * viewer.canvas.height) / Math.max(1, viewer.canvas.width)));
+      const { width: cw, height: ch } = viewer.canvas;
+      let scale = 1;
+      const size = () => [Math.max(16, Math.round(cw * scale)), Math.max(16, Math.round(ch * scale))];
+      const bytes = ([w, h]: number[]) => 256 * Math.ceil((4 * w) / 256) * h;
+      while (bytes(size()) > READ_BYTES && scale > 1e-3) scale *= 0.9;
+      const [width, height] = size();
       const image = await renderOffscreen(viewer.device, viewer.frameBindGroupLayout, camera, width, height, rays, {
         format: viewer.format,
+        colour: false,
       });
       // the step may have gone while the image was read
       if (iso.rayLevels?.()?.step !== step) return;

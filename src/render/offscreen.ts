@@ -10,7 +10,8 @@ const BACKGROUND = { r: 0.09, g: 0.1, b: 0.12, a: 1 };
  * One frame of `layer` into an offscreen target: colour (RGBA8, or the
  * layer's pipelines' `format`: bytes as that format has them), depth, and
  * its time (GPU timestamps where the adapter has them, else the wall time to
- * the read back). `pixels: false` (a benchmark's frame): nothing read back,
+ * the read back). `colour: false`: the depth alone read back (colour empty).
+ * `pixels: false` (a benchmark's frame): nothing read back,
  * colour and depth empty, the wall time to the queue's done.
  */
 export async function renderOffscreen(
@@ -20,7 +21,11 @@ export async function renderOffscreen(
   width: number,
   height: number,
   layer: RenderLayer,
-  { pixels = true, format = 'rgba8unorm' }: { pixels?: boolean; format?: GPUTextureFormat } = {},
+  {
+    pixels = true,
+    colour: readsColour = true,
+    format = 'rgba8unorm',
+  }: { pixels?: boolean; colour?: boolean; format?: GPUTextureFormat } = {},
 ): Promise<{ colour: Uint8Array; depth: Float32Array; ms: number; timing: 'timestamp-query' | 'wall' }> {
   const colour = device.createTexture({
     size: [width, height],
@@ -37,7 +42,7 @@ export async function renderOffscreen(
   const group = device.createBindGroup({ layout: frameLayout, entries: [{ binding: 0, resource: { buffer: uniforms } }] });
   const colourRow = 256 * Math.ceil((4 * width) / 256);
   const readBytes = pixels ? colourRow * height : 4;
-  const readColour = device.createBuffer({ size: readBytes, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+  const readColour = device.createBuffer({ size: readsColour ? readBytes : 4, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
   const readDepth = device.createBuffer({ size: readBytes, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
   const timed = device.features.has('timestamp-query');
   const querySet = timed ? device.createQuerySet({ type: 'timestamp', count: 2 }) : undefined;
@@ -53,7 +58,7 @@ export async function renderOffscreen(
   layer.draw(pass);
   pass.end();
   if (pixels) {
-    encoder.copyTextureToBuffer({ texture: colour }, { buffer: readColour, bytesPerRow: colourRow }, [width, height]);
+    if (readsColour) encoder.copyTextureToBuffer({ texture: colour }, { buffer: readColour, bytesPerRow: colourRow }, [width, height]);
     encoder.copyTextureToBuffer({ texture: depth, aspect: 'depth-only' }, { buffer: readDepth, bytesPerRow: colourRow }, [width, height]);
   }
   if (querySet && resolve && readTimes) {
@@ -64,7 +69,11 @@ export async function renderOffscreen(
   device.queue.submit([encoder.finish()]);
   await Promise.all(
     pixels
-      ? [readColour.mapAsync(GPUMapMode.READ), readDepth.mapAsync(GPUMapMode.READ), readTimes?.mapAsync(GPUMapMode.READ)]
+      ? [
+          readsColour ? readColour.mapAsync(GPUMapMode.READ) : undefined,
+          readDepth.mapAsync(GPUMapMode.READ),
+          readTimes?.mapAsync(GPUMapMode.READ),
+        ]
       : [device.queue.onSubmittedWorkDone(), readTimes?.mapAsync(GPUMapMode.READ)],
   );
   let ms = performance.now() - started;
@@ -78,15 +87,15 @@ export async function renderOffscreen(
     querySet?.destroy();
     return { colour: new Uint8Array(0), depth: new Float32Array(0), ms, timing: readTimes ? 'timestamp-query' : 'wall' };
   }
-  const c = new Uint8Array(readColour.getMappedRange());
   const d = new Float32Array(readDepth.getMappedRange());
-  const out = { colour: new Uint8Array(4 * width * height), depth: new Float32Array(width * height) };
-  for (let y = 0; y < height; y++) {
-    out.colour.set(c.subarray(y * colourRow, y * colourRow + 4 * width), 4 * width * y);
-    out.depth.set(d.subarray((y * colourRow) / 4, (y * colourRow) / 4 + width), width * y);
-  }
-  readColour.unmap();
+  const out = { colour: new Uint8Array(readsColour ? 4 * width * height : 0), depth: new Float32Array(width * height) };
+  for (let y = 0; y < height; y++) out.depth.set(d.subarray((y * colourRow) / 4, (y * colourRow) / 4 + width), width * y);
   readDepth.unmap();
+  if (readsColour) {
+    const c = new Uint8Array(readColour.getMappedRange());
+    for (let y = 0; y < height; y++) out.colour.set(c.subarray(y * colourRow, y * colourRow + 4 * width), 4 * width * y);
+    readColour.unmap();
+  }
   for (const x of [colour, depth, uniforms, readColour, readDepth, resolve, readTimes]) x?.destroy();
   querySet?.destroy();
   return { colour: out.colour, depth: out.depth, ms, timing: readTimes ? 'timestamp-query' : 'wall' };

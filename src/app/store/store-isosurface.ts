@@ -204,15 +204,12 @@ export class StoreIsosurface implements PageIsosurface {
    */
   guideRays(seenHits: { hits: Float64Array; dirs: Float64Array }): boolean {
     const { stream } = this;
-    const shown = stream.shown;
-    if (this.#destroyed || !shown?.final || shown.levels !== this.#shown.levels) return false;
+    // the step the rays drew, still on screen, with its region grid
+    const drawn = this.#destroyed ? undefined : this.rayLevels();
+    if (!drawn?.final) return false;
     if (!stream.seen) this.#guidedPasses = 0;
     if (this.#guidedPasses >= MAX_GUIDED_PASSES) return false;
-    const regions = regionOwners(
-      shown.leaves,
-      stream.levels.map((l) => l.layout),
-      stream.store.levelScales,
-    );
+    const regions = drawn.regions.owner.length > 0 ? drawn.regions : null;
     const next = seenChunks(
       seenHits.hits,
       seenHits.dirs,

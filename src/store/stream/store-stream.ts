@@ -265,17 +265,19 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     return Number.isFinite(this.#iso) ? this.setIsovalue(this.#iso) : Promise.resolve();
   }
 
+  /** What the rays saw since the last camera or isovalue (setSeen), or null. */
+  get seen(): Uint8Array | null {
+    return this.#seen;
+  }
+
   /**
    * Where an image's rays found the surface (per level-0 chunk, x fastest: 1
    * where a first hit lay; null: none): the cut is planned again for rays at
    * the current isovalue and view (CutInput.seen: finer chunks only there,
    * nested over coarser ones), until the next camera or isovalue; resolves
-   * when that refinement ends. For surfaces the rays draw (cache-only).
+   * when that refinement ends. Only for a stream whose steps the rays draw
+   * (a nested cut's meshes overlap where a coarse chunk is drawn under finer ones).
    */
-  /** What the rays saw since the last camera or isovalue (setSeen), or null. */
-  get seen(): Uint8Array | null {
-    return this.#seen;
-  }
 
   setSeen(seen: Uint8Array | null): Promise<void> {
     this.#seen = seen;

@@ -31,7 +31,7 @@ export function seenChunks(
   hits: Float64Array,
   dirs: Float64Array,
   level0: SeenLevel0,
-  regions: RegionOwners | null,
+  regions: (Pick<RegionOwners, 'owner'> & { grid: readonly number[]; edge: readonly number[] }) | null,
   scales: readonly (readonly [number, number, number])[],
   into?: Uint8Array,
 ): { seen: Uint8Array; added: number } {
