@@ -328,8 +328,10 @@ export class Viewer {
     pass.setBindGroup(0, this.frameBindGroup);
     for (const layer of this.layers) layer.draw(pass);
     pass.end();
-    const pick = this.pendingPick;
-    this.pendingPick = undefined;
+    // a pick waits for the frame that draws every layer: see-through ones need the peeler, made on first use
+    const peelerPending = !this.peeler && DepthPeeler.anyTransparent(this.layers);
+    const pick = peelerPending ? undefined : this.pendingPick;
+    if (pick) this.pendingPick = undefined;
     // a pick reads the opaque depth (f32 0) and the nearest see-through one (f32 1: 1 unless peeled)
     const probe = this.depthProbe;
     const pickRead = pick && probe ? this.#pickBuffers() : undefined;
@@ -452,6 +454,9 @@ export class Viewer {
       (e) => {
         this.peelerMaking = false;
         console.error('depth peeling:', e);
+        // a pick waiting for the peeler would wait for ever
+        this.pendingPick?.reject(e instanceof Error ? e : new Error(String(e)));
+        this.pendingPick = undefined;
       },
     );
   }
