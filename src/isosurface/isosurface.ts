@@ -360,6 +360,7 @@ export class Isosurface {
       cacheSlots: this.pipeline.parts.cache.capacity,
       cacheSlotsUsed: c[C.slotsUsed],
       cacheBytes: this.pipeline.cacheBytes,
+      cacheBytesNeeded: Math.min(this.pipeline.cacheBytes, this.pipeline.cacheBytesFor(activeBlocks)),
       vertexBytes: this.pipeline.vertexBytes,
       gpuMs: raw.gpuMs + r.earlierMs,
       stages,

@@ -296,6 +296,11 @@ export class IsosurfacePipeline {
     s.mark(encoder, 7);
   }
 
+  /** Bytes the cache would take at `slots` slots (budget.ts: cacheBytesFor). */
+  cacheBytesFor(slots: number): number {
+    return cacheBytesFor(Math.max(1, slots), this.info.blockCount, this.cacheOnly);
+  }
+
   /** Bytes of the cache (slots, maps, per-active buffers). */
   get cacheBytes(): number {
     return this.parts.cache.byteSize + this.parts.mc.byteSize;

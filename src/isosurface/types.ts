@@ -99,6 +99,8 @@ export interface IsosurfaceStats {
   cacheSlotsUsed: number;
   /** Bytes of the slot data and cache bookkeeping buffers. */
   cacheBytes: number;
+  /** What the cache would take at just the active blocks' slots (cacheBytes less the headroom it grew into). */
+  cacheBytesNeeded: number;
   /** Bytes of the vertex output buffers (capacity). */
   vertexBytes: number;
   /** Sum of the stages' GPU time, ms. */

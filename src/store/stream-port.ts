@@ -31,6 +31,8 @@ export interface LevelVolume {
 export interface LevelStats {
   triangles: number;
   cacheBytes: number;
+  /** The cache at just the active blocks (no headroom): a cache-only surface's cost per chunk is learnt from it. */
+  cacheBytesNeeded?: number;
   vertexBytes: number;
   /** Per-volume buffers outside the surface's cap (the pool, ranges, masks, maps). */
   fixedBytes?: number;

@@ -229,6 +229,7 @@ export function sumStats(iso: number, all: readonly IsosurfaceStats[]): Isosurfa
     cacheSlots: sum((s) => s.cacheSlots),
     cacheSlotsUsed: sum((s) => s.cacheSlotsUsed),
     cacheBytes: sum((s) => s.cacheBytes),
+    cacheBytesNeeded: sum((s) => s.cacheBytesNeeded),
     vertexBytes: sum((s) => s.vertexBytes),
     gpuMs: sum((s) => s.gpuMs),
     stages: all.flatMap((s) => s.stages),

@@ -99,7 +99,10 @@ export async function computeStep<V extends RoleVolume, S extends LevelStats, F 
       if (stale()) return { stale: true };
       // what the surface holds, the copy of it that is drawn when the step shows, and the other surfaces' copies
       const drawnCopy = parts.snapshots ? (surface.presentBytesNeeded ?? 0) : 0;
-      pools.recordCost(L, (stats.cacheBytes + stats.vertexBytes + drawnCopy + otherBytes) / Math.max(1, step.wanted[L].length));
+      // a cache-only surface (rays): what its active blocks need, not the headroom its cache grew into where
+      // the budget had room (a plan that counted the headroom would leave the budget's last fifth to it)
+      const cache = pools.gpu.cacheOnly ? (stats.cacheBytesNeeded ?? stats.cacheBytes) : stats.cacheBytes;
+      pools.recordCost(L, (cache + stats.vertexBytes + drawnCopy + otherBytes) / Math.max(1, step.wanted[L].length));
       levels.push({ level: L, volume: pool, surface, stats, others: levelOthers, drawn: [...step.drawn[L]], ghosts: [...step.ghosts[L]] });
     }
     done = true;

@@ -52,6 +52,9 @@ describe('Isosurface cacheOnly', () => {
           expect(b.activeBlocks, `${dims} at ${f}`).toBe(a.activeBlocks);
           expect(b.triangles).toBe(0);
           expect(b.indices).toBe(0);
+          // what the cost model learns: at least the active blocks' decoded values, at most what the cache holds
+          expect(b.cacheBytesNeeded).toBeGreaterThanOrEqual(b.activeBlocks * 64 * 4);
+          expect(b.cacheBytesNeeded).toBeLessThanOrEqual(b.cacheBytes);
           const ca = await cached(gpu.device, full.drawData);
           const cb = await cached(gpu.device, only.drawData);
           expect([...cb.keys()].sort((x, y) => x - y)).toEqual([...ca.keys()].sort((x, y) => x - y));

@@ -44,7 +44,12 @@ interface FakeDrawn {
   drawn: number[];
 }
 
-function fakeGpu(store: ZfpStore, ranges: Float32Array[], bytesPerDrawn = 0) {
+/**
+ * `cacheOnly`: the rays' surfaces: a cache that grows takes up to half its
+ * need again as headroom where its cap has room (as the Isosurface's does),
+ * and reports what it needed without it unless `hideNeeded`.
+ */
+function fakeGpu(store: ZfpStore, ranges: Float32Array[], bytesPerDrawn = 0, cacheOnly?: { hideNeeded: boolean }) {
   const pools: FakePool[] = [];
   /** Called at the start of every compute (a test moves the camera from here). */
   const hooks: { onCompute?: () => void } = {};
@@ -59,6 +64,7 @@ function fakeGpu(store: ZfpStore, ranges: Float32Array[], bytesPerDrawn = 0) {
       return n;
     },
     poolBytesFor: (layout, n) => n * layout.chunkBytes,
+    ...(cacheOnly ? { cacheOnly: true } : {}),
     createVolume: (layout, n) => {
       const p = new FakePool(layout, n);
       pools.push(p);
@@ -90,7 +96,10 @@ function fakeGpu(store: ZfpStore, ranges: Float32Array[], bytesPerDrawn = 0) {
           return state.copy;
         },
         presentBytesNeeded: 300,
-        trimCache() {},
+        // a cache-only surface holds nothing but its cache
+        trimCache() {
+          if (cacheOnly) state.held = 0;
+        },
         setMemoryBudget(bytes: number) {
           state.cap = bytes;
         },
@@ -109,9 +118,11 @@ function fakeGpu(store: ZfpStore, ranges: Float32Array[], bytesPerDrawn = 0) {
               neededBytes: need,
               budgetBytes: state.cap,
             });
-          state.held = need - 2000;
+          const headroom = cacheOnly ? Math.max(0, Math.min(0.5 * (need - 2000), state.cap - need)) : 0;
+          state.held = need - 2000 + headroom;
           computed = { iso, drawn: [...(pool.drawn ?? pool.resident)].sort((a, b) => a - b) };
-          return { triangles: 0, cacheBytes: 1000 + state.held, vertexBytes: 1000, drawn: pool.drawn?.size ?? 0 };
+          const reported = cacheOnly && !cacheOnly.hideNeeded ? { cacheBytesNeeded: 1000 + need - 2000 } : {};
+          return { triangles: 0, cacheBytes: 1000 + state.held, ...reported, vertexBytes: 1000, drawn: pool.drawn?.size ?? 0 };
         },
         destroy() {
           surfaces.delete(me);
@@ -122,12 +133,17 @@ function fakeGpu(store: ZfpStore, ranges: Float32Array[], bytesPerDrawn = 0) {
   return { gpu, pools, peak: () => peak, hooks };
 }
 
-async function setup(budget = 2 ** 30, link?: { mbitPerSecond: number; latencyMs: number }, bytesPerDrawn = 0) {
+async function setup(
+  budget = 2 ** 30,
+  link?: { mbitPerSecond: number; latencyMs: number },
+  bytesPerDrawn = 0,
+  cacheOnly?: { hideNeeded: boolean },
+) {
   const files = storeForLocation(path);
   const store = await openStore(link ? new SimulatedLinkStore(files, link) : files, path);
   const ranges = await Promise.all(store.levels.map((_, i) => store.readRanges(i).then((r) => r!)));
   const fetcher = new ChunkFetcher(store, { maxInFlight: 4 });
-  const fake = fakeGpu(store, ranges, bytesPerDrawn);
+  const fake = fakeGpu(store, ranges, bytesPerDrawn, cacheOnly);
   const stream = await StoreStream.byView(store, fetcher, fake.gpu, budget);
   const shown: ShownCut<FakePool, FakeStats, unknown>[] = [];
   stream.onShown((s) => shown.push(s as ShownCut<FakePool, FakeStats, unknown>));
@@ -368,6 +384,48 @@ describe('StoreStream within a budget its surfaces outgrow', () => {
     expect(shown.at(-1)!.final).toBe(true);
     expect(stops).toEqual([]);
     expect(fake.peak()).toBeLessThanOrEqual(budget);
+    stream.destroy();
+  });
+
+  it("a cache-only surface (rays) whose cache took headroom where the budget had room: the plan counts what its blocks need, not the headroom, so the cut is finer, within the budget", async () => {
+    const budget = 6 << 20;
+    const cut = async (hideNeeded: boolean) => {
+      const { stream, shown, fake, view } = await setup(budget, undefined, 40 << 10, { hideNeeded });
+      const stops: string[] = [];
+      stream.onProgress((p) => {
+        if (p.phase === 'stopped') stops.push(p.reason ?? '');
+      });
+      await stream.setView(view([0, 0, 0, 127, 127, 127]));
+      await stream.setIsovalue(ISO);
+      const last = shown.at(-1)!;
+      stream.destroy();
+      return { last, stops, peak: fake.peak() };
+    };
+    const counted = await cut(true);
+    const needed = await cut(false);
+    for (const r of [counted, needed]) {
+      expect(r.last.final).toBe(true);
+      expect(r.stops).toEqual([]);
+      expect(r.peak).toBeLessThanOrEqual(budget);
+    }
+    const finer = (c: typeof counted.last) => c.cut!.levels.reduce((a, l, L) => a + l.drawn.length * 8 ** (3 - L), 0);
+    expect(finer(needed.last)).toBeGreaterThan(finer(counted.last));
+  });
+
+  it('a coarser plan whose last step is already on screen (shown on the way, not final) ends the refinement: listeners hear it as final', async () => {
+    // dense enough that level 1 never fits: the plans coarsen until the last is the level-2 step shown on the way
+    const { stream, shown, view } = await setup(6 << 20, undefined, 200 << 10, { hideNeeded: true });
+    const phases: string[] = [];
+    stream.onProgress((p) => phases.push(p.phase));
+    await stream.setView(view([0, 0, 0, 127, 127, 127]));
+    await stream.setIsovalue(ISO);
+    const last = shown.at(-1)!;
+    expect(last.final).toBe(true);
+    expect(stream.shown).toBe(last);
+    expect(phases.at(-1)).toBe('shown');
+    expect(phases).not.toContain('stopped');
+    // the refinement did end on a step shown before (the case this is about)
+    expect(shown.filter((s) => s.step === last.step).length).toBeGreaterThan(1);
     stream.destroy();
   });
 
