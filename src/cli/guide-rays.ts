@@ -8,6 +8,7 @@
 import { mat4 } from 'gl-matrix';
 import type { IsosurfaceStats } from '../isosurface/types.ts';
 import type { ArcballCamera } from '../render/camera.ts';
+import { reachVoxels } from '../render/ray-layer.ts';
 import type { StoreStreamSurface } from '../store/stream-surface.ts';
 import { regionOwners } from '../store/view/regions.ts';
 import { hitsFromDepth, MAX_GUIDED_PASSES, seenChunks } from '../store/view/seen.ts';
@@ -43,7 +44,7 @@ export async function guideRays<I extends { depth: Float32Array }>(
   const { stream } = surface;
   const level0 = stream.levels[0].layout;
   const t0 = performance.now();
-  let seen: Uint8Array | undefined;
+  let seen: Uint32Array | undefined;
   let passes = 0;
   for (let pass = 0; pass < MAX_GUIDED_PASSES; pass++) {
     const shown = stream.shown!;
@@ -53,7 +54,11 @@ export async function guideRays<I extends { depth: Float32Array }>(
       stream.store.levelScales,
     );
     const { hits, dirs } = hitsOf(image.depth, camera, size, voxelSize, origin);
-    const next = seenChunks(hits, dirs, level0, regions, stream.store.levelScales, seen);
+    const reach = reachVoxels(
+      shown.levels.map((l) => l.level),
+      stream.store.levelScales,
+    );
+    const next = seenChunks(hits, dirs, level0, regions, stream.store.levelScales, seen, reach);
     seen = next.seen;
     if (next.added === 0) break;
     const stats = await guideOrExplain(surface, seen);
@@ -64,7 +69,7 @@ export async function guideRays<I extends { depth: Float32Array }>(
     image = await draw(scene.layer);
     passes++;
   }
-  const seenCount = seen ? seen.reduce((a, b) => a + b, 0) : 0;
+  const seenCount = seen ? seen.reduce((a, b) => a + (b > 0 ? 1 : 0), 0) : 0;
   return { scene, image, passes, seenChunks: seenCount, ms: performance.now() - t0 };
 }
 
@@ -83,7 +88,7 @@ function hitsOf(
 }
 
 /** The store's surface refined where the rays found it, or the stream's reason it stopped, as an input error. */
-async function guideOrExplain(surface: StoreStreamSurface, seen: Uint8Array): Promise<IsosurfaceStats> {
+async function guideOrExplain(surface: StoreStreamSurface, seen: Uint32Array): Promise<IsosurfaceStats> {
   try {
     return await surface.guide(seen);
   } catch (e) {

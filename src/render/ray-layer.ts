@@ -59,6 +59,18 @@ export function seamReachCells(level: number, coarsest: number): number {
 }
 
 /**
+ * Per level, how far (level-0 voxels, on its widest axis) the rays of a
+ * step drawing `levels` trace above that level's own regions
+ * (seamReachCells): what the rays' guidance allows for (seenChunks' reach).
+ */
+export function reachVoxels(levels: readonly number[], levelScales: readonly (readonly [number, number, number])[]): number[] {
+  const coarsest = Math.max(...levels);
+  const out: number[] = [];
+  for (const L of levels) out[L] = seamReachCells(L, coarsest) * Math.max(...(levelScales[L] ?? [2 ** L, 2 ** L, 2 ** L]));
+  return out;
+}
+
+/**
  * Which level draws each region of a store's step (src/store/view/regions.ts
  * makes it from the step's leaves): a grid of cells `edge` level-0 voxels
  * wide, one byte per cell (x fastest), the owning level or 255.

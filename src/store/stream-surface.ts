@@ -107,7 +107,7 @@ export class StoreStreamSurface {
    * The surface at its isovalue refined again where an image's rays found it
    * (StoreStream.setSeen: per level-0 chunk); its stats once that refinement ends.
    */
-  async guide(seen: Uint8Array): Promise<IsosurfaceStats> {
+  async guide(seen: Uint32Array): Promise<IsosurfaceStats> {
     const iso = this.stream.shown?.iso;
     if (iso === undefined) throw new Error('StoreStreamSurface.guide: compute an isovalue first');
     this.#reason = null;

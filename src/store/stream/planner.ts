@@ -32,7 +32,7 @@ export interface PlanInput {
   /** GPU bytes the plan may spend (a share of the budget, smaller each time a plan did not fit). */
   budgetBytes: number;
   /** Where an image's rays found the surface, per level-0 chunk (StoreStream.setSeen): a plan by view then makes a cut for rays (CutInput.seen). */
-  seen?: Uint8Array | null;
+  seen?: Uint32Array | null;
 }
 
 export interface StreamPlan {

@@ -57,7 +57,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   #finestUsable = 0;
   #view: ViewSpec | null = null;
   /** Where an image's rays found the surface, per level-0 chunk (a cut for rays; setSeen), or null. */
-  #seen: Uint8Array | null = null;
+  #seen: Uint32Array | null = null;
   #iso = Number.NaN;
   /** Other isovalues drawn with #iso from the same resident chunks (several surfaces). */
   #others: readonly number[] = [];
@@ -266,7 +266,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   }
 
   /** What the rays saw since the last camera or isovalue (setSeen), or null. */
-  get seen(): Uint8Array | null {
+  get seen(): Uint32Array | null {
     return this.#seen;
   }
 
@@ -279,7 +279,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
    * (a nested cut's meshes overlap where a coarse chunk is drawn under finer ones).
    */
 
-  setSeen(seen: Uint8Array | null): Promise<void> {
+  setSeen(seen: Uint32Array | null): Promise<void> {
     this.#seen = seen;
     return Number.isFinite(this.#iso) ? this.setIsovalue(this.#iso) : Promise.resolve();
   }

@@ -62,14 +62,15 @@ export interface CutInput {
   /** What the wanted chunks of all levels may cost together (Infinity: no limit). */
   budgetBytes: number;
   /**
-   * A cut for rays (issue 46): per chunk of level 0 (x fastest), 1 where an
-   * image's rays found the surface (and a little before and after it along
-   * the ray). The cut then refines only nodes holding a seen chunk, draws only
-   * the seen children of a split, keeps the node drawn for the rest of its
-   * region (the cut is nested: regions.ts says which level owns what), and is
-   * not 2:1 balanced. Absent: the cut by the view alone.
+   * A cut for rays (issue 46): per chunk of level 0 (x fastest), 1 + the
+   * pixels whose first hit lies in it, 1 where none does but one lies near
+   * (a little before or after along its ray, below a seam: seen.ts), 0
+   * elsewhere. The cut then refines only nodes holding a seen chunk (where a
+   * budget binds, those more pixels hit first), draws only the seen children of a split, keeps the node
+   * drawn for the rest of its region (the cut is nested: regions.ts says which
+   * level owns what), and is not 2:1 balanced. Absent: the cut by the view alone.
    */
-  seen?: Uint8Array | null;
+  seen?: Uint32Array | null;
 }
 
 /** A leaf of the cut: one chunk drawn at its level. */

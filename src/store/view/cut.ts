@@ -55,14 +55,16 @@
 // A cut for rays (`CutInput.seen`, issue 46: where an image's rays found the
 // surface). Rays need no 2:1 balance (each ray goes on in whatever level owns
 // the next region) and no finer brick where no ray hits: a node is queued
-// only when a seen level-0 chunk lies inside it, a split draws only its seen
-// children, and a node split so keeps being drawn (PARTIAL) for the rest of
+// only when a seen level-0 chunk lies inside it (in the view's middle first,
+// then those more of the image's pixels hit inside, then by error), a
+// split draws only its seen children, and a node split so keeps being drawn (PARTIAL) for the rest of
 // its region: the cut is nested, each region drawn by the finest level
 // whose drawn chunk covers it (regions.ts). No balance, no forced splits.
 
 import type { ChunkIndex } from '../types.ts';
 import type { CutInput, CutLevelSets, CutNode, ViewCut } from './cut-types.ts';
 import { boxInFrustum, frustumPlanes } from './frustum.ts';
+import { seenPixels } from './seen.ts';
 
 export type { CutCamera, CutInput, CutLevel, CutLevelSets, CutNode, ViewCut } from './cut-types.ts';
 
@@ -107,27 +109,31 @@ export function viewCut(input: CutInput): ViewCut {
   const E = levels.map((l, L) => scale[L].map((f) => l.chunkEdge * f) as [number, number, number]);
   const voxelEdge = scale.map((f) => Math.max(f[0] * sx, f[1] * sy, f[2] * sz));
   const notes: string[] = [];
-  // a cut for rays: per level, whether a seen level-0 chunk lies inside each chunk
+  // a cut for rays: per level and chunk, whether a seen level-0 chunk lies inside, and the pixels hitting inside
   const seen = input.seen ?? null;
-  const seenAt: (Uint8Array | undefined)[] = new Array(n);
-  const seenIn = (L: number, c: number): boolean => {
+  const seenAt: ({ any: Uint8Array; pixels: Float64Array } | undefined)[] = new Array(n);
+  const seenOf = (L: number): { any: Uint8Array; pixels: Float64Array } => {
     let m = seenAt[L];
     if (!m) {
       const [gx, gy, gz] = levels[L].chunkGrid;
       const [hx, hy] = levels[0].chunkGrid;
-      m = new Uint8Array(gx * gy * gz);
+      m = { any: new Uint8Array(gx * gy * gz), pixels: new Float64Array(gx * gy * gz) };
       for (let i = 0; i < seen!.length; i++) {
         if (!seen![i]) continue;
         const q = [i % hx, Math.floor(i / hx) % hy, Math.floor(i / (hx * hy))];
         const x = Math.floor((q[0] * E[0][0]) / E[L][0]);
         const y = Math.floor((q[1] * E[0][1]) / E[L][1]);
         const z = Math.floor((q[2] * E[0][2]) / E[L][2]);
-        if (x < gx && y < gy && z < gz) m[x + gx * (y + gy * z)] = 1;
+        if (x >= gx || y >= gy || z >= gz) continue;
+        const u = x + gx * (y + gy * z);
+        m.any[u] = 1;
+        m.pixels[u] += seenPixels(seen![i]);
       }
       seenAt[L] = m;
     }
-    return m[c] === 1;
+    return m;
   };
+  const seenIn = (L: number, c: number): boolean => seenOf(L).any[c] === 1;
 
   // k[L]: children per axis when level L splits into L-1 (null: level L is final)
   const k: ([number, number, number] | null)[] = new Array(n).fill(null);
@@ -351,8 +357,9 @@ export function viewCut(input: CutInput): ViewCut {
     return true;
   };
 
-  // --- the queue: focused first, then max priority, then nearer, then level, then chunk
+  // --- the queue: focused first, then (rays) more pixels hitting inside, then max priority, then nearer, then level, then chunk
   const qFocused: boolean[] = [];
+  const qPixels: number[] = [];
   const qErr: number[] = [];
   const qDist: number[] = [];
   const qL: number[] = [];
@@ -361,13 +368,15 @@ export function viewCut(input: CutInput): ViewCut {
   const before = (a: number, b: number): boolean =>
     qFocused[a] !== qFocused[b]
       ? qFocused[a]
-      : qErr[a] !== qErr[b]
-        ? qErr[a] > qErr[b]
-        : qDist[a] !== qDist[b]
-          ? qDist[a] < qDist[b]
-          : qL[a] !== qL[b]
-            ? qL[a] < qL[b]
-            : qC[a] < qC[b];
+      : qPixels[a] !== qPixels[b]
+        ? qPixels[a] > qPixels[b]
+        : qErr[a] !== qErr[b]
+          ? qErr[a] > qErr[b]
+          : qDist[a] !== qDist[b]
+            ? qDist[a] < qDist[b]
+            : qL[a] !== qL[b]
+              ? qL[a] < qL[b]
+              : qC[a] < qC[b];
   const push = (id: number): void => {
     let i = heap.length;
     heap.push(id);
@@ -418,6 +427,7 @@ export function viewCut(input: CutInput): ViewCut {
     if (!canSplit(L, cx, cy, cz)) return;
     const id = qErr.length;
     qFocused.push(nFocused);
+    qPixels.push(seen !== null ? seenOf(L).pixels[c] : 0);
     qErr.push(nPriority);
     qDist.push(nDist);
     qL.push(L);

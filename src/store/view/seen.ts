@@ -1,10 +1,14 @@
 // Where an image's rays found the surface, as a cut for rays asks for it
-// (CutInput.seen, issue 46): per level-0 chunk, 1 where a first hit lies, or
-// a point GUARD_VOXELS voxels of the hit's level before or after it along
-// its ray. The hit of a coarse level is where the finer surface is to be
+// (CutInput.seen, issue 46): per level-0 chunk, 1 + the pixels whose first
+// hit lies in it, or 1 where a point GUARD_VOXELS voxels of the hit's level
+// before or after a hit along its ray lies (the most any image gave). The hit of a coarse level is where the finer surface is to be
 // found to within about a coarse voxel, in front of it or behind: the guard
 // asks for the finer chunks on both sides, so that the next image's hit does
 // not land in a chunk nobody asked for (it would be asked for by that image).
+// A level's rays also reach a few cells above its own regions (seams), so a
+// hit just above a region owned by a coarser level may be that level's: the
+// chunk below the seam counts as seen too, so the finer level takes over
+// there and the seam moves away from what the image shows.
 import type { RegionOwners } from './regions.ts';
 import { NO_OWNER } from './regions.ts';
 
@@ -13,6 +17,12 @@ export const MAX_GUIDED_PASSES = 4;
 
 /** Voxels of the hit's level, before and after the hit along the ray, whose level-0 chunks count as seen. */
 export const GUARD_VOXELS = 2;
+
+/** A seen chunk no first hit lies in, only near one (a guard, a seam); 1 + n: n pixels' first hits lie in it. */
+export const SEEN_NEAR = 1;
+
+/** The pixels whose first hit lies in a chunk of mark `mark` (0 for a chunk not seen or only near a hit). */
+export const seenPixels = (mark: number): number => (mark > SEEN_NEAR ? mark - SEEN_NEAR : 0);
 
 export interface SeenLevel0 {
   dims: readonly [number, number, number];
@@ -24,8 +34,10 @@ export interface SeenLevel0 {
  * The seen level-0 chunks of `into` (a copy; all zero when absent) and of the
  * hits: `hits` x, y, z per hit in level-0 voxels, `dirs` each hit's ray's unit
  * direction in level-0 voxels; `regions` the step's region grid (which level
- * a hit is in: its guard), `scales[L]` level-0 voxels per voxel of L.
- * `added`: chunks not seen in `into`.
+ * a hit is in: its guard), `scales[L]` level-0 voxels per voxel of L,
+ * `reach[L]` (level-0 voxels) how far above its own regions level L's rays
+ * trace (absent: not at all). `added`: chunks not seen in `into`. Each
+ * chunk's mark is the larger of `into`'s and this image's.
  */
 export function seenChunks(
   hits: Float64Array,
@@ -33,44 +45,67 @@ export function seenChunks(
   level0: SeenLevel0,
   regions: (Pick<RegionOwners, 'owner'> & { grid: readonly number[]; edge: readonly number[] }) | null,
   scales: readonly (readonly [number, number, number])[],
-  into?: Uint8Array,
-): { seen: Uint8Array; added: number } {
+  into?: Uint32Array,
+  reach?: readonly number[],
+): { seen: Uint32Array; added: number } {
   const [gx, gy, gz] = level0.chunkGrid;
   const [dx, dy, dz] = level0.dims;
   const e = level0.chunkEdge;
-  const seen = new Uint8Array(gx * gy * gz);
-  if (into) {
-    if (into.length !== seen.length) throw new RangeError(`seenChunks: ${into.length} chunks seen before, level 0 has ${seen.length}`);
-    seen.set(into);
-  }
-  let added = 0;
-  const mark = (x: number, y: number, z: number) => {
+  // this image's marks, then the larger of these and those seen before
+  const now = new Uint32Array(gx * gy * gz);
+  if (into && into.length !== now.length) throw new RangeError(`seenChunks: ${into.length} chunks seen before, level 0 has ${now.length}`);
+  const mark = (x: number, y: number, z: number, hit: boolean) => {
     if (!(x >= 0 && y >= 0 && z >= 0 && x < dx && y < dy && z < dz)) return;
     const c = Math.floor(x / e) + gx * (Math.floor(y / e) + gy * Math.floor(z / e));
-    if (seen[c] === 0) {
-      seen[c] = 1;
-      added++;
-    }
+    now[c] = hit ? Math.max(now[c], SEEN_NEAR) + 1 : Math.max(now[c], SEEN_NEAR);
   };
-  const levelAt = (x: number, y: number, z: number): number => {
+  const ownerOf = (qx: number, qy: number, qz: number): number => {
     if (!regions) return 0;
     const [rx, ry, rz] = regions.grid;
-    const q = [Math.floor(x / regions.edge[0]), Math.floor(y / regions.edge[1]), Math.floor(z / regions.edge[2])];
-    if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= rx || q[1] >= ry || q[2] >= rz) return 0;
-    const L = regions.owner[q[0] + rx * (q[1] + ry * q[2])];
-    return L === NO_OWNER ? 0 : L;
+    if (qx < 0 || qy < 0 || qz < 0 || qx >= rx || qy >= ry || qz >= rz) return NO_OWNER;
+    return regions.owner[qx + rx * (qy + ry * qz)];
+  };
+  const q = [0, 0, 0];
+  const below = [0, 0, 0];
+  /** Marks the chunks just below the seams of the hit's region within reach of a coarser level owning the region below. */
+  const markBelowSeams = (p: readonly number[], own: number): void => {
+    if (!regions || !reach) return;
+    for (let k = 1; k < 8; k++) {
+      for (let a = 0; a < 3; a++) below[a] = q[a] - ((k >> a) & 1);
+      const P = ownerOf(below[0], below[1], below[2]);
+      if (P === NO_OWNER || !(P > own)) continue;
+      const s = scales[P] ?? [1, 1, 1];
+      let near = true;
+      for (let a = 0; a < 3 && near; a++) if ((k >> a) & 1) near = p[a] - q[a] * regions.edge[a] < (reach[P] ?? 0) + s[a]; // the cell the reach starts in
+      if (!near) continue;
+      const at = [0, 1, 2].map((a) => ((k >> a) & 1 ? q[a] * regions.edge[a] - 0.5 : p[a]));
+      mark(at[0], at[1], at[2], false);
+    }
   };
   for (let i = 0; i + 2 < hits.length; i += 3) {
     const x = hits[i];
     const y = hits[i + 1];
     const z = hits[i + 2];
     if (!(Number.isFinite(x) && Number.isFinite(y) && Number.isFinite(z))) continue;
-    const s = scales[levelAt(x, y, z)] ?? [1, 1, 1];
+    let own = 0;
+    if (regions) {
+      for (let a = 0; a < 3; a++) q[a] = Math.floor(hits[i + a] / regions.edge[a]);
+      const o = ownerOf(q[0], q[1], q[2]);
+      own = o === NO_OWNER ? 0 : o;
+    }
+    const s = scales[own] ?? [1, 1, 1];
     const guard = GUARD_VOXELS * Math.max(s[0], s[1], s[2]);
-    mark(x, y, z);
-    for (const g of [-guard, guard]) mark(x + g * dirs[i], y + g * dirs[i + 1], z + g * dirs[i + 2]);
+    mark(x, y, z, true);
+    markBelowSeams([x, y, z], own);
+    for (const g of [-guard, guard]) mark(x + g * dirs[i], y + g * dirs[i + 1], z + g * dirs[i + 2], false);
   }
-  return { seen, added };
+  let added = 0;
+  for (let c = 0; c < now.length; c++) {
+    const before = into?.[c] ?? 0;
+    if (before === 0 && now[c] > 0) added++;
+    if (before > now[c]) now[c] = before;
+  }
+  return { seen: now, added };
 }
 
 /**

@@ -39,8 +39,8 @@ const CAMERAS: { name: string; camera: CutCamera }[] = [
 ];
 
 /** A seen set: level-0 chunks on a sphere shell about (cx, cy, cz) of radius r (a surface the rays hit). */
-function shell(cx: number, cy: number, cz: number, r: number): Uint8Array {
-  const seen = new Uint8Array(G0[0] * G0[1] * G0[2]);
+function shell(cx: number, cy: number, cz: number, r: number): Uint32Array {
+  const seen = new Uint32Array(G0[0] * G0[1] * G0[2]);
   for (let z = 0; z < G0[2]; z++)
     for (let y = 0; y < G0[1]; y++)
       for (let x = 0; x < G0[0]; x++) {
@@ -50,7 +50,7 @@ function shell(cx: number, cy: number, cz: number, r: number): Uint8Array {
   return seen;
 }
 
-function input(camera: CutCamera, seen: Uint8Array, extra: Partial<CutInput> = {}): CutInput {
+function input(camera: CutCamera, seen: Uint32Array, extra: Partial<CutInput> = {}): CutInput {
   return {
     levels: LEVELS,
     voxelSize: [1, 1, 1],
@@ -207,9 +207,9 @@ describe('a cut for rays (seen)', () => {
 
   it('nothing seen: the roots only; everything seen: the cut by error alone without balance (no node drawn under another)', () => {
     const { camera } = CAMERAS[0];
-    const none = viewCut(input(camera, new Uint8Array(G0[0] * G0[1] * G0[2])));
+    const none = viewCut(input(camera, new Uint32Array(G0[0] * G0[1] * G0[2])));
     expect(none.levels.slice(0, -1).every((l) => l.drawn.length === 0)).toBe(true);
-    const every = viewCut(input(camera, new Uint8Array(G0[0] * G0[1] * G0[2]).fill(1)));
+    const every = viewCut(input(camera, new Uint32Array(G0[0] * G0[1] * G0[2]).fill(1)));
     const regions = regionOwners(
       every.levels.map((l) => l.drawn),
       LEVELS,
@@ -219,7 +219,7 @@ describe('a cut for rays (seen)', () => {
     const voxels = every.levels.reduce((s, l, L) => s + l.drawn.length * (16 * 2 ** L) ** 3, 0);
     expect(voxels).toBe(256 ** 3);
     expect(regions.owner.every((o) => o !== NO_OWNER)).toBe(true);
-    expect(drawnOf(every)).toEqual(reference(input(camera, new Uint8Array(G0[0] * G0[1] * G0[2]).fill(1))));
+    expect(drawnOf(every)).toEqual(reference(input(camera, new Uint32Array(G0[0] * G0[1] * G0[2]).fill(1))));
   });
 
   it('a binding budget: kept, a subset of the unlimited refinement, near before far', () => {
@@ -249,6 +249,30 @@ describe('a cut for rays (seen)', () => {
     const h = Math.floor(byDistance.length / 2);
     expect(share(byDistance.slice(0, h))).toBeGreaterThan(share(byDistance.slice(h)));
   });
+
+  it('a binding budget: the chunks more pixels hit are refined first (before nearer ones fewer pixels hit)', () => {
+    const { camera } = CAMERAS[0];
+    const seen = shell(0, 0, 0, 60);
+    const free = viewCut(input(camera, seen));
+    const budgetBytes = Math.floor(free.bytes * 0.6);
+    const flat = viewCut(input(camera, seen, { budgetBytes }));
+    // the unlimited cut's level-0 chunks the flat budgeted cut leaves out get many pixels; the others one each
+    const drawn0 = new Set(flat.levels[0].drawn);
+    const left = free.levels[0].drawn.filter((c) => !drawn0.has(c));
+    expect(left.length).toBeGreaterThan(0);
+    const weighted = seen.map((v) => (v > 0 ? 2 : 0));
+    for (const c of left) weighted[c] = 1 + 1000;
+    const cut = viewCut(input(camera, weighted, { budgetBytes }));
+    expect(cut.bytes).toBeLessThanOrEqual(budgetBytes);
+    expectRegions(cut);
+    expectSets(cut);
+    const now = new Set(cut.levels[0].drawn);
+    const share = (cs: number[]) => cs.filter((c) => now.has(c)).length / cs.length;
+    // most level-0 chunks drawn now are those many pixels hit, which the flat cut left out
+    expect(cut.levels[0].drawn.length).toBeGreaterThan(0);
+    expect(cut.levels[0].drawn.filter((c) => left.includes(c)).length / cut.levels[0].drawn.length).toBeGreaterThan(0.5);
+    expect(share(left)).toBeGreaterThan(share([...drawn0]));
+  });
 });
 
 describe('seenChunks: where the rays hit', () => {
@@ -269,12 +293,39 @@ describe('seenChunks: where the rays hit', () => {
     expect(GUARD_VOXELS * 4).toBe(8);
     expect([...a.seen.keys()].filter((i) => a.seen[i])).toEqual([ch(3, 2, 2), ch(4, 2, 2)].sort((p, q) => p - q));
     expect(a.added).toBe(2);
+    // the hit's chunk counts its pixel (1 + 1), the guard's is only near one (1)
+    expect(a.seen[ch(3, 2, 2)]).toBe(2);
+    expect(a.seen[ch(4, 2, 2)]).toBe(1);
     // a hit at level 0: a guard of 2 voxels stays in the chunk; merged with what was seen, only the new counts
-    const b = seenChunks(Float64Array.of(8, 8, 8), Float64Array.of(0, 0.6, 0.8), level0, regions, scales, a.seen);
+    const b = seenChunks(Float64Array.of(8, 8, 8, 9, 9, 9), Float64Array.of(0, 0.6, 0.8, 0, 0.6, 0.8), level0, regions, scales, a.seen);
     expect(b.added).toBe(1);
-    expect(b.seen[ch(0, 0, 0)]).toBe(1);
-    expect(b.seen.reduce((s, v) => s + v, 0)).toBe(3);
+    expect(b.seen[ch(0, 0, 0)]).toBe(3);
+    expect(b.seen[ch(3, 2, 2)]).toBe(2);
+    expect(b.seen.reduce((s, v) => s + (v > 0 ? 1 : 0), 0)).toBe(3);
     // hits outside the volume count for nothing
     expect(seenChunks(Float64Array.of(-5, 300, 8), Float64Array.of(1, 0, 0), level0, regions, scales).added).toBe(0);
+  });
+
+  it("a hit just above a seam with a coarser level below may be that level's (its rays reach up): the chunk below counts as seen", () => {
+    // level 0 owns the chunk (0, 1, 0), level 2 everything else, so (0, 0, 0) below it is level 2's
+    const leaves = LEVELS.map(() => [] as number[]);
+    leaves[2] = Array.from({ length: 4 ** 3 }, (_, c) => c);
+    leaves[0] = [indexOf(0, [0, 1, 0])];
+    const regions = regionOwners(leaves, LEVELS, scales)!;
+    const ch = (x: number, y: number, z: number) => indexOf(0, [x, y, z]);
+    // level 2's rays reach 2 of its voxels (8 level-0 voxels) above its regions; level 0's none
+    const reach = [0, 0, 8];
+    const down = Float64Array.of(0, 0, 1);
+    // 3 voxels above the seam at y = 16, looking along +z (the guard stays in the chunk): the chunk below too
+    const near = seenChunks(Float64Array.of(8, 19, 8), down, level0, regions, scales, undefined, reach);
+    expect([...near.seen.keys()].filter((i) => near.seen[i])).toEqual([ch(0, 0, 0), ch(0, 1, 0)]);
+    expect(near.seen[ch(0, 0, 0)]).toBe(1);
+    expect(near.seen[ch(0, 1, 0)]).toBe(2);
+    // beyond the reach and the cell it starts in (8 + 4 above the seam): only the hit's chunk
+    const far = seenChunks(Float64Array.of(8, 16 + 13, 8), down, level0, regions, scales, undefined, reach);
+    expect([...far.seen.keys()].filter((i) => far.seen[i])).toEqual([ch(0, 1, 0)]);
+    // without the rays' reach: only the hit's chunk
+    const none = seenChunks(Float64Array.of(8, 19, 8), down, level0, regions, scales);
+    expect([...none.seen.keys()].filter((i) => none.seen[i])).toEqual([ch(0, 1, 0)]);
   });
 });

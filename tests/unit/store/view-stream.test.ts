@@ -387,7 +387,7 @@ describe('StoreStream within a budget its surfaces outgrow', () => {
     stream.destroy();
   });
 
-  it("a cache-only surface (rays) whose cache took headroom where the budget had room: the plan counts what its blocks need, not the headroom, so the cut is finer, within the budget", async () => {
+  it('a cache-only surface (rays) whose cache took headroom where the budget had room: the plan counts what its blocks need, not the headroom, so the cut is finer, within the budget', async () => {
     const budget = 6 << 20;
     const cut = async (hideNeeded: boolean) => {
       const { stream, shown, fake, view } = await setup(budget, undefined, 40 << 10, { hideNeeded });
