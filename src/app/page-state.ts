@@ -54,6 +54,8 @@ export interface PageState {
   raysDrawn?: boolean;
   /** How many times a store's rays were read back and asked for finer chunks where they hit (a cut for rays). */
   raysGuided?: number;
+  /** Whether the rays of a store's final step wait to be read back (or are being read) for a cut for rays. */
+  raysGuiding?: boolean;
   /** The last "Measure": every visible surface (empty while measuring or after another volume opened). */
   measures?: MeasuredSurface[];
   /** The last "Measure" of the surface (cleared when another volume opens). */

@@ -39,7 +39,15 @@ export class RayGuidance {
     if (!store.final || !iso.guideRays || store.step === this.#step) return;
     this.#step = store.step;
     clearTimeout(this.#timer);
-    this.#timer = setTimeout(() => void this.#read(iso, store.step, [...voxelSize], [...origin]), GUIDE_DELAY_MS);
+    this.#timer = setTimeout(() => {
+      this.#timer = undefined;
+      void this.#read(iso, store.step, [...voxelSize], [...origin]);
+    }, GUIDE_DELAY_MS);
+  }
+
+  /** Whether a step's rays are waiting to be read or being read (the page's state: raysGuiding). */
+  get pending(): boolean {
+    return this.#timer !== undefined || this.#busy;
   }
 
   /** Nothing to read (rays off, another volume). */

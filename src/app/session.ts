@@ -112,6 +112,7 @@ export class Session {
     if (!on) {
       rays.setDrawData(undefined);
       this.guidance.cancel();
+      p.state.raysGuiding = false;
       return;
     }
     if (store) {
@@ -129,6 +130,7 @@ export class Session {
     // a store's rays refined where they found the surface, once its final step is drawn
     if (store && v) this.guidance.drew(v.iso, store, p.surface.voxelSize, p.surface.origin);
     else this.guidance.cancel();
+    p.state.raysGuiding = this.guidance.pending;
   }
 
   install(v: LoadedVolume): void {
