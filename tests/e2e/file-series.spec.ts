@@ -109,7 +109,9 @@ async function openSeries(page: Page, files: string[], name: string, iso: number
   await page.locator('#iso-value').fill(String(iso));
   await page.locator('#iso-value').press('Enter');
   await settledAt(page, 0, iso);
-  await page.waitForFunction(() => /rate=/.test(location.hash));
+  // The link is written 250 ms after a change: wait for the one that holds this iso (and so this series' rate, set
+  // when it opened), not a previous series' link still in the address bar.
+  await page.waitForFunction((iso) => new RegExp(`[#&]iso=${iso}(&|$)`).test(location.hash) && /rate=/.test(location.hash), iso);
   return Number(/rate=([\d.]+)/.exec(await page.evaluate(() => location.hash))![1]);
 }
 
