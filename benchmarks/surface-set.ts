@@ -369,6 +369,7 @@ async function storeSection(): Promise<Record<string, unknown>> {
       o.stream.shown!,
       o.stream.valueRange ?? [0, 0],
       (v, w) => o.stream.setIsovalue(v, w),
+      (seen) => o.stream.setSeen(seen),
       () => {},
     );
     const layers: SurfaceLayer[] = [];

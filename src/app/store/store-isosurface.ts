@@ -22,7 +22,7 @@ import type { VolumeProbe } from '../../zfp/probe.ts';
 import type { Clip } from '../../core/clip.ts';
 import { storeCapPieces } from './store-caps.ts';
 import type { CapPiece } from '../../render/cap-layer.ts';
-import { type RayRegions, rayLevelsOf } from '../../render/ray-layer.ts';
+import { type RayRegions, rayLevelsOf, reachVoxels } from '../../render/ray-layer.ts';
 import { regionOwners } from '../../store/view/regions.ts';
 import { MAX_GUIDED_PASSES, seenChunks } from '../../store/view/seen.ts';
 import { shownValueAt, type ShownValue } from '../../store/shown-value.ts';
@@ -69,6 +69,8 @@ export class StoreIsosurface implements PageIsosurface {
     valueRange: [number, number],
     /** A new isovalue for the store, with the others drawn with it (newest wins). */
     private readonly request: (iso: number, others: readonly number[]) => Promise<void>,
+    /** Refines for what the rays saw (StoreStream.setSeen; null: the view's cut again), as a refinement of the page's (its line and `done`). */
+    private readonly requestSeen: (seen: Uint32Array | null) => Promise<void>,
     /** Called once, when the session lets the store go. */
     private readonly onRelease: () => void,
   ) {
@@ -193,7 +195,7 @@ export class StoreIsosurface implements PageIsosurface {
     if (this.#destroyed) return;
     this.stream.setKeepCaches(on);
     // a cut for rays is nested (coarse chunks drawn under finer ones): triangles go back to the view's cut
-    if (!on && this.stream.seen) void this.stream.setSeen(null);
+    if (!on && this.stream.seen) void this.requestSeen(null);
   }
 
   /**
@@ -217,10 +219,15 @@ export class StoreIsosurface implements PageIsosurface {
       regions,
       stream.store.levelScales,
       stream.seen ?? undefined,
+      // a hit just above a seam may be the coarser level's, traced up into the finer one's region
+      reachVoxels(
+        drawn.levels.map((l) => l.level),
+        stream.store.levelScales,
+      ),
     );
     if (next.added === 0) return false;
     this.#guidedPasses++;
-    void stream.setSeen(next.seen);
+    void this.requestSeen(next.seen);
     return true;
   }
 

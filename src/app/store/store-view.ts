@@ -46,6 +46,9 @@ export type { StorePageState };
 
 export type { StoreChoice };
 
+/** Why a store is refined: a new isovalue, a new view (the camera moved), or what the rays saw (StoreStream.setSeen; null: the view's cut again). */
+type RefineHow = 'iso' | 'view' | { seen: Uint32Array | null };
+
 export class StoreView {
   #gen = 0;
   #open: OpenStore | null = null;
@@ -390,11 +393,12 @@ export class StoreView {
   /**
    * One isovalue's refinement (for the view now), with `done` and the line
    * kept current; `others`: the page's other surfaces, drawn with it (default:
-   * those drawn until now).
+   * those drawn until now). `how`: a new isovalue, a new view (the camera
+   * moved), or what the rays saw (a cut for rays; null: the view's cut again).
    */
-  async #refine(o: OpenStore, iso: number, view = false, others?: readonly number[]): Promise<void> {
+  async #refine(o: OpenStore, iso: number, how: RefineHow = 'iso', others?: readonly number[]): Promise<void> {
     // suspended while another store (time point) opens: the slider's value goes to that one
-    if (o.suspended && !view && this.#open !== null && Number.isFinite(iso)) this.#askedIso = iso;
+    if (o.suspended && how === 'iso' && this.#open !== null && Number.isFinite(iso)) this.#askedIso = iso;
     if (this.#open !== o || o.suspended) return; // ended, or suspended while another store opens
     o.iso = iso;
     o.running++;
@@ -402,9 +406,13 @@ export class StoreView {
     o.state.shownLevels = o.state.shownLevel === null ? [] : [o.state.shownLevel];
     this.#publish(o);
     try {
-      const refined = view
-        ? o.session.stream.setView(pageViewSpec(this.d.camera(), o.store, o.cut!.tolerancePx, undefined, true))
-        : o.session.stream.setIsovalue(iso, others);
+      const { stream } = o.session;
+      const refined =
+        how === 'iso'
+          ? stream.setIsovalue(iso, others)
+          : how === 'view'
+            ? stream.setView(pageViewSpec(this.d.camera(), o.store, o.cut!.tolerancePx, undefined, true))
+            : stream.setSeen(how.seen);
       // the stream has its isovalue and view now: the next time point played is planned from them
       this.#ahead(o);
       await refined;
@@ -501,7 +509,8 @@ export class StoreView {
         stream,
         s,
         o.valueRange,
-        (value, others) => this.#refine(o, value, false, others),
+        (value, others) => this.#refine(o, value, 'iso', others),
+        (seen) => this.#refine(o, o.iso, { seen }),
         () => {
           // the page let the store go (another volume or store is on screen)
           if (this.#open === o) this.close();
@@ -629,7 +638,7 @@ export class StoreView {
     o.replanTimer = setTimeout(() => {
       o.replanTimer = null;
       if (this.#open !== o || !o.cut || !o.current) return;
-      void this.#refine(o, o.iso, true);
+      void this.#refine(o, o.iso, 'view');
     }, 150);
   }
 
@@ -668,7 +677,7 @@ export class StoreView {
     }
     if (next.tolerancePx !== undefined && next.tolerancePx > 0) {
       o.cut.tolerancePx = next.tolerancePx;
-      void this.#refine(o, o.iso, true);
+      void this.#refine(o, o.iso, 'view');
     }
     this.d.setCut({ cut: true, tolerancePx: o.cut.tolerancePx, ...(o.cut.tint ? { tint: true } : {}) });
     if (o.state.cut) Object.assign(o.state.cut, { tolerancePx: o.cut.tolerancePx, tint: o.cut.tint });

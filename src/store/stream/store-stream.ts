@@ -347,7 +347,22 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       // what a superseded step was still fetching is aborted (its chunks are no longer needed)
       if (complete && this.#showsWhole(steps[steps.length - 1], iso, others)) {
         this.fetcher.wantAll([]);
+        const wasFinal = this.#shown!.final;
         this.#shown = { ...this.#shown!, cut: plan.cut, final: true };
+        // a coarser plan whose last step is the one on screen (shown as a step on the way, not final): it is
+        // the end of this refinement now, and listeners hear so (the page's progress, the rays' guidance)
+        if (!wasFinal) {
+          this.#events.shown(this.#shown);
+          const chunks = steps[steps.length - 1].wanted.reduce((a, w) => a + w.length, 0);
+          this.#events.progress({
+            iso,
+            level: this.#shown.step,
+            chunksDone: chunks,
+            chunksNeeded: chunks,
+            bytesFetched: this.fetcher.counters.bytesFetched,
+            phase: 'shown',
+          });
+        }
         return 'done';
       }
       // the finest step already resident: no fetching before it is shown

@@ -30,6 +30,7 @@ describe('StoreIsosurface with an empty cut', () => {
       emptyCut(-5),
       [0, 1],
       async () => {},
+      async () => {},
       () => {},
     );
     expect(s.drawData).toBeUndefined();

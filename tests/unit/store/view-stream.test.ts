@@ -412,6 +412,23 @@ describe('StoreStream within a budget its surfaces outgrow', () => {
     expect(finer(needed.last)).toBeGreaterThan(finer(counted.last));
   });
 
+  it('a coarser plan whose last step is already on screen (shown on the way, not final) ends the refinement: listeners hear it as final', async () => {
+    // dense enough that level 1 never fits: the plans coarsen until the last is the level-2 step shown on the way
+    const { stream, shown, view } = await setup(6 << 20, undefined, 200 << 10, { hideNeeded: true });
+    const phases: string[] = [];
+    stream.onProgress((p) => phases.push(p.phase));
+    await stream.setView(view([0, 0, 0, 127, 127, 127]));
+    await stream.setIsovalue(ISO);
+    const last = shown.at(-1)!;
+    expect(last.final).toBe(true);
+    expect(stream.shown).toBe(last);
+    expect(phases.at(-1)).toBe('shown');
+    expect(phases).not.toContain('stopped');
+    // the refinement did end on a step shown before (the case this is about)
+    expect(shown.filter((s) => s.step === last.step).length).toBeGreaterThan(1);
+    stream.destroy();
+  });
+
   it('a budget the coarsest level alone does not fit: the refinement stops and says so', async () => {
     const { stream, view } = await setup(3 << 20, undefined, 4 << 20);
     const stops: { reason?: string; cause?: string }[] = [];
