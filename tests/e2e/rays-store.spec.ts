@@ -85,6 +85,8 @@ test('draw=rays on a store: rays over the levels once settled; scrub, orbit, zoo
   // rays, nested): the picture stays (frames go on, the same coverage within a few pixels' worth)
   await page.waitForFunction(() => (window.zfpiso!.raysGuided ?? 0) >= 1, null, { timeout: 120_000 });
   await rested(page);
+  // the guided refinement ended as any other does: the line says what is on screen (it stayed "computing" once)
+  await expect(page.locator('#store-progress')).toContainText('chunks on screen level');
   await waitForFrames(page, 2);
   const guided = await nonBackgroundFraction(page);
   expect(Math.abs(guided - rays)).toBeLessThan(0.02 * rays + 0.002);

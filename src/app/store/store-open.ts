@@ -120,6 +120,8 @@ export interface OpenStore {
   /** Refinements started and not yet ended (the isovalue changed meanwhile). */
   running: number;
   lastProgress: StreamProgress | null;
+  /** The refinement asked for last is where the rays hit (a cut for rays): the line says so. */
+  guided: boolean;
   /** The isovalue asked for last. */
   iso: number;
   /** Drawn only once its first refinement has ended (playback: the time point before stays drawn until then). */

@@ -314,6 +314,7 @@ export class StoreView {
       installed: null,
       running: 0,
       lastProgress: null,
+      guided: false,
       iso: Number.NaN,
       whole: how.whole ?? false,
       keepPage: how.keepPage ?? false,
@@ -401,6 +402,7 @@ export class StoreView {
     if (o.suspended && how === 'iso' && this.#open !== null && Number.isFinite(iso)) this.#askedIso = iso;
     if (this.#open !== o || o.suspended) return; // ended, or suspended while another store opens
     o.iso = iso;
+    o.guided = typeof how === 'object' && how.seen !== null;
     o.running++;
     o.state.done = false;
     o.state.shownLevels = o.state.shownLevel === null ? [] : [o.state.shownLevel];
@@ -478,9 +480,10 @@ export class StoreView {
   #progress(o: OpenStore, p: StreamProgress): void {
     if (this.#open !== o) return;
     o.lastProgress = p;
+    const where = o.guided ? ' where the rays hit' : '';
     if (p.phase === 'fetching')
-      this.#line(`${o.url}: level ${p.level}, ${p.chunksDone} / ${p.chunksNeeded} chunks, ${mib(o.session.metered.meter.bytes)}`);
-    else if (p.phase === 'computing') this.#line(`${o.url}: level ${p.level}, computing the surface…`);
+      this.#line(`${o.url}: level ${p.level}${where}, ${p.chunksDone} / ${p.chunksNeeded} chunks, ${mib(o.session.metered.meter.bytes)}`);
+    else if (p.phase === 'computing') this.#line(`${o.url}: level ${p.level}${where}, computing the surface…`);
     this.#publish(o);
   }
 
