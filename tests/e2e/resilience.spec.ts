@@ -72,7 +72,11 @@ test('a refused shard: the coarser level stays, the reason names the chunk and t
     failed,
     { timeout: 30_000 },
   );
+  // the retry is a refinement of the page's like any other: it ends, and the line says where it stopped again
+  await storeDone(page);
   expect((await storeState(page)).shownLevel).toBe(1);
+  await expect(page.locator('#store-progress')).toContainText('level 1 shown');
+  expect((await storeState(page)).reason).toMatch(/HTTP 403 .*\(trying again in \d+ s\)/);
 });
 
 test('a lost device: a new one, and the built-in volume again at the same isovalue, surfaces and view', async ({ page }) => {

@@ -339,6 +339,8 @@ export class StoreView {
     }
     // a chunk that failed is tried again by the stream once it has cooled down (the coarser surface stays meanwhile)
     stream.onProgress((p) => this.#progress(o, p));
+    // what the stream refines on its own (a retry, a new budget, the rays reading its caches again) is the page's refinement too
+    stream.refineAgain = () => void this.#refine(o, o.iso);
     stream.onShown((s) => this.#shown(o, s));
     stream.onError((e) => this.d.onError(e.message));
     stream.setClip(this.#clip);

@@ -89,6 +89,13 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   /** Whether failed chunks are tried again on their own (the page; the CLI reports the failure instead). */
   retryFailed = true;
   /**
+   * Starts a refinement the stream wants on its own at its isovalue (a
+   * failed chunk cooled down, a new budget, the caches read again): the
+   * page routes it through its own bookkeeping (`done`, the line) by
+   * calling setIsovalue; null: the stream calls it itself.
+   */
+  refineAgain: (() => void) | null = null;
+  /**
    * Whether each step is drawn from copies of its surfaces (Isosurface.present): the page, which draws
    * while the next step computes; the CLI reads the surfaces once the refinement ended and needs none.
    */
@@ -207,7 +214,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
   setKeepCaches(on: boolean): void {
     if (on === this.#keepCaches) return;
     this.#keepCaches = on;
-    if (on && this.#cachesChanged && !this.#suspended && !this.#destroyed && Number.isFinite(this.#iso)) void this.setIsovalue(this.#iso);
+    if (on && this.#cachesChanged && !this.#suspended && !this.#destroyed && Number.isFinite(this.#iso)) this.#again();
   }
 
   get shown(): ShownCut<V, S, F> | null {
@@ -653,7 +660,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     // planned again for the new limit, unless someone asks for an isovalue first (the page, after every listener shed)
     const gen = this.#gen;
     queueMicrotask(() => {
-      if (gen === this.#gen && !this.#destroyed && !this.#suspended && Number.isFinite(this.#iso)) void this.setIsovalue(this.#iso);
+      if (gen === this.#gen && !this.#destroyed && !this.#suspended && Number.isFinite(this.#iso)) this.#again();
     });
   }
 
@@ -688,8 +695,14 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
     this.#retryTimer = setTimeout(() => {
       this.#retryTimer = null;
       if (gen !== this.#gen || this.#destroyed || this.#suspended || !Number.isFinite(this.#iso)) return;
-      void this.setIsovalue(this.#iso);
+      this.#again();
     }, inMs + 50);
+  }
+
+  /** A refinement at the current isovalue the stream wants on its own (refineAgain). */
+  #again(): void {
+    if (this.refineAgain) this.refineAgain();
+    else void this.setIsovalue(this.#iso);
   }
 
   #stop(level: number, reason: string, cause: NonNullable<StreamProgress['cause']>, retryInMs?: number): void {

@@ -330,6 +330,32 @@ describe('StoreStream', () => {
     stream.destroy();
   });
 
+  it("a refinement the stream wants on its own (a new budget) goes to its owner's refineAgain when set (the page's bookkeeping), else it refines itself", async () => {
+    for (const owned of [false, true]) {
+      const { stream, shown, view } = await setup(1536 << 10);
+      await stream.setView(view([100, 100, 100, 127, 127, 127]));
+      await stream.setIsovalue(ISO);
+      const before = shown.length;
+      let asked = 0;
+      if (owned)
+        stream.refineAgain = () => {
+          asked++;
+          void stream.setIsovalue(ISO);
+        };
+      let refined = 0;
+      stream.onProgress((p) => {
+        if (p.phase === 'shown') refined++;
+      });
+      stream.budget.bytes = 4 << 20;
+      await new Promise((r) => setTimeout(r, 300));
+      await stream.setIsovalue(ISO);
+      expect(asked).toBe(owned ? 1 : 0);
+      expect(refined).toBeGreaterThan(0);
+      expect(shown.length).toBeGreaterThan(before);
+      stream.destroy();
+    }
+  });
+
   it('a cut the budget held back, whose surfaces took far less than first guessed, is planned again with what they took: finer, within the budget', async () => {
     // the stand-in's surfaces take a few KiB, far under the first guess (half of each chunk's blocks active)
     const budget = 1536 << 10;
