@@ -8,7 +8,6 @@
 import { mat4 } from 'gl-matrix';
 import type { IsosurfaceStats } from '../isosurface/types.ts';
 import type { ArcballCamera } from '../render/camera.ts';
-import { reachVoxels } from '../render/ray-layer.ts';
 import type { StoreStreamSurface } from '../store/stream-surface.ts';
 import { regionOwners } from '../store/view/regions.ts';
 import { hitsFromDepth, MAX_GUIDED_PASSES, seenChunks } from '../store/view/seen.ts';
@@ -54,11 +53,7 @@ export async function guideRays<I extends { depth: Float32Array }>(
       stream.store.levelScales,
     );
     const { hits, dirs } = hitsOf(image.depth, camera, size, voxelSize, origin);
-    const reach = reachVoxels(
-      shown.levels.map((l) => l.level),
-      stream.store.levelScales,
-    );
-    const next = seenChunks(hits, dirs, level0, regions, stream.store.levelScales, seen, reach);
+    const next = seenChunks(hits, dirs, level0, regions, stream.store.levelScales, seen);
     seen = next.seen;
     if (next.added === 0) break;
     const stats = await guideOrExplain(surface, seen);

@@ -42,7 +42,7 @@ export interface RayLevel {
   offset: readonly [number, number, number];
   /** Multiplies the surface's colours (the tint-by-level view); default none. */
   tint?: readonly [number, number, number];
-  /** Cells the rays reach above the level's own regions (into its ghosts): seams toward coarser levels (seamReachCells). */
+  /** Cells the rays reach above the level's own regions into coarser ones (from its ghosts; seamReachCells). */
   reachCells: number;
 }
 
@@ -56,18 +56,6 @@ export interface RayLevel {
 export function seamReachCells(level: number, coarsest: number): number {
   if (coarsest <= level) return 0;
   return Math.ceil((2 ** (coarsest - level) - 1) / 2 + 0.25);
-}
-
-/**
- * Per level, how far (level-0 voxels, on its widest axis) the rays of a
- * step drawing `levels` trace above that level's own regions
- * (seamReachCells): what the rays' guidance allows for (seenChunks' reach).
- */
-export function reachVoxels(levels: readonly number[], levelScales: readonly (readonly [number, number, number])[]): number[] {
-  const coarsest = Math.max(...levels);
-  const out: number[] = [];
-  for (const L of levels) out[L] = seamReachCells(L, coarsest) * Math.max(...(levelScales[L] ?? [2 ** L, 2 ** L, 2 ** L]));
-  return out;
 }
 
 /**

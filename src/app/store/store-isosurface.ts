@@ -22,7 +22,7 @@ import type { VolumeProbe } from '../../zfp/probe.ts';
 import type { Clip } from '../../core/clip.ts';
 import { storeCapPieces } from './store-caps.ts';
 import type { CapPiece } from '../../render/cap-layer.ts';
-import { type RayRegions, rayLevelsOf, reachVoxels } from '../../render/ray-layer.ts';
+import { type RayRegions, rayLevelsOf } from '../../render/ray-layer.ts';
 import { regionOwners } from '../../store/view/regions.ts';
 import { MAX_GUIDED_PASSES, seenChunks } from '../../store/view/seen.ts';
 import { shownValueAt, type ShownValue } from '../../store/shown-value.ts';
@@ -219,11 +219,6 @@ export class StoreIsosurface implements PageIsosurface {
       regions,
       stream.store.levelScales,
       stream.seen ?? undefined,
-      // a hit just above a seam may be the coarser level's, traced up into the finer one's region
-      reachVoxels(
-        drawn.levels.map((l) => l.level),
-        stream.store.levelScales,
-      ),
     );
     if (next.added === 0) return false;
     this.#guidedPasses++;

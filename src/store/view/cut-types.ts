@@ -93,7 +93,7 @@ export interface CutLevelSets {
   /**
    * Chunks the surface needs that are not drawn but have a drawn chunk among
    * their 7 lower neighbours (c - {0,1}^3 minus c: the drawn chunk's cells on
-   * its upper faces read their voxels), ascending.
+   * its upper faces read their voxels), ascending; none in a nested cut (`ViewCut.nested`).
    */
   ghosts: ChunkIndex[];
   /** needed ∩ (drawn ∪ ghosts), nearest to the eye first (ties: ascending chunk). */
@@ -107,6 +107,13 @@ export interface ViewCut {
   levels: CutLevelSets[];
   /** Σ over levels of wanted.length * chunkBytes(level). */
   bytes: number;
+  /**
+   * A cut for rays (`CutInput.seen`): nested (every drawn chunk's coarser
+   * ancestors drawn too) and without ghosts: where a drawn chunk's next chunk
+   * is not drawn, the level owning the region there traces the drawn chunk's
+   * last cells from its own voxels (shaders/render/ray_blocks_pool.wgsl).
+   */
+  nested: boolean;
   /** True when some region would have been refined but the budget refused it (or the coarsest level alone is over it). */
   limitedByBudget: boolean;
   /** Levels the cut would have refined into but whose `needs` is null (and the coarsest when its needs is null), ascending. */

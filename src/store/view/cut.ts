@@ -60,6 +60,13 @@
 // split draws only its seen children, and a node split so keeps being drawn (PARTIAL) for the rest of
 // its region: the cut is nested, each region drawn by the finest level
 // whose drawn chunk covers it (regions.ts). No balance, no forced splits.
+// Nor ghosts: a split node stays drawn even when all its children are, so
+// every drawn chunk's coarser ancestors are drawn, and where a drawn chunk's
+// next chunk is not, the coarser level owning the region there traces the
+// drawn chunk's last cells from its own voxels (ray_blocks_pool.wgsl) rather
+// than the finer level from a ghost: a ghost is a whole chunk held for one
+// voxel layer, and a nested cut of scattered chunks needs more ghosts than
+// drawn chunks; the kept parents cost one chunk per split.
 
 import type { ChunkIndex } from '../types.ts';
 import type { CutInput, CutLevelSets, CutNode, ViewCut } from './cut-types.ts';
@@ -177,7 +184,10 @@ export function viewCut(input: CutInput): ViewCut {
   };
 
   let bytes = 0;
-  // --- wanted bookkeeping: a drawn change of c touches c + {0,1}^3
+  // --- wanted bookkeeping: a drawn change of c touches c + {0,1}^3 (its ghosts), or c alone in a cut
+  // for rays: nested, every drawn chunk's ancestors are drawn too, and a coarser level's rays trace its
+  // last cells where the next chunk is not drawn (shaders/render/ray_blocks_pool.wgsl), so no ghosts
+  const reach = seen === null ? 2 : 1;
   const changeDrawn = (s: LevelState, c: number, delta: 1 | -1): void => {
     const { gx, gy, gz, cover, need } = s;
     s.leaves += delta;
@@ -185,11 +195,11 @@ export function viewCut(input: CutInput): ViewCut {
     const cy = Math.floor(c / gx) % gy;
     const cz = Math.floor(c / (gx * gy));
     const sxy = gx * gy;
-    for (let dz = 0; dz < 2; dz++) {
+    for (let dz = 0; dz < reach; dz++) {
       if (cz + dz >= gz) break;
-      for (let dy = 0; dy < 2; dy++) {
+      for (let dy = 0; dy < reach; dy++) {
         if (cy + dy >= gy) break;
-        for (let dx = 0; dx < 2; dx++) {
+        for (let dx = 0; dx < reach; dx++) {
           if (cx + dx >= gx) break;
           const u = c + dx + dy * gx + dz * sxy;
           if (delta > 0) {
@@ -283,8 +293,11 @@ export function viewCut(input: CutInput): ViewCut {
       if (seen === null || seenIn(L - 1, child)) drawChild(cs, child);
       else all = false;
     });
-    s.state[c] = all ? SPLIT : PARTIAL;
-    if (all) changeDrawn(s, c, -1);
+    // a cut for rays keeps every split node drawn, even with all its children drawn: its voxels under
+    // them are what its rays trace their seams toward it from (cut.ts' top, `nested`)
+    const keep = seen !== null || !all;
+    s.state[c] = keep ? PARTIAL : SPLIT;
+    if (!keep) changeDrawn(s, c, -1);
     logL.push(L);
     logC.push(c);
   };
@@ -515,9 +528,9 @@ export function viewCut(input: CutInput): ViewCut {
       const cx = d % gx;
       const cy = Math.floor(d / gx) % gy;
       const cz = Math.floor(d / sxy);
-      for (let dz = 0; dz < 2 && cz + dz < gz; dz++)
-        for (let dy = 0; dy < 2 && cy + dy < gy; dy++)
-          for (let dx = 0; dx < 2 && cx + dx < gx; dx++) {
+      for (let dz = 0; dz < reach && cz + dz < gz; dz++)
+        for (let dy = 0; dy < reach && cy + dy < gy; dy++)
+          for (let dx = 0; dx < reach && cx + dx < gx; dx++) {
             const u = d + dx + dy * gx + dz * sxy;
             if (seen[u]) continue;
             seen[u] = 1;
@@ -540,6 +553,7 @@ export function viewCut(input: CutInput): ViewCut {
     nodes,
     levels: sets,
     bytes: total,
+    nested: seen !== null,
     limitedByBudget,
     wantsRanges: [...wantsRanges].sort((a, b) => a - b),
     notes,

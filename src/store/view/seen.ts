@@ -5,12 +5,13 @@
 // found to within about a coarse voxel, in front of it or behind: the guard
 // asks for the finer chunks on both sides, so that the next image's hit does
 // not land in a chunk nobody asked for (it would be asked for by that image).
-// A level's rays also reach a few cells above its own regions (seams), so a
-// hit just above a region owned by a coarser level may be that level's: the
-// chunk below the seam counts as seen too, so the finer level takes over
+// In a nested cut a coarser level's rays trace the last cells of a finer
+// region below one it owns (the finer level has no voxels past its chunk),
+// so a hit just below a region owned by a coarser level may be that level's:
+// the chunk above the seam counts as seen too, so the finer level takes over
 // there and the seam moves away from what the image shows.
 import type { RegionOwners } from './regions.ts';
-import { NO_OWNER } from './regions.ts';
+import { finerReachVoxels, NO_OWNER } from './regions.ts';
 
 /** How many times at most a view is refined again where its rays found the surface (each an image more). */
 export const MAX_GUIDED_PASSES = 4;
@@ -34,10 +35,9 @@ export interface SeenLevel0 {
  * The seen level-0 chunks of `into` (a copy; all zero when absent) and of the
  * hits: `hits` x, y, z per hit in level-0 voxels, `dirs` each hit's ray's unit
  * direction in level-0 voxels; `regions` the step's region grid (which level
- * a hit is in: its guard), `scales[L]` level-0 voxels per voxel of L,
- * `reach[L]` (level-0 voxels) how far above its own regions level L's rays
- * trace (absent: not at all). `added`: chunks not seen in `into`. Each
- * chunk's mark is the larger of `into`'s and this image's.
+ * a hit is in: its guard; the seams), `scales[L]` level-0 voxels per voxel of L.
+ * `added`: chunks not seen in `into`. Each chunk's mark is the larger of
+ * `into`'s and this image's.
  */
 export function seenChunks(
   hits: Float64Array,
@@ -46,7 +46,6 @@ export function seenChunks(
   regions: (Pick<RegionOwners, 'owner'> & { grid: readonly number[]; edge: readonly number[] }) | null,
   scales: readonly (readonly [number, number, number])[],
   into?: Uint32Array,
-  reach?: readonly number[],
 ): { seen: Uint32Array; added: number } {
   const [gx, gy, gz] = level0.chunkGrid;
   const [dx, dy, dz] = level0.dims;
@@ -66,19 +65,19 @@ export function seenChunks(
     return regions.owner[qx + rx * (qy + ry * qz)];
   };
   const q = [0, 0, 0];
-  const below = [0, 0, 0];
-  /** Marks the chunks just below the seams of the hit's region within reach of a coarser level owning the region below. */
-  const markBelowSeams = (p: readonly number[], own: number): void => {
-    if (!regions || !reach) return;
+  const above = [0, 0, 0];
+  /** Marks the chunks just above the seams of the hit's region within reach of a coarser level owning the region above. */
+  const markAboveSeams = (p: readonly number[], own: number): void => {
+    if (!regions) return;
     for (let k = 1; k < 8; k++) {
-      for (let a = 0; a < 3; a++) below[a] = q[a] - ((k >> a) & 1);
-      const P = ownerOf(below[0], below[1], below[2]);
+      for (let a = 0; a < 3; a++) above[a] = q[a] + ((k >> a) & 1);
+      const P = ownerOf(above[0], above[1], above[2]);
       if (P === NO_OWNER || !(P > own)) continue;
       const s = scales[P] ?? [1, 1, 1];
       let near = true;
-      for (let a = 0; a < 3 && near; a++) if ((k >> a) & 1) near = p[a] - q[a] * regions.edge[a] < (reach[P] ?? 0) + s[a]; // the cell the reach starts in
+      for (let a = 0; a < 3 && near; a++) if ((k >> a) & 1) near = above[a] * regions.edge[a] - p[a] <= finerReachVoxels(s[a]);
       if (!near) continue;
-      const at = [0, 1, 2].map((a) => ((k >> a) & 1 ? q[a] * regions.edge[a] - 0.5 : p[a]));
+      const at = [0, 1, 2].map((a) => ((k >> a) & 1 ? above[a] * regions.edge[a] + 0.5 : p[a]));
       mark(at[0], at[1], at[2], false);
     }
   };
@@ -96,7 +95,7 @@ export function seenChunks(
     const s = scales[own] ?? [1, 1, 1];
     const guard = GUARD_VOXELS * Math.max(s[0], s[1], s[2]);
     mark(x, y, z, true);
-    markBelowSeams([x, y, z], own);
+    markAboveSeams([x, y, z], own);
     for (const g of [-guard, guard]) mark(x + g * dirs[i], y + g * dirs[i + 1], z + g * dirs[i + 2], false);
   }
   let added = 0;

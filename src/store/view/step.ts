@@ -4,7 +4,8 @@
 // once), and per level what that draws: its leaves, the drawn chunks (the
 // leaves the surface needs), the ghosts (needed +x/+y/+z and diagonal
 // neighbours of leaves that are not leaves: their voxels complete the drawn
-// chunks' upper cells) and the chunks wanted, nearest to the eye first.
+// chunks' upper cells; none in a nested cut for rays, ViewCut.nested) and
+// the chunks wanted, nearest to the eye first.
 import type { ChunkIndex, ChunkLevelLayout } from '../types.ts';
 import type { ViewCut } from './cut.ts';
 
@@ -61,6 +62,8 @@ export function cutStep(
     const gh = new Set<ChunkIndex>();
     for (const c of leaves[L]) {
       if (need(c)) d.add(c);
+      // a nested cut (for rays) has no ghosts: its coarser levels trace the drawn chunks' last cells
+      if (cut.nested) continue;
       const x = c % g[0];
       const y = Math.floor(c / g[0]) % g[1];
       const z = Math.floor(c / (g[0] * g[1]));

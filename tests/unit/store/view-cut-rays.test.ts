@@ -2,16 +2,17 @@
 // (regions.ts) and what the rays saw (seen.ts), against a brute-force
 // reference of the rule written here: from the roots, a drawn node that holds
 // a seen level-0 chunk, meets the view and whose voxels project to more than
-// the tolerance is split into its seen children, and stays drawn when some of
-// its children are not seen; no balance. With no budget that set is unique.
+// the tolerance is split into its seen children, and stays drawn (its voxels
+// under them fill their seams; no ghosts); no balance. With no budget that set is unique.
 // Then from outside: the region grid covers every region once by the finest
-// drawn node over it, the ghosts and wanted chunks follow their definition,
+// drawn node over it, it is nested (a drawn chunk's parent drawn), has no
+// ghosts, its wanted chunks are the drawn ones,
 // a binding budget is kept, and everything seen near the eye is refined first.
 import { mat4 } from 'gl-matrix';
 import { describe, expect, it } from 'vitest';
 import { type CutCamera, type CutInput, type CutLevel, viewCut } from '../../../src/store/view/cut.ts';
 import { boxInFrustum, frustumPlanes } from '../../../src/store/view/frustum.ts';
-import { NO_OWNER, regionOwners } from '../../../src/store/view/regions.ts';
+import { finerReachVoxels, NO_OWNER, regionOwners } from '../../../src/store/view/regions.ts';
 import { GUARD_VOXELS, seenChunks } from '../../../src/store/view/seen.ts';
 
 type V3 = [number, number, number];
@@ -108,15 +109,13 @@ function reference(inp: CutInput): Set<string> {
       return;
     }
     const q = coordsOf(L, c);
-    let all = true;
     for (let z = 0; z < 2; z++)
       for (let y = 0; y < 2; y++)
         for (let x = 0; x < 2; x++) {
           const child = indexOf(L - 1, [2 * q[0] + x, 2 * q[1] + y, 2 * q[2] + z]);
           if (holdsSeen(L - 1, child)) visit(L - 1, child);
-          else all = false;
         }
-    if (!all) drawn.add(key(L, c));
+    drawn.add(key(L, c));
   };
   const top = LEVELS.length - 1;
   for (let c = 0; c < LEVELS[top].chunkGrid.reduce((a, b) => a * b, 1); c++) visit(top, c);
@@ -160,18 +159,16 @@ function expectRegions(cut: ReturnType<typeof viewCut>): void {
 function expectSets(cut: ReturnType<typeof viewCut>): void {
   cut.levels.forEach((l, L) => {
     const drawn = new Set(l.drawn);
-    const ghosts = new Set<number>();
-    for (const c of l.drawn) {
-      const q = coordsOf(L, c);
-      for (let o = 1; o < 8; o++) {
-        const u = [q[0] + (o & 1), q[1] + ((o >> 1) & 1), q[2] + ((o >> 2) & 1)];
-        if (u.some((v, a) => v >= LEVELS[L].chunkGrid[a])) continue;
-        const i = indexOf(L, u);
-        if (!drawn.has(i)) ghosts.add(i);
+    // every drawn chunk's parent is drawn (its coarser level holds voxels under all of it)
+    if (L + 1 < LEVELS.length && cut.levels[L + 1].drawn.length > 0)
+      for (const c of l.drawn) {
+        const q = coordsOf(L, c).map((v) => Math.floor(v / 2));
+        expect(cut.levels[L + 1].drawn).toContain(indexOf(L + 1, q));
       }
-    }
-    expect(new Set(l.ghosts)).toEqual(ghosts);
-    expect(new Set(l.wanted)).toEqual(new Set([...drawn, ...ghosts]));
+    // a cut for rays is nested: no ghosts (a coarser level traces a drawn chunk's last cells)
+    expect(cut.nested).toBe(true);
+    expect(l.ghosts).toEqual([]);
+    expect(new Set(l.wanted)).toEqual(drawn);
   });
 }
 
@@ -205,7 +202,7 @@ describe('a cut for rays (seen)', () => {
     });
   }
 
-  it('nothing seen: the roots only; everything seen: the cut by error alone without balance (no node drawn under another)', () => {
+  it('nothing seen: the roots only; everything seen: the cut by error alone without balance (its split nodes drawn under their children)', () => {
     const { camera } = CAMERAS[0];
     const none = viewCut(input(camera, new Uint32Array(G0[0] * G0[1] * G0[2])));
     expect(none.levels.slice(0, -1).every((l) => l.drawn.length === 0)).toBe(true);
@@ -215,8 +212,18 @@ describe('a cut for rays (seen)', () => {
       LEVELS,
       LEVELS.map((_, L) => [2 ** L, 2 ** L, 2 ** L] as const),
     )!;
-    // a partition: the drawn nodes' level-0 voxels add up to the volume's
-    const voxels = every.levels.reduce((s, l, L) => s + l.drawn.length * (16 * 2 ** L) ** 3, 0);
+    // the leaves (drawn nodes with no child drawn) are a partition: their level-0 voxels add up to the
+    // volume's; a split node has all its children drawn (all seen), and stays drawn under them
+    const children = (L: number, c: number) =>
+      [0, 1, 2, 3, 4, 5, 6, 7].map((o) => coordsOf(L, c).map((v, a) => 2 * v + ((o >> a) & 1))).map((q) => indexOf(L - 1, q));
+    let voxels = 0;
+    every.levels.forEach((l, L) => {
+      for (const c of l.drawn) {
+        const drawnChildren = L > 0 ? children(L, c).filter((u) => every.levels[L - 1].drawn.includes(u)).length : 0;
+        expect([0, 8]).toContain(drawnChildren);
+        if (drawnChildren === 0) voxels += (16 * 2 ** L) ** 3;
+      }
+    });
     expect(voxels).toBe(256 ** 3);
     expect(regions.owner.every((o) => o !== NO_OWNER)).toBe(true);
     expect(drawnOf(every)).toEqual(reference(input(camera, new Uint32Array(G0[0] * G0[1] * G0[2]).fill(1))));
@@ -306,26 +313,31 @@ describe('seenChunks: where the rays hit', () => {
     expect(seenChunks(Float64Array.of(-5, 300, 8), Float64Array.of(1, 0, 0), level0, regions, scales).added).toBe(0);
   });
 
-  it("a hit just above a seam with a coarser level below may be that level's (its rays reach up): the chunk below counts as seen", () => {
-    // level 0 owns the chunk (0, 1, 0), level 2 everything else, so (0, 0, 0) below it is level 2's
+  it("a hit just below a seam with a coarser level above may be that level's (in a nested cut its rays reach down): the chunk above counts as seen", () => {
+    // level 0 owns the chunk (0, 0, 0), level 2 everything else, so (0, 1, 0) above it is level 2's
     const leaves = LEVELS.map(() => [] as number[]);
     leaves[2] = Array.from({ length: 4 ** 3 }, (_, c) => c);
-    leaves[0] = [indexOf(0, [0, 1, 0])];
+    leaves[0] = [indexOf(0, [0, 0, 0])];
     const regions = regionOwners(leaves, LEVELS, scales)!;
     const ch = (x: number, y: number, z: number) => indexOf(0, [x, y, z]);
-    // level 2's rays reach 2 of its voxels (8 level-0 voxels) above its regions; level 0's none
-    const reach = [0, 0, 8];
-    const down = Float64Array.of(0, 0, 1);
-    // 3 voxels above the seam at y = 16, looking along +z (the guard stays in the chunk): the chunk below too
-    const near = seenChunks(Float64Array.of(8, 19, 8), down, level0, regions, scales, undefined, reach);
+    // level 2's rays trace 1.5 of its voxels + 1/4 (6.25 level-0 voxels) below the seam at y = 16
+    expect(finerReachVoxels(4)).toBe(6.25);
+    const along = Float64Array.of(0, 0, 1);
+    // 3 voxels below the seam, looking along +z (the guard stays in the chunk): the chunk above too
+    const near = seenChunks(Float64Array.of(8, 13, 8), along, level0, regions, scales);
     expect([...near.seen.keys()].filter((i) => near.seen[i])).toEqual([ch(0, 0, 0), ch(0, 1, 0)]);
-    expect(near.seen[ch(0, 0, 0)]).toBe(1);
-    expect(near.seen[ch(0, 1, 0)]).toBe(2);
-    // beyond the reach and the cell it starts in (8 + 4 above the seam): only the hit's chunk
-    const far = seenChunks(Float64Array.of(8, 16 + 13, 8), down, level0, regions, scales, undefined, reach);
-    expect([...far.seen.keys()].filter((i) => far.seen[i])).toEqual([ch(0, 1, 0)]);
-    // without the rays' reach: only the hit's chunk
-    const none = seenChunks(Float64Array.of(8, 19, 8), down, level0, regions, scales);
-    expect([...none.seen.keys()].filter((i) => none.seen[i])).toEqual([ch(0, 1, 0)]);
+    expect(near.seen[ch(0, 0, 0)]).toBe(2);
+    expect(near.seen[ch(0, 1, 0)]).toBe(1);
+    // beyond the reach (7 below the seam): only the hit's chunk
+    const far = seenChunks(Float64Array.of(8, 9, 8), along, level0, regions, scales);
+    expect([...far.seen.keys()].filter((i) => far.seen[i])).toEqual([ch(0, 0, 0)]);
+    // a diagonal seam: near the faces at x = 16 and y = 16, level 2 owning (1, 0, 0), (0, 1, 0) and (1, 1, 0)
+    const corner = seenChunks(Float64Array.of(13, 14, 8), along, level0, regions, scales);
+    expect([...corner.seen.keys()].filter((i) => corner.seen[i])).toEqual(
+      [ch(0, 0, 0), ch(1, 0, 0), ch(0, 1, 0), ch(1, 1, 0)].sort((a, b) => a - b),
+    );
+    // the hit's region owned by the coarser level itself: no seam
+    const coarse = seenChunks(Float64Array.of(8, 29, 4), along, level0, regions, scales);
+    expect([...coarse.seen.keys()].filter((i) => coarse.seen[i])).toEqual([ch(0, 1, 0)]);
   });
 });
