@@ -214,6 +214,9 @@ export class StoreSession {
       // one engine whichever way it is planned: by the view, or level by level
       const planner = view ? new CutPlanner() : new LevelPlanner(store.levels[0].layout);
       stream = await StoreStream.create<ChunkedVolume, IsosurfaceStats, Isosurface>(store, fetcher, port, budget, planner, { learnt });
+      // surfaces of caches only are read live by the rays: a step on screen whose caches a step that did
+      // not fit computed on is computed again rather than taken as shown
+      if (options.cacheOnly) stream.setKeepCaches(true);
       options.setup?.(stream);
       if (view) await stream.setView(view);
       return new StoreSession(name, store, metered, fetcher, port, stream, fetched);

@@ -326,6 +326,7 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
         if (r.coarser) share *= 0.85;
         continue;
       }
+      await this.#restoreShown(gen);
       this.#stop(r.level, r.reason, 'budget');
       return;
     }
@@ -697,6 +698,32 @@ export class StoreStream<V extends RoleVolume, S extends LevelStats, F extends L
       if (gen !== this.#gen || this.#destroyed || this.#suspended || !Number.isFinite(this.#iso)) return;
       this.#again();
     }, inMs + 50);
+  }
+
+  /**
+   * When the live caches are read (setKeepCaches: the rays) and a step that
+   * did not fit computed on them, the step on screen is computed again from
+   * its chunks, still resident, so what the rays read is what it shows.
+   */
+  async #restoreShown(gen: number): Promise<void> {
+    const shown = this.#shown;
+    if (!this.#keepCaches || !this.#cachesChanged || !shown || shown.frozen || gen !== this.#gen || this.#destroyed) return;
+    const n = this.levels.length;
+    const drawn = Array.from({ length: n }, () => new Set<ChunkIndex>());
+    const ghosts = Array.from({ length: n }, () => new Set<ChunkIndex>());
+    for (const l of shown.levels) {
+      for (const c of l.drawn) drawn[l.level].add(c);
+      for (const c of l.ghosts) ghosts[l.level].add(c);
+    }
+    const step: Step = {
+      finest: shown.step,
+      levels: shown.levels.map((l) => l.level),
+      leaves: shown.leaves.map((l) => [...l]),
+      drawn,
+      ghosts,
+      wanted: drawn.map((d, L) => [...d, ...ghosts[L]]),
+    };
+    await this.#show(step, shown.cut, shown.iso, shown.others, gen, shown.final);
   }
 
   /** A refinement at the current isovalue the stream wants on its own (refineAgain). */
