@@ -17,7 +17,7 @@
 //   ancestors drawn too), below a region it owns, the cells of this level
 //   whose lowest corner lies in a finer region within 1.5 of its voxels +
 //   1/4 of a level-0 voxel of that region's upper face (finerReachVoxels in
-//   src/store/view/regions.ts): the finer level has no voxel past its
+//   src/raycast/seam-reach.ts, passed as level_scale.w, level_offset.w): the finer level has no voxel past its
 //   chunk's last, so its rays stop there, and this level's voxels (its drawn
 //   chunk over the finer region) fill the seam.
 // Where two levels overlap, the depth test keeps the nearer hit. Only chunks
@@ -83,7 +83,7 @@ fn region_box(c: vec3u, lo: ptr<function, vec3f>, hi: ptr<function, vec3f>) -> b
   let q = vec3i(floor(p0 / edge));
   let qlo = vec3f(q) * edge;
   let up_end = qlo + min(f32(rays.pool.y) * s, edge);
-  let down_start = qlo + edge - min(1.5 * s + 0.25, edge);
+  let down_start = qlo + edge - min(rays.level_scale.w * s + rays.level_offset.w, edge);
   let near = p0 < up_end;
   let high = p0 >= down_start;
   let blo = max(max(qlo, select(up_end, qlo, near)), select(qlo, down_start, high));

@@ -36,8 +36,8 @@ struct Rays {
   pool: vec4u,         // a pool: x blocks per chunk edge, y cells a level reaches above its own regions (seams)
   region_grid: vec4u,  // a pool: the step's region grid, cells per axis; w: this draw's level
   region_edge: vec4f,  // a pool: a region cell's edge in level-0 voxels
-  level_scale: vec4f,  // a pool: level-0 voxels per voxel of this level
-  level_offset: vec4f, // a pool: where this level's voxel 0 lies in level-0 voxels
+  level_scale: vec4f,  // a pool: level-0 voxels per voxel of this level; w: voxels a coarser level reaches into a finer region
+  level_offset: vec4f, // a pool: where this level's voxel 0 lies in level-0 voxels; w: and level-0 voxels more
 };
 @group(1) @binding(0) var<uniform> rays: Rays;
 @group(1) @binding(1) var<storage, read> slot_data: array<f32>;

@@ -22,6 +22,7 @@ import { type Clip, clipPlanes } from '../core/clip.ts';
 import { createShaderModule } from '../gpu/wgsl.ts';
 import type { IsosurfaceDrawData } from '../isosurface/types.ts';
 import { cellRootSnippet } from '../raycast/cell-root-wgsl.ts';
+import { FINER_REACH_MARGIN, FINER_REACH_PER_VOXEL } from '../raycast/seam-reach.ts';
 import { DEFAULT_SURFACE_STYLE, type RenderTarget, type SurfaceStyle } from './surface-layer.ts';
 import { DEPTH_FORMAT, frameSnippet, type RenderLayer } from './viewer.ts';
 
@@ -374,8 +375,9 @@ export class RayLayer implements RenderLayer {
     }
     u32[87] = level?.level ?? 0;
     f32[91] = 0;
-    f32[95] = 0;
-    f32[99] = 0;
+    // how far a coarser level traces into a finer region below one it owns (finerReachVoxels)
+    f32[95] = FINER_REACH_PER_VOXEL;
+    f32[99] = FINER_REACH_MARGIN;
     this.target.device.queue.writeBuffer(buffer, 0, this.#scratch);
   }
 

@@ -8,17 +8,6 @@
 // per chunk: the level that owns it, or NO_OWNER.
 import type { ChunkIndex } from '../types.ts';
 
-/**
- * How far below a region it owns (level-0 voxels, per axis) a coarser level's
- * rays trace into a finer region in a nested cut, `scale` the coarser level's
- * voxel in level-0 voxels (shaders/render/ray_blocks_pool.wgsl, region_box):
- * the finer level stops at its chunk's last voxel, at most (s_f + 1) / 2
- * below the face, and the coarser cell holding that point starts at most one
- * coarse voxel further down; s_f <= s / 2, and 1/4 of a voxel keeps the
- * boundary tests off the seam.
- */
-export const finerReachVoxels = (scale: number): number => 1.5 * scale + 0.25;
-
 /** A cell of the region grid no leaf covers. */
 export const NO_OWNER = 255;
 

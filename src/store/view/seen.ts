@@ -11,7 +11,8 @@
 // the chunk above the seam counts as seen too, so the finer level takes over
 // there and the seam moves away from what the image shows.
 import type { RegionOwners } from './regions.ts';
-import { finerReachVoxels, NO_OWNER } from './regions.ts';
+import { finerReachVoxels } from '../../raycast/seam-reach.ts';
+import { NO_OWNER } from './regions.ts';
 
 /** How many times at most a view is refined again where its rays found the surface (each an image more). */
 export const MAX_GUIDED_PASSES = 4;

@@ -12,7 +12,8 @@ import { mat4 } from 'gl-matrix';
 import { describe, expect, it } from 'vitest';
 import { type CutCamera, type CutInput, type CutLevel, viewCut } from '../../../src/store/view/cut.ts';
 import { boxInFrustum, frustumPlanes } from '../../../src/store/view/frustum.ts';
-import { finerReachVoxels, NO_OWNER, regionOwners } from '../../../src/store/view/regions.ts';
+import { finerReachVoxels } from '../../../src/raycast/seam-reach.ts';
+import { NO_OWNER, regionOwners } from '../../../src/store/view/regions.ts';
 import { GUARD_VOXELS, seenChunks } from '../../../src/store/view/seen.ts';
 
 type V3 = [number, number, number];
